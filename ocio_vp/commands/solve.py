@@ -1,0 +1,86 @@
+"""``ocio-vp solve MEASUREMENTS --out DIR``: one OCIO config and solution.json per environment."""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+
+__all__ = ["add_parser", "print_table", "run"]
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "solve",
+        help="solve M, Q, N and the black level; write a config per environment",
+        description="Solve every environment of a measurements file and write "
+        "DIR/<environment>/config.ocio and solution.json.",
+    )
+    parser.add_argument("measurements", help="measurements file (.yaml/.yml/.json)")
+    parser.add_argument("--out", required=True, help="output folder")
+    parser.add_argument(
+        "--method",
+        default=None,
+        help="Q-solve method (default: %(default)s = the library default; "
+        "'least-squares' is the paper's eq. 5)",
+    )
+    parser.add_argument(
+        "--black-level",
+        choices=("exact", "paper"),
+        default="exact",
+        help="in-frustum black-level offset: exact (-M b, default) or the paper's b/w_camera",
+    )
+    parser.add_argument("--environment", action="append", help="solve only these (repeatable)")
+    parser.set_defaults(func=run)
+
+
+def print_table(solutions: Sequence) -> None:
+    """The terminal summary: one row per environment."""
+    header = (
+        "environment",
+        "method",
+        "cond[SL]",
+        "cond(Q)",
+        "N",
+        "lit error M-only",
+        "lit error M+Q",
+    )
+    rows = []
+    for s in solutions:
+        d = s.diagnostics
+        rows.append(
+            (
+                s.environment,
+                s.method,
+                f"{d['cond_SL']:.3g}",
+                f"{d['cond_Q']:.3g}",
+                "solved" if s.N is not None else "NOT solved",
+                f"{100 * float(sum(d['lit_chart_error_baseline'])) / 3:.2f}%",
+                f"{100 * float(sum(d['lit_chart_error'])) / 3:.2f}%",
+            )
+        )
+    widths = [max(len(str(r[i])) for r in [header, *rows]) for i in range(len(header))]
+    for row in [header, *rows]:
+        print("  ".join(str(v).ljust(w) for v, w in zip(row, widths)))
+    for s in solutions:
+        for warning in s.diagnostics.get("warnings", []):
+            print(f"warning: {s.environment}: {warning}")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ocio_vp.calibrate import DEFAULT_METHOD, solve_environment
+    from ocio_vp.measurements import load_measurements
+    from ocio_vp.writer import write_solutions
+
+    measurements = load_measurements(args.measurements)
+    environments = measurements.environments
+    if args.environment:
+        environments = tuple(measurements.environment(name) for name in args.environment)
+    method = args.method or DEFAULT_METHOD
+    solutions = [
+        solve_environment(measurements, env, method=method, black_level=args.black_level)
+        for env in environments
+    ]
+    written = write_solutions(solutions, args.out)
+    print_table(written)
+    print(f"wrote {len(written)} environment(s) to {args.out}")
+    return 0

@@ -1,0 +1,1 @@
+"""Writers for the tools studios already run: Unreal nDisplay, Nuke, DaVinci Resolve."""

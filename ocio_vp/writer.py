@@ -1,0 +1,43 @@
+"""Write solved environments to disk: ``OUT/<environment>/config.ocio`` and ``solution.json``.
+
+All environments are written into a staging folder first and renamed into place only when
+every one of them succeeded, so a failure never leaves a half-written output folder.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from pathlib import Path
+
+from ocio_vp.ocio_config import build_config, ocio_names, write_config
+from ocio_vp.solution import Solution, solution_to_json
+from ocio_vp.staging import publish_dir, staged_dir
+
+__all__ = ["write_environment", "write_solutions"]
+
+
+def write_environment(solution: Solution, directory: Path) -> Solution:
+    """Write one environment's files into ``directory`` (which must exist).
+
+    Returns the solution with its ``ocio`` block filled in, as written to ``solution.json``.
+    """
+    solution = dataclasses.replace(solution, ocio=ocio_names())
+    config = build_config(solution)
+    write_config(config, directory)
+    (directory / "solution.json").write_text(solution_to_json(solution), encoding="utf-8")
+    return solution
+
+
+def write_solutions(solutions: Sequence[Solution], out_dir: str | Path) -> list[Solution]:
+    """Write every solution to ``out_dir/<environment>/``, all or nothing."""
+    out_dir = Path(out_dir)
+    written = []
+    with staged_dir(out_dir) as stage:
+        for solution in solutions:
+            folder = stage / solution.environment
+            folder.mkdir()
+            written.append(write_environment(solution, folder))
+        for solution in solutions:
+            publish_dir(stage / solution.environment, out_dir / solution.environment)
+    return written
