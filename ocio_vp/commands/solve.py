@@ -60,7 +60,7 @@ def print_table(solutions: Sequence) -> None:
         )
     widths = [max(len(str(r[i])) for r in [header, *rows]) for i in range(len(header))]
     for row in [header, *rows]:
-        print("  ".join(str(v).ljust(w) for v, w in zip(row, widths)))
+        print("  ".join(str(v).ljust(w) for v, w in zip(row, widths, strict=True)))
     for s in solutions:
         for warning in s.diagnostics.get("warnings", []):
             print(f"warning: {s.environment}: {warning}")
