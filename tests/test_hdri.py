@@ -1,0 +1,149 @@
+"""w_avg from an equirectangular HDRI, checked against closed forms.
+
+Closed forms used (radiometry of a Lambertian receiver, e.g. Howell's catalog / any radiative
+transfer text):
+- uniform sky of radiance L: (1/pi) * integral L cos+ dw = L;
+- a spherical cap of half-angle a whose axis makes angle t <= pi/2 - a with the normal:
+  integral cos dw = pi sin^2(a) cos(t), so w_avg = L sin^2(a) cos(t);
+- the upper hemisphere lit, normal horizontal: w_avg = L / 2.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ocio_vp.errors import InputError
+from ocio_vp.hdri import (
+    FRONT,
+    diffuse_integral,
+    equirect_directions,
+    equirect_solid_angles,
+    read_equirect,
+    w_avg_from_hdri,
+)
+
+oiio = pytest.importorskip("OpenImageIO")
+
+
+def cap_image(height, width, axis, half_angle, radiance, sky=0.0):
+    """A lat-long image with a disc source; pixel fractions inside the cap by supersampling."""
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    s = 4  # supersample each pixel 4x4 so the edge is anti-aliased
+    dirs = equirect_directions(height * s, width * s)
+    inside = (dirs @ axis) >= np.cos(half_angle)
+    frac = inside.reshape(height, s, width, s).mean(axis=(1, 3))
+    img = np.empty((height, width, 3))
+    img[:] = sky
+    img += frac[..., None] * (np.asarray(radiance, float) - sky)
+    return img
+
+
+def write_exr(path, image, **attrs):
+    h, w, c = image.shape
+    spec = oiio.ImageSpec(w, h, c, oiio.FLOAT)
+    for k, v in attrs.items():
+        spec.attribute(k, v)
+    out = oiio.ImageOutput.create(str(path))
+    assert out.open(str(path), spec)
+    assert out.write_image(np.ascontiguousarray(image, dtype=np.float32))
+    out.close()
+
+
+class TestSolidAngles:
+    def test_sum_is_full_sphere(self):
+        assert equirect_solid_angles(64, 128).sum() == pytest.approx(4 * np.pi, rel=1e-12)
+
+    def test_row_matches_closed_form(self):
+        # Row i spans theta in [i pi/H, (i+1) pi/H]: (2 pi/W)(cos t0 - cos t1).
+        h, w = 8, 16
+        omega = equirect_solid_angles(h, w)
+        i = 3
+        expected = 2 * np.pi / w * (np.cos(i * np.pi / h) - np.cos((i + 1) * np.pi / h))
+        assert omega[i, 5] == pytest.approx(expected, rel=1e-12)
+
+    def test_directions_are_unit_and_centre_is_front(self):
+        d = equirect_directions(32, 64)
+        np.testing.assert_allclose(np.linalg.norm(d, axis=-1), 1.0, atol=1e-12)
+        # The image centre is between pixels 15/16 and 31/32; the average of those four is FRONT.
+        centre = d[15:17, 31:33].mean(axis=(0, 1))
+        np.testing.assert_allclose(centre / np.linalg.norm(centre), FRONT, atol=1e-12)
+        assert d[0, 0, 1] > 0.99  # row 0 is the zenith (+y)
+
+
+class TestDiffuseIntegral:
+    @pytest.mark.parametrize("normal", [FRONT, (0, 1, 0), (1, -1, 0.3)])
+    def test_uniform_sky_gives_its_radiance(self, normal):
+        sky = np.ones((64, 128, 3)) * [0.5, 1.0, 2.0]
+        np.testing.assert_allclose(diffuse_integral(sky, normal=normal), [0.5, 1.0, 2.0], rtol=2e-3)
+
+    def test_upper_hemisphere_with_horizontal_normal_is_half(self):
+        img = np.zeros((128, 256, 1))
+        img[:64] = 3.0
+        assert diffuse_integral(img, normal=(0, 1, 0))[0] == pytest.approx(3.0, rel=1e-3)
+        assert diffuse_integral(img, normal=FRONT)[0] == pytest.approx(1.5, rel=1e-3)
+
+    @pytest.mark.parametrize("tilt_deg", [0.0, 40.0, 70.0])
+    def test_disc_source_is_cos_weighted_solid_angle(self, tilt_deg):
+        a, t = np.radians(8.0), np.radians(tilt_deg)
+        axis = (np.sin(t), 0.0, np.cos(t))  # tilted from FRONT towards +x
+        img = cap_image(256, 512, axis, a, radiance=[100.0, 50.0, 10.0])
+        expected = np.array([100.0, 50.0, 10.0]) * np.sin(a) ** 2 * np.cos(t)
+        np.testing.assert_allclose(diffuse_integral(img), expected, rtol=5e-3)
+
+    def test_source_behind_contributes_nothing(self):
+        img = cap_image(128, 256, (0, 0, -1), np.radians(10), radiance=[5.0, 5.0, 5.0])
+        np.testing.assert_allclose(diffuse_integral(img), 0.0, atol=1e-12)
+
+    def test_bad_shape_and_normal(self):
+        with pytest.raises(ValueError, match="shape"):
+            diffuse_integral(np.ones((4, 8)))
+        with pytest.raises(InputError, match="normal"):
+            diffuse_integral(np.ones((4, 8, 3)), normal=(0, 0, 0))
+
+
+class TestFromFile:
+    def test_w_avg_from_file_at_full_and_reduced_width(self, tmp_path):
+        a, t = np.radians(6.0), np.radians(30.0)
+        img = cap_image(256, 512, (0.0, np.sin(t), np.cos(t)), a, [200.0, 180.0, 150.0], sky=0.25)
+        path = tmp_path / "sun.exr"
+        write_exr(path, img)
+        # Sky (0.25 everywhere except the cap) + cap: closed form.
+        cap = np.sin(a) ** 2 * np.cos(t)
+        expected = 0.25 * (1 - cap) + np.array([200.0, 180.0, 150.0]) * cap
+        np.testing.assert_allclose(w_avg_from_hdri(path, width=None), expected, rtol=5e-3)
+        np.testing.assert_allclose(w_avg_from_hdri(path, width=128), expected, rtol=2e-2)
+        assert read_equirect(path, width=128).shape == (64, 128, 3)
+
+    def test_mip_level_is_used_and_alpha_ignored(self, tmp_path):
+        img = np.concatenate([np.full((64, 128, 3), 0.75), np.zeros((64, 128, 1))], axis=-1)
+        flat = tmp_path / "flat.exr"
+        write_exr(flat, img)
+        tex = tmp_path / "flat.tx.exr"
+        buf = oiio.ImageBuf(str(flat))
+        assert oiio.ImageBufAlgo.make_texture(oiio.MakeTxEnvLatl, buf, str(tex))
+        small = read_equirect(tex, width=32)
+        assert small.shape == (16, 32, 3)
+        np.testing.assert_allclose(w_avg_from_hdri(tex, width=32), 0.75, rtol=1e-3)
+
+    def test_errors_are_input_errors(self, tmp_path):
+        with pytest.raises(InputError, match="no such HDRI"):
+            w_avg_from_hdri(tmp_path / "missing.exr")
+        square = tmp_path / "square.exr"
+        write_exr(square, np.ones((32, 32, 3)))
+        with pytest.raises(InputError, match="2:1"):
+            w_avg_from_hdri(square)
+        grey = tmp_path / "grey.exr"
+        write_exr(grey, np.ones((32, 64, 1)))
+        with pytest.raises(InputError, match="channel"):
+            w_avg_from_hdri(grey)
+        nan = np.ones((32, 64, 3))
+        nan[3, 4, 1] = np.nan
+        bad = tmp_path / "nan.exr"
+        write_exr(bad, nan)
+        with pytest.raises(InputError, match="NaN"):
+            w_avg_from_hdri(bad)
+        junk = tmp_path / "junk.exr"
+        junk.write_bytes(b"not an exr at all")
+        with pytest.raises(InputError, match="cannot read"):
+            w_avg_from_hdri(junk)
