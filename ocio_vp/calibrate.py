@@ -80,9 +80,8 @@ def solve_environment(
 
     offset = None
     if environment.black_level is not None:
-        in_matrix = M_calibrated if N is None else N
         offset = black_level_offset(
-            environment.black_level, M=M_calibrated, N=in_matrix, SL=SL, method=black_level
+            environment.black_level, M=M_calibrated, SL=SL, method=black_level
         )
 
     baseline = problem.predicted

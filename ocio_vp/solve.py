@@ -152,7 +152,6 @@ def black_level_offset(
     b_camera: ArrayLike,
     *,
     M: ArrayLike,
-    N: ArrayLike | None = None,
     SL: ArrayLike | None = None,
     method: Literal["exact", "paper"] = "exact",
 ) -> np.ndarray:
@@ -160,32 +159,39 @@ def black_level_offset(
 
     The camera sees ``[SL] d + b_camera`` for a drive ``d``. For the background to come back as
     it would without the bounce, ``d = N c - M b_camera``: the **exact** offset is
-    ``-M b_camera`` in panel-drive space (equivalently ``Q b_camera`` subtracted from content
-    before N). The **paper**'s form subtracts ``b_camera / w_camera`` from the content, with
-    ``w_camera = [SL] [1, 1, 1]``; a per-channel approximation that is exact only when [SL] is
-    diagonal. Both are returned in drive space: ``drive = N c + offset``.
+    ``-M b_camera`` in panel-drive space (equivalently ``Q b_camera`` subtracted from the content
+    before N). The **paper** subtracts ``b_camera / w_camera`` from the displayed values, with
+    ``w_camera = [SL] [1, 1, 1]`` the camera's view of a full-white panel: a per-channel
+    approximation of ``M b_camera`` that is exact only when [SL] is diagonal. Both are returned
+    in drive space: ``drive = N c + offset``.
 
     Parameters
     ----------
     b_camera
         (3,) camera RGB of the dark in-frustum panels with the environment lighting the stage.
     M
-        (3, 3) the out-of-frustum pre-correction.
-    N
-        (3, 3) the in-frustum pre-correction (``paper`` method only).
+        (3, 3) the out-of-frustum pre-correction [SL]^-1.
     SL
         (3, 3) [SL] (``paper`` method only).
     method
         ``"exact"`` (default) or ``"paper"``.
+
+    Examples
+    --------
+    >>> SL = np.diag([0.8, 0.9, 0.7])
+    >>> b = np.array([0.02, 0.03, 0.01])
+    >>> bool(np.allclose(black_level_offset(b, M=np.linalg.inv(SL)),
+    ...                  black_level_offset(b, M=np.linalg.inv(SL), SL=SL, method="paper")))
+    True
     """
     b_camera = np.asarray(b_camera, dtype=np.float64)
     if method == "exact":
         return -np.asarray(M, dtype=np.float64) @ b_camera
     if method == "paper":
-        if N is None or SL is None:
-            raise ValueError("the paper's black level needs N and [SL]")
+        if SL is None:
+            raise ValueError("the paper's black level needs [SL]")
         w_camera = np.asarray(SL, dtype=np.float64).sum(axis=1)
-        return -np.asarray(N, dtype=np.float64) @ (b_camera / w_camera)
+        return -b_camera / w_camera
     raise ValueError(
         f"unknown black-level method {method!r}; expected one of {BLACK_LEVEL_METHODS}"
     )

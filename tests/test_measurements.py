@@ -1,0 +1,70 @@
+"""The measurements file: round trips and the data model."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import make_measurements_dict
+
+from ocio_vp.errors import InputError
+from ocio_vp.measurements import (
+    load_measurements,
+    measurements_from_dict,
+    measurements_to_dict,
+    save_measurements,
+)
+
+
+@pytest.mark.parametrize("suffix", [".yaml", ".json"])
+def test_save_load_round_trip_is_exact(tmp_path, suffix) -> None:
+    original = measurements_from_dict(make_measurements_dict(seed=2), source="mem")
+    path = tmp_path / f"stage{suffix}"
+    save_measurements(original, path)
+    loaded = load_measurements(path)
+    np.testing.assert_array_equal(loaded.SL, original.SL)  # floats round-trip bit for bit
+    np.testing.assert_array_equal(loaded.SRL, original.SRL)
+    for a, b in zip(loaded.environments, original.environments, strict=True):
+        assert a.name == b.name
+        np.testing.assert_array_equal(a.target_chart, b.target_chart)
+        np.testing.assert_array_equal(a.black_level, b.black_level)
+    assert measurements_to_dict(loaded) == measurements_to_dict(original)
+    assert len(loaded.sha256) == 64
+
+
+def test_layout_of_SL_and_SRL() -> None:
+    data = make_measurements_dict()
+    m = measurements_from_dict(data)
+    # [SL]: camera channels along rows, LED channels along columns (paper, Section 3.3).
+    np.testing.assert_array_equal(m.SL[:, 1], data["primaries"]["green"])
+    np.testing.assert_array_equal(m.SRL[5][:, 2], data["lit_chart"]["blue"][5])
+    assert m.n_patches == 24
+
+
+def test_explicit_beta_and_defaults() -> None:
+    data = make_measurements_dict()
+    del data["stage"]["calibration_panel"]
+    data["stage"]["beta"] = 0.311
+    m = measurements_from_dict(data)
+    assert m.stage.beta == 0.311 and m.stage.panel is None
+    assert (m.stage.white_patch, m.stage.white_reflectance) == (18, 0.9)
+
+
+def test_beta_above_one_rejected() -> None:
+    data = make_measurements_dict()
+    data["stage"]["beta"] = 1.5
+    with pytest.raises(InputError, match=r"stage\.beta: a form factor is at most 1"):
+        measurements_from_dict(data, source="s.yaml")
+
+
+def test_unknown_key_suggests_the_right_one() -> None:
+    data = make_measurements_dict()
+    data["environments"][0]["blacklevel"] = [0, 0, 0]
+    with pytest.raises(InputError, match="did you mean 'black_level'"):
+        measurements_from_dict(data)
+
+
+def test_bool_is_not_a_number() -> None:
+    data = make_measurements_dict()
+    data["primaries"]["red"][0] = True
+    with pytest.raises(InputError, match=r"primaries\.red\[0\]: expected a number"):
+        measurements_from_dict(data)
