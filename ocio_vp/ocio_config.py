@@ -272,6 +272,23 @@ def _add_working_spaces(config: OCIO.Config, camera: str) -> dict[str, str]:
         config.addColorSpace(cs)
         if role:
             roles[role] = name
+    # CIE XYZ (D65) lets OCIO 2.1+ hosts convert between this config and others.
+    d65 = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
+    to_xyz = (
+        colour.adaptation.matrix_chromatic_adaptation_VonKries(
+            colour.xy_to_XYZ(target.whitepoint), colour.xy_to_XYZ(d65), transform="CAT02"
+        )
+        @ target.matrix_RGB_to_XYZ
+    )
+    xyz = _colorspace(
+        "CIE-XYZ-D65",
+        f"CIE 1931 XYZ, D65 white; from the reference by {camera}'s RGB-to-XYZ matrix with CAT02 "
+        "adaptation to D65 (colour-science).",
+        family="Utility",
+    )
+    xyz.setTransform(matrix_transform(to_xyz), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+    config.addColorSpace(xyz)
+    roles["cie_xyz_d65_interchange"] = "CIE-XYZ-D65"
     return roles
 
 

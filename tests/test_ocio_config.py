@@ -105,3 +105,19 @@ def test_profile_version_and_descriptions(written) -> None:
     assert s.environment in inner and "black-level offset" in inner
     assert s.measurements_sha256 is None or s.measurements_sha256[:16] in inner
     assert sorted(config.getViews(oc.DISPLAY)) == sorted([oc.VIEW_INNER, oc.VIEW_OUTER, "Raw"])
+
+
+def test_xyz_interchange_matches_colour_science(written) -> None:
+    # Independent path: colour.RGB_to_XYZ with CAT02 adaptation to D65.
+    out, solutions = written
+    config = OCIO.Config.CreateFromFile(str(out / solutions[0].environment / "config.ocio"))
+    assert config.getRoleColorSpace("cie_xyz_d65_interchange") == "CIE-XYZ-D65"
+    got = _apply(config.getProcessor(oc.REFERENCE, "CIE-XYZ-D65"), COLOURS)
+    d65 = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
+    expected = colour.RGB_to_XYZ(
+        COLOURS,
+        colour.RGB_COLOURSPACES["ARRI Wide Gamut 4"],
+        d65,
+        chromatic_adaptation_transform="CAT02",
+    )
+    np.testing.assert_allclose(got, expected, rtol=1e-5, atol=1e-5)
