@@ -1,0 +1,56 @@
+"""``ocio-vp export SOLUTION_DIR... --target unreal|nuke|resolve|all``: files for the tools
+studios run (Unreal nDisplay, Nuke, DaVinci Resolve) from solved environments."""
+
+from __future__ import annotations
+
+import argparse
+
+__all__ = ["add_parser", "run"]
+
+TARGETS = ("unreal", "nuke", "resolve")
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "export",
+        help="write Unreal nDisplay, Nuke and Resolve files from solved environments",
+        description="Export solved environments (OUT/<environment>/ from `ocio-vp solve`). "
+        "Output: SOLUTION_DIR/exports/<target>/, or --out DIR/<environment>/<target>/.",
+    )
+    parser.add_argument("solution_dirs", nargs="+", metavar="SOLUTION_DIR")
+    parser.add_argument("--target", choices=(*TARGETS, "all"), default="all")
+    parser.add_argument("--out", default=None, help="output folder (default: beside each solution)")
+    parser.add_argument(
+        "--cube-size", type=int, default=33, help="3D LUT size of the baked .cube (default 33)"
+    )
+    parser.add_argument(
+        "--cube-range",
+        type=float,
+        nargs=2,
+        metavar=("LO", "HI"),
+        default=(-0.25, 16.0),
+        help="linear input range the .cube covers (default -0.25 16)",
+    )
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ocio_vp.exports import export_solutions
+
+    targets = TARGETS if args.target == "all" else (args.target,)
+    results = export_solutions(
+        args.solution_dirs,
+        targets=targets,
+        out=args.out,
+        cube_size=args.cube_size,
+        cube_range=tuple(args.cube_range),
+    )
+    for result in results:
+        print(f"{result.environment}: {result.target} -> {result.folder}")
+        for name, error in result.summary.get("cube_errors", {}).items():
+            print(
+                f"  {name}: worst bake error {error['max_abs_error']:.3g} "
+                f"(rms {error['rms_error']:.3g}) over [{error['input_range'][0]:g}, "
+                f"{error['input_range'][1]:g}]^3"
+            )
+    return 0
