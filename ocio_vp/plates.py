@@ -1,0 +1,314 @@
+"""Read calibration plates with OpenImageIO, one region at a time.
+
+Plates are 4K-8K photographs; the solver needs a few hundred numbers from them. So a plate is
+opened once for its header (:func:`open_plate`) and then only the rows, columns and channels a
+chart or region covers are decoded (:func:`read_region`), in bands of scanlines (or the tiles
+that cover the region), as float32. Nothing converts a whole plate to float64.
+
+Pixel coordinates follow OpenImageIO: origin at the top-left of the display window, x to the
+right, y down, pixel ``(x, y)`` covers ``[x, x+1) x [y, y+1)`` (its centre is at ``+0.5``).
+
+Linear plates (OpenEXR half/float, DPX, 16-bit TIFF) are used as they are. Display-referred
+plates (8 bits per sample, or PNG/JPEG/WebP/HEIF of any depth) are refused unless the caller
+states their encoding, which is then decoded to linear on the region only (see
+:data:`ENCODINGS`).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ocio_vp.errors import InputError
+
+__all__ = [
+    "DISPLAY_FORMATS",
+    "ENCODINGS",
+    "PlateInfo",
+    "canonical_encoding",
+    "linearise",
+    "open_plate",
+    "read_region",
+]
+
+#: File formats that hold display-referred pictures whatever their bit depth.
+DISPLAY_FORMATS = frozenset({"png", "jpeg", "webp", "heif", "gif", "bmp", "targa"})
+#: Read this many bytes of scanlines at a time (bounds memory for wide plates).
+_BAND_BYTES = 32 * 2**20
+
+
+def _encodings() -> tuple[str, ...]:
+    import colour
+
+    return ("linear", *sorted(colour.CCTF_DECODINGS.keys()))
+
+
+#: Encodings a plate may declare: ``linear`` or any decoding in colour-science's
+#: ``colour.CCTF_DECODINGS`` (``sRGB``, ``Gamma 2.4``, ``ARRI LogC4``, ``S-Log3``, ``Cineon`` ...).
+ENCODINGS = "linear or a name in colour.CCTF_DECODINGS"
+
+
+def canonical_encoding(name: str, *, source: object = None, key: str | None = None) -> str:
+    """Return the canonical spelling of an encoding name (case-insensitive), or raise."""
+    import difflib
+
+    names = _encodings()
+    by_lower = {n.lower(): n for n in names}
+    if isinstance(name, str) and name.lower() in by_lower:
+        return by_lower[name.lower()]
+    close = difflib.get_close_matches(str(name), names, n=3, cutoff=0.5)
+    hint = f"; close matches: {', '.join(close)}" if close else ""
+    raise InputError(f"unknown encoding {name!r} (use {ENCODINGS}){hint}", source=source, key=key)
+
+
+def linearise(values: np.ndarray, encoding: str) -> np.ndarray:
+    """Decode encoded plate values to linear, float64 (``linear`` returns them as float64).
+
+    Uses colour-science's ``colour.cctf_decoding`` so the transfer functions are the published
+    ones (IEC 61966-2-1 for ``sRGB``, a pure power for ``Gamma 2.4``, the vendors' log curves).
+    """
+    values = np.asarray(values, dtype=np.float64)
+    if encoding == "linear":
+        return values
+    import colour
+
+    return np.asarray(colour.cctf_decoding(values, function=encoding), dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class PlateInfo:
+    """What :func:`open_plate` learnt from a plate's header.
+
+    ``x``, ``y``, ``width``, ``height`` are the data window; ``rgb`` the channel indices of R, G,
+    B; ``bits`` bits per sample; ``is_float`` whether samples are floating point (so there is no
+    natural clip level); ``encoding`` the encoding to decode with (``linear`` unless stated).
+    """
+
+    path: str
+    file_format: str
+    x: int
+    y: int
+    width: int
+    height: int
+    channel_names: tuple[str, ...]
+    rgb: tuple[int, int, int]
+    bits: int
+    is_float: bool
+    tile_width: int
+    tile_height: int
+    encoding: str
+    subimage: int = 0
+
+    @property
+    def box(self) -> tuple[int, int, int, int]:
+        """The data window as ``(x0, y0, x1, y1)``, end-exclusive."""
+        return (self.x, self.y, self.x + self.width, self.y + self.height)
+
+
+def _find_rgb(names: tuple[str, ...], layer: str | None, path: str) -> tuple[int, int, int]:
+    """Indices of R, G, B by name: ``R``/``red`` or ``<layer>.R`` (case-insensitive)."""
+    wanted = {"r": 0, "red": 0, "g": 1, "green": 1, "b": 2, "blue": 2}
+    layers: dict[str, list[int | None]] = {}
+    for index, name in enumerate(names):
+        prefix, _, last = name.rpartition(".")
+        if last.lower() in wanted:
+            slots = layers.setdefault(prefix, [None, None, None])
+            slots[wanted[last.lower()]] = index
+    complete = {p: s for p, s in layers.items() if None not in s}
+    have = ", ".join(names) or "none"
+    if layer is not None:
+        if layer not in complete:
+            raise InputError(
+                f"no R, G, B channels in layer {layer!r} (channels: {have})", source=path
+            )
+        chosen = complete[layer]
+    elif "" in complete:
+        chosen = complete[""]
+    elif len(complete) == 1:
+        chosen = next(iter(complete.values()))
+    elif not complete:
+        raise InputError(f"no R, G, B channels (channels: {have})", source=path)
+    else:
+        raise InputError(
+            f"several RGB layers ({', '.join(sorted(complete))}): say which with 'layer'",
+            source=path,
+        )
+    return (int(chosen[0]), int(chosen[1]), int(chosen[2]))  # type: ignore[arg-type]
+
+
+def _open_input(path: str):  # -> oiio.ImageInput
+    import OpenImageIO as oiio
+
+    if not os.path.exists(path):
+        raise InputError("plate not found", source=path)
+    if os.path.isdir(path):
+        raise InputError("is a folder, expected an image", source=path)
+    inp = oiio.ImageInput.open(path)
+    if inp is None:
+        message = " ".join(oiio.geterror().split()) or "unknown reason"
+        raise InputError(f"cannot read as an image: {message[:200]}", source=path)
+    return inp
+
+
+def open_plate(
+    path: str | os.PathLike[str],
+    *,
+    encoding: str | None = None,
+    layer: str | None = None,
+    subimage: int = 0,
+) -> PlateInfo:
+    """Open a plate's header, find its R, G, B channels and check it can be measured.
+
+    Parameters
+    ----------
+    path
+        The image file (anything OpenImageIO reads: OpenEXR, DPX, TIFF, ...).
+    encoding
+        How the pixel values are encoded; ``None`` means linear, which is refused for
+        display-referred plates (8-bit, PNG, JPEG ...): state their encoding instead.
+    layer
+        The EXR layer whose ``.R``, ``.G``, ``.B`` to use when there are several.
+    subimage
+        The subimage (EXR part) to read.
+
+    Raises
+    ------
+    InputError
+        Missing or unreadable file, no R/G/B channels, a display-referred plate without encoding.
+    """
+    source = str(path)
+    inp = _open_input(source)
+    try:
+        if subimage and not inp.seek_subimage(subimage, 0):
+            raise InputError(f"has no subimage {subimage}", source=source)
+        spec = inp.spec()
+        file_format = str(inp.format_name())
+    finally:
+        inp.close()
+    names = tuple(str(n) for n in spec.channelnames)
+    rgb = _find_rgb(names, layer, source)
+    basetype = str(spec.format)
+    is_float = basetype in ("half", "float", "double")
+    bits = int(spec.get_int_attribute("oiio:BitsPerSample", 0)) or 8 * spec.format.size()
+    if encoding is None:
+        if bits <= 8 or file_format in DISPLAY_FORMATS:
+            raise InputError(
+                f"{file_format} plate with {bits} bits per sample is display-referred; "
+                "measure linear plates (EXR, DPX, 16-bit TIFF) or state its 'encoding' "
+                "(e.g. sRGB, Gamma 2.4)",
+                source=source,
+            )
+        encoding = "linear"
+    else:
+        encoding = canonical_encoding(encoding, source=source, key="encoding")
+    if spec.depth > 1:
+        raise InputError("volume images are not plates", source=source)
+    return PlateInfo(
+        path=source,
+        file_format=file_format,
+        x=int(spec.x),
+        y=int(spec.y),
+        width=int(spec.width),
+        height=int(spec.height),
+        channel_names=names,
+        rgb=rgb,
+        bits=bits,
+        is_float=is_float,
+        tile_width=int(spec.tile_width),
+        tile_height=int(spec.tile_height),
+        encoding=encoding,
+        subimage=subimage,
+    )
+
+
+def check_box(info: PlateInfo, box: tuple[int, int, int, int], *, what: str = "region") -> None:
+    """Raise :class:`InputError` unless ``box`` (x0, y0, x1, y1) is non-empty and inside."""
+    x0, y0, x1, y1 = box
+    px0, py0, px1, py1 = info.box
+    if x1 <= x0 or y1 <= y0:
+        raise InputError(f"{what} {list(box)} is empty", source=info.path)
+    if x0 < px0 or y0 < py0 or x1 > px1 or y1 > py1:
+        raise InputError(
+            f"{what} {list(box)} is outside the image (data window {list(info.box)})",
+            source=info.path,
+        )
+
+
+def read_region(
+    plate: PlateInfo | str | os.PathLike[str],
+    box: tuple[int, int, int, int],
+    *,
+    encoding: str | None = None,
+) -> np.ndarray:
+    """Read the R, G, B pixels of ``box`` = ``(x0, y0, x1, y1)`` (end-exclusive), linearised.
+
+    Only the scanline bands (or tiles) that cover ``box`` are decoded, at most ~32 MB at a time,
+    and only the channels from the first to the last of R, G, B.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(y1 - y0, x1 - x0, 3)`` float32 linear RGB (float64 if an encoding was decoded).
+    """
+    import OpenImageIO as oiio
+
+    info = plate if isinstance(plate, PlateInfo) else open_plate(plate, encoding=encoding)
+    check_box(info, box)
+    x0, y0, x1, y1 = (int(v) for v in box)
+    ch0, ch1 = min(info.rgb), max(info.rgb) + 1
+    select = [c - ch0 for c in info.rgb]
+    out = np.empty((y1 - y0, x1 - x0, 3), dtype=np.float32)
+    inp = _open_input(info.path)
+    try:
+        if info.subimage:
+            inp.seek_subimage(info.subimage, 0)
+        if info.tile_width:
+            tw, th = info.tile_width, info.tile_height or 1
+            # Tile-aligned bounds, clamped to the data window.
+            tx0 = info.x + (x0 - info.x) // tw * tw
+            tx1 = min(info.x + -(-(x1 - info.x) // tw) * tw, info.x + info.width)
+            band = max(th, (_BAND_BYTES // max(1, (tx1 - tx0) * (ch1 - ch0) * 4)) // th * th)
+            ty = info.y + (y0 - info.y) // th * th
+            while ty < y1:
+                ty1 = min(ty + band, info.y + info.height)
+                data = inp.read_tiles(
+                    info.subimage, 0, tx0, tx1, ty, ty1, 0, 1, ch0, ch1, oiio.FLOAT
+                )
+                _check_read(data, inp, info, (ty1 - ty, tx1 - tx0, ch1 - ch0))
+                r0, r1 = max(ty, y0), min(ty1, y1)
+                out[r0 - y0 : r1 - y0] = data[r0 - ty : r1 - ty, x0 - tx0 : x1 - tx0][..., select]
+                ty = ty1
+        else:
+            rows = max(1, _BAND_BYTES // max(1, info.width * (ch1 - ch0) * 4))
+            for ya in range(y0, y1, rows):
+                yb = min(ya + rows, y1)
+                data = inp.read_scanlines(info.subimage, 0, ya, yb, 0, ch0, ch1, oiio.FLOAT)
+                _check_read(data, inp, info, (yb - ya, info.width, ch1 - ch0))
+                out[ya - y0 : yb - y0] = data[:, x0 - info.x : x1 - info.x][..., select]
+    finally:
+        inp.close()
+    if not np.all(np.isfinite(out)):
+        bad = int(np.count_nonzero(~np.isfinite(out)))
+        raise InputError(f"{bad} NaN/Inf samples in region {list(box)}", source=info.path)
+    if info.encoding != "linear":
+        return linearise(out, info.encoding)
+    return out
+
+
+def _check_read(data: object, inp: object, info: PlateInfo, shape: tuple[int, ...]) -> None:
+    if data is None or not isinstance(data, np.ndarray) or inp.has_error:  # type: ignore[attr-defined]
+        message = " ".join(str(inp.geterror()).split()) or "read failed"  # type: ignore[attr-defined]
+        raise InputError(f"cannot read pixels (corrupt file?): {message[:200]}", source=info.path)
+    if data.ndim == 2:  # one channel comes back as (rows, width)
+        data.shape = (*data.shape, 1)
+    if tuple(data.shape) != shape:
+        raise InputError(f"read {data.shape} pixels, expected {shape}", source=info.path)
+
+
+def plate_path(base: str | os.PathLike[str], value: str) -> Path:
+    """Resolve a plate path written in a file relative to that file's folder."""
+    path = Path(value).expanduser()
+    return path if path.is_absolute() else Path(base).parent / path
