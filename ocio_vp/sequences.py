@@ -1,0 +1,111 @@
+"""Frame sequences on the command line: ``plate.####.exr``, ``plate.%04d.exr`` or plain files.
+
+A run of ``n`` ``#`` stands for an ``n``-digit, zero-padded frame number (Nuke's convention;
+``plate.#.exr`` therefore matches ``plate.7.exr``, ``plate.10.exr``...), ``%0nd`` the same in
+printf style and ``%d`` any unpadded number. Without a frame range a pattern expands to the
+files that exist; with one (``first-last``) to every frame of the range, so a missing frame is
+reported rather than silently skipped.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from pathlib import Path
+
+from ocio_vp.errors import InputError
+
+__all__ = ["expand_frames", "frame_pattern", "output_paths", "parse_frame_range"]
+
+_PATTERN = re.compile(r"#+|%0?(\d*)d")
+
+
+def frame_pattern(text: str) -> tuple[str, str, int] | None:
+    """Split ``text`` (a file name, no folder) into ``(prefix, suffix, padding)``, or None.
+
+    Only one frame field per name is allowed; ``padding`` 0 means unpadded.
+    """
+    matches = list(_PATTERN.finditer(text))
+    if not matches:
+        return None
+    if len(matches) > 1:
+        raise InputError("more than one frame field (#, %0Nd) in the name", source=text)
+    m = matches[0]
+    if m.group(0).startswith("#"):
+        padding = len(m.group(0))
+        padding = 0 if padding == 1 else padding
+    else:
+        padding = int(m.group(1) or 0)
+    return text[: m.start()], text[m.end() :], padding
+
+
+def parse_frame_range(text: str) -> range:
+    """``"1001-1100"`` -> range(1001, 1101); a single number is a one-frame range."""
+    m = re.fullmatch(r"\s*(-?\d+)\s*(?:-\s*(-?\d+)\s*)?", text)
+    if not m:
+        raise InputError(f"expected FIRST-LAST, got {text!r}", key="--frames")
+    first = int(m.group(1))
+    last = int(m.group(2)) if m.group(2) is not None else first
+    if last < first:
+        raise InputError(f"the last frame {last} is before the first {first}", key="--frames")
+    return range(first, last + 1)
+
+
+def _format(prefix: str, suffix: str, padding: int, frame: int) -> str:
+    return f"{prefix}{frame:0{padding}d}{suffix}" if padding else f"{prefix}{frame}{suffix}"
+
+
+def expand_frames(args: Sequence[str], *, frames: range | None = None) -> list[Path]:
+    """The input files named by ``args`` (patterns or plain paths), in order, without repeats.
+
+    Raises
+    ------
+    InputError
+        A pattern that matches no file (and no ``frames`` range was given), or a folder.
+    """
+    out: list[Path] = []
+    seen: set[Path] = set()
+    for arg in args:
+        path = Path(arg)
+        parts = frame_pattern(path.name)
+        if parts is None:
+            if path.is_dir():
+                raise InputError(
+                    "is a folder; name frames or a pattern such as plate.####.exr", source=arg
+                )
+            found = [path]
+        else:
+            prefix, suffix, padding = parts
+            folder = path.parent
+            if frames is not None:
+                found = [folder / _format(prefix, suffix, padding, f) for f in frames]
+            else:
+                digits = r"-?\d+" if padding == 0 else rf"-?\d{{{padding},}}"
+                regex = re.compile(re.escape(prefix) + f"({digits})" + re.escape(suffix))
+                numbered = []
+                if folder.is_dir():
+                    for entry in folder.iterdir():
+                        m = regex.fullmatch(entry.name)
+                        if m and entry.is_file():
+                            numbered.append((int(m.group(1)), entry))
+                if not numbered:
+                    raise InputError("no frames match this pattern", source=arg)
+                found = [p for _, p in sorted(numbered)]
+        for p in found:
+            if p not in seen:
+                seen.add(p)
+                out.append(p)
+    return out
+
+
+def output_paths(inputs: Sequence[Path], out_dir: Path) -> list[Path]:
+    """``out_dir / name`` for each input; two inputs with one name would overwrite each other."""
+    outputs = [Path(out_dir) / p.name for p in inputs]
+    names: dict[Path, Path] = {}
+    for src, dst in zip(inputs, outputs, strict=True):
+        if dst in names:
+            raise InputError(f"{names[dst]} and {src} would both be written to {dst}", key="FRAMES")
+        names[dst] = src
+        if src.resolve() == dst.resolve():
+            raise InputError("--out would overwrite the input frame", source=str(src))
+    return outputs

@@ -1,0 +1,286 @@
+"""``ocio-vp apply``: pixels equal numpy's Q maths, everything else passes through untouched.
+
+The reference for the colour maths is numpy (``Q @ rgb`` in float64 from solution.json's Q,
+independent of OCIO); the reference for "untouched" is the input file itself, read back with
+OpenImageIO (bitwise equality of the other channels, metadata, windows, compression).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from conftest import make_measurements_dict
+
+from ocio_vp.apply import apply_in_place, cpu_processor, load_post_correction
+from ocio_vp.cli import main
+from ocio_vp.errors import InputError
+from ocio_vp.sequences import expand_frames, frame_pattern, output_paths, parse_frame_range
+
+oiio = pytest.importorskip("OpenImageIO")
+
+
+@pytest.fixture(scope="module")
+def solution_dir(tmp_path_factory) -> Path:
+    root = tmp_path_factory.mktemp("solve")
+    path = root / "stage.yaml"
+    path.write_text(yaml.safe_dump(make_measurements_dict(environments=1)))
+    assert main(["solve", str(path), "--out", str(root / "calib")]) == 0
+    return root / "calib" / "env_0"
+
+
+def _Q(solution_dir: Path) -> np.ndarray:
+    return np.asarray(json.loads((solution_dir / "solution.json").read_text())["Q"])
+
+
+def write_image(
+    path, pixels, names, *, fmt="float", formats=None, attrs=None, origin=(0, 0), full=None
+):
+    h, w, c = pixels.shape
+    spec = oiio.ImageSpec(w, h, c, fmt)
+    spec.channelnames = tuple(names)
+    if formats:
+        spec.channelformats = tuple(oiio.TypeDesc(f) for f in formats)
+    spec.x, spec.y = origin
+    if full:
+        spec.full_x, spec.full_y, spec.full_width, spec.full_height = full
+    for k, v in (attrs or {}).items():
+        spec.attribute(k, v)
+    out = oiio.ImageOutput.create(str(path))
+    assert out.open(str(path), spec), oiio.geterror()
+    assert out.write_image(np.ascontiguousarray(pixels, dtype=np.float32))
+    out.close()
+
+
+def read_image(path):
+    inp = oiio.ImageInput.open(str(path))
+    spec = oiio.ImageSpec(inp.spec())
+    pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
+    inp.close()
+    return spec, np.asarray(pixels).reshape(spec.height, spec.width, spec.nchannels)
+
+
+def test_float_rgb_pixels_equal_numpy(tmp_path, solution_dir):
+    rng = np.random.default_rng(1)
+    rgb = rng.uniform(-0.1, 4.0, size=(24, 40, 3))
+    write_image(tmp_path / "in.exr", rgb, "RGB")
+    out = tmp_path / "out"
+    rc = main(
+        [
+            "apply",
+            str(solution_dir),
+            str(tmp_path / "in.exr"),
+            "--out",
+            str(out),
+            "--no-progress",
+            "--workers",
+            "1",
+        ]
+    )
+    assert rc == 0
+    _, got = read_image(out / "in.exr")
+    expected = rgb.astype(np.float32).astype(np.float64) @ _Q(solution_dir).T
+    np.testing.assert_allclose(got, expected, atol=1e-5, rtol=1e-5)
+
+
+def test_half_rgba_depth_aovs_metadata_window_pass_through(tmp_path, solution_dir):
+    rng = np.random.default_rng(2)
+    h, w = 20, 30
+    names = ("R", "G", "B", "A", "Z", "diffuse.R", "diffuse.G", "diffuse.B")
+    pixels = rng.uniform(0.0, 2.0, size=(h, w, len(names)))
+    pixels[..., 4] = rng.uniform(1.0, 1000.0, size=(h, w))  # depth in float
+    pixels[0, 0, :3] = [np.inf, 1.0, 0.5]  # alpha must survive an infinite pixel
+    formats = ("half", "half", "half", "half", "float", "half", "half", "half")
+    attrs = {"compression": "piz", "Owner": "stage-a unit", "ocio_vp_test:take": "T042"}
+    src = tmp_path / "plate.exr"
+    write_image(
+        src,
+        pixels,
+        names,
+        fmt="half",
+        formats=formats,
+        attrs=attrs,
+        origin=(7, 3),
+        full=(0, 0, 64, 48),
+    )
+    in_spec, original = read_image(src)
+    out = tmp_path / "out"
+    assert (
+        main(
+            [
+                "apply",
+                str(solution_dir),
+                str(src),
+                "--out",
+                str(out),
+                "--no-progress",
+                "--workers",
+                "1",
+            ]
+        )
+        == 0
+    )
+    spec, got = read_image(out / "plate.exr")
+    # Other channels: bitwise identical to the input as stored (half/float).
+    np.testing.assert_array_equal(got[..., 3:], original[..., 3:])
+    # RGB: numpy maths on the stored half values, rounded to half as the file stores it.
+    expected = (original[..., :3].astype(np.float64) @ _Q(solution_dir).T).astype(np.float16)
+    finite = np.isfinite(expected).all(axis=-1)
+    np.testing.assert_allclose(got[..., :3][finite], expected[finite], rtol=2**-10, atol=1e-6)
+    assert tuple(spec.channelnames) == names
+    assert [str(t) for t in spec.channelformats] == list(formats)
+    assert (spec.x, spec.y, spec.width, spec.height) == (7, 3, w, h)
+    assert (spec.full_x, spec.full_y, spec.full_width, spec.full_height) == (0, 0, 64, 48)
+    assert spec.get_string_attribute("compression") == in_spec.get_string_attribute("compression")
+    assert spec.get_string_attribute("compression") == "piz"
+    assert spec.get_string_attribute("Owner") == "stage-a unit"
+    assert spec.get_string_attribute("ocio_vp_test:take") == "T042"
+
+
+def test_second_subimage_without_rgb_passes_through(tmp_path, solution_dir):
+    src = tmp_path / "multi.exr"
+    rgb = np.full((8, 8, 3), 0.5, dtype=np.float32)
+    depth = np.arange(64, dtype=np.float32).reshape(8, 8, 1)
+    specs = [oiio.ImageSpec(8, 8, 3, "float"), oiio.ImageSpec(8, 8, 1, "float")]
+    specs[0].attribute("name", "beauty")
+    specs[1].channelnames = ("Z",)
+    specs[1].attribute("name", "depth")
+    out = oiio.ImageOutput.create(str(src))
+    assert out.open(str(src), specs)
+    assert out.write_image(rgb)
+    assert out.open(str(src), specs[1], "AppendSubimage")
+    assert out.write_image(depth)
+    out.close()
+    dst_dir = tmp_path / "out"
+    assert (
+        main(
+            [
+                "apply",
+                str(solution_dir),
+                str(src),
+                "--out",
+                str(dst_dir),
+                "--no-progress",
+                "--workers",
+                "1",
+            ]
+        )
+        == 0
+    )
+    inp = oiio.ImageInput.open(str(dst_dir / "multi.exr"))
+    beauty = inp.read_image(0, 0, 0, 3, oiio.FLOAT)
+    z = inp.read_image(1, 0, 0, 1, oiio.FLOAT)
+    inp.close()
+    np.testing.assert_allclose(
+        beauty.reshape(8, 8, 3)[0, 0], _Q(solution_dir) @ np.full(3, 0.5), atol=1e-5
+    )
+    np.testing.assert_array_equal(np.asarray(z).reshape(8, 8, 1), depth)
+
+
+def test_corrupt_frame_in_sequence_is_reported_and_others_done(tmp_path, solution_dir, capsys):
+    seq = tmp_path / "seq"
+    seq.mkdir()
+    for f in range(1001, 1006):
+        write_image(seq / f"plate.{f:04d}.exr", np.full((16, 16, 3), f / 1000.0), "RGB")
+    good = (seq / "plate.1003.exr").read_bytes()
+    (seq / "plate.1003.exr").write_bytes(good[: len(good) // 2])  # truncated mid-pixels
+    out = tmp_path / "out"
+    args = [
+        "apply",
+        str(solution_dir),
+        str(seq / "plate.####.exr"),
+        "--out",
+        str(out),
+        "--no-progress",
+        "--workers",
+        "1",
+    ]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "plate.1003.exr" in err and "plate.1001.exr" not in err
+    written = sorted(p.name for p in out.iterdir())
+    assert written == [f"plate.{f}.exr" for f in (1001, 1002, 1004, 1005)]  # no partials left
+    _, px = read_image(out / "plate.1005.exr")
+    np.testing.assert_allclose(px[3, 3], _Q(solution_dir) @ np.full(3, 1.005), atol=1e-5)
+    # Resume: the four good frames are skipped; the fixed frame is now done.
+    (seq / "plate.1003.exr").write_bytes(good)
+    before = (out / "plate.1001.exr").stat().st_mtime_ns
+    assert main(args) == 0
+    assert "4 already done" in capsys.readouterr().out
+    assert (out / "plate.1001.exr").stat().st_mtime_ns == before
+    assert (out / "plate.1003.exr").is_file()
+
+
+def test_frame_range_reports_missing_frames(tmp_path, solution_dir, capsys):
+    for f in (1, 2, 4):
+        write_image(tmp_path / f"shot_{f:03d}.exr", np.ones((4, 4, 3)), "RGB")
+    rc = main(
+        [
+            "apply",
+            str(solution_dir),
+            str(tmp_path / "shot_%03d.exr"),
+            "--frames",
+            "1-4",
+            "--out",
+            str(tmp_path / "o"),
+            "--no-progress",
+            "--workers",
+            "1",
+        ]
+    )
+    assert rc == 2
+    assert "shot_003.exr: no such frame" in capsys.readouterr().err
+    assert len(list((tmp_path / "o").iterdir())) == 3
+
+
+def test_bad_solution_dir_is_an_input_error(tmp_path, capsys):
+    assert main(["apply", str(tmp_path), "x.exr", "--out", str(tmp_path / "o")]) == 2
+    assert "solution.json" in capsys.readouterr().err
+
+
+class TestApplyInPlace:
+    def test_threads_and_channel_order_match_numpy(self, solution_dir):
+        cpu = cpu_processor(load_post_correction(solution_dir))
+        Q = _Q(solution_dir)
+        rng = np.random.default_rng(3)
+        img = rng.uniform(0, 1, size=(37, 11, 5)).astype(np.float32)
+        ref = img.copy()
+        apply_in_place(cpu, img, rgb=(4, 2, 0), threads=3)
+        expected = ref[..., [4, 2, 0]].astype(np.float64) @ Q.T
+        np.testing.assert_allclose(img[..., [4, 2, 0]], expected, atol=1e-5)
+        np.testing.assert_array_equal(img[..., [1, 3]], ref[..., [1, 3]])
+
+    def test_rejects_non_float32(self, solution_dir):
+        cpu = cpu_processor(load_post_correction(solution_dir))
+        with pytest.raises(ValueError, match="float32"):
+            apply_in_place(cpu, np.zeros((2, 2, 3)))
+
+
+class TestSequences:
+    def test_patterns(self):
+        assert frame_pattern("a.####.exr") == ("a.", ".exr", 4)
+        assert frame_pattern("a.%04d.exr") == ("a.", ".exr", 4)
+        assert frame_pattern("a.%d.exr") == ("a.", ".exr", 0)
+        assert frame_pattern("a.#.exr") == ("a.", ".exr", 0)
+        assert frame_pattern("a.exr") is None
+        with pytest.raises(InputError, match="more than one"):
+            frame_pattern("a.##.%04d.exr")
+
+    def test_expand_sorts_numerically_and_ranges(self, tmp_path):
+        for f in (9, 10, 100):
+            (tmp_path / f"p.{f}.exr").write_bytes(b"")
+        (tmp_path / "p.x.exr").write_bytes(b"")
+        got = expand_frames([str(tmp_path / "p.#.exr")])
+        assert [p.name for p in got] == ["p.9.exr", "p.10.exr", "p.100.exr"]
+        assert parse_frame_range("1001-1003") == range(1001, 1004)
+        with pytest.raises(InputError, match="before"):
+            parse_frame_range("5-1")
+        with pytest.raises(InputError, match="no frames match"):
+            expand_frames([str(tmp_path / "q.####.exr")])
+
+    def test_output_collisions_are_errors(self, tmp_path):
+        with pytest.raises(InputError, match="both be written"):
+            output_paths([Path("a/x.exr"), Path("b/x.exr")], tmp_path)
