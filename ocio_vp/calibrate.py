@@ -155,7 +155,17 @@ def solve_environment(
         measurements_file=Path(source).name if source else None,
         measurements_sha256=measurements.sha256,
         camera_colorspace=measurements.stage.camera_colorspace,
+        linearity=_panel_linearity(measurements),
     )
+
+
+def _panel_linearity(measurements: Measurements) -> dict | None:
+    """The ``linearity`` block from the ``ramps`` section (None when there is none)."""
+    if measurements.ramps is None:
+        return None
+    from ocio_vp.linearity import fit_linearity
+
+    return fit_linearity(measurements.ramps, measurements.SL, source=measurements.source)
 
 
 def solve_measurements(

@@ -22,8 +22,16 @@ def write_environment(solution: Solution, directory: Path) -> Solution:
 
     Returns the solution with its ``ocio`` block filled in, as written to ``solution.json``.
     """
-    solution = dataclasses.replace(solution, ocio=ocio_names())
-    config = build_config(solution)
+    from ocio_vp.wall_encoding import wall_outputs
+
+    wall = wall_outputs(solution)  # panel-linearity LUT sidecar and wall signal encoding
+    solution = dataclasses.replace(solution, ocio=ocio_names(), linearity=wall.linearity)
+    config = build_config(
+        solution, extra_wall_transforms=wall.extra_wall_transforms, search_path=wall.search_path
+    )
+    for relative, text in wall.files.items():
+        (directory / relative).parent.mkdir(parents=True, exist_ok=True)
+        (directory / relative).write_text(text, encoding="utf-8")
     write_config(config, directory)
     (directory / "solution.json").write_text(solution_to_json(solution), encoding="utf-8")
     return solution

@@ -30,6 +30,20 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="in-frustum black-level offset: exact (-M b, default) or the paper's b/w_camera",
     )
     parser.add_argument("--environment", action="append", help="solve only these (repeatable)")
+    parser.add_argument(
+        "--wall-encoding",
+        choices=("linear", "gamma2.4", "pq"),
+        default="linear",
+        help="signal the wall colorspaces output (after M/N and the linearity LUT): linear "
+        "drive (default), gamma 2.4, or SMPTE ST 2084 PQ (see docs/linearity.md)",
+    )
+    parser.add_argument(
+        "--peak-nits",
+        type=float,
+        default=1000.0,
+        help="with --wall-encoding pq: luminance (cd/m2) of drive 1.0, the level of the "
+        "measured primaries (default: %(default)s)",
+    )
     parser.set_defaults(func=run)
 
 
@@ -79,6 +93,14 @@ def run(args: argparse.Namespace) -> int:
     solutions = [
         solve_environment(measurements, env, method=method, black_level=args.black_level)
         for env in environments
+    ]
+    from ocio_vp.errors import InputError
+    from ocio_vp.wall_encoding import with_wall_encoding
+
+    if not 0 < args.peak_nits <= 10000:
+        raise InputError(f"expected 0 < cd/m2 <= 10000, got {args.peak_nits:g}", key="--peak-nits")
+    solutions = [
+        with_wall_encoding(s, args.wall_encoding, peak_nits=args.peak_nits) for s in solutions
     ]
     written = write_solutions(solutions, args.out)
     print_table(written)

@@ -1,0 +1,272 @@
+"""What the wall colorspaces append after the matrix: the linearity LUT and the signal encoding.
+
+Chain (reference -> wall signal), for both ``LED Wall - Outer Frustum`` (M) and
+``LED Wall - Inner Frustum`` (N + offset)::
+
+    matrix  ->  FileTransform luts/<stage>_panel_linearity.clf  ->  encoding
+
+The LUT is the inverse of each channel's measured response (:mod:`ocio_vp.linearity`), in
+linear drive (1.0 = the level of ``primaries``). A plain 1D LUT clamps its input to [0, 1],
+and a half-domain LUT has 65536 entries (over the 4095 that stay a 1D texture on GPU hosts), so
+the sidecar is a *shaper + LUT*: a scale by ``1/H`` (a CLF Matrix node) then a 4095-entry LUT
+over drive [0, H]. Above drive 1.0 the table is the identity, which linear interpolation
+reproduces exactly, so HDR drive up to ``H`` passes unchanged; ``H`` follows the encoding:
+
+- ``linear``: ``H`` = :data:`LINEAR_HEADROOM` (16, four stops above the ramp's top step);
+- ``gamma2.4``: ``H`` = 1 (the encoded signal cannot exceed 1.0; the wall clips there anyway);
+- ``pq``: ``H`` = ceil(10000 / peak_nits) (PQ's own ceiling, drive 1.0 shown at ``peak_nits``).
+
+``H`` is a whole number and the LUT has ``floor(4094 / H) * H + 1`` entries so that drive 1.0 is
+a knot. The price is resolution below 1.0: ``floor(4094 / H)`` intervals per unit of drive
+(4094 for gamma 2.4, 255 for linear, 409 for PQ at 1000 nits).
+
+Drive below 0 (outside the LED gamut) is sent as black, as the wall would show it.
+
+Encodings: ``gamma2.4`` is ``drive^(1/2.4)`` (OCIO ExponentTransform, inverse direction;
+BT.1886 with a zero black), ``pq`` is SMPTE ST 2084 of ``drive * peak_nits`` (a scale to
+OCIO's nits/100 then the builtin ``CURVE - LINEAR_to_ST-2084``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ocio_vp.linearity import CHANNELS, inverse_response, response_model
+
+__all__ = [
+    "DEFAULT_PEAK_NITS",
+    "LINEAR_HEADROOM",
+    "LUT_SIZE",
+    "WALL_ENCODINGS",
+    "WallOutputs",
+    "apply_lut",
+    "encode",
+    "encoding_transforms",
+    "lut_domain_max",
+    "lut_table",
+    "lut_transform",
+    "wall_outputs",
+    "with_wall_encoding",
+]
+
+WALL_ENCODINGS = ("linear", "gamma2.4", "pq")
+DEFAULT_PEAK_NITS = 1000.0
+#: LUT domain above drive 1.0 for a linear (float) wall signal: four stops of headroom.
+LINEAR_HEADROOM = 16.0
+#: <= 4095 entries: the LUT stays a 1D texture on GPU hosts (OCIO's limit for 1D textures).
+LUT_SIZE = 4095
+LUT_DIR = "luts"
+CLF_FORMAT = "Academy/ASC Common LUT Format"
+#: Dense check grid for the LUT's accuracy (drive in [0, 1]).
+_CHECK_POINTS = 20001
+
+_PQ = {  # SMPTE ST 2084:2014 constants
+    "m1": 2610 / 16384,
+    "m2": 2523 / 4096 * 128,
+    "c1": 3424 / 4096,
+    "c2": 2413 / 4096 * 32,
+    "c3": 2392 / 4096 * 32,
+}
+
+
+def _check(encoding: str, peak_nits: float) -> None:
+    if encoding not in WALL_ENCODINGS:
+        raise ValueError(f"unknown wall encoding {encoding!r}; expected one of {WALL_ENCODINGS}")
+    if not (np.isfinite(peak_nits) and 0 < peak_nits <= 10000):
+        raise ValueError(f"peak_nits must be in (0, 10000], got {peak_nits!r}")
+
+
+def lut_domain_max(encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS) -> float:
+    """``H``: the largest drive the LUT passes (see the module docstring)."""
+    _check(encoding, peak_nits)
+    if encoding == "gamma2.4":
+        return 1.0
+    if encoding == "pq":  # a whole number, so drive 1.0 falls on a LUT knot
+        return float(max(1, math.ceil(10000.0 / peak_nits - 1e-9)))
+    return LINEAR_HEADROOM
+
+
+def encode(drive: np.ndarray, encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS) -> np.ndarray:
+    """Numpy model of the wall encoding: linear drive (..., 3) -> wall signal."""
+    _check(encoding, peak_nits)
+    drive = np.asarray(drive, dtype=np.float64)
+    if encoding == "linear":
+        return drive
+    if encoding == "gamma2.4":
+        return np.maximum(drive, 0.0) ** (1 / 2.4)
+    y = np.maximum(drive * peak_nits / 10000.0, 0.0) ** _PQ["m1"]
+    return ((_PQ["c1"] + _PQ["c2"] * y) / (1 + _PQ["c3"] * y)) ** _PQ["m2"]
+
+
+def encoding_transforms(encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS) -> list:
+    """OCIO transforms for the wall encoding (empty for ``linear``)."""
+    import PyOpenColorIO as OCIO
+
+    from ocio_vp.ocio_config import matrix_transform
+
+    _check(encoding, peak_nits)
+    if encoding == "linear":
+        return []
+    if encoding == "gamma2.4":
+        return [
+            OCIO.ExponentTransform(value=[2.4, 2.4, 2.4, 1.0], direction=OCIO.TRANSFORM_DIR_INVERSE)
+        ]
+    # The builtin takes linear nits/100.
+    return [
+        matrix_transform(np.eye(3) * (peak_nits / 100.0)),
+        OCIO.BuiltinTransform(style="CURVE - LINEAR_to_ST-2084"),
+    ]
+
+
+# --------------------------------------------------------------------------------------------
+# The LUT sidecar.
+
+
+def lut_table(
+    linearity: Mapping[str, Any], *, domain_max: float, size: int = LUT_SIZE
+) -> np.ndarray:
+    """The LUT (n, 3) over drive ``[0, domain_max]``: ``r^-1(x)`` for corrected channels,
+    the identity for the others and above drive 1.0.
+
+    ``n <= size`` is chosen so that drive 1.0 is a knot (``domain_max`` is a whole number):
+    the identity above it is then reproduced exactly by linear interpolation.
+    """
+    per_unit = (size - 1) // int(domain_max)
+    x = np.linspace(0.0, domain_max, per_unit * int(domain_max) + 1)
+    table = np.repeat(x[:, None], 3, axis=1)
+    for k, name in enumerate(CHANNELS):
+        channel = linearity["channels"][name]
+        if channel["corrected"]:
+            table[:, k] = inverse_response(
+                np.asarray(channel["drive"]), np.asarray(channel["response"]), x
+            )
+    return table
+
+
+def apply_lut(table: np.ndarray, domain_max: float, rgb: np.ndarray) -> np.ndarray:
+    """Numpy model of the sidecar: scale by ``1/domain_max``, clamp to [0, 1], interpolate."""
+    rgb = np.asarray(rgb, dtype=np.float64)
+    n = table.shape[0]
+    position = np.clip(rgb / domain_max, 0.0, 1.0) * (n - 1)
+    index = np.minimum(np.floor(position).astype(int), n - 2)
+    frac = position - index
+    out = np.empty_like(position)
+    for k in range(3):
+        column = table[:, k]
+        i = index[..., k]
+        out[..., k] = column[i] * (1 - frac[..., k]) + column[i + 1] * frac[..., k]
+    return out
+
+
+def lut_transform(table: np.ndarray, domain_max: float):
+    """The sidecar as an OCIO GroupTransform: a shaper scale then the 1D LUT."""
+    import PyOpenColorIO as OCIO
+
+    from ocio_vp.ocio_config import matrix_transform
+
+    lut = OCIO.Lut1DTransform(length=table.shape[0], inputHalfDomain=False)
+    lut.setInterpolation(OCIO.INTERP_LINEAR)
+    for i, (r, g, b) in enumerate(table):
+        lut.setValue(i, float(r), float(g), float(b))
+    transforms = [] if domain_max == 1.0 else [matrix_transform(np.eye(3) / domain_max)]
+    return OCIO.GroupTransform([*transforms, lut])
+
+
+def _lut_accuracy(linearity: Mapping[str, Any], table: np.ndarray, domain_max: float) -> float:
+    """max |r(LUT(x)) - x| over drive [0, 1]: how linear the modelled panel is after the LUT."""
+    x = np.linspace(0.0, 1.0, _CHECK_POINTS)
+    corrected = apply_lut(table, domain_max, np.repeat(x[:, None], 3, axis=1))
+    worst = 0.0
+    for k, name in enumerate(CHANNELS):
+        channel = linearity["channels"][name]
+        if channel["corrected"]:
+            model = response_model(np.asarray(channel["drive"]), np.asarray(channel["response"]))
+            # the LUT's output can pass 1.0 by an ulp; the response is linear there
+            drive = np.clip(corrected[:, k], 0.0, 1.0)
+            worst = max(worst, float(np.max(np.abs(model(drive) - x))))
+    return worst
+
+
+# --------------------------------------------------------------------------------------------
+# What the writer needs.
+
+
+@dataclass(frozen=True)
+class WallOutputs:
+    """Transforms to append to the wall colorspaces, sidecar files (relative path -> text),
+    the config search path, and the ``linearity`` block as it goes into ``solution.json``."""
+
+    extra_wall_transforms: dict[str, list] | None = None
+    search_path: str | None = None
+    files: dict[str, str] = field(default_factory=dict)
+    linearity: dict[str, Any] | None = None
+
+
+def with_wall_encoding(solution, encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS):
+    """A copy of ``solution`` whose ``linearity`` block records the wall signal encoding."""
+    _check(encoding, peak_nits)
+    if encoding == "linear" and solution.linearity is None:
+        return solution
+    linearity = dict(solution.linearity or {"measured": False, "model": "linear (assumed)"})
+    linearity["wall_encoding"] = {"name": encoding}
+    if encoding == "pq":
+        linearity["wall_encoding"]["peak_nits"] = float(peak_nits)
+    return dataclasses.replace(solution, linearity=linearity)
+
+
+def wall_outputs(solution) -> WallOutputs:
+    """Build the LUT sidecar (when a channel needs it) and the encoding transforms."""
+    import PyOpenColorIO as OCIO
+
+    from ocio_vp.ocio_config import IN_FRUSTUM, OUT_OF_FRUSTUM
+
+    linearity = solution.linearity
+    if linearity is None:
+        return WallOutputs()
+    linearity = dict(linearity)
+    encoding_info = linearity.get("wall_encoding") or {"name": "linear"}
+    encoding = encoding_info["name"]
+    peak_nits = float(encoding_info.get("peak_nits", DEFAULT_PEAK_NITS))
+    lut_name = None
+    files: dict[str, str] = {}
+    channels = linearity.get("channels") or {}
+    if any(channels[c]["corrected"] for c in channels):
+        domain_max = lut_domain_max(encoding, peak_nits=peak_nits)
+        table = lut_table(linearity, domain_max=domain_max)
+        name = f"{solution.stage}_panel_linearity.clf"
+        group = lut_transform(table, domain_max)
+        group.getFormatMetadata().addChildElement(
+            "Description",
+            f"ocio_vp panel-linearity pre-correction for stage {solution.stage}: per-channel "
+            f"inverse of the measured ramp response; drive [0, {domain_max:g}] -> drive.",
+        )
+        files[f"{LUT_DIR}/{name}"] = group.write(
+            formatName=CLF_FORMAT, config=OCIO.Config.CreateRaw()
+        )
+        lut_name = name
+        linearity["lut"] = {
+            "file": f"{LUT_DIR}/{name}",
+            "entries": int(table.shape[0]),
+            "domain_max": domain_max,
+            "shaper": f"scale by 1/{domain_max:g}" if domain_max != 1.0 else "none",
+            "max_error": _lut_accuracy(linearity, table, domain_max),
+        }
+
+    def chain() -> list:  # fresh objects for each colorspace
+        lut = [] if lut_name is None else [OCIO.FileTransform(src=lut_name)]
+        return lut + encoding_transforms(encoding, peak_nits=peak_nits)
+
+    if not chain():
+        return WallOutputs(linearity=linearity)
+    return WallOutputs(
+        extra_wall_transforms={OUT_OF_FRUSTUM: chain(), IN_FRUSTUM: chain()},
+        search_path=LUT_DIR if files else None,
+        files=files,
+        linearity=linearity,
+    )
