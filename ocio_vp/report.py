@@ -74,24 +74,31 @@ def template_dir() -> Path:
 
 
 def linearity_curves(linearity: Any) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """Before/after response curves from a solution's ``linearity`` block, if it has any.
+    """Panel response curves before/after the linearity LUT from a solution's ``linearity``.
 
-    Reads ``linearity.channels.<channel>`` entries with ``drive`` and any of ``measured``
-    (before the LUT) / ``corrected`` (after); anything else yields no curves.
+    Reads what :func:`ocio_vp.linearity.fit_linearity` writes: ``channels.<name>`` with the
+    response knots ``drive``/``response`` (before). For a channel marked ``corrected`` the
+    "after" curve is the response model applied to the LUT's drive,
+    ``r(r^-1(x))`` on 33 steps; an uncorrected channel has no LUT, so no "after" curve.
     """
     curves: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     channels = linearity.get("channels") if isinstance(linearity, dict) else None
     if not isinstance(channels, dict):
         return curves
     for channel, entry in channels.items():
-        if not isinstance(entry, dict) or "drive" not in entry:
+        if not isinstance(entry, dict) or "drive" not in entry or "response" not in entry:
             continue
-        x = np.asarray(entry["drive"], dtype=np.float64)
-        for key, when in (("measured", "before"), ("corrected", "after")):
-            if key in entry:
-                y = np.asarray(entry[key], dtype=np.float64)
-                if y.shape == x.shape and np.all(np.isfinite(y)):
-                    curves[f"{channel} {when}"] = (x, y)
+        drive = np.asarray(entry["drive"], dtype=np.float64)
+        response = np.asarray(entry["response"], dtype=np.float64)
+        if drive.shape != response.shape or not np.all(np.isfinite(response)):
+            continue
+        curves[f"{channel} before"] = (drive, response)
+        if entry.get("corrected") is True:
+            from ocio_vp.linearity import inverse_response, response_model
+
+            x = np.linspace(0.0, 1.0, 33)
+            after = response_model(drive, response)(inverse_response(drive, response, x))
+            curves[f"{channel} after"] = (x, np.asarray(after, dtype=np.float64))
     return curves
 
 

@@ -248,25 +248,32 @@ def plot_linearity(
     title: str = "Panel linearity",
     dpi: float = 110,
 ) -> LinearityPlot:
-    """Response curves (drive -> normalised camera response) with the ideal line y = x.
+    """Panel response (drive -> normalised camera response) and its deviation from linear.
 
     ``curves`` maps a label such as ``"red before"``/``"red after"`` to ``(x, y)``; the label's
-    first word picks the channel colour, ``after`` curves are dashed.
+    first word picks the channel colour, ``after`` curves are dashed. Left: the curves with the
+    ideal line y = x; right: ``y - x`` in percent of the top step, where small deviations show.
     """
-    figure = _figure(6.0, 4.2)
-    ax = figure.subplots()
-    ax.plot([0, 1], [0, 1], color="#999999", lw=0.8, label="linear")
+    figure = _figure(10.0, 4.0)
+    response_ax, deviation_ax = figure.subplots(1, 2)
+    response_ax.plot([0, 1], [0, 1], color="#999999", lw=0.8, label="linear")
+    deviation_ax.axhline(0.0, color="#999999", lw=0.8)
     drawn = {}
     for label, (x, y) in curves.items():
         words = label.lower().split()
         channel = {"red": 0, "green": 1, "blue": 2}.get(words[0] if words else "", None)
         colour = "#333333" if channel is None else CHANNEL_COLOURS[channel]
         style = "--" if "after" in words else "-"
-        (line,) = ax.plot(x, y, style, color=colour, marker=".", ms=4, label=label)
+        x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+        (line,) = response_ax.plot(x, y, style, color=colour, marker=".", ms=4, label=label)
+        deviation_ax.plot(x, 100 * (y - x), style, color=colour, marker=".", ms=4, label=label)
         drawn[label] = (np.asarray(line.get_xdata(), float), np.asarray(line.get_ydata(), float))
-    ax.set_xlabel("drive sent to the wall")
-    ax.set_ylabel("camera response (normalised at the top step)")
-    ax.set_title(title, fontsize=11)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    response_ax.set_xlabel("drive sent to the wall")
+    response_ax.set_ylabel("camera response (normalised at the top step)")
+    deviation_ax.set_xlabel("drive sent to the wall")
+    deviation_ax.set_ylabel("response - drive (% of the top step)")
+    for ax in (response_ax, deviation_ax):
+        ax.grid(alpha=0.3)
+    response_ax.legend(fontsize=8)
+    figure.suptitle(f"{title}: solid = measured, dashed = through the 1D LUT", fontsize=11)
     return LinearityPlot(_save(figure, path, dpi), drawn)

@@ -1,0 +1,312 @@
+"""Tests for the HTML report: it renders, its PNGs decode, and every plotted number is the
+solution's own number (read back from the matplotlib artists, not from pixels)."""
+
+from __future__ import annotations
+
+import copy
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import make_measurements_dict
+
+from ocio_vp.calibrate import solve_measurements
+from ocio_vp.cli import main
+from ocio_vp.diagnostics import error_relative_to_white
+from ocio_vp.measurements import measurements_from_dict
+from ocio_vp.report import build_report, linearity_curves
+from ocio_vp.report_data import (
+    DISPLAY_WHITE,
+    STAGE_CHARTS,
+    colorchecker_srgb,
+    delta_e,
+    fit_display_matrix,
+)
+from ocio_vp.writer import write_solutions
+
+TOL = 1e-9
+DPI = 30  # small PNGs keep the tests fast; sizes below are figsize (inches) x DPI
+SAMPLE = Path(__file__).resolve().parent.parent / "sample_configs"
+
+
+def _solve(tmp: Path, document: dict) -> Path:
+    measurements = measurements_from_dict(document, source=str(tmp / "m.json"))
+    out = tmp / "solved"
+    write_solutions(solve_measurements(measurements), out)
+    return out
+
+
+@pytest.fixture(scope="module")
+def solved(tmp_path_factory) -> Path:
+    return _solve(tmp_path_factory.mktemp("report"), make_measurements_dict(environments=3))
+
+
+@pytest.fixture(scope="module")
+def report(solved):
+    return build_report([solved], solved / "report", dpi=DPI)
+
+
+def _json(solved: Path, environment: str) -> dict:
+    return json.loads((solved / environment / "solution.json").read_text())
+
+
+def _srgb_decode(v: np.ndarray) -> np.ndarray:
+    # IEC 61966-2-1 piecewise sRGB decoding, written out (independent of colour-science).
+    v = np.asarray(v, dtype=np.float64)
+    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+
+
+class TestRender:
+    def test_every_image_exists_and_decodes(self, report):
+        import matplotlib.image
+
+        html = report.index.read_text()
+        sources = re.findall(r'<img[^>]*\bsrc="([^"]+)"', html)
+        # 2 Fig. 11 panels + (charts, ΔE) per environment; no linearity in this data.
+        assert len(sources) == 2 + 2 * 3
+        for source in sources:
+            image = matplotlib.image.imread(report.index.parent / source)
+            assert image.ndim == 3 and image.shape[2] in (3, 4)
+        charts = matplotlib.image.imread(next(iter(report.charts.values())).path)
+        assert charts.shape[:2] == (round(7.4 * DPI), round(10.0 * DPI))
+        bars = matplotlib.image.imread(report.error_bars["lit"].path)
+        assert bars.shape[0] == round(4.2 * DPI)
+
+    def test_no_external_urls(self, report):
+        html = report.index.read_text()
+        assert not re.search(r"https?:", html, re.IGNORECASE)
+        assert "//" not in re.sub(r"<!--.*?-->", "", html)  # no protocol-relative //host
+        assert "@import" not in html and "url(" not in html
+        for link in re.findall(r'(?:src|href)="([^"]*)"', html):
+            assert link.startswith("#") or (report.index.parent / link).is_file(), link
+
+    def test_pngs_carry_no_web_address(self, report):
+        # matplotlib writes its web address into the PNG "Software" text chunk by default.
+        for plot in [*report.charts.values(), *report.error_bars.values()]:
+            assert b"http" not in plot.path.read_bytes()
+
+    def test_every_environment_has_a_section(self, report, solved):
+        html = report.index.read_text()
+        for environment in ("env_0", "env_1", "env_2"):
+            assert f">{environment}</h2>" in html
+        assert "cond = " in html and "Q method" in html
+
+    def test_nothing_left_behind(self, report, solved):
+        assert not [p for p in solved.iterdir() if p.name.startswith(".")]
+        assert sorted(p.name for p in solved.iterdir()) == ["env_0", "env_1", "env_2", "report"]
+
+
+class TestPlottedNumbers:
+    def test_error_bars_are_the_solutions_errors(self, report, solved):
+        for kind, (base_key, ours_key) in {
+            "lit": ("lit_chart_error_baseline", "lit_chart_error"),
+            "displayed": ("displayed_chart_error_baseline", "displayed_chart_error"),
+        }.items():
+            plot = report.error_bars[kind]
+            assert plot.environments == ["env_0", "env_1", "env_2"]
+            for i, environment in enumerate(plot.environments):
+                d = _json(solved, environment)["diagnostics"]
+                np.testing.assert_allclose(plot.baseline[i], d[base_key], rtol=TOL)
+                np.testing.assert_allclose(plot.ours[i], d[ours_key], rtol=TOL)
+                # And those are the paper's Fig. 11 metric of the charts in the same file.
+                charts = {k: np.array(v) for k, v in d["charts"].items()}
+                closed_form = np.mean(
+                    np.abs(charts[f"{kind}_baseline"] - charts["target"]) / charts["target"][18],
+                    axis=0,
+                )
+                np.testing.assert_allclose(plot.baseline[i], closed_form, rtol=1e-9)
+
+    def test_chart_squares_and_circles_are_the_solution_charts(self, report, solved):
+        for data in report.environments:
+            plot = report.charts[data.key]
+            charts = {
+                k: np.array(v)
+                for k, v in _json(solved, data.solution.environment)["diagnostics"][
+                    "charts"
+                ].items()
+            }
+            A = data.transform.matrix
+            target = charts["target"]
+            exposure = DISPLAY_WHITE / np.max(A @ target[18])
+            for chart in STAGE_CHARTS:
+                squares, circles = plot.squares[chart], plot.circles[chart]
+                assert squares.shape == circles.shape == (24, 3)
+                # Undo the documented display path (sRGB decode, exposure, matrix) on patches
+                # that were not clipped: we get back the camera RGB of solution.json.
+                for drawn, camera, scale in (
+                    (squares, target, exposure),
+                    (circles, charts[chart], exposure * target[18, 1] / charts[chart][18, 1]),
+                ):
+                    linear = _srgb_decode(drawn)
+                    inside = np.all((linear > 1e-6) & (linear < 1 - 1e-6), axis=1)
+                    assert inside.sum() >= 12
+                    back = linear[inside] @ np.linalg.inv(A).T / scale
+                    np.testing.assert_allclose(back, camera[inside], rtol=1e-6, atol=1e-9)
+            # The target white's brightest channel is DISPLAY_WHITE: sRGB(0.9) = 0.95468.
+            assert np.max(plot.squares["lit_baseline"][18]) == pytest.approx(
+                1.055 * 0.9 ** (1 / 2.4) - 0.055, abs=1e-12
+            )
+
+    def test_delta_e_bars_are_the_delta_e(self, report):
+        for data in report.environments:
+            plot = report.delta_e[data.key]
+            for metric in ("CIE 2000", "ITP"):
+                for chart in STAGE_CHARTS:
+                    np.testing.assert_allclose(
+                        plot.values[metric][chart], data.delta_e[metric][chart], rtol=TOL
+                    )
+                    assert np.all(np.isfinite(plot.values[metric][chart]))
+
+
+class TestDisplayMatrix:
+    def test_fit_recovers_a_known_matrix(self):
+        # Closed form: camera RGB made from the reference by an invertible B -> the fit is B^-1.
+        B = np.array([[0.8, 0.15, 0.05], [0.1, 0.85, 0.05], [0.02, 0.1, 0.88]])
+        camera = colorchecker_srgb() @ B.T * 0.37
+        A, residual = fit_display_matrix(camera)
+        np.testing.assert_allclose(A, np.linalg.inv(B) / 0.37, rtol=1e-9)
+        assert residual < 1e-12
+
+    def test_named_camera_colourspace(self, tmp_path):
+        import colour
+
+        document = make_measurements_dict(environments=1)
+        document["stage"]["camera_colorspace"] = "ARRI Wide Gamut 4"
+        out = _solve(tmp_path, document)
+        result = build_report([out / "env_0"], tmp_path / "r", dpi=DPI)
+        A = result.environments[0].transform.matrix
+        # AWG4 and sRGB are both D65: the matrix is XYZ->sRGB times AWG4->XYZ (colour's
+        # published primaries), and camera white (1,1,1) stays display white.
+        awg4 = colour.RGB_COLOURSPACES["ARRI Wide Gamut 4"]
+        srgb = colour.RGB_COLOURSPACES["sRGB"]
+        np.testing.assert_allclose(
+            A, srgb.matrix_XYZ_to_RGB @ awg4.matrix_RGB_to_XYZ, rtol=1e-6, atol=1e-9
+        )
+        # (to the 4 decimals sRGB's published matrix is rounded to)
+        np.testing.assert_allclose(A @ np.ones(3), np.ones(3), atol=5e-4)
+        assert "ARRI Wide Gamut 4" in result.index.read_text()
+
+
+class TestDeltaE:
+    def test_identical_charts_give_zero(self):
+        rng = np.random.default_rng(3)
+        target = rng.uniform(0.05, 0.8, size=(24, 3))
+        charts = {"target": target, **{k: target.copy() for k in STAGE_CHARTS}}
+        result = delta_e(charts, np.eye(3), 18)
+        for metric in ("CIE 2000", "ITP"):
+            for chart in STAGE_CHARTS:
+                np.testing.assert_allclose(result[metric][chart], 0.0, atol=1e-9)
+
+    def test_half_exposed_white_matches_cie2000_closed_form(self):
+        # The stage's white patch at half the target's: a pure lightness difference.
+        # CIE 2000 (Sharma et al. 2005): dE = dL / S_L, S_L = 1 + 0.015 (L-50)^2 / sqrt(20 + (L-50)^2).
+        target = np.full((24, 3), 0.2)
+        target[18] = [0.7, 0.6, 0.5]
+        stage = target.copy()
+        stage[18] *= 0.5
+        charts = {"target": target, **{k: stage for k in STAGE_CHARTS}}
+        result = delta_e(charts, np.eye(3), 18)["CIE 2000"]["lit_baseline"]
+        L1 = 100.0
+        L2 = 116 * 0.5 ** (1 / 3) - 16
+        mean = (L1 + L2) / 2
+        S_L = 1 + 0.015 * (mean - 50) ** 2 / np.sqrt(20 + (mean - 50) ** 2)
+        assert result[18] == pytest.approx((L1 - L2) / S_L, rel=1e-9)
+        np.testing.assert_allclose(np.delete(result, 18), 0.0, atol=1e-9)
+
+
+class TestLinearity:
+    def test_linearity_curves_are_plotted(self, tmp_path, solved):
+        linearity = {
+            "measured": True,
+            "model": "pchip-inverse-1d-lut",
+            "channels": {
+                "red": {
+                    "drive": [0.0, 0.25, 0.5, 0.75, 1.0],
+                    "response": [0.0, 0.2, 0.45, 0.72, 1.0],
+                    "corrected": True,
+                },
+                "green": {
+                    "drive": [0.0, 0.5, 1.0],
+                    "response": [0.0, 0.5, 1.0],
+                    "corrected": False,
+                },
+            },
+        }
+        data = _json(solved, "env_1")
+        data["linearity"] = linearity
+        folder = tmp_path / "env_1"
+        folder.mkdir()
+        (folder / "solution.json").write_text(json.dumps(data))
+        result = build_report([folder], tmp_path / "r", dpi=DPI)
+        plot = next(iter(result.linearity.values()))
+        assert sorted(plot.curves) == ["green before", "red after", "red before"]
+        np.testing.assert_allclose(plot.curves["red before"][1], [0.0, 0.2, 0.45, 0.72, 1.0])
+        # Through the LUT the red response is linear: r(r^-1(x)) = x (PCHIP is exactly
+        # invertible; bisection to float64).
+        x, y = plot.curves["red after"]
+        np.testing.assert_allclose(y, x, atol=1e-9)
+        assert "linearity" in result.index.read_text().lower()
+        assert plot.path.is_file()
+
+    def test_no_linearity_no_curves(self):
+        assert linearity_curves(None) == {}
+        assert linearity_curves({"measured": False, "channels": None}) == {}
+
+
+class TestCommand:
+    def test_default_folder_and_exit_code(self, solved, tmp_path, capsys):
+        import shutil
+
+        copy_dir = tmp_path / "solved"
+        shutil.copytree(solved, copy_dir, ignore=shutil.ignore_patterns("report"))
+        assert main(["report", str(copy_dir), "--dpi", "20"]) == 0
+        assert (copy_dir / "report" / "index.html").is_file()
+        assert "index.html" in capsys.readouterr().out
+
+    def test_missing_folder_is_an_input_error(self, tmp_path, capsys):
+        assert main(["report", str(tmp_path / "nope")]) == 2
+        err = capsys.readouterr().err
+        assert "nope" in err and "error" in err and "Traceback" not in err
+
+    def test_corrupt_solution_leaves_nothing(self, solved, tmp_path, capsys):
+        data = _json(solved, "env_0")
+        broken = copy.deepcopy(data)
+        broken["diagnostics"]["charts"]["lit_corrected"] = [[1.0, 2.0]] * 24
+        folder = tmp_path / "env_0"
+        folder.mkdir()
+        (folder / "solution.json").write_text(json.dumps(broken))
+        assert main(["report", str(folder), "--out", str(tmp_path / "r")]) == 2
+        assert "diagnostics.charts.lit_corrected" in capsys.readouterr().err
+        assert not (tmp_path / "r").exists()
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["env_0"]
+
+
+def test_white_patch_other_than_18(tmp_path):
+    document = make_measurements_dict(environments=1)
+    document["stage"]["white_patch"] = 5
+    target = np.array(document["environments"][0]["target_chart"])
+    target[5] = [0.85, 0.8, 0.75]
+    document["environments"][0]["target_chart"] = target.tolist()
+    out = _solve(tmp_path, document)
+    result = build_report([out], tmp_path / "r", dpi=DPI)
+    data = result.environments[0]
+    assert data.white_patch == 5
+    stored = _json(out, "env_0")["diagnostics"]["lit_chart_error_baseline"]
+    np.testing.assert_allclose(
+        error_relative_to_white(data.charts["lit_baseline"], data.charts["target"], 5),
+        stored,
+        rtol=1e-12,
+    )
+
+
+@pytest.mark.skipif(
+    not (SAMPLE / "stage-a").is_dir(), reason="sample_configs/ not generated yet (issue 3)"
+)
+def test_sample_configs_render(tmp_path):
+    result = build_report([SAMPLE / "stage-a"], tmp_path / "r", dpi=DPI)
+    assert len(result.environments) >= 7
+    for data in result.environments:
+        d = data.solution.diagnostics
+        np.testing.assert_allclose(data.errors["lit_corrected"], d["lit_chart_error"], rtol=TOL)
