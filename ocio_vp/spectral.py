@@ -326,7 +326,7 @@ def simulate_measurements(
         SL=SL,
         SRL=stage.beta * stage.SRL_unscaled,
         environments=tuple(envs),
-        source=f"simulated: {stage.camera_name}, {stage.led_description}, {stage.chart_name}",
+        source=None,  # in memory; solution.json names the file once it is saved
     )
 
 
