@@ -13,6 +13,8 @@ Public functions (other modules build on these; names are stable):
   resize); ``width=None`` reads the full resolution.
 - ``w_avg_from_hdri(path, *, width=DEFAULT_HDRI_WIDTH, normal=FRONT) -> (3,)``: the paper's
   w_avg from an HDRI file.
+- ``environments_with_hdri(measurements, environments, ["ENV=FILE", ...], width=)``: what
+  ``ocio-vp solve --hdri ENV=FILE`` does (w_avg of those environments from their HDRI).
 
 Convention: y is up; row 0 is the zenith, the last row the nadir; the centre of the image
 (u = 0.5, v = 0.5) looks along +z (:data:`FRONT`), and u increasing turns towards +x. A pixel
@@ -32,6 +34,8 @@ https://doi.org/10.1145/3543664.3543699
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -43,6 +47,7 @@ __all__ = [
     "DEFAULT_HDRI_WIDTH",
     "FRONT",
     "diffuse_integral",
+    "environments_with_hdri",
     "equirect_directions",
     "equirect_solid_angles",
     "read_equirect",
@@ -218,3 +223,57 @@ def w_avg_from_hdri(
         (3,) float64 RGB, in the HDRI's linear RGB.
     """
     return diffuse_integral(read_equirect(path, width=width), normal=normal)
+
+
+def environments_with_hdri(
+    measurements, environments, hdri: Sequence[str], *, width: int | None = DEFAULT_HDRI_WIDTH
+) -> tuple[tuple, list[str]]:
+    """Give each environment named in ``hdri`` (``ENV=FILE`` items) the w_avg of its HDRI.
+
+    An HDRI belongs to one lighting environment, so each item names it; a bare ``FILE`` is
+    accepted only when exactly one environment is being solved. The HDRI's w_avg replaces the
+    file's ``w_avg`` and the white-patch estimate for that environment.
+
+    Returns
+    -------
+    tuple
+        The environments (others unchanged) and one line per HDRI comparing its w_avg with the
+        white-patch estimate, for the user.
+    """
+    from ocio_vp.geometry import w_avg_from_white_patch
+
+    by_name = {env.name: env for env in environments}
+    chosen: dict[str, str] = {}
+    for item in hdri:
+        name, sep, path = item.partition("=")
+        if not sep:
+            if len(environments) != 1:
+                raise InputError(
+                    f"name the environment: --hdri ENV=FILE (solving {len(environments)})",
+                    key="--hdri",
+                )
+            name, path = environments[0].name, item
+        if name not in by_name:
+            raise InputError(
+                f"no environment {name!r} is being solved; known: {', '.join(by_name)}",
+                key="--hdri",
+            )
+        if name in chosen:
+            raise InputError(f"two HDRIs for environment {name!r}", key="--hdri")
+        chosen[name] = path
+    notes = []
+    out = []
+    for env in environments:
+        if env.name in chosen:
+            w_avg = w_avg_from_hdri(chosen[env.name], width=width)
+            stage = measurements.stage
+            patch = w_avg_from_white_patch(
+                env.target_chart, stage.white_patch, stage.white_reflectance
+            )
+            notes.append(
+                f"{env.name}: w_avg from {chosen[env.name]} = {np.round(w_avg, 5).tolist()} "
+                f"(white patch / reflectance gives {np.round(patch, 5).tolist()})"
+            )
+            env = dataclasses.replace(env, w_avg=w_avg)
+        out.append(env)
+    return tuple(out), notes

@@ -147,3 +147,45 @@ class TestFromFile:
         junk.write_bytes(b"not an exr at all")
         with pytest.raises(InputError, match="cannot read"):
             w_avg_from_hdri(junk)
+
+
+class TestSolveOption:
+    def test_hdri_sets_w_avg_of_its_environment_only(self, tmp_path, capsys):
+        import json
+
+        import yaml
+        from conftest import make_measurements_dict
+
+        from ocio_vp.cli import main
+
+        doc = make_measurements_dict(environments=2)
+        stage = tmp_path / "stage.yaml"
+        stage.write_text(yaml.safe_dump(doc))
+        hdri = tmp_path / "sky.exr"
+        write_exr(hdri, np.ones((64, 128, 3)) * [0.7, 0.8, 0.9])  # uniform: w_avg = radiance
+        out = tmp_path / "calib"
+        assert main(["solve", str(stage), "--out", str(out), "--hdri", f"env_0={hdri}"]) == 0
+        assert "env_0: w_avg from" in capsys.readouterr().out
+        w0 = json.loads((out / "env_0" / "solution.json").read_text())["w_avg"]
+        w1 = json.loads((out / "env_1" / "solution.json").read_text())["w_avg"]
+        np.testing.assert_allclose(w0, [0.7, 0.8, 0.9], rtol=2e-3)
+        # env_1 keeps the paper's white patch / 0.9 estimate.
+        np.testing.assert_allclose(w1, np.asarray(doc["environments"][1]["target_chart"][18]) / 0.9)
+
+    def test_hdri_option_errors(self, tmp_path, capsys):
+        import yaml
+        from conftest import make_measurements_dict
+
+        from ocio_vp.cli import main
+
+        stage = tmp_path / "stage.yaml"
+        stage.write_text(yaml.safe_dump(make_measurements_dict(environments=2)))
+        hdri = tmp_path / "sky.exr"
+        write_exr(hdri, np.ones((16, 32, 3)))
+        base = ["solve", str(stage), "--out", str(tmp_path / "o")]
+        assert main([*base, "--hdri", str(hdri)]) == 2
+        assert "ENV=FILE" in capsys.readouterr().err
+        assert main([*base, "--hdri", f"nowhere={hdri}"]) == 2
+        assert "nowhere" in capsys.readouterr().err
+        assert main([*base, "--environment", "env_1", "--hdri", str(hdri)]) == 0
+        assert not (tmp_path / "o" / "env_0").exists()

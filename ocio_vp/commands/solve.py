@@ -31,6 +31,21 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--environment", action="append", help="solve only these (repeatable)")
     parser.add_argument(
+        "--hdri",
+        action="append",
+        default=[],
+        metavar="ENV=FILE",
+        help="take ENV's w_avg from its equirectangular HDRI (camera linear RGB) instead of the "
+        "white patch (repeatable; a bare FILE when solving one environment)",
+    )
+    parser.add_argument(
+        "--hdri-width",
+        type=int,
+        default=None,
+        metavar="N",
+        help="resolution the HDRI is integrated at (default 1024; see docs/performance.md)",
+    )
+    parser.add_argument(
         "--wall-encoding",
         choices=("linear", "gamma2.4", "pq"),
         default="linear",
@@ -89,6 +104,14 @@ def run(args: argparse.Namespace) -> int:
     environments = measurements.environments
     if args.environment:
         environments = tuple(measurements.environment(name) for name in args.environment)
+    if args.hdri:
+        from ocio_vp.hdri import DEFAULT_HDRI_WIDTH, environments_with_hdri
+
+        width = args.hdri_width or DEFAULT_HDRI_WIDTH
+        environments, notes = environments_with_hdri(
+            measurements, environments, args.hdri, width=width
+        )
+        print("\n".join(notes))
     method = args.method or DEFAULT_METHOD
     solutions = [
         solve_environment(measurements, env, method=method, black_level=args.black_level)
