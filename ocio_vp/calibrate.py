@@ -12,7 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ocio_vp.diagnostics import error_relative_to_white
+from ocio_vp.diagnostics import clipped_patches, error_relative_to_white, stability_diagnostics
+from ocio_vp.errors import InputError
 from ocio_vp.geometry import environment_w_avg, stage_beta
 from ocio_vp.measurements import Environment, Measurements
 from ocio_vp.qsolve import QProblem, solve_post_correction
@@ -29,7 +30,8 @@ from ocio_vp.solve import (
 
 __all__ = ["DEFAULT_METHOD", "solve_environment", "solve_measurements"]
 
-DEFAULT_METHOD = "least-squares"
+#: The simplest Q model the scene needs (ocio_vp.qmethods.q_auto); "least-squares" is the paper.
+DEFAULT_METHOD = "auto"
 
 
 def solve_environment(
@@ -63,6 +65,23 @@ def solve_environment(
     beta = stage_beta(measurements)
     w_avg = environment_w_avg(measurements, environment)
     white = measurements.stage.white_patch
+    clip_level = measurements.stage.clip_level
+    if clip_level is not None and np.any(SL >= clip_level):
+        raise InputError(
+            f"a primary is clipped (>= clip_level {clip_level:g}): [SL] and M would be wrong; "
+            "re-shoot the primaries with less exposure",
+            source=source,
+            key="primaries",
+        )
+    clipped = clipped_patches(measurements.SRL, environment.target_chart, clip_level)
+    if white in clipped and environment.w_avg is None:
+        raise InputError(
+            f"the white patch {white} is clipped, so w_avg cannot come from it: give w_avg",
+            source=source,
+            key=f"environments.{environment.name}.w_avg",
+        )
+    weights = np.ones(measurements.n_patches)
+    weights[clipped] = 0.0
     problem = QProblem(
         SL=SL,
         SRL=measurements.SRL,
@@ -71,12 +90,13 @@ def solve_environment(
         w_avg=w_avg,
         target=environment.target_chart,
         white_patch=white,
+        weights=weights,
     )
     fit = solve_post_correction(problem, method=method)
     M = M_calibrated if fit.M is None else np.asarray(fit.M, dtype=np.float64)
     Q = np.asarray(fit.Q, dtype=np.float64)
     # N inverts Q for the calibrated wall (paper eq. 7: Q [SL] N = I), whatever M lights with.
-    N, n_reason = solve_N(M_calibrated, Q, max_condition=max_condition_q)
+    N, n_reason = solve_N(M_calibrated, Q, max_condition=max_condition_q, SL=SL)
 
     offset = None
     if environment.black_level is not None:
@@ -115,15 +135,17 @@ def solve_environment(
         "N_reason": n_reason,
         "max_condition_q_for_N": max_condition_q,
         "lit_chart_error_baseline": error_relative_to_white(
-            baseline, environment.target_chart, white
+            baseline, environment.target_chart, white, weights
         ),
-        "lit_chart_error": error_relative_to_white(corrected, environment.target_chart, white),
+        "lit_chart_error": error_relative_to_white(
+            corrected, environment.target_chart, white, weights
+        ),
         "residual_rms": float(np.sqrt(np.mean((corrected - environment.target_chart) ** 2))),
         "displayed_chart_error_baseline": error_relative_to_white(
-            displayed_baseline, environment.target_chart, white
+            displayed_baseline, environment.target_chart, white, weights
         ),
         "displayed_chart_error": error_relative_to_white(
-            displayed_corrected, environment.target_chart, white
+            displayed_corrected, environment.target_chart, white, weights
         ),
         "out_of_frustum_drive": drive,
         "method_notes": dict(fit.notes),
@@ -139,6 +161,21 @@ def solve_environment(
             "displayed_corrected": displayed_corrected,
         },
     }
+    # Issue 7: model choice, cross-validation, drive ranges, bounce, clipping (diagnostics.py).
+    extra, extra_warnings = stability_diagnostics(
+        problem,
+        fit,
+        method=method,
+        M=M,
+        Q=Q,
+        N=N,
+        offset=offset,
+        black_level=environment.black_level,
+        corrected=corrected,
+        clipped=clipped,
+    )
+    diagnostics.update(extra)
+    warnings.extend(extra_warnings)
     return Solution(
         stage=measurements.stage.name,
         environment=environment.name,

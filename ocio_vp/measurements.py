@@ -73,6 +73,8 @@ class Stage:
     white_patch: int = 18
     white_reflectance: float = 0.9
     camera_colorspace: str | None = None
+    #: Camera value at or above which a sample is clipped (optional; docs/stability.md).
+    clip_level: float | None = None
 
 
 @dataclass(frozen=True)
@@ -271,6 +273,7 @@ def _parse_stage(ctx: _Context, value: Any) -> Stage:
             "white_patch",
             "white_reflectance",
             "camera_colorspace",
+            "clip_level",
         ),
     )
     name = ctx.name(stage["name"], (*key, "name"))
@@ -308,6 +311,9 @@ def _parse_stage(ctx: _Context, value: Any) -> Stage:
     camera = stage.get("camera_colorspace")
     if camera is not None:
         camera = _check_colourspace(ctx, camera, (*key, "camera_colorspace"))
+    clip_level = None
+    if "clip_level" in stage:
+        clip_level = ctx.number(stage["clip_level"], (*key, "clip_level"), strict=True)
     return Stage(
         name=name,
         panel=panel,
@@ -315,6 +321,7 @@ def _parse_stage(ctx: _Context, value: Any) -> Stage:
         white_patch=white_patch,
         white_reflectance=reflectance,
         camera_colorspace=camera,
+        clip_level=clip_level,
     )
 
 
@@ -415,6 +422,8 @@ def measurements_to_dict(measurements: Measurements) -> dict[str, Any]:
     stage_dict["white_reflectance"] = stage.white_reflectance
     if stage.camera_colorspace is not None:
         stage_dict["camera_colorspace"] = stage.camera_colorspace
+    if stage.clip_level is not None:
+        stage_dict["clip_level"] = stage.clip_level
 
     def rows(array: np.ndarray) -> list[list[float]]:
         return [[float(v) for v in row] for row in np.asarray(array, dtype=np.float64)]

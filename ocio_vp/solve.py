@@ -122,9 +122,18 @@ def predict_lit_chart(SRL: ArrayLike, beta: float, M: ArrayLike, w_avg: ArrayLik
 
 
 def solve_N(
-    M: ArrayLike, Q: ArrayLike, *, max_condition: float = MAX_CONDITION_Q_FOR_N
+    M: ArrayLike,
+    Q: ArrayLike,
+    *,
+    max_condition: float = MAX_CONDITION_Q_FOR_N,
+    SL: ArrayLike | None = None,
 ) -> tuple[np.ndarray | None, str | None]:
     """The in-frustum pre-correction ``N = M Q^-1`` (paper, eqs. 6-8).
+
+    With ``SL`` given, N is solved from eq. 7 itself, ``(Q [SL]) N = I``: then
+    ``||Q [SL] N - I|| <= c eps cond(Q) cond([SL])`` (backward-stable LU, docs/stability.md),
+    where going through ``M = [SL]^-1`` first can lose another factor cond(Q). For ``Q = I``
+    both give ``N = M`` bit for bit.
 
     Returns
     -------
@@ -143,6 +152,8 @@ def solve_N(
             "environment such as sodium vapour); in-frustum content uses M, so do not apply Q "
             "to shots with the wall in frame"
         )
+    if SL is not None:
+        return np.linalg.solve(Q @ np.asarray(SL, dtype=np.float64), np.eye(3)), None
     # N = M Q^-1 computed as a solve of N Q = M (more accurate than forming Q^-1).
     N = np.linalg.solve(Q.T, M.T).T
     return N, None
