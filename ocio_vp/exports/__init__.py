@@ -7,6 +7,7 @@ folders are renamed into place only when every export succeeded.
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable, Sequence
 from contextlib import ExitStack
 from dataclasses import dataclass
@@ -93,6 +94,27 @@ def export_solutions(
             seen[key] = source.directory
             jobs.append((source, target, final))
 
+    # Folders this call creates; removed again (when left empty) if an export fails.
+    created = sorted(
+        {
+            p
+            for _, _, final in jobs
+            for p in (final.parent, *final.parent.parents)
+            if not p.exists()
+        },
+        key=lambda p: len(p.parts),
+        reverse=True,
+    )
+    try:
+        return _run_jobs(jobs, cube_size=int(cube_size), cube_range=(lo, hi))
+    except BaseException:
+        for folder in created:
+            with contextlib.suppress(OSError):
+                folder.rmdir()
+        raise
+
+
+def _run_jobs(jobs, *, cube_size: int, cube_range: tuple[float, float]) -> list[ExportResult]:
     results = []
     with ExitStack() as stack:
         staged = []
@@ -104,8 +126,8 @@ def export_solutions(
                 source,
                 folder,
                 final_folder=final,
-                cube_size=int(cube_size),
-                cube_range=(lo, hi),
+                cube_size=cube_size,
+                cube_range=cube_range,
             )
             staged.append((folder, final))
             results.append(ExportResult(source.solution.environment, target, final, summary))

@@ -1,0 +1,139 @@
+"""Nuke export: the .nk is parsed by a real Tcl interpreter (``tclsh``), in a *safe* interp
+that defines one proc per node class and records the knobs; the values read back must equal
+Q (float64, exactly) and the exported config path. Independent sources: tclsh, ociocheck and
+an OCIO processor on the named transform the script points at."""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_export_unreal import run_tool, solve_to
+
+from ocio_vp.errors import InputError
+from ocio_vp.exports import export_solutions
+from ocio_vp.solution import load_solution
+
+NODE_CLASSES = ("Root", "Group", "Input", "OCIONamedTransform", "ColorMatrix", "Output")
+
+# Runs the script in a safe interpreter; every node class is a proc that records its knob
+# list; `pwned` records that injected code ran. Knob values leave as hex so nothing is lost.
+TCL_HARNESS = r"""
+set path [lindex $argv 0]
+set calls {}
+proc record {cls knobs} { lappend ::calls [list $cls $knobs] }
+set child [interp create -safe]
+interp alias $child record {} record
+foreach cls {NODE_CLASSES} { $child eval [list proc $cls {knobs} "record $cls \$knobs"] }
+$child eval {proc version args {}}
+$child eval {proc end_group {} { record end_group {} }}
+$child eval {proc pwned args { record PWNED {} }}
+set f [open $path r]
+fconfigure $f -encoding utf-8
+set script [read $f]
+close $f
+$child eval $script
+foreach call $calls {
+    set cls [lindex $call 0]
+    puts "node $cls"
+    foreach {key value} [lindex $call 1] {
+        puts "knob $key [binary encode hex [encoding convertto utf-8 $value]]"
+    }
+}
+""".replace("NODE_CLASSES", " ".join(NODE_CLASSES))
+
+
+def parse_nk(path: Path, tmp_path: Path) -> list[tuple[str, dict[str, str]]]:
+    """Run the .nk through tclsh; returns [(node class, {knob: value})] in file order."""
+    if shutil.which("tclsh") is None:
+        pytest.skip("tclsh is not on PATH")
+    harness = tmp_path / "harness.tcl"
+    harness.write_text(TCL_HARNESS)
+    result = subprocess.run(
+        ["tclsh", str(harness), str(path)], capture_output=True, text=True, timeout=30, check=False
+    )
+    assert result.returncode == 0, result.stderr
+    nodes: list[tuple[str, dict[str, str]]] = []
+    for line in result.stdout.splitlines():
+        kind, rest = line.split(" ", 1)
+        if kind == "node":
+            nodes.append((rest, {}))
+        else:
+            key, _, value = rest.partition(" ")
+            nodes[-1][1][key] = bytes.fromhex(value).decode("utf-8")
+    return nodes
+
+
+def tcl_matrix(text: str) -> np.ndarray:
+    rows = re.findall(r"\{([^{}]*)\}", text)
+    return np.array([[float(v) for v in row.split()] for row in rows])
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory):
+    dirs = solve_to(tmp_path_factory.mktemp("nuke") / "solved")
+    export_solutions(dirs, targets=["nuke"])
+    return dirs
+
+
+class TestNukeScript:
+    @pytest.mark.parametrize("index", [0, 1])
+    def test_knobs_read_back(self, exported, index, tmp_path):
+        folder = exported[index] / "exports" / "nuke"
+        nodes = parse_nk(folder / f"env_{index}.nk", tmp_path)
+        classes = [cls for cls, _ in nodes]
+        assert classes == [*NODE_CLASSES, "end_group"]
+        knobs = dict(nodes)
+        config = (folder / "config" / "config.ocio").resolve()
+        assert knobs["Root"]["customOCIOConfigPath"] == config.as_posix()
+        assert knobs["Root"]["OCIO_config"] == "custom"
+        assert knobs["Root"]["colorManagement"] == "OCIO"
+        solution = load_solution(exported[index])
+        # float64 repr round trip: exactly Q.
+        np.testing.assert_array_equal(tcl_matrix(knobs["ColorMatrix"]["matrix"]), solution.Q)
+        assert knobs["ColorMatrix"]["disable"] == "true"
+        assert knobs["Group"]["name"] == f"ocio_vp_env_{index}"
+        named = knobs["OCIONamedTransform"]["named_transform"]
+        assert named == solution.ocio["post_correction"]
+        assert "PWNED" not in classes
+
+    def test_named_transform_is_Q(self, exported, tmp_path):
+        """The named transform the script uses, from the config the Root points at, is Q."""
+        import PyOpenColorIO as OCIO
+
+        knobs = dict(parse_nk(exported[0] / "exports" / "nuke" / "env_0.nk", tmp_path))
+        config_path = knobs["Root"]["customOCIOConfigPath"]
+        result = run_tool("ociocheck", "--iconfig", config_path)
+        assert result.returncode == 0, result.stdout + result.stderr
+        config = OCIO.Config.CreateFromFile(config_path)
+        named = config.getNamedTransform(knobs["OCIONamedTransform"]["named_transform"])
+        processor = config.getProcessor(named.getTransform(OCIO.TRANSFORM_DIR_FORWARD))
+        rgb = np.array([[0.18, 0.18, 0.18], [0.9, 0.1, 0.3]], dtype=np.float32)
+        out = rgb.copy()
+        processor.getDefaultCPUProcessor().applyRGB(out)
+        expected = rgb.astype(np.float64) @ load_solution(exported[0]).Q.T
+        np.testing.assert_allclose(out, expected, atol=1e-6)
+
+    def test_hostile_output_path_is_refused(self, exported, tmp_path):
+        """Nuke evaluates [..] in path knobs at run time: such a path is refused, not written."""
+        out = tmp_path / "[pwned]"
+        with pytest.raises(InputError, match="Tcl"):
+            export_solutions(exported[:1], targets=["nuke"], out=out)
+        assert not out.exists()
+
+    def test_out_folder_layout(self, exported, tmp_path):
+        results = export_solutions(exported, targets=["nuke"], out=tmp_path / "o")
+        assert [r.folder for r in results] == [
+            tmp_path / "o" / "env_0" / "nuke",
+            tmp_path / "o" / "env_1" / "nuke",
+        ]
+        json.dumps([r.summary for r in results])  # summaries are plain data
+        knobs = dict(parse_nk(tmp_path / "o" / "env_1" / "nuke" / "env_1.nk", tmp_path))
+        expected = (tmp_path / "o" / "env_1" / "nuke" / "config" / "config.ocio").resolve()
+        assert knobs["Root"]["customOCIOConfigPath"] == expected.as_posix()
+        assert Path(knobs["Root"]["customOCIOConfigPath"]).is_file()

@@ -1,0 +1,222 @@
+"""Resolve export, checked by independent readers: ``ociochecklut`` (OCIO's CLI) on each CLF,
+colour-science's ``read_LUT`` on each baked ``.cube``, and ``gcc`` compiling the DCTL inside a
+small C harness that defines Resolve's DCTL types. Expected values: numpy ``Q c``, ``M c``,
+``N c + offset`` from solution.json."""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_export_unreal import run_tool, solve_to
+
+from ocio_vp.cli import main
+from ocio_vp.errors import InputError
+from ocio_vp.exports import export_solutions
+from ocio_vp.exports.resolve import render_dctl
+from ocio_vp.solution import load_solution
+
+COLOURS = np.array(
+    [
+        [0.18, 0.18, 0.18],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.9, 0.4, 0.05],
+        [4.0, 2.5, 7.0],
+        [0.0, 0.0, 0.0],
+    ]
+)
+
+
+def exact(stem: str, solution) -> np.ndarray:
+    """The exact transform of each exported file, in numpy (paper eq. 5, 8, Section 3.4)."""
+    if stem == "post_correction_Q":
+        return COLOURS @ solution.Q.T
+    if stem == "wall_out_of_frustum":
+        return COLOURS @ solution.M.T
+    return COLOURS @ solution.in_frustum_matrix.T + solution.in_frustum_offset
+
+
+STEMS = ("post_correction_Q", "wall_out_of_frustum", "wall_in_frustum")
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory):
+    dirs = solve_to(tmp_path_factory.mktemp("resolve") / "solved")
+    export_solutions(dirs, targets=["resolve"], cube_size=17)
+    return dirs
+
+
+class TestClf:
+    @pytest.mark.parametrize("stem", STEMS)
+    def test_ociochecklut(self, exported, stem):
+        solution = load_solution(exported[1])
+        clf = exported[1] / "exports" / "resolve" / f"{stem}.clf"
+        expected = exact(stem, solution)
+        for rgb, want in zip(COLOURS, expected, strict=True):
+            result = run_tool("ociochecklut", str(clf), *(f"{v!r}" for v in rgb))
+            assert result.returncode == 0, result.stderr
+            got = np.array([float(v) for v in result.stdout.split()[-3:]])
+            # ociochecklut prints 7 significant digits.
+            np.testing.assert_allclose(got, want, rtol=2e-6, atol=1e-6)
+
+    def test_offset_is_in_the_matrix(self, exported):
+        text = (exported[1] / "exports" / "resolve" / "wall_in_frustum.clf").read_text()
+        assert '<Array dim="3 4">' in text  # 3x4: matrix with offset (CLF spec, Matrix node)
+
+
+class TestCube:
+    @pytest.mark.parametrize("stem", STEMS)
+    def test_colour_reads_cube_within_reported_error(self, exported, stem):
+        import colour
+
+        folder = exported[0] / "exports" / "resolve"
+        report = json.loads((folder / "cube_errors.json").read_text())["cubes"]
+        entry = report[f"{stem}_17.cube"]
+        assert entry["cube_size"] == 17 and entry["input_range"] == [-0.25, 16.0]
+        assert 0 <= entry["max_abs_error"] < 1e-3
+        lut = colour.io.read_LUT(str(folder / f"{stem}_17.cube"))
+        got = lut.apply(COLOURS)
+        error = np.abs(got - exact(stem, load_solution(exported[0]))).max()
+        # colour evaluates in float64 and OCIO (which measured the report) in float32.
+        assert error <= entry["max_abs_error"] + 1e-6, (error, entry)
+
+    def test_reported_error_is_real(self, tmp_path):
+        """For a curve (gamma 2.4 wall encoding) a coarse bake is visibly inexact: the report
+        says so, and colour-science's reading of the cube stays within it."""
+        import colour
+        import PyOpenColorIO as OCIO
+
+        from ocio_vp.exports.resolve import bake_cube, cube_bake_error
+
+        config = OCIO.Config.CreateRaw()
+        config.addColorSpace(OCIO.ColorSpace(name="lin"))
+        encoded = OCIO.ColorSpace(name="enc")
+        encoded.setTransform(
+            OCIO.ExponentTransform(
+                value=[2.4, 2.4, 2.4, 1.0], direction=OCIO.TRANSFORM_DIR_INVERSE
+            ),
+            OCIO.COLORSPACE_DIR_FROM_REFERENCE,
+        )
+        config.addColorSpace(encoded)
+        cube = bake_cube(
+            config,
+            "lin",
+            "enc",
+            tmp_path / "g.cube",
+            reference="lin",
+            size=9,
+            input_range=(0.0, 1.0),
+        )
+        report = cube_bake_error(config, "lin", "enc", cube, size=9, input_range=(0.0, 1.0))
+        assert report["max_abs_error"] > 1e-3
+        rgb = np.random.default_rng(1).uniform(size=(2000, 3))
+        error = np.abs(colour.io.read_LUT(str(cube)).apply(rgb) - rgb ** (1 / 2.4)).max()
+        assert 1e-3 < error <= report["max_abs_error"] + 1e-5
+
+    def test_cli_prints_errors(self, exported, tmp_path, capsys):
+        assert (
+            main(["export", str(exported[0]), "--target", "resolve", "--out", str(tmp_path)]) == 0
+        )
+        out = capsys.readouterr().out
+        assert out.count("worst bake error") == 3
+        report = json.loads((tmp_path / "env_0" / "resolve" / "cube_errors.json").read_text())
+        worst = report["cubes"]["wall_in_frustum_33.cube"]["max_abs_error"]
+        assert f"wall_in_frustum_33.cube: worst bake error {worst:.3g}" in out
+
+    def test_bad_cube_size_exits_2(self, exported, tmp_path, capsys):
+        code = main(["export", str(exported[0]), "--out", str(tmp_path / "o"), "--cube-size", "1"])
+        assert code == 2
+        assert "--cube-size" in capsys.readouterr().err
+        assert not (tmp_path / "o").exists()
+
+    def test_bad_range(self, exported):
+        with pytest.raises(InputError, match="LO < HI"):
+            export_solutions(exported[:1], targets=["resolve"], cube_range=(1.0, 1.0))
+
+
+HARNESS = r"""
+#include <stdio.h>
+#include <stdlib.h>
+#define __DEVICE__ static
+typedef struct { float x, y, z; } float3;
+static float3 make_float3(float x, float y, float z) { float3 v = {x, y, z}; return v; }
+#include "%s"
+int main(int argc, char **argv) {
+    for (int i = 1; i + 2 < argc; i += 3) {
+        float3 o = transform(1, 1, 0, 0, strtof(argv[i], 0), strtof(argv[i + 1], 0),
+                             strtof(argv[i + 2], 0));
+        printf("%%.9g %%.9g %%.9g\n", o.x, o.y, o.z);
+    }
+    return 0;
+}
+"""
+
+
+def compile_dctl(dctl: Path, tmp_path: Path) -> Path:
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc is not on PATH")
+    source = tmp_path / "harness.c"
+    source.write_text(HARNESS % dctl.resolve())
+    binary = tmp_path / "harness"
+    result = subprocess.run(
+        [
+            "gcc",
+            "-std=c99",
+            "-Wall",
+            "-Werror",
+            "-Wno-unused-parameter",
+            "-o",
+            str(binary),
+            str(source),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr
+    return binary
+
+
+def run_dctl(binary: Path, colours: np.ndarray) -> np.ndarray:
+    args = [f"{v!r}" for v in colours.astype(np.float32).astype(float).ravel()]
+    result = subprocess.run([str(binary), *args], capture_output=True, text=True, check=True)
+    return np.array([[float(v) for v in line.split()] for line in result.stdout.splitlines()])
+
+
+class TestDctl:
+    def test_full_float_precision(self, exported):
+        solution = load_solution(exported[0])
+        text = (exported[0] / "exports" / "resolve" / "post_correction_Q.dctl").read_text()
+        literals = re.findall(r"(-?[0-9.]+(?:e[-+]?\d+)?)f \* p_[RGB]", text)
+        values = np.array([float(v) for v in literals]).reshape(3, 3)
+        # Every coefficient is the float32 nearest to Q (9 significant digits round-trip).
+        np.testing.assert_array_equal(values.astype(np.float32), solution.Q.astype(np.float32))
+
+    def test_compiles_and_matches_numpy(self, exported, tmp_path):
+        solution = load_solution(exported[0])
+        binary = compile_dctl(
+            exported[0] / "exports" / "resolve" / "post_correction_Q.dctl", tmp_path
+        )
+        got = run_dctl(binary, COLOURS)
+        np.testing.assert_allclose(got, COLOURS @ solution.Q.T, rtol=1e-6, atol=1e-6)
+
+    def test_offset_variant(self, tmp_path):
+        """The same template with an offset (the in-frustum form N c + offset)."""
+        rng = np.random.default_rng(3)
+        matrix, offset = rng.normal(size=(3, 3)), rng.normal(size=3) * 0.01
+        dctl = tmp_path / "m.dctl"
+        dctl.write_text(
+            render_dctl(
+                title="t", stage="s", environment="e", description="d", matrix=matrix, offset=offset
+            )
+        )
+        got = run_dctl(compile_dctl(dctl, tmp_path), COLOURS)
+        np.testing.assert_allclose(got, COLOURS @ matrix.T + offset, rtol=1e-6, atol=2e-6)
