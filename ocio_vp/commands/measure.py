@@ -1,0 +1,49 @@
+"""``ocio-vp measure CAPTURE --out MEASUREMENTS``: calibration plates to a measurements file."""
+
+from __future__ import annotations
+
+import argparse
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "measure",
+        help="sample the calibration plates of a capture file into a measurements file",
+        description="Read the plates a capture file names (docs/capture.md), sample the chart "
+        "patches and regions, and write a measurements file plus an overlay PNG per plate "
+        "(OUT_STEM.overlays/) showing exactly which pixels were sampled.",
+    )
+    parser.add_argument("capture", help="capture file (.yaml/.yml/.json), format ocio-vp/capture")
+    parser.add_argument("--out", required=True, help="measurements file to write (.yaml or .json)")
+    parser.add_argument(
+        "--overlays", default=None, help="overlay folder (default: next to --out, STEM.overlays)"
+    )
+    parser.add_argument(
+        "--no-write-back",
+        action="store_true",
+        help="do not write auto-detected chart corners back into the capture file",
+    )
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ocio_vp.capture import load_capture, save_capture_document, with_corners
+    from ocio_vp.measure_plates import measure_capture, write_measure_outputs
+
+    capture = load_capture(args.capture)
+    detect = None
+    if any(shot.corners is None for shot in capture.charts()):
+        from ocio_vp.chart_detection import detector
+
+        detect = detector(source=capture.source)
+    result = measure_capture(capture, detect=detect)
+    folder = write_measure_outputs(result, args.out, overlays=args.overlays)
+    if result.detected and not args.no_write_back:
+        save_capture_document(with_corners(capture.document, result.detected), capture.source)
+        print(f"wrote {len(result.detected)} detected chart corner set(s) to {capture.source}")
+    for warning in result.warnings:
+        print(f"warning: {warning}")
+    print(f"wrote {args.out} ({len(result.plates)} plates sampled); overlays in {folder}")
+    return 0
