@@ -72,8 +72,10 @@ def align(sd) -> np.ndarray:
     """Values of a colour ``SpectralDistribution`` on :data:`SPECTRAL_SHAPE`, float64 (W,).
 
     Interpolated inside its domain; outside it, held constant (colour's default extrapolator).
+    Interpolation overshoot below 0 (Sprague, next to a spectral line's zeros) is clipped: light
+    and reflectance are never negative.
     """
-    return np.asarray(sd.copy().align(_shape()).values, dtype=np.float64)
+    return np.maximum(np.asarray(sd.copy().align(_shape()).values, dtype=np.float64), 0.0)
 
 
 def camera_sensitivities(name: str = DEFAULT_CAMERA) -> np.ndarray:

@@ -1,0 +1,122 @@
+"""``ocio-vp demo`` and ``ocio-vp simulate`` end to end (files checked by loading them back).
+
+Sources: the simulator (tests/test_spectral.py checks it against direct sums), OCIO's own
+``ociocheck`` for the written configs.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from ocio_vp.cli import main
+from ocio_vp.measurements import load_measurements
+from ocio_vp.solution import load_solution
+from ocio_vp.spectral import PAPER_ENVIRONMENTS
+
+
+@pytest.fixture(scope="module")
+def demo(tmp_path_factory):
+    out = tmp_path_factory.mktemp("demo") / "demo_out"
+    import contextlib
+    import io
+
+    buffer = io.StringIO()
+    with contextlib.redirect_stdout(buffer):
+        code = main(["demo", "--out", str(out), "--method", "least-squares"])
+    return code, out, buffer.getvalue()
+
+
+def test_demo_writes_every_environment(demo):
+    code, out, _ = demo
+    assert code == 0
+    for name in PAPER_ENVIRONMENTS:
+        solution = load_solution(out / name)
+        assert solution.environment == name
+        assert solution.measurements_file == "paper_stage.yaml"
+    measurements = load_measurements(out / "paper_stage.yaml")
+    assert [e.name for e in measurements.environments] == list(PAPER_ENVIRONMENTS)
+    assert not [p.name for p in out.iterdir() if p.name.startswith(".")]  # no staging left
+
+
+def test_demo_table_and_sodium_reason(demo):
+    _, out, text = demo
+    lines = {line.split()[0]: line for line in text.splitlines() if line.split()}
+    for name in PAPER_ENVIRONMENTS:
+        assert name in lines
+    assert "SKIPPED" in lines["sodium_vapour"]
+    assert "sodium_vapour: N not solved:" in text
+    assert "direct_sun" in text and "solved" in lines["direct_sun"]
+    data = json.loads((out / "sodium_vapour" / "solution.json").read_text())
+    assert data["N"] is None
+
+
+@pytest.mark.skipif(shutil.which("ociocheck") is None, reason="ociocheck not on PATH")
+def test_demo_configs_pass_ociocheck(demo):
+    _, out, _ = demo
+    for name in ("direct_sun", "sodium_vapour"):
+        result = subprocess.run(
+            ["ociocheck", "--iconfig", str(out / name / "config.ocio")],
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+        assert result.returncode == 0, result.stdout + result.stderr
+
+
+def test_simulate_writes_a_measurements_file(tmp_path, capsys):
+    spectrum = tmp_path / "sodium_dusk.csv"
+    wl = np.arange(380, 781, 10)
+    spectrum.write_text(
+        "wavelength,value\n" + "\n".join(f"{w},{1.0 + (w == 590) * 50}" for w in wl) + "\n"
+    )
+    out = tmp_path / "stage.json"
+    code = main(
+        [
+            "simulate",
+            "--out",
+            str(out),
+            "--leds",
+            "625/18,530/30,465/20",
+            "--chart",
+            "BabelColor Average",
+            "--environment",
+            "incandescent",
+            "--environment",
+            f"dusk={spectrum}",
+            "--panel",
+            "1.2x1.2x1",
+            "--albedo",
+            "0",
+        ]
+    )
+    assert code == 0
+    m = load_measurements(out)
+    assert [e.name for e in m.environments] == ["incandescent", "dusk"]
+    assert m.stage.panel.width == 1.2
+    assert all(e.black_level is None for e in m.environments)
+    # w_avg is normalised to green = 1 for every environment (the simulator's exposure).
+    np.testing.assert_allclose([e.w_avg[1] for e in m.environments], 1.0, rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--leds", "630,525,460"], "--leds"),
+        (["--environment", "sodium_vapor"], "sodium_vapour"),
+        (["--camera", "Nikon 9999"], "camera"),
+        (["--environment", "x=/no/such/file.csv"], "file not found"),
+        (["--panel", "1x1"], "--panel"),
+    ],
+)
+def test_simulate_bad_input_exits_2(tmp_path, capsys, args, message):
+    out = tmp_path / "x.yaml"
+    assert main(["simulate", "--out", str(out), *args]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("ocio-vp simulate: error:") and message in err
+    assert len(err.splitlines()) == 1
+    assert not out.exists()

@@ -1,0 +1,89 @@
+"""Chart metrics against published reference values and colour-science's own data.
+
+Sources: Sharma, Wu & Dalal (2005), "The CIEDE2000 color-difference formula", test pair 1
+(ΔE00 = 2.0425); SMPTE ST 2084 (100 cd/m^2 encodes to 0.5080784, colour's docstring) and
+ITU-R BT.2124 (ΔE ITP = 720 sqrt(ΔI^2 + ΔT^2 + ΔP^2), T = Ct / 2); CIE 1931 XYZ from
+colour.sd_to_XYZ.
+"""
+
+from __future__ import annotations
+
+import colour
+import numpy as np
+import pytest
+
+from ocio_vp import diagnostics
+from ocio_vp.metrics import (
+    ITP_WHITE_NITS,
+    camera_to_xyz_matrix,
+    chart_errors,
+    error_relative_to_white,
+)
+from ocio_vp.spectral import environment_spectrum, paper_stage
+
+D65_XY = np.array([0.3127, 0.3290])
+
+
+def _d65_chart(n: int = 24) -> np.ndarray:
+    chart = np.tile(colour.xy_to_XYZ(D65_XY) * 0.2, (n, 1))
+    chart[18] = colour.xy_to_XYZ(D65_XY)  # white: Y = 1
+    return chart
+
+
+def test_reuses_the_paper_metric():
+    assert error_relative_to_white is diagnostics.error_relative_to_white
+
+
+def test_delta_E_2000_sharma_pair_1():
+    target, predicted = _d65_chart(), _d65_chart()
+    target[0] = colour.Lab_to_XYZ([50.0, 2.6772, -79.7751], D65_XY)
+    predicted[0] = colour.Lab_to_XYZ([50.0, 0.0, -82.7485], D65_XY)
+    errors = chart_errors(predicted, target, camera_to_xyz=np.eye(3))
+    assert errors.delta_E_2000[0] == pytest.approx(2.0425, abs=1e-4)
+    np.testing.assert_allclose(errors.delta_E_2000[1:], 0.0, atol=1e-12)
+
+
+def test_delta_E_ITP_neutral_luminance_step():
+    # A D65 neutral is R = G = B in BT.2020, so Ct = Cp = 0 and I = PQ(Y nits).
+    target = _d65_chart()
+    predicted = target.copy()
+    predicted[18] *= 1.1
+    errors = chart_errors(predicted, target, camera_to_xyz=np.eye(3))
+    i_100 = colour.models.eotf_inverse_ST2084(ITP_WHITE_NITS)
+    assert i_100 == pytest.approx(0.5080784, abs=1e-7)
+    expected = 720.0 * abs(colour.models.eotf_inverse_ST2084(1.1 * ITP_WHITE_NITS) - i_100)
+    assert errors.delta_E_ITP[18] == pytest.approx(expected, rel=1e-3)
+    np.testing.assert_allclose(errors.delta_E_ITP[:18], 0.0, atol=1e-9)
+    np.testing.assert_allclose(errors.relative_to_white, [0.1 / 24] * 3, rtol=1e-12)
+
+
+def test_normalisation_is_scale_free():
+    rng = np.random.default_rng(1)
+    target = rng.uniform(0.05, 0.9, (24, 3))
+    predicted = target * rng.uniform(0.97, 1.03, (24, 3))
+    a = chart_errors(predicted, target, camera_to_xyz=np.eye(3))
+    b = chart_errors(7 * predicted, 7 * target, camera_to_xyz=np.eye(3))
+    np.testing.assert_allclose(a.delta_E_2000, b.delta_E_2000, rtol=1e-9)
+    np.testing.assert_allclose(a.delta_E_ITP, b.delta_E_ITP, rtol=1e-9)
+
+
+def test_camera_matrix_recovers_chart_xyz():
+    # The fitted matrix maps the camera's view of the ColorChecker under D65 close to
+    # colour.sd_to_XYZ of the same patches: mean ΔE2000 below 3 (a 3x3 camera fit).
+    stage = paper_stage()
+    matrix = camera_to_xyz_matrix(stage.camera)
+    light = environment_spectrum(stage, "d65")
+    rgb = (stage.reflectances * light) @ stage.camera
+    shape = colour.SpectralShape(380, 780, 5)
+    illuminant = colour.SDS_ILLUMINANTS["D65"].copy().align(shape)
+    xyz = np.array(
+        [
+            colour.sd_to_XYZ(sd.copy().align(shape), illuminant=illuminant) / 100
+            for sd in colour.SDS_COLOURCHECKERS["ColorChecker N Ohta"].values()
+        ]
+    )
+    fitted = rgb @ matrix.T
+    fitted *= xyz[18, 1] / fitted[18, 1]
+    white = colour.XYZ_to_xy(xyz[18])
+    delta = colour.delta_E(colour.XYZ_to_Lab(xyz, white), colour.XYZ_to_Lab(fitted, white))
+    assert np.mean(delta) < 3.0
