@@ -209,6 +209,7 @@ def build_report(
     *,
     dpi: float = 110,
     match_white: bool = True,
+    camera_to_xyz: np.ndarray | None = None,
 ) -> Report:
     """Write ``out_dir/index.html`` and its PNGs for every solution in ``paths``, all or nothing.
 
@@ -222,11 +223,14 @@ def build_report(
         PNG resolution (tests use a small one).
     match_white
         Scale each stage chart so its white's green matches the target's (paper, Section 4).
+    camera_to_xyz
+        (3, 3) camera RGB -> XYZ when the caller knows the camera; otherwise derived from the
+        solutions (see :func:`ocio_vp.report_data.camera_to_display`).
     """
     import jinja2
 
     out_dir = Path(out_dir).resolve()
-    environments = environment_data(paths, match_white=match_white)
+    environments = environment_data(paths, match_white=match_white, camera_to_xyz=camera_to_xyz)
     report = Report(index=out_dir / "index.html", environments=environments)
     loader = jinja2.FileSystemLoader(str(template_dir()))
     env = jinja2.Environment(loader=loader, autoescape=True, undefined=jinja2.StrictUndefined)

@@ -6,6 +6,8 @@ Everything comes from ``solution.json`` (read with :func:`ocio_vp.solution.load_
 camera, as the paper does ("one consistent color matrix to take all images from a camera raw
 color space to sRGB", Section 4):
 
+- when the caller knows the camera (the demo's simulated one), its camera-to-XYZ matrix
+  (:func:`ocio_vp.metrics.camera_to_xyz_matrix`) followed by XYZ -> linear sRGB;
 - when the solution names ``camera_colorspace``, colour-science's matrix from that space to
   linear sRGB (CAT02 adaptation of the white points);
 - otherwise a 3x3 matrix fitted by least squares from the camera RGB of a target chart to the
@@ -18,7 +20,9 @@ Each environment is then scaled so that the target white patch's largest display
 0.9, and each stage chart is first scaled so that the green channel of its white patch equals
 the target's (the paper's comparison charts do the same, Section 4), then clipped to [0, 1] and
 sRGB-encoded. Errors are never computed on these display values: Fig. 11's errors are the
-solve's own (camera RGB), and ΔE uses the camera-to-XYZ matrix described in :func:`delta_e`.
+solve's own (camera RGB), and ΔE (:func:`ocio_vp.metrics.chart_errors`) goes through the
+camera-to-XYZ matrix that matches the display choice above (for the fitted case, sRGB's
+RGB-to-XYZ after the fitted matrix).
 
 References
 ----------
@@ -78,9 +82,13 @@ DISPLAY_WHITE = 0.9
 
 @dataclass(frozen=True)
 class DisplayTransform:
-    """Camera RGB -> linear sRGB: ``display = matrix @ camera``; ``description`` says where from."""
+    """Camera RGB -> linear sRGB (``display = matrix @ camera``) and -> CIE XYZ (for ΔE).
+
+    ``description`` says where the matrices come from.
+    """
 
     matrix: np.ndarray
+    camera_to_xyz: np.ndarray
     description: str
     residual: float | None = None
 
@@ -199,17 +207,38 @@ def fit_display_matrix(target: np.ndarray) -> tuple[np.ndarray, float]:
 
 
 def camera_to_display(
-    solutions: Sequence[Solution], targets: Sequence[np.ndarray]
+    solutions: Sequence[Solution],
+    targets: Sequence[np.ndarray],
+    *,
+    camera_to_xyz: np.ndarray | None = None,
 ) -> DisplayTransform:
-    """One camera-to-linear-sRGB matrix for a group of solutions from the same stage/camera."""
+    """One camera-to-display (and camera-to-XYZ) matrix for solutions from the same camera.
+
+    In order of preference: ``camera_to_xyz`` given by a caller that knows the camera (the
+    demo's simulated one), then XYZ -> linear sRGB; the solutions' ``camera_colorspace``
+    (colour-science's matrices, CAT02 to sRGB's D65); a least-squares fit of the best-fitting
+    target chart to the ColorChecker24 reference in linear sRGB (see the module docstring),
+    with XYZ from sRGB's matrix; identity for a chart that is not a ColorChecker 24.
+    """
     import colour
 
+    srgb = colour.RGB_COLOURSPACES["sRGB"]
+    if camera_to_xyz is not None:
+        camera_to_xyz = np.asarray(camera_to_xyz, dtype=np.float64)
+        return DisplayTransform(
+            srgb.matrix_XYZ_to_RGB @ camera_to_xyz,
+            camera_to_xyz,
+            "the camera's own camera-to-XYZ matrix (fitted on its spectral sensitivities), "
+            "then XYZ to linear sRGB",
+        )
     named = {s.camera_colorspace for s in solutions if s.camera_colorspace}
     if len(named) == 1:
         name = named.pop()
-        matrix = colour.matrix_RGB_to_RGB(colour.RGB_COLOURSPACES[name], "sRGB")
+        space = colour.RGB_COLOURSPACES[name]
         return DisplayTransform(
-            matrix, f"colour-science matrix from {name} to linear sRGB (CAT02 white adaptation)"
+            colour.matrix_RGB_to_RGB(space, srgb),
+            np.asarray(space.matrix_RGB_to_XYZ, dtype=np.float64),
+            f"colour-science matrix from {name} to linear sRGB (CAT02 white adaptation)",
         )
     best = None
     for solution, target in zip(solutions, targets, strict=True):
@@ -224,11 +253,14 @@ def camera_to_display(
             best = (A, residual, solution.environment)
     if best is None:
         return DisplayTransform(
-            np.eye(3), "identity: the chart is not a ColorChecker 24, camera RGB shown as sRGB"
+            np.eye(3),
+            np.asarray(srgb.matrix_RGB_to_XYZ, dtype=np.float64),
+            "identity: the chart is not a ColorChecker 24, camera RGB shown as sRGB",
         )
     A, residual, environment = best
     return DisplayTransform(
         A,
+        srgb.matrix_RGB_to_XYZ @ A,
         f"least-squares fit of {environment!r}'s target chart to the {COLORCHECKER} reference "
         f"values in linear sRGB (colour-science), relative residual {residual:.1%}",
         residual,
@@ -264,29 +296,22 @@ def delta_e(
 ) -> dict[str, dict[str, np.ndarray]]:
     """Per-patch CIE ΔE2000 and ΔE ITP of every stage chart against the target.
 
-    Camera RGB goes to XYZ through ``camera_to_xyz``; everything is scaled so the target white
-    patch has Y = 1 (ΔE2000: CIELAB with that patch as the reference white) or 100 cd/m^2
-    (ΔE ITP, an absolute metric; the scene white is adapted to D65 by CAT02). Stage charts are
-    not re-exposed: an exposure error is a real error here.
+    :func:`ocio_vp.metrics.chart_errors` through ``camera_to_xyz`` (its normalisation: target
+    white at Y = 1 and the Lab reference white for ΔE2000, at 100 cd/m^2 for ΔE ITP). Stage
+    charts are not re-exposed: an exposure error is a real error here.
     """
-    import colour
+    from ocio_vp.metrics import chart_errors
 
-    XYZ = {name: chart @ camera_to_xyz.T for name, chart in charts.items()}
-    white = XYZ["target"][white_patch]
-    if not white[1] > 0:
+    if not (np.asarray(camera_to_xyz) @ charts["target"][white_patch])[1] > 0:
         raise InputError("the target white patch has no luminance; ΔE is undefined")
-    white_xy = colour.XYZ_to_xy(white)
-    lab = {k: colour.XYZ_to_Lab(v / white[1], white_xy) for k, v in XYZ.items()}
-    itp = {
-        k: colour.XYZ_to_ICtCp(np.maximum(v, 0) * (100.0 / white[1]), illuminant=white_xy)
-        for k, v in XYZ.items()
-    }
-    return {
-        "CIE 2000": {
-            k: colour.delta_E(lab[k], lab["target"], method="CIE 2000") for k in STAGE_CHARTS
-        },
-        "ITP": {k: colour.delta_E(itp[k], itp["target"], method="ITP") for k in STAGE_CHARTS},
-    }
+    out: dict[str, dict[str, np.ndarray]] = {"CIE 2000": {}, "ITP": {}}
+    for chart in STAGE_CHARTS:
+        errors = chart_errors(
+            charts[chart], charts["target"], camera_to_xyz=camera_to_xyz, white_patch=white_patch
+        )
+        out["CIE 2000"][chart] = np.asarray(errors.delta_E_2000, dtype=np.float64)
+        out["ITP"][chart] = np.asarray(errors.delta_E_ITP, dtype=np.float64)
+    return out
 
 
 def _errors(
@@ -304,10 +329,15 @@ def _errors(
 
 
 def environment_data(
-    paths: Sequence[str | Path], *, match_white: bool = True
+    paths: Sequence[str | Path],
+    *,
+    match_white: bool = True,
+    camera_to_xyz: np.ndarray | None = None,
 ) -> list[EnvironmentData]:
-    """Load every solution and compute what the report shows; one display matrix per stage."""
-    import colour
+    """Load every solution and compute what the report shows; one display matrix per stage.
+
+    ``camera_to_xyz`` (3, 3), when the caller knows the camera, is used for every solution.
+    """
 
     files = find_solutions(paths)
     loaded = []
@@ -320,10 +350,11 @@ def environment_data(
         s = item[2]
         groups.setdefault((s.stage, s.measurements_sha256, s.camera_colorspace), []).append(item)
     transforms = {
-        key: camera_to_display([i[2] for i in items], [i[3]["target"] for i in items])
+        key: camera_to_display(
+            [i[2] for i in items], [i[3]["target"] for i in items], camera_to_xyz=camera_to_xyz
+        )
         for key, items in groups.items()
     }
-    srgb_to_xyz = colour.RGB_COLOURSPACES["sRGB"].matrix_RGB_to_XYZ
     out = []
     for index, path, solution, charts, white in loaded:
         key = (solution.stage, solution.measurements_sha256, solution.camera_colorspace)
@@ -338,7 +369,7 @@ def environment_data(
                 charts=charts,
                 errors=_errors(diagnostics, charts, white),
                 display=display_charts(charts, transform.matrix, white, match_white=match_white),
-                delta_e=delta_e(charts, srgb_to_xyz @ transform.matrix, white),
+                delta_e=delta_e(charts, transform.camera_to_xyz, white),
                 transform=transform,
             )
         )

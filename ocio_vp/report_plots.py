@@ -154,6 +154,19 @@ def plot_comparison_charts(data: EnvironmentData, path: Path, *, dpi: float = 11
     return ChartPlot(_save(figure, path, dpi), squares, circles)
 
 
+def _axis_top(values: np.ndarray) -> float | None:
+    """A y limit that keeps the other environments readable next to an outlier (sodium).
+
+    ``values`` is (environments, 6). When one environment's worst bar is over 2.5 times every
+    other environment's, the axis stops at 1.6 times the second worst and the outlier bars are
+    labelled with their value; otherwise ``None`` (matplotlib's own limits).
+    """
+    worst = np.sort(np.max(values, axis=1))[::-1] if len(values) > 1 else np.array([])
+    if len(worst) < 2 or not worst[1] > 0 or worst[0] <= 2.5 * worst[1]:
+        return None
+    return float(1.6 * worst[1])
+
+
 def plot_error_bars(
     environments: Sequence[EnvironmentData], kind: str, path: Path, *, dpi: float = 110
 ) -> ErrorBarsPlot:
@@ -165,7 +178,7 @@ def plot_error_bars(
     if kind not in ("lit", "displayed"):
         raise ValueError(f"kind must be 'lit' or 'displayed', got {kind!r}")
     names = [e.solution.environment for e in environments]
-    figure = _figure(max(6.0, 1.3 * len(names) + 2.0), 4.2)
+    figure = _figure(max(7.0, 1.3 * len(names) + 3.5), 4.2)
     ax = figure.subplots()
     width = 0.13
     x = np.arange(len(names))
@@ -186,12 +199,28 @@ def plot_error_bars(
             )
             bars_per_channel.append([b.get_height() / 100 for b in bars])
         heights[series] = np.array(bars_per_channel).T
+    top = _axis_top(np.concatenate([heights["baseline"], heights["corrected"]], axis=1))
+    if top is not None:
+        ax.set_ylim(0, 100 * top)
+        for bar in ax.patches:
+            if bar.get_height() > 100 * top:  # clipped by the axis: print its value
+                ax.text(
+                    bar.get_x() + bar.get_width() / 2,
+                    100 * top * 0.98,
+                    f"{bar.get_height():.3g}%",
+                    rotation=90,
+                    ha="center",
+                    va="top",
+                    fontsize=7,
+                    color="black",
+                    bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.5},
+                )
     ax.set_xticks(x, names, rotation=20, ha="right")
     ax.set_ylabel("mean |error| / target white (%)")
     what = "out-of-frustum lit chart" if kind == "lit" else "in-camera-frustum displayed chart"
     ax.set_title(f"Error relative to white: {what}", fontsize=11)
     ax.grid(axis="y", alpha=0.3)
-    ax.legend(ncols=2, fontsize=8)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return ErrorBarsPlot(
         _save(figure, path, dpi),
         names,

@@ -217,38 +217,35 @@ class TestDeltaE:
 
 
 class TestLinearity:
-    def test_linearity_curves_are_plotted(self, tmp_path, solved):
-        linearity = {
-            "measured": True,
-            "model": "pchip-inverse-1d-lut",
-            "channels": {
-                "red": {
-                    "drive": [0.0, 0.25, 0.5, 0.75, 1.0],
-                    "response": [0.0, 0.2, 0.45, 0.72, 1.0],
-                    "corrected": True,
-                },
-                "green": {
-                    "drive": [0.0, 0.5, 1.0],
-                    "response": [0.0, 0.5, 1.0],
-                    "corrected": False,
-                },
-            },
+    def test_measured_ramps_are_plotted_before_and_after(self, tmp_path):
+        # A wall whose red channel follows drive^1.15 (the paper saw a non-linear red), green
+        # and blue linear: ramps made in closed form from the primaries' columns of [SL].
+        document = make_measurements_dict(environments=1)
+        drive = np.linspace(0.0, 1.0, 9)
+        power = {"red": 1.15, "green": 1.0, "blue": 1.0}
+        document["ramps"] = {
+            c: {
+                "drive": drive.tolist(),
+                "camera": np.outer(drive ** power[c], document["primaries"][c]).tolist(),
+            }
+            for c in ("red", "green", "blue")
         }
-        data = _json(solved, "env_1")
-        data["linearity"] = linearity
-        folder = tmp_path / "env_1"
-        folder.mkdir()
-        (folder / "solution.json").write_text(json.dumps(data))
-        result = build_report([folder], tmp_path / "r", dpi=DPI)
+        out = _solve(tmp_path, document)
+        stored = _json(out, "env_0")["linearity"]["channels"]
+        result = build_report([out], tmp_path / "r", dpi=DPI)
         plot = next(iter(result.linearity.values()))
-        assert sorted(plot.curves) == ["green before", "red after", "red before"]
-        np.testing.assert_allclose(plot.curves["red before"][1], [0.0, 0.2, 0.45, 0.72, 1.0])
+        assert sorted(plot.curves) == ["blue before", "green before", "red after", "red before"]
+        for channel in ("red", "green", "blue"):
+            x, y = plot.curves[f"{channel} before"]
+            np.testing.assert_allclose(x, stored[channel]["drive"], rtol=TOL)
+            np.testing.assert_allclose(y, stored[channel]["response"], rtol=TOL)
+        np.testing.assert_allclose(plot.curves["red before"][1], drive**1.15, atol=1e-12)
         # Through the LUT the red response is linear: r(r^-1(x)) = x (PCHIP is exactly
         # invertible; bisection to float64).
         x, y = plot.curves["red after"]
         np.testing.assert_allclose(y, x, atol=1e-9)
-        assert "linearity" in result.index.read_text().lower()
         assert plot.path.is_file()
+        assert "Panel linearity" in result.index.read_text()
 
     def test_no_linearity_no_curves(self):
         assert linearity_curves(None) == {}
@@ -302,11 +299,38 @@ def test_white_patch_other_than_18(tmp_path):
 
 
 @pytest.mark.skipif(
-    not (SAMPLE / "stage-a").is_dir(), reason="sample_configs/ not generated yet (issue 3)"
+    not (SAMPLE / "paper_stage").is_dir(), reason="sample_configs/paper_stage not generated"
 )
 def test_sample_configs_render(tmp_path):
-    result = build_report([SAMPLE / "stage-a"], tmp_path / "r", dpi=DPI)
-    assert len(result.environments) >= 7
-    for data in result.environments:
-        d = data.solution.diagnostics
-        np.testing.assert_allclose(data.errors["lit_corrected"], d["lit_chart_error"], rtol=TOL)
+    # The committed sample solutions (issue 3's simulated paper stage, seven environments).
+    result = build_report([SAMPLE / "paper_stage"], tmp_path / "r", dpi=DPI)
+    assert len(result.environments) == 7
+    for i, name in enumerate(result.error_bars["lit"].environments):
+        d = json.loads((SAMPLE / "paper_stage" / name / "solution.json").read_text())
+        diagnostics = d["diagnostics"]
+        np.testing.assert_allclose(
+            result.error_bars["lit"].ours[i], diagnostics["lit_chart_error"], rtol=TOL
+        )
+        np.testing.assert_allclose(
+            result.error_bars["displayed"].baseline[i],
+            diagnostics["displayed_chart_error_baseline"],
+            rtol=TOL,
+        )
+    html = result.index.read_text()
+    assert "sodium_vapour" in html and "not solved" in html  # the paper: no N for sodium
+
+
+def test_camera_to_xyz_from_the_caller(tmp_path, solved):
+    import colour
+
+    # A caller that knows the camera (the demo) passes its camera-to-XYZ matrix; the display
+    # matrix is then XYZ -> linear sRGB after it (colour-science's sRGB matrix).
+    camera_to_xyz = np.array([[0.5, 0.3, 0.15], [0.25, 0.7, 0.05], [0.02, 0.1, 0.95]])
+    result = build_report([solved / "env_0"], tmp_path / "r", dpi=DPI, camera_to_xyz=camera_to_xyz)
+    transform = result.environments[0].transform
+    np.testing.assert_allclose(transform.camera_to_xyz, camera_to_xyz)
+    np.testing.assert_allclose(
+        transform.matrix,
+        colour.RGB_COLOURSPACES["sRGB"].matrix_XYZ_to_RGB @ camera_to_xyz,
+        rtol=1e-12,
+    )
