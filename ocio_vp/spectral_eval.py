@@ -52,10 +52,12 @@ def evaluate_solution(stage: SpectralStage, solution, environment=None) -> Evalu
     baseline = predict_stage(stage, env, M=solution.M)
     white = stage.white_patch
     spec = ENVIRONMENTS.get(solution.environment) if isinstance(env, str) else None
+    model = solution.diagnostics.get("method_notes", {}).get("model")
+    method = solution.method if model in (None, solution.method) else f"{solution.method}: {model}"
     return Evaluation(
         environment=solution.environment,
         broadband=None if spec is None else spec.broadband,
-        method=solution.method,
+        method=method,
         cond_Q=float(solution.diagnostics.get("cond_Q", np.nan)),
         N_solved=solution.N is not None,
         N_reason=solution.diagnostics.get("N_reason"),
