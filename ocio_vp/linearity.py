@@ -246,6 +246,13 @@ def inverse_response(drive: np.ndarray, response: np.ndarray, x: np.ndarray) -> 
     Exact inverse of :func:`response_model` (bisection to float64 resolution, not a second
     interpolation). Values outside [0, 1] are returned unchanged: above the top step the
     response is taken as linear (continuous at 1, since r(1) = 1), below zero the wall is black.
+
+    Examples
+    --------
+    >>> d = np.linspace(0, 1, 5)
+    >>> x = inverse_response(d, d**2, np.array([0.25, 1.0, 3.0]))
+    >>> [round(float(v), 6) for v in x]
+    [0.5, 1.0, 3.0]
     """
     model = response_model(drive, response)
     x = np.asarray(x, dtype=np.float64)
@@ -298,8 +305,9 @@ def fit_linearity(
     corrected = [c for c in CHANNELS if channels[c]["corrected"]]
     worst = max(channels[c]["max_deviation"] for c in CHANNELS)
     if corrected:
+        verb = "deviates" if len(corrected) == 1 else "deviate"
         summary = (
-            f"{', '.join(corrected)} deviate(s) from linear by up to {100 * worst:.3g}% of the "
+            f"{', '.join(corrected)} {verb} from linear by up to {100 * worst:.3g}% of the "
             f"top step (tolerance {100 * tolerance:.3g}%): corrected by a per-channel 1D LUT"
         )
     else:

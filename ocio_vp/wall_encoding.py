@@ -33,11 +33,14 @@ import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ocio_vp.linearity import CHANNELS, inverse_response, response_model
+
+if TYPE_CHECKING:
+    from ocio_vp.solution import Solution
 
 __all__ = [
     "DEFAULT_PEAK_NITS",
@@ -93,7 +96,15 @@ def lut_domain_max(encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS) -> fl
 
 
 def encode(drive: np.ndarray, encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS) -> np.ndarray:
-    """Numpy model of the wall encoding: linear drive (..., 3) -> wall signal."""
+    """Numpy model of the wall encoding: linear drive (..., 3) -> wall signal.
+
+    Examples
+    --------
+    >>> [round(float(v), 6) for v in encode(np.array([0.1, 1.0]), "pq", peak_nits=1000)]
+    [0.508078, 0.751827]
+    >>> round(float(encode(np.array(0.5), "gamma2.4")), 6)
+    0.749154
+    """
     _check(encoding, peak_nits)
     drive = np.asarray(drive, dtype=np.float64)
     if encoding == "linear":
@@ -208,7 +219,9 @@ class WallOutputs:
     linearity: dict[str, Any] | None = None
 
 
-def with_wall_encoding(solution, encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS):
+def with_wall_encoding(
+    solution: Solution, encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS
+) -> Solution:
     """A copy of ``solution`` whose ``linearity`` block records the wall signal encoding."""
     _check(encoding, peak_nits)
     if encoding == "linear" and solution.linearity is None:
@@ -220,7 +233,7 @@ def with_wall_encoding(solution, encoding: str, *, peak_nits: float = DEFAULT_PE
     return dataclasses.replace(solution, linearity=linearity)
 
 
-def wall_outputs(solution) -> WallOutputs:
+def wall_outputs(solution: Solution) -> WallOutputs:
     """Build the LUT sidecar (when a channel needs it) and the encoding transforms."""
     import PyOpenColorIO as OCIO
 
