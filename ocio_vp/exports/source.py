@@ -86,7 +86,7 @@ def load_export_source(directory: str | Path) -> ExportSource:
     try:
         config = OCIO.Config.CreateFromFile(str(config_path))
         config.validate()
-    except OCIO.Exception as error:
+    except (OCIO.Exception, OCIO.ExceptionMissingFile) as error:
         raise InputError(f"cannot load the OCIO config: {error}", source=config_path) from None
     _check_names_in_config(config, solution.ocio, str(json_path))
     return ExportSource(directory, solution, config_path, config)

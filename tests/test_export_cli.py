@@ -1,0 +1,119 @@
+"""The export command's contract: all or nothing, clear one-line errors (exit 2), templates
+shipped with the package. Independent checks: the file system and pyproject.toml."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+from test_export_unreal import solve_to
+
+import ocio_vp.exports as exports
+from ocio_vp.cli import main
+from ocio_vp.errors import InputError
+from ocio_vp.exports import export_solutions
+from ocio_vp.exports.templating import template_dir
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def solved(tmp_path_factory):
+    return solve_to(tmp_path_factory.mktemp("cli") / "solved")
+
+
+def copy_solution(source: Path, folder: Path) -> None:
+    shutil.copytree(source, folder, ignore=shutil.ignore_patterns("exports"))
+
+
+def snapshot(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+
+
+def test_failure_mid_way_publishes_nothing(solved, tmp_path, monkeypatch):
+    out = tmp_path / "o"
+    export_solutions(solved, targets=["unreal", "nuke"], out=out)
+    before = snapshot(out)
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("disk full")
+
+    monkeypatch.setitem(exports.EXPORT_TARGETS, "resolve", broken)
+    with pytest.raises(RuntimeError, match="disk full"):
+        export_solutions(solved, targets=["unreal", "nuke", "resolve"], out=out)
+    assert snapshot(out) == before  # old exports intact, no new target, no staging leftovers
+    assert sorted(p.name for p in (out / "env_0").iterdir()) == ["nuke", "unreal"]
+
+
+def test_all_targets_default_location(solved, capsys):
+    assert main(["export", *map(str, solved)]) == 0
+    for folder in solved:
+        assert sorted(p.name for p in (folder / "exports").iterdir()) == [
+            "nuke",
+            "resolve",
+            "unreal",
+        ]
+    out = capsys.readouterr().out
+    assert out.count("->") == 6
+
+
+@pytest.mark.parametrize(
+    ("edit", "words"),
+    [
+        (lambda d: d.pop("M"), "M: expected a finite 3x3 matrix"),
+        (lambda d: d.pop("stage"), "malformed solution"),
+        (lambda d: d["ocio"].update(in_frustum="Nope"), "'Nope' is not in the config"),
+        (lambda d: d.update(format="other"), "not an ocio-vp/solution file"),
+    ],
+)
+def test_broken_solution_exits_2(solved, tmp_path, capsys, edit, words):
+    folder = tmp_path / "env"
+    copy_solution(solved[0], folder)
+    data = json.loads((folder / "solution.json").read_text())
+    edit(data)
+    (folder / "solution.json").write_text(json.dumps(data))
+    assert main(["export", str(folder)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ocio-vp export: error: ") and err.count("\n") == 1
+    assert words in err
+    assert not (folder / "exports").exists()
+
+
+def test_missing_folder_and_config(tmp_path, solved, capsys):
+    assert main(["export", str(tmp_path / "nope")]) == 2
+    assert "not a solution folder" in capsys.readouterr().err
+    folder = tmp_path / "env"
+    copy_solution(solved[0], folder)
+    (folder / "config.ocio").unlink()
+    with pytest.raises(InputError, match="cannot load the OCIO config"):
+        export_solutions([folder], targets=["unreal"])
+
+
+def test_same_environment_twice_into_one_out(solved, tmp_path):
+    with pytest.raises(InputError, match="would both write"):
+        export_solutions([solved[0], solved[0]], targets=["nuke"], out=tmp_path / "o")
+    assert not (tmp_path / "o").exists()
+
+
+def test_n_not_solved_is_said(solved, tmp_path):
+    folder = tmp_path / "env"
+    copy_solution(solved[0], folder)
+    data = json.loads((folder / "solution.json").read_text())
+    data["N"] = None
+    data["diagnostics"]["N_reason"] = "cond(Q) too high"
+    (folder / "solution.json").write_text(json.dumps(data))
+    export_solutions([folder], targets=["unreal"])
+    text = (folder / "exports" / "unreal" / "UNREAL.md").read_text()
+    assert "N was not solved" in text and "`cond(Q) too high`" in text
+    mapping = json.loads((folder / "exports" / "unreal" / "unreal_ocio.json").read_text())
+    assert mapping["N_solved"] is False
+
+
+def test_templates_are_shipped():
+    """Every template is found in the checkout and listed by pyproject's data-files glob."""
+    assert template_dir() == ROOT / "templates"
+    assert '"share/ocio-vp/templates" = ["templates/*"]' in (ROOT / "pyproject.toml").read_text()
+    names = {p.name for p in template_dir().glob("*.j2")}
+    assert {"nuke_environment.nk.j2", "resolve_matrix.dctl.j2", "UNREAL.md.j2"} <= names
