@@ -333,6 +333,28 @@ class TestWrittenConfig:
         rgb[:1000] = np.random.default_rng(2).uniform(0, 1, size=(1000, 3))
         np.testing.assert_allclose(apply(cpu, rgb), apply_lut(table, H, rgb), atol=1e-5)
 
+    def test_the_sidecar_is_a_shaper_and_a_lut_of_at_most_4095_entries(self, written):
+        import xml.etree.ElementTree as ET
+
+        root = ET.parse(lut_file(written["linear"])).getroot()
+        nodes = [child.tag.split("}")[-1] for child in root]
+        assert nodes[-2:] == ["Matrix", "LUT1D"]
+        (lut,) = [child for child in root if child.tag.endswith("LUT1D")]
+        (array,) = [child for child in lut if child.tag.endswith("Array")]
+        entries, channels = map(int, array.get("dim").split())
+        assert channels == 3 and entries <= 4095
+        assert entries == load_solution(written["linear"]).linearity["lut"]["entries"]
+
+    def test_rewriting_a_loaded_solution_gives_the_same_sidecar(self, written, tmp_path):
+        folder = written["pq"]
+        write_solutions([load_solution(folder)], tmp_path)
+        again = tmp_path / folder.name
+        assert lut_file(again).read_text() == lut_file(folder).read_text()
+        assert (
+            json.loads((again / "solution.json").read_text())["linearity"]
+            == json.loads((folder / "solution.json").read_text())["linearity"]
+        )
+
     @needs_tools
     def test_ociochecklut_matches_the_numpy_model(self, written):
         folder = written["pq"]
