@@ -86,7 +86,15 @@ class TestUnrealFiles:
         assert cards["destination"] == OUT_OF_FRUSTUM
         assert mapping["config"] == "config/config.ocio"
         assert (folder / mapping["config"]).is_file() and (folder / mapping["ocioz"]).is_file()
+        asset = mapping["configuration_asset"]
+        assert asset["desired_color_spaces"] == [REFERENCE, OUT_OF_FRUSTUM, IN_FRUSTUM]
+        assert asset["configuration_file"] == mapping["config"]
+        assert {v["view"] for v in asset["desired_display_views"]} == {
+            "Outer Frustum",
+            "Inner Frustum",
+        }
         text = (folder / "UNREAL.md").read_text()
+        assert f"`{REFERENCE}`, `{OUT_OF_FRUSTUM}`, `{IN_FRUSTUM}`." in text
         for ui in ("All Viewports Color Configuration", "All Nodes Color Configuration"):
             assert ui in text
 

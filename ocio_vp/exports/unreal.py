@@ -70,6 +70,17 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> dict[str
         "config": config,
         "ocioz": ocioz,
         "content_working_space": content,
+        # The OpenColorIO Configuration asset only offers the colour spaces listed here.
+        "configuration_asset": {
+            "configuration_file": config,
+            "desired_color_spaces": [content, names["out_of_frustum"], names["in_frustum"]],
+            "desired_display_views": [
+                {"display": names["display"], "view": names["view_out_of_frustum"]},
+                {"display": names["display"], "view": names["view_in_frustum"]},
+            ]
+            if "display" in names
+            else [],
+        },
         "content_working_space_alternatives": alternatives,
         "assignments": [
             slot(
@@ -129,6 +140,7 @@ def write_unreal(source: ExportSource, folder: Path, **_: Any) -> dict[str, Any]
         config=config_rel,
         ocioz=ocioz.name,
         source=mapping["content_working_space"],
+        desired=mapping["configuration_asset"]["desired_color_spaces"],
         out_of_frustum=names["out_of_frustum"],
         in_frustum=names["in_frustum"],
         post_correction=names["post_correction"],
