@@ -9,9 +9,11 @@ perspective is exact for a flat chart. A pixel belongs to patch ``(r, c)`` when 
 coordinates of its centre fall in ``[c + inset, c + 1 - inset] x [r + inset, r + 1 - inset]``:
 the inset keeps the samples off the borders between patches.
 
-Each patch's value is a robust mean (:data:`ROBUST_MEAN_METHODS`; default a 10 % trimmed mean
-per channel, which ignores a small specular highlight or a few hot pixels), with the standard
-deviation of all its pixels as its spread. Patches are flagged when pixels are clipped or when
+Each patch's value is a robust mean of its pixels (:data:`ROBUST_MEAN_METHODS`; default a 10 %
+trimmed mean per channel) after rejecting outliers (farther than 6 robust sigmas, 1.4826 MAD,
+from the patch median: a specular glint, dust, hot pixels), so the trim stays symmetric about the
+noise and the mean unbiased. The spread is the standard deviation of the pixels kept. Patches
+are flagged when pixels are clipped or when
 more than a small fraction of pixels are outliers (e.g. a highlight, dust, a misplaced corner).
 
 Vignetting is not corrected here: each patch is sampled over a small area, so the fall-off
@@ -70,6 +72,7 @@ def _mean(pixels: np.ndarray, *, trim: float) -> np.ndarray:
 #: ``method=`` of :func:`sample_chart`: how a patch's pixels become one RGB value.
 #: ``"trimmed"`` (default) drops the lowest and highest ``trim`` fraction of each channel
 #: and averages the rest; ``"median-of-means"`` is the median of 9 interleaved group means.
+#: All but ``"mean"`` (plain, for comparison) first drop the patch's outlier pixels.
 ROBUST_MEAN_METHODS: dict[str, Callable[..., np.ndarray]] = {
     "trimmed": _trimmed_mean,
     "median-of-means": _median_of_means,
@@ -85,8 +88,9 @@ class ChartSamples:
     Attributes
     ----------
     means : (n, 3) robust mean linear RGB per patch (``method``).
-    spreads : (n, 3) standard deviation of all sampled pixels per patch and channel.
-    counts : (n,) number of pixels sampled per patch (per frame).
+    spreads : (n, 3) standard deviation of the pixels the mean used (outliers rejected), so
+        ``spreads / sqrt(counts)`` estimates the standard error of a mean from noise.
+    counts : (n,) number of pixels the mean used per patch (sampled minus outliers).
     clipped_fraction : (n,) fraction of pixels with a channel at or above the clip level.
     outlier_fraction : (n,) fraction of pixels farther than ``outlier_sigma`` robust sigmas
         from the patch median.
@@ -307,9 +311,6 @@ def _statistics(
     clipped_fraction, outlier_fraction = np.zeros(n), np.zeros(n)
     for j, pixels in enumerate(groups):
         pixels = np.asarray(pixels, dtype=np.float64)
-        counts[j] = len(pixels)
-        means[j] = robust_mean(pixels, trim=trim)
-        spreads[j] = pixels.std(axis=0, ddof=1) if len(pixels) > 1 else 0.0
         clipped_fraction[j] = np.mean(np.any(pixels >= levels, axis=1))
         median = np.median(pixels, axis=0)
         sigma = 1.4826 * np.median(np.abs(pixels - median), axis=0)
@@ -317,6 +318,13 @@ def _statistics(
         sigma = np.maximum(sigma, 1e-3 * max(float(np.max(np.abs(median))), 1e-12))
         far = np.any(np.abs(pixels - median) > outlier_sigma * sigma, axis=1)
         outlier_fraction[j] = np.mean(far)
+        # Outliers (a glint, dust) go first, so the trim stays symmetric about the noise.
+        # ("mean" is the plain, non-robust mean of all pixels, kept for comparison.)
+        enough = np.count_nonzero(~far) >= max(2, len(pixels) // 2)
+        kept = pixels[~far] if enough and method != "mean" else pixels
+        means[j] = robust_mean(kept, trim=trim)
+        counts[j] = len(kept)
+        spreads[j] = kept.std(axis=0, ddof=1) if len(kept) > 1 else 0.0
     level = max(float(np.max(means)), 1e-12)
     high_spread = (outlier_fraction > max_outlier_fraction) | (
         np.max(spreads, axis=1) > max_spread * level

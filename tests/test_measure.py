@@ -1,0 +1,203 @@
+"""``ocio-vp measure``: synthetic plates of a simulated stage -> measurements -> same solve."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from synthetic_plates import CORNERS, render_chart, render_regions, write_image
+
+from ocio_vp.calibrate import solve_environment
+from ocio_vp.capture import load_capture
+from ocio_vp.cli import main
+from ocio_vp.measure_plates import measure_capture
+from ocio_vp.measurements import load_measurements, measurements_from_dict
+
+NOISE, READ_NOISE = 0.01, 1e-4
+REGIONS = {"red": (40, 30, 160, 110), "green": (240, 30, 360, 110), "blue": (440, 30, 560, 110)}
+ENVIRONMENTS = ["incandescent", "outdoor_shade"]
+
+
+@pytest.fixture(scope="module")
+def truth():
+    """The spectral simulator's exact measurements (the paper-like stage, two environments)."""
+    from ocio_vp.spectral import paper_stage, simulate_measurements
+
+    return simulate_measurements(ENVIRONMENTS, stage=paper_stage())
+
+
+def _write_capture(folder: Path, truth, *, seed: int = 0) -> Path:
+    """Render every plate of a capture (perspective, noise, a glint on one patch) + the file."""
+    folder.mkdir(parents=True, exist_ok=True)
+    noise = {"noise": NOISE, "read_noise": READ_NOISE}
+    primaries = {c: (REGIONS[c], truth.SL[:, k]) for k, c in enumerate(REGIONS)}
+    write_image(folder / "primaries.exr", render_regions(primaries, seed=seed, **noise))
+    lit = {}
+    for k, c in enumerate(("red", "green", "blue")):
+        image = render_chart(truth.SRL[:, :, k], highlight=11, seed=seed + 1 + k, **noise)
+        # One lit plate as 16-bit TIFF, the others half-float EXR with extra channels.
+        if c == "green":
+            name = write_image(folder / "lit_green.tif", image, dtype="uint16").name
+        else:
+            name = write_image(
+                folder / f"lit_{c}.exr", image, channels=("A", "B", "G", "R", "Z")
+            ).name
+        lit[c] = {"plate": f"plates/{name}", "corners": CORNERS.tolist()}
+    environments = []
+    for i, env in enumerate(truth.environments):
+        image = render_chart(env.target_chart, seed=seed + 10 + i, **noise)
+        write_image(folder / f"{env.name}.exr", image, dtype="float")
+        black = render_regions(
+            {"b": ((200, 150, 400, 250), env.black_level)}, seed=seed + 20 + i, **noise
+        )
+        write_image(folder / f"{env.name}_black.exr", black, dtype="float")
+        environments.append(
+            {
+                "name": env.name,
+                "target_chart": {"plate": f"plates/{env.name}.exr", "corners": CORNERS.tolist()},
+                "black_level": {
+                    "plate": f"plates/{env.name}_black.exr",
+                    "region": [200, 150, 400, 250],
+                },
+                "w_avg": env.w_avg.tolist(),
+            }
+        )
+    document = {
+        "format": "ocio-vp/capture",
+        "version": 1,
+        "stage": {
+            "name": "synthetic-stage",
+            "calibration_panel": {"width": 1.0, "height": 1.0, "distance": 1.0},
+            "white_patch": 18,
+        },
+        "chart": {"rows": 4, "columns": 6, "inset": 0.25},
+        "primaries": {"plate": "plates/primaries.exr", **{c: list(r) for c, r in REGIONS.items()}},
+        "lit_chart": lit,
+        "environments": environments,
+    }
+    path = folder.parent / "capture.yaml"
+    path.write_text(yaml.safe_dump(document, sort_keys=False))
+    return path
+
+
+@pytest.fixture(scope="module")
+def capture_file(tmp_path_factory, truth) -> Path:
+    return _write_capture(tmp_path_factory.mktemp("stage") / "plates", truth)
+
+
+def _solve_all(measurements):
+    return {
+        env.name: solve_environment(measurements, env, method="least-squares")
+        for env in measurements.environments
+    }
+
+
+class TestMeasureCommand:
+    def test_writes_measurements_and_overlays(self, tmp_path, capture_file, truth, capsys):
+        out = tmp_path / "stage.yaml"
+        assert main(["measure", str(capture_file), "--out", str(out)]) == 0
+        measured = load_measurements(out)
+        # The glint patch (11) is reported on each lit plate; nothing else.
+        printed = capsys.readouterr().out
+        assert printed.count("warning:") == 3 and printed.count("patch 11: clipped") == 3
+        np.testing.assert_allclose(measured.SL, truth.SL, rtol=0.005)
+        white = truth.SRL.max(axis=(0, 1))  # the brightest value on each lit plate
+        assert np.max(np.abs(measured.SRL - truth.SRL) / white) < 0.005
+        for got, want in zip(measured.environments, truth.environments, strict=True):
+            assert got.name == want.name
+            scale = want.target_chart.max()
+            assert np.max(np.abs(got.target_chart - want.target_chart) / scale) < 0.005
+            np.testing.assert_allclose(got.black_level, want.black_level, rtol=0.005)
+        folder = tmp_path / "stage.overlays"
+        names = sorted(p.name for p in folder.iterdir())
+        assert names == sorted(
+            [
+                "primaries.png",
+                "lit_red.png",
+                "lit_green.png",
+                "lit_blue.png",
+                "samples.json",
+                *(f"{e}_target.png" for e in ENVIRONMENTS),
+                *(f"{e}_black.png" for e in ENVIRONMENTS),
+            ]
+        )
+        samples = json.loads((folder / "samples.json").read_text())
+        lit_red = next(p for p in samples["plates"] if p["key"] == "lit_chart.red")
+        assert lit_red["samples"][11]["flags"] and not lit_red["samples"][10]["flags"]
+
+    def test_overlay_marks_the_sampled_pixels(self, tmp_path, capture_file):
+        """The overlay outlines exactly the label map of the sampling (read back with OIIO)."""
+        import OpenImageIO as oiio
+
+        from ocio_vp.chart_sampling import patch_labels
+        from ocio_vp.overlay import OUTLINE_COLOURS
+
+        out = tmp_path / "m.yaml"
+        assert main(["measure", str(capture_file), "--out", str(out)]) == 0
+        samples = json.loads((tmp_path / "m.overlays" / "samples.json").read_text())
+        entry = next(p for p in samples["plates"] if p["key"] == "lit_chart.blue")
+        png = oiio.ImageBuf(str(tmp_path / "m.overlays" / "lit_blue.png")).get_pixels(oiio.UINT8)
+        x0, y0 = entry["box"][0] - 16, entry["box"][1] - 16  # the overlay's margin
+        box = (x0, y0, x0 + png.shape[1], y0 + png.shape[0])
+        labels = patch_labels(np.array(entry["corners"]), 4, 6, inset=0.25, box=box)
+        green = np.all(png == OUTLINE_COLOURS["ok"], axis=-1)
+        yellow = np.all(png == OUTLINE_COLOURS["clipped"], axis=-1)
+        assert np.all(labels[green | yellow] >= 0)  # outlines only on sampled pixels
+        assert set(np.unique(labels[yellow])) == {11}  # the glint patch
+        assert set(np.unique(labels[green])) == set(range(24)) - {11}
+
+    def test_solve_matches_exact_within_noise(self, capture_file, truth):
+        """measure -> solve gives the simulator's M, Q, N within what the sampling noise explains.
+
+        The bound: each measured value has a standard error spread / sqrt(pixels) (estimated
+        from the plates themselves). 200 Monte-Carlo draws of the exact measurements perturbed
+        by those errors give the spread of M, Q, N; the measured solve must be within 5 sigma
+        of the exact one (element-wise; plus 1e-12 for exactly-zero spreads).
+        """
+        capture = load_capture(capture_file)
+        result = measure_capture(capture)
+        by_key = {p.plate.key: p.samples for p in result.plates}
+        se = {k: s.spreads / np.sqrt(s.counts)[:, None] for k, s in by_key.items()}
+        se_SL = np.stack([se["primaries"][k] for k in range(3)], axis=1)
+        se_SRL = np.stack([se[f"lit_chart.{c}"] for c in ("red", "green", "blue")], axis=2)
+        exact = _solve_all(truth)
+        measured = _solve_all(result.measurements)
+        rng = np.random.default_rng(1)
+        draws = {name: [] for name in exact}
+        from ocio_vp.measurements import measurements_to_dict
+
+        base = measurements_to_dict(truth)
+        for _ in range(200):
+            doc = json.loads(json.dumps(base))
+            doc["primaries"] = {
+                c: (truth.SL[:, k] + se_SL[:, k] * rng.standard_normal(3)).tolist()
+                for k, c in enumerate(("red", "green", "blue"))
+            }
+            SRL = truth.SRL + se_SRL * rng.standard_normal(truth.SRL.shape)
+            doc["lit_chart"] = {
+                c: SRL[:, :, k].tolist() for k, c in enumerate(("red", "green", "blue"))
+            }
+            for i, env in enumerate(truth.environments):
+                s = se[f"environments[{i}].target_chart"]
+                b = se[f"environments[{i}].black_level"][0]
+                doc["environments"][i]["target_chart"] = (
+                    env.target_chart + s * rng.standard_normal(s.shape)
+                ).tolist()
+                doc["environments"][i]["black_level"] = (
+                    env.black_level + b * rng.standard_normal(3)
+                ).tolist()
+            perturbed = measurements_from_dict(doc)
+            for name, sol in _solve_all(perturbed).items():
+                draws[name].append(np.concatenate([sol.M.ravel(), sol.Q.ravel(), sol.N.ravel()]))
+        for name in exact:
+            sigma = np.std(draws[name], axis=0)
+            want = np.concatenate(
+                [exact[name].M.ravel(), exact[name].Q.ravel(), exact[name].N.ravel()]
+            )
+            got = np.concatenate(
+                [measured[name].M.ravel(), measured[name].Q.ravel(), measured[name].N.ravel()]
+            )
+            assert np.all(np.abs(got - want) <= 5 * sigma + 1e-12), (name, (got - want) / sigma)
