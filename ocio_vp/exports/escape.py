@@ -35,6 +35,11 @@ def tcl_string(value: object) -> str:
 
     Newlines and other control characters become ``\\n`` / ``\\xHH`` escapes, so a value can
     neither end the current command nor start a command substitution (``[exec ...]``).
+
+    Examples
+    --------
+    >>> print(tcl_string('a [exec rm -rf ~] "b"'))
+    "a \\[exec rm -rf ~\\] \\"b\\""
     """
     out = []
     for char in str(value):
@@ -74,7 +79,13 @@ def tcl_float(value: float) -> str:
 
 def c_float(value: float) -> str:
     """A C ``float`` literal holding ``value`` to full single precision (9 significant
-    digits round-trip every float32), with the ``f`` suffix."""
+    digits round-trip every float32), with the ``f`` suffix.
+
+    Examples
+    --------
+    >>> c_float(0.1), c_float(1), c_float(-2.5e-7)
+    ('0.100000001f', '1.0f', '-2.49999999e-07f')
+    """
     number = float(value)
     if not math.isfinite(number):
         raise ValueError(f"non-finite value {number!r} cannot be exported")
@@ -86,7 +97,13 @@ def c_float(value: float) -> str:
 
 def c_comment(value: object) -> str:
     """Text safe inside a C ``/* ... */`` comment and on one ``//`` line: printable ASCII
-    only, no ``*/``, ``/*``, backslash (line splicing) or trigraph-forming ``??``."""
+    only, no ``*/``, ``/*``, backslash (line splicing) or trigraph-forming ``??``.
+
+    Examples
+    --------
+    >>> c_comment('x */ system("id"); /*\\nnext')
+    'x * / system("id"); / *?next'
+    """
     text = "".join(ch if 0x20 <= ord(ch) < 0x7F else "?" for ch in str(value))
     text = text.replace("\\", "/")
     while "*/" in text or "/*" in text or "??" in text:
