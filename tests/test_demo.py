@@ -27,7 +27,7 @@ def demo(tmp_path_factory):
 
     buffer = io.StringIO()
     with contextlib.redirect_stdout(buffer):
-        code = main(["demo", "--out", str(out), "--method", "least-squares"])
+        code = main(["demo", "--out", str(out), "--method", "least-squares", "--no-report"])
     return code, out, buffer.getvalue()
 
 

@@ -25,6 +25,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--method", default=None, help="Q-solve method (default: the library default)"
     )
+    parser.add_argument("--no-report", action="store_true", help="skip the HTML report (faster)")
     parser.set_defaults(func=run)
 
 
@@ -55,16 +56,17 @@ def run(args: argparse.Namespace) -> int:
     print("errors: mean |camera RGB - target| per channel, % of the target white patch")
     print("  lit = chart lit by the wall (M only, then after Q); shown = background in camera")
     print(format_table(evaluations))
-    from ocio_vp.metrics import camera_to_xyz_matrix
-    from ocio_vp.report import build_report
+    if not args.no_report:
+        from ocio_vp.metrics import camera_to_xyz_matrix
+        from ocio_vp.report import build_report
 
-    # The simulated camera is known: its own camera-to-XYZ drives the report's colours and ΔE.
-    report = build_report(
-        [out / s.environment for s in written],
-        out / "report",
-        camera_to_xyz=camera_to_xyz_matrix(stage.camera),
-    )
-    print(f"report: {report.index} (open it in a browser)")
+        # The simulated camera is known: its own camera-to-XYZ drives the report's colours and ΔE.
+        report = build_report(
+            [out / s.environment for s in written],
+            out / "report",
+            camera_to_xyz=camera_to_xyz_matrix(stage.camera),
+        )
+        print(f"report: {report.index} (open it in a browser)")
     print(
         f"wrote {len(written)} environments and {scratch.name} to {out} "
         f"in {time.perf_counter() - start:.1f} s"
