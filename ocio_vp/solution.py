@@ -138,18 +138,28 @@ def load_solution(path: str | Path) -> Solution:
         raise InputError(f"cannot read solution: {error}", source=source) from None
     if not isinstance(data, dict) or data.get("format") != SOLUTION_FORMAT:
         raise InputError(f"not an {SOLUTION_FORMAT} file", source=source, key="format")
+    missing = [k for k in ("stage", "environment", "method", "beta", "w_avg") if k not in data]
+    if missing:
+        raise InputError(f"missing required key {missing[0]!r}", source=source)
+    w_avg = np.asarray(data["w_avg"], dtype=np.float64)
+    if w_avg.shape != (3,) or not np.all(np.isfinite(w_avg)):
+        raise InputError("expected a finite [r, g, b]", source=source, key="w_avg")
     offset = data.get("black_level_offset")
+    if offset is not None:
+        offset = np.asarray(offset, dtype=np.float64)
+        if offset.shape != (3,) or not np.all(np.isfinite(offset)):
+            raise InputError("expected a finite [r, g, b]", source=source, key="black_level_offset")
     return Solution(
         stage=data["stage"],
         environment=data["environment"],
         method=data["method"],
         beta=float(data["beta"]),
-        w_avg=np.asarray(data["w_avg"], dtype=np.float64),
+        w_avg=w_avg,
         SL=_matrix(data, "SL", source),
         M=_matrix(data, "M", source),
         Q=_matrix(data, "Q", source),
         N=_matrix(data, "N", source, optional=True),
-        black_level_offset=None if offset is None else np.asarray(offset, dtype=np.float64),
+        black_level_offset=offset,
         black_level_method=data.get("black_level_method"),
         diagnostics=data.get("diagnostics", {}),
         measurements_file=data.get("measurements", {}).get("file"),

@@ -68,3 +68,11 @@ def test_bool_is_not_a_number() -> None:
     data["primaries"]["red"][0] = True
     with pytest.raises(InputError, match=r"primaries\.red\[0\]: expected a number"):
         measurements_from_dict(data)
+
+
+def test_load_solution_reports_missing_keys(tmp_path) -> None:
+    from ocio_vp.solution import load_solution
+
+    (tmp_path / "solution.json").write_text('{"format": "ocio-vp/solution", "version": 1}')
+    with pytest.raises(InputError, match="missing required key 'stage'"):
+        load_solution(tmp_path)
