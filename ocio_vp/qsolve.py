@@ -20,6 +20,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ocio_vp.errors import InputError
+from ocio_vp.perceptual import q_perceptual
 from ocio_vp.qmethods import (
     fit_least_squares,
     q_auto,
@@ -60,6 +61,7 @@ Q_SOLVE_METHODS: dict[str, Callable[[QProblem], QFit]] = {
     "diagonal": q_diagonal,
     "identity": q_identity,
     "auto": q_auto,
+    "perceptual": q_perceptual,
 }
 
 
