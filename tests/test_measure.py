@@ -201,3 +201,93 @@ class TestMeasureCommand:
                 [measured[name].M.ravel(), measured[name].Q.ravel(), measured[name].N.ravel()]
             )
             assert np.all(np.abs(got - want) <= 5 * sigma + 1e-12), (name, (got - want) / sigma)
+
+
+class TestBadInput:
+    """Exit 2, one line naming the plate, and nothing written."""
+
+    def _run(self, tmp_path, capture_file, edit, capsys) -> str:
+        document = yaml.safe_load(capture_file.read_text())
+        edit(document, capture_file.parent / "plates")
+        bad = capture_file.parent / f"bad_{tmp_path.name}.yaml"
+        bad.write_text(yaml.safe_dump(document, sort_keys=False))
+        out = tmp_path / "out" / "stage.yaml"
+        capsys.readouterr()
+        assert main(["measure", str(bad), "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and err.startswith("ocio-vp measure: error: ")
+        assert not (tmp_path / "out").exists()  # nothing written, not even the folder
+        return err
+
+    def test_missing_file(self, tmp_path, capture_file, capsys):
+        def edit(d, plates):
+            d["lit_chart"]["red"]["plate"] = "plates/nope.exr"
+
+        err = self._run(tmp_path, capture_file, edit, capsys)
+        assert "nope.exr" in err and "lit_chart.red" in err and "not found" in err
+
+    def test_corrupt_exr(self, tmp_path, capture_file, capsys):
+        def edit(d, plates):
+            data = (plates / "lit_blue.exr").read_bytes()
+            (plates / "corrupt.exr").write_bytes(data[: len(data) // 2])
+            d["lit_chart"]["blue"]["plate"] = "plates/corrupt.exr"
+
+        err = self._run(tmp_path, capture_file, edit, capsys)
+        assert "corrupt.exr" in err and "lit_chart.blue" in err
+
+    def test_corners_outside(self, tmp_path, capture_file, capsys):
+        def edit(d, plates):
+            d["environments"][0]["target_chart"]["corners"][1] = [640.0, 104.0]
+
+        err = self._run(tmp_path, capture_file, edit, capsys)
+        assert "incandescent.exr" in err and "outside the image" in err
+
+    def test_no_rgb_channels(self, tmp_path, capture_file, capsys):
+        def edit(d, plates):
+            write_image(plates / "yz.exr", np.ones((400, 600, 3)), channels=("Y", "Z"))
+            d["lit_chart"]["green"]["plate"] = "plates/yz.exr"
+
+        err = self._run(tmp_path, capture_file, edit, capsys)
+        assert "yz.exr" in err and "no R, G, B channels (channels: Y, Z)" in err
+
+    def test_fully_clipped_chart(self, tmp_path, capture_file, truth, capsys):
+        def edit(d, plates):
+            image = np.minimum(render_chart(truth.SRL[:, :, 0] * 100, noise=NOISE), 1.0)
+            write_image(plates / "clipped.tif", image, dtype="uint16")
+            d["lit_chart"]["red"]["plate"] = "plates/clipped.tif"
+
+        err = self._run(tmp_path, capture_file, edit, capsys)
+        assert "clipped.tif" in err and "clipped" in err
+
+    def test_8bit_without_encoding(self, tmp_path, capture_file, capsys):
+        def edit(d, plates):
+            write_image(plates / "eight.png", np.full((400, 600, 3), 0.5), dtype="uint8")
+            d["environments"][1]["target_chart"]["plate"] = "plates/eight.png"
+
+        err = self._run(tmp_path, capture_file, edit, capsys)
+        assert "eight.png" in err and "display-referred" in err
+
+
+def test_detect_corners_written_back(tmp_path):
+    """corners: detect finds a near-frontal ColorChecker and writes the corners back."""
+    ccd = pytest.importorskip("colour_checker_detection")
+    values = ccd.SETTINGS_SEGMENTATION_COLORCHECKER_CLASSIC["reference_values"].clip(0.01) * 0.5
+    corners = np.array([[100.0, 80.0], [500.0, 90.0], [495.0, 350.0], [105.0, 345.0]])
+    plate = write_image(tmp_path / "chart.exr", render_chart(values, corners=corners, noise=0.005))
+    from ocio_vp.chart_detection import detect_chart_corners
+    from ocio_vp.chart_sampling import sample_chart
+    from ocio_vp.plates import open_plate
+
+    found = detect_chart_corners(open_plate(plate))
+    # The segmentation's quadrilateral is approximate: within 4 % of the chart's width ...
+    assert np.max(np.abs(found - corners)) < 0.04 * 400
+    # ... which an inset of 0.3 absorbs: the patch values are still within 0.5 %.
+    samples = sample_chart(plate, found, 4, 6, inset=0.3)
+    np.testing.assert_allclose(samples.means, values, rtol=0.005)
+
+    from ocio_vp.capture import with_corners
+
+    document = {"lit_chart": {"red": {"plate": "x.exr", "corners": "detect"}}}
+    written = with_corners(document, {("lit_chart", "red"): found})
+    assert written["lit_chart"]["red"]["corners"] == np.round(found, 2).tolist()
+    assert document["lit_chart"]["red"]["corners"] == "detect"  # the input is not modified
