@@ -58,6 +58,7 @@ __all__ = [
     "find_solutions",
     "fit_display_matrix",
     "infer_white_patch",
+    "patch_names",
 ]
 
 #: The chart arrays every solution carries in ``diagnostics.charts``.
@@ -192,6 +193,16 @@ def colorchecker_srgb() -> np.ndarray:
     checker = colour.CCS_COLOURCHECKERS[COLORCHECKER]
     XYZ = colour.xyY_to_XYZ(np.array(list(checker.data.values())))
     return colour.XYZ_to_RGB(XYZ, "sRGB", illuminant=checker.illuminant)
+
+
+def patch_names(n: int) -> list[str]:
+    """ColorChecker 24 patch names (reading order) for a 24-patch chart, else the indices."""
+    if n != 24:
+        return [str(j) for j in range(n)]
+    import colour
+
+    names = colour.CCS_COLOURCHECKERS[COLORCHECKER].data.keys()
+    return [f"{j} {name.split(' (')[0]}" for j, name in enumerate(names)]  # drop densities
 
 
 def fit_display_matrix(target: np.ndarray) -> tuple[np.ndarray, float]:

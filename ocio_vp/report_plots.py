@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from ocio_vp.report_data import EnvironmentData
+from ocio_vp.report_data import EnvironmentData, patch_names
 
 __all__ = [
     "ChartPlot",
@@ -82,12 +82,15 @@ class LinearityPlot:
     curves: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
 
 
-def _figure(width: float, height: float) -> Any:
+def _figure(width: float, height: float, **margins: float) -> Any:
     # A Figure on its own Agg canvas: no pyplot, so no global backend or figure registry.
+    # Fixed margins rather than constrained layout, which draws every figure twice (2-3x the
+    # time of a report).
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    figure = Figure(figsize=(width, height), layout="constrained")
+    figure = Figure(figsize=(width, height))
+    figure.subplots_adjust(**margins)
     FigureCanvasAgg(figure)
     return figure
 
@@ -127,7 +130,7 @@ def _draw_chart(ax: Any, squares: np.ndarray, circles: np.ndarray) -> tuple[list
 
 
 def plot_comparison_charts(data: EnvironmentData, path: Path, *, dpi: float = 110) -> ChartPlot:
-    """The paper's comparison charts for one environment (Section 4, Figs. 8-10).
+    """The paper's comparison charts for one environment (Section 4, its result figures).
 
     Squares are the target chart (real location), inset circles the stage chart; a 2x2 grid:
     lit chart (top) and in-camera background chart (bottom), baseline (left) and ours (right).
@@ -135,7 +138,9 @@ def plot_comparison_charts(data: EnvironmentData, path: Path, *, dpi: float = 11
     """
     from matplotlib.colors import to_rgb
 
-    figure = _figure(10.0, 7.4)
+    figure = _figure(
+        10.0, 7.4, left=0.015, right=0.985, top=0.88, bottom=0.01, hspace=0.2, wspace=0.05
+    )
     axes = figure.subplots(2, 2)
     squares, circles = {}, {}
     for ax, (chart, title) in zip(axes.ravel(), PANELS, strict=True):
@@ -178,7 +183,8 @@ def plot_error_bars(
     if kind not in ("lit", "displayed"):
         raise ValueError(f"kind must be 'lit' or 'displayed', got {kind!r}")
     names = [e.solution.environment for e in environments]
-    figure = _figure(max(7.0, 1.3 * len(names) + 3.5), 4.2)
+    width = max(7.0, 1.3 * len(names) + 3.5)
+    figure = _figure(width, 4.2, left=0.8 / width, right=1 - 1.9 / width, top=0.92, bottom=0.2)
     ax = figure.subplots()
     width = 0.13
     x = np.arange(len(names))
@@ -231,7 +237,9 @@ def plot_error_bars(
 
 def plot_delta_e(data: EnvironmentData, path: Path, *, dpi: float = 110) -> DeltaEPlot:
     """Per-patch ΔE2000 and ΔE ITP of the stage charts against the target, baseline vs ours."""
-    figure = _figure(11.0, 6.0)
+    figure = _figure(
+        11.0, 6.8, left=0.06, right=0.99, top=0.91, bottom=0.2, hspace=0.2, wspace=0.14
+    )
     axes = figure.subplots(2, 2, sharex=True)
     n = len(data.charts["target"])
     x = np.arange(n)
@@ -262,9 +270,10 @@ def plot_delta_e(data: EnvironmentData, path: Path, *, dpi: float = 110) -> Delt
             ax.set_ylabel(label)
             ax.grid(axis="y", alpha=0.3)
             ax.axvline(data.white_patch, color="#bbbbbb", lw=0.8, zorder=0)
+    labels = patch_names(n)
     for ax in axes[1]:
-        ax.set_xticks(x, [str(j) for j in x], fontsize=7)
-        ax.set_xlabel("chart patch (reading order; grey line = white patch)")
+        ax.set_xticks(x, labels, fontsize=7, rotation=60 if n == 24 else 0, ha="right")
+        ax.set_xlabel("chart patch (grey line = white patch)")
     axes[0, 0].legend(fontsize=8)
     figure.suptitle(f"{data.solution.environment}: colour difference per patch", fontsize=11)
     return DeltaEPlot(_save(figure, path, dpi), drawn)
@@ -283,7 +292,7 @@ def plot_linearity(
     first word picks the channel colour, ``after`` curves are dashed. Left: the curves with the
     ideal line y = x; right: ``y - x`` in percent of the top step, where small deviations show.
     """
-    figure = _figure(10.0, 4.0)
+    figure = _figure(10.0, 4.0, left=0.07, right=0.98, top=0.88, bottom=0.13, wspace=0.25)
     response_ax, deviation_ax = figure.subplots(1, 2)
     response_ax.plot([0, 1], [0, 1], color="#999999", lw=0.8, label="linear")
     deviation_ax.axhline(0.0, color="#999999", lw=0.8)
