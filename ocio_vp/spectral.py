@@ -165,7 +165,7 @@ def spectral_stage(
     camera: str = DEFAULT_CAMERA,
     leds: Any = None,
     chart: str = DEFAULT_CHART,
-    panel: PanelGeometry | None = DEFAULT_PANEL,
+    panel: PanelGeometry | None = None,
     beta: float | None = None,
     panel_albedo: float | None = DEFAULT_PANEL_ALBEDO,
     name: str = "simulated-stage",
@@ -183,7 +183,8 @@ def spectral_stage(
     chart
         ``'ColorChecker N Ohta'`` or ``'BabelColor Average'`` (24 patches, white = 18).
     panel, beta
-        The calibration panel's geometry (beta from the closed-form form factor), or beta.
+        The calibration panel's geometry (beta from the closed-form form factor; default
+        :data:`DEFAULT_PANEL`), or beta alone (then the file carries ``beta``).
     panel_albedo
         Grey reflectance of the in-frustum panels (black level), ``None`` for none.
     """
@@ -192,11 +193,16 @@ def spectral_stage(
 
     check_safe_name(name, key="name")
     if beta is None:
-        if panel is None:
-            raise InputError("give the panel geometry or beta", key="beta")
+        panel = DEFAULT_PANEL if panel is None else panel
         beta = panel_beta(panel)
     elif not 0.0 < beta <= 1.0:
         raise InputError(f"beta is a form factor in (0, 1], got {beta!r}", key="beta")
+    elif panel is not None and abs(panel_beta(panel) - beta) > 1e-9 * beta:
+        raise InputError(
+            f"beta {beta!r} disagrees with the panel geometry's {panel_beta(panel):.6g}; "
+            "give one of them",
+            key="beta",
+        )
     if panel_albedo is not None and not 0.0 <= panel_albedo < 1.0:
         raise InputError(f"panel albedo must be in [0, 1), got {panel_albedo!r}", key="albedo")
     sensitivities = camera_sensitivities(camera)
@@ -215,7 +221,7 @@ def spectral_stage(
         camera=sensitivities,
         leds=raw_leds * gains,
         reflectances=reflectances,
-        panel=panel if beta is None or panel is not None else None,
+        panel=panel,
         beta=float(beta),
         panel_albedo=None if panel_albedo is None else float(panel_albedo),
         camera_name=camera,
@@ -335,97 +341,9 @@ def paper_stage_measurements(environments: Any = PAPER_ENVIRONMENTS) -> Measurem
     return simulate_measurements(environments, stage=paper_stage())
 
 
-# --------------------------------------------------------------------------------------------
-# The predictor: what the stage really produces for a given solve.
-
-
-@dataclass(frozen=True)
-class StagePrediction:
-    """The stage's real output for one environment and one set of matrices (camera RGB).
-
-    ``lit`` (n, 3): the chart lit by the out-of-frustum wall (eq. 3 done spectrally, with the
-    emitted drive ``drive_emitted = clip(M w_avg, 0)``); ``lit_corrected = Q lit``.
-    ``displayed`` (n, 3): ``content`` shown in-frustum through N (or M) plus the offset,
-    clipped to >= 0, seen by the camera plus the bounce ``black_level``; and
-    ``displayed_corrected = Q displayed``. ``*_clipped`` say where drive was clipped.
-    """
-
-    target: np.ndarray
-    lit: np.ndarray
-    lit_corrected: np.ndarray
-    displayed: np.ndarray
-    displayed_corrected: np.ndarray
-    drive: np.ndarray
-    drive_emitted: np.ndarray
-    lit_drive_clipped: bool
-    displayed_drive_clipped: np.ndarray  # (n,) bool: any channel of that patch clipped
-    black_level: np.ndarray | None
-
-
-def predict_stage(
-    stage: SpectralStage,
-    environment: Any,
-    *,
-    M: ArrayLike,
-    Q: ArrayLike | None = None,
-    N: ArrayLike | None = None,
-    offset: ArrayLike | None = None,
-    content: ArrayLike | None = None,
-) -> StagePrediction:
-    """Predict the lit and the displayed chart for a solve, from the spectra (paper's theory).
-
-    Lit chart: ``sum S R_j (L clip(M w_avg, 0))`` (eq. 3 with the LED drive the wall can
-    emit), then ``Q``. Displayed chart: ``[SL] clip(N c + offset, 0) + b_camera`` (N = M when
-    not given), then ``Q``; ``content`` c defaults to the true target chart (the background
-    shows the scene as it was photographed). The true black level comes from the panel albedo
-    under the emitted lighting.
-    """
-    M = np.asarray(M, dtype=np.float64)
-    Q = np.eye(3) if Q is None else np.asarray(Q, dtype=np.float64)
-    spectrum = environment_spectrum(stage, environment)
-    target = camera_rgb(stage, stage.reflectances * spectrum)
-    w_avg = camera_rgb(stage, spectrum)
-    drive = M @ w_avg
-    emitted = np.clip(drive, 0.0, None)
-    lit = camera_rgb(stage, stage.reflectances * (stage.leds @ emitted))
-    black = _black_level(stage, M, w_avg)
-    c = target if content is None else np.asarray(content, dtype=np.float64)
-    in_drive = c @ (M if N is None else np.asarray(N, dtype=np.float64)).T
-    if offset is not None:
-        in_drive = in_drive + np.asarray(offset, dtype=np.float64)
-    displayed = np.clip(in_drive, 0.0, None) @ stage.SL.T
-    if black is not None:
-        displayed = displayed + black
-    return StagePrediction(
-        target=target,
-        lit=lit,
-        lit_corrected=lit @ Q.T,
-        displayed=displayed,
-        displayed_corrected=displayed @ Q.T,
-        drive=drive,
-        drive_emitted=emitted,
-        lit_drive_clipped=bool(np.any(drive < 0)),
-        displayed_drive_clipped=np.any(in_drive < 0, axis=-1),
-        black_level=black,
-    )
-
-
-def predict_solution(stage: SpectralStage, environment: Any, solution: Any) -> StagePrediction:
-    """:func:`predict_stage` for a solved :class:`~ocio_vp.solution.Solution`.
-
-    Uses its M (lighting), Q, in-frustum matrix (N, or M where N was not solved, in which
-    case Q is *not* applied to the displayed chart: the wall stays as M shows it) and offset.
-    """
-    prediction = predict_stage(
-        stage,
-        environment,
-        M=solution.M,
-        Q=solution.Q,
-        N=solution.in_frustum_matrix,
-        offset=solution.in_frustum_offset,
-    )
-    if solution.N is None:
-        from dataclasses import replace
-
-        prediction = replace(prediction, displayed_corrected=prediction.displayed)
-    return prediction
+# The predictor lives in its own module (one job each); re-exported here as public API.
+from ocio_vp.spectral_predict import (  # noqa: E402
+    StagePrediction,
+    predict_solution,
+    predict_stage,
+)

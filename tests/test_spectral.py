@@ -14,7 +14,7 @@ import pytest
 from ocio_vp.calibrate import solve_environment
 from ocio_vp.errors import InputError
 from ocio_vp.geometry import form_factor_parallel_rectangle, stage_beta
-from ocio_vp.measurements import load_measurements, save_measurements
+from ocio_vp.measurements import PanelGeometry, load_measurements, save_measurements
 from ocio_vp.solve import predict_lit_chart
 from ocio_vp.spectral import (
     ENVIRONMENTS,
@@ -105,7 +105,7 @@ class TestBeta:
                 )
 
     def test_explicit_beta(self):
-        m = simulate_measurements(["d65"], beta=0.311, panel=None)
+        m = simulate_measurements(["d65"], beta=0.311)
         assert m.stage.beta == 0.311 and m.stage.panel is None
         assert stage_beta(m) == 0.311
 
@@ -223,6 +223,7 @@ class TestInputs:
             ({"leds": [(630, 20), (525, 35), (2000, 20)]}, "leds"),
             ({"panel_albedo": 1.5}, "albedo"),
             ({"beta": 2.0}, "beta"),
+            ({"beta": 0.311, "panel": PanelGeometry(1.0, 1.0, 1.0)}, "beta"),
         ],
     )
     def test_bad_stage_options(self, options, key):
