@@ -103,6 +103,30 @@ def test_simulate_writes_a_measurements_file(tmp_path, capsys):
     np.testing.assert_allclose([e.w_avg[1] for e in m.environments], 1.0, rtol=1e-12)
 
 
+def test_simulate_measured_leds_from_csv(tmp_path):
+    # Measured spectra given as a CSV on a 1 nm grid: the simulator resamples them linearly, so
+    # Gaussian LEDs written out this way reproduce [SL] of the same Gaussians closely.
+    from ocio_vp.spectral import spectral_stage
+
+    wl = np.arange(380.0, 781.0, 1.0)
+    pairs = ((630.0, 20.0), (525.0, 35.0), (460.0, 22.0))
+    sig = [f / (2 * np.sqrt(2 * np.log(2))) for _, f in pairs]
+    leds = np.stack(
+        [np.exp(-((wl - p) ** 2) / (2 * s**2)) for (p, _), s in zip(pairs, sig, strict=True)], 1
+    )
+    path = tmp_path / "leds.csv"
+    path.write_text(
+        "nm,r,g,b\n"
+        + "\n".join(
+            ",".join(f"{v:.12g}" for v in (w, *row)) for w, row in zip(wl, leds, strict=True)
+        )
+    )
+    out = tmp_path / "m.yaml"
+    assert main(["simulate", "--out", str(out), "--leds", str(path), "--environment", "d65"]) == 0
+    expected = spectral_stage(leds=pairs).SL
+    np.testing.assert_allclose(load_measurements(out).SL, expected, rtol=1e-9)
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [
