@@ -26,6 +26,8 @@ __all__ = [
     "error_relative_to_white",
     "identity_check",
     "in_frustum_drive_range",
+    "is_identity",
+    "offset_is_negligible",
     "out_of_frustum_drive",
     "residuals_per_patch",
     "stability_diagnostics",
@@ -247,7 +249,9 @@ def stability_diagnostics(
     in_range = in_frustum_drive_range(
         target, M=problem.M, matrix=in_matrix, offset=offset, white_patch=white
     )
-    in_range_M = in_frustum_drive_range(target, M=problem.M, matrix=problem.M, white_patch=white)
+    in_range_M = in_frustum_drive_range(
+        target, M=problem.M, matrix=problem.M, offset=offset, white_patch=white
+    )
     in_range["below_zero_with_M"] = in_range_M["below_zero"]
     in_range["above_max_with_M"] = in_range_M["above_max"]
     cond_SL = condition_number(problem.SL)
@@ -256,6 +260,11 @@ def stability_diagnostics(
             f"cond([SL]) = {cond_SL:.3g}: an LED channel is almost dark or two primaries look "
             "alike to the camera; M (and N) amplify noise in the primaries' plate by this factor"
         )
+    if notes.get("marginal"):
+        warnings.append(
+            f"auto's choice of {notes.get('model')} is marginal: {notes['marginal']} came within "
+            "5% of the tolerance, so a re-measured chart could pick a different model (and N)"
+        )
     if clipped:
         warnings.append(
             f"{len(clipped)} chart patch(es) clipped and left out of the fit: {clipped}"
@@ -263,7 +272,8 @@ def stability_diagnostics(
     if N is not None and in_range["below_zero"] > in_range_M["below_zero"]:
         warnings.append(
             f"N drives {in_range['below_zero']} chart colour(s) below zero in-frustum (M: "
-            f"{in_range_M['below_zero']}): Q's inverse pushes them outside the LED gamut"
+            f"{in_range_M['below_zero']}, same black-level offset): Q's inverse pushes them "
+            "outside the LED gamut"
         )
     block = {
         "model": notes.get("model", method),
@@ -282,3 +292,23 @@ def stability_diagnostics(
         "identity_check": identity_check(Q, problem.SL, N),
     }
     return block, warnings
+
+
+#: A black-level offset whose light ``[SL] offset`` stays below this fraction of the wall's
+#: white ``[SL] [1, 1, 1]`` is left out of the OCIO config (kept in solution.json): 1e-5 of
+#: full white is under half a code value of a 16-bit linear signal.
+NEGLIGIBLE_OFFSET = 1e-5
+
+
+def offset_is_negligible(offset: ArrayLike | None, SL: ArrayLike) -> bool:
+    """True when an in-frustum drive offset cannot be seen (see :data:`NEGLIGIBLE_OFFSET`)."""
+    if offset is None:
+        return True
+    SL = np.asarray(SL, dtype=np.float64)
+    seen = np.abs(SL @ np.asarray(offset, dtype=np.float64))
+    return bool(np.max(seen) <= NEGLIGIBLE_OFFSET * np.max(np.abs(SL.sum(axis=1))))
+
+
+def is_identity(Q: ArrayLike) -> bool:
+    """True when Q is exactly the identity (``auto``'s identity model, or ``method="identity"``)."""
+    return bool(np.array_equal(np.asarray(Q, dtype=np.float64), np.eye(3)))

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import PyOpenColorIO as OCIO
 
+from ocio_vp.diagnostics import is_identity, offset_is_negligible
 from ocio_vp.solution import Solution
 
 __all__ = [
@@ -104,9 +105,11 @@ def wall_transforms(solution: Solution) -> dict[str, list[OCIO.Transform]]:
     Linearity LUTs (when the solution has them) are appended by :mod:`ocio_vp.linearity`.
     """
     outer: list[OCIO.Transform] = [matrix_transform(solution.M)]
-    inner: list[OCIO.Transform] = [
-        matrix_transform(solution.in_frustum_matrix, solution.black_level_offset)
-    ]
+    # An offset the camera cannot see is left out (docs/stability.md); solution.json keeps it.
+    offset = solution.black_level_offset
+    if offset_is_negligible(offset, solution.SL):
+        offset = None
+    inner: list[OCIO.Transform] = [matrix_transform(solution.in_frustum_matrix, offset)]
     return {OUT_OF_FRUSTUM: outer, IN_FRUSTUM: inner}
 
 
@@ -152,7 +155,8 @@ def build_config(
     config.setMinorVersion(1)
     config.setName(f"ocio-vp_{stage}_{env}")
     config.setDescription(
-        f"ocio_vp calibration of {origin}. Q method: {solution.method}. "
+        f"ocio_vp calibration of {origin}. Q method: {solution.method} "
+        f"(model {solution.diagnostics.get('model') or solution.method}). "
         "LeGendre, Lepicovsky & Debevec, DigiPro 2022."
     )
     if search_path:
@@ -186,7 +190,12 @@ def build_config(
     outer.setTransform(_group(chains[OUT_OF_FRUSTUM]), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
     config.addColorSpace(outer)
 
-    if solution.N is not None:
+    q_identity = is_identity(solution.Q)
+    if solution.N is not None and q_identity:
+        inner_text = (
+            f"N = M (Q is the identity, so no in-frustum change is needed) {_fmt(solution.N)}"
+        )
+    elif solution.N is not None:
         inner_text = f"N = M Q^-1 {_fmt(solution.N)}"
     else:
         reason = solution.diagnostics.get("N_reason") or "Q is not invertible"
@@ -196,6 +205,10 @@ def build_config(
             f", plus black-level offset {_fmt(solution.black_level_offset[None])} "
             f"({solution.black_level_method})"
         )
+        if offset_is_negligible(solution.black_level_offset, solution.SL):
+            inner_text += (
+                " - negligible (below 1e-5 of the wall's white), left out of this transform"
+            )
     inner = _colorspace(
         IN_FRUSTUM,
         f"Panel drive for content INSIDE the camera frustum (the in-camera background): "
@@ -206,24 +219,30 @@ def build_config(
     inner.setTransform(_group(chains[IN_FRUSTUM]), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
     config.addColorSpace(inner)
 
+    model = solution.diagnostics.get("model") or solution.method
+    reason = solution.diagnostics.get("model_reason")
     q_text = (
-        f"Post-correction Q {_fmt(solution.Q)} for footage shot on the stage ({solution.method}). "
-        f"{origin}."
+        f"Post-correction Q {_fmt(solution.Q)} for footage shot on the stage ({solution.method}, "
+        f"model {model}{': ' + reason if reason else ''}). {origin}."
     )
+    if q_identity:
+        # Kept under the same names so hosts' settings survive, but as no-op transforms.
+        q_text = "Q is the identity: no post-correction is needed. " + q_text
     footage = _colorspace(
         POST_CORRECTION_COLORSPACE,
         "Camera linear RGB as recorded on the stage; converting to the reference applies Q. "
         + q_text,
         family="Camera",
     )
-    footage.setTransform(matrix_transform(solution.Q), OCIO.COLORSPACE_DIR_TO_REFERENCE)
+    if not q_identity:
+        footage.setTransform(matrix_transform(solution.Q), OCIO.COLORSPACE_DIR_TO_REFERENCE)
     config.addColorSpace(footage)
 
     named = OCIO.NamedTransform(
         name=POST_CORRECTION,
         family=f"{FAMILY}/Post",
         description=q_text,
-        forwardTransform=matrix_transform(solution.Q),
+        forwardTransform=OCIO.GroupTransform() if q_identity else matrix_transform(solution.Q),
     )
     config.addNamedTransform(named)
 

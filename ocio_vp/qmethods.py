@@ -7,10 +7,12 @@ under M, eq. 3) with patch weights ``w_j`` (0 = excluded, e.g. clipped):
 model               dof   what it fits
 ==================  ====  ==================================================================
 identity            0     ``Q = I``: the stage's LEDs already light the scene like the real one
-diagonal            3     white balance: ``Q = diag(p_w / x_w)`` (the white patch maps exactly)
-white-preserving    6     full Q with ``Q x_w = p_w`` exactly, the rest least squares
-regularised         3..9  least squares shrunk toward the diagonal model, strength by LOO CV
+diagonal            3     white balance: per-channel gains, least squares over all patches
+regularised         3..9  least squares shrunk toward the diagonal model: the most shrinkage
+                          whose LOO error is within half auto's tolerance of the best strength
 least-squares       9     the paper's eq. 5
+white-preserving    6     full Q with ``Q x_w = p_w`` exactly, the rest least squares (not in
+                          auto's ladder: one patch's noise goes straight into Q and N)
 rank-r              5, 8  reduced-rank least squares, for a (nearly) monochromatic target
 ==================  ====  ==================================================================
 
@@ -51,20 +53,30 @@ __all__ = [
 ]
 
 #: ``auto`` keeps the simplest model whose cross-validated error is at most
-#: ``best * (1 + relative) + absolute``. 10 % of the best error, plus 0.25 % of the target white:
-#: below what a colourist sees on a chart, above the spread of LOO estimates at 0.5 % noise.
-AUTO_TOLERANCE_RELATIVE = 0.10
-AUTO_TOLERANCE_ABSOLUTE = 0.0025
+#: ``best * (1 + relative) + absolute``: 5 % of the best error plus 0.2 % of the target white,
+#: well below a visible difference on a chart (docs/stability.md), above LOO's own jitter.
+AUTO_TOLERANCE_RELATIVE = 0.05
+AUTO_TOLERANCE_ABSOLUTE = 0.002
 
 #: A colour direction of the target chart carrying less than this fraction of its largest
 #: singular value is treated as absent (low-pressure sodium: ~1e-16; high-pressure sodium: 0.04).
 RANK_RELATIVE_TOLERANCE = 0.01
 
-#: Shrinkage strengths tried by ``regularised``, relative to ``trace(X^T W X) / 3``.
-REGULARISATION_GRID = (0.0, *np.logspace(-4, 2, 13).tolist())
+#: ``regularised`` takes the strongest shrinkage whose inner leave-one-out error is within
+#: ``best * (1 + relative) + absolute`` of the best strength's: half ``auto``'s tolerance, so the
+#: shrunk model usually stays within ``auto``'s tolerance when cross-validated from outside.
+SHRINKAGE_TOLERANCE = (AUTO_TOLERANCE_RELATIVE / 2, AUTO_TOLERANCE_ABSOLUTE / 2)
 
-#: ``auto``'s candidates, simplest first.
-AUTO_LADDER = ("identity", "diagonal", "white-preserving", "regularised", "least-squares")
+#: Shrinkage strengths tried by ``regularised``, relative to ``trace(X^T W X) / 3``.
+REGULARISATION_GRID = (0.0, *np.logspace(-4, 2, 7).tolist())
+
+#: A simpler model whose error is within this fraction above ``auto``'s limit makes the choice
+#: "marginal" (reported: re-measuring could flip it).
+MARGINAL_CHOICE = 0.05
+
+#: ``auto``'s candidates, simplest first. ``white-preserving`` is not one: pinning Q to a single
+#: patch makes Q and N inherit that patch's noise (docs/stability.md), so it is never "simpler".
+AUTO_LADDER = ("identity", "diagonal", "regularised", "least-squares")
 
 Kernel = Callable[[np.ndarray, np.ndarray, np.ndarray, int], np.ndarray]
 
@@ -85,10 +97,8 @@ def _fit_identity(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> np
 
 
 def _fit_diagonal(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> np.ndarray:
-    """Von Kries gains from the white patch; per-channel least squares when it is excluded."""
-    x_w, p_w = X[white], P[white]
-    if w[white] > 0 and np.all(np.abs(x_w) > 1e-12 * np.max(np.abs(X))):
-        return np.diag(p_w / x_w)
+    """Per-channel gains by least squares over every fitted patch (a white balance that no
+    single noisy patch sets); a channel with no signal keeps gain 1."""
     num = np.einsum("j,jc,jc->c", w, X, P)
     den = np.einsum("j,jc,jc->c", w, X, X)
     safe = den > 0
@@ -135,8 +145,10 @@ def _choose_shrinkage(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -
     held = np.einsum("gkcd,kd->gkc", Q, X[active])
     denom = white_scale(P, white, w)
     errors = np.mean(np.abs(held - P[active]) / denom, axis=(1, 2))
-    best = np.flatnonzero(errors <= errors.min() * (1 + 1e-9))[-1]
-    return float(grid[best])
+    # Like Breiman's one-standard-error rule: the most shrinkage whose error is within
+    # SHRINKAGE_TOLERANCE of the best, because shrinkage toward D is what keeps N stable.
+    limit = errors.min() * (1 + SHRINKAGE_TOLERANCE[0]) + SHRINKAGE_TOLERANCE[1]
+    return float(grid[np.flatnonzero(errors <= limit)[-1]])
 
 
 def _fit_regularised(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> np.ndarray:
@@ -233,7 +245,7 @@ def _method(name: str, description: str) -> Callable[[QProblem], QFit]:
 
 
 q_identity = _method("identity", "Q = I, no post-correction")
-q_diagonal = _method("diagonal", "white balance only, the white patch maps exactly")
+q_diagonal = _method("diagonal", "white balance only: per-channel gains fitted to every patch")
 q_white_preserving = _method(
     "white-preserving",
     "the white patch maps exactly, the other 6 degrees of freedom by least squares",
@@ -294,6 +306,9 @@ def q_auto(problem: QProblem) -> QFit:
     best_name = min(errors, key=errors.__getitem__)
     limit = errors[best_name] * (1 + AUTO_TOLERANCE_RELATIVE) + AUTO_TOLERANCE_ABSOLUTE
     chosen = next(name for name in AUTO_LADDER if errors[name] <= limit)
+    simpler = AUTO_LADDER[: AUTO_LADDER.index(chosen)]
+    # A simpler model just above the limit means 0.5 % noise may flip the choice (and N).
+    marginal = [name for name in simpler if errors[name] <= limit * (1 + MARGINAL_CHOICE)]
     reason = (
         f"simplest model whose leave-one-patch-out error {100 * errors[chosen]:.3g}% is within "
         f"{100 * limit:.3g}% (best: {best_name} {100 * errors[best_name]:.3g}%, +"
@@ -304,6 +319,8 @@ def q_auto(problem: QProblem) -> QFit:
         "reason": reason,
         "cv_error": errors,
         "cross_validated_error": per_channel[chosen],
+        "limit": limit,
+        "marginal": marginal,
     }
     if chosen == "regularised":
         notes["shrinkage"] = _choose_shrinkage(X, P, w, white)

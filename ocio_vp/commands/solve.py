@@ -67,11 +67,15 @@ def print_table(solutions: Sequence) -> None:
     header = (
         "environment",
         "method",
+        "model",
         "cond[SL]",
         "cond(Q)",
         "N",
         "lit error M-only",
         "lit error M+Q",
+        "CV error",
+        "drive<0",
+        "clipped",
     )
     rows = []
     for s in solutions:
@@ -80,11 +84,15 @@ def print_table(solutions: Sequence) -> None:
             (
                 s.environment,
                 s.method,
+                d.get("model", s.method),
                 f"{d['cond_SL']:.3g}",
                 f"{d['cond_Q']:.3g}",
-                "solved" if s.N is not None else "NOT solved",
+                ("= M" if d.get("N_equals_M") else "solved") if s.N is not None else "NOT solved",
                 f"{100 * float(sum(d['lit_chart_error_baseline'])) / 3:.2f}%",
                 f"{100 * float(sum(d['lit_chart_error'])) / 3:.2f}%",
+                _percent(d.get("cross_validated_error")),
+                ",".join("RGB"[c] for c in d.get("out_of_frustum_negative_channels") or []) or "-",
+                str(len(d.get("clipped_patches") or [])),
             )
         )
     widths = [max(len(str(r[i])) for r in [header, *rows]) for i in range(len(header))]
@@ -93,6 +101,13 @@ def print_table(solutions: Sequence) -> None:
     for s in solutions:
         for warning in s.diagnostics.get("warnings", []):
             print(f"warning: {s.environment}: {warning}")
+
+
+def _percent(per_channel) -> str:
+    """Mean of a per-channel error as a percentage ('-' when absent)."""
+    if per_channel is None:
+        return "-"
+    return f"{100 * float(sum(per_channel)) / len(per_channel):.2f}%"
 
 
 def run(args: argparse.Namespace) -> int:
