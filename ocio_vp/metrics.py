@@ -125,6 +125,15 @@ def chart_errors(
 
     See the module docstring for the normalisation of ΔE2000 (target white Y = 1 and the Lab
     reference white) and ΔE ITP (target white = 100 cd/m^2).
+
+    Examples
+    --------
+    >>> chart = np.linspace(0.05, 0.9, 72).reshape(24, 3)
+    >>> e = chart_errors(chart * 1.01, chart, camera_to_xyz=np.eye(3))
+    >>> bool(np.allclose(e.relative_to_white, 0.01 * chart.mean(axis=0) / chart[18]))
+    True
+    >>> bool(e.delta_E_2000.max() < 1.0)
+    True
     """
     import colour
 

@@ -134,6 +134,14 @@ def camera_rgb(stage: SpectralStage, spectrum: ArrayLike) -> np.ndarray:
     -------
     ndarray
         (..., 3) camera RGB.
+
+    Examples
+    --------
+    A perfect white diffuser under an environment reads green = 1 (the simulator's exposure):
+
+    >>> stage = paper_stage()
+    >>> round(float(camera_rgb(stage, environment_spectrum(stage, "direct_sun"))[1]), 12)
+    1.0
     """
     return np.asarray(spectrum, dtype=np.float64) @ stage.camera
 
@@ -299,6 +307,16 @@ def simulate_measurements(
         [SL] (eq. 1), [SRL]_j *as photographed* (beta x the uniform-sphere value), and per
         environment the target chart p_j, the true diffuse integral w_avg and, when the stage
         has a panel albedo, the black level b_camera seen with M = [SL]^-1 lighting the stage.
+
+    Examples
+    --------
+    The stage's own LEDs mixed to a white need no post-correction (Q = I):
+
+    >>> from ocio_vp.calibrate import solve_environment
+    >>> m = simulate_measurements(["rgb_led_white"])
+    >>> s = solve_environment(m, m.environments[0], method="least-squares")
+    >>> bool(np.allclose(s.Q, np.eye(3), atol=1e-9))
+    True
     """
     from ocio_vp.measurements import check_safe_name
 

@@ -87,3 +87,15 @@ def test_camera_matrix_recovers_chart_xyz():
     white = colour.XYZ_to_xy(xyz[18])
     delta = colour.delta_E(colour.XYZ_to_Lab(xyz, white), colour.XYZ_to_Lab(fitted, white))
     assert np.mean(delta) < 3.0
+
+
+def test_docstring_examples_run():
+    # STYLE.md: examples in docstrings must actually run.
+    import doctest
+
+    import ocio_vp.metrics
+    import ocio_vp.spectral
+
+    for module in (ocio_vp.spectral, ocio_vp.metrics):
+        result = doctest.testmod(module)
+        assert result.attempted > 0 and result.failed == 0, module.__name__
