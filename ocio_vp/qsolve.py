@@ -20,6 +20,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ocio_vp.errors import InputError
+from ocio_vp.joint import q_joint
 from ocio_vp.perceptual import q_perceptual
 from ocio_vp.qmethods import (
     fit_least_squares,
@@ -62,6 +63,7 @@ Q_SOLVE_METHODS: dict[str, Callable[[QProblem], QFit]] = {
     "identity": q_identity,
     "auto": q_auto,
     "perceptual": q_perceptual,
+    "joint": q_joint,
 }
 
 
