@@ -128,7 +128,7 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
     ]
     facts = [
         ("stage", s.stage),
-        ("Q method", s.method),
+        ("Q method", _method(s)),
         ("beta (panel form factor)", f"{s.beta:.5f}"),
         ("w_avg (camera RGB)", ", ".join(f"{v:.5g}" for v in s.w_avg)),
         ("out-of-frustum drive M w_avg", _triple(d.get("out_of_frustum_drive"))),
@@ -165,12 +165,38 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
         "images": images,
         "matrices": matrices,
         "facts": facts,
-        "notes": sorted((str(k), str(v)) for k, v in notes.items()),
+        "notes": sorted((str(k), _short(v)) for k, v in notes.items()),
         "warnings": [str(w) for w in d.get("warnings", [])],
         "errors": rows,
         "transform": data.transform.description,
         "linearity": _linearity_facts(s.linearity),
     }
+
+
+def _method(solution: Any) -> str:
+    """The Q method, with the model an automatic method chose (from its notes)."""
+    model = (solution.diagnostics.get("method_notes") or {}).get("model")
+    if isinstance(model, str) and model != solution.method:
+        return f"{solution.method} → {model}"
+    return solution.method
+
+
+def _short(value: Any) -> str:
+    """Notes as a person reads them: floats to 4 significant digits, inside lists and dicts."""
+
+    def walk(v: Any) -> Any:
+        if isinstance(v, float):
+            return float(f"{v:.4g}")
+        if isinstance(v, dict):
+            return {k: walk(x) for k, x in v.items()}
+        if isinstance(v, (list, tuple)):
+            return [walk(x) for x in v]
+        return v
+
+    value = walk(value)
+    if isinstance(value, dict):
+        return ", ".join(f"{k}: {v}" for k, v in value.items())
+    return str(value)
 
 
 def _triple(values: Any) -> str:
@@ -193,7 +219,7 @@ def _summary(environments: Sequence[EnvironmentData]) -> list[dict[str, str]]:
             {
                 "name": e.solution.environment,
                 "key": e.key,
-                "method": e.solution.method,
+                "method": _method(e.solution),
                 "cond_q": f"{float(d.get('cond_Q', float('nan'))):.3g}",
                 "n": "solved" if e.solution.N is not None else "not solved",
                 **{chart: _percent(e.errors[chart]) for chart in STAGE_CHARTS},

@@ -29,6 +29,7 @@ __all__ = [
     "DeltaEPlot",
     "ErrorBarsPlot",
     "LinearityPlot",
+    "panel_titles",
     "plot_comparison_charts",
     "plot_delta_e",
     "plot_error_bars",
@@ -37,13 +38,25 @@ __all__ = [
 
 CHANNEL_COLOURS = ("#c0392b", "#27ae60", "#2e6fbd")
 CHANNEL_NAMES = ("R", "G", "B")
-#: The four comparison panels: (stage chart, title), rows lit/displayed, columns baseline/ours.
-PANELS = (
-    ("lit_baseline", "Lit chart: baseline (M only)"),
-    ("lit_corrected", "Lit chart: ours (M, then Q on the footage)"),
-    ("displayed_baseline", "In-camera background: baseline (M only)"),
-    ("displayed_corrected", "In-camera background: ours (N, black level, Q)"),
-)
+#: The four comparison panels: stage chart, rows lit/displayed, columns baseline/ours.
+PANELS = ("lit_baseline", "lit_corrected", "displayed_baseline", "displayed_corrected")
+
+
+def panel_titles(solution: Any) -> dict[str, str]:
+    """Panel titles that say what "ours" is for this solution (N or black level may be absent)."""
+    background = ["N" if solution.N is not None else "M (N not solved)"]
+    if solution.black_level_offset is not None:
+        background.append("black level")
+    if solution.N is not None:
+        background.append("Q")
+    return {
+        "lit_baseline": "Lit chart: baseline (M only)",
+        "lit_corrected": "Lit chart: ours (M, then Q on the footage)",
+        "displayed_baseline": "In-camera background: baseline (M only)",
+        "displayed_corrected": f"In-camera background: ours ({', '.join(background)})",
+    }
+
+
 BACKGROUND = "#3a3a3a"
 
 
@@ -54,6 +67,7 @@ class ChartPlot:
     path: Path
     squares: dict[str, np.ndarray]
     circles: dict[str, np.ndarray]
+    titles: dict[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -142,13 +156,16 @@ def plot_comparison_charts(data: EnvironmentData, path: Path, *, dpi: float = 11
         10.0, 7.4, left=0.015, right=0.985, top=0.88, bottom=0.01, hspace=0.2, wspace=0.05
     )
     axes = figure.subplots(2, 2)
-    squares, circles = {}, {}
-    for ax, (chart, title) in zip(axes.ravel(), PANELS, strict=True):
+    squares, circles, drawn_titles = {}, {}, {}
+    titles = panel_titles(data.solution)
+    for ax, chart in zip(axes.ravel(), PANELS, strict=True):
+        title = titles[chart]
         square_artists, circle_artists = _draw_chart(
             ax, data.display["target"], data.display[chart]
         )
         error = 100 * float(np.mean(data.errors[chart]))
         ax.set_title(f"{title}\nmean error {error:.2f}% of white", fontsize=10)
+        drawn_titles[chart] = ax.get_title()
         squares[chart] = np.array([to_rgb(a.get_facecolor()) for a in square_artists])
         circles[chart] = np.array([to_rgb(a.get_facecolor()) for a in circle_artists])
     figure.suptitle(
@@ -156,7 +173,7 @@ def plot_comparison_charts(data: EnvironmentData, path: Path, *, dpi: float = 11
         "circles = on the stage",
         fontsize=11,
     )
-    return ChartPlot(_save(figure, path, dpi), squares, circles)
+    return ChartPlot(_save(figure, path, dpi), squares, circles, drawn_titles)
 
 
 def _axis_top(values: np.ndarray) -> float | None:

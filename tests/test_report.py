@@ -318,6 +318,12 @@ def test_sample_configs_render(tmp_path):
         )
     html = result.index.read_text()
     assert "sodium_vapour" in html and "not solved" in html  # the paper: no N for sodium
+    for data in result.environments:
+        title = result.charts[data.key].titles["displayed_corrected"]
+        if data.solution.environment == "sodium_vapour":
+            assert "N not solved" in title and "Q" not in title.split(":")[1]
+        else:
+            assert "(N, black level, Q)" in title
 
 
 def test_camera_to_xyz_from_the_caller(tmp_path, solved):
