@@ -79,6 +79,7 @@ __all__ = [
     "predict_stage",
     "simulate_measurements",
     "spectral_stage",
+    "white_reflectance",
 ]
 
 #: The paper's calibration panel: 1 m x 1 m at 1 m (beta = 0.23946).
@@ -238,6 +239,16 @@ def spectral_stage(
     )
 
 
+def white_reflectance(stage: SpectralStage) -> float:
+    """The chart white patch's reflectance as the camera's green channel sees it (4 digits).
+
+    ``sum S_g R_white / sum S_g``: ~0.887 for the ColorChecker, not the paper's nominal 0.9, so
+    tools that derive w_avg from the white patch (when a file has no w_avg) get it right.
+    """
+    green = stage.camera[:, 1]
+    return round(float(green @ stage.reflectances[stage.white_patch] / green.sum()), 4)
+
+
 def paper_stage() -> SpectralStage:
     """The default simulated stage (see the module docstring), named ``paper-stage``."""
     return spectral_stage(name="paper-stage")
@@ -346,6 +357,7 @@ def simulate_measurements(
             panel=stage.panel,
             beta=None if stage.panel is not None else stage.beta,
             white_patch=stage.white_patch,
+            white_reflectance=white_reflectance(stage),
         ),
         SL=SL,
         SRL=stage.beta * stage.SRL_unscaled,

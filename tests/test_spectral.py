@@ -110,6 +110,20 @@ class TestBeta:
         assert stage_beta(m) == 0.311
 
 
+def test_white_patch_gives_w_avg_within_half_a_percent(measurements):
+    # The file's white_reflectance (camera-green-weighted, ~0.887 for the Ohta chart, not the
+    # paper's nominal 0.9) lets the core's w_avg-from-white-patch recover the true diffuse
+    # integral to 0.5% (the patch is not perfectly neutral).
+    from ocio_vp.geometry import w_avg_from_white_patch
+
+    assert measurements.stage.white_reflectance == pytest.approx(0.8865, abs=1e-4)
+    for env in measurements.environments:
+        estimate = w_avg_from_white_patch(
+            env.target_chart, 18, measurements.stage.white_reflectance
+        )
+        np.testing.assert_allclose(estimate, env.w_avg, rtol=5e-3)
+
+
 class TestPaperFindings:
     BROADBAND = tuple(n for n in PAPER_ENVIRONMENTS if ENVIRONMENTS[n].broadband)
 
