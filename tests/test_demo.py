@@ -127,6 +127,14 @@ def test_simulate_measured_leds_from_csv(tmp_path):
     np.testing.assert_allclose(load_measurements(out).SL, expected, rtol=1e-9)
 
 
+def test_simulate_lists_environments(capsys):
+    assert main(["simulate", "--list-environments"]) == 0
+    names = [line.split()[0] for line in capsys.readouterr().out.splitlines()]
+    assert set(PAPER_ENVIRONMENTS) <= set(names)
+    assert main(["simulate"]) == 2  # no --out
+    assert "--out" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [

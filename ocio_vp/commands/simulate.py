@@ -15,7 +15,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "(colour-science's offline datasets) and write a measurements file (.yaml or .json) "
         "that `ocio-vp solve` reads. Defaults: the paper-like stage of `ocio-vp demo`.",
     )
-    parser.add_argument("--out", required=True, help="measurements file to write")
+    parser.add_argument("--out", help="measurements file to write (.yaml/.yml or .json)")
     parser.add_argument(
         "--camera", default=None, help="colour.MSDS_CAMERA_SENSITIVITIES key (Nikon 5100 (NPL))"
     )
@@ -55,6 +55,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ocio_vp.errors import InputError
     from ocio_vp.measurements import save_measurements
     from ocio_vp.spectral import simulate_measurements
     from ocio_vp.spectral_cli import environments_from_args, stage_options_from_args
@@ -64,6 +65,8 @@ def run(args: argparse.Namespace) -> int:
         for spec in ENVIRONMENTS.values():
             print(f"{spec.name:22s} {spec.description}")
         return 0
+    if not args.out:
+        raise InputError("--out FILE is required", key="--out")
     options = stage_options_from_args(args)
     measurements = simulate_measurements(environments_from_args(args.environment), **options)
     save_measurements(measurements, args.out)
