@@ -127,6 +127,16 @@ def test_simulate_measured_leds_from_csv(tmp_path):
     np.testing.assert_allclose(load_measurements(out).SL, expected, rtol=1e-9)
 
 
+def test_unwritable_out_exits_2(tmp_path, capsys):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a folder")
+    assert main(["demo", "--out", str(blocker), "--no-report"]) == 2
+    assert main(["simulate", "--out", str(blocker / "m.yaml"), "--environment", "d65"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and all("error:" in line and "a_file" in line for line in err)
+    assert blocker.read_text() == "not a folder"
+
+
 def test_simulate_lists_environments(capsys):
     assert main(["simulate", "--list-environments"]) == 0
     names = [line.split()[0] for line in capsys.readouterr().out.splitlines()]

@@ -34,6 +34,7 @@ def run(args: argparse.Namespace) -> int:
     import time
     from pathlib import Path
 
+    from ocio_vp.errors import InputError
     from ocio_vp.spectral import paper_stage
     from ocio_vp.spectral_eval import evaluate_solution, format_table
     from ocio_vp.spectral_samples import SAMPLE_NAME, simulate_and_solve
@@ -42,12 +43,17 @@ def run(args: argparse.Namespace) -> int:
 
     start = time.perf_counter()
     out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise InputError("exists and is not a folder", source=out, key="--out")
     stage = paper_stage()
     with tempfile.TemporaryDirectory() as tmp:
         scratch = Path(tmp) / f"{SAMPLE_NAME}.yaml"
         _, solutions = simulate_and_solve(scratch, method=args.method, stage=stage)
-        written = write_solutions(solutions, out)
-        write_file_atomically(out / scratch.name, scratch.read_bytes())
+        try:
+            written = write_solutions(solutions, out)
+            write_file_atomically(out / scratch.name, scratch.read_bytes())
+        except OSError as error:
+            raise InputError(f"cannot write: {error.strerror}", source=out, key="--out") from None
     evaluations = [evaluate_solution(stage, s) for s in written]
     print(
         f"simulated stage: {stage.camera_name}, {stage.led_description}, {stage.chart_name}, "

@@ -69,7 +69,10 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--out FILE is required", key="--out")
     options = stage_options_from_args(args)
     measurements = simulate_measurements(environments_from_args(args.environment), **options)
-    save_measurements(measurements, args.out)
+    try:
+        save_measurements(measurements, args.out)
+    except OSError as error:
+        raise InputError(f"cannot write: {error.strerror}", source=args.out, key="--out") from None
     names = ", ".join(e.name for e in measurements.environments)
     print(f"wrote {args.out}: stage {measurements.stage.name}, environments {names}")
     return 0
