@@ -229,6 +229,25 @@ def _summary(environments: Sequence[EnvironmentData]) -> list[dict[str, str]]:
     return rows
 
 
+def _check_replaceable(out_dir: Path, environments: Sequence[EnvironmentData]) -> None:
+    """The report folder is replaced as a whole: never let that be anything but a report."""
+    from ocio_vp.errors import InputError
+
+    for data in environments:
+        if data.path.resolve().is_relative_to(out_dir):
+            raise InputError(
+                "the report folder would replace the solutions it reports on; choose another --out",
+                source=out_dir,
+            )
+    if out_dir.is_file() or (
+        out_dir.is_dir() and any(out_dir.iterdir()) and not (out_dir / "index.html").is_file()
+    ):
+        raise InputError(
+            "exists and is not an ocio-vp report (no index.html); refusing to replace it",
+            source=out_dir,
+        )
+
+
 def build_report(
     paths: Sequence[str | Path],
     out_dir: str | Path,
@@ -257,6 +276,7 @@ def build_report(
 
     out_dir = Path(out_dir).resolve()
     environments = environment_data(paths, match_white=match_white, camera_to_xyz=camera_to_xyz)
+    _check_replaceable(out_dir, environments)
     report = Report(index=out_dir / "index.html", environments=environments)
     loader = jinja2.FileSystemLoader(str(template_dir()))
     env = jinja2.Environment(loader=loader, autoescape=True, undefined=jinja2.StrictUndefined)

@@ -279,6 +279,33 @@ class TestCommand:
         assert not (tmp_path / "r").exists()
         assert sorted(p.name for p in tmp_path.iterdir()) == ["env_0"]
 
+    def test_refuses_to_replace_what_is_not_a_report(self, solved, tmp_path, capsys):
+        # --out pointing at the solve output (or any other folder) would be replaced whole.
+        assert main(["report", str(solved / "env_0"), "--out", str(solved)]) == 2
+        assert "would replace the solutions" in capsys.readouterr().err
+        other = tmp_path / "photos"
+        other.mkdir()
+        (other / "keep.txt").write_text("mine")
+        assert main(["report", str(solved / "env_0"), "--out", str(other)]) == 2
+        assert "not an ocio-vp report" in capsys.readouterr().err
+        assert (other / "keep.txt").read_text() == "mine"
+        assert sorted(p.name for p in solved.iterdir()) == ["env_0", "env_1", "env_2", "report"]
+
+
+def test_other_chart_without_black_level(tmp_path):
+    # 30 patches (not a ColorChecker 24): identity display matrix; no black level measured.
+    document = make_measurements_dict(n=30, environments=1, black_level=False)
+    out = _solve(tmp_path, document)
+    result = build_report([out], tmp_path / "r", dpi=DPI)
+    data = result.environments[0]
+    assert data.white_patch == 18
+    np.testing.assert_array_equal(data.transform.matrix, np.eye(3))
+    plot = result.charts[data.key]
+    assert plot.squares["lit_baseline"].shape == (30, 3)
+    assert "ours (N, Q)\n" in plot.titles["displayed_corrected"]
+    assert "no black-level measurement" in result.index.read_text()
+    assert "identity" in result.index.read_text()
+
 
 def test_white_patch_other_than_18(tmp_path):
     document = make_measurements_dict(environments=1)
