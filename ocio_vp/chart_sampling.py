@@ -24,12 +24,13 @@ chart near the optical centre (or correct the plates first); ``docs/capture.md``
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from ocio_vp.errors import InputError
+from ocio_vp.patch_statistics import ROBUST_MEAN_METHODS, patch_statistics
 from ocio_vp.plates import PlateInfo, check_box, open_plate, read_region
 
 __all__ = [
@@ -43,42 +44,6 @@ __all__ = [
 ]
 
 Box = tuple[int, int, int, int]
-
-
-# --------------------------------------------------------------------------------------------
-# Robust means: (k, 3) pixels -> (3,).
-
-
-def _trimmed_mean(pixels: np.ndarray, *, trim: float) -> np.ndarray:
-    from scipy.stats import trim_mean
-
-    return np.asarray(trim_mean(pixels, trim, axis=0), dtype=np.float64)
-
-
-def _median_of_means(pixels: np.ndarray, *, trim: float) -> np.ndarray:
-    # 9 interleaved groups (raster order) so each group spans the whole patch.
-    groups = [pixels[i::9] for i in range(min(9, len(pixels)))]
-    return np.median(np.stack([g.mean(axis=0) for g in groups]), axis=0)
-
-
-def _median(pixels: np.ndarray, *, trim: float) -> np.ndarray:
-    return np.median(pixels, axis=0)
-
-
-def _mean(pixels: np.ndarray, *, trim: float) -> np.ndarray:
-    return pixels.mean(axis=0)
-
-
-#: ``method=`` of :func:`sample_chart`: how a patch's pixels become one RGB value.
-#: ``"trimmed"`` (default) drops the lowest and highest ``trim`` fraction of each channel
-#: and averages the rest; ``"median-of-means"`` is the median of 9 interleaved group means.
-#: All but ``"mean"`` (plain, for comparison) first drop the patch's outlier pixels.
-ROBUST_MEAN_METHODS: dict[str, Callable[..., np.ndarray]] = {
-    "trimmed": _trimmed_mean,
-    "median-of-means": _median_of_means,
-    "median": _median,
-    "mean": _mean,
-}
 
 
 @dataclass(frozen=True)
@@ -264,84 +229,6 @@ def _frames_pixels(
     return total, is_float, len(frames)
 
 
-def _clip_levels(pixels: np.ndarray, clip_level: float | None, is_float: bool) -> np.ndarray:
-    """Per-channel clip level: given, 1.0 for integer plates, or a detected plateau for float.
-
-    A float plate has no fixed clip level, but a clipped sensor gives a flat top: the channel's
-    maximum shared by at least 0.1 % (and 4) of the sampled pixels. Noise-free synthetic images
-    look clipped at their brightest value by this test; pass ``clip_level`` to avoid it.
-    """
-    if clip_level is not None:
-        return np.full(3, float(clip_level))
-    if not is_float:
-        return np.full(3, 1.0 - 1e-6)
-    levels = np.full(3, np.inf)
-    if len(pixels) == 0:
-        return levels
-    top = pixels.max(axis=0)
-    for k in range(3):
-        at_top = np.count_nonzero(pixels[:, k] >= top[k] - 1e-6 * abs(top[k]))
-        if top[k] > 0 and at_top >= max(4, 1e-3 * len(pixels)):
-            levels[k] = top[k] * (1 - 1e-6)
-    return levels
-
-
-def _statistics(
-    groups: Sequence[np.ndarray],
-    *,
-    method: str,
-    trim: float,
-    clip_level: float | None,
-    is_float: bool,
-    outlier_sigma: float,
-    max_outlier_fraction: float,
-    max_spread: float,
-    source: object,
-) -> dict[str, np.ndarray | tuple[float, float, float] | None]:
-    if method not in ROBUST_MEAN_METHODS:
-        valid = ", ".join(ROBUST_MEAN_METHODS)
-        raise ValueError(f"unknown method {method!r}; expected one of: {valid}")
-    if not 0 <= trim < 0.5:
-        raise ValueError(f"trim must be in [0, 0.5), got {trim!r}")
-    robust_mean = ROBUST_MEAN_METHODS[method]
-    levels = _clip_levels(np.concatenate(groups), clip_level, is_float)
-    n = len(groups)
-    means, spreads = np.zeros((n, 3)), np.zeros((n, 3))
-    counts = np.zeros(n, dtype=np.int64)
-    clipped_fraction, outlier_fraction = np.zeros(n), np.zeros(n)
-    for j, pixels in enumerate(groups):
-        pixels = np.asarray(pixels, dtype=np.float64)
-        clipped_fraction[j] = np.mean(np.any(pixels >= levels, axis=1))
-        median = np.median(pixels, axis=0)
-        sigma = 1.4826 * np.median(np.abs(pixels - median), axis=0)
-        # A floor so noise-free or quantised data (sigma 0) does not call every pixel an outlier.
-        sigma = np.maximum(sigma, 1e-3 * max(float(np.max(np.abs(median))), 1e-12))
-        far = np.any(np.abs(pixels - median) > outlier_sigma * sigma, axis=1)
-        outlier_fraction[j] = np.mean(far)
-        # Outliers (a glint, dust) go first, so the trim stays symmetric about the noise.
-        # ("mean" is the plain, non-robust mean of all pixels, kept for comparison.)
-        enough = np.count_nonzero(~far) >= max(2, len(pixels) // 2)
-        kept = pixels[~far] if enough and method != "mean" else pixels
-        means[j] = robust_mean(kept, trim=trim)
-        counts[j] = len(kept)
-        spreads[j] = kept.std(axis=0, ddof=1) if len(kept) > 1 else 0.0
-    level = max(float(np.max(means)), 1e-12)
-    high_spread = (outlier_fraction > max_outlier_fraction) | (
-        np.max(spreads, axis=1) > max_spread * level
-    )
-    finite = tuple(float(v) for v in levels) if np.all(np.isfinite(levels)) else None
-    return {
-        "means": means,
-        "spreads": spreads,
-        "counts": counts,
-        "clipped_fraction": clipped_fraction,
-        "outlier_fraction": outlier_fraction,
-        "clipped": clipped_fraction > 0,
-        "high_spread": high_spread,
-        "clip_level": finite,
-    }
-
-
 def sample_chart(
     image: object,
     corners: object,
@@ -379,7 +266,7 @@ def sample_chart(
         A name in :data:`ROBUST_MEAN_METHODS`; ``"trimmed"`` uses ``trim`` per side.
     clip_level
         Linear value at which a pixel counts as clipped; default 1.0 for integer plates and a
-        detected flat top for float plates (see :func:`_clip_levels`).
+        detected flat top for float plates (see :func:`ocio_vp.patch_statistics.clip_levels`).
     encoding
         The plates' encoding when they are display-referred (see :mod:`ocio_vp.plates`).
     outlier_sigma, max_outlier_fraction, max_spread
@@ -437,7 +324,7 @@ def sample_chart(
             source=where,
             key="corners",
         )
-    stats = _statistics(
+    stats = patch_statistics(
         groups,
         method=method,
         trim=trim,
@@ -484,7 +371,7 @@ def sample_region(
     pixels, is_float, n_frames = _frames_pixels(
         frames, b, encoding=encoding, source=where, what="region"
     )
-    stats = _statistics(
+    stats = patch_statistics(
         [pixels.reshape(-1, 3)],
         method=method,
         trim=trim,
