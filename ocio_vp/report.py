@@ -14,7 +14,6 @@ camera-to-display matrix and ΔE conventions, :mod:`ocio_vp.report_plots` for th
 from __future__ import annotations
 
 import dataclasses
-import sys
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -60,17 +59,6 @@ def default_report_dir(paths: Sequence[str | Path]) -> Path:
     """``report/`` beside the first solution's environment folder (inside the solve output)."""
     first = find_solutions(paths)[0]
     return first.resolve().parent.parent / "report"
-
-
-def template_dir() -> Path:
-    """``templates/`` of the source tree, else the installed ``share/ocio-vp/templates``."""
-    for candidate in (
-        Path(__file__).resolve().parent.parent / "templates",
-        Path(sys.prefix) / "share" / "ocio-vp" / "templates",
-    ):
-        if (candidate / TEMPLATE).is_file():
-            return candidate
-    raise FileNotFoundError(f"{TEMPLATE} not found (is ocio-vp installed with its templates?)")
 
 
 def linearity_curves(linearity: Any) -> dict[str, tuple[np.ndarray, np.ndarray]]:
@@ -278,6 +266,8 @@ def build_report(
     environments = environment_data(paths, match_white=match_white, camera_to_xyz=camera_to_xyz)
     _check_replaceable(out_dir, environments)
     report = Report(index=out_dir / "index.html", environments=environments)
+    from ocio_vp.exports.templating import template_dir
+
     loader = jinja2.FileSystemLoader(str(template_dir()))
     env = jinja2.Environment(loader=loader, autoescape=True, undefined=jinja2.StrictUndefined)
     with staged_dir(out_dir.parent) as stage:
