@@ -13,6 +13,8 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
+from ocio_vp.errors import InputError
+
 __all__ = ["publish_dir", "staged_dir", "write_file_atomically"]
 
 
@@ -24,7 +26,12 @@ def staged_dir(parent: str | os.PathLike[str]) -> Iterator[Path]:
     """
     parent = Path(parent)
     created = not parent.exists()
-    parent.mkdir(parents=True, exist_ok=True)
+    if parent.exists() and not parent.is_dir():
+        raise InputError("exists and is not a folder; choose another output folder", source=parent)
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise InputError(f"cannot create output folder: {error.strerror}", source=parent) from None
     stage = Path(tempfile.mkdtemp(prefix=".ocio-vp-staging-", dir=parent))
     try:
         yield stage

@@ -206,3 +206,12 @@ def test_console_script_exit_code(tmp_path) -> None:
     assert result.returncode == 2
     assert "Traceback" not in result.stderr
     assert result.stderr.strip().endswith("this ocio-vp reads version 1, got 9")
+
+
+def test_output_path_that_is_a_file(tmp_path, capsys) -> None:
+    path = _write(tmp_path, make_measurements_dict())
+    blocker = tmp_path / "calib"
+    blocker.write_text("not a folder")
+    assert main(["solve", str(path), "--out", str(blocker)]) == 2
+    assert "exists and is not a folder" in capsys.readouterr().err
+    assert blocker.read_text() == "not a folder"
