@@ -21,7 +21,12 @@ from typing import Any
 
 import numpy as np
 
-from ocio_vp.report_data import STAGE_CHARTS, EnvironmentData, environment_data, find_solutions
+from ocio_vp.report_data import (
+    STAGE_CHARTS,
+    EnvironmentData,
+    environment_data,
+    find_solutions,
+)
 from ocio_vp.report_plots import (
     ChartPlot,
     DeltaEPlot,
@@ -32,10 +37,18 @@ from ocio_vp.report_plots import (
     plot_error_bars,
     plot_linearity,
 )
+from ocio_vp.solution import Solution
 from ocio_vp.solve import condition_number
 from ocio_vp.staging import publish_dir, staged_dir
 
-__all__ = ["Report", "build_report", "default_report_dir", "linearity_curves", "write_report"]
+__all__ = [
+    "Report",
+    "build_report",
+    "default_report_dir",
+    "linearity_curves",
+    "panel_description",
+    "write_report",
+]
 
 TEMPLATE = "report.html.j2"
 
@@ -90,6 +103,36 @@ def linearity_curves(linearity: Any) -> dict[str, tuple[np.ndarray, np.ndarray]]
     return curves
 
 
+def panel_description(solution: Solution, path: Path) -> str | None:
+    """The calibration panel's geometry, when the measurements file is found beside the solve.
+
+    ``solution.json`` records beta but not the panel; the measurements file it names is looked
+    for in the solve output folder (where ``ocio-vp demo`` writes it) and used only if its
+    SHA-256 matches the one recorded in the solution.
+    """
+    import hashlib
+
+    name = solution.measurements_file
+    if not name or not solution.measurements_sha256:
+        return None
+    candidate = Path(path).parent.parent / Path(name).name
+    try:
+        raw = candidate.read_bytes()
+    except OSError:
+        return None
+    if hashlib.sha256(raw).hexdigest() != solution.measurements_sha256:
+        return None
+    from ocio_vp.measurements import load_measurements
+
+    panel = load_measurements(candidate).stage.panel
+    if panel is None:
+        return f"beta given directly in {candidate.name}"
+    text = f"{panel.width:g} m x {panel.height:g} m at {panel.distance:g} m"
+    if panel.offset_x or panel.offset_y:
+        text += f", centre offset ({panel.offset_x:g}, {panel.offset_y:g}) m"
+    return f"{text} (from {candidate.name})"
+
+
 def _matrix_rows(name: str, matrix: np.ndarray | None, meaning: str) -> dict[str, Any]:
     if matrix is None:
         return {"name": name, "meaning": meaning, "rows": None, "cond": None}
@@ -133,8 +176,8 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
         ("solution file", str(data.path)),
         ("white patch (index)", data.white_patch),
     ]
-    if "panel" in d:
-        facts.append(("calibration panel", d["panel"]))
+    panel = panel_description(s, data.path)
+    facts.insert(3, ("calibration panel", panel or "not recorded in solution.json (beta only)"))
     notes = d.get("method_notes") or {}
     rows = []
     for chart in STAGE_CHARTS:

@@ -307,6 +307,23 @@ def test_other_chart_without_black_level(tmp_path):
     assert "identity" in result.index.read_text()
 
 
+def test_panel_geometry_from_the_measurements_file(tmp_path):
+    from ocio_vp.measurements import load_measurements
+
+    document = make_measurements_dict(environments=1)
+    document["stage"]["calibration_panel"] = {"width": 1.2, "height": 0.5, "distance": 1.5}
+    out = tmp_path / "solved"
+    out.mkdir()
+    (out / "m.json").write_text(json.dumps(document))
+    write_solutions(solve_measurements(load_measurements(out / "m.json")), out)
+    html = build_report([out], tmp_path / "r", dpi=DPI).index.read_text()
+    assert "1.2 m x 0.5 m at 1.5 m (from m.json)" in html
+    # A different file of the same name (hash differs from solution.json's) is not trusted.
+    (out / "m.json").write_text(json.dumps(document) + "\n")
+    html = build_report([out], tmp_path / "r", dpi=DPI).index.read_text()
+    assert "1.2 m" not in html and "not recorded in solution.json" in html
+
+
 def test_white_patch_other_than_18(tmp_path):
     document = make_measurements_dict(environments=1)
     document["stage"]["white_patch"] = 5
