@@ -9,6 +9,8 @@ in-frustum identity.
 from __future__ import annotations
 
 import dataclasses
+import re
+from pathlib import Path
 
 import colour
 import numpy as np
@@ -16,7 +18,13 @@ import pytest
 
 from ocio_vp.calibrate import solve_environment
 from ocio_vp.geometry import stage_beta
-from ocio_vp.joint import DEFAULT_MAX_CONDITION, joint_matrix, make_q_joint, q_joint
+from ocio_vp.joint import (
+    DEFAULT_MAX_CONDITION,
+    comparison_table,
+    joint_matrix,
+    make_q_joint,
+    q_joint,
+)
 from ocio_vp.metrics import camera_to_xyz_matrix, chart_errors
 from ocio_vp.qmethods import fit_least_squares
 from ocio_vp.qsolve import Q_SOLVE_METHODS, QProblem
@@ -132,3 +140,18 @@ def test_sodium_cannot_meet_the_limits(measurements):
     fit = q_joint(problem)
     assert fit.M is None and fit.notes["limits_met"] is False
     assert "no solution within the limits" in fit.notes["reason"]
+
+
+def _numbers(text):
+    return [float(x) for x in re.findall(r"[-+]?\d+\.\d+|[-+]?\d+(?=\b)", text)]
+
+
+def test_docs_table_is_generated_by_comparison_table():
+    # docs/joint.md's tables must be what the code produces now (not typed by hand).
+    doc = (Path(__file__).resolve().parent.parent / "docs" / "joint.md").read_text()
+    fresh = comparison_table()
+    table_lines = [x for x in fresh.splitlines() if x.startswith("| ") and "---" not in x]
+    for line in table_lines:
+        name = line.split("|")[1].strip()
+        (doc_line,) = [x for x in doc.splitlines() if x.split("|")[1:2] == [f" {name} "]]
+        np.testing.assert_allclose(_numbers(doc_line), _numbers(line), atol=0.011, rtol=1e-3)
