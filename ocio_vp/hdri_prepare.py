@@ -161,7 +161,9 @@ def _check_map(rgb: np.ndarray, peak: float) -> None:
         raise InputError(f"the peak must be a number > 0, got {peak!r}", key="--peak")
 
 
-def fit_under_peak(rgb: ArrayLike, *, peak: float) -> PreparedHDRI:
+def fit_under_peak(
+    rgb: ArrayLike, *, peak: float, storage_dtype: np.dtype | type | None = None
+) -> PreparedHDRI:
     """Spread the excess of over-range sources so that no channel of any pixel exceeds ``peak``.
 
     Parameters
@@ -171,6 +173,9 @@ def fit_under_peak(rgb: ArrayLike, *, peak: float) -> PreparedHDRI:
         layout). Not modified.
     peak
         The largest value the wall can show, in the map's units (> 0).
+    storage_dtype
+        The type the result will be stored in (e.g. ``np.float16`` for a half EXR): the peak
+        is rounded down to it (and to the working type) so that no stored value exceeds it.
 
     Returns
     -------
@@ -197,7 +202,10 @@ def fit_under_peak(rgb: ArrayLike, *, peak: float) -> PreparedHDRI:
     out = src.astype(np.float32 if src.dtype == np.float32 else np.float64, copy=True)
     # Values are computed in float64 and rounded to out.dtype; a peak representable in that
     # dtype keeps every rounded value <= peak (rounding is monotonic).
-    peak = round_down_to(float(peak), out.dtype)
+    requested = float(peak)
+    peak = round_down_to(requested, out.dtype)
+    if storage_dtype is not None:
+        peak = min(peak, round_down_to(requested, storage_dtype))
     height, width = out.shape[:2]
     row_omega = equirect_solid_angles(height, 1)[:, 0] / width
     brightness = np.maximum(np.maximum(out[..., 0], out[..., 1]), out[..., 2])
@@ -209,7 +217,7 @@ def fit_under_peak(rgb: ArrayLike, *, peak: float) -> PreparedHDRI:
     mean = float(row_omega @ brightness.sum(axis=1, dtype=np.float64)) / (4.0 * np.pi)
     if mean > peak:
         raise InputError(
-            f"the map cannot fit under peak {peak:g}: its solid-angle-weighted mean "
+            f"the map cannot fit under peak {requested:g}: its solid-angle-weighted mean "
             f"max(R,G,B) is {mean:.6g}, above the peak (lower the exposure or raise --peak)",
             key="--peak",
         )
@@ -268,6 +276,8 @@ def _spread(
 
     height, width = out.shape[:2]
     amount = float(excess.max())
+    if not amount > 0:  # only possible with large negative values beside the source
+        raise InputError("an over-range source has no positive excess: negative pixels beside it")
     colour = excess / amount
     theta = (rows + 0.5) * (np.pi / height)
     phi = ((cols + 0.5) / width - 0.5) * (2.0 * np.pi)
@@ -319,7 +329,7 @@ def _spread(
             break
         if reach >= np.pi:
             raise InputError(
-                f"the map cannot fit under peak {peak:g}: no room left for a source's excess",
+                f"the map cannot fit under peak {peak:.9g}: no room left for a source's excess",
                 key="--peak",
             )
         # Grow to the cap the excess needs at the room density seen so far (plus a margin).
@@ -404,10 +414,9 @@ def prepare_hdri_file(
     pixels = np.asarray(pixels, dtype=np.float32).reshape(spec.height, spec.width, -1)
     rgb_index = _rgb_channels(list(spec.channelnames), source)
     out_format = spec.format if spec.format.basetype in (oiio.HALF, oiio.FLOAT) else oiio.HALF
-    if out_format.basetype == oiio.HALF:
-        peak = round_down_to(float(peak), np.float16)
+    storage = np.float16 if out_format.basetype == oiio.HALF else np.float32
     try:
-        prepared = fit_under_peak(pixels[..., rgb_index], peak=peak)
+        prepared = fit_under_peak(pixels[..., rgb_index], peak=peak, storage_dtype=storage)
     except InputError as err:
         raise InputError(err.problem, source=source, key=err.key) from None
     w_avg = {
@@ -425,7 +434,7 @@ def prepare_hdri_file(
         out_spec.attribute("compression", "zip")
     out_spec.attribute(
         "ocio_vp:prepare_hdri",
-        f"peak={peak:.9g}; sources={len(prepared.sources)}; "
+        f"peak={peak:.9g} (applied {prepared.peak:.9g}); sources={len(prepared.sources)}; "
         f"radius_deg={prepared.max_radius_deg:.4g} (energy-preserving spread, ocio-vp)",
     )
     tmp = target.with_name(f".{target.stem}.tmp-{os.getpid()}{target.suffix}")
