@@ -216,6 +216,19 @@ def make_q_joint(
             )
 
         Q0 = _least_squares_q(A @ d0, P, w)
+        if not (y0 > 0 and top > 0):  # no visible baseline light: no white point to keep
+            return QFit(
+                Q=Q0,
+                notes={
+                    "model": "joint",
+                    "joint_applied": False,
+                    "limits_met": False,
+                    "reason": "the baseline stage light M w_avg has no luminance or no "
+                    "positive drive: the white-point and drive limits are undefined",
+                    "lit_chart_error_reduction": 0.0,
+                    "active_limits": [],
+                },
+            )
         z0 = np.concatenate([d0 / scale, Q0.ravel()])
         start_error = objective(z0)[0]
         constraints = [

@@ -155,3 +155,10 @@ def test_docs_table_is_generated_by_comparison_table():
         name = line.split("|")[1].strip()
         (doc_line,) = [x for x in doc.splitlines() if x.split("|")[1:2] == [f" {name} "]]
         np.testing.assert_allclose(_numbers(doc_line), _numbers(line), atol=0.011, rtol=1e-3)
+
+
+def test_dark_baseline_light_is_refused_politely(measurements):
+    problem = problem_for(measurements, "direct_sun")
+    fit = q_joint(dataclasses.replace(problem, w_avg=-problem.w_avg))
+    assert fit.M is None and not fit.notes["joint_applied"]
+    assert "no luminance" in fit.notes["reason"]
