@@ -16,8 +16,9 @@ noise and the mean unbiased. The spread is the standard deviation of the pixels 
 are flagged when pixels are clipped or when
 more than a small fraction of pixels are outliers (e.g. a highlight, dust, a misplaced corner).
 
-Vignetting is not corrected here: each patch is sampled over a small area, so the fall-off
-inside one patch averages out, but the fall-off between patches is measured as is. Frame the
+Vignetting: each patch is sampled over a small area, so the fall-off inside one patch averages
+out, but the fall-off between patches is measured as is unless a ``flat_field`` plate is given
+(then every pixel is divided by the lens's relative gain there). Without one, frame the
 chart near the optical centre (or correct the plates first); ``docs/capture.md`` says more.
 """
 
@@ -31,7 +32,8 @@ import numpy as np
 
 from ocio_vp.errors import InputError
 from ocio_vp.patch_statistics import ROBUST_MEAN_METHODS, patch_statistics
-from ocio_vp.plates import PlateInfo, check_box, open_plate, read_region
+from ocio_vp.plate_frames import flat_field_gain, frames_pixels
+from ocio_vp.plates import PlateInfo, open_plate
 
 __all__ = [
     "ROBUST_MEAN_METHODS",
@@ -182,51 +184,13 @@ def patch_labels(
     return labels
 
 
-# --------------------------------------------------------------------------------------------
-# Reading.
-
-
-def _load_pixels(
-    image: object, box: Box, *, encoding: str | None, source: object, what: str
-) -> tuple[np.ndarray, bool]:
-    """One frame's pixels over ``box`` and whether its samples are floating point."""
-    if isinstance(image, (str, os.PathLike, PlateInfo)):
-        info = image if isinstance(image, PlateInfo) else open_plate(image, encoding=encoding)
-        check_box(info, box, what=what)
-        return read_region(info, box), info.is_float or info.encoding != "linear"
-    array = np.asarray(image)
-    if array.ndim != 3 or array.shape[2] < 3:
-        raise InputError(f"expected an (h, w, >=3) image, got shape {array.shape}", source=source)
-    x0, y0, x1, y1 = box
-    if x0 < 0 or y0 < 0 or x1 > array.shape[1] or y1 > array.shape[0] or x1 <= x0 or y1 <= y0:
-        raise InputError(
-            f"{what} {list(box)} is outside the image ({array.shape[1]}x{array.shape[0]})",
-            source=source,
-        )
-    return array[y0:y1, x0:x1, :3], not np.issubdtype(array.dtype, np.integer)
-
-
-def _frames_pixels(
-    image: object, box: Box, *, encoding: str | None, source: object, what: str
-) -> tuple[np.ndarray, bool, int]:
-    frames = list(image) if isinstance(image, (list, tuple)) else [image]
-    if not frames:
-        raise InputError("no frames given", source=source)
-    total: np.ndarray | None = None
-    is_float = False
-    for frame in frames:
-        pixels, frame_float = _load_pixels(frame, box, encoding=encoding, source=source, what=what)
-        is_float = is_float or frame_float
-        if total is None:
-            total = pixels.astype(np.float64 if len(frames) > 1 else pixels.dtype, copy=True)
-        else:
-            total += pixels
-    assert total is not None
-    if len(frames) > 1:
-        total /= len(frames)
-    if not is_float and np.issubdtype(total.dtype, np.integer):
-        total = total / float(np.iinfo(total.dtype).max)
-    return total, is_float, len(frames)
+def _plate_box(frame: object, encoding: str | None) -> tuple[int, int, int, int]:
+    if isinstance(frame, PlateInfo):
+        return frame.box
+    if isinstance(frame, (str, os.PathLike)):
+        return open_plate(frame, encoding=encoding).box
+    shape = np.shape(frame)
+    return (0, 0, int(shape[1]), int(shape[0]))
 
 
 def sample_chart(
@@ -244,6 +208,7 @@ def sample_chart(
     max_outlier_fraction: float = 0.005,
     max_spread: float = 0.05,
     min_pixels: int = 16,
+    flat_field: object = None,
     source: object = None,
 ) -> ChartSamples:
     """Sample every patch of a chart photographed in perspective.
@@ -276,6 +241,10 @@ def sample_chart(
         ``max_spread`` times the brightest patch mean.
     min_pixels
         Fewer sampled pixels than this in a patch is an error (chart too small or inset too big).
+    flat_field
+        Optional flat-field plate(s) (same forms as ``image``, same size and encoding): the
+        pixels are divided by its gain relative to the frame's centre, which removes vignetting
+        (:func:`ocio_vp.plate_frames.flat_field_gain`). Clipping is judged before the division.
 
     Returns
     -------
@@ -306,16 +275,30 @@ def sample_chart(
     c = _check_corners(corners, where)
     box = chart_box(c)
     box = (box[0], box[1], max(box[2], box[0] + 1), max(box[3], box[1] + 1))
-    pixels, is_float, n_frames = _frames_pixels(
+    pixels, is_float, n_frames = frames_pixels(
         frames, box, encoding=encoding, source=source, what="chart corners' box"
     )
     labels = patch_labels(c, rows, columns, inset=inset, box=box)
-    flat = pixels.reshape(-1, 3)
     order = np.argsort(labels.ravel(), kind="stable")  # raster order within each patch
     sorted_labels = labels.ravel()[order]
     n = rows * columns
     starts = np.searchsorted(sorted_labels, np.arange(n + 1))
-    groups = [flat[order[starts[j] : starts[j + 1]]] for j in range(n)]
+
+    def split(values: np.ndarray) -> list[np.ndarray]:
+        values = values.reshape(-1, 3)
+        return [values[order[starts[j] : starts[j + 1]]] for j in range(n)]
+
+    raw_groups = split(pixels)
+    groups = raw_groups
+    if flat_field is not None:
+        gain = flat_field_gain(
+            flat_field,
+            box,
+            encoding=encoding,
+            plate_box=_plate_box(frames[0], encoding),
+            source=where,
+        )
+        groups = split(pixels / gain)
     small = [j for j, g in enumerate(groups) if len(g) < min_pixels]
     if small:
         raise InputError(
@@ -334,6 +317,7 @@ def sample_chart(
         max_outlier_fraction=max_outlier_fraction,
         max_spread=max_spread,
         source=where,
+        raw_groups=raw_groups,
     )
     mostly = np.asarray(stats["clipped_fraction"]) > 0.5
     if np.count_nonzero(mostly) * 2 >= n:
@@ -355,6 +339,7 @@ def sample_region(
     outlier_sigma: float = 6.0,
     max_outlier_fraction: float = 0.005,
     max_spread: float = 0.05,
+    flat_field: object = None,
     source: object = None,
 ) -> ChartSamples:
     """Sample one rectangle ``(x0, y0, x1, y1)`` (end-exclusive) of a plate.
@@ -368,11 +353,22 @@ def sample_region(
     b: Box = (values[0], values[1], values[2], values[3])
     frames = list(image) if isinstance(image, (list, tuple)) else [image]
     where = source or (str(frames[0]) if isinstance(frames[0], (str, os.PathLike)) else None)
-    pixels, is_float, n_frames = _frames_pixels(
+    pixels, is_float, n_frames = frames_pixels(
         frames, b, encoding=encoding, source=where, what="region"
     )
+    raw = pixels.reshape(-1, 3)
+    corrected = raw
+    if flat_field is not None:
+        gain = flat_field_gain(
+            flat_field,
+            b,
+            encoding=encoding,
+            plate_box=_plate_box(frames[0], encoding),
+            source=where,
+        )
+        corrected = (pixels / gain).reshape(-1, 3)
     stats = patch_statistics(
-        [pixels.reshape(-1, 3)],
+        [corrected],
         method=method,
         trim=trim,
         clip_level=clip_level,
@@ -381,5 +377,6 @@ def sample_region(
         max_outlier_fraction=max_outlier_fraction,
         max_spread=np.inf,  # a region has no brightest patch to compare with
         source=where,
+        raw_groups=[raw],
     )
     return ChartSamples(box=b, method=method, frames=n_frames, **stats)  # type: ignore[arg-type]

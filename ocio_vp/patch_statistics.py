@@ -82,8 +82,12 @@ def patch_statistics(
     max_outlier_fraction: float,
     max_spread: float,
     source: object,
+    raw_groups: Sequence[np.ndarray] | None = None,
 ) -> dict[str, np.ndarray | tuple[float, float, float] | None]:
     """Statistics of each pixel group (one (k, 3) array per patch or region).
+
+    ``raw_groups`` are the same pixels before a flat-field division: clipping is a property of
+    the sensor's values, so it is judged on those when given.
 
     Returns the fields of :class:`ocio_vp.chart_sampling.ChartSamples` as a dict; the options
     are documented on :func:`ocio_vp.chart_sampling.sample_chart`.
@@ -94,14 +98,15 @@ def patch_statistics(
     if not 0 <= trim < 0.5:
         raise ValueError(f"trim must be in [0, 0.5), got {trim!r}")
     robust_mean = ROBUST_MEAN_METHODS[method]
-    levels = clip_levels(np.concatenate(groups), clip_level, is_float)
+    raw = groups if raw_groups is None else raw_groups
+    levels = clip_levels(np.concatenate(raw), clip_level, is_float)
     n = len(groups)
     means, spreads = np.zeros((n, 3)), np.zeros((n, 3))
     counts = np.zeros(n, dtype=np.int64)
     clipped_fraction, outlier_fraction = np.zeros(n), np.zeros(n)
     for j, pixels in enumerate(groups):
         pixels = np.asarray(pixels, dtype=np.float64)
-        clipped_fraction[j] = np.mean(np.any(pixels >= levels, axis=1))
+        clipped_fraction[j] = np.mean(np.any(np.asarray(raw[j]) >= levels, axis=1))
         median = np.median(pixels, axis=0)
         sigma = 1.4826 * np.median(np.abs(pixels - median), axis=0)
         # A floor so noise-free or quantised data (sigma 0) does not call every pixel an outlier.

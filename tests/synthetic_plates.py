@@ -30,6 +30,16 @@ def homography(corners: np.ndarray, rows: int, columns: int) -> np.ndarray:
     return h.reshape(3, 3) / h[-1]
 
 
+def vignetting_gain(size: tuple[int, int], vignetting: float) -> np.ndarray:
+    """(h, w) gain 1 - v (r / r_corner)^2 about the image centre."""
+    width, height = size
+    ys, xs = np.mgrid[0:height, 0:width]
+    r2 = ((xs + 0.5 - width / 2) ** 2 + (ys + 0.5 - height / 2) ** 2) / (
+        (width / 2) ** 2 + (height / 2) ** 2
+    )
+    return 1 - vignetting * r2
+
+
 def render_chart(
     values: np.ndarray,
     *,
@@ -66,11 +76,7 @@ def render_chart(
     image = np.full((height, width, 3), background, dtype=np.float64)
     image[inside & ~on_patch] = 0.005  # the chart's black frame
     image[on_patch] = values[(row * columns + col)[on_patch]]
-    if vignetting:
-        r2 = ((xs + 0.5 - width / 2) ** 2 + (ys + 0.5 - height / 2) ** 2) / (
-            (width / 2) ** 2 + (height / 2) ** 2
-        )
-        image *= (1 - vignetting * r2)[..., None]
+    image *= vignetting_gain(size, vignetting)[..., None]
     rng = np.random.default_rng(seed)
     if noise or read_noise:
         sigma = np.sqrt((noise * image) ** 2 + read_noise**2)
@@ -89,6 +95,7 @@ def render_regions(
     *,
     size: tuple[int, int] = SIZE,
     background: float = 0.002,
+    vignetting: float = 0.0,
     noise: float = 0.0,
     read_noise: float = 0.0,
     seed: int = 0,
@@ -98,6 +105,7 @@ def render_regions(
     image = np.full((height, width, 3), background, dtype=np.float64)
     for (x0, y0, x1, y1), rgb in regions.values():
         image[y0:y1, x0:x1] = rgb
+    image *= vignetting_gain(size, vignetting)[..., None]
     rng = np.random.default_rng(seed)
     sigma = np.sqrt((noise * image) ** 2 + read_noise**2)
     return (image + sigma * rng.standard_normal(image.shape)).astype(np.float32)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from synthetic_plates import CORNERS, GAP, homography, render_chart, write_image
+from synthetic_plates import CORNERS, GAP, homography, render_chart, render_regions, write_image
 
 from ocio_vp.chart_sampling import (
     ROBUST_MEAN_METHODS,
@@ -123,6 +123,25 @@ class TestSampleChart:
         ratio = four.spreads[bright] / one.spreads[bright]
         assert 0.4 < np.median(ratio) < 0.6
         _check_values(four.means, truth)
+
+    def test_flat_field_removes_strong_vignetting(self, tmp_path, truth):
+        # 30 % fall-off at the corners: patches are off by up to ~15 % without correction.
+        # The flat: a uniform white target, same lens, averaged over 4 frames.
+        plate = _plate(truth, vignetting=0.3)
+        flats = [
+            render_regions(
+                {"all": ((0, 0, 600, 400), [0.5, 0.5, 0.5])}, vignetting=0.3, noise=0.003, seed=s
+            )
+            for s in range(4)
+        ]
+        paths = [write_image(tmp_path / f"flat.{i}.exr", f) for i, f in enumerate(flats)]
+        raw = sample_chart(plate, CORNERS, 4, 6)
+        assert np.max(np.abs(raw.means / truth - 1)) > 0.05
+        corrected = sample_chart(plate, CORNERS, 4, 6, flat_field=paths)
+        _check_values(corrected.means, truth)
+        assert np.flatnonzero(corrected.flagged).tolist() == [7]
+        with pytest.raises(InputError, match="differs from the plate"):
+            sample_chart(plate[:, :590], CORNERS, 4, 6, flat_field=paths)
 
     def test_example_exact(self):
         # A noise-free 2 x 2 chart gives its exact patch values with any method.
