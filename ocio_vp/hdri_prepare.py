@@ -413,7 +413,8 @@ def prepare_hdri_file(
         raise InputError(f"cannot read the image: {error or 'no pixels'}", source=source)
     pixels = np.asarray(pixels, dtype=np.float32).reshape(spec.height, spec.width, -1)
     rgb_index = _rgb_channels(list(spec.channelnames), source)
-    out_format = spec.format if spec.format.basetype in (oiio.HALF, oiio.FLOAT) else oiio.HALF
+    half = oiio.TypeDesc(oiio.HALF)
+    out_format = spec.format if spec.format.basetype in (oiio.HALF, oiio.FLOAT) else half
     storage = np.float16 if out_format.basetype == oiio.HALF else np.float32
     try:
         prepared = fit_under_peak(pixels[..., rgb_index], peak=peak, storage_dtype=storage)

@@ -249,3 +249,17 @@ class TestCommand:
         assert len(err.splitlines()) == 1 and message in err and "Traceback" not in err
         assert not dst.exists()
         assert sorted(p.name for p in tmp_path.iterdir()) == ([] if make is None else ["in.exr"])
+
+
+def test_integer_input_is_written_as_half(tmp_path):
+    # An 8-bit TIFF (OIIO reads it as 0..1): the prepared map is written as half float.
+    img = np.full((H, W, 3), 0.2)
+    img[100:104, 200:204] = 1.0
+    src, dst = tmp_path / "in.tif", tmp_path / "out.exr"
+    write_exr(src, img, oiio.UINT8, ("R", "G", "B"))
+    assert main(["prepare-hdri", str(src), "--peak", "0.5", "--out", str(dst)]) == 0
+    spec = oiio.ImageInput.open(str(dst)).spec()
+    assert spec.format == oiio.HALF
+    assert max(oiiotool_max(dst)) <= 0.5
+    pixels = oiio.ImageBuf(str(dst)).get_pixels(oiio.FLOAT)
+    np.testing.assert_allclose(energy(pixels), energy(np.round(img * 255) / 255), rtol=1e-3)
