@@ -38,7 +38,7 @@ __all__ = [
 FORMAT = "ocio-vp/capture"
 VERSION = 1
 DETECT = "detect"
-_PLATE_KEYS = ("plate", "encoding", "layer")
+_PLATE_KEYS = ("plate", "encoding", "layer", "flat_field")
 
 
 @dataclass(frozen=True)
@@ -46,7 +46,7 @@ class PlateRef:
     """A plate: one file or several frames (averaged), its encoding and EXR layer.
 
     ``key`` is where it was described in the capture file (for messages); ``name`` is a short
-    file-safe label used for its overlay.
+    file-safe label used for its overlay; ``flat_field`` the flat-field frames, if any.
     """
 
     paths: tuple[Path, ...]
@@ -54,6 +54,7 @@ class PlateRef:
     layer: str | None
     key: str
     name: str
+    flat_field: tuple[Path, ...] | None = None
 
     @property
     def label(self) -> str:
@@ -113,11 +114,26 @@ class Capture:
 # --------------------------------------------------------------------------------------------
 
 
+@dataclass(frozen=True)
+class _Where:
+    """Where relative paths start, and the capture-wide flat field (if any)."""
+
+    base: Path
+    flat_field: tuple[Path, ...] | None = None
+
+
+def _paths(ctx: _Context, value: Any, key: tuple[str | int, ...], base: Path) -> tuple[Path, ...]:
+    frames = value if isinstance(value, list) else [value]
+    if not frames or not all(isinstance(f, str) and f for f in frames):
+        raise ctx.error(key, "expected a file path or a list of frame paths")
+    return tuple(plate_path(base, f) for f in frames)
+
+
 def _plate(
     ctx: _Context,
     raw: Mapping[str, Any],
     key: tuple[str | int, ...],
-    base: Path,
+    where: _Where,
     name: str,
     inherited: PlateRef | None = None,
 ) -> PlateRef:
@@ -125,10 +141,11 @@ def _plate(
         if inherited is None:
             raise ctx.error(key, "missing required key 'plate'")
         return inherited
-    value = raw["plate"]
-    frames = value if isinstance(value, list) else [value]
-    if not frames or not all(isinstance(f, str) and f for f in frames):
-        raise ctx.error((*key, "plate"), "expected a file path or a list of frame paths")
+    paths = _paths(ctx, raw["plate"], (*key, "plate"), where.base)
+    flat = where.flat_field
+    if "flat_field" in raw:  # null switches the capture-wide flat field off for this plate
+        value = raw["flat_field"]
+        flat = None if value is None else _paths(ctx, value, (*key, "flat_field"), where.base)
     encoding = raw.get("encoding")
     if encoding is not None:
         encoding = canonical_encoding(encoding, source=ctx.source, key=_key(*key, "encoding"))
@@ -136,11 +153,7 @@ def _plate(
     if layer is not None and not isinstance(layer, str):
         raise ctx.error((*key, "layer"), f"expected a layer name, got {layer!r}")
     return PlateRef(
-        paths=tuple(plate_path(base, f) for f in frames),
-        encoding=encoding,
-        layer=layer,
-        key=_key(*key),
-        name=name,
+        paths=paths, encoding=encoding, layer=layer, key=_key(*key), name=name, flat_field=flat
     )
 
 
@@ -176,11 +189,11 @@ def _corners(ctx: _Context, value: Any, key: tuple[str | int, ...]) -> np.ndarra
 
 
 def _chart(
-    ctx: _Context, value: Any, key: tuple[str | int, ...], base: Path, name: str
+    ctx: _Context, value: Any, key: tuple[str | int, ...], where: _Where, name: str
 ) -> ChartShot:
     raw = ctx.mapping(value, key, required=("plate", "corners"), optional=_PLATE_KEYS)
     return ChartShot(
-        plate=_plate(ctx, raw, key, base, name),
+        plate=_plate(ctx, raw, key, where, name),
         corners=_corners(ctx, raw["corners"], (*key, "corners")),
         key=key,
     )
@@ -190,14 +203,14 @@ def _region_shot(
     ctx: _Context,
     value: Any,
     key: tuple[str | int, ...],
-    base: Path,
+    where: _Where,
     name: str,
     shared: PlateRef | None,
 ) -> RegionShot:
     if isinstance(value, list) and shared is not None:  # a bare rectangle on the shared plate
         return RegionShot(plate=shared, region=_region(ctx, value, key), key=key)
     raw = ctx.mapping(value, key, required=("region",), optional=_PLATE_KEYS)
-    plate = _plate(ctx, raw, key, base, name, inherited=shared)
+    plate = _plate(ctx, raw, key, where, name, inherited=shared)
     return RegionShot(plate=plate, region=_region(ctx, raw["region"], (*key, "region")), key=key)
 
 
@@ -217,7 +230,7 @@ def capture_from_dict(
         data,
         (),
         required=("format", "version", "stage", "primaries", "lit_chart", "environments"),
-        optional=("chart", "sampling"),
+        optional=("chart", "sampling", "flat_field"),
     )
     if top["format"] != FORMAT:
         raise ctx.error(("format",), f"expected {FORMAT!r}, got {top['format']!r}")
@@ -253,15 +266,18 @@ def capture_from_dict(
             valid = ", ".join(ROBUST_MEAN_METHODS)
             raise ctx.error(("sampling", "method"), f"unknown method; expected one of: {valid}")
 
+    where = _Where(base)
+    if top.get("flat_field") is not None:
+        where = _Where(base, _paths(ctx, top["flat_field"], ("flat_field",), base))
     prim = ctx.mapping(top["primaries"], ("primaries",), CHANNELS, _PLATE_KEYS)
-    shared = _plate(ctx, prim, ("primaries",), base, "primaries") if "plate" in prim else None
+    shared = _plate(ctx, prim, ("primaries",), where, "primaries") if "plate" in prim else None
     primaries = {
-        c: _region_shot(ctx, prim[c], ("primaries", c), base, f"primaries_{c}", shared)
+        c: _region_shot(ctx, prim[c], ("primaries", c), where, f"primaries_{c}", shared)
         for c in CHANNELS
     }
 
     lit = ctx.mapping(top["lit_chart"], ("lit_chart",), CHANNELS)
-    lit_chart = {c: _chart(ctx, lit[c], ("lit_chart", c), base, f"lit_{c}") for c in CHANNELS}
+    lit_chart = {c: _chart(ctx, lit[c], ("lit_chart", c), where, f"lit_{c}") for c in CHANNELS}
 
     envs = top["environments"]
     if not isinstance(envs, list) or not envs:
@@ -275,11 +291,11 @@ def capture_from_dict(
         if name in seen:
             raise ctx.error((*key, "name"), f"duplicate name {name!r}")
         seen.add(name)
-        target = _chart(ctx, env["target_chart"], (*key, "target_chart"), base, f"{name}_target")
+        target = _chart(ctx, env["target_chart"], (*key, "target_chart"), where, f"{name}_target")
         black = None
         if "black_level" in env:
             black = _region_shot(
-                ctx, env["black_level"], (*key, "black_level"), base, f"{name}_black", None
+                ctx, env["black_level"], (*key, "black_level"), where, f"{name}_black", None
             )
         w_avg = ctx.rgb(env["w_avg"], (*key, "w_avg")) if "w_avg" in env else None
         environments.append(EnvironmentCapture(name, target, black, w_avg))

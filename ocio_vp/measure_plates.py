@@ -66,6 +66,13 @@ def _open(ref: PlateRef) -> tuple[PlateInfo, ...]:
     return infos
 
 
+def _flat(ref: PlateRef) -> dict[str, Any]:
+    """Flat-field keyword arguments for a plate (its encoding applies to the flat too)."""
+    if ref.flat_field is None:
+        return {}
+    return {"flat_field": [str(p) for p in ref.flat_field], "encoding": ref.encoding}
+
+
 def _named(error: InputError, ref: PlateRef, key: str) -> InputError:
     """The same error, naming the plate and the capture-file key."""
     source = error.source or ref.label
@@ -94,6 +101,7 @@ def _sample_chart(
             capture.columns,
             inset=capture.inset,
             source=infos[0].path,
+            **_flat(shot.plate),
             **capture.sampling,
         )
     except InputError as error:
@@ -130,7 +138,11 @@ def _sample_regions(
             try:
                 rows.append(
                     sample_region(
-                        list(infos), shot.region, source=infos[0].path, **capture.sampling
+                        list(infos),
+                        shot.region,
+                        source=infos[0].path,
+                        **_flat(ref),
+                        **capture.sampling,
                     )
                 )
             except InputError as error:
