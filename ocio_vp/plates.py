@@ -36,6 +36,8 @@ __all__ = [
 
 #: File formats that hold display-referred pictures whatever their bit depth.
 DISPLAY_FORMATS = frozenset({"png", "jpeg", "webp", "heif", "gif", "bmp", "targa"})
+#: DPX transfer characteristics that are not linear (OIIO's ``dpx:Transfer`` names).
+_LOG_TRANSFERS = frozenset({"Printing density", "Logarithmic"})
 #: Read this many bytes of scanlines at a time (bounds memory for wide plates).
 _BAND_BYTES = 32 * 2**20
 
@@ -193,7 +195,14 @@ def open_plate(
     basetype = str(spec.format)
     is_float = basetype in ("half", "float", "double")
     bits = int(spec.get_int_attribute("oiio:BitsPerSample", 0)) or 8 * spec.format.size()
+    transfer = str(spec.get_string_attribute("dpx:Transfer", ""))
     if encoding is None:
+        if transfer in _LOG_TRANSFERS:
+            raise InputError(
+                f"DPX transfer is {transfer!r} (log-encoded): state its 'encoding' "
+                "(e.g. Cineon, ARRI LogC3)",
+                source=source,
+            )
         if bits <= 8 or file_format in DISPLAY_FORMATS:
             raise InputError(
                 f"{file_format} plate with {bits} bits per sample is display-referred; "

@@ -66,6 +66,24 @@ class TestReadRegion:
         want = colour.models.eotf_sRGB(np.round(codes * 255) / 255)
         np.testing.assert_allclose(got, want, atol=1e-6)
 
+    def test_log_dpx_needs_encoding(self, tmp_path, image):
+        import colour
+        import OpenImageIO as oiio
+
+        spec = oiio.ImageSpec(200, 120, 3, "uint16")
+        spec.attribute("oiio:BitsPerSample", 10)
+        spec.attribute("dpx:Transfer", "Printing density")
+        out = oiio.ImageOutput.create(str(tmp_path / "log.dpx"))
+        out.open(str(tmp_path / "log.dpx"), spec)
+        out.write_image(image)
+        out.close()
+        with pytest.raises(InputError, match="log-encoded"):
+            open_plate(tmp_path / "log.dpx")
+        got = read_region(open_plate(tmp_path / "log.dpx", encoding="cineon"), (0, 0, 200, 120))
+        codes = oiio.ImageBuf(str(tmp_path / "log.dpx")).get_pixels(oiio.FLOAT)  # code values
+        # Reference: colour-science's Cineon decoding of the code values OIIO's ImageBuf reads.
+        np.testing.assert_allclose(got, colour.models.log_decoding_Cineon(codes), rtol=1e-5)
+
     def test_errors(self, tmp_path, image):
         with pytest.raises(InputError, match="plate not found"):
             open_plate(tmp_path / "missing.exr")
