@@ -316,3 +316,60 @@ def test_detect_corners_written_back(tmp_path):
     written = with_corners(document, {("lit_chart", "red"): found})
     assert written["lit_chart"]["red"]["corners"] == np.round(found, 2).tolist()
     assert document["lit_chart"]["red"]["corners"] == "detect"  # the input is not modified
+
+
+def test_detect_through_the_command(tmp_path, truth, capsys):
+    """`corners: detect` in a capture: found, used, and written back into the capture file."""
+    pytest.importorskip("colour_checker_detection")
+    capture = _write_capture(tmp_path / "plates", truth)
+    document = yaml.safe_load(capture.read_text())
+    frontal = np.array([[100.0, 80.0], [500.0, 90.0], [495.0, 350.0], [105.0, 345.0]])
+    image = render_chart(truth.SRL[:, :, 1], corners=frontal, noise=NOISE, read_noise=READ_NOISE)
+    write_image(tmp_path / "plates" / "frontal.exr", image)
+    document["lit_chart"]["green"] = {"plate": "plates/frontal.exr", "corners": "detect"}
+    document["lit_chart"]["green"]["flat_field"] = None  # rendered without vignetting
+    document["chart"]["inset"] = 0.3  # absorbs the detector's approximate quadrilateral
+    capture.write_text(yaml.safe_dump(document, sort_keys=False))
+    out = tmp_path / "stage.yaml"
+    assert main(["measure", str(capture), "--out", str(out)]) == 0
+    assert "detected chart corner" in capsys.readouterr().out
+    written = yaml.safe_load(capture.read_text())["lit_chart"]["green"]["corners"]
+    assert np.max(np.abs(np.array(written) - frontal)) < 0.04 * 400
+    measured = load_measurements(out).SRL[:, :, 1]
+    white = truth.SRL[:, :, 1].max()
+    assert np.max(np.abs(measured - truth.SRL[:, :, 1])) / white < 0.005
+    # A second run reads the written corners: no detection, same numbers.
+    assert main(["measure", str(capture), "--out", str(tmp_path / "again.yaml")]) == 0
+    assert "detected" not in capsys.readouterr().out
+    again = load_measurements(tmp_path / "again.yaml").SRL[:, :, 1]
+    np.testing.assert_allclose(again, measured, rtol=1e-4)
+
+
+class TestCaptureFile:
+    @pytest.mark.parametrize(
+        ("edit", "message"),
+        [
+            (lambda d: d.update(formt=1), "formt: unknown key"),
+            (lambda d: d["primaries"].update(red=[10, 10, 5, 20]), "primaries.red: empty region"),
+            (lambda d: d["lit_chart"]["red"].update(corners=[[1, 2]]), "lit_chart.red.corners"),
+            (lambda d: d["chart"].update(inset=0.6), "chart.inset: expected at most 0.45"),
+            (lambda d: d["sampling"].update(method="avg"), "sampling.method: unknown method"),
+            (lambda d: d["stage"].update(white_reflectance=2), "stage.white_reflectance"),
+            (lambda d: d["lit_chart"]["red"].update(encoding="gama"), "unknown encoding"),
+        ],
+    )
+    def test_invalid(self, capture_file, edit, message):
+        from ocio_vp.errors import InputError
+
+        document = yaml.safe_load(capture_file.read_text())
+        document.setdefault("sampling", {})
+        edit(document)
+        with pytest.raises(InputError, match=message.replace(".", r"\.")) as info:
+            capture_from_dict(document, source=str(capture_file))
+        assert str(info.value).startswith(str(capture_file))
+
+    def test_paths_relative_to_the_file(self, capture_file):
+        capture = load_capture(capture_file)
+        assert capture.lit_chart["red"].plate.paths[0] == capture_file.parent / "plates/lit_red.exr"
+        assert capture.primaries["red"].plate is capture.primaries["blue"].plate  # shared plate
+        assert len(capture.lit_chart["red"].plate.flat_field) == 4
