@@ -63,7 +63,7 @@ def test_all_targets_default_location(solved, capsys):
     ("edit", "words"),
     [
         (lambda d: d.pop("M"), "M: expected a finite 3x3 matrix"),
-        (lambda d: d.pop("stage"), "malformed solution"),
+        (lambda d: d.pop("stage"), "missing required key 'stage'"),
         (lambda d: d["ocio"].update(in_frustum="Nope"), "'Nope' is not in the config"),
         (lambda d: d.update(format="other"), "not an ocio-vp/solution file"),
     ],
