@@ -260,11 +260,6 @@ def stability_diagnostics(
             f"cond([SL]) = {cond_SL:.3g}: an LED channel is almost dark or two primaries look "
             "alike to the camera; M (and N) amplify noise in the primaries' plate by this factor"
         )
-    if notes.get("marginal"):
-        warnings.append(
-            f"auto's choice of {notes.get('model')} is marginal: {notes['marginal']} came within "
-            "5% of the tolerance, so a re-measured chart could pick a different model (and N)"
-        )
     if clipped:
         warnings.append(
             f"{len(clipped)} chart patch(es) clipped and left out of the fit: {clipped}"

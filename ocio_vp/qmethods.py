@@ -18,8 +18,9 @@ rank-r              5, 8  reduced-rank least squares, for a (nearly) monochromat
 
 ``auto`` measures every model's leave-one-patch-out cross-validated error and keeps the
 simplest whose error is within ``best * (1 + AUTO_TOLERANCE_RELATIVE) + AUTO_TOLERANCE_ABSOLUTE``
-of the best; when the target chart has numerical rank below 3 it fits a reduced-rank Q instead
-(N is then not solved). See docs/stability.md for the reasoning and the measured figures.
+of the best (a model just inside the limit is blended with the next one, :func:`soft_choice`,
+so that Q moves continuously with the data); when the target chart has numerical rank below 3
+it fits a reduced-rank Q instead (N is then not solved). See docs/stability.md for the reasoning and the measured figures.
 
 The errors are the paper's (Fig. 11): mean absolute error per channel relative to the target
 white patch, averaged over channels (:func:`ocio_vp.diagnostics.error_relative_to_white`).
@@ -39,6 +40,7 @@ __all__ = [
     "AUTO_LADDER",
     "AUTO_TOLERANCE_ABSOLUTE",
     "AUTO_TOLERANCE_RELATIVE",
+    "BLEND_BAND",
     "MODEL_KERNELS",
     "RANK_RELATIVE_TOLERANCE",
     "REGULARISATION_GRID",
@@ -49,6 +51,7 @@ __all__ = [
     "q_identity",
     "q_regularised",
     "q_white_preserving",
+    "soft_choice",
     "target_rank",
 ]
 
@@ -70,9 +73,9 @@ SHRINKAGE_TOLERANCE = (AUTO_TOLERANCE_RELATIVE / 2, AUTO_TOLERANCE_ABSOLUTE / 2)
 #: Shrinkage strengths tried by ``regularised``, relative to ``trace(X^T W X) / 3``.
 REGULARISATION_GRID = (0.0, *np.logspace(-4, 2, 7).tolist())
 
-#: A simpler model whose error is within this fraction above ``auto``'s limit makes the choice
-#: "marginal" (reported: re-measuring could flip it).
-MARGINAL_CHOICE = 0.05
+#: A chosen model whose error lies within this fraction under ``auto``'s limit is blended with
+#: the next model clear of the band, weight 1 at the band's floor falling to 0 at the limit.
+BLEND_BAND = 0.05
 
 #: ``auto``'s candidates, simplest first. ``white-preserving`` is not one: pinning Q to a single
 #: patch makes Q and N inherit that patch's noise (docs/stability.md), so it is never "simpler".
@@ -266,6 +269,30 @@ def q_regularised(problem: QProblem) -> QFit:
     )
 
 
+def soft_choice(errors: dict[str, float], limit: float) -> dict[str, float]:
+    """Weights of ``auto``'s models: the hard "simplest within the limit", made continuous.
+
+    Down the ladder, each model takes ``clip((limit - error) / (BLEND_BAND * limit), 0, 1)`` of
+    the weight still unassigned; the best model takes what is left. A model clear of the band
+    (error <= (1 - BLEND_BAND) limit) takes everything, so clear cases stay a single model
+    (e.g. exactly Q = I), and every model with weight has error <= limit.
+    """
+    best = min(errors, key=errors.__getitem__)
+    band = BLEND_BAND * limit
+    remaining, weights = 1.0, {}
+    for name in AUTO_LADDER:
+        if name == best:
+            break
+        share = remaining * min(max((limit - errors[name]) / band, 0.0), 1.0)
+        if share > 0:
+            weights[name] = share
+            remaining -= share
+        if remaining <= 0:
+            return weights
+    weights[best] = weights.get(best, 0.0) + remaining
+    return weights
+
+
 def q_auto(problem: QProblem) -> QFit:
     """The simplest model the scene needs (see the module docstring and docs/stability.md).
 
@@ -306,22 +333,28 @@ def q_auto(problem: QProblem) -> QFit:
     best_name = min(errors, key=errors.__getitem__)
     limit = errors[best_name] * (1 + AUTO_TOLERANCE_RELATIVE) + AUTO_TOLERANCE_ABSOLUTE
     chosen = next(name for name in AUTO_LADDER if errors[name] <= limit)
-    simpler = AUTO_LADDER[: AUTO_LADDER.index(chosen)]
-    # A simpler model just above the limit means 0.5 % noise may flip the choice (and N).
-    marginal = [name for name in simpler if errors[name] <= limit * (1 + MARGINAL_CHOICE)]
+    Q = MODEL_KERNELS[chosen](X, P, w, white)
+    notes |= {"model": chosen, "cv_error": errors, "limit": limit}
     reason = (
         f"simplest model whose leave-one-patch-out error {100 * errors[chosen]:.3g}% is within "
         f"{100 * limit:.3g}% (best: {best_name} {100 * errors[best_name]:.3g}%, +"
         f"{100 * AUTO_TOLERANCE_RELATIVE:g}% relative +{100 * AUTO_TOLERANCE_ABSOLUTE:g}% of white)"
     )
-    notes |= {
-        "model": chosen,
-        "reason": reason,
-        "cv_error": errors,
-        "cross_validated_error": per_channel[chosen],
-        "limit": limit,
-        "marginal": marginal,
-    }
-    if chosen == "regularised":
+    cv = per_channel[chosen]
+    weights = soft_choice(errors, limit)
+    if len(weights) > 1:
+        # Near the limit a hard switch would make Q (and N) jump under measurement noise, so
+        # the models straddling it are blended, continuously in the errors.
+        def blend(X, P, w, white):
+            return sum(v * MODEL_KERNELS[k](X, P, w, white) for k, v in weights.items())
+
+        Q = blend(X, P, w, white)
+        cv = loo_cv_error(blend, X, P, w, white)
+        notes |= {"model": "+".join(weights), "blend": weights}
+        reason += "; near the limit, so blended " + ", ".join(
+            f"{k} {v:.2f}" for k, v in weights.items()
+        )
+    notes |= {"reason": reason, "cross_validated_error": cv}
+    if "regularised" in weights:
         notes["shrinkage"] = _choose_shrinkage(X, P, w, white)
-    return QFit(Q=MODEL_KERNELS[chosen](X, P, w, white), notes=notes)
+    return QFit(Q=Q, notes=notes)

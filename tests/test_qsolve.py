@@ -13,12 +13,13 @@ import numpy as np
 import pytest
 
 from ocio_vp.calibrate import DEFAULT_METHOD, solve_environment
-from ocio_vp.diagnostics import cross_validated_error
+from ocio_vp.diagnostics import cross_validated_error, error_relative_to_white
 from ocio_vp.errors import InputError
 from ocio_vp.qmethods import (
     AUTO_TOLERANCE_ABSOLUTE,
     AUTO_TOLERANCE_RELATIVE,
     REGULARISATION_GRID,
+    soft_choice,
     target_rank,
 )
 from ocio_vp.qsolve import Q_SOLVE_METHODS, QProblem, solve_post_correction
@@ -41,6 +42,18 @@ def _problem(Q_true: np.ndarray | None = None, *, seed: int = 0, n: int = 24, no
     Q = np.eye(3) if Q_true is None else Q_true
     target = X @ Q.T * (1 + noise * rng.standard_normal((n, 3)))
     return dataclasses.replace(base, target=target)
+
+
+def _loo_blend(problem: QProblem, weights: dict[str, float]) -> np.ndarray:
+    """Leave-one-out error of sum_k weight_k Q_k, each Q_k re-solved by the registry."""
+    held = np.empty_like(problem.target)
+    for j in range(problem.target.shape[0]):
+        w = np.ones(problem.target.shape[0])
+        w[j] = 0
+        sub = dataclasses.replace(problem, weights=w)
+        Q = sum(v * solve_post_correction(sub, method=k).Q for k, v in weights.items())
+        held[j] = Q @ problem.predicted[j]
+    return error_relative_to_white(held, problem.target, problem.white_patch)
 
 
 Q_TRUE = np.array([[0.95, 0.08, -0.02], [0.04, 0.9, 0.05], [-0.03, 0.1, 1.05]])
@@ -192,8 +205,9 @@ class TestAutoOnTheSimulator:
                 target=env.target_chart,
                 white_patch=simulated.stage.white_patch,
             )
-            # Recomputed through the registry (generic leave-one-out), not from auto's notes.
-            auto_cv = np.mean(cross_validated_error(problem, model))
+            # Recomputed through the registry (a plain leave-one-out loop), not from auto's notes.
+            weights = s.diagnostics["method_notes"].get("blend") or {model: 1.0}
+            auto_cv = np.mean(_loo_blend(problem, weights))
             ls_cv = np.mean(cross_validated_error(problem, "least-squares"))
             assert auto_cv <= ls_cv * (1 + AUTO_TOLERANCE_RELATIVE) + AUTO_TOLERANCE_ABSOLUTE
             np.testing.assert_allclose(auto_cv, np.mean(s.diagnostics["cross_validated_error"]))
@@ -219,3 +233,24 @@ class TestAutoOnTheSimulator:
             spread = np.sqrt(np.mean(np.sum((Ns - Ns.mean(0)) ** 2, axis=(1, 2))))
             spreads[method] = spread / np.linalg.norm(Ns.mean(0))
         assert spreads["auto"] < spreads["least-squares"]
+
+
+class TestSoftChoice:
+    """auto's weights, by hand (BLEND_BAND = 5% of the limit)."""
+
+    def test_clear_winner_takes_everything(self) -> None:
+        errors = {"identity": 0.5, "diagonal": 0.6, "regularised": 0.45, "least-squares": 0.4}
+        assert soft_choice(errors, 1.0) == {"identity": 1.0}
+
+    def test_model_in_the_band_shares_with_the_next_clear_one(self) -> None:
+        errors = {"identity": 0.975, "diagonal": 2.0, "regularised": 0.9, "least-squares": 0.8}
+        weights = soft_choice(errors, 1.0)
+        assert weights.keys() == {"identity", "regularised"}
+        np.testing.assert_allclose([weights["identity"], weights["regularised"]], [0.5, 0.5])
+
+    def test_weights_are_continuous_across_the_limit(self) -> None:
+        errors = {"identity": 0.0, "diagonal": 2.0, "regularised": 0.9, "least-squares": 0.8}
+        below = soft_choice(errors | {"identity": 1.0 - 1e-12}, 1.0)
+        above = soft_choice(errors | {"identity": 1.0 + 1e-12}, 1.0)
+        assert below.get("identity", 0.0) < 1e-9 and "identity" not in above
+        assert above == {"regularised": 1.0}
