@@ -29,6 +29,8 @@ base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 t = time.perf_counter()
 if mode == "region":
     s = sample_chart(path, corners, 4, 6)
+elif mode == "flat":  # the plate as its own flat field: same reads and arithmetic as a real one
+    s = sample_chart(path, corners, 4, 6, flat_field=path)
 else:
     inp = oiio.ImageInput.open(path)
     full = inp.read_image(0, 0, 0, 3, oiio.FLOAT)
@@ -36,6 +38,7 @@ else:
     s = sample_chart(full, corners, 4, 6)
 elapsed = time.perf_counter() - t
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+# (with the plate as its own flat and the centre on the chart, every patch reads 0.18 too)
 print(peak * 1024, base * 1024, elapsed, float(s.means[18, 1]))
 """
 
@@ -94,6 +97,7 @@ def run(quick: bool = False) -> str:
         write_s = time.perf_counter() - t
         size_mb = path.stat().st_size / 2**20
         region = _child("region", path, corners)
+        flat = _child("flat", path, corners)
         full = _child("full", path, corners)
     mib = 2**20
     lines = [
@@ -108,6 +112,7 @@ def run(quick: bool = False) -> str:
     ]
     for name, (peak, base, elapsed) in (
         ("`sample_chart(path)` (chart box, scanline bands)", region),
+        ("same, with `flat_field=` (vignetting correction)", flat),
         ("full `read_image` float32, then `sample_chart(array)`", full),
     ):
         lines.append(
@@ -115,7 +120,7 @@ def run(quick: bool = False) -> str:
             f"| {elapsed:.2f} |"
         )
     ratio = (full[0] - full[1]) / max(region[0] - region[1], 1)
-    verdict = "meets" if region[0] < 2**30 else "MISSES"
+    verdict = "meets" if max(region[0], flat[0]) < 2**30 else "MISSES"
     lines += [
         "",
         f"Region sampling {verdict} the < 1 GB target; the full read adds {ratio:.1f}x the "
