@@ -18,7 +18,7 @@ from typing import Any, TypeVar
 
 from ocio_vp.errors import InputError
 
-__all__ = ["default_workers", "map_unordered"]
+__all__ = ["default_workers", "map_unordered", "solve_environments"]
 
 T = TypeVar("T")
 
@@ -123,3 +123,29 @@ def map_unordered(
         raise InputError(f"--workers must be >= 1, got {n}", key="--workers")
     n = min(n, max(1, len(items)))
     return _inline(func, items) if n == 1 else _local_pool(func, items, n)
+
+
+def _solve_one(payload: tuple) -> Any:
+    from ocio_vp.calibrate import solve_environment
+
+    measurements, environment, options = payload
+    return solve_environment(measurements, environment, **options)
+
+
+def solve_environments(
+    measurements: Any,
+    environments: Sequence[Any],
+    *,
+    scheduler: str | None = None,
+    workers: int | None = 1,
+    **options: Any,
+) -> list[Any]:
+    """:func:`ocio_vp.calibrate.solve_environment` for each environment, in their order, on a
+    local pool or a Dask cluster (``scheduler``); the first failure is raised."""
+    results: list[Any] = [None] * len(environments)
+    payloads = [(measurements, env, options) for env in environments]
+    for i, result in map_unordered(_solve_one, payloads, workers=workers, scheduler=scheduler):
+        if isinstance(result, BaseException):
+            raise result
+        results[i] = result
+    return results

@@ -75,3 +75,21 @@ def test_apply_with_two_local_workers(tmp_path):
         a = oiio.ImageBuf(str(tmp_path / "pool" / f"p.{f:04d}.exr")).get_pixels(oiio.FLOAT)
         b = oiio.ImageBuf(str(tmp_path / "one" / f"p.{f:04d}.exr")).get_pixels(oiio.FLOAT)
         np.testing.assert_array_equal(a, b)
+
+
+def test_solve_on_dask_matches_local(tmp_path):
+    import json
+
+    distributed = pytest.importorskip("distributed")
+    doc = tmp_path / "stage.yaml"
+    doc.write_text(yaml.safe_dump(make_measurements_dict(environments=2)))
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+    ) as cluster:
+        args = ["solve", str(doc), "--scheduler", cluster.scheduler_address]
+        assert main([*args, "--out", str(tmp_path / "dask")]) == 0
+    assert main(["solve", str(doc), "--out", str(tmp_path / "local")]) == 0
+    for env in ("env_0", "env_1"):
+        a = json.loads((tmp_path / "dask" / env / "solution.json").read_text())
+        b = json.loads((tmp_path / "local" / env / "solution.json").read_text())
+        assert a == b

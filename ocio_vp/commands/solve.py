@@ -39,6 +39,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "white patch (repeatable; a bare FILE when solving one environment)",
     )
     parser.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="solve the environments on a Dask cluster, e.g. tcp://host:8786 (docs/distributed.md)",
+    )
+    parser.add_argument(
         "--hdri-width",
         type=int,
         default=None,
@@ -128,10 +133,21 @@ def run(args: argparse.Namespace) -> int:
         )
         print("\n".join(notes))
     method = args.method or DEFAULT_METHOD
-    solutions = [
-        solve_environment(measurements, env, method=method, black_level=args.black_level)
-        for env in environments
-    ]
+    if args.scheduler:
+        from ocio_vp.distributed import solve_environments
+
+        solutions = solve_environments(
+            measurements,
+            environments,
+            scheduler=args.scheduler,
+            method=method,
+            black_level=args.black_level,
+        )
+    else:
+        solutions = [
+            solve_environment(measurements, env, method=method, black_level=args.black_level)
+            for env in environments
+        ]
     from ocio_vp.errors import InputError
     from ocio_vp.wall_encoding import with_wall_encoding
 
