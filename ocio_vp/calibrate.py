@@ -75,10 +75,11 @@ def solve_environment(
         )
     clipped = clipped_patches(measurements.SRL, environment.target_chart, clip_level)
     if white in clipped and environment.w_avg is None:
+        index = [e.name for e in measurements.environments].index(environment.name)
         raise InputError(
             f"the white patch {white} is clipped, so w_avg cannot come from it: give w_avg",
             source=source,
-            key=f"environments.{environment.name}.w_avg",
+            key=f"environments[{index}].w_avg",
         )
     weights = np.ones(measurements.n_patches)
     weights[clipped] = 0.0

@@ -187,6 +187,11 @@ def clipped_patches(SRL: ArrayLike, target: ArrayLike, clip_level: float | None)
     return [int(j) for j in np.flatnonzero(clipped)]
 
 
+#: Methods cheap enough (closed forms) to cross-validate by re-solving once per patch.
+CLOSED_FORM_METHODS = frozenset(
+    {"least-squares", "white-preserving", "regularised", "diagonal", "identity", "auto"}
+)
+
 #: cond([SL]) above this earns a warning: an LED channel is almost dark or two look alike, so
 #: 0.1 % noise in the primaries' plate moves M by more than 10 %.
 WARN_CONDITION_SL = 1e2
@@ -238,7 +243,7 @@ def stability_diagnostics(
     white, weights = problem.white_patch, problem.fit_weights
     warnings: list[str] = []
     cv = notes.get("cross_validated_error")
-    if cv is None:
+    if cv is None and method in CLOSED_FORM_METHODS:
         cv = cross_validated_error(problem, method)
     drive = out_of_frustum_drive(M, problem.w_avg)
     lit_clipped = None
@@ -274,7 +279,9 @@ def stability_diagnostics(
         "model": notes.get("model", method),
         "model_reason": notes.get("reason"),
         "rank_target": notes.get("target_rank"),
-        "cross_validated_error": np.asarray(cv, dtype=np.float64),
+        # None for an iterative method that does not report its own leave-one-out error:
+        # re-solving it once per patch would multiply the solve time by n.
+        "cross_validated_error": None if cv is None else np.asarray(cv, dtype=np.float64),
         "residuals_per_patch": residuals_per_patch(corrected, target, white, weights),
         "out_of_frustum_negative_channels": drive["negative_channels"],
         "lit_chart_error_clipped_drive": lit_clipped,
