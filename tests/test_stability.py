@@ -15,11 +15,12 @@ import re
 
 import numpy as np
 import pytest
+from conftest import make_measurements_dict
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from ocio_vp.calibrate import solve_environment
-from ocio_vp.diagnostics import IDENTITY_BOUND_FACTOR
+from ocio_vp.diagnostics import CLOSED_FORM_METHODS, IDENTITY_BOUND_FACTOR
 from ocio_vp.errors import InputError
 from ocio_vp.measurements import measurements_from_dict
 from ocio_vp.ocio_config import build_config
@@ -233,3 +234,44 @@ def test_non_finite_measurements_are_rejected_with_a_clear_message(document, bad
     with pytest.raises(InputError, match="expected a finite number") as info:
         measurements_from_dict(document, source="bad.yaml")
     assert "bad.yaml" in str(info.value) and where in str(info.value)
+
+
+@SETTINGS
+@given(scenes(quantise=False, clip=False), st.sampled_from(["duplicate", "dark", "zero"]))
+def test_singular_primaries_give_the_clear_error(document: dict, how: str) -> None:
+    primaries = document["primaries"]
+    if how == "duplicate":  # two primaries look alike to the camera
+        primaries["green"] = list(primaries["red"])
+    elif how == "dark":  # an LED channel far darker than cond 1e10 allows
+        primaries["blue"] = [v * 1e-12 for v in primaries["blue"]]
+    else:
+        primaries["red"] = [0.0, 0.0, 0.0]
+    with pytest.raises(InputError, match=r"\[SL\] is singular") as info:
+        _solve(document, "auto")
+    assert "primaries" in str(info.value)
+
+
+@SETTINGS
+@given(scenes(quantise=False, clip=False), st.sampled_from(sorted(CLOSED_FORM_METHODS)))
+def test_a_degenerate_lit_chart_never_crashes(document: dict, method: str) -> None:
+    # Every patch lit identically: the x_j span one direction, Q is underdetermined.
+    for c in CHANNELS:
+        first = document["lit_chart"][c][0]
+        document["lit_chart"][c] = [list(first) for _ in document["lit_chart"][c]]
+    try:
+        _, s = _solve(document, method)
+    except InputError as error:
+        assert EXPECTED_ERRORS.search(str(error)), str(error)
+        return
+    _finite_tree(json.loads(solution_to_json(s)))
+    if s.N is not None:
+        error = np.max(np.abs(s.Q @ s.SL @ s.N - np.eye(3)))
+        assert error <= s.diagnostics["identity_check"]["bound"]
+
+
+def test_a_black_target_chart_is_an_input_error() -> None:
+    document = make_measurements_dict(environments=1)
+    document["environments"][0]["target_chart"] = [[0.0, 0.0, 0.0]] * 24
+    document["environments"][0]["w_avg"] = [0.5, 0.5, 0.5]
+    with pytest.raises(InputError, match="black"):
+        _solve(document, "auto")
