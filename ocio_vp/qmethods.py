@@ -73,8 +73,8 @@ SHRINKAGE_TOLERANCE = (AUTO_TOLERANCE_RELATIVE / 2, AUTO_TOLERANCE_ABSOLUTE / 2)
 #: Shrinkage strengths tried by ``regularised``, relative to ``trace(X^T W X) / 3``.
 REGULARISATION_GRID = (0.0, *np.logspace(-4, 2, 7).tolist())
 
-#: A chosen model whose error lies within this fraction under ``auto``'s limit is blended with
-#: the next model clear of the band, weight 1 at the band's floor falling to 0 at the limit.
+#: Width of the band under ``auto``'s limit, as a fraction of it, where a model shares its weight
+#: with the models after it (:func:`soft_choice`): 1 at the band's floor, 0 at the limit.
 BLEND_BAND = 0.05
 
 #: ``auto``'s candidates, simplest first. ``white-preserving`` is not one: pinning Q to a single
@@ -296,8 +296,21 @@ def soft_choice(errors: dict[str, float], limit: float) -> dict[str, float]:
 def q_auto(problem: QProblem) -> QFit:
     """The simplest model the scene needs (see the module docstring and docs/stability.md).
 
-    The notes say which model was chosen (``model``), why (``reason``), every candidate's
-    cross-validated error, the tolerance and the target chart's rank.
+    The notes say which model was chosen (``model``; ``a+b`` with ``blend`` weights when
+    :func:`soft_choice` blends), why (``reason``), every candidate's cross-validated error
+    (``cv_error``), the ``limit``, the tolerance and the target chart's rank.
+
+    Examples
+    --------
+    A chart lit exactly as the stage lights it needs no correction:
+
+    >>> SL = np.array([[0.9, 0.1, 0.0], [0.2, 0.8, 0.1], [0.0, 0.1, 0.9]])
+    >>> rho = np.random.default_rng(0).uniform(0.05, 0.9, (24, 3, 1))
+    >>> SRL = 0.25 * rho * SL
+    >>> problem = QProblem(SL=SL, SRL=SRL, beta=0.25, M=np.linalg.inv(SL),
+    ...                    w_avg=SL.sum(axis=1), target=SRL.sum(axis=2) / 0.25)
+    >>> q_auto(problem).notes["model"]
+    'identity'
     """
     X, P, w, white = _data(problem)
     rank, singular = target_rank(P, w)
