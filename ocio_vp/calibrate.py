@@ -93,7 +93,14 @@ def solve_environment(
         white_patch=white,
         weights=weights,
     )
-    fit = solve_post_correction(problem, method=method)
+    try:
+        fit = solve_post_correction(problem, method=method)
+    except InputError as error:
+        if error.key != "target_chart" or error.source is not None:
+            raise
+        index = [e.name for e in measurements.environments].index(environment.name)
+        key = f"environments[{index}].target_chart"
+        raise InputError(error.problem, source=source, key=key) from None
     M = M_calibrated if fit.M is None else np.asarray(fit.M, dtype=np.float64)
     Q = np.asarray(fit.Q, dtype=np.float64)
     # N inverts Q for the calibrated wall (paper eq. 7: Q [SL] N = I), whatever M lights with.

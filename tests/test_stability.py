@@ -273,5 +273,6 @@ def test_a_black_target_chart_is_an_input_error() -> None:
     document = make_measurements_dict(environments=1)
     document["environments"][0]["target_chart"] = [[0.0, 0.0, 0.0]] * 24
     document["environments"][0]["w_avg"] = [0.5, 0.5, 0.5]
-    with pytest.raises(InputError, match="black"):
+    with pytest.raises(InputError, match="black") as info:
         _solve(document, "auto")
+    assert str(info.value).startswith("generated.yaml: environments[0].target_chart: ")
