@@ -264,7 +264,10 @@ def run_task(task: FrameTask) -> FrameResult:
     try:
         import OpenImageIO as oiio
 
+        # OpenEXR has its own thread pool besides OIIO's: cap both, so a task given one core
+        # (a pool or Dask worker) uses one core and the workers do not oversubscribe the node.
         oiio.attribute("threads", max(1, task.threads))
+        oiio.attribute("exr_threads", max(1, task.threads))
         apply_file(task.src, task.dst, task.post_correction, threads=task.threads)
     except InputError as exc:
         return FrameResult(task.src, task.dst, "input-error", str(exc))
