@@ -186,13 +186,15 @@ class TestClipping:
             measurements_from_dict(self._document(0.0))
 
 
-class TestConfigLeavesOutWhatIsNotNeeded:
-    @pytest.fixture(scope="class")
-    def led_white(self):
-        spectral = pytest.importorskip("ocio_vp.spectral")
-        m = spectral.simulate_measurements(["rgb_led_white", "incandescent"])
-        return m, solve_environment(m, m.environment("rgb_led_white"), method="auto")
+@pytest.fixture(scope="module")
+def led_white():
+    from ocio_vp import spectral
 
+    m = spectral.simulate_measurements(["rgb_led_white", "incandescent"])
+    return m, solve_environment(m, m.environment("rgb_led_white"), method="auto")
+
+
+class TestConfigLeavesOutWhatIsNotNeeded:
     def test_identity_Q_has_no_post_correction_transform(self, led_white) -> None:
         _, s = led_white
         config = oc.build_config(s)
