@@ -9,7 +9,6 @@ every key. Plate paths are relative to the capture file.
 
 from __future__ import annotations
 
-import hashlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,8 +17,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from ocio_vp.errors import InputError
-from ocio_vp.measurements import CHANNELS, _Context, _parse_stage
+from ocio_vp.measurements import CHANNELS, _Context, _parse_stage, read_document
 from ocio_vp.plates import canonical_encoding, plate_path
 
 __all__ = [
@@ -316,24 +314,9 @@ def capture_from_dict(
 
 
 def load_capture(path: str | Path) -> Capture:
-    """Load and validate a capture file (YAML or JSON; JSON is YAML)."""
-    path = Path(path)
-    source = str(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise InputError("file not found", source=source) from None
-    except OSError as error:
-        raise InputError(f"cannot read: {error.strerror}", source=source) from None
-    try:
-        data = yaml.safe_load(raw.decode("utf-8"))
-    except UnicodeDecodeError:
-        raise InputError("not a UTF-8 text file", source=source) from None
-    except yaml.YAMLError as error:
-        mark = getattr(error, "problem_mark", None)
-        where = f" at line {mark.line + 1}" if mark is not None else ""
-        raise InputError(f"invalid YAML{where}", source=source) from None
-    return capture_from_dict(data, source=source, sha256=hashlib.sha256(raw).hexdigest())
+    """Load and validate a capture file (YAML or JSON)."""
+    data, sha256 = read_document(path)
+    return capture_from_dict(data, source=str(path), sha256=sha256)
 
 
 def with_corners(document: Mapping[str, Any], corners: Mapping[tuple[str | int, ...], np.ndarray]):

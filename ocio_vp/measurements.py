@@ -35,6 +35,7 @@ __all__ = [
     "load_measurements",
     "measurements_from_dict",
     "measurements_to_dict",
+    "read_document",
     "save_measurements",
 ]
 
@@ -367,13 +368,13 @@ def _parse_environments(ctx: _Context, value: Any, n: int) -> tuple[Environment,
 # Files.
 
 
-def load_measurements(path: str | Path) -> Measurements:
-    """Load and validate a measurements file (``.yaml``/``.yml`` or ``.json``).
+def read_document(path: str | Path) -> tuple[Any, str]:
+    """Read a YAML or JSON file; returns the parsed data and the sha256 of its bytes.
 
     Raises
     ------
     InputError
-        When the file is missing, unreadable, not YAML/JSON, or not a valid measurements file.
+        When the file is missing, unreadable, not UTF-8, or not valid YAML/JSON.
     """
     path = Path(path)
     source = str(path)
@@ -400,7 +401,19 @@ def load_measurements(path: str | Path) -> Measurements:
         where = f" at line {mark.line + 1}" if mark is not None else ""
         problem = getattr(error, "problem", None) or "syntax error"
         raise InputError(f"invalid YAML{where}: {problem}", source=source) from None
-    return measurements_from_dict(data, source=source, sha256=hashlib.sha256(raw).hexdigest())
+    return data, hashlib.sha256(raw).hexdigest()
+
+
+def load_measurements(path: str | Path) -> Measurements:
+    """Load and validate a measurements file (``.yaml``/``.yml`` or ``.json``).
+
+    Raises
+    ------
+    InputError
+        When the file is missing, unreadable, not YAML/JSON, or not a valid measurements file.
+    """
+    data, sha256 = read_document(path)
+    return measurements_from_dict(data, source=str(path), sha256=sha256)
 
 
 def measurements_to_dict(measurements: Measurements) -> dict[str, Any]:
