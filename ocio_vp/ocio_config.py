@@ -113,6 +113,15 @@ def wall_transforms(solution: Solution) -> dict[str, list[OCIO.Transform]]:
     return {OUT_OF_FRUSTUM: outer, IN_FRUSTUM: inner}
 
 
+#: OCIO encoding of the wall colorspaces for each wall signal encoding (docs/linearity.md).
+WALL_SIGNAL_ENCODINGS = {"linear": "scene-linear", "gamma2.4": "sdr-video", "pq": "hdr-video"}
+
+
+def _wall_signal_encoding(solution: Solution) -> str:
+    wall = (solution.linearity or {}).get("wall_encoding") or {}
+    return WALL_SIGNAL_ENCODINGS.get(wall.get("name", "linear"), "scene-linear")
+
+
 def _group(transforms: list[OCIO.Transform]) -> OCIO.Transform:
     if len(transforms) == 1:
         return transforms[0]
@@ -185,7 +194,7 @@ def build_config(
         f"Panel drive for content OUTSIDE the camera frustum (lights the actors): M = [SL]^-1 "
         f"{_fmt(solution.M)}. {origin}.",
         family="LED Wall",
-        encoding="sdr-video" if len(chains[OUT_OF_FRUSTUM]) > 1 else "scene-linear",
+        encoding=_wall_signal_encoding(solution),
     )
     outer.setTransform(_group(chains[OUT_OF_FRUSTUM]), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
     config.addColorSpace(outer)
@@ -214,7 +223,7 @@ def build_config(
         f"Panel drive for content INSIDE the camera frustum (the in-camera background): "
         f"{inner_text}. {origin}.",
         family="LED Wall",
-        encoding="sdr-video" if len(chains[IN_FRUSTUM]) > 1 else "scene-linear",
+        encoding=_wall_signal_encoding(solution),
     )
     inner.setTransform(_group(chains[IN_FRUSTUM]), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
     config.addColorSpace(inner)

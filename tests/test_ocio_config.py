@@ -121,3 +121,17 @@ def test_xyz_interchange_matches_colour_science(written) -> None:
         chromatic_adaptation_transform="CAT02",
     )
     np.testing.assert_allclose(got, expected, rtol=1e-5, atol=1e-5)
+
+
+@pytest.mark.parametrize(
+    ("wall", "encoding"),
+    [(None, "scene-linear"), ("gamma2.4", "sdr-video"), ("pq", "hdr-video")],
+)
+def test_wall_colorspace_encoding_follows_the_wall_signal(written, wall, encoding) -> None:
+    import dataclasses
+
+    _, solutions = written
+    linearity = None if wall is None else {"wall_encoding": {"name": wall}}
+    config = oc.build_config(dataclasses.replace(solutions[0], linearity=linearity))
+    for name in (oc.OUT_OF_FRUSTUM, oc.IN_FRUSTUM):
+        assert config.getColorSpace(name).getEncoding() == encoding
