@@ -136,6 +136,7 @@ def solve_environment(
             "LED gamut and the wall will clip it"
         )
     diagnostics = {
+        "white_patch": white,
         "cond_SL": condition_number(SL),
         "cond_Q": condition_number(Q),
         "rank_Q": int(np.linalg.matrix_rank(Q)),
