@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import make_measurements_dict
+from exr_helpers import write_exr
 
 from ocio_vp.calibrate import solve_measurements
 from ocio_vp.exports import export_solutions
@@ -126,15 +127,6 @@ class TestUnrealFiles:
         np.testing.assert_allclose(out, expected, atol=1e-5)
 
 
-def _write_exr(path: Path, rgb: np.ndarray) -> None:
-    oiio = pytest.importorskip("OpenImageIO")
-    spec = oiio.ImageSpec(rgb.shape[1], rgb.shape[0], 3, oiio.FLOAT)
-    out = oiio.ImageOutput.create(str(path))
-    assert out.open(str(path), spec)
-    assert out.write_image(np.ascontiguousarray(rgb, dtype=np.float32))
-    out.close()
-
-
 def _read_exr(path: Path) -> np.ndarray:
     oiio = pytest.importorskip("OpenImageIO")
     image = oiio.ImageInput.open(str(path))
@@ -153,7 +145,7 @@ class TestOiiotool:
         rgb[0, 0] = [1.0, 1.0, 1.0]
         rgb[0, 1] = [0.0, 0.0, 0.0]
         path = tmp_path / "in.exr"
-        _write_exr(path, rgb)
+        write_exr(path, rgb)
         return path, rgb.astype(np.float32).astype(np.float64)
 
     @pytest.mark.parametrize(

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from exr_helpers import write_exr
 
 from ocio_vp.errors import InputError
 from ocio_vp.hdri import (
@@ -37,17 +38,6 @@ def cap_image(height, width, axis, half_angle, radiance, sky=0.0):
     img[:] = sky
     img += frac[..., None] * (np.asarray(radiance, float) - sky)
     return img
-
-
-def write_exr(path, image, **attrs):
-    h, w, c = image.shape
-    spec = oiio.ImageSpec(w, h, c, oiio.FLOAT)
-    for k, v in attrs.items():
-        spec.attribute(k, v)
-    out = oiio.ImageOutput.create(str(path))
-    assert out.open(str(path), spec)
-    assert out.write_image(np.ascontiguousarray(image, dtype=np.float32))
-    out.close()
 
 
 class TestSolidAngles:

@@ -16,6 +16,7 @@ import subprocess
 
 import numpy as np
 import pytest
+from exr_helpers import write_exr
 
 from ocio_vp.cli import main
 from ocio_vp.errors import InputError
@@ -179,18 +180,6 @@ class TestFitUnderPeak:
 def _box_energy(image, rows, cols):
     omega = row_solid_angles(*image.shape[:2])[rows]
     return np.einsum("h,hwc->c", omega, image[rows, cols].astype(np.float64))
-
-
-def write_exr(path, image, fmt, names, **attrs):
-    h, w, c = image.shape
-    spec = oiio.ImageSpec(w, h, c, fmt)
-    spec.channelnames = names
-    for k, v in attrs.items():
-        spec.attribute(k, v)
-    out = oiio.ImageOutput.create(str(path))
-    assert out.open(str(path), spec)
-    assert out.write_image(np.ascontiguousarray(image, dtype=np.float32))
-    out.close()
 
 
 def oiiotool_max(path):
