@@ -13,7 +13,7 @@ import json
 import math
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -474,8 +474,3 @@ def save_measurements(measurements: Measurements, path: str | Path) -> None:
     else:
         text = yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
     write_file_atomically(path, text)
-
-
-def with_environments(measurements: Measurements, environments: list[Environment]) -> Measurements:
-    """A copy of ``measurements`` with other environments (used by tools that add scenes)."""
-    return replace(measurements, environments=tuple(environments))
