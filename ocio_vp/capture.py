@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from ocio_vp.measurements import CHANNELS, _Context, _parse_stage, read_document
+from ocio_vp.measurements import CHANNELS, Validator, parse_stage, read_document
 from ocio_vp.plates import canonical_encoding, plate_path
 
 __all__ = [
@@ -120,7 +120,7 @@ class _Where:
     flat_field: tuple[Path, ...] | None = None
 
 
-def _paths(ctx: _Context, value: Any, key: tuple[str | int, ...], base: Path) -> tuple[Path, ...]:
+def _paths(ctx: Validator, value: Any, key: tuple[str | int, ...], base: Path) -> tuple[Path, ...]:
     frames = value if isinstance(value, list) else [value]
     if not frames or not all(isinstance(f, str) and f for f in frames):
         raise ctx.error(key, "expected a file path or a list of frame paths")
@@ -128,7 +128,7 @@ def _paths(ctx: _Context, value: Any, key: tuple[str | int, ...], base: Path) ->
 
 
 def _plate(
-    ctx: _Context,
+    ctx: Validator,
     raw: Mapping[str, Any],
     key: tuple[str | int, ...],
     where: _Where,
@@ -161,7 +161,7 @@ def _key(*parts: str | int) -> str:
     return format_key_path(*parts)
 
 
-def _region(ctx: _Context, value: Any, key: tuple[str | int, ...]) -> tuple[int, int, int, int]:
+def _region(ctx: Validator, value: Any, key: tuple[str | int, ...]) -> tuple[int, int, int, int]:
     if not isinstance(value, list) or len(value) != 4:
         raise ctx.error(key, "expected a region [x0, y0, x1, y1] in pixels")
     numbers = [ctx.number(v, (*key, i)) for i, v in enumerate(value)]
@@ -173,7 +173,7 @@ def _region(ctx: _Context, value: Any, key: tuple[str | int, ...]) -> tuple[int,
     return (x0, y0, x1, y1)
 
 
-def _corners(ctx: _Context, value: Any, key: tuple[str | int, ...]) -> np.ndarray | None:
+def _corners(ctx: Validator, value: Any, key: tuple[str | int, ...]) -> np.ndarray | None:
     if value == DETECT:
         return None
     if not isinstance(value, list) or len(value) != 4:
@@ -187,7 +187,7 @@ def _corners(ctx: _Context, value: Any, key: tuple[str | int, ...]) -> np.ndarra
 
 
 def _chart(
-    ctx: _Context, value: Any, key: tuple[str | int, ...], where: _Where, name: str
+    ctx: Validator, value: Any, key: tuple[str | int, ...], where: _Where, name: str
 ) -> ChartShot:
     raw = ctx.mapping(value, key, required=("plate", "corners"), optional=_PLATE_KEYS)
     return ChartShot(
@@ -198,7 +198,7 @@ def _chart(
 
 
 def _region_shot(
-    ctx: _Context,
+    ctx: Validator,
     value: Any,
     key: tuple[str | int, ...],
     where: _Where,
@@ -222,7 +222,7 @@ def capture_from_dict(
     InputError
         Naming ``source``, the key path and the problem.
     """
-    ctx = _Context(source)
+    ctx = Validator(source)
     base = Path(source)
     top = ctx.mapping(
         data,
@@ -236,7 +236,7 @@ def capture_from_dict(
         raise ctx.error(
             ("version",), f"this ocio-vp reads version {VERSION}, got {top['version']!r}"
         )
-    _parse_stage(ctx, top["stage"])  # same rules as the measurements file it is copied to
+    parse_stage(ctx, top["stage"])  # same rules as the measurements file it is copied to
 
     chart = ctx.mapping(top.get("chart", {}), ("chart",), (), ("rows", "columns", "inset"))
     rows, columns = chart.get("rows", 4), chart.get("columns", 6)

@@ -31,10 +31,12 @@ __all__ = [
     "Measurements",
     "PanelGeometry",
     "Stage",
+    "Validator",
     "check_safe_name",
     "load_measurements",
     "measurements_from_dict",
     "measurements_to_dict",
+    "parse_stage",
     "read_document",
     "save_measurements",
 ]
@@ -123,7 +125,12 @@ class Measurements:
 # Validation helpers: each takes the value, the source and the key path for its messages.
 
 
-class _Context:
+class Validator:
+    """Checks values of a parsed document; every error names ``source`` and the key path.
+
+    Shared by the measurements and capture file loaders.
+    """
+
     def __init__(self, source: str) -> None:
         self.source = source
 
@@ -199,7 +206,7 @@ def _kind(value: Any) -> str:
 
 def check_safe_name(value: Any, *, source: object = None, key: str | None = None) -> str:
     """Return ``value`` if it is a safe environment/stage name, else raise :class:`InputError`."""
-    return _Context(str(source) if source else "input").name(value, (key or "name",))
+    return Validator(str(source) if source else "input").name(value, (key or "name",))
 
 
 # --------------------------------------------------------------------------------------------
@@ -215,7 +222,7 @@ def measurements_from_dict(
     InputError
         Naming ``source``, the key path and the problem, for any deviation from the format.
     """
-    ctx = _Context(source)
+    ctx = Validator(source)
     top = ctx.mapping(
         data,
         (),
@@ -229,7 +236,7 @@ def measurements_from_dict(
             ("version",), f"this ocio-vp reads version {VERSION}, got {top['version']!r}"
         )
 
-    stage = _parse_stage(ctx, top["stage"])
+    stage = parse_stage(ctx, top["stage"])
 
     primaries = ctx.mapping(top["primaries"], ("primaries",), required=CHANNELS)
     SL = np.stack([ctx.rgb(primaries[c], ("primaries", c)) for c in CHANNELS], axis=1)
@@ -262,7 +269,8 @@ def measurements_from_dict(
     )
 
 
-def _parse_stage(ctx: _Context, value: Any) -> Stage:
+def parse_stage(ctx: Validator, value: Any) -> Stage:
+    """Validate a ``stage`` section (also used by the capture file, which copies it)."""
     key: tuple[str | int, ...] = ("stage",)
     stage = ctx.mapping(
         value,
@@ -326,7 +334,7 @@ def _parse_stage(ctx: _Context, value: Any) -> Stage:
     )
 
 
-def _check_colourspace(ctx: _Context, value: Any, key: tuple[str | int, ...]) -> str:
+def _check_colourspace(ctx: Validator, value: Any, key: tuple[str | int, ...]) -> str:
     import colour
 
     names = sorted(colour.RGB_COLOURSPACES.keys())
@@ -337,7 +345,7 @@ def _check_colourspace(ctx: _Context, value: Any, key: tuple[str | int, ...]) ->
     raise ctx.error(key, f"unknown colour space {value!r} (colour.RGB_COLOURSPACES){hint}")
 
 
-def _parse_environments(ctx: _Context, value: Any, n: int) -> tuple[Environment, ...]:
+def _parse_environments(ctx: Validator, value: Any, n: int) -> tuple[Environment, ...]:
     if not isinstance(value, list) or not value:
         raise ctx.error(("environments",), f"expected a non-empty list, got {_kind(value)}")
     seen: dict[str, int] = {}

@@ -102,7 +102,7 @@ def _colorspace(
 def wall_transforms(solution: Solution) -> dict[str, list[OCIO.Transform]]:
     """Reference -> drive transform chains for the two wall colorspaces.
 
-    Linearity LUTs (when the solution has them) are appended by :mod:`ocio_vp.linearity`.
+    Linearity LUTs (when the solution has them) are appended by :mod:`ocio_vp.wall_encoding` (linearity LUT, then signal encoding).
     """
     outer: list[OCIO.Transform] = [matrix_transform(solution.M)]
     # An offset the camera cannot see is left out (docs/stability.md); solution.json keeps it.
