@@ -39,6 +39,7 @@ def test_delta_E_2000_sharma_pair_1():
     target[0] = colour.Lab_to_XYZ([50.0, 2.6772, -79.7751], D65_XY)
     predicted[0] = colour.Lab_to_XYZ([50.0, 0.0, -82.7485], D65_XY)
     errors = chart_errors(predicted, target, camera_to_xyz=np.eye(3))
+    # Sharma, Wu & Dalal (2005), CIEDE2000 test data, pair 1: Delta E00 = 2.0425.
     assert errors.delta_E_2000[0] == pytest.approx(2.0425, abs=1e-4)
     np.testing.assert_allclose(errors.delta_E_2000[1:], 0.0, atol=1e-12)
 
@@ -50,6 +51,7 @@ def test_delta_E_ITP_neutral_luminance_step():
     predicted[18] *= 1.1
     errors = chart_errors(predicted, target, camera_to_xyz=np.eye(3))
     i_100 = colour.models.eotf_inverse_ST2084(ITP_WHITE_NITS)
+    # SMPTE ST 2084 inverse EOTF at 100 cd/m2 (closed form): 0.5080784.
     assert i_100 == pytest.approx(0.5080784, abs=1e-7)
     expected = 720.0 * abs(colour.models.eotf_inverse_ST2084(1.1 * ITP_WHITE_NITS) - i_100)
     assert errors.delta_E_ITP[18] == pytest.approx(expected, rel=1e-3)
