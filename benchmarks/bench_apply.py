@@ -30,9 +30,9 @@ OFFSET = np.array([0.002, -0.001, 0.003])
 
 def make_solution(folder: Path) -> Path:
     """Solve the simulator's incandescent environment; returns its solution folder."""
-    from ocio_vp.calibrate import solve_environment
-    from ocio_vp.spectral import paper_stage_measurements
-    from ocio_vp.writer import write_solutions
+    from ocio_vp.ocio.writer import write_solutions
+    from ocio_vp.pipeline import solve_environment
+    from ocio_vp.simulator.stage import paper_stage_measurements
 
     m = paper_stage_measurements(("incandescent",))
     solution = solve_environment(m, m.environments[0], method="least-squares")
@@ -73,7 +73,7 @@ def _read(path: Path) -> np.ndarray:
 
 
 def _tasks(post, frames, out: Path, threads: int):
-    from ocio_vp.apply import FrameTask
+    from ocio_vp.footage.apply import FrameTask
 
     return [
         FrameTask(str(f), str(out / f.name), post, overwrite=True, threads=threads) for f in frames
@@ -81,8 +81,8 @@ def _tasks(post, frames, out: Path, threads: int):
 
 
 def _run_ours(post, frames, out: Path, *, workers=None, scheduler=None, threads=1) -> float:
-    from ocio_vp.apply import run_task
-    from ocio_vp.distributed import map_unordered
+    from ocio_vp.footage.apply import run_task
+    from ocio_vp.footage.distributed import map_unordered
 
     shutil.rmtree(out, ignore_errors=True)
     start = time.perf_counter()
@@ -101,8 +101,8 @@ def _run_ours(post, frames, out: Path, *, workers=None, scheduler=None, threads=
 def in_memory(quick: bool) -> str:
     import PyOpenColorIO as OCIO
 
-    from ocio_vp.apply import apply_in_place
-    from ocio_vp.ocio_config import matrix_transform
+    from ocio_vp.footage.apply import apply_in_place
+    from ocio_vp.ocio.config import matrix_transform
 
     height, width = 2160, 4096
     repeats = 5 if quick else 9
@@ -311,7 +311,7 @@ def peak_memory(quick: bool, post, root: Path) -> str:
 
 
 def run(quick: bool = False) -> str:
-    from ocio_vp.apply import load_post_correction
+    from ocio_vp.footage.apply import load_post_correction
 
     parts = ["## `ocio-vp apply`: footage at memory speed", "", in_memory(quick), ""]
     with tempfile.TemporaryDirectory() as tmp:

@@ -9,10 +9,10 @@ from pathlib import Path
 
 def run(quick: bool = False) -> str:
     """Time the demo's steps in this process; returns a markdown section."""
-    from ocio_vp.spectral import paper_stage
-    from ocio_vp.spectral_eval import evaluate_solution
-    from ocio_vp.spectral_samples import simulate_and_solve
-    from ocio_vp.writer import write_solutions
+    from ocio_vp.ocio.writer import write_solutions
+    from ocio_vp.simulator.evaluate import evaluate_solution
+    from ocio_vp.simulator.samples import simulate_and_solve
+    from ocio_vp.simulator.stage import paper_stage
 
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -35,7 +35,7 @@ def run(quick: bool = False) -> str:
         ]
         if not quick:
             from ocio_vp.metrics import camera_to_xyz_matrix
-            from ocio_vp.report import build_report
+            from ocio_vp.report.build import build_report
 
             build_report(
                 [out / s.environment for s in written],

@@ -1,6 +1,6 @@
 """LUT sizes vs the exact chain: the panel-linearity 1D LUT, and baked .cube 17/33/65.
 
-Linearity LUT (issue 5, ``ocio_vp.wall_encoding.lut_table``): the panel's measured response
+Linearity LUT (issue 5, ``ocio_vp.wall.encoding.lut_table``): the panel's measured response
 ``r`` (a simulated panel, ``PANEL_GAMMA`` of ``bench_ocio_optim``) is inverted exactly by
 bisection on its PCHIP model; the LUT samples that inverse. Error: how far the corrected panel
 is from linear, ``max |r(LUT(x)) - x|`` over drive x in [0, 1] with the LUT run by OCIO.
@@ -32,8 +32,9 @@ def _apply(processor, rgb: np.ndarray) -> np.ndarray:
 def linearity_luts(quick: bool, solution) -> str:
     import PyOpenColorIO as OCIO
 
-    from ocio_vp.linearity import CHANNELS, response_model
-    from ocio_vp.wall_encoding import LINEAR_HEADROOM, lut_table, lut_transform
+    from ocio_vp.ocio.wall import lut_transform
+    from ocio_vp.wall.encoding import LINEAR_HEADROOM, lut_table
+    from ocio_vp.wall.linearity import CHANNELS, response_model
 
     linearity = solution.linearity
     x = np.linspace(0.0, 1.0, 20001)
@@ -91,7 +92,7 @@ def baked_cubes(quick: bool, configs: dict[str, Path], folder: Path) -> str:
     import PyOpenColorIO as OCIO
 
     from ocio_vp.exports.resolve import DEFAULT_CUBE_RANGE, bake_cube
-    from ocio_vp.ocio_config import IN_FRUSTUM, POST_CORRECTION_COLORSPACE, REFERENCE
+    from ocio_vp.ocio.config import IN_FRUSTUM, POST_CORRECTION_COLORSPACE, REFERENCE
 
     lo, hi = DEFAULT_CUBE_RANGE
     rng = np.random.default_rng(0)

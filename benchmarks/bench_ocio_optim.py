@@ -25,11 +25,11 @@ PANEL_GAMMA = {"red": 1.25, "green": 0.9, "blue": 1.0}
 
 def wall_config(folder: Path, *, encoding: str = "pq"):
     """Solve a sample environment with a non-linear panel; returns (config path, solution)."""
-    from ocio_vp.calibrate import solve_environment
-    from ocio_vp.linearity import fit_linearity, parse_ramps
-    from ocio_vp.spectral import paper_stage_measurements
-    from ocio_vp.wall_encoding import with_wall_encoding
-    from ocio_vp.writer import write_solutions
+    from ocio_vp.ocio.writer import write_solutions
+    from ocio_vp.pipeline import solve_environment
+    from ocio_vp.simulator.stage import paper_stage_measurements
+    from ocio_vp.wall.encoding import with_wall_encoding
+    from ocio_vp.wall.linearity import fit_linearity, parse_ramps
 
     m = paper_stage_measurements(("incandescent",))
     drive = np.linspace(0.0, 1.0, 17)
@@ -57,7 +57,7 @@ def frame(height: int = 2160, width: int = 4096) -> np.ndarray:
 def run(quick: bool = False) -> str:
     import PyOpenColorIO as OCIO
 
-    from ocio_vp.ocio_config import IN_FRUSTUM, POST_CORRECTION_COLORSPACE, REFERENCE
+    from ocio_vp.ocio.config import IN_FRUSTUM, POST_CORRECTION_COLORSPACE, REFERENCE
 
     levels = {
         "lossless": OCIO.OPTIMIZATION_LOSSLESS,

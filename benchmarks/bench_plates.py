@@ -24,7 +24,7 @@ import resource, sys, time
 import numpy as np
 mode, path, corners = sys.argv[1], sys.argv[2], np.array(eval(sys.argv[3]))
 import OpenImageIO as oiio
-from ocio_vp.chart_sampling import sample_chart
+from ocio_vp.plates.sampling import sample_chart
 base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 t = time.perf_counter()
 if mode == "region":

@@ -2,7 +2,7 @@
 
 The map is generated here: a sky gradient above the horizon, ground below, and a sun disc of
 radiance 3000 (anti-aliased by 8x8 supersampling) at 35 degrees elevation. For each sun size
-the table gives the time of :func:`ocio_vp.hdri_prepare.fit_under_peak` (in memory) and of the
+the table gives the time of :func:`ocio_vp.hdri.prepare.fit_under_peak` (in memory) and of the
 whole ``prepare-hdri`` file path (EXR in, EXR out, half, zip), the largest pixel after, the
 energy error, the largest w_avg error over five normals, the spread radius and the closed-form
 smallest radius, and the closed-form w_avg shrink for the normal facing the sun,
@@ -33,7 +33,7 @@ _BLOCK = 256
 
 
 def sun_direction() -> np.ndarray:
-    """The sun's direction in :mod:`ocio_vp.hdri`'s convention (y up, azimuth from +z)."""
+    """The sun's direction in :mod:`ocio_vp.hdri.diffuse`'s convention (y up, azimuth from +z)."""
     ce = np.cos(SUN_ELEVATION)
     return np.array([ce * np.sin(SUN_AZIMUTH), np.sin(SUN_ELEVATION), ce * np.cos(SUN_AZIMUTH)])
 
@@ -79,7 +79,7 @@ def make_map(width: int, sun_radius_deg: float) -> np.ndarray:
 
 def energy(img: np.ndarray) -> np.ndarray:
     """Solid-angle-weighted energy per channel, float64, in row blocks (no 8K float64 copy)."""
-    from ocio_vp.hdri import equirect_solid_angles
+    from ocio_vp.hdri.diffuse import equirect_solid_angles
 
     height, width = img.shape[:2]
     row_omega = equirect_solid_angles(height, 1)[:, 0] / width
@@ -104,8 +104,8 @@ def _write_exr(path: Path, img: np.ndarray) -> None:
 
 def measure(width: int, sun_radius_deg: float, *, repeats: int) -> dict:
     """One row of the table (see the module docstring)."""
-    from ocio_vp.hdri import diffuse_integral
-    from ocio_vp.hdri_prepare import fit_under_peak, minimum_cap_radius_deg, prepare_hdri_file
+    from ocio_vp.hdri.diffuse import diffuse_integral
+    from ocio_vp.hdri.prepare import fit_under_peak, minimum_cap_radius_deg, prepare_hdri_file
 
     img = make_map(width, sun_radius_deg)
     seconds = median_time(lambda: fit_under_peak(img, peak=PEAK), repeats=repeats, warmup=0)
@@ -120,7 +120,7 @@ def measure(width: int, sun_radius_deg: float, *, repeats: int) -> dict:
         w_errors[name] = float(np.max(np.abs(after / before - 1.0)))
     (sun,) = prepared.sources
     # Room per unit of the sun's colour over the sky at the sun's elevation (module docstring
-    # of ocio_vp.hdri_prepare): the smallest cap the excess fits in, if the sky were uniform.
+    # of ocio_vp.hdri.prepare): the smallest cap the excess fits in, if the sky were uniform.
     sky = SKY_HORIZON + (SKY_ZENITH - SKY_HORIZON) * np.sin(SUN_ELEVATION)
     colour = SUN_COLOUR / SUN_COLOUR.max()
     room = float(np.min((PEAK - sky) / colour))
@@ -154,7 +154,7 @@ def measure(width: int, sun_radius_deg: float, *, repeats: int) -> dict:
 
 def many_sources(width: int, count: int, *, repeats: int) -> tuple[float, int]:
     """Time for ``count`` scattered small over-range sources (street lights, glints)."""
-    from ocio_vp.hdri_prepare import fit_under_peak
+    from ocio_vp.hdri.prepare import fit_under_peak
 
     rng = np.random.default_rng(0)
     img = make_map(width, 0.0)

@@ -1,7 +1,7 @@
 """Q-solve methods: solve time vs the lit chart's colour error on the simulator's environments.
 
 For every method of ``Q_SOLVE_METHODS`` (plus the perceptual solve on ΔE ITP) and every sample
-environment of :func:`ocio_vp.spectral.paper_stage_measurements` (spectral ground truth), the
+environment of :func:`ocio_vp.simulator.stage.paper_stage_measurements` (spectral ground truth), the
 corrected lit chart ``Q x_j`` (eq. 3 and 5 of the paper, through the method's own M when it
 returns one) is compared with the target chart: mean ΔE2000 and ΔE ITP through
 :func:`ocio_vp.metrics.chart_errors` with the simulated camera's XYZ matrix, and the paper's
@@ -18,13 +18,13 @@ from benchmarks import fmt_ms, markdown_table, median_time
 
 
 def run(quick: bool = False) -> str:
-    from ocio_vp.geometry import environment_w_avg, stage_beta
+    from ocio_vp.calibration.equations import solve_M
+    from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
+    from ocio_vp.correction.perceptual import make_q_perceptual
+    from ocio_vp.correction.problem import QProblem
+    from ocio_vp.correction.registry import Q_SOLVE_METHODS
     from ocio_vp.metrics import camera_to_xyz_matrix, chart_errors
-    from ocio_vp.perceptual import make_q_perceptual
-    from ocio_vp.qproblem import QProblem
-    from ocio_vp.qsolve import Q_SOLVE_METHODS
-    from ocio_vp.solve import solve_M
-    from ocio_vp.spectral import paper_stage, paper_stage_measurements
+    from ocio_vp.simulator.stage import paper_stage, paper_stage_measurements
 
     stage = paper_stage()
     measurements = paper_stage_measurements()

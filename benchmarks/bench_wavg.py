@@ -27,7 +27,7 @@ TILTS = (0.0, 45.0, 80.0)  # angle between the sun and the chart normal, degrees
 
 
 def _sun_direction() -> np.ndarray:
-    # Module convention of ocio_vp.hdri: y up, azimuth from +z towards +x.
+    # Module convention of ocio_vp.hdri.diffuse: y up, azimuth from +z towards +x.
     ce = np.cos(SUN_ELEVATION)
     return np.array([ce * np.sin(SUN_AZIMUTH), np.sin(SUN_ELEVATION), ce * np.cos(SUN_AZIMUTH)])
 
@@ -66,7 +66,7 @@ def make_hdri(width: int, half_angle: float) -> np.ndarray:
     r0, r1 = int(row - pad), int(row + pad) + 1
     c0, c1 = int(col - pad * 2), int(col + pad * 2) + 1
     s = 8
-    # Directions of the supersamples of that window only (module convention of ocio_vp.hdri).
+    # Directions of the supersamples of that window only (module convention of ocio_vp.hdri.diffuse).
     th = (np.arange(r0 * s, r1 * s) + 0.5) * (np.pi / (height * s))
     ph = ((np.arange(c0 * s, c1 * s) + 0.5) / (width * s) - 0.5) * (2 * np.pi)
     dirs = np.stack(
@@ -102,7 +102,7 @@ def _write(path: Path, img: np.ndarray, *, mip: bool) -> None:
 
 
 def run(quick: bool = False) -> str:
-    from ocio_vp.hdri import DEFAULT_HDRI_WIDTH, diffuse_integral, read_equirect
+    from ocio_vp.hdri.diffuse import DEFAULT_HDRI_WIDTH, diffuse_integral, read_equirect
 
     full = 4096 if quick else 8192
     half_angle = np.radians(1.0 if quick else 0.5)

@@ -1,6 +1,6 @@
 """Regenerate the measured tables of docs/stability.md: ``python docs/stability_figures.py``.
 
-Every number comes from ocio_vp itself on the spectral simulator (ocio_vp.spectral) or on random
+Every number comes from ocio_vp itself on the spectral simulator (ocio_vp.simulator.stage) or on random
 matrices; seeds are fixed so a re-run prints the same tables.
 """
 
@@ -12,11 +12,11 @@ from collections import Counter
 
 import numpy as np
 
-from ocio_vp.calibrate import solve_environment
-from ocio_vp.diagnostics import error_relative_to_white
-from ocio_vp.solve import condition_number, predict_lit_chart, solve_M, solve_N
-from ocio_vp.spectral import simulate_measurements
-from ocio_vp.spectral_data import ENVIRONMENTS
+from ocio_vp.calibration.equations import condition_number, predict_lit_chart, solve_M, solve_N
+from ocio_vp.metrics import error_relative_to_white
+from ocio_vp.pipeline import solve_environment
+from ocio_vp.simulator.data import ENVIRONMENTS
+from ocio_vp.simulator.stage import simulate_measurements
 
 NOISE = 0.005
 TRIALS = 40
@@ -75,7 +75,7 @@ def noise_table(m) -> str:
 
 def blend_sweep(m) -> str:
     """N spread of auto under noise for several blend bands (0 = a hard switch)."""
-    from ocio_vp import qmethods
+    from ocio_vp.correction import linear as qmethods
 
     names = ("high_pressure_sodium", "incandescent", "d65", "rgb_led_white")
     rows = ["| BLEND_BAND | " + " | ".join(names) + " |", "|---" * (len(names) + 1) + "|"]

@@ -1,6 +1,6 @@
 """Chart error metrics: the paper's relative-to-white error, CIE ΔE2000 and ΔE ITP.
 
-- :func:`error_relative_to_white` (re-exported from :mod:`ocio_vp.diagnostics`): mean absolute
+- :func:`error_relative_to_white` : mean absolute
   error per channel relative to the target white patch, the metric of the paper's Fig. 11.
 - :func:`camera_to_xyz_matrix`: a 3x3 camera RGB -> CIE XYZ matrix fitted (least squares,
   colour's ``matrix_colour_correction``, Cheung 2004 with 3 terms) on colour-science's offline
@@ -33,20 +33,80 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ocio_vp.diagnostics import error_relative_to_white
+from ocio_vp.spectra import align, spectral_shape
 
 __all__ = [
     "ITP_WHITE_NITS",
+    "WHITE_FLOOR",
     "ChartErrors",
     "camera_to_xyz_matrix",
     "chart_errors",
     "error_relative_to_white",
     "training_rgb_xyz",
+    "white_scale",
 ]
 
 #: Luminance (cd/m^2) that the target white patch is mapped to for ΔE ITP.
 ITP_WHITE_NITS = 100.0
 _CMFS = "CIE 1931 2 Degree Standard Observer"
+
+
+
+#: A white-patch channel below this fraction of the white's brightest channel is floored to it,
+#: so that a near-monochromatic target (sodium: almost no blue) does not divide by ~0.
+WHITE_FLOOR = 0.01
+
+
+def white_scale(target: ArrayLike, white_patch: int = 18, weights: ArrayLike | None = None):
+    """(..., 3) per-channel denominators for white-relative errors.
+
+    The target white patch, each channel floored at ``WHITE_FLOOR`` times its brightest channel;
+    when the white patch is black (or excluded by ``weights``) the mean absolute target value of
+    the fitted patches over all channels, and 1 if the whole chart is black.
+    """
+    target = np.asarray(target, dtype=np.float64)
+    white = np.abs(target[..., white_patch, :])
+    peak = white.max(axis=-1, keepdims=True)
+    w = np.ones(target.shape[-2]) if weights is None else np.asarray(weights, dtype=np.float64)
+    fallback = np.tensordot(w, np.abs(target), axes=([0], [-2])).mean(axis=-1, keepdims=True)
+    fallback = fallback / max(float(w.sum()), 1e-300)
+    fallback = np.where(fallback > 0, fallback, 1.0)
+    usable = (peak > 0) & (w[white_patch] > 0)
+    floored = np.maximum(white, WHITE_FLOOR * peak)
+    return np.where(usable, floored, np.broadcast_to(fallback, white.shape))
+
+
+def error_relative_to_white(
+    predicted: ArrayLike, target: ArrayLike, white_patch: int = 18, weights: ArrayLike | None = None
+) -> np.ndarray:
+    """Mean absolute error per channel, relative to the target white patch (paper, Fig. 11).
+
+    Parameters
+    ----------
+    predicted, target
+        (..., n, 3) chart values.
+    white_patch
+        Index of the white patch in ``target``.
+    weights
+        Optional (n,) weights (0 excludes a patch).
+
+    Returns
+    -------
+    ndarray
+        (..., 3) ``mean_j |predicted_j - target_j| / target_white`` (white per
+        :func:`white_scale`).
+
+    Examples
+    --------
+    >>> target = np.ones((24, 3)); predicted = target * 1.02
+    >>> error_relative_to_white(predicted, target).round(6).tolist()
+    [0.02, 0.02, 0.02]
+    """
+    predicted = np.asarray(predicted, dtype=np.float64)
+    target = np.asarray(target, dtype=np.float64)
+    error = np.abs(predicted - target) / white_scale(target, white_patch, weights)[..., None, :]
+    w = np.ones(target.shape[-2]) if weights is None else np.asarray(weights, dtype=np.float64)
+    return np.tensordot(w, error, axes=([0], [-2])) / w.sum()
 
 
 def training_rgb_xyz(
@@ -57,7 +117,7 @@ def training_rgb_xyz(
     Parameters
     ----------
     camera
-        (W, 3) camera sensitivities on :data:`ocio_vp.spectral_data.SPECTRAL_SHAPE`.
+        (W, 3) camera sensitivities on :data:`ocio_vp.simulator.data.SPECTRAL_SHAPE`.
     illuminant
         A key of ``colour.SDS_ILLUMINANTS``.
 
@@ -68,9 +128,8 @@ def training_rgb_xyz(
     """
     import colour
 
-    from ocio_vp.spectral_data import _shape, align
 
-    shape = _shape()
+    shape = spectral_shape()
     reflectances = np.asarray(
         colour.characterisation.read_training_data_rawtoaces_v1().copy().align(shape).values,
         dtype=np.float64,

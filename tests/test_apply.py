@@ -15,10 +15,10 @@ import pytest
 import yaml
 from conftest import make_measurements_dict
 
-from ocio_vp.apply import apply_in_place, cpu_processor, load_post_correction
 from ocio_vp.cli import main
 from ocio_vp.errors import InputError
-from ocio_vp.sequences import expand_frames, frame_pattern, output_paths, parse_frame_range
+from ocio_vp.footage.apply import apply_in_place, cpu_processor, load_post_correction
+from ocio_vp.footage.sequences import expand_frames, frame_pattern, output_paths, parse_frame_range
 
 oiio = pytest.importorskip("OpenImageIO")
 

@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 from synthetic_plates import CORNERS, GAP, homography, render_chart, render_regions, write_image
 
-from ocio_vp.chart_sampling import (
+from ocio_vp.errors import InputError
+from ocio_vp.plates.sampling import (
     ROBUST_MEAN_METHODS,
     grid_homography,
     patch_labels,
     sample_chart,
     sample_region,
 )
-from ocio_vp.errors import InputError
 
 # Noise of the synthetic sensor: 1 % of the signal plus 1e-4 absolute; vignetting 0.6 % at the
 # image corners (the chart's patches sit at most ~0.35 % down from the centre).
@@ -24,7 +24,7 @@ TOLERANCE = 0.005  # the issue's 0.5 %
 @pytest.fixture(scope="module")
 def truth() -> np.ndarray:
     """A lit chart from the spectral simulator (camera RGB of 24 patches lit by the red LED)."""
-    from ocio_vp.spectral import paper_stage
+    from ocio_vp.simulator.stage import paper_stage
 
     stage = paper_stage()
     lit = stage.SRL_unscaled[:, :, 0] + stage.SRL_unscaled[:, :, 1] + stage.SRL_unscaled[:, :, 2]

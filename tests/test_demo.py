@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from ocio_vp.cli import main
-from ocio_vp.measurements import load_measurements
-from ocio_vp.solution import load_solution
-from ocio_vp.spectral import PAPER_ENVIRONMENTS
+from ocio_vp.formats.measurements import load_measurements
+from ocio_vp.formats.solution import load_solution
+from ocio_vp.simulator.stage import PAPER_ENVIRONMENTS
 
 
 @pytest.fixture(scope="module")
@@ -106,7 +106,7 @@ def test_simulate_writes_a_measurements_file(tmp_path, capsys):
 def test_simulate_measured_leds_from_csv(tmp_path):
     # Measured spectra given as a CSV on a 1 nm grid: the simulator resamples them linearly, so
     # Gaussian LEDs written out this way reproduce [SL] of the same Gaussians closely.
-    from ocio_vp.spectral import spectral_stage
+    from ocio_vp.simulator.stage import spectral_stage
 
     wl = np.arange(380.0, 781.0, 1.0)
     pairs = ((630.0, 20.0), (525.0, 35.0), (460.0, 22.0))

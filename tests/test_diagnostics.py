@@ -1,4 +1,4 @@
-"""Diagnostics (ocio_vp.diagnostics), clipped patches, and what the config leaves out.
+"""Diagnostics (ocio_vp.calibration.diagnostics), clipped patches, and what the config leaves out.
 
 Independent sources: hand-computed closed forms, a plain numpy leave-one-out loop, the paper's
 Section 3.4 ratio b / w_camera, the simulator (low-pressure sodium lies outside the LED gamut:
@@ -15,25 +15,24 @@ import PyOpenColorIO as OCIO
 import pytest
 from conftest import make_measurements_dict
 
-from ocio_vp import ocio_config as oc
-from ocio_vp.calibrate import solve_environment
-from ocio_vp.cli import main
-from ocio_vp.diagnostics import (
+from ocio_vp.calibration.diagnostics import (
     NEGLIGIBLE_OFFSET,
     black_level_bounce,
     clipped_patches,
-    cross_validated_error,
-    error_relative_to_white,
     in_frustum_drive_range,
     offset_is_negligible,
     out_of_frustum_drive,
     residuals_per_patch,
-    white_scale,
 )
+from ocio_vp.cli import main
+from ocio_vp.correction.registry import QProblem
+from ocio_vp.correction.validation import cross_validated_error
 from ocio_vp.errors import InputError
-from ocio_vp.measurements import measurements_from_dict, measurements_to_dict
-from ocio_vp.qsolve import QProblem
-from ocio_vp.solution import solution_to_json
+from ocio_vp.formats.measurements import measurements_from_dict, measurements_to_dict
+from ocio_vp.formats.solution import solution_to_json
+from ocio_vp.metrics import error_relative_to_white, white_scale
+from ocio_vp.ocio import config as oc
+from ocio_vp.pipeline import solve_environment
 
 ATOL = 1e-12
 
@@ -129,7 +128,7 @@ class TestDrives:
         np.testing.assert_allclose(black_level_bounce(b, SL), [0.04, 0.03, 0.02])
 
     def test_sodium_is_outside_the_led_gamut_on_the_simulator(self) -> None:
-        spectral = pytest.importorskip("ocio_vp.spectral")
+        spectral = pytest.importorskip("ocio_vp.simulator.stage")
         m = spectral.simulate_measurements(["sodium_vapour", "d65"])
         sodium = solve_environment(m, m.environment("sodium_vapour"))
         daylight = solve_environment(m, m.environment("d65"))
@@ -188,7 +187,7 @@ class TestClipping:
 
 @pytest.fixture(scope="module")
 def led_white():
-    from ocio_vp import spectral
+    from ocio_vp.simulator import stage as spectral
 
     m = spectral.simulate_measurements(["rgb_led_white", "incandescent"])
     return m, solve_environment(m, m.environment("rgb_led_white"), method="auto")

@@ -1,4 +1,4 @@
-"""ocio_vp.distributed: the same results inline, in a local process pool and on Dask.
+"""ocio_vp.footage.distributed: the same results inline, in a local process pool and on Dask.
 
 The reference is the plain in-process call; every path must give the same per-item results
 and turn a failing task into a reported exception while the other tasks finish.
@@ -14,8 +14,8 @@ import yaml
 from conftest import make_measurements_dict
 
 from ocio_vp.cli import main
-from ocio_vp.distributed import map_unordered
 from ocio_vp.errors import InputError
+from ocio_vp.footage.distributed import map_unordered
 
 
 def _sqrt_or_fail(x: float) -> float:

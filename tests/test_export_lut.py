@@ -15,11 +15,11 @@ import pytest
 from conftest import make_measurements_dict
 from test_export_unreal import run_tool
 
-from ocio_vp.calibrate import solve_measurements
 from ocio_vp.exports import export_solutions
-from ocio_vp.measurements import measurements_from_dict
-from ocio_vp.ocio_config import IN_FRUSTUM, OUT_OF_FRUSTUM, REFERENCE
-from ocio_vp.writer import write_solutions
+from ocio_vp.formats.measurements import measurements_from_dict
+from ocio_vp.ocio.config import IN_FRUSTUM, OUT_OF_FRUSTUM, REFERENCE
+from ocio_vp.ocio.writer import write_solutions
+from ocio_vp.pipeline import solve_measurements
 
 CHANNELS = ("red", "green", "blue")
 

@@ -17,7 +17,7 @@ from test_export_unreal import run_tool, solve_to
 
 from ocio_vp.errors import InputError
 from ocio_vp.exports import export_solutions
-from ocio_vp.solution import load_solution
+from ocio_vp.formats.solution import load_solution
 
 NODE_CLASSES = ("Root", "Group", "Input", "OCIONamedTransform", "ColorMatrix", "Output")
 

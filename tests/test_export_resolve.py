@@ -19,7 +19,7 @@ from ocio_vp.cli import main
 from ocio_vp.errors import InputError
 from ocio_vp.exports import export_solutions
 from ocio_vp.exports.resolve import render_dctl
-from ocio_vp.solution import load_solution
+from ocio_vp.formats.solution import load_solution
 
 COLOURS = np.array(
     [

@@ -18,12 +18,12 @@ import pytest
 from conftest import make_measurements_dict
 from exr_helpers import write_exr
 
-from ocio_vp.calibrate import solve_measurements
 from ocio_vp.exports import export_solutions
-from ocio_vp.measurements import measurements_from_dict
-from ocio_vp.ocio_config import IN_FRUSTUM, OUT_OF_FRUSTUM, POST_CORRECTION, REFERENCE
-from ocio_vp.solution import load_solution
-from ocio_vp.writer import write_solutions
+from ocio_vp.formats.measurements import measurements_from_dict
+from ocio_vp.formats.solution import load_solution
+from ocio_vp.ocio.config import IN_FRUSTUM, OUT_OF_FRUSTUM, POST_CORRECTION, REFERENCE
+from ocio_vp.ocio.writer import write_solutions
+from ocio_vp.pipeline import solve_measurements
 
 TOL = 1e-5  # the bar for oiiotool vs numpy
 

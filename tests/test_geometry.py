@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ocio_vp.errors import InputError
-from ocio_vp.geometry import (
+from ocio_vp.calibration.geometry import (
     form_factor_numerical,
     form_factor_parallel_rectangle,
     w_avg_from_white_patch,
 )
+from ocio_vp.errors import InputError
 
 
 class TestFormFactorParallelRectangle:

@@ -15,7 +15,7 @@ import pytest
 from exr_helpers import write_exr
 
 from ocio_vp.errors import InputError
-from ocio_vp.hdri import (
+from ocio_vp.hdri.diffuse import (
     FRONT,
     diffuse_integral,
     equirect_directions,

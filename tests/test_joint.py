@@ -1,6 +1,6 @@
 """The ``joint`` Q-solve method, checked on the spectral simulator and against closed forms.
 
-Independent references: the spectral simulator (:mod:`ocio_vp.spectral`) says what the stage
+Independent references: the spectral simulator (:mod:`ocio_vp.simulator.stage`) says what the stage
 really lights and shows; colour-science computes CIE xy, Lab and CIEDE2000; numpy's lstsq gives
 the minimum-norm matrix change in closed form; the paper's eq. 7 (Q [SL] N = I) is the
 in-frustum identity.
@@ -10,26 +10,31 @@ from __future__ import annotations
 
 import dataclasses
 import re
+import sys
 from pathlib import Path
 
 import colour
 import numpy as np
 import pytest
 
-from ocio_vp.calibrate import solve_environment
-from ocio_vp.geometry import stage_beta
-from ocio_vp.joint import (
+from ocio_vp.pipeline import solve_environment
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs"))
+from joint_table import comparison_table
+
+from ocio_vp.calibration.geometry import stage_beta
+from ocio_vp.correction.joint import (
     DEFAULT_MAX_CONDITION,
-    comparison_table,
     joint_matrix,
     make_q_joint,
     q_joint,
 )
+from ocio_vp.correction.linear import fit_least_squares
+from ocio_vp.correction.registry import Q_SOLVE_METHODS, QProblem
 from ocio_vp.metrics import camera_to_xyz_matrix, chart_errors
-from ocio_vp.qmethods import fit_least_squares
-from ocio_vp.qsolve import Q_SOLVE_METHODS, QProblem
-from ocio_vp.spectral import paper_stage, predict_solution, predict_stage, simulate_measurements
-from ocio_vp.spectral_data import ENVIRONMENTS, PAPER_ENVIRONMENTS
+from ocio_vp.simulator.data import ENVIRONMENTS, PAPER_ENVIRONMENTS
+from ocio_vp.simulator.predict import predict_solution, predict_stage
+from ocio_vp.simulator.stage import paper_stage, simulate_measurements
 
 BROADBAND = [n for n in PAPER_ENVIRONMENTS if ENVIRONMENTS[n].broadband]
 

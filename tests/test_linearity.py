@@ -20,10 +20,26 @@ import PyOpenColorIO as OCIO
 import pytest
 from conftest import make_measurements_dict
 
-from ocio_vp.calibrate import solve_environment
 from ocio_vp.cli import main
 from ocio_vp.errors import InputError
-from ocio_vp.linearity import (
+from ocio_vp.formats.measurements import (
+    load_measurements,
+    measurements_from_dict,
+    save_measurements,
+)
+from ocio_vp.formats.solution import load_solution
+from ocio_vp.ocio.config import IN_FRUSTUM, OUT_OF_FRUSTUM, REFERENCE
+from ocio_vp.ocio.wall import wall_outputs
+from ocio_vp.ocio.writer import write_solutions
+from ocio_vp.pipeline import solve_environment
+from ocio_vp.wall.encoding import (
+    apply_lut,
+    encode,
+    lut_domain_max,
+    lut_table,
+    with_wall_encoding,
+)
+from ocio_vp.wall.linearity import (
     LINEARITY_TOLERANCE,
     channel_response,
     fit_linearity,
@@ -32,22 +48,6 @@ from ocio_vp.linearity import (
     ramps_to_dict,
     response_model,
 )
-from ocio_vp.measurements import (
-    load_measurements,
-    measurements_from_dict,
-    save_measurements,
-)
-from ocio_vp.ocio_config import IN_FRUSTUM, OUT_OF_FRUSTUM, REFERENCE
-from ocio_vp.solution import load_solution
-from ocio_vp.wall_encoding import (
-    apply_lut,
-    encode,
-    lut_domain_max,
-    lut_table,
-    wall_outputs,
-    with_wall_encoding,
-)
-from ocio_vp.writer import write_solutions
 
 CHANNELS = ("red", "green", "blue")
 FLARE = np.array([0.002, 0.003, 0.0025])

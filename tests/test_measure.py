@@ -10,11 +10,11 @@ import pytest
 import yaml
 from synthetic_plates import CORNERS, render_chart, render_regions, write_image
 
-from ocio_vp.calibrate import solve_environment
-from ocio_vp.capture import capture_from_dict, load_capture
 from ocio_vp.cli import main
-from ocio_vp.measure_plates import measure_capture
-from ocio_vp.measurements import load_measurements, measurements_from_dict
+from ocio_vp.formats.measurements import load_measurements, measurements_from_dict
+from ocio_vp.pipeline import solve_environment
+from ocio_vp.plates.capture import capture_from_dict, load_capture
+from ocio_vp.plates.measure import measure_capture
 
 NOISE, READ_NOISE = 0.01, 1e-4
 # 10 % fall-off at the frame's corners, removed with a flat field (4 frames of a white target).
@@ -26,7 +26,7 @@ ENVIRONMENTS = ["incandescent", "outdoor_shade"]
 @pytest.fixture(scope="module")
 def truth():
     """The spectral simulator's exact measurements (the paper-like stage, two environments)."""
-    from ocio_vp.spectral import paper_stage, simulate_measurements
+    from ocio_vp.simulator.stage import paper_stage, simulate_measurements
 
     return simulate_measurements(ENVIRONMENTS, stage=paper_stage())
 
@@ -111,7 +111,7 @@ def _deviation_in_sigmas(result, truth) -> dict[str, np.ndarray]:
     measurements perturbed by those errors give the spread of M, Q, N (plus 1e-12 for elements
     that do not vary).
     """
-    from ocio_vp.measurements import measurements_to_dict
+    from ocio_vp.formats.measurements import measurements_to_dict
 
     se = {
         p.plate.key: p.samples.spreads / np.sqrt(p.samples.counts)[:, None] for p in result.plates
@@ -193,8 +193,8 @@ class TestMeasureCommand:
         """The overlay outlines exactly the label map of the sampling (read back with OIIO)."""
         import OpenImageIO as oiio
 
-        from ocio_vp.chart_sampling import patch_labels
-        from ocio_vp.overlay import OUTLINE_COLOURS
+        from ocio_vp.plates.overlay import OUTLINE_COLOURS
+        from ocio_vp.plates.sampling import patch_labels
 
         out = tmp_path / "m.yaml"
         assert main(["measure", str(capture_file), "--out", str(out)]) == 0
@@ -299,9 +299,9 @@ def test_detect_corners_written_back(tmp_path):
     values = ccd.SETTINGS_SEGMENTATION_COLORCHECKER_CLASSIC["reference_values"].clip(0.01) * 0.5
     corners = np.array([[100.0, 80.0], [500.0, 90.0], [495.0, 350.0], [105.0, 345.0]])
     plate = write_image(tmp_path / "chart.exr", render_chart(values, corners=corners, noise=0.005))
-    from ocio_vp.chart_detection import detect_chart_corners
-    from ocio_vp.chart_sampling import sample_chart
-    from ocio_vp.plates import open_plate
+    from ocio_vp.plates.detection import detect_chart_corners
+    from ocio_vp.plates.reader import open_plate
+    from ocio_vp.plates.sampling import sample_chart
 
     found = detect_chart_corners(open_plate(plate))
     # The segmentation's quadrilateral is approximate: within 4 % of the chart's width ...
@@ -310,7 +310,7 @@ def test_detect_corners_written_back(tmp_path):
     samples = sample_chart(plate, found, 4, 6, inset=0.3)
     np.testing.assert_allclose(samples.means, values, rtol=0.005)
 
-    from ocio_vp.capture import with_corners
+    from ocio_vp.plates.capture import with_corners
 
     document = {"lit_chart": {"red": {"plate": "x.exr", "corners": "detect"}}}
     written = with_corners(document, {("lit_chart", "red"): found})

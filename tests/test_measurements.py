@@ -7,7 +7,7 @@ import pytest
 from conftest import make_measurements_dict
 
 from ocio_vp.errors import InputError
-from ocio_vp.measurements import (
+from ocio_vp.formats.measurements import (
     load_measurements,
     measurements_from_dict,
     measurements_to_dict,
@@ -71,7 +71,7 @@ def test_bool_is_not_a_number() -> None:
 
 
 def test_load_solution_reports_missing_keys(tmp_path) -> None:
-    from ocio_vp.solution import load_solution
+    from ocio_vp.formats.solution import load_solution
 
     (tmp_path / "solution.json").write_text('{"format": "ocio-vp/solution", "version": 1}')
     with pytest.raises(InputError, match="missing required key 'stage'"):

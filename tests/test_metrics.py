@@ -12,14 +12,13 @@ import colour
 import numpy as np
 import pytest
 
-from ocio_vp import diagnostics
+from ocio_vp.calibration import diagnostics as diagnostics
 from ocio_vp.metrics import (
     ITP_WHITE_NITS,
     camera_to_xyz_matrix,
     chart_errors,
-    error_relative_to_white,
 )
-from ocio_vp.spectral import environment_spectrum, paper_stage
+from ocio_vp.simulator.stage import environment_spectrum, paper_stage
 
 D65_XY = np.array([0.3127, 0.3290])
 
@@ -28,10 +27,6 @@ def _d65_chart(n: int = 24) -> np.ndarray:
     chart = np.tile(colour.xy_to_XYZ(D65_XY) * 0.2, (n, 1))
     chart[18] = colour.xy_to_XYZ(D65_XY)  # white: Y = 1
     return chart
-
-
-def test_reuses_the_paper_metric():
-    assert error_relative_to_white is diagnostics.error_relative_to_white
 
 
 def test_delta_E_2000_sharma_pair_1():
@@ -96,8 +91,8 @@ def test_docstring_examples_run():
     import doctest
 
     import ocio_vp.metrics
-    import ocio_vp.spectral
+    import ocio_vp.simulator.stage
 
-    for module in (ocio_vp.spectral, ocio_vp.metrics):
+    for module in (ocio_vp.simulator.stage, ocio_vp.metrics):
         result = doctest.testmod(module)
         assert result.attempted > 0 and result.failed == 0, module.__name__

@@ -12,10 +12,10 @@ import PyOpenColorIO as OCIO
 import pytest
 from conftest import make_measurements_dict
 
-from ocio_vp import ocio_config as oc
-from ocio_vp.calibrate import solve_measurements
-from ocio_vp.measurements import measurements_from_dict
-from ocio_vp.writer import write_solutions
+from ocio_vp.formats.measurements import measurements_from_dict
+from ocio_vp.ocio import config as oc
+from ocio_vp.ocio.writer import write_solutions
+from ocio_vp.pipeline import solve_measurements
 
 COLOURS = np.random.default_rng(7).uniform(-0.2, 4.0, size=(64, 3))  # HDR and negative too
 

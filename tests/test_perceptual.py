@@ -10,21 +10,21 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ocio_vp.geometry import environment_w_avg, stage_beta
-from ocio_vp.metrics import chart_errors
-from ocio_vp.perceptual import (
+from ocio_vp.calibration.equations import solve_M
+from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
+from ocio_vp.correction.perceptual import (
     default_camera_to_xyz,
     make_q_perceptual,
     mean_delta_e,
     q_perceptual,
 )
-from ocio_vp.qproblem import QProblem
-from ocio_vp.solve import solve_M
+from ocio_vp.correction.problem import QProblem
+from ocio_vp.metrics import chart_errors
 
 
 @pytest.fixture(scope="module")
 def problem() -> QProblem:
-    from ocio_vp.spectral import paper_stage_measurements
+    from ocio_vp.simulator.stage import paper_stage_measurements
 
     m = paper_stage_measurements(("indoor_daylight",))
     env = m.environments[0]
@@ -107,9 +107,9 @@ def test_registered_for_solve(tmp_path):
     import json
 
     from ocio_vp.cli import main
-    from ocio_vp.measurements import save_measurements
-    from ocio_vp.qsolve import Q_SOLVE_METHODS
-    from ocio_vp.spectral import paper_stage_measurements
+    from ocio_vp.correction.registry import Q_SOLVE_METHODS
+    from ocio_vp.formats.measurements import save_measurements
+    from ocio_vp.simulator.stage import paper_stage_measurements
 
     assert Q_SOLVE_METHODS["perceptual"] is q_perceptual
     path = tmp_path / "stage.json"

@@ -7,7 +7,7 @@ import pytest
 from synthetic_plates import write_image
 
 from ocio_vp.errors import InputError
-from ocio_vp.plates import open_plate, read_region
+from ocio_vp.plates.reader import open_plate, read_region
 
 
 @pytest.fixture

@@ -1,6 +1,6 @@
 """prepare-hdri: over-range sources spread under the peak, checked against closed forms.
 
-Closed forms (spherical geometry, independent of ocio_vp.hdri):
+Closed forms (spherical geometry, independent of ocio_vp.hdri.diffuse):
 - solid angle of a lat-long row between polar angles t0, t1: (2 pi / W) (cos t0 - cos t1);
 - a spherical cap of radius r has solid angle 2 pi (1 - cos r), and the mean of w over it is
   its axis times (1 + cos r) / 2: so an energy E spread uniformly over it lowers the diffuse
@@ -20,7 +20,7 @@ from exr_helpers import write_exr
 
 from ocio_vp.cli import main
 from ocio_vp.errors import InputError
-from ocio_vp.hdri_prepare import fit_under_peak, label_sources, minimum_cap_radius_deg
+from ocio_vp.hdri.prepare import fit_under_peak, label_sources, minimum_cap_radius_deg
 
 oiio = pytest.importorskip("OpenImageIO")
 

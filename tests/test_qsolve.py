@@ -1,8 +1,8 @@
-"""Q-solve methods (ocio_vp.qsolve / ocio_vp.qmethods) against closed forms and the simulator.
+"""Q-solve methods (ocio_vp.correction.registry / ocio_vp.correction.linear) against closed forms and the simulator.
 
 Independent sources: exact recovery of a known Q from noise-free data (linear algebra), the
 KKT system of equality-constrained least squares, the ridge normal equations (zero gradient),
-and the spectral simulator's environments (ocio_vp.spectral, colour-science data).
+and the spectral simulator's environments (ocio_vp.simulator.stage, colour-science data).
 """
 
 from __future__ import annotations
@@ -12,18 +12,19 @@ import dataclasses
 import numpy as np
 import pytest
 
-from ocio_vp.calibrate import DEFAULT_METHOD, solve_environment
-from ocio_vp.diagnostics import cross_validated_error, error_relative_to_white
-from ocio_vp.errors import InputError
-from ocio_vp.qmethods import (
+from ocio_vp.calibration.equations import solve_M
+from ocio_vp.correction.linear import (
     AUTO_TOLERANCE_ABSOLUTE,
     AUTO_TOLERANCE_RELATIVE,
     REGULARISATION_GRID,
     soft_choice,
     target_rank,
 )
-from ocio_vp.qsolve import Q_SOLVE_METHODS, QProblem, solve_post_correction
-from ocio_vp.solve import solve_M
+from ocio_vp.correction.registry import Q_SOLVE_METHODS, QProblem, solve_post_correction
+from ocio_vp.correction.validation import cross_validated_error
+from ocio_vp.errors import InputError
+from ocio_vp.metrics import error_relative_to_white
+from ocio_vp.pipeline import DEFAULT_METHOD, solve_environment
 
 ATOL = 1e-10
 METHODS = ("least-squares", "white-preserving", "regularised", "diagonal", "identity", "auto")
@@ -167,8 +168,8 @@ class TestRankAware:
 
 @pytest.fixture(scope="module")
 def simulated():
-    spectral = pytest.importorskip("ocio_vp.spectral")
-    from ocio_vp.spectral_data import ENVIRONMENTS
+    spectral = pytest.importorskip("ocio_vp.simulator.stage")
+    from ocio_vp.simulator.data import ENVIRONMENTS
 
     return spectral.simulate_measurements(list(ENVIRONMENTS))
 

@@ -12,19 +12,19 @@ import numpy as np
 import pytest
 from conftest import make_measurements_dict
 
-from ocio_vp.calibrate import solve_measurements
 from ocio_vp.cli import main
-from ocio_vp.diagnostics import error_relative_to_white
-from ocio_vp.measurements import measurements_from_dict
-from ocio_vp.report import build_report, linearity_curves
-from ocio_vp.report_data import (
+from ocio_vp.formats.measurements import measurements_from_dict
+from ocio_vp.metrics import error_relative_to_white
+from ocio_vp.ocio.writer import write_solutions
+from ocio_vp.pipeline import solve_measurements
+from ocio_vp.report.build import build_report, linearity_curves
+from ocio_vp.report.data import (
     DISPLAY_WHITE,
     STAGE_CHARTS,
     colorchecker_srgb,
     delta_e,
     fit_display_matrix,
 )
-from ocio_vp.writer import write_solutions
 
 TOL = 1e-9
 DPI = 30  # small PNGs keep the tests fast; sizes below are figsize (inches) x DPI
@@ -308,7 +308,7 @@ def test_other_chart_without_black_level(tmp_path):
 
 
 def test_panel_geometry_from_the_measurements_file(tmp_path):
-    from ocio_vp.measurements import load_measurements
+    from ocio_vp.formats.measurements import load_measurements
 
     document = make_measurements_dict(environments=1)
     document["stage"]["calibration_panel"] = {"width": 1.2, "height": 0.5, "distance": 1.5}

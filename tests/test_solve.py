@@ -7,11 +7,7 @@ import numpy as np
 import pytest
 from conftest import make_measurements_dict
 
-from ocio_vp.calibrate import solve_environment
-from ocio_vp.errors import InputError
-from ocio_vp.measurements import measurements_from_dict
-from ocio_vp.qsolve import QProblem, solve_post_correction
-from ocio_vp.solve import (
+from ocio_vp.calibration.equations import (
     black_level_offset,
     condition_number,
     predict_displayed_chart,
@@ -19,6 +15,10 @@ from ocio_vp.solve import (
     solve_M,
     solve_N,
 )
+from ocio_vp.correction.registry import QProblem, solve_post_correction
+from ocio_vp.errors import InputError
+from ocio_vp.formats.measurements import measurements_from_dict
+from ocio_vp.pipeline import solve_environment
 
 RNG = np.random.default_rng(1234)
 SL = np.array([[0.9, 0.12, 0.02], [0.25, 0.8, 0.1], [0.02, 0.15, 0.85]])

@@ -11,22 +11,21 @@ import colour
 import numpy as np
 import pytest
 
-from ocio_vp.calibrate import solve_environment
+from ocio_vp.calibration.equations import predict_lit_chart
+from ocio_vp.calibration.geometry import form_factor_parallel_rectangle, stage_beta
 from ocio_vp.errors import InputError
-from ocio_vp.geometry import form_factor_parallel_rectangle, stage_beta
-from ocio_vp.measurements import PanelGeometry, load_measurements, save_measurements
-from ocio_vp.solve import predict_lit_chart
-from ocio_vp.spectral import (
+from ocio_vp.formats.measurements import PanelGeometry, load_measurements, save_measurements
+from ocio_vp.pipeline import solve_environment
+from ocio_vp.simulator.evaluate import evaluate_solution, noise_study
+from ocio_vp.simulator.predict import predict_solution, predict_stage
+from ocio_vp.simulator.stage import (
     ENVIRONMENTS,
     PAPER_ENVIRONMENTS,
     environment_spectrum,
     paper_stage,
-    predict_solution,
-    predict_stage,
     simulate_measurements,
     spectral_stage,
 )
-from ocio_vp.spectral_eval import evaluate_solution, noise_study
 
 RTOL = 1e-12
 
@@ -114,7 +113,7 @@ def test_white_patch_gives_w_avg_within_half_a_percent(measurements):
     # The file's white_reflectance (camera-green-weighted, ~0.887 for the Ohta chart, not the
     # paper's nominal 0.9) lets the core's w_avg-from-white-patch recover the true diffuse
     # integral to 0.5% (the patch is not perfectly neutral).
-    from ocio_vp.geometry import w_avg_from_white_patch
+    from ocio_vp.calibration.geometry import w_avg_from_white_patch
 
     assert measurements.stage.white_reflectance == pytest.approx(0.8865, abs=1e-4)
     for env in measurements.environments:
@@ -213,7 +212,7 @@ class TestPredictor:
 
 class TestInputs:
     def test_registry_names_are_safe_and_resolve(self, stage):
-        from ocio_vp.measurements import SAFE_NAME
+        from ocio_vp.formats.measurements import SAFE_NAME
 
         assert len(PAPER_ENVIRONMENTS) == 7
         for name in ENVIRONMENTS:

@@ -19,13 +19,14 @@ from conftest import make_measurements_dict
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from ocio_vp.calibrate import solve_environment
-from ocio_vp.diagnostics import CLOSED_FORM_METHODS, IDENTITY_BOUND_FACTOR
+from ocio_vp.calibration.diagnostics import IDENTITY_BOUND_FACTOR
+from ocio_vp.calibration.equations import MAX_CONDITION_SL, condition_number
+from ocio_vp.correction.validation import CLOSED_FORM_METHODS
 from ocio_vp.errors import InputError
-from ocio_vp.measurements import measurements_from_dict
-from ocio_vp.ocio_config import build_config
-from ocio_vp.solution import solution_to_json
-from ocio_vp.solve import MAX_CONDITION_SL, condition_number
+from ocio_vp.formats.measurements import measurements_from_dict
+from ocio_vp.formats.solution import solution_to_json
+from ocio_vp.ocio.config import build_config
+from ocio_vp.pipeline import solve_environment
 
 CHANNELS = ("red", "green", "blue")
 BETA = 0.25

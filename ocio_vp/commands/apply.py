@@ -49,9 +49,9 @@ def run(args: argparse.Namespace) -> int:
 
     from tqdm import tqdm
 
-    from ocio_vp.apply import FrameTask, load_post_correction, run_task
-    from ocio_vp.distributed import default_workers, map_unordered
-    from ocio_vp.sequences import expand_frames, output_paths, parse_frame_range
+    from ocio_vp.footage.apply import FrameTask, load_post_correction, run_task
+    from ocio_vp.footage.distributed import default_workers, map_unordered
+    from ocio_vp.footage.sequences import expand_frames, output_paths, parse_frame_range
 
     post = load_post_correction(args.solution)
     frame_range = parse_frame_range(args.frame_range) if args.frame_range else None

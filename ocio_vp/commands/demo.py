@@ -35,11 +35,11 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from ocio_vp.errors import InputError
-    from ocio_vp.spectral import paper_stage
-    from ocio_vp.spectral_eval import evaluate_solution, format_table
-    from ocio_vp.spectral_samples import SAMPLE_NAME, simulate_and_solve
+    from ocio_vp.ocio.writer import write_solutions
+    from ocio_vp.simulator.evaluate import evaluate_solution, format_table
+    from ocio_vp.simulator.samples import SAMPLE_NAME, simulate_and_solve
+    from ocio_vp.simulator.stage import paper_stage
     from ocio_vp.staging import write_file_atomically
-    from ocio_vp.writer import write_solutions
 
     start = time.perf_counter()
     out = Path(args.out)
@@ -64,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
     print(format_table(evaluations))
     if not args.no_report:
         from ocio_vp.metrics import camera_to_xyz_matrix
-        from ocio_vp.report import build_report
+        from ocio_vp.report.build import build_report
 
         # The simulated camera is known: its own camera-to-XYZ drives the report's colours and ΔE.
         report = build_report(

@@ -29,13 +29,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ocio_vp.capture import load_capture, save_capture_document, with_corners
-    from ocio_vp.measure_plates import measure_capture, write_measure_outputs
+    from ocio_vp.plates.capture import load_capture, save_capture_document, with_corners
+    from ocio_vp.plates.measure import measure_capture, write_measure_outputs
 
     capture = load_capture(args.capture)
     detect = None
     if any(shot.corners is None for shot in capture.charts()):
-        from ocio_vp.chart_detection import detector
+        from ocio_vp.plates.detection import detector
 
         detect = detector(source=capture.source)
     result = measure_capture(capture, detect=detect)

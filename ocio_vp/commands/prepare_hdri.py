@@ -6,7 +6,7 @@ import argparse
 
 __all__ = ["add_parser", "run"]
 
-#: Normals the summary reports w_avg for (ocio_vp.hdri convention: +y up, +z image centre).
+#: Normals the summary reports w_avg for (ocio_vp.hdri.diffuse convention: +y up, +z image centre).
 SUMMARY_NORMALS = {"front": (0.0, 0.0, 1.0), "up": (0.0, 1.0, 0.0), "right": (1.0, 0.0, 0.0)}
 
 
@@ -33,7 +33,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from ocio_vp.hdri_prepare import prepare_hdri_file
+    from ocio_vp.hdri.prepare import prepare_hdri_file
 
     prepared = prepare_hdri_file(args.input, args.out, peak=args.peak, normals=SUMMARY_NORMALS)
     print(f"wrote {args.out}: peak {prepared.peak:g}, {len(prepared.sources)} over-range source(s)")

@@ -33,7 +33,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ocio_vp.errors import InputError
-    from ocio_vp.report import build_report, default_report_dir
+    from ocio_vp.report.build import build_report, default_report_dir
 
     if not args.dpi > 0:
         raise InputError(f"expected a positive number, got {args.dpi}", key="--dpi")

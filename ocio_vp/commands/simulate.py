@@ -56,10 +56,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ocio_vp.errors import InputError
-    from ocio_vp.measurements import save_measurements
-    from ocio_vp.spectral import simulate_measurements
-    from ocio_vp.spectral_cli import environments_from_args, stage_options_from_args
-    from ocio_vp.spectral_data import ENVIRONMENTS
+    from ocio_vp.formats.measurements import save_measurements
+    from ocio_vp.simulator.data import ENVIRONMENTS
+    from ocio_vp.simulator.options import environments_from_args, stage_options_from_args
+    from ocio_vp.simulator.stage import simulate_measurements
 
     if args.list_environments:
         for spec in ENVIRONMENTS.values():

@@ -116,16 +116,16 @@ def _percent(per_channel) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ocio_vp.calibrate import DEFAULT_METHOD, solve_environment
-    from ocio_vp.measurements import load_measurements
-    from ocio_vp.writer import write_solutions
+    from ocio_vp.formats.measurements import load_measurements
+    from ocio_vp.ocio.writer import write_solutions
+    from ocio_vp.pipeline import DEFAULT_METHOD, solve_environment
 
     measurements = load_measurements(args.measurements)
     environments = measurements.environments
     if args.environment:
         environments = tuple(measurements.environment(name) for name in args.environment)
     if args.hdri:
-        from ocio_vp.hdri import DEFAULT_HDRI_WIDTH, environments_with_hdri
+        from ocio_vp.hdri.diffuse import DEFAULT_HDRI_WIDTH, environments_with_hdri
 
         width = args.hdri_width or DEFAULT_HDRI_WIDTH
         environments, notes = environments_with_hdri(
@@ -134,7 +134,7 @@ def run(args: argparse.Namespace) -> int:
         print("\n".join(notes))
     method = args.method or DEFAULT_METHOD
     if args.scheduler:
-        from ocio_vp.distributed import solve_environments
+        from ocio_vp.footage.distributed import solve_environments
 
         solutions = solve_environments(
             measurements,
@@ -149,7 +149,7 @@ def run(args: argparse.Namespace) -> int:
             for env in environments
         ]
     from ocio_vp.errors import InputError
-    from ocio_vp.wall_encoding import with_wall_encoding
+    from ocio_vp.wall.encoding import with_wall_encoding
 
     if not 0 < args.peak_nits <= 10000:
         raise InputError(f"expected 0 < cd/m2 <= 10000, got {args.peak_nits:g}", key="--peak-nits")

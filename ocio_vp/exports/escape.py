@@ -1,6 +1,6 @@
 """Escaping for every language an exported name ends up in (Tcl, C, Markdown, file names).
 
-Names are validated on input (:func:`ocio_vp.measurements.check_safe_name`) *and* escaped on
+Names are validated on input (:func:`ocio_vp.formats.measurements.check_safe_name`) *and* escaped on
 output: a hand-edited ``solution.json`` or a future caller that skips validation must still
 never turn a name into code or into a path outside the output folder.
 """

@@ -17,7 +17,7 @@ from ocio_vp.errors import InputError
 from ocio_vp.exports.escape import nuke_identifier
 from ocio_vp.exports.source import ExportSource, copy_config
 from ocio_vp.exports.templating import render_template
-from ocio_vp.measurements import check_safe_name
+from ocio_vp.formats.measurements import check_safe_name
 
 __all__ = ["render_nuke_script", "write_nuke"]
 

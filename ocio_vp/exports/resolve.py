@@ -23,7 +23,7 @@ import PyOpenColorIO as OCIO
 
 from ocio_vp.exports.source import ExportSource
 from ocio_vp.exports.templating import render_template
-from ocio_vp.ocio_config import matrix_transform
+from ocio_vp.ocio.config import matrix_transform
 
 __all__ = [
     "DEFAULT_CUBE_RANGE",

@@ -15,8 +15,8 @@ from pathlib import Path
 import PyOpenColorIO as OCIO
 
 from ocio_vp.errors import InputError
-from ocio_vp.measurements import check_safe_name
-from ocio_vp.solution import Solution, load_solution
+from ocio_vp.formats.measurements import check_safe_name
+from ocio_vp.formats.solution import Solution, load_solution
 
 __all__ = ["ExportSource", "copy_config", "load_export_source", "sidecar_dirs"]
 

@@ -24,7 +24,7 @@ import PyOpenColorIO as OCIO
 from ocio_vp.errors import InputError
 from ocio_vp.exports.source import ExportSource, copy_config
 from ocio_vp.exports.templating import render_template
-from ocio_vp.ocio_config import WORKING_SPACE_NAMES
+from ocio_vp.ocio.config import WORKING_SPACE_NAMES
 
 __all__ = ["MAPPING_FILE", "unreal_mapping", "write_ocioz", "write_unreal"]
 

@@ -1,0 +1,226 @@
+"""Numbers that tell a stage engineer whether a solve can be trusted.
+
+Every function is pure (arrays in, arrays or plain numbers out) and never returns NaN or Inf for
+finite input: a white patch with a dark channel is floored (see :func:`white_scale`) rather than
+divided by zero.
+
+References
+----------
+LeGendre, C., Lepicovsky, L., Debevec, P. (2022). DigiPro '22, Fig. 11: mean absolute error per
+channel relative to the target white patch, the metric used throughout ocio_vp's tables.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ocio_vp.calibration.equations import condition_number, predict_lit_chart
+from ocio_vp.metrics import error_relative_to_white, white_scale
+
+__all__ = [
+    "black_level_bounce",
+    "clipped_patches",
+    "identity_check",
+    "in_frustum_drive_range",
+    "is_identity",
+    "offset_is_negligible",
+    "out_of_frustum_drive",
+    "residuals_per_patch",
+    "stability_diagnostics",
+]
+
+def residuals_per_patch(
+    predicted: ArrayLike, target: ArrayLike, white_patch: int = 18, weights: ArrayLike | None = None
+) -> np.ndarray:
+    """(n, 3) signed residuals ``predicted - target`` relative to the target white."""
+    predicted = np.asarray(predicted, dtype=np.float64)
+    target = np.asarray(target, dtype=np.float64)
+    return (predicted - target) / white_scale(target, white_patch, weights)
+
+
+def out_of_frustum_drive(M: ArrayLike, w_avg: ArrayLike) -> dict[str, Any]:
+    """The lighting drive ``M w_avg`` (eq. 3) and the channels the wall cannot emit (< 0).
+
+    A negative channel means the environment's light is outside the LED gamut: the wall clips
+    it to 0 and the lit chart departs from eq. 3's prediction.
+    """
+    drive = np.asarray(M, dtype=np.float64) @ np.asarray(w_avg, dtype=np.float64)
+    negative = [int(c) for c in np.flatnonzero(drive < 0)]
+    return {"drive": drive, "negative_channels": negative, "clipped_drive": np.clip(drive, 0, None)}
+
+
+def in_frustum_drive_range(
+    target: ArrayLike,
+    *,
+    M: ArrayLike,
+    matrix: ArrayLike,
+    offset: ArrayLike | None = None,
+    white_patch: int = 18,
+    max_drive: float = 1.0,
+) -> dict[str, Any]:
+    """How many chart colours the in-frustum matrix would drive outside ``[0, max_drive]``.
+
+    The chart (the target p_j, as background content) is first scaled so that its white patch
+    through M peaks at ``max_drive`` (the brightest neutral the wall shows at that exposure);
+    then each patch's drive ``matrix c + offset`` is checked per channel.
+    """
+    target = np.asarray(target, dtype=np.float64)
+    M = np.asarray(M, dtype=np.float64)
+    peak = float(np.max(M @ target[white_patch]))
+    scale = max_drive / peak if peak > 0 else 1.0
+    drive = (target * scale) @ np.asarray(matrix, dtype=np.float64).T
+    if offset is not None:
+        drive = drive + np.asarray(offset, dtype=np.float64) * scale
+    below = np.any(drive < 0, axis=1)
+    above = np.any(drive > max_drive, axis=1)
+    return {
+        "below_zero": int(below.sum()),
+        "above_max": int(above.sum()),
+        "patches_outside": [int(j) for j in np.flatnonzero(below | above)],
+        "max_drive": max_drive,
+        "content_scale": scale,
+    }
+
+
+def black_level_bounce(black_level: ArrayLike, SL: ArrayLike) -> np.ndarray:
+    """(3,) the panels' bounced light relative to the wall's white: ``b / ([SL] [1, 1, 1])``.
+
+    This is the paper's Section 3.4 ratio ``b_camera / w_camera``: panel albedo times how
+    bright the environment is relative to the wall's full white.
+    """
+    w_camera = np.asarray(SL, dtype=np.float64).sum(axis=1)
+    w_camera = np.where(np.abs(w_camera) > 0, w_camera, 1.0)
+    return np.asarray(black_level, dtype=np.float64) / w_camera
+
+
+def clipped_patches(SRL: ArrayLike, target: ArrayLike, clip_level: float | None) -> list[int]:
+    """Patches with any value (lit by any LED channel, or in the target) at ``clip_level``."""
+    if clip_level is None:
+        return []
+    SRL = np.asarray(SRL, dtype=np.float64)
+    target = np.asarray(target, dtype=np.float64)
+    clipped = np.any(SRL >= clip_level, axis=(1, 2)) | np.any(target >= clip_level, axis=1)
+    return [int(j) for j in np.flatnonzero(clipped)]
+
+
+#: cond([SL]) above this earns a warning: an LED channel is almost dark or two look alike, so
+#: 0.1 % noise in the primaries' plate moves M by more than 10 %.
+WARN_CONDITION_SL = 1e2
+
+#: ``||Q [SL] N - I||_max <= IDENTITY_BOUND_FACTOR * eps * cond(Q) * cond([SL])`` (see
+#: :func:`ocio_vp.calibration.equations.solve_N` and docs/stability.md).
+IDENTITY_BOUND_FACTOR = 32.0
+
+
+def identity_check(Q: ArrayLike, SL: ArrayLike, N: ArrayLike | None) -> dict[str, Any] | None:
+    """How exactly eq. 7, ``Q [SL] N = I``, holds, against its rounding-error bound."""
+    if N is None:
+        return None
+    Q, SL, N = (np.asarray(a, dtype=np.float64) for a in (Q, SL, N))
+    error = float(np.max(np.abs(Q @ SL @ N - np.eye(3))))
+    bound = IDENTITY_BOUND_FACTOR * np.finfo(np.float64).eps
+    bound *= condition_number(Q) * condition_number(SL)
+    return {"max_abs_error": error, "bound": float(bound)}
+
+
+def stability_diagnostics(
+    problem: Any,
+    fit: Any,
+    *,
+    method: str,
+    M: np.ndarray,
+    Q: np.ndarray,
+    N: np.ndarray | None,
+    offset: np.ndarray | None,
+    black_level: np.ndarray | None,
+    corrected: np.ndarray,
+    clipped: list[int],
+    cross_validated: np.ndarray | None = None,
+) -> tuple[dict[str, Any], list[str]]:
+    """The issue-7 block of ``solution.json`` diagnostics, and the warnings it raises.
+
+    Keys: ``model`` and ``model_reason`` (what was fitted and why), ``cond_SL`` warnings,
+    ``rank_target``, ``cross_validated_error`` (per channel, leave one patch out: the fit's own
+    or ``cross_validated``),
+    ``residuals_per_patch`` (n, 3, white-relative), ``out_of_frustum_negative_channels``,
+    ``lit_chart_error_clipped_drive`` (the lit chart when the wall clips a negative drive),
+    ``in_frustum_drive_range``, ``black_level_bounce``, ``clipped_patches``,
+    ``N_equals_M`` and ``identity_check``.
+    """
+    notes = dict(fit.notes)
+    target = np.asarray(problem.target, dtype=np.float64)
+    white, weights = problem.white_patch, problem.fit_weights
+    warnings: list[str] = []
+    cv = notes.get("cross_validated_error", cross_validated)
+    drive = out_of_frustum_drive(M, problem.w_avg)
+    lit_clipped = None
+    if drive["negative_channels"]:
+        lit = predict_lit_chart(problem.SRL, problem.beta, np.eye(3), drive["clipped_drive"])
+        lit_clipped = error_relative_to_white(lit @ Q.T, target, white, weights)
+    in_matrix = M if N is None else N
+    in_range = in_frustum_drive_range(
+        target, M=problem.M, matrix=in_matrix, offset=offset, white_patch=white
+    )
+    in_range_M = in_frustum_drive_range(
+        target, M=problem.M, matrix=problem.M, offset=offset, white_patch=white
+    )
+    in_range["below_zero_with_M"] = in_range_M["below_zero"]
+    in_range["above_max_with_M"] = in_range_M["above_max"]
+    cond_SL = condition_number(problem.SL)
+    if not cond_SL <= WARN_CONDITION_SL:
+        warnings.append(
+            f"cond([SL]) = {cond_SL:.3g}: an LED channel is almost dark or two primaries look "
+            "alike to the camera; M (and N) amplify noise in the primaries' plate by this factor"
+        )
+    if clipped:
+        warnings.append(
+            f"{len(clipped)} chart patch(es) clipped and left out of the fit: {clipped}"
+        )
+    if N is not None and in_range["below_zero"] > in_range_M["below_zero"]:
+        warnings.append(
+            f"N drives {in_range['below_zero']} chart colour(s) below zero in-frustum (M: "
+            f"{in_range_M['below_zero']}, same black-level offset): Q's inverse pushes them "
+            "outside the LED gamut"
+        )
+    block = {
+        "model": notes.get("model", method),
+        "model_reason": notes.get("reason"),
+        "rank_target": notes.get("target_rank"),
+        # None for an iterative method that does not report its own leave-one-out error:
+        # re-solving it once per patch would multiply the solve time by n.
+        "cross_validated_error": None if cv is None else np.asarray(cv, dtype=np.float64),
+        "residuals_per_patch": residuals_per_patch(corrected, target, white, weights),
+        "out_of_frustum_negative_channels": drive["negative_channels"],
+        "lit_chart_error_clipped_drive": lit_clipped,
+        "in_frustum_drive_range": in_range,
+        "black_level_bounce": None
+        if black_level is None
+        else black_level_bounce(black_level, problem.SL),
+        "clipped_patches": clipped,
+        "N_equals_M": N is not None and bool(np.array_equal(N, M)),
+        "identity_check": identity_check(Q, problem.SL, N),
+    }
+    return block, warnings
+
+
+#: A black-level offset whose light ``[SL] offset`` stays below this fraction of the wall's
+#: white ``[SL] [1, 1, 1]`` is left out of the OCIO config (kept in solution.json): 1e-5 of
+#: full white is under half a code value of a 16-bit linear signal.
+NEGLIGIBLE_OFFSET = 1e-5
+
+
+def offset_is_negligible(offset: ArrayLike | None, SL: ArrayLike) -> bool:
+    """True when an in-frustum drive offset cannot be seen (see :data:`NEGLIGIBLE_OFFSET`)."""
+    if offset is None:
+        return True
+    SL = np.asarray(SL, dtype=np.float64)
+    seen = np.abs(SL @ np.asarray(offset, dtype=np.float64))
+    return bool(np.max(seen) <= NEGLIGIBLE_OFFSET * np.max(np.abs(SL.sum(axis=1))))
+
+
+def is_identity(Q: ArrayLike) -> bool:
+    """True when Q is exactly the identity (``auto``'s identity model, or ``method="identity"``)."""
+    return bool(np.array_equal(np.asarray(Q, dtype=np.float64), np.eye(3)))

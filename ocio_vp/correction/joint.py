@@ -1,0 +1,331 @@
+"""The ``joint`` Q-solve method: optimise the out-of-frustum matrix and Q together, within limits.
+
+The paper (Future Work, "Joint Optimization of M and Q") fixes ``M = [SL]^-1`` and then
+solves Q (eq. 5); minimising eq. 5 over both was tried and gave non-neutral stage light and
+out-of-gamut drives. This method minimises the same lit-chart error
+
+    ``J(M', Q) = sum_j w_j || (1/beta) Q [SRL]_j M' w_avg - p_j ||^2``
+
+over both, from the sequential solution (M, least-squares Q), with scipy's SLSQP in float64,
+subject to limits a stage can live with:
+
+- **white point**: the stage light as the camera sees it, ``[SL] M' w_avg``, keeps its
+  chromaticity within ``max_delta_e`` CIEDE2000 of the baseline ``[SL] M w_avg`` (= w_avg).
+  Both are normalised to luminance Y = 1 and the baseline's chromaticity is the Lab reference
+  white, so the baseline is L* = 100, a* = b* = 0 and the ΔE is purely chromatic. Default 2.0
+  (about the "just noticeable" white-balance shift on set). Camera RGB -> XYZ is a 3x3 matrix
+  (:func:`ocio_vp.correction.perceptual.default_camera_to_xyz`, the sample camera, unless given).
+- **gamut**: every LED drive of the environment's average light ``d = M' w_avg`` stays in
+  ``[0, max_drive]``; default ``max_drive`` = the baseline's largest drive channel (the joint
+  light needs no more headroom than the paper's).
+- **conditioning**: ``cond(Q) <= max_condition`` (default 100), so N = [SL]^-1 Q^-1 stays usable.
+
+Scale ambiguity: ``(s M', Q / s)`` gives the same product; it is fixed by keeping the luminance
+(Y through the camera matrix) of ``[SL] M' w_avg`` equal to the baseline's.
+
+Parametrisation: J and all the limits depend on M' only through the drive ``d = M' w_avg``, so
+the optimiser works on (d, Q) (12 unknowns) and M' is the smallest (Frobenius) change of M with
+that drive, ``M' = M + (d - M w_avg) w_avg^T / |w_avg|^2``: colours other than the
+environment's average are moved as little as possible.
+
+The in-frustum matrix is unchanged in meaning: ``N = [SL]^-1 Q^-1`` (paper, eq. 7), computed by
+:mod:`ocio_vp.pipeline` from the calibrated wall, not from M', so the background stays exact
+after Q. ``QFit.notes`` reports the error reduction against the sequential method and which
+limits are active.
+
+References
+----------
+LeGendre, C., Lepicovsky, L., Debevec, P. (2022). Jointly Optimizing Color Rendition and
+In-Camera Backgrounds in an RGB Virtual Production Stage. DigiPro '22, eqs. 3, 5, 7 and
+Future Work. https://doi.org/10.1145/3543664.3543699
+CIE 142-2001, Improvement to industrial colour-difference evaluation (CIEDE2000).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ocio_vp.calibration.equations import condition_number
+from ocio_vp.correction.linear import fit_least_squares
+from ocio_vp.correction.problem import QFit, QProblem
+
+__all__ = [
+    "DEFAULT_MAX_CONDITION",
+    "DEFAULT_MAX_DELTA_E",
+    "joint_matrix",
+    "make_q_joint",
+    "q_joint",
+    "white_point_delta_e",
+]
+
+#: Default white-point limit, CIEDE2000 between the joint and the baseline stage light.
+DEFAULT_MAX_DELTA_E = 2.0
+#: Default bound on cond(Q) (N = [SL]^-1 Q^-1 amplifies errors by at most this).
+DEFAULT_MAX_CONDITION = 100.0
+
+_TOL = 1e-6  # relative slack when checking a limit / calling it active
+
+
+def white_point_delta_e(light: ArrayLike, baseline: ArrayLike, *, camera_to_xyz: ArrayLike):
+    """CIEDE2000 between the chromaticities of two camera-RGB lights (luminance ignored).
+
+    Both are scaled to Y = 1 and ``baseline``'s chromaticity is the Lab reference white, so
+    ``baseline`` itself is (100, 0, 0). ``light`` may be (..., 3).
+
+    Examples
+    --------
+    >>> m = np.eye(3)
+    >>> float(white_point_delta_e([2.0, 2.0, 2.0], [1.0, 1.0, 1.0], camera_to_xyz=m))
+    0.0
+    """
+    import colour
+
+    matrix = np.asarray(camera_to_xyz, dtype=np.float64)
+    xyz_base = matrix @ np.asarray(baseline, dtype=np.float64)
+    xyz = np.asarray(light, dtype=np.float64) @ matrix.T
+    white_xy = colour.XYZ_to_xy(xyz_base / xyz_base[1])
+    lab = colour.XYZ_to_Lab(xyz / xyz[..., 1:2], white_xy)
+    return colour.delta_E(np.array([100.0, 0.0, 0.0]), lab, method="CIE 2000")
+
+
+def joint_matrix(M: ArrayLike, w_avg: ArrayLike, drive: ArrayLike) -> np.ndarray:
+    """The smallest (Frobenius) change of ``M`` with ``M' w_avg = drive`` (a rank-1 update).
+
+    Examples
+    --------
+    >>> w = np.array([0.8, 1.0, 0.6]); d = np.array([0.7, 1.1, 0.5])
+    >>> bool(np.allclose(joint_matrix(np.eye(3), w, d) @ w, d))
+    True
+    """
+    M = np.asarray(M, dtype=np.float64)
+    w = np.asarray(w_avg, dtype=np.float64)
+    return M + np.outer(np.asarray(drive, dtype=np.float64) - M @ w, w) / float(w @ w)
+
+
+def _forward_difference(f: Callable[[np.ndarray], float], z: np.ndarray, part: slice) -> np.ndarray:
+    """(1, len(z)) gradient of ``f`` by forward differences over ``z[part]`` only (0 elsewhere)."""
+    grad = np.zeros((1, z.size))
+    f0 = f(z)
+    for i in range(*part.indices(z.size)):
+        step = 1.49e-8 * max(1.0, abs(z[i]))  # sqrt(machine epsilon)
+        zi = z.copy()
+        zi[i] += step
+        grad[0, i] = (f(zi) - f0) / step
+    return grad
+
+
+def make_q_joint(
+    *,
+    camera_to_xyz: ArrayLike | None = None,
+    max_delta_e: float = DEFAULT_MAX_DELTA_E,
+    max_drive: float | None = None,
+    max_condition: float = DEFAULT_MAX_CONDITION,
+    max_iterations: int = 300,
+) -> Callable[[QProblem], QFit]:
+    """A Q-solve method (for :data:`ocio_vp.correction.registry.Q_SOLVE_METHODS`) that also returns M'.
+
+    Parameters
+    ----------
+    camera_to_xyz
+        (3, 3) camera RGB -> CIE XYZ for the white-point ΔE and the luminance; default the
+        sample camera's (:func:`ocio_vp.correction.perceptual.default_camera_to_xyz`).
+    max_delta_e
+        Largest CIEDE2000 between the joint and the baseline stage-light chromaticity.
+    max_drive
+        Largest LED drive of ``M' w_avg``; default the baseline's largest channel.
+    max_condition
+        Largest cond(Q).
+    max_iterations
+        SLSQP iteration limit.
+    """
+    if not max_delta_e >= 0 or not max_condition >= 1:
+        raise ValueError(
+            f"need max_delta_e >= 0, max_condition >= 1: {max_delta_e}, {max_condition}"
+        )
+
+    def q_joint_method(problem: QProblem) -> QFit:
+        from scipy.optimize import minimize
+
+        if camera_to_xyz is None:
+            from ocio_vp.correction.perceptual import default_camera_to_xyz
+
+            matrix = default_camera_to_xyz()
+        else:
+            matrix = np.asarray(camera_to_xyz, dtype=np.float64)
+        SL = np.asarray(problem.SL, dtype=np.float64)
+        M = np.asarray(problem.M, dtype=np.float64)
+        w_avg = np.asarray(problem.w_avg, dtype=np.float64)
+        A = np.asarray(problem.SRL, dtype=np.float64) / float(problem.beta)  # x_j = A_j d
+        P = np.asarray(problem.target, dtype=np.float64)
+        w = problem.fit_weights
+        d0 = M @ w_avg
+        baseline_light = SL @ d0
+        y_row = matrix[1] @ SL  # luminance of the stage light, linear in d
+        y0 = float(y_row @ d0)
+        top = float(np.max(d0)) if max_drive is None else float(max_drive)
+        scale = max(float(np.max(np.abs(d0))), 1e-12)
+        norm = float(np.sum(w) * np.sum(P[problem.white_patch] ** 2))
+
+        def unpack(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            return z[:3] * scale, z[3:].reshape(3, 3)
+
+        def objective(z: np.ndarray) -> tuple[float, np.ndarray]:
+            d, Q = unpack(z)
+            X = A @ d  # (n, 3)
+            R = X @ Q.T - P
+            value = float(np.sum(w[:, None] * R * R)) / norm
+            gQ = 2.0 * (R * w[:, None]).T @ X / norm
+            gd = 2.0 * np.einsum("n,ni,nij->j", w, R @ Q, A) / norm
+            return value, np.concatenate([gd * scale, gQ.ravel()])
+
+        def delta_e(z: np.ndarray) -> float:
+            d = unpack(z)[0]
+            light = SL @ d
+            if not float(matrix[1] @ light) > 0:
+                return 1e3
+            value = float(white_point_delta_e(light, baseline_light, camera_to_xyz=matrix))
+            return value if np.isfinite(value) else 1e3
+
+        def log_cond_margin(z: np.ndarray) -> float:
+            # log keeps the scale sane; capped so a singular Q gives no inf - inf.
+            cond = min(condition_number(unpack(z)[1]), 1e12)
+            return float(np.log(max_condition) - np.log(cond))
+
+        def limits(d: np.ndarray, Q: np.ndarray) -> dict[str, float]:
+            return {
+                "white_point_delta_e": float(delta_e(np.concatenate([d / scale, Q.ravel()]))),
+                "drive_min": float(np.min(d)),
+                "drive_max": float(np.max(d)),
+                "cond_Q": condition_number(Q),
+            }
+
+        def feasible(values: dict[str, float]) -> bool:
+            return (
+                values["white_point_delta_e"] <= max_delta_e + 1e-6
+                and values["drive_min"] >= -_TOL * top
+                and values["drive_max"] <= top * (1 + _TOL)
+                and values["cond_Q"] <= max_condition * (1 + _TOL)
+            )
+
+        Q0 = fit_least_squares(A @ d0, P, w)
+        if not (y0 > 0 and top > 0):  # no visible baseline light: no white point to keep
+            return QFit(
+                Q=Q0,
+                notes={
+                    "model": "joint",
+                    "joint_applied": False,
+                    "limits_met": False,
+                    "reason": "the baseline stage light M w_avg has no luminance or no "
+                    "positive drive: the white-point and drive limits are undefined",
+                    "lit_chart_error_reduction": 0.0,
+                    "active_limits": [],
+                },
+            )
+        z0 = np.concatenate([d0 / scale, Q0.ravel()])
+        start_error = objective(z0)[0]
+        constraints = [
+            {
+                "type": "eq",
+                "fun": lambda z: np.array([(float(y_row @ unpack(z)[0]) - y0) / y0]),
+                "jac": lambda z: np.concatenate([y_row * scale / y0, np.zeros(9)])[None, :],
+            },
+            {
+                "type": "ineq",
+                "fun": lambda z: np.array([max_delta_e - delta_e(z)]),
+                "jac": lambda z: -_forward_difference(delta_e, z, slice(0, 3)),
+            },
+            {
+                "type": "ineq",
+                "fun": lambda z: np.array([log_cond_margin(z)]),
+                "jac": lambda z: _forward_difference(log_cond_margin, z, slice(3, 12)),
+            },
+        ]
+        bounds = [(0.0, top / scale)] * 3 + [(None, None)] * 9
+        z_init = z0.copy()
+        z_init[:3] = np.clip(z_init[:3], 0.0, top / scale)  # SLSQP starts inside the bounds
+        result = minimize(
+            objective,
+            z_init,
+            jac=True,
+            method="SLSQP",
+            bounds=bounds,
+            constraints=constraints,
+            options={"maxiter": max_iterations, "ftol": 1e-12},
+        )
+        d, Q = unpack(result.x)
+        start_limits = limits(d0, Q0)
+        final_limits = limits(d, Q)
+        final_error = objective(result.x)[0]
+        start_ok = feasible(start_limits)
+        ok = np.all(np.isfinite(result.x)) and feasible(final_limits)
+        if ok and start_ok and final_error >= start_error * (1 - 1e-9):
+            ok = False  # never worse than the sequential solve when that one is admissible
+        notes: dict = {
+            "model": "joint",
+            "description": "out-of-frustum matrix and Q jointly minimising eq. 5 under "
+            "white-point, drive and cond(Q) limits (paper, Future Work)",
+            "limits": {
+                "max_white_point_delta_e2000": max_delta_e,
+                "drive_range": [0.0, top],
+                "max_cond_Q": max_condition,
+            },
+            "scale_convention": "luminance of [SL] M' w_avg kept equal to the baseline's",
+            "camera_to_xyz": "sample camera" if camera_to_xyz is None else "given",
+            "sequential": {"lit_chart_error_eq5": start_error, **start_limits},
+            "optimiser": {
+                "method": "SLSQP",
+                "iterations": int(result.nit),
+                "success": bool(result.success),
+                "message": str(result.message),
+            },
+        }
+        if not ok:
+            reason = (
+                "the sequential solution already meets the limits and the optimiser found "
+                "nothing better"
+                if start_ok
+                else "no solution within the limits was found"
+            )
+            notes.update(
+                {
+                    "joint_applied": False,
+                    "reason": reason,
+                    "limits_met": start_ok,
+                    "lit_chart_error_eq5": start_error,
+                    "lit_chart_error_reduction": 0.0,
+                    "active_limits": [],
+                }
+            )
+            return QFit(Q=Q0, M=None, notes=notes)
+        active = []
+        if final_limits["white_point_delta_e"] >= max_delta_e * (1 - 1e-3) - 1e-9:
+            active.append("white_point")
+        if final_limits["drive_min"] <= 1e-6 * top:
+            active.append("drive_min")
+        if final_limits["drive_max"] >= top * (1 - 1e-6):
+            active.append("drive_max")
+        if final_limits["cond_Q"] >= max_condition * (1 - 1e-3):
+            active.append("cond_Q")
+        notes.update(
+            {
+                "joint_applied": True,
+                "limits_met": True,
+                "lit_chart_error_eq5": final_error,
+                "lit_chart_error_reduction": 1.0 - final_error / start_error
+                if start_error > 0
+                else 0.0,
+                "active_limits": active,
+                "drive": d.tolist(),
+                **final_limits,
+            }
+        )
+        return QFit(Q=Q, M=joint_matrix(M, w_avg, d), notes=notes)
+
+    return q_joint_method
+
+
+#: The registry's ``joint`` method: the defaults above, the sample camera's XYZ matrix.
+q_joint = make_q_joint()

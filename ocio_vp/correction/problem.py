@@ -1,0 +1,61 @@
+"""The data of a post-correction (Q) solve and its result.
+
+:class:`QProblem` and :class:`QFit` live here, apart from the registry in
+:mod:`ocio_vp.correction.registry`, so that modules holding Q methods can import them without importing the
+registry that imports them (``ocio_vp.correction.registry`` re-exports both names).
+
+References
+----------
+LeGendre, C., Lepicovsky, L., Debevec, P. (2022). Jointly Optimizing Color Rendition and
+In-Camera Backgrounds in an RGB Virtual Production Stage. DigiPro '22, eq. 5.
+https://doi.org/10.1145/3543664.3543699
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ocio_vp.calibration.equations import predict_lit_chart
+
+__all__ = ["QFit", "QProblem"]
+
+
+@dataclass(frozen=True)
+class QProblem:
+    """The data of eq. 5 for one environment.
+
+    ``SRL`` is (n, 3, 3) as photographed (not divided by beta); ``target`` the (n, 3) p_j;
+    ``weights`` (n,) is 1 for patches to fit and 0 for excluded ones (e.g. clipped).
+    """
+
+    SL: np.ndarray
+    SRL: np.ndarray
+    beta: float
+    M: np.ndarray
+    w_avg: np.ndarray
+    target: np.ndarray
+    white_patch: int = 18
+    weights: np.ndarray | None = None
+
+    @property
+    def predicted(self) -> np.ndarray:
+        """(n, 3) the lit chart under M alone, eq. 3: the x_j that Q maps to p_j."""
+        return predict_lit_chart(self.SRL, self.beta, self.M, self.w_avg)
+
+    @property
+    def fit_weights(self) -> np.ndarray:
+        n = self.target.shape[0]
+        return np.ones(n) if self.weights is None else np.asarray(self.weights, dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class QFit:
+    """A solved post-correction; ``M`` set only by methods that also change the lighting."""
+
+    Q: np.ndarray
+    M: np.ndarray | None = None
+    notes: Mapping[str, Any] = field(default_factory=dict)

@@ -1,0 +1,53 @@
+"""The file formats people and other tools depend on: measurements and solutions.
+
+- :mod:`~ocio_vp.formats.measurements`: ``ocio-vp/measurements`` v1 (YAML/JSON), strictly validated;
+- :mod:`~ocio_vp.formats.solution`: ``solution.json``, one solved environment.
+"""
+
+from ocio_vp.formats.measurements import (
+    CHANNELS,
+    FORMAT,
+    SAFE_NAME,
+    VERSION,
+    Environment,
+    Measurements,
+    PanelGeometry,
+    Stage,
+    Validator,
+    check_safe_name,
+    load_measurements,
+    measurements_from_dict,
+    measurements_to_dict,
+    parse_stage,
+    read_document,
+    save_measurements,
+)
+from ocio_vp.formats.solution import (
+    SOLUTION_FORMAT,
+    Solution,
+    load_solution,
+    solution_to_json,
+)
+
+__all__ = [
+    "CHANNELS",
+    "FORMAT",
+    "SAFE_NAME",
+    "SOLUTION_FORMAT",
+    "VERSION",
+    "Environment",
+    "Measurements",
+    "PanelGeometry",
+    "Solution",
+    "Stage",
+    "Validator",
+    "check_safe_name",
+    "load_measurements",
+    "load_solution",
+    "measurements_from_dict",
+    "measurements_to_dict",
+    "parse_stage",
+    "read_document",
+    "save_measurements",
+    "solution_to_json",
+]

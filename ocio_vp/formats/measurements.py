@@ -1,0 +1,484 @@
+"""The measurements file (format ``ocio-vp/measurements``, version 1): load, validate, save.
+
+Other tools, scripts and people write this file, so it is a contract; ``docs/measurements.md``
+documents every key. Validation is strict: unknown keys are errors (typos are caught), and every
+error names the file, the key path and the problem.
+"""
+
+from __future__ import annotations
+
+import difflib
+import hashlib
+import json
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from ocio_vp.errors import InputError, format_key_path
+
+__all__ = [
+    "CHANNELS",
+    "FORMAT",
+    "SAFE_NAME",
+    "VERSION",
+    "Environment",
+    "Measurements",
+    "PanelGeometry",
+    "Stage",
+    "Validator",
+    "check_safe_name",
+    "load_measurements",
+    "measurements_from_dict",
+    "measurements_to_dict",
+    "parse_stage",
+    "read_document",
+    "save_measurements",
+]
+
+FORMAT = "ocio-vp/measurements"
+VERSION = 1
+CHANNELS = ("red", "green", "blue")
+#: Names that are safe as folder names and inside Tcl, C, YAML and OCIO names.
+SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
+
+
+@dataclass(frozen=True)
+class PanelGeometry:
+    """The calibration panel as seen from the chart, in metres (the chart faces the panel).
+
+    ``offset_x``/``offset_y`` move the panel centre sideways from the chart's normal.
+    """
+
+    width: float
+    height: float
+    distance: float
+    offset_x: float = 0.0
+    offset_y: float = 0.0
+
+
+@dataclass(frozen=True)
+class Stage:
+    """The stage section: name, how to get beta, the chart's white patch, camera colour space.
+
+    ``beta`` is ``None`` when the file gives panel geometry instead; use
+    :func:`ocio_vp.calibration.geometry.stage_beta` to resolve it.
+    """
+
+    name: str
+    panel: PanelGeometry | None = None
+    beta: float | None = None
+    white_patch: int = 18
+    white_reflectance: float = 0.9
+    camera_colorspace: str | None = None
+    #: Camera value at or above which a sample is clipped (optional; docs/stability.md).
+    clip_level: float | None = None
+
+
+@dataclass(frozen=True)
+class Environment:
+    """One real lighting environment: the target chart ``p_j`` and optional extras."""
+
+    name: str
+    target_chart: np.ndarray  # (n, 3)
+    w_avg: np.ndarray | None = None  # (3,)
+    black_level: np.ndarray | None = None  # (3,) b_camera
+
+
+@dataclass(frozen=True)
+class Measurements:
+    """Everything the solver needs, as float64 arrays.
+
+    ``SL`` is the 3x3 matrix [SL] of the paper (camera channels along rows, LED channels along
+    columns: column k is the camera RGB of primary k). ``SRL`` has shape (n, 3, 3): ``SRL[j]`` is
+    [SRL]_j, column k the camera RGB of patch j lit by LED channel k from the calibration panel,
+    *as photographed* (not yet divided by beta).
+    """
+
+    stage: Stage
+    SL: np.ndarray
+    SRL: np.ndarray
+    environments: tuple[Environment, ...]
+    ramps: Mapping[str, Any] | None = None
+    source: str | None = None
+    sha256: str | None = None
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def n_patches(self) -> int:
+        return int(self.SRL.shape[0])
+
+    def environment(self, name: str) -> Environment:
+        for environment in self.environments:
+            if environment.name == name:
+                return environment
+        names = ", ".join(e.name for e in self.environments)
+        raise InputError(f"no environment named {name!r} (have: {names})", source=self.source)
+
+
+# --------------------------------------------------------------------------------------------
+# Validation helpers: each takes the value, the source and the key path for its messages.
+
+
+class Validator:
+    """Checks values of a parsed document; every error names ``source`` and the key path.
+
+    Shared by the measurements and capture file loaders.
+    """
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+
+    def error(self, key: tuple[str | int, ...], problem: str) -> InputError:
+        return InputError(problem, source=self.source, key=format_key_path(*key) or None)
+
+    def mapping(
+        self,
+        value: Any,
+        key: tuple[str | int, ...],
+        required: tuple[str, ...],
+        optional: tuple[str, ...] = (),
+    ) -> Mapping[str, Any]:
+        if not isinstance(value, Mapping):
+            raise self.error(key, f"expected a mapping, got {_kind(value)}")
+        for name in required:
+            if name not in value:
+                raise self.error(key, f"missing required key {name!r}")
+        allowed = set(required) | set(optional)
+        for name in value:
+            if name not in allowed:
+                hint = difflib.get_close_matches(str(name), sorted(allowed), n=1)
+                suggestion = f" (did you mean {hint[0]!r}?)" if hint else ""
+                expected = ", ".join(sorted(allowed))
+                raise self.error(
+                    (*key, str(name)), f"unknown key{suggestion}; expected one of: {expected}"
+                )
+        return value
+
+    def number(
+        self, value: Any, key: tuple[str | int, ...], *, minimum: float = 0.0, strict: bool = False
+    ) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise self.error(key, f"expected a number, got {_kind(value)}")
+        number = float(value)
+        if not math.isfinite(number):
+            raise self.error(key, f"expected a finite number, got {value!r}")
+        if number < minimum or (strict and number == minimum):
+            relation = ">" if strict else ">="
+            raise self.error(key, f"expected a number {relation} {minimum:g}, got {value!r}")
+        return number
+
+    def rgb(self, value: Any, key: tuple[str | int, ...]) -> np.ndarray:
+        if not isinstance(value, (list, tuple)) or len(value) != 3:
+            raise self.error(key, f"expected [r, g, b], got {_kind(value)}")
+        out = np.array([self.number(v, (*key, i)) for i, v in enumerate(value)], dtype=np.float64)
+        return out
+
+    def chart(self, value: Any, key: tuple[str | int, ...], n: int | None) -> np.ndarray:
+        if not isinstance(value, (list, tuple)) or not value:
+            raise self.error(key, f"expected a list of [r, g, b] patches, got {_kind(value)}")
+        if n is not None and len(value) != n:
+            raise self.error(key, f"has {len(value)} patches, expected {n} like lit_chart.red")
+        return np.stack([self.rgb(v, (*key, i)) for i, v in enumerate(value)])
+
+    def name(self, value: Any, key: tuple[str | int, ...]) -> str:
+        if not isinstance(value, str) or not SAFE_NAME.match(value):
+            raise self.error(
+                key,
+                f"unsafe name {value!r}: use 1-64 letters, digits, '_' or '-', "
+                "starting with a letter or digit",
+            )
+        return value
+
+
+def _kind(value: Any) -> str:
+    if isinstance(value, (list, tuple)):
+        return f"a list of {len(value)}"
+    if value is None:
+        return "nothing"
+    return f"{type(value).__name__} {value!r}"[:60]
+
+
+def check_safe_name(value: Any, *, source: object = None, key: str | None = None) -> str:
+    """Return ``value`` if it is a safe environment/stage name, else raise :class:`InputError`."""
+    return Validator(str(source) if source else "input").name(value, (key or "name",))
+
+
+# --------------------------------------------------------------------------------------------
+
+
+def measurements_from_dict(
+    data: Any, *, source: str = "<measurements>", sha256: str | None = None
+) -> Measurements:
+    """Validate a parsed measurements document and return :class:`Measurements`.
+
+    Raises
+    ------
+    InputError
+        Naming ``source``, the key path and the problem, for any deviation from the format.
+    """
+    ctx = Validator(source)
+    top = ctx.mapping(
+        data,
+        (),
+        required=("format", "version", "stage", "primaries", "lit_chart", "environments"),
+        optional=("ramps",),
+    )
+    if top["format"] != FORMAT:
+        raise ctx.error(("format",), f"expected {FORMAT!r}, got {top['format']!r}")
+    if top["version"] != VERSION or isinstance(top["version"], bool):
+        raise ctx.error(
+            ("version",), f"this ocio-vp reads version {VERSION}, got {top['version']!r}"
+        )
+
+    stage = parse_stage(ctx, top["stage"])
+
+    primaries = ctx.mapping(top["primaries"], ("primaries",), required=CHANNELS)
+    SL = np.stack([ctx.rgb(primaries[c], ("primaries", c)) for c in CHANNELS], axis=1)
+
+    lit = ctx.mapping(top["lit_chart"], ("lit_chart",), required=CHANNELS)
+    red = ctx.chart(lit["red"], ("lit_chart", "red"), None)
+    n = len(red)
+    charts = [red] + [ctx.chart(lit[c], ("lit_chart", c), n) for c in CHANNELS[1:]]
+    SRL = np.stack(charts, axis=2)  # (n, camera channel, LED channel)
+
+    if not 0 <= stage.white_patch < n:
+        raise ctx.error(
+            ("stage", "white_patch"), f"index {stage.white_patch} is outside the {n} chart patches"
+        )
+
+    environments = _parse_environments(ctx, top["environments"], n)
+    ramps = None
+    if "ramps" in top:
+        from ocio_vp.wall.linearity import parse_ramps  # the optional section lives with its maths
+
+        ramps = parse_ramps(top["ramps"], source=source)
+    return Measurements(
+        stage=stage,
+        SL=SL,
+        SRL=SRL,
+        environments=environments,
+        ramps=ramps,
+        source=source,
+        sha256=sha256,
+    )
+
+
+def parse_stage(ctx: Validator, value: Any) -> Stage:
+    """Validate a ``stage`` section (also used by the capture file, which copies it)."""
+    key: tuple[str | int, ...] = ("stage",)
+    stage = ctx.mapping(
+        value,
+        key,
+        required=("name",),
+        optional=(
+            "calibration_panel",
+            "beta",
+            "white_patch",
+            "white_reflectance",
+            "camera_colorspace",
+            "clip_level",
+        ),
+    )
+    name = ctx.name(stage["name"], (*key, "name"))
+    panel = None
+    if "calibration_panel" in stage:
+        pkey = (*key, "calibration_panel")
+        raw = ctx.mapping(
+            stage["calibration_panel"],
+            pkey,
+            required=("width", "height", "distance"),
+            optional=("offset_x", "offset_y"),
+        )
+        panel = PanelGeometry(
+            width=ctx.number(raw["width"], (*pkey, "width"), strict=True),
+            height=ctx.number(raw["height"], (*pkey, "height"), strict=True),
+            distance=ctx.number(raw["distance"], (*pkey, "distance"), strict=True),
+            offset_x=ctx.number(raw.get("offset_x", 0.0), (*pkey, "offset_x"), minimum=-math.inf),
+            offset_y=ctx.number(raw.get("offset_y", 0.0), (*pkey, "offset_y"), minimum=-math.inf),
+        )
+    beta = None
+    if "beta" in stage:
+        beta = ctx.number(stage["beta"], (*key, "beta"), strict=True)
+        if beta > 1.0:
+            raise ctx.error((*key, "beta"), f"a form factor is at most 1, got {beta!r}")
+    if panel is None and beta is None:
+        raise ctx.error(key, "give either calibration_panel {width, height, distance} or beta")
+    white_patch = stage.get("white_patch", 18)
+    if isinstance(white_patch, bool) or not isinstance(white_patch, int):
+        raise ctx.error((*key, "white_patch"), f"expected a patch index, got {_kind(white_patch)}")
+    reflectance = ctx.number(
+        stage.get("white_reflectance", 0.9), (*key, "white_reflectance"), strict=True
+    )
+    if reflectance > 1.0:
+        raise ctx.error((*key, "white_reflectance"), f"expected at most 1, got {reflectance!r}")
+    camera = stage.get("camera_colorspace")
+    if camera is not None:
+        camera = _check_colourspace(ctx, camera, (*key, "camera_colorspace"))
+    clip_level = None
+    if "clip_level" in stage:
+        clip_level = ctx.number(stage["clip_level"], (*key, "clip_level"), strict=True)
+    return Stage(
+        name=name,
+        panel=panel,
+        beta=beta,
+        white_patch=white_patch,
+        white_reflectance=reflectance,
+        camera_colorspace=camera,
+        clip_level=clip_level,
+    )
+
+
+def _check_colourspace(ctx: Validator, value: Any, key: tuple[str | int, ...]) -> str:
+    import colour
+
+    names = sorted(colour.RGB_COLOURSPACES.keys())
+    if isinstance(value, str) and value in colour.RGB_COLOURSPACES:
+        return colour.RGB_COLOURSPACES[value].name
+    close = difflib.get_close_matches(str(value), names, n=3, cutoff=0.5)
+    hint = f"; close matches: {', '.join(close)}" if close else ""
+    raise ctx.error(key, f"unknown colour space {value!r} (colour.RGB_COLOURSPACES){hint}")
+
+
+def _parse_environments(ctx: Validator, value: Any, n: int) -> tuple[Environment, ...]:
+    if not isinstance(value, list) or not value:
+        raise ctx.error(("environments",), f"expected a non-empty list, got {_kind(value)}")
+    seen: dict[str, int] = {}
+    environments = []
+    for i, raw in enumerate(value):
+        key: tuple[str | int, ...] = ("environments", i)
+        env = ctx.mapping(
+            raw, key, required=("name", "target_chart"), optional=("w_avg", "black_level")
+        )
+        name = ctx.name(env["name"], (*key, "name"))
+        if name in seen:
+            raise ctx.error(
+                (*key, "name"), f"duplicate name {name!r} (also environments[{seen[name]}])"
+            )
+        seen[name] = i
+        target = ctx.chart(env["target_chart"], (*key, "target_chart"), n)
+        w_avg = ctx.rgb(env["w_avg"], (*key, "w_avg")) if "w_avg" in env else None
+        if w_avg is not None and not np.any(w_avg > 0):
+            raise ctx.error((*key, "w_avg"), "is black: the environment gives no light")
+        black = ctx.rgb(env["black_level"], (*key, "black_level")) if "black_level" in env else None
+        environments.append(
+            Environment(name=name, target_chart=target, w_avg=w_avg, black_level=black)
+        )
+    return tuple(environments)
+
+
+# --------------------------------------------------------------------------------------------
+# Files.
+
+
+def read_document(path: str | Path) -> tuple[Any, str]:
+    """Read a YAML or JSON file; returns the parsed data and the sha256 of its bytes.
+
+    Raises
+    ------
+    InputError
+        When the file is missing, unreadable, not UTF-8, or not valid YAML/JSON.
+    """
+    path = Path(path)
+    source = str(path)
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise InputError("file not found", source=source) from None
+    except OSError as error:
+        raise InputError(f"cannot read: {error.strerror}", source=source) from None
+    try:
+        text = raw.decode("utf-8")
+        if path.suffix.lower() == ".json":
+            data = json.loads(text)
+        else:
+            data = yaml.safe_load(text)
+    except UnicodeDecodeError:
+        raise InputError("not a UTF-8 text file", source=source) from None
+    except json.JSONDecodeError as error:
+        raise InputError(
+            f"invalid JSON at line {error.lineno}: {error.msg}", source=source
+        ) from None
+    except yaml.YAMLError as error:
+        mark = getattr(error, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark is not None else ""
+        problem = getattr(error, "problem", None) or "syntax error"
+        raise InputError(f"invalid YAML{where}: {problem}", source=source) from None
+    return data, hashlib.sha256(raw).hexdigest()
+
+
+def load_measurements(path: str | Path) -> Measurements:
+    """Load and validate a measurements file (``.yaml``/``.yml`` or ``.json``).
+
+    Raises
+    ------
+    InputError
+        When the file is missing, unreadable, not YAML/JSON, or not a valid measurements file.
+    """
+    data, sha256 = read_document(path)
+    return measurements_from_dict(data, source=str(path), sha256=sha256)
+
+
+def measurements_to_dict(measurements: Measurements) -> dict[str, Any]:
+    """The inverse of :func:`measurements_from_dict` (plain Python types, file key order)."""
+    stage = measurements.stage
+    stage_dict: dict[str, Any] = {"name": stage.name}
+    if stage.panel is not None:
+        panel = {
+            "width": stage.panel.width,
+            "height": stage.panel.height,
+            "distance": stage.panel.distance,
+        }
+        if stage.panel.offset_x or stage.panel.offset_y:
+            panel.update(offset_x=stage.panel.offset_x, offset_y=stage.panel.offset_y)
+        stage_dict["calibration_panel"] = panel
+    if stage.beta is not None:
+        stage_dict["beta"] = stage.beta
+    stage_dict["white_patch"] = stage.white_patch
+    stage_dict["white_reflectance"] = stage.white_reflectance
+    if stage.camera_colorspace is not None:
+        stage_dict["camera_colorspace"] = stage.camera_colorspace
+    if stage.clip_level is not None:
+        stage_dict["clip_level"] = stage.clip_level
+
+    def rows(array: np.ndarray) -> list[list[float]]:
+        return [[float(v) for v in row] for row in np.asarray(array, dtype=np.float64)]
+
+    data: dict[str, Any] = {
+        "format": FORMAT,
+        "version": VERSION,
+        "stage": stage_dict,
+        "primaries": {c: rows(measurements.SL.T)[k] for k, c in enumerate(CHANNELS)},
+        "lit_chart": {c: rows(measurements.SRL[:, :, k]) for k, c in enumerate(CHANNELS)},
+        "environments": [],
+    }
+    for env in measurements.environments:
+        entry: dict[str, Any] = {"name": env.name, "target_chart": rows(env.target_chart)}
+        if env.w_avg is not None:
+            entry["w_avg"] = rows(env.w_avg[None])[0]
+        if env.black_level is not None:
+            entry["black_level"] = rows(env.black_level[None])[0]
+        data["environments"].append(entry)
+    if measurements.ramps is not None:
+        from ocio_vp.wall.linearity import ramps_to_dict
+
+        data["ramps"] = ramps_to_dict(measurements.ramps)
+    return data
+
+
+def save_measurements(measurements: Measurements, path: str | Path) -> None:
+    """Write a measurements file; YAML unless ``path`` ends in ``.json``. Floats round-trip."""
+    from ocio_vp.staging import write_file_atomically
+
+    data = measurements_to_dict(measurements)
+    path = Path(path)
+    if path.suffix.lower() == ".json":
+        text = json.dumps(data, indent=2) + "\n"
+    else:
+        text = yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
+    write_file_atomically(path, text)

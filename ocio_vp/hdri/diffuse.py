@@ -1,0 +1,279 @@
+"""w_avg from an equirectangular HDRI: the diffuse integral of the frontal hemisphere.
+
+Public functions (other modules build on these; names are stable):
+
+- ``equirect_solid_angles(height, width) -> (height, width)``: exact solid angle of each pixel
+  of a latitude-longitude image (sums to 4 pi).
+- ``equirect_directions(height, width) -> (height, width, 3)``: unit direction of each pixel
+  centre (convention below).
+- ``diffuse_integral(image, *, normal=FRONT) -> (channels,)``: ``(1/pi) sum L cos+ dOmega``
+  over an in-memory (height, width, channels) equirectangular image.
+- ``read_equirect(path, *, width=DEFAULT_HDRI_WIDTH) -> (height, width, 3)``: read an HDRI
+  with OpenImageIO at a chosen resolution (a MIP level when the file has one, else a box
+  resize); ``width=None`` reads the full resolution.
+- ``w_avg_from_hdri(path, *, width=DEFAULT_HDRI_WIDTH, normal=FRONT) -> (3,)``: the paper's
+  w_avg from an HDRI file.
+- ``environments_with_hdri(measurements, environments, ["ENV=FILE", ...], width=)``: what
+  ``ocio-vp solve --hdri ENV=FILE`` does (w_avg of those environments from their HDRI).
+
+Convention: y is up; row 0 is the zenith, the last row the nadir; the centre of the image
+(u = 0.5, v = 0.5) looks along +z (:data:`FRONT`), and u increasing turns towards +x. A pixel
+at (u, v) in [0, 1)^2 has polar angle ``theta = pi v`` from +y and azimuth ``phi = 2 pi (u -
+0.5)`` from +z, direction ``(sin theta sin phi, cos theta, sin theta cos phi)``.
+
+The HDRI must hold the same linear RGB as the measurements (the camera's native linear RGB,
+as in the paper): no colour conversion is applied here.
+
+References
+----------
+LeGendre, C., Lepicovsky, L., Debevec, P. (2022). Jointly Optimizing Color Rendition and
+In-Camera Backgrounds in an RGB Virtual Production Stage. DigiPro '22, Section 3.3 ("the
+diffuse integral of the frontal hemisphere of the HDRI map", w_avg).
+https://doi.org/10.1145/3543664.3543699
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ocio_vp.errors import InputError
+
+__all__ = [
+    "DEFAULT_HDRI_WIDTH",
+    "FRONT",
+    "diffuse_integral",
+    "environments_with_hdri",
+    "equirect_directions",
+    "equirect_solid_angles",
+    "read_equirect",
+    "w_avg_from_hdri",
+]
+
+#: Default working width for w_avg: benchmarks/bench_wavg.py measures the error of each width
+#: against a closed form (docs/performance.md); 1024 wide stays well under 0.1% with a small sun.
+DEFAULT_HDRI_WIDTH = 1024
+
+#: The direction of the image centre, the default normal of the chart.
+FRONT = (0.0, 0.0, 1.0)
+
+_ROWS_PER_BLOCK = 256  # bounds the temporary (rows, width) arrays at 8K to a few MB
+
+
+def _angles(height: int, width: int) -> tuple[np.ndarray, np.ndarray]:
+    theta = (np.arange(height, dtype=np.float64) + 0.5) * (np.pi / height)
+    phi = ((np.arange(width, dtype=np.float64) + 0.5) / width - 0.5) * (2.0 * np.pi)
+    return theta, phi
+
+
+def equirect_solid_angles(height: int, width: int) -> np.ndarray:
+    """Solid angle (steradians) of each pixel of an equirectangular image.
+
+    Exact for the lat-long cell: a row between polar angles theta0 and theta1 spans
+    ``(2 pi / width) (cos theta0 - cos theta1)``. The values sum to 4 pi.
+
+    Examples
+    --------
+    >>> round(float(equirect_solid_angles(4, 8).sum() / np.pi), 12)
+    4.0
+    """
+    if height < 1 or width < 1:
+        raise ValueError(f"expected height, width >= 1, got {height}, {width}")
+    edges = np.cos(np.arange(height + 1, dtype=np.float64) * (np.pi / height))
+    row = (edges[:-1] - edges[1:]) * (2.0 * np.pi / width)
+    return np.broadcast_to(row[:, None], (height, width)).copy()
+
+
+def equirect_directions(height: int, width: int) -> np.ndarray:
+    """(height, width, 3) unit direction of each pixel centre (module convention)."""
+    theta, phi = _angles(height, width)
+    st = np.sin(theta)[:, None]
+    return np.stack(
+        [
+            st * np.sin(phi)[None, :],
+            np.broadcast_to(np.cos(theta)[:, None], (height, width)),
+            st * np.cos(phi)[None, :],
+        ],
+        axis=-1,
+    )
+
+
+def _unit(normal: ArrayLike) -> np.ndarray:
+    n = np.asarray(normal, dtype=np.float64).reshape(-1)
+    norm = float(np.linalg.norm(n)) if n.shape == (3,) else 0.0
+    if not np.isfinite(norm) or norm == 0.0:
+        raise InputError(f"the normal must be a non-zero 3-vector, got {normal!r}")
+    return n / norm
+
+
+def diffuse_integral(image: ArrayLike, *, normal: ArrayLike = FRONT) -> np.ndarray:
+    """The diffuse integral ``(1/pi) integral L(w) max(0, n.w) dw`` of an equirectangular image.
+
+    This is the paper's w_avg (Section 3.3): the radiance a perfect white Lambertian patch
+    facing ``normal`` would show. A uniform sky of radiance L gives exactly L; a small source
+    of radiance L and solid angle Omega at angle t from the normal gives ``L Omega cos(t) / pi``.
+
+    Parameters
+    ----------
+    image
+        (height, width, channels) linear radiance in lat-long layout (module convention).
+    normal
+        Direction the patch faces (it receives light from that hemisphere); default the image
+        centre, :data:`FRONT`.
+
+    Returns
+    -------
+    numpy.ndarray
+        (channels,) float64.
+
+    Examples
+    --------
+    >>> sky = np.full((32, 64, 3), 2.0)
+    >>> np.round(diffuse_integral(sky), 3).tolist()  # uniform sky -> its radiance
+    [2.0, 2.0, 2.0]
+    """
+    img = np.asarray(image)
+    if img.ndim != 3:
+        raise ValueError(f"expected an image of shape (height, width, channels), got {img.shape}")
+    n = _unit(normal)
+    height, width, channels = img.shape
+    theta, phi = _angles(height, width)
+    row_omega = equirect_solid_angles(height, 1)[:, 0] / width
+    # n.w = sin(theta) (nx sin(phi) + nz cos(phi)) + ny cos(theta): separable, so no
+    # (height, width, 3) direction array is ever built.
+    azimuthal = n[0] * np.sin(phi) + n[2] * np.cos(phi)
+    total = np.zeros(channels, dtype=np.float64)
+    for start in range(0, height, _ROWS_PER_BLOCK):
+        rows = slice(start, min(start + _ROWS_PER_BLOCK, height))
+        cosine = (
+            np.sin(theta[rows])[:, None] * azimuthal[None, :] + n[1] * np.cos(theta[rows])[:, None]
+        )
+        weight = np.maximum(cosine, 0.0) * row_omega[rows, None]
+        total += np.einsum("hw,hwc->c", weight, img[rows].astype(np.float64, copy=False))
+    return total / np.pi
+
+
+def read_equirect(path: str | Path, *, width: int | None = DEFAULT_HDRI_WIDTH) -> np.ndarray:
+    """Read the RGB of an equirectangular HDRI with OpenImageIO at about ``width`` pixels wide.
+
+    When the file has a MIP level of exactly that width it is read directly (no decode of the
+    full image); otherwise the nearest larger level is box-filtered down with
+    ``ImageBufAlgo.resize`` (a box filter keeps a bright sun's energy: no negative lobes).
+    ``width=None`` or a width at least the file's reads the full resolution.
+
+    Raises
+    ------
+    InputError
+        Missing/unreadable file, fewer than 3 channels, not 2:1, or non-finite pixels.
+    """
+    import OpenImageIO as oiio
+
+    source = str(path)
+    if not Path(source).is_file():
+        raise InputError("no such HDRI file", source=source)
+    inp = oiio.ImageInput.open(source)
+    if inp is None:
+        raise InputError(f"cannot read the HDRI: {oiio.geterror()}", source=source)
+    try:
+        levels = []
+        while inp.seek_subimage(0, len(levels)):
+            spec = inp.spec()
+            levels.append((spec.width, spec.height, spec.nchannels))
+    finally:
+        inp.close()
+    full_w, full_h, nchannels = levels[0]
+    if nchannels < 3:
+        raise InputError(f"an HDRI needs RGB, the file has {nchannels} channel(s)", source=source)
+    if abs(full_w - 2 * full_h) > 1:
+        raise InputError(f"not an equirectangular (2:1) image: {full_w}x{full_h}", source=source)
+    if width is not None and width < 4:
+        raise InputError(f"the HDRI width must be >= 4, got {width}", source=source, key="width")
+    target = full_w if width is None else min(int(width), full_w)
+    level = max(i for i, (w, _, _) in enumerate(levels) if w >= target)
+    buf = oiio.ImageBuf(source, 0, level)
+    if target != levels[level][0]:
+        roi = oiio.ROI(0, target, 0, max(1, round(target * full_h / full_w)), 0, 1, 0, 3)
+        buf = oiio.ImageBufAlgo.resize(buf, "box", 0.0, roi)
+    pixels = buf.get_pixels(oiio.FLOAT)
+    if buf.has_error or pixels is None:
+        raise InputError(f"cannot read the HDRI: {buf.geterror()}", source=source)
+    pixels = np.asarray(pixels, dtype=np.float32)
+    pixels = pixels.reshape(pixels.shape[0], pixels.shape[1], -1)[..., :3]
+    if not np.all(np.isfinite(pixels)):
+        raise InputError("the HDRI has NaN or infinite pixels", source=source)
+    return pixels
+
+
+def w_avg_from_hdri(
+    path: str | Path, *, width: int | None = DEFAULT_HDRI_WIDTH, normal: ArrayLike = FRONT
+) -> np.ndarray:
+    """The paper's w_avg (Section 3.3) from an equirectangular HDRI file.
+
+    Reads the HDRI at ``width`` (see :func:`read_equirect`) and returns
+    :func:`diffuse_integral` about ``normal``: the value a chart's white patch would show
+    divided by its reflectance, when the chart stands at the HDRI's centre of projection.
+
+    Returns
+    -------
+    numpy.ndarray
+        (3,) float64 RGB, in the HDRI's linear RGB.
+    """
+    return diffuse_integral(read_equirect(path, width=width), normal=normal)
+
+
+def environments_with_hdri(
+    measurements, environments, hdri: Sequence[str], *, width: int | None = DEFAULT_HDRI_WIDTH
+) -> tuple[tuple, list[str]]:
+    """Give each environment named in ``hdri`` (``ENV=FILE`` items) the w_avg of its HDRI.
+
+    An HDRI belongs to one lighting environment, so each item names it; a bare ``FILE`` is
+    accepted only when exactly one environment is being solved. The HDRI's w_avg replaces the
+    file's ``w_avg`` and the white-patch estimate for that environment.
+
+    Returns
+    -------
+    tuple
+        The environments (others unchanged) and one line per HDRI comparing its w_avg with the
+        white-patch estimate, for the user.
+    """
+    from ocio_vp.calibration.geometry import w_avg_from_white_patch
+
+    by_name = {env.name: env for env in environments}
+    chosen: dict[str, str] = {}
+    for item in hdri:
+        name, sep, path = item.partition("=")
+        if not sep:
+            if len(environments) != 1:
+                raise InputError(
+                    f"name the environment: --hdri ENV=FILE (solving {len(environments)})",
+                    key="--hdri",
+                )
+            name, path = environments[0].name, item
+        if name not in by_name:
+            raise InputError(
+                f"no environment {name!r} is being solved; known: {', '.join(by_name)}",
+                key="--hdri",
+            )
+        if name in chosen:
+            raise InputError(f"two HDRIs for environment {name!r}", key="--hdri")
+        chosen[name] = path
+    notes = []
+    out = []
+    for env in environments:
+        if env.name in chosen:
+            w_avg = w_avg_from_hdri(chosen[env.name], width=width)
+            stage = measurements.stage
+            patch = w_avg_from_white_patch(
+                env.target_chart, stage.white_patch, stage.white_reflectance
+            )
+            notes.append(
+                f"{env.name}: w_avg from {chosen[env.name]} = {np.round(w_avg, 5).tolist()} "
+                f"(white patch / reflectance gives {np.round(patch, 5).tolist()})"
+            )
+            env = dataclasses.replace(env, w_avg=w_avg)
+        out.append(env)
+    return tuple(out), notes

@@ -1,0 +1,454 @@
+"""Fit an HDRI under the wall's peak: energy-preserving dilation of over-range light sources.
+
+LED panels cannot emit more than their peak, yet the paper assumes the stage shows the full
+dynamic range of the HDRI without clipping light sources (Section 3.2, "HDRI Map Acquisition
+and Display"; the authors spread bright sources with an energy-preserving dilation). Clipping
+a sun of 3000x the white level would remove most of the environment's key light and change
+w_avg; this module instead moves the *excess* of every over-range source into the pixels
+closest to it, so that
+
+- no pixel exceeds ``peak`` in any channel (the wall's limit is per LED channel);
+- the total solid-angle-weighted energy ``sum L dOmega`` is unchanged, per channel;
+- the excess keeps the source's own colour (no coloured fringes), so the diffuse integral
+  w_avg keeps its chromaticity, and the energy stays as close to the source as the peak
+  allows, so w_avg changes only by the second-order shrink below.
+
+Algorithm (distance-ordered spreading, one source at a time, largest first): over-range
+pixels are grouped into 8-connected sources (wrapping across the longitude seam). A source's
+pixels are scaled down to the peak (keeping their chromaticity); the removed RGB energy ``X``
+is spread with colour ``c = X / max(X)`` into the pixels in order of their angular distance to
+the source (true angles on the sphere), each filled up to the largest ``t`` with
+``L + t c <= peak`` in every channel, until ``sum t dOmega = max(X)``. The filled region is
+therefore the most compact one the peak allows: a disc of radius about
+``sqrt(Omega_needed / pi)`` for a compact source. Everything is vectorised per source (a
+window around it, a KD-tree for distances, one sort and one cumulative sum).
+
+Limit (a property of the sphere, not of the method): spreading a source over a cap of solid
+angle ``A`` keeps its energy but shortens its mean direction by about ``A / (4 pi)``, so for a
+normal facing the source w_avg drops by about ``E_source cos(t) A / (4 pi)`` (relative: that
+over w_avg). No non-negative spreading avoids it; the most compact one minimises it.
+``docs/hdri.md`` gives numbers.
+
+References
+----------
+LeGendre, C., Lepicovsky, L., Debevec, P. (2022). Jointly Optimizing Color Rendition and
+In-Camera Backgrounds in an RGB Virtual Production Stage. DigiPro '22, Section 3.2.
+https://doi.org/10.1145/3543664.3543699
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ocio_vp.errors import InputError
+from ocio_vp.hdri.diffuse import diffuse_integral, equirect_solid_angles
+
+__all__ = [
+    "PreparedHDRI",
+    "SpreadSource",
+    "fit_under_peak",
+    "label_sources",
+    "minimum_cap_radius_deg",
+    "prepare_hdri_file",
+    "round_down_to",
+]
+
+
+@dataclass(frozen=True)
+class SpreadSource:
+    """One over-range source and where its excess went.
+
+    ``direction`` is the energy-weighted centre (unit vector, :mod:`ocio_vp.hdri.diffuse` convention);
+    ``radius_deg`` the largest angle from the source's own pixels to a pixel that received
+    energy; ``centre_radius_deg`` the largest angle from ``direction`` to such a pixel.
+    """
+
+    pixels: int
+    energy: np.ndarray
+    excess: np.ndarray
+    direction: np.ndarray
+    radius_deg: float
+    centre_radius_deg: float
+    filled_pixels: int
+
+
+@dataclass(frozen=True)
+class PreparedHDRI:
+    """The displayable map and a record of what was moved."""
+
+    image: np.ndarray
+    peak: float
+    sources: tuple[SpreadSource, ...] = field(default_factory=tuple)
+    #: {name: (w_avg before, w_avg after)} for the normals asked of :func:`prepare_hdri_file`.
+    w_avg: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+
+    @property
+    def max_radius_deg(self) -> float:
+        return max((s.radius_deg for s in self.sources), default=0.0)
+
+
+def minimum_cap_radius_deg(excess: float, capacity: float) -> float:
+    """Angular radius of the spherical cap whose ``capacity * solid angle`` equals ``excess``.
+
+    The lower bound on a spread around a point source over a uniform background with room
+    ``capacity = peak - background``: ``2 pi (1 - cos r) capacity = excess``.
+
+    Examples
+    --------
+    >>> round(minimum_cap_radius_deg(2 * np.pi, 1.0), 6)  # a hemisphere
+    90.0
+    """
+    c = 1.0 - float(excess) / (2.0 * np.pi * float(capacity))
+    return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
+
+
+def round_down_to(value: float, dtype: np.dtype | type) -> float:
+    """The largest number representable in ``dtype`` that is <= ``value``."""
+    v = np.asarray(value, dtype=dtype)
+    if float(v) > value:
+        v = np.nextafter(v, np.asarray(-np.inf, dtype=dtype))
+    return float(v)
+
+
+def label_sources(over: np.ndarray) -> tuple[np.ndarray, int]:
+    """8-connected components of a lat-long mask, joined across the longitude seam.
+
+    Returns ``(labels, count)`` like :func:`scipy.ndimage.label`, labels 1..count.
+    """
+    from scipy import ndimage
+
+    labels, count = ndimage.label(over, structure=np.ones((3, 3), dtype=bool))
+    if count == 0 or over.shape[1] < 2:
+        return labels, count
+    parent = np.arange(count + 1)
+
+    def find(a: int) -> int:
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = int(parent[a])
+        return a
+
+    left, right = labels[:, 0], labels[:, -1]
+    for shift in (-1, 0, 1):  # column 0 touches column W-1 in rows r-1, r, r+1
+        r = np.roll(right, shift)
+        if shift == -1:
+            r[-1] = 0
+        elif shift == 1:
+            r[0] = 0
+        for a, b in {(int(x), int(y)) for x, y in zip(left, r, strict=True) if x and y}:
+            ra, rb = find(a), find(b)
+            if ra != rb:
+                parent[max(ra, rb)] = min(ra, rb)
+    roots = np.array([find(i) for i in range(count + 1)])
+    _, dense = np.unique(roots, return_inverse=True)  # root 0 stays 0 (background)
+    return dense[labels], int(dense.max())
+
+
+def _check_map(rgb: np.ndarray, peak: float) -> None:
+    if rgb.ndim != 3 or rgb.shape[2] != 3:
+        raise InputError(f"expected an (height, width, 3) image, got shape {rgb.shape}")
+    height, width = rgb.shape[:2]
+    if height < 2 or width != 2 * height:
+        raise InputError(f"not an equirectangular (2:1) map: {width}x{height}")
+    if not (np.isfinite(peak) and peak > 0):
+        raise InputError(f"the peak must be a number > 0, got {peak!r}", key="--peak")
+
+
+def fit_under_peak(
+    rgb: ArrayLike, *, peak: float, storage_dtype: np.dtype | type | None = None
+) -> PreparedHDRI:
+    """Spread the excess of over-range sources so that no channel of any pixel exceeds ``peak``.
+
+    Parameters
+    ----------
+    rgb
+        (height, width, 3) linear equirectangular map, width = 2 height (:mod:`ocio_vp.hdri.diffuse`
+        layout). Not modified.
+    peak
+        The largest value the wall can show, in the map's units (> 0).
+    storage_dtype
+        The type the result will be stored in (e.g. ``np.float16`` for a half EXR): the peak
+        is rounded down to it (and to the working type) so that no stored value exceeds it.
+
+    Returns
+    -------
+    PreparedHDRI
+        The map (float32 if the input was float32, else float64) and one
+        :class:`SpreadSource` per over-range source, largest first.
+
+    Raises
+    ------
+    InputError
+        When the map is not 2:1, has non-finite values, ``peak <= 0``, or cannot fit: its
+        solid-angle-weighted mean of ``max(R, G, B)`` exceeds ``peak`` (then even a uniform map
+        at the peak holds less energy).
+
+    Examples
+    --------
+    >>> sky = np.full((16, 32, 3), 0.25); sky[8, 16] = 40.0
+    >>> out = fit_under_peak(sky, peak=1.0)
+    >>> bool(out.image.max() <= 1.0), len(out.sources)
+    (True, 1)
+    """
+    src = np.asarray(rgb)
+    _check_map(src, float(peak))
+    out = src.astype(np.float32 if src.dtype == np.float32 else np.float64, copy=True)
+    # Values are computed in float64 and rounded to out.dtype; a peak representable in that
+    # dtype keeps every rounded value <= peak (rounding is monotonic).
+    requested = float(peak)
+    peak = round_down_to(requested, out.dtype)
+    if storage_dtype is not None:
+        peak = min(peak, round_down_to(requested, storage_dtype))
+    height, width = out.shape[:2]
+    row_omega = equirect_solid_angles(height, 1)[:, 0] / width
+    brightness = np.maximum(np.maximum(out[..., 0], out[..., 1]), out[..., 2])
+    if not np.all(np.isfinite(brightness)):
+        raise InputError("the map has NaN or infinite pixels")
+    over = brightness > peak
+    if not over.any():
+        return PreparedHDRI(image=out, peak=peak)
+    mean = float(row_omega @ brightness.sum(axis=1, dtype=np.float64)) / (4.0 * np.pi)
+    if mean > peak:
+        raise InputError(
+            f"the map cannot fit under peak {requested:g}: its solid-angle-weighted mean "
+            f"max(R,G,B) is {mean:.6g}, above the peak (lower the exposure or raise --peak)",
+            key="--peak",
+        )
+    del brightness
+    # Label only the band of rows that holds over-range pixels (a sun is a few rows of 4096).
+    band = np.flatnonzero(over.any(axis=1))
+    first, last = int(band[0]), int(band[-1]) + 1
+    labels, count = label_sources(over[first:last])
+    flat = np.flatnonzero(labels) + first * width
+    lab = labels.ravel()[flat - first * width]
+    order = np.argsort(lab, kind="stable")
+    flat, lab = flat[order], lab[order]
+    bounds = np.flatnonzero(np.diff(lab)) + 1
+    groups = np.split(flat, bounds)
+
+    # Remove each source's excess first (scale its pixels to the peak, chromaticity kept), so a
+    # source never spreads into a neighbour that is still over range.
+    pending = []
+    for idx in groups:
+        rows, cols = np.divmod(idx, width)
+        v = out[rows, cols].astype(np.float64)
+        scale = peak / v.max(axis=1)
+        omega = row_omega[rows][:, None]
+        moved = v * (1.0 - scale[:, None]) * omega
+        excess = moved.sum(axis=0)
+        energy = (v * omega).sum(axis=0)
+        out[rows, cols] = (v * scale[:, None]).astype(out.dtype)
+        pending.append((float(excess.max()), rows, cols, energy, excess, moved.max(axis=1)))
+    pending.sort(key=lambda p: -p[0])
+    sources = tuple(
+        _spread(out, rows, cols, energy, excess, weight, peak=peak, row_omega=row_omega)
+        for _, rows, cols, energy, excess, weight in pending
+    )
+    return PreparedHDRI(image=out, peak=peak, sources=sources)
+
+
+def _directions(theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    theta, phi = np.broadcast_arrays(theta, phi)
+    st = np.sin(theta)
+    return np.stack([st * np.sin(phi), np.cos(theta), st * np.cos(phi)], axis=-1)
+
+
+def _spread(
+    out: np.ndarray,
+    rows: np.ndarray,
+    cols: np.ndarray,
+    energy: np.ndarray,
+    excess: np.ndarray,
+    weight: np.ndarray,
+    *,
+    peak: float,
+    row_omega: np.ndarray,
+) -> SpreadSource:
+    """Fill the pixels nearest to one source with its excess (see the module docstring)."""
+    from scipy.spatial import cKDTree
+
+    height, width = out.shape[:2]
+    amount = float(excess.max())
+    if not amount > 0:  # only possible with large negative values beside the source
+        raise InputError("an over-range source has no positive excess: negative pixels beside it")
+    colour = excess / amount
+    theta = (rows + 0.5) * (np.pi / height)
+    phi = ((cols + 0.5) / width - 0.5) * (2.0 * np.pi)
+    dirs = _directions(theta, phi)
+    centre = (dirs * weight[:, None]).sum(axis=0)  # excess-weighted centre of the source
+    norm = float(np.linalg.norm(centre))
+    centre = centre / norm if norm > 0 else dirs[np.argmax(weight)]
+    source_radius = float(np.arccos(np.clip(dirs @ centre, -1.0, 1.0)).max())
+    tree = cKDTree(dirs)
+    theta_c = float(np.arccos(np.clip(centre[1], -1.0, 1.0)))
+    phi_c = float(np.arctan2(centre[0], centre[2]))
+    # First guess: the cap the excess needs on a black background, then grow.
+    reach = np.radians(minimum_cap_radius_deg(amount, peak)) + np.radians(0.1)
+    while True:
+        outer = min(np.pi, source_radius + reach)
+        r0 = max(0, int(np.floor((theta_c - outer) / np.pi * height)))
+        r1 = min(height, int(np.ceil((theta_c + outer) / np.pi * height)) + 1)
+        near_pole = theta_c - outer <= 0.0 or theta_c + outer >= np.pi
+        sin_t = np.sin(theta_c)
+        if near_pole or outer >= np.pi / 2 or np.sin(outer) >= sin_t:
+            wcols = np.arange(width)
+        else:
+            half = np.arcsin(np.sin(outer) / sin_t)  # longitude half-width of the cap
+            c0 = int(np.floor((phi_c - half) / (2 * np.pi) * width + width / 2)) - 1
+            c1 = int(np.ceil((phi_c + half) / (2 * np.pi) * width + width / 2)) + 1
+            wcols = np.arange(c0, c1 + 1) % width
+            wcols = np.unique(wcols) if wcols.size >= width else wcols
+        wrows = np.arange(r0, r1)
+        th = (wrows + 0.5) * (np.pi / height)
+        ph = ((wcols + 0.5) / width - 0.5) * (2.0 * np.pi)
+        # d.centre is separable in (theta, phi): no (rows, cols, 3) array for the whole window.
+        azimuthal = centre[0] * np.sin(ph) + centre[2] * np.cos(ph)
+        cosine = np.sin(th)[:, None] * azimuthal[None, :] + centre[1] * np.cos(th)[:, None]
+        rr, cc = np.nonzero(cosine >= np.cos(outer))
+        chord, _ = tree.query(_directions(th[rr], ph[cc]), k=1)
+        dist = 2.0 * np.arcsin(np.clip(chord / 2.0, 0.0, 1.0))
+        keep = dist <= reach
+        rr, cc, dist = wrows[rr[keep]], wcols[cc[keep]], dist[keep]
+        current = out[rr, cc].astype(np.float64)
+        room = np.full(rr.shape, np.inf)
+        for k in range(3):
+            if colour[k] > 0:
+                room = np.minimum(room, (peak - current[:, k]) / colour[k])
+        room = np.maximum(room, 0.0)
+        capacity = room * row_omega[rr]
+        order = np.argsort(dist, kind="stable")
+        cumulative = np.cumsum(capacity[order])
+        if cumulative.size and cumulative[-1] >= amount:
+            break
+        if reach >= np.pi:
+            raise InputError(
+                f"the map cannot fit under peak {peak:.9g}: no room left for a source's excess",
+                key="--peak",
+            )
+        # Grow to the cap the excess needs at the room density seen so far (plus a margin).
+        density = capacity.sum() / max(row_omega[rr].sum(), 1e-300)
+        needed = np.radians(minimum_cap_radius_deg(amount, density)) if density > 0 else np.pi
+        reach = min(np.pi, max(reach * 1.25, 1.1 * needed + source_radius))
+    last = int(np.searchsorted(cumulative, amount))
+    fill = np.zeros(order.size)
+    fill[order[:last]] = room[order[:last]]
+    before = cumulative[last - 1] if last > 0 else 0.0
+    fill[order[last]] = (amount - before) / row_omega[rr[order[last]]]
+    touched = fill > 0
+    rr, cc, fill = rr[touched], cc[touched], fill[touched]
+    out[rr, cc] = (out[rr, cc].astype(np.float64) + fill[:, None] * colour).astype(out.dtype)
+    filled_dirs = _directions((rr + 0.5) * (np.pi / height), ((cc + 0.5) / width - 0.5) * 2 * np.pi)
+    return SpreadSource(
+        pixels=int(rows.size),
+        energy=energy,
+        excess=excess,
+        direction=centre,
+        radius_deg=float(np.degrees(dist[order[last]])),
+        centre_radius_deg=float(
+            np.degrees(np.arccos(np.clip(filled_dirs @ centre, -1.0, 1.0)).max())
+        ),
+        filled_pixels=int(touched.sum()),
+    )
+
+
+def _rgb_channels(names: list[str], source: str) -> list[int]:
+    lower = [n.lower() for n in names]
+    if all(c in lower for c in "rgb"):
+        return [lower.index(c) for c in "rgb"]
+    if len(names) >= 3:  # unnamed channels: the first three are RGB (OIIO's convention)
+        return [0, 1, 2]
+    raise InputError(f"an HDRI needs RGB, the file has channels {names}", source=source)
+
+
+def prepare_hdri_file(
+    in_path: str | Path,
+    out_path: str | Path,
+    *,
+    peak: float,
+    normals: dict[str, ArrayLike] | None = None,
+) -> PreparedHDRI:
+    """Read an equirectangular HDRI, :func:`fit_under_peak` its RGB, write it (atomically).
+
+    Other channels (alpha, depth...) pass through untouched; metadata is copied and
+    ``ocio_vp:prepare_hdri`` records the peak. The output keeps the input's pixel type when it
+    is half or float (integer inputs are written as half) and its EXR compression (else zip).
+
+    ``normals`` ({name: direction}) fills :attr:`PreparedHDRI.w_avg` with the diffuse integral
+    (:func:`ocio_vp.hdri.diffuse.diffuse_integral`) before and after.
+
+    Raises
+    ------
+    InputError
+        Missing or unreadable file, not 2:1, no RGB, non-finite pixels, ``peak <= 0``, a map
+        that cannot fit, or an output format OpenImageIO cannot write. Nothing is written then.
+    """
+    import OpenImageIO as oiio
+
+    source, target = str(in_path), Path(out_path)
+    if not (np.isfinite(peak) and peak > 0):
+        raise InputError(f"the peak must be a number > 0, got {peak!r}", key="--peak")
+    if not Path(source).is_file():
+        raise InputError("no such file", source=source)
+    probe = oiio.ImageOutput.create(str(target))
+    if probe is None:
+        oiio.geterror()
+        raise InputError("OpenImageIO cannot write this file type", source=str(target))
+    inp = oiio.ImageInput.open(source)
+    if inp is None:
+        raise InputError(f"not an image OpenImageIO can read ({oiio.geterror()})", source=source)
+    try:
+        spec = oiio.ImageSpec(inp.spec())
+        pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
+        error = inp.geterror()
+    finally:
+        inp.close()
+    if pixels is None or error:
+        raise InputError(f"cannot read the image: {error or 'no pixels'}", source=source)
+    pixels = np.asarray(pixels, dtype=np.float32).reshape(spec.height, spec.width, -1)
+    rgb_index = _rgb_channels(list(spec.channelnames), source)
+    half = oiio.TypeDesc(oiio.HALF)
+    out_format = spec.format if spec.format.basetype in (oiio.HALF, oiio.FLOAT) else half
+    storage = np.float16 if out_format.basetype == oiio.HALF else np.float32
+    try:
+        prepared = fit_under_peak(pixels[..., rgb_index], peak=peak, storage_dtype=storage)
+    except InputError as err:
+        raise InputError(err.problem, source=source, key=err.key) from None
+    w_avg = {
+        name: (diffuse_integral(pixels[..., rgb_index], normal=n), None)
+        for name, n in (normals or {}).items()
+    }
+    pixels[..., rgb_index] = prepared.image
+    for name, n in (normals or {}).items():
+        w_avg[name] = (w_avg[name][0], diffuse_integral(prepared.image, normal=n))
+    prepared = dataclasses.replace(prepared, w_avg=w_avg)
+    out_spec = oiio.ImageSpec(spec)
+    out_spec.set_format(out_format)
+    out_spec.tile_width = out_spec.tile_height = out_spec.tile_depth = 0
+    if target.suffix.lower() == ".exr" and not str(spec.get_string_attribute("compression")):
+        out_spec.attribute("compression", "zip")
+    out_spec.attribute(
+        "ocio_vp:prepare_hdri",
+        f"peak={peak:.9g} (applied {prepared.peak:.9g}); sources={len(prepared.sources)}; "
+        f"radius_deg={prepared.max_radius_deg:.4g} (energy-preserving spread, ocio-vp)",
+    )
+    tmp = target.with_name(f".{target.stem}.tmp-{os.getpid()}{target.suffix}")
+    try:
+        out = oiio.ImageOutput.create(str(tmp))
+        ok = out is not None and out.open(str(tmp), out_spec)
+        ok = ok and out.write_image(pixels)
+        ok = out.close() and ok if out is not None else False
+        if not ok:
+            message = (out.geterror() if out is not None else "") or oiio.geterror()
+            raise InputError(f"cannot write the image: {message}", source=str(target))
+        os.replace(tmp, target)
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+    return prepared

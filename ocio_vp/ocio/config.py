@@ -1,0 +1,342 @@
+"""One OpenColorIO config per environment, built with the PyOpenColorIO API.
+
+Layout (names are module constants so other tools can rely on them):
+
+- ``Camera Native Linear`` — the reference: the camera's own linear RGB, in which everything was
+  measured and solved. Content for the wall is expected here.
+- ``LED Wall - Outer Frustum`` — reference -> panel drive through M (lights the actors).
+- ``LED Wall - Inner Frustum`` — reference -> panel drive through N plus the black-level offset
+  (the background, pre-distorted for Q).
+- ``Stage Footage`` — what the camera recorded on the stage; converting it to the reference
+  applies Q (the post-correction). Q is also the NamedTransform ``Post-Correction Q``.
+- an ``LED Wall`` display with ``Outer Frustum`` / ``Inner Frustum`` views, for hosts (Unreal
+  nDisplay) that pick display/views or colorspaces but not looks or named transforms.
+
+``ocio_profile_version`` is 2.1 so that Unreal 5.1+ and other OCIO 2.1 hosts load it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import PyOpenColorIO as OCIO
+
+from ocio_vp.calibration.diagnostics import is_identity, offset_is_negligible
+from ocio_vp.formats.solution import Solution
+
+__all__ = [
+    "DISPLAY",
+    "IN_FRUSTUM",
+    "OUT_OF_FRUSTUM",
+    "POST_CORRECTION",
+    "POST_CORRECTION_COLORSPACE",
+    "RAW",
+    "REFERENCE",
+    "build_config",
+    "matrix_transform",
+    "write_config",
+]
+
+REFERENCE = "Camera Native Linear"
+OUT_OF_FRUSTUM = "LED Wall - Outer Frustum"
+IN_FRUSTUM = "LED Wall - Inner Frustum"
+POST_CORRECTION = "Post-Correction Q"
+POST_CORRECTION_COLORSPACE = "Stage Footage"
+RAW = "Raw"
+DISPLAY = "LED Wall"
+VIEW_OUTER = "Outer Frustum"
+VIEW_INNER = "Inner Frustum"
+CONFIG_FILENAME = "config.ocio"
+FAMILY = "ocio-vp"
+
+#: Working spaces added when the stage names its camera gamut, and the OCIO role each takes.
+WORKING_SPACES = {
+    "ACES2065-1": "aces_interchange",
+    "ACEScg": None,
+    "ITU-R BT.709": None,
+}
+WORKING_SPACE_NAMES = {
+    "ACES2065-1": "ACES2065-1",
+    "ACEScg": "ACEScg",
+    "ITU-R BT.709": "Linear Rec.709 (sRGB)",
+}
+
+
+def matrix_transform(
+    matrix: np.ndarray,
+    offset: Sequence[float] | np.ndarray | None = None,
+    direction: OCIO.TransformDirection = OCIO.TRANSFORM_DIR_FORWARD,
+) -> OCIO.MatrixTransform:
+    """An OCIO MatrixTransform computing ``matrix @ rgb + offset`` (alpha untouched)."""
+    m44 = np.eye(4)
+    m44[:3, :3] = np.asarray(matrix, dtype=np.float64)
+    off = np.zeros(4)
+    if offset is not None:
+        off[:3] = np.asarray(offset, dtype=np.float64)
+    return OCIO.MatrixTransform(
+        matrix=[float(v) for v in m44.ravel()], offset=[float(v) for v in off], direction=direction
+    )
+
+
+def _fmt(matrix: np.ndarray | None) -> str:
+    if matrix is None:
+        return "none"
+    return "[" + "; ".join(" ".join(f"{v:.6g}" for v in row) for row in matrix) + "]"
+
+
+def _colorspace(
+    name: str, description: str, *, family: str, encoding: str = "scene-linear"
+) -> OCIO.ColorSpace:
+    cs = OCIO.ColorSpace(
+        referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
+        name=name,
+        family=f"{FAMILY}/{family}",
+        encoding=encoding,
+        description=description,
+    )
+    return cs
+
+
+def wall_transforms(solution: Solution) -> dict[str, list[OCIO.Transform]]:
+    """Reference -> drive transform chains for the two wall colorspaces.
+
+    Linearity LUTs (when the solution has them) are appended by :mod:`ocio_vp.wall.encoding` (linearity LUT, then signal encoding).
+    """
+    outer: list[OCIO.Transform] = [matrix_transform(solution.M)]
+    # An offset the camera cannot see is left out (docs/stability.md); solution.json keeps it.
+    offset = solution.black_level_offset
+    if offset_is_negligible(offset, solution.SL):
+        offset = None
+    inner: list[OCIO.Transform] = [matrix_transform(solution.in_frustum_matrix, offset)]
+    return {OUT_OF_FRUSTUM: outer, IN_FRUSTUM: inner}
+
+
+#: OCIO encoding of the wall colorspaces for each wall signal encoding (docs/linearity.md).
+WALL_SIGNAL_ENCODINGS = {"linear": "scene-linear", "gamma2.4": "sdr-video", "pq": "hdr-video"}
+
+
+def _wall_signal_encoding(solution: Solution) -> str:
+    wall = (solution.linearity or {}).get("wall_encoding") or {}
+    return WALL_SIGNAL_ENCODINGS.get(wall.get("name", "linear"), "scene-linear")
+
+
+def _group(transforms: list[OCIO.Transform]) -> OCIO.Transform:
+    if len(transforms) == 1:
+        return transforms[0]
+    return OCIO.GroupTransform(transforms)
+
+
+def build_config(
+    solution: Solution,
+    *,
+    extra_wall_transforms: dict[str, list[OCIO.Transform]] | None = None,
+    search_path: str | None = None,
+) -> OCIO.Config:
+    """Build and validate the OCIO config for one solved environment.
+
+    Parameters
+    ----------
+    solution
+        The solved environment.
+    extra_wall_transforms
+        Transforms appended (after the matrix) to the ``OUT_OF_FRUSTUM`` / ``IN_FRUSTUM``
+        chains, e.g. the panel-linearity LUT and the wall signal encoding.
+    search_path
+        The config's search path for sidecar files (e.g. ``"luts"``).
+
+    Raises
+    ------
+    PyOpenColorIO.Exception
+        If the config does not validate (never expected: that is a bug).
+    """
+    env, stage = solution.environment, solution.stage
+    origin = f"stage {stage!r}, environment {env!r}"
+    if solution.measurements_sha256:
+        origin += (
+            f", from {solution.measurements_file or 'measurements'} "
+            f"(sha256 {solution.measurements_sha256[:16]})"
+        )
+
+    config = OCIO.Config()
+    config.setMajorVersion(2)
+    config.setMinorVersion(1)
+    config.setName(f"ocio-vp_{stage}_{env}")
+    config.setDescription(
+        f"ocio_vp calibration of {origin}. Q method: {solution.method} "
+        f"(model {solution.diagnostics.get('model') or solution.method}). "
+        "LeGendre, Lepicovsky & Debevec, DigiPro 2022."
+    )
+    if search_path:
+        config.setSearchPath(search_path)
+
+    camera = solution.camera_colorspace
+    gamut_text = f" ({camera} primaries)" if camera else " (as measured; gamut not stated)"
+    config.addColorSpace(
+        _colorspace(
+            REFERENCE,
+            f"The camera's native linear RGB{gamut_text}: the space all calibration values were "
+            "measured in. Content for the LED wall is expected here.",
+            family="Camera",
+        )
+    )
+    raw = _colorspace(RAW, "Data: no colour conversion.", family="Utility", encoding="data")
+    raw.setIsData(True)
+    config.addColorSpace(raw)
+
+    chains = wall_transforms(solution)
+    for name, extra in (extra_wall_transforms or {}).items():
+        chains[name] = chains[name] + list(extra)
+
+    outer = _colorspace(
+        OUT_OF_FRUSTUM,
+        f"Panel drive for content OUTSIDE the camera frustum (lights the actors): M = [SL]^-1 "
+        f"{_fmt(solution.M)}. {origin}.",
+        family="LED Wall",
+        encoding=_wall_signal_encoding(solution),
+    )
+    outer.setTransform(_group(chains[OUT_OF_FRUSTUM]), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+    config.addColorSpace(outer)
+
+    q_identity = is_identity(solution.Q)
+    if solution.N is not None and q_identity:
+        inner_text = (
+            f"N = M (Q is the identity, so no in-frustum change is needed) {_fmt(solution.N)}"
+        )
+    elif solution.N is not None:
+        inner_text = f"N = M Q^-1 {_fmt(solution.N)}"
+    else:
+        reason = solution.diagnostics.get("N_reason") or "Q is not invertible"
+        inner_text = f"N NOT SOLVED ({reason}); M is used instead, {_fmt(solution.M)}"
+    if solution.black_level_offset is not None:
+        inner_text += (
+            f", plus black-level offset {_fmt(solution.black_level_offset[None])} "
+            f"({solution.black_level_method})"
+        )
+        if offset_is_negligible(solution.black_level_offset, solution.SL):
+            inner_text += (
+                " - negligible (below 1e-5 of the wall's white), left out of this transform"
+            )
+    inner = _colorspace(
+        IN_FRUSTUM,
+        f"Panel drive for content INSIDE the camera frustum (the in-camera background): "
+        f"{inner_text}. {origin}.",
+        family="LED Wall",
+        encoding=_wall_signal_encoding(solution),
+    )
+    inner.setTransform(_group(chains[IN_FRUSTUM]), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+    config.addColorSpace(inner)
+
+    model = solution.diagnostics.get("model") or solution.method
+    reason = solution.diagnostics.get("model_reason")
+    q_text = (
+        f"Post-correction Q {_fmt(solution.Q)} for footage shot on the stage ({solution.method}, "
+        f"model {model}{': ' + reason if reason else ''}). {origin}."
+    )
+    if q_identity:
+        # Kept under the same names so hosts' settings survive, but as no-op transforms.
+        q_text = "Q is the identity: no post-correction is needed. " + q_text
+    footage = _colorspace(
+        POST_CORRECTION_COLORSPACE,
+        "Camera linear RGB as recorded on the stage; converting to the reference applies Q. "
+        + q_text,
+        family="Camera",
+    )
+    if not q_identity:
+        footage.setTransform(matrix_transform(solution.Q), OCIO.COLORSPACE_DIR_TO_REFERENCE)
+    config.addColorSpace(footage)
+
+    named = OCIO.NamedTransform(
+        name=POST_CORRECTION,
+        family=f"{FAMILY}/Post",
+        description=q_text,
+        forwardTransform=OCIO.GroupTransform() if q_identity else matrix_transform(solution.Q),
+    )
+    config.addNamedTransform(named)
+
+    roles = {
+        OCIO.ROLE_SCENE_LINEAR: REFERENCE,
+        OCIO.ROLE_REFERENCE: REFERENCE,
+        OCIO.ROLE_DEFAULT: REFERENCE,
+        OCIO.ROLE_DATA: RAW,
+        OCIO.ROLE_COLOR_PICKING: REFERENCE,
+        OCIO.ROLE_COMPOSITING_LOG: REFERENCE,
+        OCIO.ROLE_COLOR_TIMING: REFERENCE,
+        OCIO.ROLE_TEXTURE_PAINT: REFERENCE,
+        OCIO.ROLE_MATTE_PAINT: REFERENCE,
+    }
+    if camera:
+        roles.update(_add_working_spaces(config, camera))
+    for role, space in roles.items():
+        config.setRole(role, space)
+
+    config.addDisplayView(DISPLAY, VIEW_OUTER, OUT_OF_FRUSTUM)
+    config.addDisplayView(DISPLAY, VIEW_INNER, IN_FRUSTUM)
+    config.addDisplayView(DISPLAY, "Raw", RAW)
+    config.setActiveDisplays(DISPLAY)
+    config.setActiveViews(f"{VIEW_INNER}, {VIEW_OUTER}, Raw")
+    config.validate()
+    return config
+
+
+def _add_working_spaces(config: OCIO.Config, camera: str) -> dict[str, str]:
+    """Add ACES2065-1, ACEScg and linear Rec.709, converted to the camera gamut (CAT02)."""
+    import colour
+
+    target = colour.RGB_COLOURSPACES[camera]
+    roles = {}
+    for key, role in WORKING_SPACES.items():
+        source = colour.RGB_COLOURSPACES[key]
+        to_camera = colour.matrix_RGB_to_RGB(source, target, chromatic_adaptation_transform="CAT02")
+        name = WORKING_SPACE_NAMES[key]
+        cs = _colorspace(
+            name,
+            f"{source.name} linear; to the reference ({camera}) by colour-science's "
+            "matrix_RGB_to_RGB with CAT02 adaptation.",
+            family="Working",
+        )
+        cs.setTransform(matrix_transform(to_camera), OCIO.COLORSPACE_DIR_TO_REFERENCE)
+        config.addColorSpace(cs)
+        if role:
+            roles[role] = name
+    # CIE XYZ (D65) lets OCIO 2.1+ hosts convert between this config and others.
+    d65 = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
+    to_xyz = (
+        colour.adaptation.matrix_chromatic_adaptation_VonKries(
+            colour.xy_to_XYZ(target.whitepoint), colour.xy_to_XYZ(d65), transform="CAT02"
+        )
+        @ target.matrix_RGB_to_XYZ
+    )
+    xyz = _colorspace(
+        "CIE-XYZ-D65",
+        f"CIE 1931 XYZ, D65 white; from the reference by {camera}'s RGB-to-XYZ matrix with CAT02 "
+        "adaptation to D65 (colour-science).",
+        family="Utility",
+    )
+    xyz.setTransform(matrix_transform(to_xyz), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+    config.addColorSpace(xyz)
+    roles["cie_xyz_d65_interchange"] = "CIE-XYZ-D65"
+    return roles
+
+
+def ocio_names(config_filename: str = CONFIG_FILENAME) -> dict[str, str]:
+    """The ``ocio`` block of ``solution.json``: which colorspace does what."""
+    return {
+        "config": config_filename,
+        "reference": REFERENCE,
+        "out_of_frustum": OUT_OF_FRUSTUM,
+        "in_frustum": IN_FRUSTUM,
+        "post_correction": POST_CORRECTION,
+        "post_correction_colorspace": POST_CORRECTION_COLORSPACE,
+        "display": DISPLAY,
+        "view_out_of_frustum": VIEW_OUTER,
+        "view_in_frustum": VIEW_INNER,
+    }
+
+
+def write_config(config: OCIO.Config, directory: str | Path) -> Path:
+    """Serialize ``config`` to ``directory/config.ocio``; returns its path."""
+    path = Path(directory) / CONFIG_FILENAME
+    path.write_text(config.serialize(), encoding="utf-8")
+    return path

@@ -1,0 +1,50 @@
+"""Write solved environments to disk: ``OUT/<environment>/config.ocio`` and ``solution.json``.
+
+All environments are written into a staging folder first and renamed into place only when
+every one of them succeeded, so a failure never leaves a half-written output folder.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from pathlib import Path
+
+from ocio_vp.formats.solution import Solution, solution_to_json
+from ocio_vp.ocio.config import build_config, ocio_names, write_config
+from ocio_vp.ocio.wall import wall_outputs
+from ocio_vp.staging import publish_dir, staged_dir
+
+__all__ = ["write_environment", "write_solutions"]
+
+
+def write_environment(solution: Solution, directory: Path) -> Solution:
+    """Write one environment's files into ``directory`` (which must exist).
+
+    Returns the solution with its ``ocio`` block filled in, as written to ``solution.json``.
+    """
+    wall = wall_outputs(solution)  # panel-linearity LUT sidecar and wall signal encoding
+    solution = dataclasses.replace(solution, ocio=ocio_names(), linearity=wall.linearity)
+    config = build_config(
+        solution, extra_wall_transforms=wall.extra_wall_transforms, search_path=wall.search_path
+    )
+    for relative, text in wall.files.items():
+        (directory / relative).parent.mkdir(parents=True, exist_ok=True)
+        (directory / relative).write_text(text, encoding="utf-8")
+    write_config(config, directory)
+    (directory / "solution.json").write_text(solution_to_json(solution), encoding="utf-8")
+    return solution
+
+
+def write_solutions(solutions: Sequence[Solution], out_dir: str | Path) -> list[Solution]:
+    """Write every solution to ``out_dir/<environment>/``, all or nothing."""
+    out_dir = Path(out_dir)
+    written = []
+    with staged_dir(out_dir) as stage:
+        for solution in solutions:
+            folder = stage / solution.environment
+            folder.mkdir()
+            written.append(write_environment(solution, folder))
+        for solution in solutions:
+            publish_dir(stage / solution.environment, out_dir / solution.environment)
+    return written

@@ -1,0 +1,232 @@
+"""From a measurements file to one :class:`~ocio_vp.formats.solution.Solution` per environment.
+
+This is the orchestration of the paper's method (Section 3): beta and w_avg, M = [SL]^-1, Q by
+the chosen method (eq. 5), N = M Q^-1 (eq. 8) and the black-level offset (Section 3.4), plus
+the diagnostics that say whether the result can be trusted.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from ocio_vp.calibration.diagnostics import (
+    clipped_patches,
+    stability_diagnostics,
+)
+from ocio_vp.calibration.equations import (
+    BLACK_LEVEL_METHODS,
+    MAX_CONDITION_Q_FOR_N,
+    black_level_offset,
+    condition_number,
+    predict_displayed_chart,
+    solve_M,
+    solve_N,
+)
+from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
+from ocio_vp.correction.registry import QProblem, solve_post_correction
+from ocio_vp.correction.validation import CLOSED_FORM_METHODS, cross_validated_error
+from ocio_vp.errors import InputError
+from ocio_vp.formats.measurements import Environment, Measurements
+from ocio_vp.formats.solution import Solution
+from ocio_vp.metrics import error_relative_to_white
+
+__all__ = ["DEFAULT_METHOD", "solve_environment", "solve_measurements"]
+
+#: The simplest Q model the scene needs (ocio_vp.correction.linear.q_auto); "least-squares" is the paper.
+DEFAULT_METHOD = "auto"
+
+
+def solve_environment(
+    measurements: Measurements,
+    environment: Environment,
+    *,
+    method: str = DEFAULT_METHOD,
+    black_level: str = "exact",
+    max_condition_q: float = MAX_CONDITION_Q_FOR_N,
+) -> Solution:
+    """Solve M, Q, N and the black-level offset for one environment.
+
+    Parameters
+    ----------
+    measurements
+        The validated measurements.
+    environment
+        One of ``measurements.environments``.
+    method
+        A name from :data:`ocio_vp.correction.registry.Q_SOLVE_METHODS`.
+    black_level
+        ``"exact"`` (``-M b_camera`` in drive space) or ``"paper"`` (``b / w_camera``).
+    max_condition_q
+        N is not solved when cond(Q) is above this.
+    """
+    if black_level not in BLACK_LEVEL_METHODS:
+        raise ValueError(f"black_level must be one of {BLACK_LEVEL_METHODS}, got {black_level!r}")
+    source = measurements.source
+    SL = measurements.SL
+    M_calibrated = solve_M(SL, source=source)
+    beta = stage_beta(measurements)
+    w_avg = environment_w_avg(measurements, environment)
+    white = measurements.stage.white_patch
+    clip_level = measurements.stage.clip_level
+    if clip_level is not None and np.any(SL >= clip_level):
+        raise InputError(
+            f"a primary is clipped (>= clip_level {clip_level:g}): [SL] and M would be wrong; "
+            "re-shoot the primaries with less exposure",
+            source=source,
+            key="primaries",
+        )
+    clipped = clipped_patches(measurements.SRL, environment.target_chart, clip_level)
+    if white in clipped and environment.w_avg is None:
+        index = [e.name for e in measurements.environments].index(environment.name)
+        raise InputError(
+            f"the white patch {white} is clipped, so w_avg cannot come from it: give w_avg",
+            source=source,
+            key=f"environments[{index}].w_avg",
+        )
+    weights = np.ones(measurements.n_patches)
+    weights[clipped] = 0.0
+    problem = QProblem(
+        SL=SL,
+        SRL=measurements.SRL,
+        beta=beta,
+        M=M_calibrated,
+        w_avg=w_avg,
+        target=environment.target_chart,
+        white_patch=white,
+        weights=weights,
+    )
+    try:
+        fit = solve_post_correction(problem, method=method)
+    except InputError as error:
+        if error.key != "target_chart" or error.source is not None:
+            raise
+        index = [e.name for e in measurements.environments].index(environment.name)
+        key = f"environments[{index}].target_chart"
+        raise InputError(error.problem, source=source, key=key) from None
+    M = M_calibrated if fit.M is None else np.asarray(fit.M, dtype=np.float64)
+    Q = np.asarray(fit.Q, dtype=np.float64)
+    # N inverts Q for the calibrated wall (paper eq. 7: Q [SL] N = I), whatever M lights with.
+    N, n_reason = solve_N(M_calibrated, Q, max_condition=max_condition_q, SL=SL)
+
+    offset = None
+    if environment.black_level is not None:
+        offset = black_level_offset(
+            environment.black_level, M=M_calibrated, SL=SL, method=black_level
+        )
+
+    baseline = problem.predicted
+    lit = baseline if fit.M is None else dataclasses.replace(problem, M=M).predicted
+    corrected = lit @ Q.T
+    displayed = predict_displayed_chart(
+        environment.target_chart,
+        SL=SL,
+        matrix=M_calibrated if N is None else N,
+        offset=offset,
+        black_level=environment.black_level,
+    )
+    displayed_corrected = displayed if N is None else displayed @ Q.T
+    displayed_baseline = predict_displayed_chart(
+        environment.target_chart, SL=SL, matrix=M_calibrated, black_level=environment.black_level
+    )
+    drive = M @ w_avg
+    warnings = []
+    if n_reason:
+        warnings.append(f"N not solved: {n_reason}")
+    if np.any(drive < 0):
+        warnings.append(
+            "the out-of-frustum drive M w_avg has a negative channel: this light is outside the "
+            "LED gamut and the wall will clip it"
+        )
+    diagnostics = {
+        "white_patch": white,
+        "cond_SL": condition_number(SL),
+        "cond_Q": condition_number(Q),
+        "rank_Q": int(np.linalg.matrix_rank(Q)),
+        "N_solved": N is not None,
+        "N_reason": n_reason,
+        "max_condition_q_for_N": max_condition_q,
+        "lit_chart_error_baseline": error_relative_to_white(
+            baseline, environment.target_chart, white, weights
+        ),
+        "lit_chart_error": error_relative_to_white(
+            corrected, environment.target_chart, white, weights
+        ),
+        "residual_rms": float(np.sqrt(np.mean((corrected - environment.target_chart) ** 2))),
+        "displayed_chart_error_baseline": error_relative_to_white(
+            displayed_baseline, environment.target_chart, white, weights
+        ),
+        "displayed_chart_error": error_relative_to_white(
+            displayed_corrected, environment.target_chart, white, weights
+        ),
+        "out_of_frustum_drive": drive,
+        "method_notes": dict(fit.notes),
+        "warnings": warnings,
+        # Per-patch camera RGB, for reports: the target p_j, the lit chart under M alone
+        # (baseline) and after Q, and the chart shown in-frustum as the camera records it
+        # (baseline: through M, no Q; ours: through N and the offset, then Q).
+        "charts": {
+            "target": environment.target_chart,
+            "lit_baseline": baseline,
+            "lit_corrected": corrected,
+            "displayed_baseline": displayed_baseline,
+            "displayed_corrected": displayed_corrected,
+        },
+    }
+    # Issue 7: model choice, cross-validation, drive ranges, bounce, clipping (diagnostics.py).
+    extra, extra_warnings = stability_diagnostics(
+        problem,
+        fit,
+        method=method,
+        M=M,
+        Q=Q,
+        N=N,
+        offset=offset,
+        black_level=environment.black_level,
+        corrected=corrected,
+        clipped=clipped,
+        cross_validated=cross_validated_error(problem, method)
+        if "cross_validated_error" not in fit.notes and method in CLOSED_FORM_METHODS
+        else None,
+    )
+    diagnostics.update(extra)
+    warnings.extend(extra_warnings)
+    return Solution(
+        stage=measurements.stage.name,
+        environment=environment.name,
+        method=method,
+        beta=beta,
+        w_avg=w_avg,
+        SL=SL,
+        M=M,
+        Q=Q,
+        N=N,
+        black_level_offset=offset,
+        black_level_method=None if offset is None else black_level,
+        diagnostics=diagnostics,
+        measurements_file=Path(source).name if source else None,
+        measurements_sha256=measurements.sha256,
+        camera_colorspace=measurements.stage.camera_colorspace,
+        linearity=_panel_linearity(measurements),
+    )
+
+
+def _panel_linearity(measurements: Measurements) -> dict | None:
+    """The ``linearity`` block from the ``ramps`` section (None when there is none)."""
+    if measurements.ramps is None:
+        return None
+    from ocio_vp.wall.linearity import fit_linearity
+
+    return fit_linearity(measurements.ramps, measurements.SL, source=measurements.source)
+
+
+def solve_measurements(
+    measurements: Measurements, *, method: str = DEFAULT_METHOD, black_level: str = "exact"
+) -> list[Solution]:
+    """:func:`solve_environment` for every environment, in file order."""
+    return [
+        solve_environment(measurements, env, method=method, black_level=black_level)
+        for env in measurements.environments
+    ]

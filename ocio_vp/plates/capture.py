@@ -1,0 +1,340 @@
+"""The capture file (format ``ocio-vp/capture``, version 1): which plates to measure, and where.
+
+It describes the paper's calibration photographs once (Section 3.3: the primaries plate and the
+chart lit by each LED channel; per environment the real-location chart and, Section 3.4, the
+black-level plate) so ``ocio-vp measure`` can turn them into a measurements file. The ``stage``
+section is passed through to the measurements file unchanged. ``docs/capture.md`` documents
+every key. Plate paths are relative to the capture file.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from ocio_vp.formats.measurements import CHANNELS, Validator, parse_stage, read_document
+from ocio_vp.plates.reader import canonical_encoding, plate_path
+
+__all__ = [
+    "FORMAT",
+    "VERSION",
+    "Capture",
+    "ChartShot",
+    "EnvironmentCapture",
+    "PlateRef",
+    "RegionShot",
+    "capture_from_dict",
+    "load_capture",
+    "save_capture_document",
+]
+
+FORMAT = "ocio-vp/capture"
+VERSION = 1
+DETECT = "detect"
+_PLATE_KEYS = ("plate", "encoding", "layer", "flat_field")
+
+
+@dataclass(frozen=True)
+class PlateRef:
+    """A plate: one file or several frames (averaged), its encoding and EXR layer.
+
+    ``key`` is where it was described in the capture file (for messages); ``name`` is a short
+    file-safe label used for its overlay; ``flat_field`` the flat-field frames, if any.
+    """
+
+    paths: tuple[Path, ...]
+    encoding: str | None
+    layer: str | None
+    key: str
+    name: str
+    flat_field: tuple[Path, ...] | None = None
+
+    @property
+    def label(self) -> str:
+        """The first frame's path (what messages name)."""
+        return str(self.paths[0])
+
+
+@dataclass(frozen=True)
+class ChartShot:
+    """A chart on a plate; ``corners`` (4, 2) TL, TR, BR, BL, or ``None`` to auto-detect."""
+
+    plate: PlateRef
+    corners: np.ndarray | None
+    key: tuple[str | int, ...]
+
+
+@dataclass(frozen=True)
+class RegionShot:
+    """A rectangle ``(x0, y0, x1, y1)`` (pixels, end-exclusive) on a plate."""
+
+    plate: PlateRef
+    region: tuple[int, int, int, int]
+    key: tuple[str | int, ...]
+
+
+@dataclass(frozen=True)
+class EnvironmentCapture:
+    """One environment: its target chart photo, optional black-level region and w_avg."""
+
+    name: str
+    target_chart: ChartShot
+    black_level: RegionShot | None = None
+    w_avg: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class Capture:
+    """A validated capture file."""
+
+    stage: Mapping[str, Any]
+    rows: int
+    columns: int
+    inset: float
+    sampling: Mapping[str, Any]
+    primaries: Mapping[str, RegionShot]
+    lit_chart: Mapping[str, ChartShot]
+    environments: tuple[EnvironmentCapture, ...]
+    source: str
+    document: Mapping[str, Any] = field(default_factory=dict)
+    sha256: str | None = None
+
+    def charts(self) -> list[ChartShot]:
+        """Every chart shot, lit charts first."""
+        return [*self.lit_chart.values(), *(e.target_chart for e in self.environments)]
+
+
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class _Where:
+    """Where relative paths start, and the capture-wide flat field (if any)."""
+
+    base: Path
+    flat_field: tuple[Path, ...] | None = None
+
+
+def _paths(ctx: Validator, value: Any, key: tuple[str | int, ...], base: Path) -> tuple[Path, ...]:
+    frames = value if isinstance(value, list) else [value]
+    if not frames or not all(isinstance(f, str) and f for f in frames):
+        raise ctx.error(key, "expected a file path or a list of frame paths")
+    return tuple(plate_path(base, f) for f in frames)
+
+
+def _plate(
+    ctx: Validator,
+    raw: Mapping[str, Any],
+    key: tuple[str | int, ...],
+    where: _Where,
+    name: str,
+    inherited: PlateRef | None = None,
+) -> PlateRef:
+    if "plate" not in raw:
+        if inherited is None:
+            raise ctx.error(key, "missing required key 'plate'")
+        return inherited
+    paths = _paths(ctx, raw["plate"], (*key, "plate"), where.base)
+    flat = where.flat_field
+    if "flat_field" in raw:  # null switches the capture-wide flat field off for this plate
+        value = raw["flat_field"]
+        flat = None if value is None else _paths(ctx, value, (*key, "flat_field"), where.base)
+    encoding = raw.get("encoding")
+    if encoding is not None:
+        encoding = canonical_encoding(encoding, source=ctx.source, key=_key(*key, "encoding"))
+    layer = raw.get("layer")
+    if layer is not None and not isinstance(layer, str):
+        raise ctx.error((*key, "layer"), f"expected a layer name, got {layer!r}")
+    return PlateRef(
+        paths=paths, encoding=encoding, layer=layer, key=_key(*key), name=name, flat_field=flat
+    )
+
+
+def _key(*parts: str | int) -> str:
+    from ocio_vp.errors import format_key_path
+
+    return format_key_path(*parts)
+
+
+def _region(ctx: Validator, value: Any, key: tuple[str | int, ...]) -> tuple[int, int, int, int]:
+    if not isinstance(value, list) or len(value) != 4:
+        raise ctx.error(key, "expected a region [x0, y0, x1, y1] in pixels")
+    numbers = [ctx.number(v, (*key, i)) for i, v in enumerate(value)]
+    if any(v != int(v) for v in numbers):
+        raise ctx.error(key, f"region corners must be whole pixels, got {value}")
+    x0, y0, x1, y1 = (int(v) for v in numbers)
+    if x1 <= x0 or y1 <= y0:
+        raise ctx.error(key, f"empty region {value}: need x1 > x0 and y1 > y0")
+    return (x0, y0, x1, y1)
+
+
+def _corners(ctx: Validator, value: Any, key: tuple[str | int, ...]) -> np.ndarray | None:
+    if value == DETECT:
+        return None
+    if not isinstance(value, list) or len(value) != 4:
+        raise ctx.error(key, "expected 4 corners [[x, y], ...] (TL, TR, BR, BL) or 'detect'")
+    points = []
+    for i, point in enumerate(value):
+        if not isinstance(point, list) or len(point) != 2:
+            raise ctx.error((*key, i), f"expected [x, y], got {point!r}")
+        points.append([ctx.number(v, (*key, i, k), minimum=-np.inf) for k, v in enumerate(point)])
+    return np.array(points, dtype=np.float64)
+
+
+def _chart(
+    ctx: Validator, value: Any, key: tuple[str | int, ...], where: _Where, name: str
+) -> ChartShot:
+    raw = ctx.mapping(value, key, required=("plate", "corners"), optional=_PLATE_KEYS)
+    return ChartShot(
+        plate=_plate(ctx, raw, key, where, name),
+        corners=_corners(ctx, raw["corners"], (*key, "corners")),
+        key=key,
+    )
+
+
+def _region_shot(
+    ctx: Validator,
+    value: Any,
+    key: tuple[str | int, ...],
+    where: _Where,
+    name: str,
+    shared: PlateRef | None,
+) -> RegionShot:
+    if isinstance(value, list) and shared is not None:  # a bare rectangle on the shared plate
+        return RegionShot(plate=shared, region=_region(ctx, value, key), key=key)
+    raw = ctx.mapping(value, key, required=("region",), optional=_PLATE_KEYS)
+    plate = _plate(ctx, raw, key, where, name, inherited=shared)
+    return RegionShot(plate=plate, region=_region(ctx, raw["region"], (*key, "region")), key=key)
+
+
+def capture_from_dict(
+    data: Any, *, source: str = "<capture>", sha256: str | None = None
+) -> Capture:
+    """Validate a parsed capture document (paths are resolved relative to ``source``).
+
+    Raises
+    ------
+    InputError
+        Naming ``source``, the key path and the problem.
+    """
+    ctx = Validator(source)
+    base = Path(source)
+    top = ctx.mapping(
+        data,
+        (),
+        required=("format", "version", "stage", "primaries", "lit_chart", "environments"),
+        optional=("chart", "sampling", "flat_field"),
+    )
+    if top["format"] != FORMAT:
+        raise ctx.error(("format",), f"expected {FORMAT!r}, got {top['format']!r}")
+    if top["version"] != VERSION or isinstance(top["version"], bool):
+        raise ctx.error(
+            ("version",), f"this ocio-vp reads version {VERSION}, got {top['version']!r}"
+        )
+    parse_stage(ctx, top["stage"])  # same rules as the measurements file it is copied to
+
+    chart = ctx.mapping(top.get("chart", {}), ("chart",), (), ("rows", "columns", "inset"))
+    rows, columns = chart.get("rows", 4), chart.get("columns", 6)
+    for name, value in (("rows", rows), ("columns", columns)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ctx.error(("chart", name), f"expected a whole number >= 1, got {value!r}")
+    inset = ctx.number(chart.get("inset", 0.25), ("chart", "inset"))
+    if inset > 0.45:
+        raise ctx.error(("chart", "inset"), f"expected at most 0.45, got {inset!r}")
+    sampling = dict(
+        ctx.mapping(top.get("sampling", {}), ("sampling",), (), ("method", "trim", "clip_level"))
+    )
+    if "trim" in sampling:
+        sampling["trim"] = ctx.number(sampling["trim"], ("sampling", "trim"))
+        if sampling["trim"] >= 0.5:
+            raise ctx.error(("sampling", "trim"), "expected less than 0.5")
+    if sampling.get("clip_level") is not None:
+        sampling["clip_level"] = ctx.number(
+            sampling["clip_level"], ("sampling", "clip_level"), strict=True
+        )
+    if "method" in sampling:
+        from ocio_vp.plates.sampling import ROBUST_MEAN_METHODS
+
+        if sampling["method"] not in ROBUST_MEAN_METHODS:
+            valid = ", ".join(ROBUST_MEAN_METHODS)
+            raise ctx.error(("sampling", "method"), f"unknown method; expected one of: {valid}")
+
+    where = _Where(base)
+    if top.get("flat_field") is not None:
+        where = _Where(base, _paths(ctx, top["flat_field"], ("flat_field",), base))
+    prim = ctx.mapping(top["primaries"], ("primaries",), CHANNELS, _PLATE_KEYS)
+    shared = _plate(ctx, prim, ("primaries",), where, "primaries") if "plate" in prim else None
+    primaries = {
+        c: _region_shot(ctx, prim[c], ("primaries", c), where, f"primaries_{c}", shared)
+        for c in CHANNELS
+    }
+
+    lit = ctx.mapping(top["lit_chart"], ("lit_chart",), CHANNELS)
+    lit_chart = {c: _chart(ctx, lit[c], ("lit_chart", c), where, f"lit_{c}") for c in CHANNELS}
+
+    envs = top["environments"]
+    if not isinstance(envs, list) or not envs:
+        raise ctx.error(("environments",), "expected a non-empty list")
+    environments = []
+    seen: set[str] = set()
+    for i, raw in enumerate(envs):
+        key: tuple[str | int, ...] = ("environments", i)
+        env = ctx.mapping(raw, key, ("name", "target_chart"), ("black_level", "w_avg"))
+        name = ctx.name(env["name"], (*key, "name"))
+        if name in seen:
+            raise ctx.error((*key, "name"), f"duplicate name {name!r}")
+        seen.add(name)
+        target = _chart(ctx, env["target_chart"], (*key, "target_chart"), where, f"{name}_target")
+        black = None
+        if "black_level" in env:
+            black = _region_shot(
+                ctx, env["black_level"], (*key, "black_level"), where, f"{name}_black", None
+            )
+        w_avg = ctx.rgb(env["w_avg"], (*key, "w_avg")) if "w_avg" in env else None
+        environments.append(EnvironmentCapture(name, target, black, w_avg))
+
+    return Capture(
+        stage=dict(top["stage"]),
+        rows=rows,
+        columns=columns,
+        inset=inset,
+        sampling=sampling,
+        primaries=primaries,
+        lit_chart=lit_chart,
+        environments=tuple(environments),
+        source=source,
+        document=data,
+        sha256=sha256,
+    )
+
+
+def load_capture(path: str | Path) -> Capture:
+    """Load and validate a capture file (YAML or JSON)."""
+    data, sha256 = read_document(path)
+    return capture_from_dict(data, source=str(path), sha256=sha256)
+
+
+def with_corners(document: Mapping[str, Any], corners: Mapping[tuple[str | int, ...], np.ndarray]):
+    """A copy of a capture document with detected corners written in place of ``detect``."""
+    import copy
+
+    out = copy.deepcopy(dict(document))
+    for key, value in corners.items():
+        node: Any = out
+        for part in key:
+            node = node[part]
+        node["corners"] = [[round(float(x), 2), round(float(y), 2)] for x, y in value]
+    return out
+
+
+def save_capture_document(document: Mapping[str, Any], path: str | Path) -> None:
+    """Write a capture document as YAML, atomically (comments in the old file are not kept)."""
+    from ocio_vp.staging import write_file_atomically
+
+    text = yaml.safe_dump(dict(document), sort_keys=False, default_flow_style=None, width=100)
+    write_file_atomically(path, text)

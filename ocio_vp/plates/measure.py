@@ -1,0 +1,326 @@
+"""From a capture file to a measurements file: sample every plate, then write the results.
+
+[SL] (paper Section 3.3) is built column by column from the primaries' regions, [SRL]_j from
+the chart lit by each LED channel (eq. 3), p_j from each environment's chart (eq. 5) and
+b_camera from the black-level region (Section 3.4). :func:`write_measure_outputs` writes the
+measurements file, an overlay PNG per plate and ``samples.json`` all together or not at all.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ocio_vp.errors import InputError
+from ocio_vp.formats.measurements import (
+    CHANNELS,
+    FORMAT,
+    VERSION,
+    Measurements,
+    measurements_from_dict,
+)
+from ocio_vp.plates.capture import Capture, ChartShot, PlateRef, RegionShot
+from ocio_vp.plates.reader import PlateInfo, open_plate, read_region
+from ocio_vp.plates.sampling import ChartSamples, patch_labels, sample_chart, sample_region
+
+__all__ = ["MeasureResult", "PlateSampling", "measure_capture", "write_measure_outputs"]
+
+_OVERLAY_MARGIN = 16
+
+
+@dataclass(frozen=True)
+class PlateSampling:
+    """What was sampled on one plate: a chart (``corners``) or named regions."""
+
+    name: str
+    plate: PlateRef
+    infos: tuple[PlateInfo, ...]
+    samples: ChartSamples
+    labels: tuple[str, ...]  # one per sample row: patch numbers or region names
+    corners: np.ndarray | None = None
+    regions: tuple[tuple[int, int, int, int], ...] = ()
+    detected: bool = False
+    grid: tuple[int, int] = (0, 0)  # rows, columns of a chart
+    inset: float = 0.0
+
+
+@dataclass(frozen=True)
+class MeasureResult:
+    """The measurements plus everything needed for overlays and the user's report."""
+
+    measurements: Measurements
+    plates: tuple[PlateSampling, ...]
+    detected: Mapping[tuple[str | int, ...], np.ndarray]
+    warnings: tuple[str, ...]
+
+
+def _open(ref: PlateRef) -> tuple[PlateInfo, ...]:
+    infos = tuple(open_plate(p, encoding=ref.encoding, layer=ref.layer) for p in ref.paths)
+    first = infos[0]
+    for info in infos[1:]:
+        if info.box != first.box:
+            raise InputError(
+                f"frame size {list(info.box)} differs from the first frame's {list(first.box)}",
+                source=info.path,
+                key=ref.key,
+            )
+    return infos
+
+
+def _flat(ref: PlateRef) -> dict[str, Any]:
+    """Flat-field keyword arguments for a plate (its encoding applies to the flat too)."""
+    if ref.flat_field is None:
+        return {}
+    return {"flat_field": [str(p) for p in ref.flat_field], "encoding": ref.encoding}
+
+
+def _named(error: InputError, ref: PlateRef, key: str) -> InputError:
+    """The same error, naming the plate and the capture-file key."""
+    source = error.source or ref.label
+    return InputError(error.problem, source=source, key=f"{key}.{error.key}" if error.key else key)
+
+
+def _sample_chart(
+    capture: Capture, shot: ChartShot, detect: Any
+) -> tuple[PlateSampling, np.ndarray | None]:
+    from ocio_vp.errors import format_key_path
+
+    key = format_key_path(*shot.key)
+    try:
+        infos = _open(shot.plate)
+        corners, found = shot.corners, None
+        if corners is None:
+            if detect is None:
+                raise InputError(
+                    "corners: detect needs ocio-vp[detect] installed", source=infos[0].path
+                )
+            corners = found = detect(infos[0], rows=capture.rows, columns=capture.columns)
+        samples = sample_chart(
+            list(infos),
+            corners,
+            capture.rows,
+            capture.columns,
+            inset=capture.inset,
+            source=infos[0].path,
+            **_flat(shot.plate),
+            **capture.sampling,
+        )
+    except InputError as error:
+        raise _named(error, shot.plate, key) from None
+    labels = tuple(f"patch {j}" for j in range(capture.rows * capture.columns))
+    sampling = PlateSampling(
+        name=shot.plate.name,
+        plate=shot.plate,
+        infos=infos,
+        samples=samples,
+        labels=labels,
+        corners=np.asarray(corners, dtype=np.float64),
+        detected=found is not None,
+        grid=(capture.rows, capture.columns),
+        inset=capture.inset,
+    )
+    return sampling, found
+
+
+def _sample_regions(
+    capture: Capture, shots: Mapping[str, RegionShot], name: str
+) -> list[PlateSampling]:
+    """Sample regions, grouping those that share a plate into one :class:`PlateSampling`."""
+    from ocio_vp.errors import format_key_path
+
+    groups: dict[PlateRef, list[tuple[str, RegionShot]]] = {}
+    for label, shot in shots.items():
+        groups.setdefault(shot.plate, []).append((label, shot))
+    out = []
+    for ref, members in groups.items():
+        infos = _open(ref)
+        rows = []
+        for _label, shot in members:
+            try:
+                rows.append(
+                    sample_region(
+                        list(infos),
+                        shot.region,
+                        source=infos[0].path,
+                        **_flat(ref),
+                        **capture.sampling,
+                    )
+                )
+            except InputError as error:
+                raise _named(error, ref, format_key_path(*shot.key)) from None
+        stacked = ChartSamples(
+            **{
+                f: np.concatenate([getattr(r, f) for r in rows])
+                for f in (
+                    "means",
+                    "spreads",
+                    "counts",
+                    "clipped_fraction",
+                    "outlier_fraction",
+                    "clipped",
+                    "high_spread",
+                )
+            },
+            box=rows[0].box,
+            method=rows[0].method,
+            frames=rows[0].frames,
+            clip_level=rows[0].clip_level,
+        )
+        out.append(
+            PlateSampling(
+                name=ref.name if len(members) > 1 else members[0][1].plate.name,
+                plate=ref,
+                infos=infos,
+                samples=stacked,
+                labels=tuple(label for label, _ in members),
+                regions=tuple(shot.region for _, shot in members),
+            )
+        )
+    return out
+
+
+def measure_capture(capture: Capture, *, detect: Any = None) -> MeasureResult:
+    """Sample every plate of ``capture`` and build the measurements.
+
+    Parameters
+    ----------
+    capture
+        A validated capture file.
+    detect
+        ``detect(plate_info, rows=, columns=) -> (4, 2) corners`` for charts whose corners
+        are ``detect`` (see :mod:`ocio_vp.plates.detection`); ``None`` makes them an error.
+
+    Raises
+    ------
+    InputError
+        Naming the plate and the capture-file key: unreadable plates, bad corners or regions,
+        clipped charts, and measurements the measurements format rejects.
+    """
+    plates: list[PlateSampling] = []
+    detected: dict[tuple[str | int, ...], np.ndarray] = {}
+    primaries = _sample_regions(capture, capture.primaries, "primaries")
+    plates.extend(primaries)
+    primary_means = {}
+    for sampling in primaries:
+        for label, mean in zip(sampling.labels, sampling.samples.means, strict=True):
+            primary_means[label] = mean
+
+    def chart(shot: ChartShot) -> np.ndarray:
+        sampling, found = _sample_chart(capture, shot, detect)
+        plates.append(sampling)
+        if found is not None:
+            detected[shot.key] = found
+        return sampling.samples.means
+
+    lit = {c: chart(capture.lit_chart[c]) for c in CHANNELS}
+    environments = []
+    for env in capture.environments:
+        entry: dict[str, Any] = {"name": env.name, "target_chart": chart(env.target_chart).tolist()}
+        if env.black_level is not None:
+            black = _sample_regions(capture, {"black_level": env.black_level}, env.name)
+            plates.extend(black)
+            entry["black_level"] = black[0].samples.means[0].tolist()
+        if env.w_avg is not None:
+            entry["w_avg"] = env.w_avg.tolist()
+        environments.append(entry)
+    document = {
+        "format": FORMAT,
+        "version": VERSION,
+        "stage": dict(capture.stage),
+        "primaries": {c: primary_means[c].tolist() for c in CHANNELS},
+        "lit_chart": {c: lit[c].tolist() for c in CHANNELS},
+        "environments": environments,
+    }
+    measurements = measurements_from_dict(document, source=capture.source)
+    warnings = []
+    for sampling in plates:
+        for index in np.flatnonzero(sampling.samples.flagged):
+            flags = ", ".join(sampling.samples.flag_names(int(index)))
+            warnings.append(f"{sampling.plate.label}: {sampling.labels[index]}: {flags}")
+    return MeasureResult(measurements, tuple(plates), detected, tuple(warnings))
+
+
+def _overlay(sampling: PlateSampling) -> np.ndarray:
+    from ocio_vp.plates.overlay import overlay_image
+
+    info = sampling.infos[0]
+    px0, py0, px1, py1 = info.box
+    x0, y0, x1, y1 = sampling.samples.box
+    for r in sampling.regions:
+        x0, y0, x1, y1 = min(x0, r[0]), min(y0, r[1]), max(x1, r[2]), max(y1, r[3])
+    m = _OVERLAY_MARGIN
+    box = (max(px0, x0 - m), max(py0, y0 - m), min(px1, x1 + m), min(py1, y1 + m))
+    pixels = read_region(info, box)
+    if sampling.corners is not None:
+        labels = patch_labels(sampling.corners, *sampling.grid, inset=sampling.inset, box=box)
+    else:
+        labels = np.full((box[3] - box[1], box[2] - box[0]), -1, dtype=np.int32)
+        for index, (rx0, ry0, rx1, ry1) in enumerate(sampling.regions):
+            labels[ry0 - box[1] : ry1 - box[1], rx0 - box[0] : rx1 - box[0]] = index
+    s = sampling.samples
+    states = [
+        "clipped" if s.clipped[j] else "high_spread" if s.high_spread[j] else "ok"
+        for j in range(len(s.means))
+    ]
+    return overlay_image(pixels, labels, states)
+
+
+def samples_document(result: MeasureResult) -> dict[str, Any]:
+    """Per-plate, per-patch statistics (``samples.json`` beside the overlays)."""
+    plates = []
+    for sampling in result.plates:
+        s = sampling.samples
+        plates.append(
+            {
+                "plate": [str(p) for p in sampling.plate.paths],
+                "key": sampling.plate.key,
+                "overlay": f"{sampling.name}.png",
+                "box": list(s.box),
+                "method": s.method,
+                "frames": s.frames,
+                "corners": None if sampling.corners is None else sampling.corners.tolist(),
+                "detected": sampling.detected,
+                "samples": [
+                    {
+                        "label": sampling.labels[j],
+                        "mean": s.means[j].tolist(),
+                        "spread": s.spreads[j].tolist(),
+                        "pixels": int(s.counts[j]),
+                        "clipped_fraction": float(s.clipped_fraction[j]),
+                        "outlier_fraction": float(s.outlier_fraction[j]),
+                        "flags": s.flag_names(j),
+                    }
+                    for j in range(len(s.means))
+                ],
+            }
+        )
+    return {"format": "ocio-vp/samples", "version": 1, "plates": plates}
+
+
+def write_measure_outputs(
+    result: MeasureResult, out: str | Path, *, overlays: str | Path | None = None
+) -> Path:
+    """Write the measurements file and ``<out stem>.overlays/`` (PNGs + samples.json).
+
+    Everything is rendered into a staging folder first; the measurements file is written
+    atomically and the overlay folder published only when all of it succeeded.
+    """
+    from ocio_vp.formats.measurements import save_measurements
+    from ocio_vp.plates.overlay import write_png
+    from ocio_vp.staging import publish_dir, staged_dir, write_file_atomically
+
+    out = Path(out)
+    folder = Path(overlays) if overlays is not None else out.with_name(f"{out.stem}.overlays")
+    with staged_dir(folder.parent) as staged:
+        for sampling in result.plates:
+            write_png(staged / f"{sampling.name}.png", _overlay(sampling))
+        text = json.dumps(samples_document(result), indent=2) + "\n"
+        write_file_atomically(staged / "samples.json", text)
+        save_measurements(result.measurements, out)
+        publish_dir(staged, folder)
+    return folder

@@ -1,0 +1,382 @@
+"""Sample a colour chart (and plain regions) from a plate: perspective-correct patch grid, robust
+statistics, flags.
+
+The chart is given by the four outer corners of its patch grid, in pixel coordinates (see
+:mod:`ocio_vp.plates.reader` for the convention), in the order top-left, top-right, bottom-right,
+bottom-left *of the chart* (patch 0 is the top-left patch, reading order row by row). A
+homography maps grid coordinates ``(u, v)`` in ``[0, columns] x [0, rows]`` to the image, so
+perspective is exact for a flat chart. A pixel belongs to patch ``(r, c)`` when the grid
+coordinates of its centre fall in ``[c + inset, c + 1 - inset] x [r + inset, r + 1 - inset]``:
+the inset keeps the samples off the borders between patches.
+
+Each patch's value is a robust mean of its pixels (:data:`ROBUST_MEAN_METHODS`; default a 10 %
+trimmed mean per channel) after rejecting outliers (farther than 6 robust sigmas, 1.4826 MAD,
+from the patch median: a specular glint, dust, hot pixels), so the trim stays symmetric about the
+noise and the mean unbiased. The spread is the standard deviation of the pixels kept. Patches
+are flagged when pixels are clipped or when
+more than a small fraction of pixels are outliers (e.g. a highlight, dust, a misplaced corner).
+
+Vignetting: each patch is sampled over a small area, so the fall-off inside one patch averages
+out, but the fall-off between patches is measured as is unless a ``flat_field`` plate is given
+(then every pixel is divided by the lens's relative gain there). Without one, frame the
+chart near the optical centre (or correct the plates first); ``docs/capture.md`` says more.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ocio_vp.errors import InputError
+from ocio_vp.plates.frames import flat_field_gain, frames_pixels
+from ocio_vp.plates.reader import PlateInfo, open_plate
+from ocio_vp.plates.statistics import ROBUST_MEAN_METHODS, patch_statistics
+
+__all__ = [
+    "ROBUST_MEAN_METHODS",
+    "ChartSamples",
+    "chart_box",
+    "grid_homography",
+    "patch_labels",
+    "sample_chart",
+    "sample_region",
+]
+
+Box = tuple[int, int, int, int]
+
+
+@dataclass(frozen=True)
+class ChartSamples:
+    """Per-patch statistics of a sampled chart (or of regions, one row each).
+
+    Attributes
+    ----------
+    means : (n, 3) robust mean linear RGB per patch (``method``).
+    spreads : (n, 3) standard deviation of the pixels the mean used (outliers rejected), so
+        ``spreads / sqrt(counts)`` estimates the standard error of a mean from noise.
+    counts : (n,) number of pixels the mean used per patch (sampled minus outliers).
+    clipped_fraction : (n,) fraction of pixels with a channel at or above the clip level.
+    outlier_fraction : (n,) fraction of pixels farther than ``outlier_sigma`` robust sigmas
+        from the patch median.
+    clipped, high_spread : (n,) flags. ``high_spread`` means too many outliers or a spread
+        above ``max_spread`` of the chart's brightest patch.
+    box : the (x0, y0, x1, y1) image region that was read.
+    frames : how many frames were averaged (pixel by pixel, before the statistics).
+    """
+
+    means: np.ndarray
+    spreads: np.ndarray
+    counts: np.ndarray
+    clipped_fraction: np.ndarray
+    outlier_fraction: np.ndarray
+    clipped: np.ndarray
+    high_spread: np.ndarray
+    box: Box
+    method: str
+    frames: int = 1
+    clip_level: tuple[float, float, float] | None = None
+
+    @property
+    def flagged(self) -> np.ndarray:
+        """(n,) patches with any flag."""
+        return self.clipped | self.high_spread
+
+    def flag_names(self, index: int) -> list[str]:
+        """The flags of patch ``index`` as words (for messages)."""
+        names = []
+        if self.clipped[index]:
+            names.append(f"clipped ({100 * self.clipped_fraction[index]:.1f}% of pixels)")
+        if self.high_spread[index]:
+            names.append(f"high spread ({100 * self.outlier_fraction[index]:.1f}% outliers)")
+        return names
+
+
+# --------------------------------------------------------------------------------------------
+# Geometry.
+
+
+def _check_corners(corners: object, source: object) -> np.ndarray:
+    c = np.asarray(corners, dtype=np.float64)
+    if c.shape != (4, 2) or not np.all(np.isfinite(c)):
+        raise InputError(
+            f"expected 4 corners [[x, y], ...] (TL, TR, BR, BL), got shape {c.shape}",
+            source=source,
+            key="corners",
+        )
+    # Cross products of consecutive edges: all the same sign for a convex quadrilateral.
+    edges = np.roll(c, -1, axis=0) - c
+    cross = (
+        edges[:, 0] * np.roll(edges, -1, axis=0)[:, 1]
+        - edges[:, 1] * np.roll(edges, -1, axis=0)[:, 0]
+    )
+    if not (np.all(cross > 0) or np.all(cross < 0)):
+        raise InputError(
+            "corners do not form a convex quadrilateral in the order TL, TR, BR, BL",
+            source=source,
+            key="corners",
+        )
+    return c
+
+
+def grid_homography(corners: np.ndarray, rows: int, columns: int) -> np.ndarray:
+    """The 3x3 homography ``H`` with ``H (u, v, 1)`` ~ ``(x, y, 1)``.
+
+    Maps grid coordinates (``u`` across ``columns``, ``v`` down ``rows``) to pixel coordinates,
+    from the four correspondences (0,0)->TL, (C,0)->TR, (C,R)->BR, (0,R)->BL (direct linear
+    transform with h33 = 1, exact for four points).
+    """
+    src = np.array([[0, 0], [columns, 0], [columns, rows], [0, rows]], dtype=np.float64)
+    dst = np.asarray(corners, dtype=np.float64)
+    A = np.zeros((8, 8))
+    b = np.zeros(8)
+    for i, ((u, v), (x, y)) in enumerate(zip(src, dst, strict=True)):
+        A[2 * i] = [u, v, 1, 0, 0, 0, -u * x, -v * x]
+        A[2 * i + 1] = [0, 0, 0, u, v, 1, -u * y, -v * y]
+        b[2 * i], b[2 * i + 1] = x, y
+    h = np.linalg.solve(A, b)
+    return np.append(h, 1.0).reshape(3, 3)
+
+
+def _apply(H: np.ndarray, points: np.ndarray) -> np.ndarray:
+    p = points @ H[:, :2].T + H[:, 2]
+    return p[..., :2] / p[..., 2:3]
+
+
+def chart_box(corners: np.ndarray, *, margin: int = 0) -> Box:
+    """Integer pixel box (x0, y0, x1, y1) covering the corners, grown by ``margin``."""
+    c = np.asarray(corners, dtype=np.float64)
+    x0, y0 = np.floor(c.min(axis=0)).astype(int) - margin
+    x1, y1 = np.ceil(c.max(axis=0)).astype(int) + margin
+    return (int(x0), int(y0), int(x1), int(y1))
+
+
+def patch_labels(
+    corners: np.ndarray, rows: int, columns: int, *, inset: float, box: Box
+) -> np.ndarray:
+    """(h, w) int32 map over ``box``: the patch index of each sampled pixel, -1 elsewhere.
+
+    This is *the* definition of which pixels are sampled; overlays draw this very map.
+    """
+    H = grid_homography(corners, rows, columns)
+    Hinv = np.linalg.inv(H)
+    x0, y0, x1, y1 = box
+    labels = np.full((y1 - y0, x1 - x0), -1, dtype=np.int32)
+    cell = np.array(
+        [[inset, inset], [1 - inset, inset], [1 - inset, 1 - inset], [inset, 1 - inset]]
+    )
+    for r in range(rows):
+        for c in range(columns):
+            quad = _apply(H, cell + np.array([c, r], dtype=np.float64))
+            qx0, qy0, qx1, qy1 = chart_box(quad, margin=1)
+            qx0, qy0 = max(qx0, x0), max(qy0, y0)
+            qx1, qy1 = min(qx1, x1), min(qy1, y1)
+            if qx1 <= qx0 or qy1 <= qy0:
+                continue
+            ys, xs = np.mgrid[qy0:qy1, qx0:qx1]
+            centres = np.stack([xs + 0.5, ys + 0.5], axis=-1).astype(np.float64)
+            uv = _apply(Hinv, centres) - [c, r]
+            inside = np.all((uv >= inset) & (uv <= 1 - inset), axis=-1)
+            view = labels[qy0 - y0 : qy1 - y0, qx0 - x0 : qx1 - x0]
+            view[inside] = r * columns + c
+    return labels
+
+
+def _plate_box(frame: object, encoding: str | None) -> tuple[int, int, int, int]:
+    if isinstance(frame, PlateInfo):
+        return frame.box
+    if isinstance(frame, (str, os.PathLike)):
+        return open_plate(frame, encoding=encoding).box
+    shape = np.shape(frame)
+    return (0, 0, int(shape[1]), int(shape[0]))
+
+
+def sample_chart(
+    image: object,
+    corners: object,
+    rows: int = 4,
+    columns: int = 6,
+    *,
+    inset: float = 0.25,
+    method: str = "trimmed",
+    trim: float = 0.1,
+    clip_level: float | None = None,
+    encoding: str | None = None,
+    outlier_sigma: float = 6.0,
+    max_outlier_fraction: float = 0.005,
+    max_spread: float = 0.05,
+    min_pixels: int = 16,
+    flat_field: object = None,
+    source: object = None,
+) -> ChartSamples:
+    """Sample every patch of a chart photographed in perspective.
+
+    The patch values are the camera RGB the paper samples from its calibration photographs:
+    the lit-chart columns of [SRL]_j (eq. 3) and the target chart p_j (eq. 5).
+
+    Parameters
+    ----------
+    image
+        A plate path, a :class:`~ocio_vp.plates.reader.PlateInfo`, an (h, w, >=3) array, or a list of
+        them (frames of a sequence, averaged pixel by pixel before the statistics).
+    corners
+        (4, 2) pixel coordinates of the chart grid's outer corners: TL, TR, BR, BL.
+    rows, columns
+        The patch grid (a ColorChecker 24 is 4 x 6).
+    inset
+        Margin kept unsampled on each side of a patch, as a fraction of the patch (0-0.45).
+    method
+        A name in :data:`ROBUST_MEAN_METHODS`; ``"trimmed"`` uses ``trim`` per side.
+    clip_level
+        Linear value at which a pixel counts as clipped; default 1.0 for integer plates and a
+        detected flat top for float plates (see :func:`ocio_vp.plates.statistics.clip_levels`).
+    encoding
+        The plates' encoding when they are display-referred (see :mod:`ocio_vp.plates.reader`).
+    outlier_sigma, max_outlier_fraction, max_spread
+        A pixel farther than ``outlier_sigma`` robust sigmas (1.4826 MAD) from its patch median
+        is an outlier; a patch is flagged ``high_spread`` when more than
+        ``max_outlier_fraction`` of its pixels are, or when its standard deviation exceeds
+        ``max_spread`` times the brightest patch mean.
+    min_pixels
+        Fewer sampled pixels than this in a patch is an error (chart too small or inset too big).
+    flat_field
+        Optional flat-field plate(s) (same forms as ``image``, same size and encoding): the
+        pixels are divided by its gain relative to the frame's centre, which removes vignetting
+        (:func:`ocio_vp.plates.frames.flat_field_gain`). Clipping is judged before the division.
+
+    Returns
+    -------
+    ChartSamples
+        Patches in reading order (row by row from the top-left).
+
+    Raises
+    ------
+    InputError
+        Unreadable plate, corners not a convex quadrilateral or outside the image, too few
+        pixels in a patch, or a chart whose patches are mostly clipped.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> img = np.zeros((40, 60, 3), np.float32)
+    >>> img[:20, :30] = 0.5
+    >>> s = sample_chart(img, [[0, 0], [60, 0], [60, 40], [0, 40]], 2, 2, clip_level=1.0)
+    >>> s.means[:, 0].tolist()
+    [0.5, 0.0, 0.0, 0.0]
+    """
+    if isinstance(rows, bool) or int(rows) < 1 or isinstance(columns, bool) or int(columns) < 1:
+        raise InputError(f"rows and columns must be >= 1, got {rows} x {columns}", source=source)
+    if not 0 <= inset <= 0.45:
+        raise InputError(f"inset must be in [0, 0.45], got {inset!r}", source=source, key="inset")
+    frames = list(image) if isinstance(image, (list, tuple)) else [image]
+    where = source or (str(frames[0]) if isinstance(frames[0], (str, os.PathLike)) else None)
+    c = _check_corners(corners, where)
+    box = chart_box(c)
+    box = (box[0], box[1], max(box[2], box[0] + 1), max(box[3], box[1] + 1))
+    pixels, is_float, n_frames = frames_pixels(
+        frames, box, encoding=encoding, source=source, what="chart corners' box"
+    )
+    labels = patch_labels(c, rows, columns, inset=inset, box=box)
+    order = np.argsort(labels.ravel(), kind="stable")  # raster order within each patch
+    sorted_labels = labels.ravel()[order]
+    n = rows * columns
+    starts = np.searchsorted(sorted_labels, np.arange(n + 1))
+
+    def split(values: np.ndarray) -> list[np.ndarray]:
+        values = values.reshape(-1, 3)
+        return [values[order[starts[j] : starts[j + 1]]] for j in range(n)]
+
+    raw_groups = split(pixels)
+    groups = raw_groups
+    if flat_field is not None:
+        gain = flat_field_gain(
+            flat_field,
+            box,
+            encoding=encoding,
+            plate_box=_plate_box(frames[0], encoding),
+            source=where,
+        )
+        groups = split(pixels / gain)
+    small = [j for j, g in enumerate(groups) if len(g) < min_pixels]
+    if small:
+        raise InputError(
+            f"patch {small[0]} has {len(groups[small[0]])} pixels (< {min_pixels}): the chart is "
+            "too small in the image or the inset too large",
+            source=where,
+            key="corners",
+        )
+    stats = patch_statistics(
+        groups,
+        method=method,
+        trim=trim,
+        clip_level=clip_level,
+        is_float=is_float,
+        outlier_sigma=outlier_sigma,
+        max_outlier_fraction=max_outlier_fraction,
+        max_spread=max_spread,
+        source=where,
+        raw_groups=raw_groups,
+    )
+    mostly = np.asarray(stats["clipped_fraction"]) > 0.5
+    if np.count_nonzero(mostly) * 2 >= n:
+        raise InputError(
+            f"{np.count_nonzero(mostly)} of {n} patches are clipped: expose lower and reshoot",
+            source=where,
+        )
+    return ChartSamples(box=box, method=method, frames=n_frames, **stats)  # type: ignore[arg-type]
+
+
+def sample_region(
+    image: object,
+    box: Sequence[int],
+    *,
+    method: str = "trimmed",
+    trim: float = 0.1,
+    clip_level: float | None = None,
+    encoding: str | None = None,
+    outlier_sigma: float = 6.0,
+    max_outlier_fraction: float = 0.005,
+    max_spread: float = 0.05,
+    flat_field: object = None,
+    source: object = None,
+) -> ChartSamples:
+    """Sample one rectangle ``(x0, y0, x1, y1)`` (end-exclusive) of a plate.
+
+    Used for the primaries (the columns of [SL], paper Section 3.3) and the black level
+    b_camera (Section 3.4). Same statistics and flags as :func:`sample_chart`, one row.
+    """
+    values = [int(v) for v in box]
+    if len(values) != 4:
+        raise InputError(f"expected a region [x0, y0, x1, y1], got {list(box)}", source=source)
+    b: Box = (values[0], values[1], values[2], values[3])
+    frames = list(image) if isinstance(image, (list, tuple)) else [image]
+    where = source or (str(frames[0]) if isinstance(frames[0], (str, os.PathLike)) else None)
+    pixels, is_float, n_frames = frames_pixels(
+        frames, b, encoding=encoding, source=where, what="region"
+    )
+    raw = pixels.reshape(-1, 3)
+    corrected = raw
+    if flat_field is not None:
+        gain = flat_field_gain(
+            flat_field,
+            b,
+            encoding=encoding,
+            plate_box=_plate_box(frames[0], encoding),
+            source=where,
+        )
+        corrected = (pixels / gain).reshape(-1, 3)
+    stats = patch_statistics(
+        [corrected],
+        method=method,
+        trim=trim,
+        clip_level=clip_level,
+        is_float=is_float,
+        outlier_sigma=outlier_sigma,
+        max_outlier_fraction=max_outlier_fraction,
+        max_spread=np.inf,  # a region has no brightest patch to compare with
+        source=where,
+        raw_groups=[raw],
+    )
+    return ChartSamples(box=b, method=method, frames=n_frames, **stats)  # type: ignore[arg-type]

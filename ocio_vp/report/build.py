@@ -1,0 +1,355 @@
+"""``ocio-vp report``: a self-contained HTML page (plus its PNGs) for one or more solutions.
+
+For each environment: the paper's comparison charts (baseline M only vs ours), per-patch ΔE,
+the matrices with their condition numbers, model choices, warnings, beta, w_avg and the
+linearity curves when the solve has them; for all environments together the paper's Fig. 11
+error bars. The page links its PNGs relatively and loads nothing from the network, so the folder
+can be zipped, mailed or opened from a USB stick. It is written into a staging folder and
+renamed into place, so a failed run never leaves half a report.
+
+The numbers come from ``solution.json`` only; see :mod:`ocio_vp.report.data` for the
+camera-to-display matrix and ΔE conventions, :mod:`ocio_vp.report.plots` for the figures.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ocio_vp.calibration.equations import condition_number
+from ocio_vp.formats.solution import Solution
+from ocio_vp.report.data import (
+    STAGE_CHARTS,
+    EnvironmentData,
+    environment_data,
+    find_solutions,
+)
+from ocio_vp.report.plots import (
+    ChartPlot,
+    DeltaEPlot,
+    ErrorBarsPlot,
+    LinearityPlot,
+    plot_comparison_charts,
+    plot_delta_e,
+    plot_error_bars,
+    plot_linearity,
+)
+from ocio_vp.staging import publish_dir, staged_dir
+
+__all__ = [
+    "Report",
+    "build_report",
+    "default_report_dir",
+    "linearity_curves",
+    "panel_description",
+]
+
+TEMPLATE = "report.html.j2"
+
+
+@dataclass
+class Report:
+    """What :func:`build_report` wrote: the page and the numbers behind every figure.
+
+    Paths in the plot records point into the final folder, not the staging folder.
+    """
+
+    index: Path
+    environments: list[EnvironmentData]
+    error_bars: dict[str, ErrorBarsPlot] = field(default_factory=dict)
+    charts: dict[str, ChartPlot] = field(default_factory=dict)
+    delta_e: dict[str, DeltaEPlot] = field(default_factory=dict)
+    linearity: dict[str, LinearityPlot] = field(default_factory=dict)
+
+
+def default_report_dir(paths: Sequence[str | Path]) -> Path:
+    """``report/`` beside the first solution's environment folder (inside the solve output)."""
+    first = find_solutions(paths)[0]
+    return first.resolve().parent.parent / "report"
+
+
+def linearity_curves(linearity: Any) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Panel response curves before/after the linearity LUT from a solution's ``linearity``.
+
+    Reads what :func:`ocio_vp.wall.linearity.fit_linearity` writes: ``channels.<name>`` with the
+    response knots ``drive``/``response`` (before). For a channel marked ``corrected`` the
+    "after" curve is the response model applied to the LUT's drive,
+    ``r(r^-1(x))`` on 33 steps; an uncorrected channel has no LUT, so no "after" curve.
+    """
+    curves: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    channels = linearity.get("channels") if isinstance(linearity, dict) else None
+    if not isinstance(channels, dict):
+        return curves
+    for channel, entry in channels.items():
+        if not isinstance(entry, dict) or "drive" not in entry or "response" not in entry:
+            continue
+        drive = np.asarray(entry["drive"], dtype=np.float64)
+        response = np.asarray(entry["response"], dtype=np.float64)
+        if drive.shape != response.shape or not np.all(np.isfinite(response)):
+            continue
+        curves[f"{channel} before"] = (drive, response)
+        if entry.get("corrected") is True:
+            from ocio_vp.wall.linearity import inverse_response, response_model
+
+            x = np.linspace(0.0, 1.0, 33)
+            after = response_model(drive, response)(inverse_response(drive, response, x))
+            curves[f"{channel} after"] = (x, np.asarray(after, dtype=np.float64))
+    return curves
+
+
+def panel_description(solution: Solution, path: Path) -> str | None:
+    """The calibration panel's geometry, when the measurements file is found beside the solve.
+
+    ``solution.json`` records beta but not the panel; the measurements file it names is looked
+    for in the solve output folder (where ``ocio-vp demo`` writes it) and used only if its
+    SHA-256 matches the one recorded in the solution.
+    """
+    import hashlib
+
+    name = solution.measurements_file
+    if not name or not solution.measurements_sha256:
+        return None
+    candidate = Path(path).parent.parent / Path(name).name
+    try:
+        raw = candidate.read_bytes()
+    except OSError:
+        return None
+    if hashlib.sha256(raw).hexdigest() != solution.measurements_sha256:
+        return None
+    from ocio_vp.formats.measurements import load_measurements
+
+    panel = load_measurements(candidate).stage.panel
+    if panel is None:
+        return f"beta given directly in {candidate.name}"
+    text = f"{panel.width:g} m x {panel.height:g} m at {panel.distance:g} m"
+    if panel.offset_x or panel.offset_y:
+        text += f", centre offset ({panel.offset_x:g}, {panel.offset_y:g}) m"
+    return f"{text} (from {candidate.name})"
+
+
+def _matrix_rows(name: str, matrix: np.ndarray | None, meaning: str) -> dict[str, Any]:
+    if matrix is None:
+        return {"name": name, "meaning": meaning, "rows": None, "cond": None}
+    return {
+        "name": name,
+        "meaning": meaning,
+        "rows": [[f"{v:+.5f}" for v in row] for row in np.asarray(matrix)],
+        "cond": f"{condition_number(matrix):.4g}",
+    }
+
+
+def _percent(values: np.ndarray) -> str:
+    return f"{100 * float(np.mean(values)):.2f}%"
+
+
+def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
+    s = data.solution
+    d = s.diagnostics
+    matrices = [
+        _matrix_rows("[SL]", s.SL, "camera RGB of the LED primaries (columns)"),
+        _matrix_rows("M", s.M, "out-of-frustum pre-correction, [SL]^-1 (eq. 2)"),
+        _matrix_rows("Q", s.Q, "post-correction of the footage (eq. 5)"),
+        _matrix_rows("N", s.N, "in-frustum pre-correction, M Q^-1 (eq. 8)"),
+    ]
+    facts = [
+        ("stage", s.stage),
+        ("Q method", _method(s)),
+        ("beta (panel form factor)", f"{s.beta:.5f}"),
+        ("w_avg (camera RGB)", ", ".join(f"{v:.5g}" for v in s.w_avg)),
+        ("out-of-frustum drive M w_avg", _triple(d.get("out_of_frustum_drive"))),
+        ("N", "solved" if s.N is not None else f"not solved: {d.get('N_reason')}"),
+        (
+            "black level offset",
+            "none (no black-level measurement)"
+            if s.black_level_offset is None
+            else f"{_triple(s.black_level_offset)} ({s.black_level_method})",
+        ),
+        ("rank Q", d.get("rank_Q")),
+        ("camera colour space", s.camera_colorspace or "camera native (as measured)"),
+        ("measurements", f"{s.measurements_file} (sha256 {str(s.measurements_sha256)[:12]}…)"),
+        ("solution file", str(data.path)),
+        ("white patch (index)", data.white_patch),
+    ]
+    panel = panel_description(s, data.path)
+    facts.insert(3, ("calibration panel", panel or "not recorded in solution.json (beta only)"))
+    notes = d.get("method_notes") or {}
+    rows = []
+    for chart in STAGE_CHARTS:
+        rows.append(
+            {
+                "chart": chart.replace("_", " "),
+                "error": [f"{100 * v:.2f}%" for v in data.errors[chart]],
+                "mean": _percent(data.errors[chart]),
+                "de2000": f"{float(np.mean(data.delta_e['CIE 2000'][chart])):.2f}",
+                "deitp": f"{float(np.mean(data.delta_e['ITP'][chart])):.2f}",
+            }
+        )
+    return {
+        "name": s.environment,
+        "key": data.key,
+        "images": images,
+        "matrices": matrices,
+        "facts": facts,
+        "notes": sorted((str(k), _short(v)) for k, v in notes.items()),
+        "warnings": [str(w) for w in d.get("warnings", [])],
+        "errors": rows,
+        "transform": data.transform.description,
+        "linearity": _linearity_facts(s.linearity),
+    }
+
+
+def _method(solution: Any) -> str:
+    """The Q method, with the model an automatic method chose (from its notes)."""
+    model = (solution.diagnostics.get("method_notes") or {}).get("model")
+    if isinstance(model, str) and model != solution.method:
+        return f"{solution.method} → {model}"
+    return solution.method
+
+
+def _short(value: Any) -> str:
+    """Notes as a person reads them: floats to 4 significant digits, inside lists and dicts."""
+
+    def walk(v: Any) -> Any:
+        if isinstance(v, float):
+            return float(f"{v:.4g}")
+        if isinstance(v, dict):
+            return {k: walk(x) for k, x in v.items()}
+        if isinstance(v, (list, tuple)):
+            return [walk(x) for x in v]
+        return v
+
+    value = walk(value)
+    if isinstance(value, dict):
+        return ", ".join(f"{k}: {v}" for k, v in value.items())
+    return str(value)
+
+
+def _triple(values: Any) -> str:
+    if values is None:
+        return "—"
+    return ", ".join(f"{float(v):.5g}" for v in np.ravel(values))
+
+
+def _linearity_facts(linearity: Any) -> list[tuple[str, str]]:
+    if not isinstance(linearity, dict):
+        return []
+    return [(str(k), str(v)) for k, v in linearity.items() if not isinstance(v, (dict, list))]
+
+
+def _summary(environments: Sequence[EnvironmentData]) -> list[dict[str, str]]:
+    rows = []
+    for e in environments:
+        d = e.solution.diagnostics
+        rows.append(
+            {
+                "name": e.solution.environment,
+                "key": e.key,
+                "method": _method(e.solution),
+                "cond_q": f"{float(d.get('cond_Q', float('nan'))):.3g}",
+                "n": "solved" if e.solution.N is not None else "not solved",
+                **{chart: _percent(e.errors[chart]) for chart in STAGE_CHARTS},
+                "warnings": str(len(d.get("warnings", []))),
+            }
+        )
+    return rows
+
+
+def _check_replaceable(out_dir: Path, environments: Sequence[EnvironmentData]) -> None:
+    """The report folder is replaced as a whole: never let that be anything but a report."""
+    from ocio_vp.errors import InputError
+
+    for data in environments:
+        if data.path.resolve().is_relative_to(out_dir):
+            raise InputError(
+                "the report folder would replace the solutions it reports on; choose another --out",
+                source=out_dir,
+            )
+    if out_dir.is_file() or (
+        out_dir.is_dir() and any(out_dir.iterdir()) and not (out_dir / "index.html").is_file()
+    ):
+        raise InputError(
+            "exists and is not an ocio-vp report (no index.html); refusing to replace it",
+            source=out_dir,
+        )
+
+
+def build_report(
+    paths: Sequence[str | Path],
+    out_dir: str | Path,
+    *,
+    dpi: float = 110,
+    match_white: bool = True,
+    camera_to_xyz: np.ndarray | None = None,
+) -> Report:
+    """Write ``out_dir/index.html`` and its PNGs for every solution in ``paths``, all or nothing.
+
+    Parameters
+    ----------
+    paths
+        ``solution.json`` files, environment folders, or ``ocio-vp solve`` output folders.
+    out_dir
+        The report folder; replaced as a whole if it exists.
+    dpi
+        PNG resolution (tests use a small one).
+    match_white
+        Scale each stage chart so its white's green matches the target's (paper, Section 4).
+    camera_to_xyz
+        (3, 3) camera RGB -> XYZ when the caller knows the camera; otherwise derived from the
+        solutions (see :func:`ocio_vp.report.data.camera_to_display`).
+    """
+    import jinja2
+
+    out_dir = Path(out_dir).resolve()
+    environments = environment_data(paths, match_white=match_white, camera_to_xyz=camera_to_xyz)
+    _check_replaceable(out_dir, environments)
+    report = Report(index=out_dir / "index.html", environments=environments)
+    from ocio_vp.exports.templating import template_dir
+
+    loader = jinja2.FileSystemLoader(str(template_dir()))
+    env = jinja2.Environment(loader=loader, autoescape=True, undefined=jinja2.StrictUndefined)
+    with staged_dir(out_dir.parent) as stage:
+        folder = stage / "report"
+        (folder / "img").mkdir(parents=True)
+
+        def png(name: str) -> tuple[Path, str]:
+            return folder / "img" / name, f"img/{name}"
+
+        summary_images = {}
+        for kind in ("lit", "displayed"):
+            path, link = png(f"error_{kind}.png")
+            report.error_bars[kind] = plot_error_bars(environments, kind, path, dpi=dpi)
+            summary_images[kind] = link
+        sections = []
+        for data in environments:
+            images = {}
+            path, images["charts"] = png(f"{data.key}-charts.png")
+            report.charts[data.key] = plot_comparison_charts(data, path, dpi=dpi)
+            path, images["delta_e"] = png(f"{data.key}-delta_e.png")
+            report.delta_e[data.key] = plot_delta_e(data, path, dpi=dpi)
+            curves = linearity_curves(data.solution.linearity)
+            if curves:
+                path, images["linearity"] = png(f"{data.key}-linearity.png")
+                report.linearity[data.key] = plot_linearity(curves, path, dpi=dpi)
+            sections.append(_context(data, images))
+        html = env.get_template(TEMPLATE).render(
+            summary=_summary(environments),
+            summary_images=summary_images,
+            sections=sections,
+            transforms=sorted({e.transform.description for e in environments}),
+        )
+        (folder / "index.html").write_text(html, encoding="utf-8")
+        publish_dir(folder, out_dir)
+    _relocate(report, folder, out_dir)
+    return report
+
+
+def _relocate(report: Report, staged: Path, final: Path) -> None:
+    """Point the plot records at the published folder instead of the staging one."""
+    for plots in (report.error_bars, report.charts, report.delta_e, report.linearity):
+        for key, plot in plots.items():
+            plots[key] = dataclasses.replace(plot, path=final / plot.path.relative_to(staged))

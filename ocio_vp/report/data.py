@@ -1,0 +1,387 @@
+"""The numbers behind the report: charts read from ``solution.json``, made display-referred.
+
+Everything comes from ``solution.json`` (read with :func:`ocio_vp.formats.solution.load_solution`):
+``diagnostics.charts`` holds the per-patch camera RGB of the target chart and of the predicted
+(or measured) stage charts. For the screen they go through one **camera-to-display matrix** per
+camera, as the paper does ("one consistent color matrix to take all images from a camera raw
+color space to sRGB", Section 4):
+
+- when the caller knows the camera (the demo's simulated one), its camera-to-XYZ matrix
+  (:func:`ocio_vp.metrics.camera_to_xyz_matrix`) followed by XYZ -> linear sRGB;
+- when the solution names ``camera_colorspace``, colour-science's matrix from that space to
+  linear sRGB (CAT02 adaptation of the white points);
+- otherwise a 3x3 matrix fitted by least squares from the camera RGB of a target chart to the
+  linear sRGB of colour-science's ColorChecker24 (After November 2014) reference values. The
+  paper fitted its matrix on a chart in daylight; we fit on every environment's target chart of
+  the same stage and keep the one that fits best (relative residual), which is the most
+  broadband light, so a tungsten or sodium environment still looks warm or yellow on screen.
+
+Each environment is then scaled so that the target white patch's largest display channel is
+0.9, and each stage chart is first scaled so that the green channel of its white patch equals
+the target's (the paper's comparison charts do the same, Section 4), then clipped to [0, 1] and
+sRGB-encoded. Errors are never computed on these display values: Fig. 11's errors are the
+solve's own (camera RGB), and ΔE (:func:`ocio_vp.metrics.chart_errors`) goes through the
+camera-to-XYZ matrix that matches the display choice above (for the fitted case, sRGB's
+RGB-to-XYZ after the fitted matrix).
+
+References
+----------
+LeGendre, C., Lepicovsky, L., Debevec, P. (2022). Jointly Optimizing Color Rendition and
+In-Camera Backgrounds in an RGB Virtual Production Stage. DigiPro '22.
+https://doi.org/10.1145/3543664.3543681
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ocio_vp.errors import InputError
+from ocio_vp.formats.solution import Solution, load_solution
+from ocio_vp.metrics import error_relative_to_white
+
+__all__ = [
+    "CHART_KEYS",
+    "COLORCHECKER",
+    "DISPLAY_WHITE",
+    "STAGE_CHARTS",
+    "DisplayTransform",
+    "EnvironmentData",
+    "camera_to_display",
+    "colorchecker_srgb",
+    "delta_e",
+    "display_charts",
+    "environment_data",
+    "find_solutions",
+    "fit_display_matrix",
+    "infer_white_patch",
+    "patch_names",
+]
+
+#: The chart arrays every solution carries in ``diagnostics.charts``.
+CHART_KEYS = (
+    "target",
+    "lit_baseline",
+    "lit_corrected",
+    "displayed_baseline",
+    "displayed_corrected",
+)
+#: The stage charts and the error keys of ``diagnostics`` that belong to them (paper Fig. 11).
+STAGE_CHARTS = {
+    "lit_baseline": "lit_chart_error_baseline",
+    "lit_corrected": "lit_chart_error",
+    "displayed_baseline": "displayed_chart_error_baseline",
+    "displayed_corrected": "displayed_chart_error",
+}
+COLORCHECKER = "ColorChecker24 - After November 2014"
+#: Display-linear value of the target white patch's largest channel.
+DISPLAY_WHITE = 0.9
+
+
+@dataclass(frozen=True)
+class DisplayTransform:
+    """Camera RGB -> linear sRGB (``display = matrix @ camera``) and -> CIE XYZ (for ΔE).
+
+    ``description`` says where the matrices come from.
+    """
+
+    matrix: np.ndarray
+    camera_to_xyz: np.ndarray
+    description: str
+    residual: float | None = None
+
+
+@dataclass(frozen=True)
+class EnvironmentData:
+    """One environment's numbers for the report (all camera RGB unless said otherwise).
+
+    ``errors`` maps each stage chart to the solve's per-channel error relative to white;
+    ``display`` maps every chart to sRGB-encoded values in [0, 1]; ``delta_e`` maps
+    ``"CIE 2000"`` and ``"ITP"`` to per-patch ΔE of each stage chart against the target.
+    """
+
+    solution: Solution
+    path: Path
+    key: str
+    white_patch: int
+    charts: dict[str, np.ndarray]
+    errors: dict[str, np.ndarray]
+    display: dict[str, np.ndarray]
+    delta_e: dict[str, dict[str, np.ndarray]]
+    transform: DisplayTransform
+
+
+def find_solutions(paths: Sequence[str | Path]) -> list[Path]:
+    """Every ``solution.json`` named: a file, an environment folder, or a ``solve`` output.
+
+    Raises
+    ------
+    InputError
+        When a path does not exist or holds no solution.
+    """
+    found: list[Path] = []
+    for raw in paths:
+        path = Path(raw)
+        if path.is_file():
+            found.append(path)
+        elif (path / "solution.json").is_file():
+            found.append(path / "solution.json")
+        elif path.is_dir() and sorted(path.glob("*/solution.json")):
+            found.extend(sorted(path.glob("*/solution.json")))
+        elif not path.exists():
+            raise InputError("no such file or folder", source=path)
+        else:
+            raise InputError(
+                "no solution.json here or in its sub-folders; run `ocio-vp solve` first",
+                source=path,
+            )
+    return found
+
+
+def _charts(solution: Solution, source: Path) -> dict[str, np.ndarray]:
+    charts = solution.diagnostics.get("charts")
+    if not isinstance(charts, dict):
+        raise InputError(
+            "missing (re-run `ocio-vp solve`)", source=source, key="diagnostics.charts"
+        )
+    out = {}
+    n = None
+    for name in CHART_KEYS:
+        key = f"diagnostics.charts.{name}"
+        try:
+            array = np.asarray(charts.get(name), dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InputError("expected a list of [r, g, b]", source=source, key=key) from None
+        if array.ndim != 2 or array.shape[1] != 3 or not np.all(np.isfinite(array)):
+            raise InputError("expected a finite (n, 3) chart", source=source, key=key)
+        if n is not None and array.shape[0] != n:
+            raise InputError(f"expected {n} patches, got {array.shape[0]}", source=source, key=key)
+        n = array.shape[0]
+        out[name] = array
+    return out
+
+
+def infer_white_patch(solution: Solution, charts: dict[str, np.ndarray]) -> int:
+    """The chart's white patch index.
+
+    ``diagnostics.white_patch`` when the solve recorded it; otherwise the index that reproduces
+    the solve's own ``lit_chart_error_baseline`` (Fig. 11 is relative to that patch); otherwise
+    18 (ColorChecker 24) or the brightest target patch for other charts.
+    """
+    d = solution.diagnostics
+    n = charts["target"].shape[0]
+    if isinstance(d.get("white_patch"), int) and 0 <= d["white_patch"] < n:
+        return int(d["white_patch"])
+    stored = d.get("lit_chart_error_baseline")
+    if stored is not None and np.shape(stored) == (3,):
+        for index in [18, *range(n)] if n > 18 else range(n):
+            if np.min(charts["target"][index]) <= 0:
+                continue
+            redone = error_relative_to_white(charts["lit_baseline"], charts["target"], index)
+            if np.allclose(redone, stored, rtol=1e-9, atol=1e-12):
+                return index
+    return 18 if n == 24 else int(np.argmax(charts["target"].sum(axis=1)))
+
+
+def colorchecker_srgb() -> np.ndarray:
+    """Linear sRGB (D65, CAT02) of colour-science's ColorChecker24 reference, (24, 3)."""
+    import colour
+
+    checker = colour.CCS_COLOURCHECKERS[COLORCHECKER]
+    XYZ = colour.xyY_to_XYZ(np.array(list(checker.data.values())))
+    return colour.XYZ_to_RGB(XYZ, "sRGB", illuminant=checker.illuminant)
+
+
+def patch_names(n: int) -> list[str]:
+    """ColorChecker 24 patch names (reading order) for a 24-patch chart, else the indices."""
+    if n != 24:
+        return [str(j) for j in range(n)]
+    import colour
+
+    names = colour.CCS_COLOURCHECKERS[COLORCHECKER].data.keys()
+    return [f"{j} {name.split(' (')[0]}" for j, name in enumerate(names)]  # drop densities
+
+
+def fit_display_matrix(target: np.ndarray) -> tuple[np.ndarray, float]:
+    """Least-squares 3x3 ``A`` with ``A @ target_j ~ colorchecker_srgb()_j`` over 24 patches.
+
+    Returns ``(A, relative residual)``; the residual is ``|A p - s| / |s|`` (Frobenius).
+    """
+    reference = colorchecker_srgb()
+    solution, *_ = np.linalg.lstsq(np.asarray(target, dtype=np.float64), reference, rcond=None)
+    A = solution.T
+    residual = np.linalg.norm(target @ A.T - reference) / np.linalg.norm(reference)
+    return A, float(residual)
+
+
+def camera_to_display(
+    solutions: Sequence[Solution],
+    targets: Sequence[np.ndarray],
+    *,
+    camera_to_xyz: np.ndarray | None = None,
+) -> DisplayTransform:
+    """One camera-to-display (and camera-to-XYZ) matrix for solutions from the same camera.
+
+    In order of preference: ``camera_to_xyz`` given by a caller that knows the camera (the
+    demo's simulated one), then XYZ -> linear sRGB; the solutions' ``camera_colorspace``
+    (colour-science's matrices, CAT02 to sRGB's D65); a least-squares fit of the best-fitting
+    target chart to the ColorChecker24 reference in linear sRGB (see the module docstring),
+    with XYZ from sRGB's matrix; identity for a chart that is not a ColorChecker 24.
+    """
+    import colour
+
+    srgb = colour.RGB_COLOURSPACES["sRGB"]
+    if camera_to_xyz is not None:
+        camera_to_xyz = np.asarray(camera_to_xyz, dtype=np.float64)
+        return DisplayTransform(
+            srgb.matrix_XYZ_to_RGB @ camera_to_xyz,
+            camera_to_xyz,
+            "the camera's own camera-to-XYZ matrix (fitted on its spectral sensitivities), "
+            "then XYZ to linear sRGB",
+        )
+    named = {s.camera_colorspace for s in solutions if s.camera_colorspace}
+    if len(named) == 1:
+        name = named.pop()
+        space = colour.RGB_COLOURSPACES[name]
+        return DisplayTransform(
+            colour.matrix_RGB_to_RGB(space, srgb),
+            np.asarray(space.matrix_RGB_to_XYZ, dtype=np.float64),
+            f"colour-science matrix from {name} to linear sRGB (CAT02 white adaptation)",
+        )
+    best = None
+    for solution, target in zip(solutions, targets, strict=True):
+        if target.shape[0] != 24:
+            continue
+        A, residual = fit_display_matrix(target)
+        if (
+            np.isfinite(residual)
+            and np.linalg.cond(A) < 1e6
+            and (best is None or residual < best[1])
+        ):
+            best = (A, residual, solution.environment)
+    if best is None:
+        return DisplayTransform(
+            np.eye(3),
+            np.asarray(srgb.matrix_RGB_to_XYZ, dtype=np.float64),
+            "identity: the chart is not a ColorChecker 24, camera RGB shown as sRGB",
+        )
+    A, residual, environment = best
+    return DisplayTransform(
+        A,
+        srgb.matrix_RGB_to_XYZ @ A,
+        f"least-squares fit of {environment!r}'s target chart to the {COLORCHECKER} reference "
+        f"values in linear sRGB (colour-science), relative residual {residual:.1%}",
+        residual,
+    )
+
+
+def display_charts(
+    charts: dict[str, np.ndarray], matrix: np.ndarray, white_patch: int, *, match_white: bool = True
+) -> dict[str, np.ndarray]:
+    """sRGB-encoded display values of every chart, in [0, 1].
+
+    The exposure puts the target white's largest display channel at :data:`DISPLAY_WHITE`;
+    with ``match_white`` each stage chart is first scaled so its white patch's green channel
+    equals the target's (the paper's comparison charts, Section 4).
+    """
+    import colour
+
+    target = charts["target"]
+    white = matrix @ target[white_patch]
+    exposure = DISPLAY_WHITE / max(float(np.max(white)), 1e-12)
+    out = {}
+    for name, chart in charts.items():
+        scale = exposure
+        if match_white and name != "target" and chart[white_patch, 1] > 0:
+            scale *= target[white_patch, 1] / chart[white_patch, 1]
+        linear = np.clip(scale * chart @ matrix.T, 0.0, 1.0)
+        out[name] = np.asarray(colour.cctf_encoding(linear, "sRGB"), dtype=np.float64)
+    return out
+
+
+def delta_e(
+    charts: dict[str, np.ndarray], camera_to_xyz: np.ndarray, white_patch: int
+) -> dict[str, dict[str, np.ndarray]]:
+    """Per-patch CIE ΔE2000 and ΔE ITP of every stage chart against the target.
+
+    :func:`ocio_vp.metrics.chart_errors` through ``camera_to_xyz`` (its normalisation: target
+    white at Y = 1 and the Lab reference white for ΔE2000, at 100 cd/m^2 for ΔE ITP). Stage
+    charts are not re-exposed: an exposure error is a real error here.
+    """
+    from ocio_vp.metrics import chart_errors
+
+    if not (np.asarray(camera_to_xyz) @ charts["target"][white_patch])[1] > 0:
+        raise InputError("the target white patch has no luminance; ΔE is undefined")
+    out: dict[str, dict[str, np.ndarray]] = {"CIE 2000": {}, "ITP": {}}
+    for chart in STAGE_CHARTS:
+        errors = chart_errors(
+            charts[chart], charts["target"], camera_to_xyz=camera_to_xyz, white_patch=white_patch
+        )
+        out["CIE 2000"][chart] = np.asarray(errors.delta_E_2000, dtype=np.float64)
+        out["ITP"][chart] = np.asarray(errors.delta_E_ITP, dtype=np.float64)
+    return out
+
+
+def _errors(
+    diagnostics: dict, charts: dict[str, np.ndarray], white_patch: int
+) -> dict[str, np.ndarray]:
+    """The solve's Fig. 11 errors; recomputed from the charts only if an old file lacks them."""
+    out = {}
+    for chart, key in STAGE_CHARTS.items():
+        stored = diagnostics.get(key)
+        if stored is not None and np.shape(stored) == (3,):
+            out[chart] = np.asarray(stored, dtype=np.float64)
+        else:
+            out[chart] = error_relative_to_white(charts[chart], charts["target"], white_patch)
+    return out
+
+
+def environment_data(
+    paths: Sequence[str | Path],
+    *,
+    match_white: bool = True,
+    camera_to_xyz: np.ndarray | None = None,
+) -> list[EnvironmentData]:
+    """Load every solution and compute what the report shows; one display matrix per stage.
+
+    ``camera_to_xyz`` (3, 3), when the caller knows the camera, is used for every solution.
+    """
+
+    files = find_solutions(paths)
+    loaded = []
+    for index, path in enumerate(files):
+        solution = load_solution(path)
+        charts = _charts(solution, path)
+        loaded.append((index, path, solution, charts, infer_white_patch(solution, charts)))
+    groups: dict[tuple, list] = {}
+    for item in loaded:
+        s = item[2]
+        groups.setdefault((s.stage, s.measurements_sha256, s.camera_colorspace), []).append(item)
+    transforms = {
+        key: camera_to_display(
+            [i[2] for i in items], [i[3]["target"] for i in items], camera_to_xyz=camera_to_xyz
+        )
+        for key, items in groups.items()
+    }
+    out = []
+    for index, path, solution, charts, white in loaded:
+        key = (solution.stage, solution.measurements_sha256, solution.camera_colorspace)
+        transform = transforms[key]
+        diagnostics = solution.diagnostics
+        out.append(
+            EnvironmentData(
+                solution=solution,
+                path=path,
+                key=f"{index + 1:02d}-{solution.environment}",
+                white_patch=white,
+                charts=charts,
+                errors=_errors(diagnostics, charts, white),
+                display=display_charts(charts, transform.matrix, white, match_white=match_white),
+                delta_e=delta_e(charts, transform.camera_to_xyz, white),
+                transform=transform,
+            )
+        )
+    return out

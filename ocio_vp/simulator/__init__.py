@@ -1,0 +1,93 @@
+"""The spectral stage simulator: colour-science datasets, the simulated stage and its
+measurements, the ground-truth prediction of what a solution does, evaluation, sample data.
+"""
+
+from ocio_vp.simulator.data import (
+    DEFAULT_CAMERA,
+    DEFAULT_CHART,
+    DEFAULT_LEDS,
+    ENVIRONMENTS,
+    PAPER_ENVIRONMENTS,
+    SPECTRAL_SHAPE,
+    EnvironmentSpec,
+    align,
+    camera_sensitivities,
+    chart_reflectances,
+    gaussian_leds,
+    wavelengths,
+)
+from ocio_vp.simulator.evaluate import (
+    Evaluation,
+    NoiseStudy,
+    evaluate_solution,
+    format_table,
+    noise_study,
+)
+from ocio_vp.simulator.options import (
+    environments_from_args,
+    read_spectra_csv,
+    stage_options_from_args,
+)
+from ocio_vp.simulator.predict import (
+    StagePrediction,
+    predict_solution,
+    predict_stage,
+)
+from ocio_vp.simulator.samples import (
+    SAMPLE_METHOD,
+    SAMPLE_NAME,
+    simulate_and_solve,
+    write_paper_samples,
+)
+from ocio_vp.simulator.stage import (
+    DEFAULT_PANEL,
+    DEFAULT_PANEL_ALBEDO,
+    SpectralStage,
+    camera_rgb,
+    environment_spectrum,
+    paper_stage,
+    paper_stage_measurements,
+    simulate_measurements,
+    spectral_stage,
+    white_reflectance,
+)
+
+__all__ = [
+    "DEFAULT_CAMERA",
+    "DEFAULT_CHART",
+    "DEFAULT_LEDS",
+    "DEFAULT_PANEL",
+    "DEFAULT_PANEL_ALBEDO",
+    "ENVIRONMENTS",
+    "PAPER_ENVIRONMENTS",
+    "SAMPLE_METHOD",
+    "SAMPLE_NAME",
+    "SPECTRAL_SHAPE",
+    "EnvironmentSpec",
+    "Evaluation",
+    "NoiseStudy",
+    "SpectralStage",
+    "StagePrediction",
+    "align",
+    "camera_rgb",
+    "camera_sensitivities",
+    "chart_reflectances",
+    "environment_spectrum",
+    "environments_from_args",
+    "evaluate_solution",
+    "format_table",
+    "gaussian_leds",
+    "noise_study",
+    "paper_stage",
+    "paper_stage_measurements",
+    "predict_solution",
+    "predict_stage",
+    "read_spectra_csv",
+    "simulate_and_solve",
+    "simulate_measurements",
+    "spectral_stage",
+    "stage_options_from_args",
+    "wavelengths",
+    "white_reflectance",
+    "write_paper_samples",
+]

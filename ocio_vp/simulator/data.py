@@ -1,0 +1,204 @@
+"""Spectral datasets for the stage simulator, all from colour-science's offline data.
+
+Kept apart from the simulator's algorithms (:mod:`ocio_vp.simulator.stage`), as colour-science keeps
+datasets apart from algorithms. Everything is resampled onto one wavelength grid,
+:data:`SPECTRAL_SHAPE` (380-780 nm in 5 nm steps, the grid of the cameras' sensitivities).
+
+The seven environments of the paper (Fig. 5) are in :data:`ENVIRONMENTS`, with extra named
+light sources that other tools use. Choices where the paper names only a kind of light:
+
+- ``warm_white_led``: colour's ``SDS_LIGHT_SOURCES['Luxeon WW 2880']`` (a phosphor white LED).
+- ``incandescent``: CIE illuminant A (a 2856 K Planckian tungsten lamp).
+- ``indoor_daylight``: CIE illuminant ID65 (CIE 184:2009 indoor daylight: D65 through window
+  glass, which cuts the ultraviolet).
+- ``rgb_led_white``: the stage's *own* three LED spectra mixed to a camera-neutral white
+  (R = G = B), so Q must come out as the identity.
+- ``sodium_vapour``: ``SDS_LIGHT_SOURCES['LPS']``, low-pressure sodium (the 589 nm doublet).
+- ``outdoor_shade``: CIE D75 (skylight only, ~7500 K).
+- ``direct_sun``: CIE D55 (mid-morning / mid-afternoon sun plus sky, ~5500 K). D50 would serve
+  as well; D55 sits between horizon-sun D50 and overcast D65, and is what ISO 7589
+  photographic daylight approximates.
+
+Extras: ``high_pressure_sodium`` (``'HPS'``), ``d65`` (CIE D65), ``d50`` (CIE D50).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from ocio_vp.errors import InputError
+from ocio_vp.spectra import (
+    DEFAULT_CAMERA,
+    SPECTRAL_SHAPE,
+    align,
+    camera_sensitivities,
+    spectral_shape,
+    wavelengths,
+)
+
+__all__ = [
+    "DEFAULT_CAMERA",
+    "DEFAULT_CHART",
+    "DEFAULT_LEDS",
+    "ENVIRONMENTS",
+    "PAPER_ENVIRONMENTS",
+    "SPECTRAL_SHAPE",
+    "EnvironmentSpec",
+    "align",
+    "camera_sensitivities",
+    "chart_reflectances",
+    "gaussian_leds",
+    "wavelengths",
+]
+
+DEFAULT_CHART = "ColorChecker N Ohta"
+#: Paper-like narrow-band RGB LEDs: (peak nm, FWHM nm) for red, green, blue. Red AlInGaP and
+#: blue InGaN LEDs are ~20 nm wide; green InGaN is broader (~35 nm).
+DEFAULT_LEDS = ((630.0, 20.0), (525.0, 35.0), (460.0, 22.0))
+
+
+def chart_reflectances(name: str = DEFAULT_CHART) -> np.ndarray:
+    """(24, W) reflectances of a chart in ``colour.SDS_COLOURCHECKERS``, in reading order."""
+    import colour
+
+    if name not in ("ColorChecker N Ohta", "BabelColor Average"):
+        raise InputError(
+            f"unknown chart {name!r}; expected 'ColorChecker N Ohta' or 'BabelColor Average'",
+            key="chart",
+        )
+    sds = colour.SDS_COLOURCHECKERS[name]
+    return np.stack([align(sd) for sd in sds.values()])
+
+
+def gaussian_leds(primaries=DEFAULT_LEDS) -> np.ndarray:
+    """(W, 3) Gaussian LED emission spectra, unit peak, from three (peak nm, FWHM nm) pairs."""
+    import colour
+
+    pairs = [tuple(float(v) for v in p) for p in primaries]
+    if len(pairs) != 3 or any(len(p) != 2 for p in pairs):
+        raise InputError(f"expected three (peak, FWHM) pairs, got {primaries!r}", key="leds")
+    for peak, fwhm in pairs:
+        if not (300.0 <= peak <= 830.0 and 1.0 <= fwhm <= 300.0):
+            raise InputError(
+                f"LED peak {peak:g} nm / FWHM {fwhm:g} nm out of range "
+                "(peak 300-830 nm, FWHM 1-300 nm)",
+                key="leds",
+            )
+    return np.stack(
+        [align(colour.sd_gaussian(peak, fwhm, spectral_shape(), method="FWHM")) for peak, fwhm in pairs],
+        axis=1,
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# Environments: each resolves to an (unnormalised) spectrum on the grid. The simulator scales
+# it (see ocio_vp.simulator.stage.environment_spectrum); ``leds``/``camera`` are the stage's own.
+
+
+@dataclass(frozen=True)
+class EnvironmentSpec:
+    """A named environment illuminant for the simulator.
+
+    ``spectrum(leds, camera)`` returns the (W,) relative spectral distribution; only the
+    stage's own RGB-LED white needs the stage. ``broadband`` marks the continuous spectra for
+    which the paper's findings (Q helps, error < 4% of white) are expected to hold.
+    """
+
+    name: str
+    description: str
+    spectrum: Callable[[np.ndarray, np.ndarray], np.ndarray]
+    broadband: bool
+
+
+def _dataset(collection: str, key: str) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    def spectrum(leds: np.ndarray, camera: np.ndarray) -> np.ndarray:
+        import colour
+
+        return align(getattr(colour, collection)[key])
+
+    return spectrum
+
+
+def _rgb_led_white(leds: np.ndarray, camera: np.ndarray) -> np.ndarray:
+    # Drive the stage's LEDs so the camera sees R = G = B: d = [SL]^-1 [1, 1, 1].
+    SL = camera.T @ leds
+    drive = np.linalg.solve(SL, np.ones(3))
+    if np.any(drive < 0):
+        raise InputError(
+            f"the stage's LEDs cannot make a camera-neutral white (drive {drive.round(4)})",
+            key="leds",
+        )
+    return leds @ drive
+
+
+def _spec(name: str, description: str, spectrum, broadband: bool) -> EnvironmentSpec:
+    return EnvironmentSpec(name, description, spectrum, broadband)
+
+
+#: The paper's seven environments (Fig. 5), in the paper's order.
+PAPER_ENVIRONMENTS = (
+    "warm_white_led",
+    "incandescent",
+    "indoor_daylight",
+    "rgb_led_white",
+    "sodium_vapour",
+    "outdoor_shade",
+    "direct_sun",
+)
+
+#: Every named environment the simulator knows, by safe name.
+ENVIRONMENTS: dict[str, EnvironmentSpec] = {
+    s.name: s
+    for s in (
+        _spec(
+            "warm_white_led",
+            "warm white phosphor LED (colour: SDS_LIGHT_SOURCES['Luxeon WW 2880'])",
+            _dataset("SDS_LIGHT_SOURCES", "Luxeon WW 2880"),
+            True,
+        ),
+        _spec(
+            "incandescent",
+            "incandescent tungsten, CIE illuminant A (2856 K)",
+            _dataset("SDS_ILLUMINANTS", "A"),
+            True,
+        ),
+        _spec(
+            "indoor_daylight",
+            "indoor daylight through window glass, CIE ID65",
+            _dataset("SDS_ILLUMINANTS", "ID65"),
+            True,
+        ),
+        _spec(
+            "rgb_led_white",
+            "the stage's own R, G, B LEDs mixed to a camera-neutral white",
+            _rgb_led_white,
+            False,
+        ),
+        _spec(
+            "sodium_vapour",
+            "low-pressure sodium vapour (colour: SDS_LIGHT_SOURCES['LPS'])",
+            _dataset("SDS_LIGHT_SOURCES", "LPS"),
+            False,
+        ),
+        _spec(
+            "outdoor_shade", "outdoors in shade, CIE D75", _dataset("SDS_ILLUMINANTS", "D75"), True
+        ),
+        _spec(
+            "direct_sun",
+            "outdoors in direct sun, CIE D55",
+            _dataset("SDS_ILLUMINANTS", "D55"),
+            True,
+        ),
+        _spec(
+            "high_pressure_sodium",
+            "high-pressure sodium (colour: SDS_LIGHT_SOURCES['HPS'])",
+            _dataset("SDS_LIGHT_SOURCES", "HPS"),
+            False,
+        ),
+        _spec("d65", "CIE D65 daylight", _dataset("SDS_ILLUMINANTS", "D65"), True),
+        _spec("d50", "CIE D50 daylight", _dataset("SDS_ILLUMINANTS", "D50"), True),
+    )
+}

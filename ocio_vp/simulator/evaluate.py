@@ -1,0 +1,195 @@
+"""Judge solves against the simulated stage's spectral truth, and how noise moves them.
+
+:func:`evaluate_solution` gives the numbers of ``ocio-vp demo``'s table (the paper's "theory"
+column, from :func:`ocio_vp.simulator.predict.predict_solution`); :func:`noise_study` re-solves an
+environment from measurements with multiplicative noise and reports how much N moves.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ocio_vp.metrics import error_relative_to_white
+from ocio_vp.simulator.data import ENVIRONMENTS
+from ocio_vp.simulator.predict import predict_solution, predict_stage
+from ocio_vp.simulator.stage import SpectralStage
+
+__all__ = ["Evaluation", "NoiseStudy", "evaluate_solution", "format_table", "noise_study"]
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """One environment's solve judged on the spectral stage (errors relative to white, (3,)).
+
+    ``lit_baseline``: chart lit through M alone; ``lit``: after Q (both with the LED drive the
+    wall can emit). ``displayed_baseline``: the background through M with the panel bounce;
+    ``displayed``: through N + offset, then Q (through M without Q where N was not solved).
+    """
+
+    environment: str
+    broadband: bool | None
+    method: str
+    cond_Q: float
+    N_solved: bool
+    N_reason: str | None
+    lit_baseline: np.ndarray
+    lit: np.ndarray
+    displayed_baseline: np.ndarray
+    displayed: np.ndarray
+    drive_clipped: bool
+    displayed_patches_clipped: int
+
+
+def evaluate_solution(stage: SpectralStage, solution, environment=None) -> Evaluation:
+    """Evaluate a :class:`~ocio_vp.formats.solution.Solution` on the stage it was simulated from.
+
+    ``environment`` (name or spectrum) defaults to ``solution.environment`` as a known name.
+    """
+    env = solution.environment if environment is None else environment
+    ours = predict_solution(stage, env, solution)
+    baseline = predict_stage(stage, env, M=solution.M)
+    white = stage.white_patch
+    spec = ENVIRONMENTS.get(solution.environment) if isinstance(env, str) else None
+    model = solution.diagnostics.get("method_notes", {}).get("model")
+    method = solution.method if model in (None, solution.method) else f"{solution.method}: {model}"
+    return Evaluation(
+        environment=solution.environment,
+        broadband=None if spec is None else spec.broadband,
+        method=method,
+        cond_Q=float(solution.diagnostics.get("cond_Q", np.nan)),
+        N_solved=solution.N is not None,
+        N_reason=solution.diagnostics.get("N_reason"),
+        lit_baseline=error_relative_to_white(baseline.lit, ours.target, white),
+        lit=error_relative_to_white(ours.lit_corrected, ours.target, white),
+        displayed_baseline=error_relative_to_white(baseline.displayed, ours.target, white),
+        displayed=error_relative_to_white(ours.displayed_corrected, ours.target, white),
+        drive_clipped=ours.lit_drive_clipped,
+        displayed_patches_clipped=int(np.count_nonzero(ours.displayed_drive_clipped)),
+    )
+
+
+def _pct(error: np.ndarray) -> str:
+    return f"{100 * float(np.mean(error)):.2f}%"
+
+
+def format_table(evaluations: Sequence[Evaluation]) -> str:
+    """The demo's summary table (errors are the mean over R, G, B relative to target white)."""
+    header = (
+        "environment",
+        "kind",
+        "method",
+        "cond(Q)",
+        "lit M-only",
+        "lit M+Q",
+        "shown M",
+        "shown N+Q",
+        "N",
+    )
+    rows = [header]
+    for e in evaluations:
+        kind = {True: "broadband", False: "narrow", None: "?"}[e.broadband]
+        rows.append(
+            (
+                e.environment,
+                kind,
+                e.method,
+                f"{e.cond_Q:.3g}",
+                _pct(e.lit_baseline),
+                _pct(e.lit),
+                _pct(e.displayed_baseline),
+                _pct(e.displayed),
+                "solved" if e.N_solved else "SKIPPED",
+            )
+        )
+    widths = [max(len(r[i]) for r in rows) for i in range(len(header))]
+    lines = ["  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)).rstrip() for r in rows]
+    for e in evaluations:
+        if not e.N_solved:
+            lines.append(f"{e.environment}: N not solved: {e.N_reason}")
+        if e.drive_clipped:
+            lines.append(
+                f"{e.environment}: the light is outside the LED gamut: the wall clips a "
+                "negative drive of M w_avg to 0 (the lit-chart errors include that)"
+            )
+    return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class NoiseStudy:
+    """How far N moves under noise: relative Frobenius change ``||N' - N|| / ||N||``."""
+
+    environment: str
+    noise: float
+    trials: int
+    cond_Q: float
+    median: float
+    p95: float
+    maximum: float
+
+
+def noise_study(
+    measurements,
+    environment: str,
+    *,
+    noise: float = 0.005,
+    trials: int = 200,
+    seed: int = 0,
+    method: str = "least-squares",
+) -> NoiseStudy:
+    """Re-solve N with every measured sample multiplied by ``1 + noise * gauss`` (independent).
+
+    All of [SL], [SRL]_j, the target chart and w_avg are perturbed, then M, Q (``method``) and
+    ``N = M Q^-1`` (paper eqs. 2, 5, 8) are solved again with no conditioning limit, and
+    compared with the noise-free N.
+    """
+    from ocio_vp.calibration.equations import condition_number, solve_M, solve_N
+    from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
+    from ocio_vp.correction.registry import QProblem, solve_post_correction
+
+    env = measurements.environment(environment)
+    beta = stage_beta(measurements)
+    white = measurements.stage.white_patch
+
+    def solve(SL, SRL, target, w_avg):
+        M = solve_M(SL)
+        problem = QProblem(
+            SL=SL, SRL=SRL, beta=beta, M=M, w_avg=w_avg, target=target, white_patch=white
+        )
+        Q = solve_post_correction(problem, method=method).Q
+        N, _ = solve_N(M, Q, max_condition=np.inf)
+        return Q, N
+
+    clean = (
+        measurements.SL,
+        measurements.SRL,
+        env.target_chart,
+        environment_w_avg(measurements, env),
+    )
+    Q, N = solve(*clean)
+    if N is None:
+        raise ValueError(f"Q is singular for {environment!r}: N cannot be solved at all")
+    rng = np.random.default_rng(seed)
+    changes = []
+    for _ in range(trials):
+        noisy = [a * (1.0 + noise * rng.standard_normal(np.shape(a))) for a in clean]
+        _, N_noisy = solve(*noisy)
+        if N_noisy is None:
+            changes.append(np.inf)
+            continue
+        changes.append(np.linalg.norm(N_noisy - N) / np.linalg.norm(N))
+    changes = np.array(changes)
+    return NoiseStudy(
+        environment=environment,
+        noise=noise,
+        trials=trials,
+        cond_Q=condition_number(Q),
+        median=float(np.median(changes)),
+        p95=float(np.percentile(changes, 95)),
+        maximum=float(np.max(changes)),
+    )

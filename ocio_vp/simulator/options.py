@@ -1,0 +1,129 @@
+"""Turn ``ocio-vp simulate`` options into simulator inputs (spectra from CSV files, LED pairs).
+
+Every bad value becomes an :class:`~ocio_vp.errors.InputError` naming the option or file.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ocio_vp.errors import InputError
+from ocio_vp.formats.measurements import PanelGeometry
+from ocio_vp.simulator.data import PAPER_ENVIRONMENTS, wavelengths
+
+__all__ = ["environments_from_args", "read_spectra_csv", "stage_options_from_args"]
+
+
+def read_spectra_csv(path: str | Path, *, columns: int) -> np.ndarray:
+    """Read ``wavelength,value...`` rows (optional header) onto the simulator grid.
+
+    Values are linearly interpolated; outside the file's wavelength range they are 0.
+
+    Returns
+    -------
+    ndarray
+        (W, columns) float64.
+    """
+    source = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError("file not found", source=source) from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise InputError(f"cannot read: {error}", source=source) from None
+    rows = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        fields = [f.strip() for f in line.replace(";", ",").split(",") if f.strip()]
+        if not fields or fields[0].startswith("#"):
+            continue
+        try:
+            values = [float(f) for f in fields]
+        except ValueError:
+            if not rows:
+                continue  # a header line
+            raise InputError(
+                f"not a number in {line!r}", source=source, key=f"line {number}"
+            ) from None
+        if len(values) != columns + 1 or not np.all(np.isfinite(values)):
+            raise InputError(
+                f"expected {columns + 1} finite numbers (wavelength and {columns} values), "
+                f"got {line!r}",
+                source=source,
+                key=f"line {number}",
+            )
+        rows.append(values)
+    data = np.array(rows, dtype=np.float64)
+    if len(data) < 2 or np.any(np.diff(data[:, 0]) <= 0):
+        raise InputError("need at least 2 rows with increasing wavelengths", source=source)
+    if np.any(data[:, 1:] < 0):
+        raise InputError("spectral values must be >= 0", source=source)
+    grid = wavelengths()
+    return np.stack(
+        [
+            np.interp(grid, data[:, 0], data[:, k], left=0.0, right=0.0)
+            for k in range(1, columns + 1)
+        ],
+        axis=1,
+    )
+
+
+def _leds(value: str) -> Any:
+    if value.lower().endswith(".csv"):
+        return read_spectra_csv(value, columns=3)
+    try:
+        pairs = [tuple(float(x) for x in item.split("/")) for item in value.split(",")]
+    except ValueError:
+        pairs = []
+    if len(pairs) != 3 or any(len(p) != 2 for p in pairs):
+        raise InputError(
+            f"expected PEAK/FWHM,PEAK/FWHM,PEAK/FWHM (nm) or a .csv file, got {value!r}",
+            key="--leds",
+        )
+    return pairs
+
+
+def _panel(value: str) -> PanelGeometry:
+    try:
+        width, height, distance = (float(x) for x in value.lower().split("x"))
+    except ValueError:
+        raise InputError(
+            f"expected WIDTHxHEIGHTxDISTANCE in metres, got {value!r}", key="--panel"
+        ) from None
+    if not (width > 0 and height > 0 and distance > 0):
+        raise InputError(f"panel sizes must be > 0, got {value!r}", key="--panel")
+    return PanelGeometry(width=width, height=height, distance=distance)
+
+
+def stage_options_from_args(args: argparse.Namespace) -> dict[str, Any]:
+    """Keyword options for :func:`ocio_vp.simulator.stage.spectral_stage` from parsed arguments."""
+    options: dict[str, Any] = {}
+    if args.camera is not None:
+        options["camera"] = args.camera
+    if args.leds is not None:
+        options["leds"] = _leds(args.leds)
+    if args.chart is not None:
+        options["chart"] = args.chart
+    if args.panel is not None:
+        options["panel"] = _panel(args.panel)
+    if args.albedo is not None:
+        options["panel_albedo"] = None if args.albedo == 0 else args.albedo
+    if args.name is not None:
+        options["name"] = args.name
+    return options
+
+
+def environments_from_args(values: list[str] | None) -> dict[str, Any]:
+    """``NAME`` or ``NAME=FILE.csv`` items -> the simulator's environments mapping."""
+    if not values:
+        return {name: name for name in PAPER_ENVIRONMENTS}
+    environments: dict[str, Any] = {}
+    for value in values:
+        name, _, path = value.partition("=")
+        if name in environments:
+            raise InputError(f"environment {name!r} given twice", key="--environment")
+        environments[name] = read_spectra_csv(path, columns=1)[:, 0] if path else name
+    return environments
