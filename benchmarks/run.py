@@ -4,7 +4,9 @@ Imports every ``benchmarks/bench_*.py``, calls its ``run(quick=...)`` and writes
 ``docs/performance.md``: the machine (CPU model, cores, RAM), the versions (Python, numpy,
 OpenColorIO, OpenImageIO, colour-science), the date, and each module's section. A module that
 fails is reported in its section (with the error) and makes the command exit 1; the others
-still run. ``--quick`` uses smaller inputs and fewer repeats (about 3 minutes on 2 cores).
+still run. ``--quick`` uses smaller inputs and fewer repeats (about 3 minutes on 2 cores). A module with a
+``DOC`` attribute (e.g. ``bench_accuracy``: ``DOC = "accuracy.md"``) writes its own document,
+``docs/<DOC>``, instead of a section of docs/performance.md.
 """
 
 from __future__ import annotations
@@ -105,6 +107,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     sections = [header(args.quick)]
+    own_docs: dict[str, str] = {}
     failed = 0
     for name in bench_modules(args.only):
         start = time.perf_counter()
@@ -117,19 +120,28 @@ def main(argv: list[str] | None = None) -> int:
             body = f"## {name}\n\n**FAILED**:\n\n```\n{traceback.format_exc()}```"
         took = time.perf_counter() - start
         print(f"benchmarks: {name} done in {took:.1f} s", file=sys.stderr, flush=True)
-        sections.append(f"{body}\n\n_(`{name}` took {took:.0f} s)_\n")
+        doc = getattr(sys.modules.get(f"benchmarks.{name}"), "DOC", None)
+        if doc and "FAILED" not in body[:200]:
+            own_docs[doc] = f"{body}\n\n_(`{name}` took {took:.0f} s)_\n"
+        else:
+            sections.append(f"{body}\n\n_(`{name}` took {took:.0f} s)_\n")
     text = "\n".join(sections)
     out = args.out or (None if args.only else str(ROOT / "docs" / "performance.md"))
     if out:
-        path = Path(out)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-        print(f"wrote {path}", file=sys.stderr)
+        _write(Path(out), text)
+        for doc, body in own_docs.items():
+            _write(ROOT / "docs" / doc, body)
     else:
-        print(text)
+        print("\n".join([text, *own_docs.values()]))
     return 1 if failed else 0
+
+
+def _write(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    tmp.write_text(text, encoding="utf-8")
+    os.replace(tmp, path)
+    print(f"wrote {path}", file=sys.stderr)
 
 
 if __name__ == "__main__":

@@ -1,5 +1,6 @@
 """The spectral stage simulator: colour-science datasets, the simulated stage and its
-measurements, the ground-truth prediction of what a solution does, evaluation, sample data.
+measurements, the ground-truth prediction of what a solution does, evaluation, sample data,
+and the ground truth on colours the chart does not contain (:mod:`ocio_vp.simulator.truth`).
 """
 
 from ocio_vp.simulator.data import (
@@ -51,8 +52,16 @@ from ocio_vp.simulator.stage import (
     spectral_stage,
     white_reflectance,
 )
+from ocio_vp.simulator.truth import (
+    CHART_DUPLICATE_TOLERANCE,
+    HeldOutErrors,
+    held_out_errors,
+    held_out_reflectances,
+    noisy_measurements,
+)
 
 __all__ = [
+    "CHART_DUPLICATE_TOLERANCE",
     "DEFAULT_CAMERA",
     "DEFAULT_CHART",
     "DEFAULT_LEDS",
@@ -65,6 +74,7 @@ __all__ = [
     "SPECTRAL_SHAPE",
     "EnvironmentSpec",
     "Evaluation",
+    "HeldOutErrors",
     "NoiseStudy",
     "SpectralStage",
     "StagePrediction",
@@ -77,7 +87,10 @@ __all__ = [
     "evaluate_solution",
     "format_table",
     "gaussian_leds",
+    "held_out_errors",
+    "held_out_reflectances",
     "noise_study",
+    "noisy_measurements",
     "paper_stage",
     "paper_stage_measurements",
     "predict_solution",

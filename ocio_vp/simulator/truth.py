@@ -1,0 +1,154 @@
+"""Ground truth on colours the chart does not contain: held-out reflectances, noisy measurements.
+
+A calibration is fitted on 24 chart patches and applied to actors, costumes and sets. This module
+judges it the way it is used:
+
+- :func:`held_out_reflectances`: reflectance sets that are *not* the chart, all from
+  colour-science's offline data: the 190 RAW to ACES v1 training reflectances, the 99 CIE 2017
+  colour evaluation samples (the TM-30 set), and a ``skin`` set (the four skin tones of colour's
+  ``PMC`` chart and CIE 1995 test colour sample 13, "human complexion"). A sample whose spectrum
+  lies within :data:`CHART_DUPLICATE_TOLERANCE` of a chart patch is dropped: it is on the chart.
+- :func:`noisy_measurements`: every photographed value (primaries, lit chart, target chart,
+  w_avg, black level) multiplied by ``1 + noise * gauss``, independently.
+- :func:`held_out_errors`: the samples lit by what the wall really emits (the solution's
+  ``M w_avg`` clipped at 0, through the stage's true LED spectra), corrected by Q, against the
+  same samples under the real light, in ΔE2000 and ΔE ITP
+  (:func:`ocio_vp.metrics.chart_errors`, through the true camera's RGB -> XYZ matrix, the
+  reference white a perfect diffuser under the real light).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+
+from ocio_vp.formats.measurements import Measurements
+from ocio_vp.metrics import camera_to_xyz_matrix, chart_errors
+from ocio_vp.simulator.data import chart_reflectances
+from ocio_vp.simulator.stage import SpectralStage, camera_rgb, environment_spectrum
+from ocio_vp.spectra import align, spectral_shape
+
+__all__ = [
+    "CHART_DUPLICATE_TOLERANCE",
+    "HeldOutErrors",
+    "held_out_errors",
+    "held_out_reflectances",
+    "noisy_measurements",
+]
+
+#: A held-out sample whose reflectance is within this (max over wavelengths) of a chart patch's
+#: counts as a chart patch and is dropped (the RAW to ACES set contains ColorChecker-like patches).
+CHART_DUPLICATE_TOLERANCE = 0.02
+
+_SKIN_PMC = ("Caucasian", "Oriental", "South Asian", "African")
+
+
+@functools.lru_cache(maxsize=4)
+def held_out_reflectances(chart: str = "ColorChecker N Ohta") -> dict[str, np.ndarray]:
+    """Reflectance sets not on ``chart``: ``{"rawtoaces": (k, W), "cie2017": ..., "skin": ...}``.
+
+    Read-only arrays on the simulator's grid; see the module docstring for the sources.
+    """
+    import colour
+    from colour.quality.cfi2017 import load_TCS_CIE2017
+
+    shape = spectral_shape()
+    training = colour.characterisation.read_training_data_rawtoaces_v1().copy().align(shape)
+    ces = load_TCS_CIE2017(shape)
+    pmc = colour.SDS_COLOURCHECKERS["PMC"]
+    skin = [align(pmc[name]) for name in _SKIN_PMC]
+    skin.append(align(colour.quality.SDS_TCS["CIE 1995"]["TCS13"]))
+    sets = {
+        "rawtoaces": np.asarray(training.values, dtype=np.float64).T,
+        "cie2017": np.asarray(ces.values, dtype=np.float64).T,
+        "skin": np.stack(skin),
+    }
+    patches = chart_reflectances(chart)
+    out = {}
+    for name, values in sets.items():
+        distance = np.abs(values[:, None, :] - patches[None]).max(axis=2).min(axis=1)
+        kept = np.clip(values[distance > CHART_DUPLICATE_TOLERANCE], 0.0, None)
+        kept.setflags(write=False)
+        out[name] = kept
+    return out
+
+
+def noisy_measurements(
+    measurements: Measurements, noise: float, rng: np.random.Generator
+) -> Measurements:
+    """``measurements`` with every photographed value times ``1 + noise * gauss`` (independent).
+
+    Primaries [SL], the lit chart [SRL]_j, every target chart, w_avg and black level.
+    """
+
+    def jitter(a):
+        if a is None:
+            return None
+        a = np.asarray(a, dtype=np.float64)
+        return a * (1.0 + noise * rng.standard_normal(a.shape))
+
+    environments = tuple(
+        dataclasses.replace(
+            e,
+            target_chart=jitter(e.target_chart),
+            w_avg=jitter(e.w_avg),
+            black_level=jitter(e.black_level),
+        )
+        for e in measurements.environments
+    )
+    return dataclasses.replace(
+        measurements,
+        SL=jitter(measurements.SL),
+        SRL=jitter(measurements.SRL),
+        environments=environments,
+    )
+
+
+@dataclass(frozen=True)
+class HeldOutErrors:
+    """Per-sample ΔE2000 and ΔE ITP of a solve on one reflectance set (both (k,))."""
+
+    delta_E_2000: np.ndarray
+    delta_E_ITP: np.ndarray
+
+
+def _camera_matrix(stage: SpectralStage) -> np.ndarray:
+    return _camera_matrix_cached(stage.camera.tobytes(), stage.camera.shape)
+
+
+@functools.lru_cache(maxsize=8)
+def _camera_matrix_cached(camera: bytes, shape: tuple[int, ...]) -> np.ndarray:
+    return camera_to_xyz_matrix(np.frombuffer(camera, dtype=np.float64).reshape(shape))
+
+
+def held_out_errors(
+    stage: SpectralStage,
+    environment,
+    *,
+    M: np.ndarray,
+    w_avg: np.ndarray,
+    Q: np.ndarray,
+    reflectances: np.ndarray,
+) -> HeldOutErrors:
+    """How a solve renders ``reflectances`` (k, W) on the stage, against the real light.
+
+    The wall emits ``clip(M w_avg, 0)`` through the stage's true LEDs; the camera sees the
+    samples lit by it, Q corrects them; the reference is the samples under ``environment``
+    (a name or spectrum, as :func:`~ocio_vp.simulator.stage.environment_spectrum`). ΔE uses the
+    stage camera's own RGB -> XYZ matrix and a perfect white diffuser under the real light as
+    the reference white.
+    """
+    spectrum = environment_spectrum(stage, environment)
+    white = camera_rgb(stage, spectrum)
+    target = np.vstack([camera_rgb(stage, reflectances * spectrum), white])
+    drive = np.clip(np.asarray(M, dtype=np.float64) @ np.asarray(w_avg, dtype=np.float64), 0, None)
+    emitted = stage.leds @ drive
+    lit = np.vstack([camera_rgb(stage, reflectances * emitted), camera_rgb(stage, emitted)])
+    corrected = lit @ np.asarray(Q, dtype=np.float64).T
+    errors = chart_errors(
+        corrected, target, camera_to_xyz=_camera_matrix(stage), white_patch=len(target) - 1
+    )
+    return HeldOutErrors(errors.delta_E_2000[:-1], errors.delta_E_ITP[:-1])
