@@ -3,7 +3,7 @@
 Chain (reference -> wall signal), for both ``LED Wall - Outer Frustum`` (M) and
 ``LED Wall - Inner Frustum`` (N + offset)::
 
-    matrix  ->  FileTransform luts/<stage>_panel_linearity.clf  ->  encoding
+    matrix  ->  FileTransform luts/<stage>_panel_linearity_<hash>.clf  ->  encoding
 
 The numbers (LUT table, encoding curves, domain) are in :mod:`ocio_vp.wall.encoding`; this module
 turns them into OCIO transforms and sidecar text for :mod:`ocio_vp.ocio.writer`.
@@ -11,6 +11,7 @@ turns them into OCIO transforms and sidecar text for :mod:`ocio_vp.ocio.writer`.
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -18,6 +19,7 @@ import numpy as np
 import PyOpenColorIO as OCIO
 
 from ocio_vp.formats.solution import Solution
+from ocio_vp.ocio.clf import clf_v3
 from ocio_vp.ocio.config import IN_FRUSTUM, OUT_OF_FRUSTUM, matrix_transform
 from ocio_vp.wall.encoding import (
     CLF_FORMAT,
@@ -29,7 +31,7 @@ from ocio_vp.wall.encoding import (
     lut_table,
 )
 
-__all__ = ["WallOutputs", "encoding_transforms", "lut_transform", "wall_outputs"]
+__all__ = ["WallOutputs", "encoding_transforms", "lut_transform", "sidecar_name", "wall_outputs"]
 
 
 def encoding_transforms(encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS) -> list:
@@ -58,6 +60,14 @@ def lut_transform(table: np.ndarray, domain_max: float):
     return OCIO.GroupTransform([*transforms, lut])
 
 
+def sidecar_name(stem: str, text: str) -> str:
+    """``<stem>_<hash>.clf``: OCIO caches files by path for the whole process, so two configs
+    whose sidecars differ must not share a file name (a host session loading two calibrations
+    of one stage would otherwise apply the first one's LUT to both)."""
+    digest = hashlib.sha256(text.encode("utf-8")).hexdigest()[:12]
+    return f"{stem}_{digest}.clf"
+
+
 @dataclass(frozen=True)
 class WallOutputs:
     """Transforms to append to the wall colorspaces, sidecar files (relative path -> text),
@@ -84,16 +94,15 @@ def wall_outputs(solution: Solution) -> WallOutputs:
     if any(channels[c]["corrected"] for c in channels):
         domain_max = lut_domain_max(encoding, peak_nits=peak_nits)
         table = lut_table(linearity, domain_max=domain_max)
-        name = f"{solution.stage}_panel_linearity.clf"
         group = lut_transform(table, domain_max)
         group.getFormatMetadata().addChildElement(
             "Description",
             f"ocio_vp panel-linearity pre-correction for stage {solution.stage}: per-channel "
             f"inverse of the measured ramp response; drive [0, {domain_max:g}] -> drive.",
         )
-        files[f"{LUT_DIR}/{name}"] = group.write(
-            formatName=CLF_FORMAT, config=OCIO.Config.CreateRaw()
-        )
+        text = clf_v3(group.write(formatName=CLF_FORMAT, config=OCIO.Config.CreateRaw()))
+        name = sidecar_name(f"{solution.stage}_panel_linearity", text)
+        files[f"{LUT_DIR}/{name}"] = text
         lut_name = name
         linearity["lut"] = {
             "file": f"{LUT_DIR}/{name}",

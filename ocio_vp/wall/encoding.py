@@ -5,7 +5,7 @@ The OCIO transforms built from them are in :mod:`ocio_vp.ocio.wall`.
 Chain (reference -> wall signal), for both ``LED Wall - Outer Frustum`` (M) and
 ``LED Wall - Inner Frustum`` (N + offset)::
 
-    matrix  ->  FileTransform luts/<stage>_panel_linearity.clf  ->  encoding
+    matrix  ->  FileTransform luts/<stage>_panel_linearity_<hash>.clf  ->  encoding
 
 The LUT is the inverse of each channel's measured response (:mod:`ocio_vp.wall.linearity`), in
 linear drive (1.0 = the level of ``primaries``). A plain 1D LUT clamps its input to [0, 1],

@@ -1,0 +1,40 @@
+"""CLF text that does not depend on the OpenColorIO version that wrote it.
+
+OCIO's CLF writer marks its ``ProcessList`` differently by version: up to 2.5 with no XML
+namespace, from 2.6 with the SMPTE ST 2136-1 one. Readers differ too (colour-science's
+``colour-clf-io`` refuses the SMPTE files but reads ``urn:AMPAS:CLF:v3.0`` ones). Every CLF this
+package writes is therefore normalised to the Academy CLF v3 header, the most widely read form:
+``<ProcessList xmlns="urn:AMPAS:CLF:v3.0" compCLFversion="3.0" ...>``. The process nodes OCIO
+writes (Matrix, Range, LUT1D, LUT3D, Exponent, Log) are all CLF v3 nodes, so only the header
+changes.
+"""
+
+from __future__ import annotations
+
+import re
+
+__all__ = ["CLF_FORMAT", "CLF_V3_NAMESPACE", "clf_v3"]
+
+CLF_FORMAT = "Academy/ASC Common LUT Format"
+CLF_V3_NAMESPACE = "urn:AMPAS:CLF:v3.0"
+
+_PROCESS_LIST = re.compile(r"<ProcessList\b([^>]*)>")
+_NAMESPACE = re.compile(r"\s+xmlns(:\w+)?\s*=\s*\"[^\"]*\"")
+_VERSION = re.compile(r"\s+compCLFversion\s*=\s*\"[^\"]*\"")
+
+
+def clf_v3(text: str) -> str:
+    """``text`` (a CLF document) with an Academy CLF v3 ``ProcessList`` header.
+
+    Examples
+    --------
+    >>> clf_v3('<ProcessList compCLFversion="3" xmlns="http://www.smpte-ra.org/ns/2136-1/2024"'
+    ...        ' id="a">')
+    '<ProcessList xmlns="urn:AMPAS:CLF:v3.0" compCLFversion="3.0" id="a">'
+    """
+    match = _PROCESS_LIST.search(text)
+    if match is None:
+        raise ValueError("not a CLF document: no <ProcessList> element")
+    attributes = _VERSION.sub("", _NAMESPACE.sub("", match.group(1)))
+    header = f'<ProcessList xmlns="{CLF_V3_NAMESPACE}" compCLFversion="3.0"{attributes}>'
+    return text[: match.start()] + header + text[match.end() :]
