@@ -154,3 +154,24 @@ def test_every_subpackage_imports_first_in_a_fresh_interpreter(package):
         [sys.executable, "-c", f"import {package}"], capture_output=True, text=True, timeout=120
     )
     assert run.returncode == 0, run.stderr.strip().splitlines()[-1:]
+
+
+def _tested_source(test_name: str) -> list[Path]:
+    """Where ``test_<package>_<module>.py`` (or ``test_<module>.py``) may point in ocio_vp/."""
+    parts = test_name.removeprefix("test_").split("_")
+    candidates = []
+    for split in range(len(parts) + 1):
+        folder, stem = "_".join(parts[:split]), "_".join(parts[split:])
+        base = PACKAGE / folder if folder else PACKAGE
+        candidates += [base / f"{stem}.py", base / stem / "__init__.py"] if stem else []
+    return [c for c in candidates if c.is_file()]
+
+
+def test_tests_mirror_the_package():
+    # tests/test_calibration_equations.py tests ocio_vp/calibration/equations.py, tests/test_report.py
+    # the report/ subpackage: a newcomer finds a module's tests by its name, and the other way.
+    tests = sorted(Path(__file__).parent.glob("test_*.py"))
+    unmatched = [
+        t.name for t in tests if t.stem != "test_architecture" and not _tested_source(t.stem)
+    ]
+    assert not unmatched, f"name these after the module or subpackage they test: {unmatched}"

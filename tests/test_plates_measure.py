@@ -31,7 +31,7 @@ def truth():
     return simulate_measurements(ENVIRONMENTS, stage=paper_stage())
 
 
-def _write_capture(folder: Path, truth, *, seed: int = 0) -> Path:
+def write_capture(folder: Path, truth, *, seed: int = 0) -> Path:
     """Render every plate of a capture (perspective, noise, a glint on one patch) + the file."""
     folder.mkdir(parents=True, exist_ok=True)
     noise = {"noise": NOISE, "read_noise": READ_NOISE, "vignetting": VIGNETTING}
@@ -93,7 +93,7 @@ def _write_capture(folder: Path, truth, *, seed: int = 0) -> Path:
 
 @pytest.fixture(scope="module")
 def capture_file(tmp_path_factory, truth) -> Path:
-    return _write_capture(tmp_path_factory.mktemp("stage") / "plates", truth)
+    return write_capture(tmp_path_factory.mktemp("stage") / "plates", truth)
 
 
 def _solve_all(measurements):
@@ -321,7 +321,7 @@ def test_detect_corners_written_back(tmp_path):
 def test_detect_through_the_command(tmp_path, truth, capsys):
     """`corners: detect` in a capture: found, used, and written back into the capture file."""
     pytest.importorskip("colour_checker_detection")
-    capture = _write_capture(tmp_path / "plates", truth)
+    capture = write_capture(tmp_path / "plates", truth)
     document = yaml.safe_load(capture.read_text())
     frontal = np.array([[100.0, 80.0], [500.0, 90.0], [495.0, 350.0], [105.0, 345.0]])
     image = render_chart(truth.SRL[:, :, 1], corners=frontal, noise=NOISE, read_noise=READ_NOISE)
@@ -343,33 +343,3 @@ def test_detect_through_the_command(tmp_path, truth, capsys):
     assert "detected" not in capsys.readouterr().out
     again = load_measurements(tmp_path / "again.yaml").SRL[:, :, 1]
     np.testing.assert_allclose(again, measured, rtol=1e-4)
-
-
-class TestCaptureFile:
-    @pytest.mark.parametrize(
-        ("edit", "message"),
-        [
-            (lambda d: d.update(formt=1), "formt: unknown key"),
-            (lambda d: d["primaries"].update(red=[10, 10, 5, 20]), "primaries.red: empty region"),
-            (lambda d: d["lit_chart"]["red"].update(corners=[[1, 2]]), "lit_chart.red.corners"),
-            (lambda d: d["chart"].update(inset=0.6), "chart.inset: expected at most 0.45"),
-            (lambda d: d["sampling"].update(method="avg"), "sampling.method: unknown method"),
-            (lambda d: d["stage"].update(white_reflectance=2), "stage.white_reflectance"),
-            (lambda d: d["lit_chart"]["red"].update(encoding="gama"), "unknown encoding"),
-        ],
-    )
-    def test_invalid(self, capture_file, edit, message):
-        from ocio_vp.errors import InputError
-
-        document = yaml.safe_load(capture_file.read_text())
-        document.setdefault("sampling", {})
-        edit(document)
-        with pytest.raises(InputError, match=message.replace(".", r"\.")) as info:
-            capture_from_dict(document, source=str(capture_file))
-        assert str(info.value).startswith(str(capture_file))
-
-    def test_paths_relative_to_the_file(self, capture_file):
-        capture = load_capture(capture_file)
-        assert capture.lit_chart["red"].plate.paths[0] == capture_file.parent / "plates/lit_red.exr"
-        assert capture.primaries["red"].plate is capture.primaries["blue"].plate  # shared plate
-        assert len(capture.lit_chart["red"].plate.flat_field) == 4

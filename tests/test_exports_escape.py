@@ -13,8 +13,8 @@ import subprocess
 
 import numpy as np
 import pytest
-from test_export_resolve import COLOURS, compile_dctl, run_dctl
-from test_export_unreal import solve_to
+from test_exports_resolve import COLOURS, compile_dctl, run_dctl
+from test_exports_unreal import solve_to
 
 from ocio_vp.cli import main
 from ocio_vp.errors import InputError

@@ -25,6 +25,8 @@ from ocio_vp.correction.validation import cross_validated_error
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import error_relative_to_white
 from ocio_vp.pipeline import DEFAULT_METHOD, solve_environment
+from ocio_vp.simulator.data import ENVIRONMENTS
+from ocio_vp.simulator.stage import simulate_measurements
 
 ATOL = 1e-10
 METHODS = ("least-squares", "white-preserving", "regularised", "diagonal", "identity", "auto")
@@ -168,10 +170,7 @@ class TestRankAware:
 
 @pytest.fixture(scope="module")
 def simulated():
-    spectral = pytest.importorskip("ocio_vp.simulator.stage")
-    from ocio_vp.simulator.data import ENVIRONMENTS
-
-    return spectral.simulate_measurements(list(ENVIRONMENTS))
+    return simulate_measurements(list(ENVIRONMENTS))
 
 
 class TestAutoOnTheSimulator:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_export_unreal import run_tool, solve_to
+from test_exports_unreal import run_tool, solve_to
 
 from ocio_vp.cli import main
 from ocio_vp.errors import InputError

@@ -12,6 +12,7 @@ Files are checked with OpenImageIO's own ``oiiotool --stats`` as a second reader
 
 from __future__ import annotations
 
+import shutil
 import subprocess
 
 import numpy as np
@@ -183,6 +184,8 @@ def _box_energy(image, rows, cols):
 
 
 def oiiotool_max(path):
+    if shutil.which("oiiotool") is None:
+        pytest.skip("oiiotool is not on PATH")
     text = subprocess.run(
         ["oiiotool", "--stats", str(path)], capture_output=True, text=True, check=True
     ).stdout
