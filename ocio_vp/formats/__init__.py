@@ -1,7 +1,8 @@
 """The file formats people and other tools depend on: measurements and solutions.
 
 - :mod:`~ocio_vp.formats.measurements`: ``ocio-vp/measurements`` v1 (YAML/JSON), strictly validated;
-- :mod:`~ocio_vp.formats.solution`: ``solution.json``, one solved environment.
+- :mod:`~ocio_vp.formats.solution`: ``solution.json``, one solved environment;
+- :mod:`~ocio_vp.formats.synthesis`: the ``synthesized`` record of a computed target chart.
 """
 
 from ocio_vp.formats.measurements import (
@@ -28,6 +29,7 @@ from ocio_vp.formats.solution import (
     load_solution,
     solution_to_json,
 )
+from ocio_vp.formats.synthesis import SynthesisRecord
 
 __all__ = [
     "CHANNELS",
@@ -40,6 +42,7 @@ __all__ = [
     "PanelGeometry",
     "Solution",
     "Stage",
+    "SynthesisRecord",
     "Validator",
     "check_safe_name",
     "load_measurements",

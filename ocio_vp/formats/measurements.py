@@ -21,6 +21,7 @@ import numpy as np
 import yaml
 
 from ocio_vp.errors import InputError, format_key_path
+from ocio_vp.formats.synthesis import SynthesisRecord, parse_synthesis, synthesis_to_dict
 
 __all__ = [
     "CHANNELS",
@@ -88,6 +89,8 @@ class Environment:
     target_chart: np.ndarray  # (n, 3)
     w_avg: np.ndarray | None = None  # (3,)
     black_level: np.ndarray | None = None  # (3,) b_camera
+    #: Set when the target chart was computed (``ocio-vp target-chart``), not photographed.
+    synthesized: SynthesisRecord | None = None
 
 
 @dataclass(frozen=True)
@@ -353,7 +356,10 @@ def _parse_environments(ctx: Validator, value: Any, n: int) -> tuple[Environment
     for i, raw in enumerate(value):
         key: tuple[str | int, ...] = ("environments", i)
         env = ctx.mapping(
-            raw, key, required=("name", "target_chart"), optional=("w_avg", "black_level")
+            raw,
+            key,
+            required=("name", "target_chart"),
+            optional=("w_avg", "black_level", "synthesized"),
         )
         name = ctx.name(env["name"], (*key, "name"))
         if name in seen:
@@ -366,8 +372,17 @@ def _parse_environments(ctx: Validator, value: Any, n: int) -> tuple[Environment
         if w_avg is not None and not np.any(w_avg > 0):
             raise ctx.error((*key, "w_avg"), "is black: the environment gives no light")
         black = ctx.rgb(env["black_level"], (*key, "black_level")) if "black_level" in env else None
+        synthesized = None
+        if "synthesized" in env:
+            synthesized = parse_synthesis(ctx, env["synthesized"], (*key, "synthesized"))
         environments.append(
-            Environment(name=name, target_chart=target, w_avg=w_avg, black_level=black)
+            Environment(
+                name=name,
+                target_chart=target,
+                w_avg=w_avg,
+                black_level=black,
+                synthesized=synthesized,
+            )
         )
     return tuple(environments)
 
@@ -463,6 +478,8 @@ def measurements_to_dict(measurements: Measurements) -> dict[str, Any]:
             entry["w_avg"] = rows(env.w_avg[None])[0]
         if env.black_level is not None:
             entry["black_level"] = rows(env.black_level[None])[0]
+        if env.synthesized is not None:
+            entry["synthesized"] = synthesis_to_dict(env.synthesized)
         data["environments"].append(entry)
     if measurements.ramps is not None:
         from ocio_vp.wall.linearity import ramps_to_dict

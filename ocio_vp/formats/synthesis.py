@@ -1,0 +1,103 @@
+"""The ``synthesized`` record of an environment whose target chart was computed, not photographed.
+
+``ocio-vp target-chart`` writes it beside the synthesized ``target_chart`` so that ``solve`` (and
+``solution.json``, and the report) can say how the target was made and what it assumes. It is
+part of the measurements file format (``docs/measurements.md``), validated as strictly as the
+rest: unknown keys, wrong types and empty texts are errors naming the key path.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+__all__ = ["SYNTHESIS_SOURCES", "SynthesisRecord", "parse_synthesis", "synthesis_to_dict"]
+
+#: Where the environment's light came from.
+SYNTHESIS_SOURCES = ("hdri", "average-rgb")
+_MAX_TEXT = 500
+_REQUIRED = ("source", "colorspace", "illuminant", "camera", "chart", "assumptions")
+_OPTIONAL = ("hdri", "cct", "duv", "warnings")
+
+
+@dataclass(frozen=True)
+class SynthesisRecord:
+    """How a synthesized target chart was made.
+
+    ``source``: ``"hdri"`` or ``"average-rgb"``; ``hdri``: the HDRI's file name (no folder);
+    ``colorspace``: the space its RGB was in; ``illuminant``: the spectrum estimate used (e.g.
+    ``"CIE daylight"``); ``cct``/``duv``: the light's correlated colour temperature (K) and
+    distance from the Planckian locus; ``camera`` and ``chart``: the camera model and the chart's
+    spectral data; ``assumptions`` and ``warnings``: one sentence each.
+    """
+
+    source: str
+    colorspace: str
+    illuminant: str
+    camera: str
+    chart: str
+    assumptions: tuple[str, ...]
+    hdri: str | None = None
+    cct: float | None = None
+    duv: float | None = None
+    warnings: tuple[str, ...] = ()
+
+
+def _text(ctx: Any, value: Any, key: tuple[str | int, ...]) -> str:
+    if not isinstance(value, str) or not value.strip() or len(value) > _MAX_TEXT:
+        raise ctx.error(key, f"expected a non-empty text of at most {_MAX_TEXT} characters")
+    if "\n" in value or "\r" in value:
+        raise ctx.error(key, "expected one line of text")
+    return value
+
+
+def _texts(ctx: Any, value: Any, key: tuple[str | int, ...], *, empty: bool) -> tuple[str, ...]:
+    if not isinstance(value, list) or (not value and not empty):
+        raise ctx.error(key, "expected a non-empty list of texts" if not empty else "expected a list")
+    return tuple(_text(ctx, v, (*key, i)) for i, v in enumerate(value))
+
+
+def parse_synthesis(ctx: Any, value: Any, key: tuple[str | int, ...]) -> SynthesisRecord:
+    """Validate an environment's ``synthesized`` mapping (``ctx``: a measurements ``Validator``)."""
+    raw = ctx.mapping(value, key, required=_REQUIRED, optional=_OPTIONAL)
+    source = raw["source"]
+    if source not in SYNTHESIS_SOURCES:
+        raise ctx.error((*key, "source"), f"expected one of {', '.join(SYNTHESIS_SOURCES)}")
+    cct = None
+    if "cct" in raw:
+        cct = ctx.number(raw["cct"], (*key, "cct"), strict=True)
+    duv = None
+    if "duv" in raw:
+        duv = ctx.number(raw["duv"], (*key, "duv"), minimum=-1.0)
+        if duv > 1.0:
+            raise ctx.error((*key, "duv"), f"expected a number in [-1, 1], got {duv!r}")
+    return SynthesisRecord(
+        source=source,
+        colorspace=_text(ctx, raw["colorspace"], (*key, "colorspace")),
+        illuminant=_text(ctx, raw["illuminant"], (*key, "illuminant")),
+        camera=_text(ctx, raw["camera"], (*key, "camera")),
+        chart=_text(ctx, raw["chart"], (*key, "chart")),
+        assumptions=_texts(ctx, raw["assumptions"], (*key, "assumptions"), empty=False),
+        hdri=_text(ctx, raw["hdri"], (*key, "hdri")) if "hdri" in raw else None,
+        cct=cct,
+        duv=duv,
+        warnings=_texts(ctx, raw.get("warnings", []), (*key, "warnings"), empty=True),
+    )
+
+
+def synthesis_to_dict(record: SynthesisRecord) -> dict[str, Any]:
+    """The record as plain types, in file key order (optional keys only when set)."""
+    data: Mapping[str, Any] = {
+        "source": record.source,
+        "hdri": record.hdri,
+        "colorspace": record.colorspace,
+        "illuminant": record.illuminant,
+        "cct": record.cct,
+        "duv": record.duv,
+        "camera": record.camera,
+        "chart": record.chart,
+        "assumptions": list(record.assumptions),
+        "warnings": list(record.warnings),
+    }
+    return {k: v for k, v in data.items() if v not in (None, [])}
