@@ -24,6 +24,7 @@ COMMANDS = (
     "apply",
     "report",
     "prepare_hdri",
+    "target_chart",
 )
 
 

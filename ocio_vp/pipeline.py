@@ -31,6 +31,7 @@ from ocio_vp.correction.validation import CLOSED_FORM_METHODS, cross_validated_e
 from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import Environment, Measurements
 from ocio_vp.formats.solution import Solution
+from ocio_vp.formats.synthesis import synthesis_to_dict, synthesis_warnings
 from ocio_vp.metrics import error_relative_to_white
 
 __all__ = ["DEFAULT_METHOD", "solve_environment", "solve_measurements"]
@@ -193,6 +194,7 @@ def solve_environment(
     )
     diagnostics.update(extra)
     warnings.extend(extra_warnings)
+    _note_synthesized(environment, diagnostics)
     return Solution(
         stage=measurements.stage.name,
         environment=environment.name,
@@ -211,6 +213,14 @@ def solve_environment(
         camera_colorspace=measurements.stage.camera_colorspace,
         linearity=_panel_linearity(measurements),
     )
+
+
+def _note_synthesized(environment: Environment, diagnostics: dict) -> None:
+    """Record a synthesized target (``ocio-vp target-chart``) and warn that it is one."""
+    if environment.synthesized is None:
+        return
+    diagnostics["synthesized_target"] = synthesis_to_dict(environment.synthesized)
+    diagnostics["warnings"].extend(synthesis_warnings(environment.synthesized))
 
 
 def _panel_linearity(measurements: Measurements) -> dict | None:

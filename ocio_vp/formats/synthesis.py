@@ -12,7 +12,13 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["SYNTHESIS_SOURCES", "SynthesisRecord", "parse_synthesis", "synthesis_to_dict"]
+__all__ = [
+    "SYNTHESIS_SOURCES",
+    "SynthesisRecord",
+    "parse_synthesis",
+    "synthesis_to_dict",
+    "synthesis_warnings",
+]
 
 #: Where the environment's light came from.
 SYNTHESIS_SOURCES = ("hdri", "average-rgb")
@@ -54,7 +60,9 @@ def _text(ctx: Any, value: Any, key: tuple[str | int, ...]) -> str:
 
 def _texts(ctx: Any, value: Any, key: tuple[str | int, ...], *, empty: bool) -> tuple[str, ...]:
     if not isinstance(value, list) or (not value and not empty):
-        raise ctx.error(key, "expected a non-empty list of texts" if not empty else "expected a list")
+        raise ctx.error(
+            key, "expected a non-empty list of texts" if not empty else "expected a list"
+        )
     return tuple(_text(ctx, v, (*key, i)) for i, v in enumerate(value))
 
 
@@ -101,3 +109,17 @@ def synthesis_to_dict(record: SynthesisRecord) -> dict[str, Any]:
         "warnings": list(record.warnings),
     }
     return {k: v for k, v in data.items() if v not in (None, [])}
+
+
+def synthesis_warnings(record: SynthesisRecord) -> list[str]:
+    """What ``solve`` tells the user about a synthesized target (first line always present)."""
+    where = f"the HDRI {record.hdri}" if record.hdri else "an average RGB"
+    light = record.illuminant
+    if record.cct is not None and record.duv is not None:
+        light += f" (CCT {record.cct:.0f} K, Duv {record.duv:+.4f})"
+    first = (
+        f"the target chart is SYNTHESIZED from {where}, not photographed: light assumed {light}, "
+        f"camera {record.camera}, chart {record.chart}; Q is only as right as these "
+        "assumptions (diagnostics.synthesized_target)"
+    )
+    return [first, *(f"synthesized target: {w}" for w in record.warnings)]

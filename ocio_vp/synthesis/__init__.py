@@ -55,6 +55,7 @@ __all__ = [
     "camera_from_matrix",
     "cct_duv",
     "chart_spectra",
+    "cie_cmfs",
     "estimate_illuminant",
     "given_illuminant",
     "match_colour",

@@ -30,17 +30,23 @@ __all__ = [
     "camera_from_dataset",
     "camera_from_matrix",
     "cie_cmfs",
+    "cie_cmfs_sds",
 ]
 
 CIE_OBSERVER = "CIE 1931 2 Degree Standard Observer"
 
 
-def cie_cmfs() -> np.ndarray:
-    """(W, 3) the CIE 1931 2-degree colour matching functions on the project's grid."""
+def cie_cmfs_sds():
+    """The CIE 1931 2-degree colour matching functions (colour ``MultiSpectralDistributions``)
+    on the project's grid."""
     import colour
 
-    cmfs = colour.MSDS_CMFS[CIE_OBSERVER].copy().align(spectral_shape())
-    return np.asarray(cmfs.values, dtype=np.float64)
+    return colour.MSDS_CMFS[CIE_OBSERVER].copy().align(spectral_shape())
+
+
+def cie_cmfs() -> np.ndarray:
+    """(W, 3) the CIE 1931 2-degree colour matching functions on the project's grid."""
+    return np.asarray(cie_cmfs_sds().values, dtype=np.float64)
 
 
 @dataclass(frozen=True)

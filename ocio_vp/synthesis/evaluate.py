@@ -73,15 +73,22 @@ def _held_out_delta_E(stage, spectrum, drive, Q, reflectances, to_xyz) -> float:
 
 
 def _one_seed(stage, truth, spectrum, synthesize, rng, noise, method, held_out, to_xyz):
+    noises = (noise[0], noise[0], noise[0], noise[1])
     SL, SRL, real, w_avg = (
-        a * (1.0 + noise * rng.standard_normal(np.shape(a))) for a in truth
+        a * (1.0 + n * rng.standard_normal(np.shape(a))) for a, n in zip(truth, noises, strict=True)
     )
     M = np.linalg.inv(SL)
     beta = stage.beta
     row = [_held_out_delta_E(stage, spectrum, M @ w_avg, np.eye(3), held_out, to_xyz)]
     for target in (real, synthesize(w_avg)):
         problem = QProblem(
-            SL=SL, SRL=SRL, beta=beta, M=M, w_avg=w_avg, target=target, white_patch=stage.white_patch
+            SL=SL,
+            SRL=SRL,
+            beta=beta,
+            M=M,
+            w_avg=w_avg,
+            target=target,
+            white_patch=stage.white_patch,
         )
         Q = solve_post_correction(problem, method=method).Q
         row.append(_held_out_delta_E(stage, spectrum, M @ w_avg, Q, held_out, to_xyz))
@@ -95,6 +102,7 @@ def study_environment(
     *,
     name: str | None = None,
     noise: float = 0.005,
+    w_avg_noise: float | None = None,
     seeds: int = 5,
     method: str = "least-squares",
     held_out: np.ndarray | None = None,
@@ -103,6 +111,8 @@ def study_environment(
 
     ``environment`` is a simulator environment name, a colour ``SpectralDistribution`` or a
     (W,) spectrum; ``synthesize(w_avg) -> (n, 3)`` makes the target from camera-RGB w_avg.
+    ``w_avg_noise`` (default ``noise``) is the noise on w_avg alone: 0 models a rendered HDRI,
+    whose w_avg has no measurement error.
     """
     spectrum = environment_spectrum(stage, environment)
     measured = simulate_measurements({"env": spectrum}, stage=stage)
@@ -113,8 +123,17 @@ def study_environment(
     chart = chart_errors(synthesize(env.w_avg), env.target_chart, camera_to_xyz=to_xyz)
     rows = np.array(
         [
-            _one_seed(stage, truth, spectrum, synthesize, np.random.default_rng(seed), noise,
-                      method, held_out, to_xyz)
+            _one_seed(
+                stage,
+                truth,
+                spectrum,
+                synthesize,
+                np.random.default_rng(seed),
+                (noise, noise if w_avg_noise is None else w_avg_noise),
+                method,
+                held_out,
+                to_xyz,
+            )
             for seed in range(seeds)
         ]
     )

@@ -70,7 +70,13 @@ def rgb_to_camera(rgb: ArrayLike, colorspace: str, camera_colorspace: str | None
         return rgb
     name = _ALIASES.get(colorspace, colorspace)
     if name not in colour.RGB_COLOURSPACES:
-        valid = [CAMERA_SPACE, "ACES2065-1", "ACEScg", "Linear Rec.709", "(colour.RGB_COLOURSPACES)"]
+        valid = [
+            CAMERA_SPACE,
+            "ACES2065-1",
+            "ACEScg",
+            "Linear Rec.709",
+            "(colour.RGB_COLOURSPACES)",
+        ]
         raise InputError(unknown_name("colour space", colorspace, valid), key="--hdri-colorspace")
     if camera_colorspace is None:
         raise InputError(
