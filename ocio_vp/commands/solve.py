@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Sequence
 
-__all__ = ["add_parser", "print_table", "run"]
+__all__ = ["add_parser", "print_linearity", "print_table", "run"]
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -52,10 +52,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument(
         "--wall-encoding",
-        choices=("linear", "gamma2.4", "pq"),
+        choices=("linear", "gamma2.4", "srgb", "pq"),
         default="linear",
         help="signal the wall colorspaces output (after M/N and the linearity LUT): linear "
-        "drive (default), gamma 2.4, or SMPTE ST 2084 PQ (see docs/linearity.md)",
+        "drive (default), gamma 2.4, sRGB (IEC 61966-2-1) or SMPTE ST 2084 PQ "
+        "(see docs/linearity.md)",
     )
     parser.add_argument(
         "--peak-nits",
@@ -106,6 +107,27 @@ def print_table(solutions: Sequence) -> None:
     for s in solutions:
         for warning in s.diagnostics.get("warnings", []):
             print(f"warning: {s.environment}: {warning}")
+    print_linearity(solutions)
+
+
+def print_linearity(solutions: Sequence) -> None:
+    """The panel-linearity summary, once: every environment shares the stage's ramps."""
+    for s in solutions:
+        linearity = s.linearity or {}
+        if not linearity.get("measured"):
+            continue
+        print(f"linearity: {linearity['summary']}")
+        for note in linearity.get("notes", []):
+            print(f"  {note}")
+        lut = linearity.get("lut")
+        if lut:
+            print(
+                f"  LUT {lut['file']}: {lut['entries']} entries, {lut['domain']}; error vs the "
+                f"exact inverse {100 * lut['max_error']:.2g}% of the level or less above 0.2% of peak"
+            )
+        for warning in linearity.get("warnings", []):
+            print(f"warning: {warning}")
+        return
 
 
 def _percent(per_channel) -> str:

@@ -114,7 +114,12 @@ def wall_transforms(solution: Solution) -> dict[str, list[OCIO.Transform]]:
 
 
 #: OCIO encoding of the wall colorspaces for each wall signal encoding (docs/linearity.md).
-WALL_SIGNAL_ENCODINGS = {"linear": "scene-linear", "gamma2.4": "sdr-video", "pq": "hdr-video"}
+WALL_SIGNAL_ENCODINGS = {
+    "linear": "scene-linear",
+    "gamma2.4": "sdr-video",
+    "srgb": "sdr-video",
+    "pq": "hdr-video",
+}
 
 
 def _wall_signal_encoding(solution: Solution) -> str:

@@ -3,10 +3,14 @@
 Chain (reference -> wall signal), for both ``LED Wall - Outer Frustum`` (M) and
 ``LED Wall - Inner Frustum`` (N + offset)::
 
-    matrix  ->  FileTransform luts/<stage>_panel_linearity_<hash>.clf  ->  encoding
+    gamma2.4, srgb, pq:  matrix  ->  encoding  ->  FileTransform luts/<sidecar>.clf (LUT)
+    linear:              matrix  ->  FileTransform luts/<sidecar>.clf (log2 shaper + LUT)
 
-The numbers (LUT table, encoding curves, domain) are in :mod:`ocio_vp.wall.encoding`; this module
-turns them into OCIO transforms and sidecar text for :mod:`ocio_vp.ocio.writer`.
+``<sidecar>`` is ``<stage>_panel_linearity_<hash>``, named by its content.
+
+The LUT is spaced in the wall's signal (see :mod:`ocio_vp.wall.encoding`, which holds the
+numbers); this module turns it into OCIO transforms and sidecar text for
+:mod:`ocio_vp.ocio.writer`.
 """
 
 from __future__ import annotations
@@ -24,14 +28,23 @@ from ocio_vp.ocio.config import IN_FRUSTUM, OUT_OF_FRUSTUM, matrix_transform
 from ocio_vp.wall.encoding import (
     CLF_FORMAT,
     DEFAULT_PEAK_NITS,
+    LINEAR_HEADROOM,
+    LOG_SHAPER_KNEE,
     LUT_DIR,
+    LinearityLut,
     check_encoding,
     lut_accuracy,
-    lut_domain_max,
     lut_table,
 )
 
-__all__ = ["WallOutputs", "encoding_transforms", "lut_transform", "sidecar_name", "wall_outputs"]
+__all__ = [
+    "WallOutputs",
+    "encoding_transforms",
+    "log_shaper_transform",
+    "lut_transform",
+    "sidecar_name",
+    "wall_outputs",
+]
 
 
 def encoding_transforms(encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS) -> list:
@@ -43,6 +56,14 @@ def encoding_transforms(encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS) 
         return [
             OCIO.ExponentTransform(value=[2.4, 2.4, 2.4, 1.0], direction=OCIO.TRANSFORM_DIR_INVERSE)
         ]
+    if encoding == "srgb":  # IEC 61966-2-1 as OCIO's moncurve (gamma 2.4, offset 0.055)
+        return [
+            OCIO.ExponentWithLinearTransform(
+                gamma=[2.4, 2.4, 2.4, 1.0],
+                offset=[0.055, 0.055, 0.055, 0.0],
+                direction=OCIO.TRANSFORM_DIR_INVERSE,
+            )
+        ]
     # The builtin takes linear nits/100.
     return [
         matrix_transform(np.eye(3) * (peak_nits / 100.0)),
@@ -50,14 +71,29 @@ def encoding_transforms(encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS) 
     ]
 
 
-def lut_transform(table: np.ndarray, domain_max: float):
-    """The sidecar as an OCIO GroupTransform: a shaper scale then the 1D LUT."""
-    lut = OCIO.Lut1DTransform(length=table.shape[0], inputHalfDomain=False)
-    lut.setInterpolation(OCIO.INTERP_LINEAR)
+def log_shaper_transform() -> OCIO.LogAffineTransform:
+    """The linear wall's log2 shaper (:func:`ocio_vp.wall.encoding.shaper`) as OCIO's
+    LogAffineTransform (a CLF ``Log`` node)."""
+    log = OCIO.LogAffineTransform(
+        logSideSlope=[1.0 / float(np.log2(1.0 + LINEAR_HEADROOM / LOG_SHAPER_KNEE))] * 3,
+        logSideOffset=[0.0] * 3,
+        linSideSlope=[1.0 / LOG_SHAPER_KNEE] * 3,
+        linSideOffset=[1.0] * 3,
+    )
+    log.setBase(2.0)
+    return log
+
+
+def lut_transform(lut: LinearityLut):
+    """The sidecar as an OCIO GroupTransform: the 1D LUT, after the log2 shaper for a linear
+    wall (the other encodings feed it their own signal)."""
+    table = lut.table
+    lut1d = OCIO.Lut1DTransform(length=table.shape[0], inputHalfDomain=False)
+    lut1d.setInterpolation(OCIO.INTERP_LINEAR)
     for i, (r, g, b) in enumerate(table):
-        lut.setValue(i, float(r), float(g), float(b))
-    transforms = [] if domain_max == 1.0 else [matrix_transform(np.eye(3) / domain_max)]
-    return OCIO.GroupTransform([*transforms, lut])
+        lut1d.setValue(i, float(r), float(g), float(b))
+    shaper = [log_shaper_transform()] if lut.encoding == "linear" else []
+    return OCIO.GroupTransform([*shaper, lut1d])
 
 
 def sidecar_name(stem: str, text: str) -> str:
@@ -66,6 +102,15 @@ def sidecar_name(stem: str, text: str) -> str:
     of one stage would otherwise apply the first one's LUT to both)."""
     digest = hashlib.sha256(text.encode("utf-8")).hexdigest()[:12]
     return f"{stem}_{digest}.clf"
+
+
+#: What the LUT takes and returns, per wall encoding (in the CLF and solution.json).
+_LUT_DOMAINS = {
+    "linear": f"drive [0, {LINEAR_HEADROOM:g}] through a log2 shaper -> drive",
+    "gamma2.4": "gamma 2.4 signal [0, 1] -> gamma 2.4 signal",
+    "srgb": "sRGB signal [0, 1] -> sRGB signal",
+    "pq": "PQ signal [0, 1] -> PQ signal",
+}
 
 
 @dataclass(frozen=True)
@@ -92,13 +137,12 @@ def wall_outputs(solution: Solution) -> WallOutputs:
     files: dict[str, str] = {}
     channels = linearity.get("channels") or {}
     if any(channels[c]["corrected"] for c in channels):
-        domain_max = lut_domain_max(encoding, peak_nits=peak_nits)
-        table = lut_table(linearity, domain_max=domain_max)
-        group = lut_transform(table, domain_max)
+        lut = lut_table(linearity, encoding, peak_nits=peak_nits)
+        group = lut_transform(lut)
         group.getFormatMetadata().addChildElement(
             "Description",
             f"ocio_vp panel-linearity pre-correction for stage {solution.stage}: per-channel "
-            f"inverse of the measured ramp response; drive [0, {domain_max:g}] -> drive.",
+            f"inverse of the measured ramp response, {_LUT_DOMAINS[encoding]}.",
         )
         text = clf_v3(group.write(formatName=CLF_FORMAT, config=OCIO.Config.CreateRaw()))
         name = sidecar_name(f"{solution.stage}_panel_linearity", text)
@@ -106,15 +150,16 @@ def wall_outputs(solution: Solution) -> WallOutputs:
         lut_name = name
         linearity["lut"] = {
             "file": f"{LUT_DIR}/{name}",
-            "entries": int(table.shape[0]),
-            "domain_max": domain_max,
-            "shaper": f"scale by 1/{domain_max:g}" if domain_max != 1.0 else "none",
-            "max_error": lut_accuracy(linearity, table, domain_max),
+            "entries": int(lut.table.shape[0]),
+            "domain": _LUT_DOMAINS[encoding],
+            **lut_accuracy(linearity, lut),
         }
 
     def chain() -> list:  # fresh objects for each colorspace
         lut = [] if lut_name is None else [OCIO.FileTransform(src=lut_name)]
-        return lut + encoding_transforms(encoding, peak_nits=peak_nits)
+        if encoding == "linear":
+            return lut
+        return encoding_transforms(encoding, peak_nits=peak_nits) + lut
 
     if not chain():
         return WallOutputs(linearity=linearity)

@@ -1,38 +1,38 @@
-"""The wall's signal: the linearity LUT table and the signal encoding, in numpy.
+"""The wall's signal: the encodings and the panel-linearity LUT, in numpy.
 
 The OCIO transforms built from them are in :mod:`ocio_vp.ocio.wall`.
 
 Chain (reference -> wall signal), for both ``LED Wall - Outer Frustum`` (M) and
 ``LED Wall - Inner Frustum`` (N + offset)::
 
-    matrix  ->  FileTransform luts/<stage>_panel_linearity_<hash>.clf  ->  encoding
+    gamma2.4, srgb, pq:  matrix  ->  encoding  ->  FileTransform luts/<sidecar>.clf (LUT)
+    linear:              matrix  ->  FileTransform luts/<sidecar>.clf (log2 shaper + LUT)
 
-The LUT is the inverse of each channel's measured response (:mod:`ocio_vp.wall.linearity`), in
-linear drive (1.0 = the level of ``primaries``). A plain 1D LUT clamps its input to [0, 1],
-and a half-domain LUT has 65536 entries (over the 4095 that stay a 1D texture on GPU hosts), so
-the sidecar is a *shaper + LUT*: a scale by ``1/H`` (a CLF Matrix node) then a 4095-entry LUT
-over drive [0, H]. Above drive 1.0 the table is the identity, which linear interpolation
-reproduces exactly, so HDR drive up to ``H`` passes unchanged; ``H`` follows the encoding:
+``<sidecar>`` is ``<stage>_panel_linearity_<hash>``, named by its content.
 
-- ``linear``: ``H`` = :data:`LINEAR_HEADROOM` (16, four stops above the ramp's top step);
-- ``gamma2.4``: ``H`` = 1 (the encoded signal cannot exceed 1.0; the wall clips there anyway);
-- ``pq``: ``H`` = ceil(10000 / peak_nits) (PQ's own ceiling, drive 1.0 shown at ``peak_nits``).
+The LUT corrects the panel's measured response ``r`` (:mod:`ocio_vp.wall.linearity`): the
+panel shown drive ``r^-1(x)`` emits ``x``. Its entries are spaced evenly **in the wall's own
+signal**, so they are dense where the wall is dark, as the wall's code values are:
 
-``H`` is a whole number and the LUT has ``floor(4094 / H) * H + 1`` entries so that drive 1.0 is
-a knot. The price is resolution below 1.0: ``floor(4094 / H)`` intervals per unit of drive
-(4094 for gamma 2.4, 255 for linear, 409 for PQ at 1000 nits).
+- ``gamma2.4``, ``srgb``, ``pq``: the LUT takes the encoded signal ``t`` in [0, 1] and returns
+  ``E(r^-1(E^-1(t)))``, the signal of the corrected drive (``E`` the encoding). A LUT1D clamps
+  its input to [0, 1], which is the encoded signal's own range; for PQ the table is the identity
+  above ``E(1)``, so HDR drive above 1.0 passes unchanged up to PQ's 10000 cd/m2.
+- ``linear``: a log2 shaper ``t = log2(1 + d / LOG_SHAPER_KNEE) / log2(1 + H / LOG_SHAPER_KNEE)``
+  (a CLF ``Log`` node) maps drive [0, H] to [0, 1], ``H`` = :data:`LINEAR_HEADROOM`, and the LUT
+  returns the corrected drive. Near black the spacing is linear (``LOG_SHAPER_KNEE`` = 0.01% of
+  the top step), above it each entry is a constant ratio of drive apart.
 
-Drive below 0 (outside the LED gamut) is sent as black, as the wall would show it.
+Drive below 0 (outside the LED gamut) reaches the LUT as a signal <= 0 and is sent as black.
+The LUT has :data:`LUT_SIZE` = 4095 entries (OCIO keeps a 1D texture on GPU hosts up to that).
 
-Encodings: ``gamma2.4`` is ``drive^(1/2.4)`` (OCIO ExponentTransform, inverse direction;
-BT.1886 with a zero black), ``pq`` is SMPTE ST 2084 of ``drive * peak_nits`` (a scale to
-OCIO's nits/100 then the builtin ``CURVE - LINEAR_to_ST-2084``).
+Encodings: ``gamma2.4`` is ``drive^(1/2.4)`` (BT.1886 with a zero black); ``srgb`` is the
+IEC 61966-2-1 piecewise curve; ``pq`` is SMPTE ST 2084 of ``drive * peak_nits``.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
@@ -44,28 +44,37 @@ if TYPE_CHECKING:
     from ocio_vp.formats.solution import Solution
 
 __all__ = [
+    "ACCURACY_BANDS",
     "DEFAULT_PEAK_NITS",
     "LINEAR_HEADROOM",
+    "LOG_SHAPER_KNEE",
     "LUT_SIZE",
     "WALL_ENCODINGS",
+    "LinearityLut",
     "apply_lut",
     "check_encoding",
+    "decode",
     "encode",
     "lut_accuracy",
-    "lut_domain_max",
+    "lut_drive",
     "lut_table",
+    "shaper",
     "with_wall_encoding",
 ]
 
-WALL_ENCODINGS = ("linear", "gamma2.4", "pq")
+WALL_ENCODINGS = ("linear", "gamma2.4", "srgb", "pq")
 DEFAULT_PEAK_NITS = 1000.0
 #: LUT domain above drive 1.0 for a linear (float) wall signal: four stops of headroom.
 LINEAR_HEADROOM = 16.0
+#: Where the linear wall's log2 shaper turns from linear to logarithmic (fraction of drive 1.0).
+LOG_SHAPER_KNEE = 1e-4
 #: <= 4095 entries: the LUT stays a 1D texture on GPU hosts (OCIO's limit for 1D textures).
 LUT_SIZE = 4095
 LUT_DIR = "luts"
 CLF_FORMAT = "Academy/ASC Common LUT Format"
-#: Dense check grid for the LUT's accuracy (drive in [0, 1]).
+#: Levels (fraction of drive 1.0) the LUT's accuracy is reported over: ``max_error`` is the
+#: worst relative error from 0.2% of peak up, the bands say where it is.
+ACCURACY_BANDS = ((0.001, 0.002), (0.002, 0.02), (0.02, 1.0))
 _CHECK_POINTS = 20001
 
 _PQ = {  # SMPTE ST 2084:2014 constants
@@ -75,6 +84,7 @@ _PQ = {  # SMPTE ST 2084:2014 constants
     "c2": 2413 / 4096 * 32,
     "c3": 2392 / 4096 * 32,
 }
+_SRGB_BREAK = 0.0031308  # IEC 61966-2-1: linear segment below this (signal 0.04045)
 
 
 def check_encoding(encoding: str, peak_nits: float) -> None:
@@ -84,18 +94,8 @@ def check_encoding(encoding: str, peak_nits: float) -> None:
         raise ValueError(f"peak_nits must be in (0, 10000], got {peak_nits!r}")
 
 
-def lut_domain_max(encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS) -> float:
-    """``H``: the largest drive the LUT passes (see the module docstring)."""
-    check_encoding(encoding, peak_nits)
-    if encoding == "gamma2.4":
-        return 1.0
-    if encoding == "pq":  # a whole number, so drive 1.0 falls on a LUT knot
-        return float(max(1, math.ceil(10000.0 / peak_nits - 1e-9)))
-    return LINEAR_HEADROOM
-
-
 def encode(drive: np.ndarray, encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS) -> np.ndarray:
-    """Numpy model of the wall encoding: linear drive (..., 3) -> wall signal.
+    """Numpy model of the wall encoding: linear drive (...) -> wall signal (negatives -> 0).
 
     Examples
     --------
@@ -103,70 +103,153 @@ def encode(drive: np.ndarray, encoding: str, *, peak_nits: float = DEFAULT_PEAK_
     [0.508078, 0.751827]
     >>> round(float(encode(np.array(0.5), "gamma2.4")), 6)
     0.749154
+    >>> [round(float(v), 6) for v in encode(np.array([0.001, 0.5]), "srgb")]
+    [0.01292, 0.735357]
     """
     check_encoding(encoding, peak_nits)
     drive = np.asarray(drive, dtype=np.float64)
     if encoding == "linear":
         return drive
+    d = np.maximum(drive, 0.0)
     if encoding == "gamma2.4":
-        return np.maximum(drive, 0.0) ** (1 / 2.4)
-    y = np.maximum(drive * peak_nits / 10000.0, 0.0) ** _PQ["m1"]
+        return d ** (1 / 2.4)
+    if encoding == "srgb":
+        return np.where(d <= _SRGB_BREAK, 12.92 * d, 1.055 * d ** (1 / 2.4) - 0.055)
+    y = (d * peak_nits / 10000.0) ** _PQ["m1"]
     return ((_PQ["c1"] + _PQ["c2"] * y) / (1 + _PQ["c3"] * y)) ** _PQ["m2"]
+
+
+def decode(
+    signal: np.ndarray, encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS
+) -> np.ndarray:
+    """Inverse of :func:`encode`: wall signal (...) -> linear drive (signal below 0 -> 0).
+
+    Examples
+    --------
+    >>> [round(float(v), 6) for v in decode(np.array([0.508078, 0.01292]), "pq")]
+    [0.1, 0.000128]
+    """
+    check_encoding(encoding, peak_nits)
+    signal = np.asarray(signal, dtype=np.float64)
+    if encoding == "linear":
+        return signal
+    t = np.maximum(signal, 0.0)
+    if encoding == "gamma2.4":
+        return t**2.4
+    if encoding == "srgb":
+        return np.where(t <= 12.92 * _SRGB_BREAK, t / 12.92, ((t + 0.055) / 1.055) ** 2.4)
+    p = t ** (1 / _PQ["m2"])
+    y = np.maximum(p - _PQ["c1"], 0.0) / (_PQ["c2"] - _PQ["c3"] * p)
+    return y ** (1 / _PQ["m1"]) * 10000.0 / peak_nits
+
+
+def shaper(drive: np.ndarray, encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS) -> np.ndarray:
+    """The LUT's input ``t`` for linear drive: the encoded signal, or the linear wall's log2
+    shaper (see the module docstring). ``t`` in [0, 1] spans the LUT.
+
+    Examples
+    --------
+    >>> [round(float(v), 6) for v in shaper(np.array([0.0, 1.0, LINEAR_HEADROOM]), "linear")]
+    [0.0, 0.768084, 1.0]
+    """
+    if encoding != "linear":
+        return encode(drive, encoding, peak_nits=peak_nits)
+    drive = np.asarray(drive, dtype=np.float64)
+    scale = np.log2(1.0 + LINEAR_HEADROOM / LOG_SHAPER_KNEE)
+    return np.log2(1.0 + np.maximum(drive, 0.0) / LOG_SHAPER_KNEE) / scale
+
+
+def _unshape(t: np.ndarray, encoding: str, peak_nits: float) -> np.ndarray:
+    if encoding != "linear":
+        return decode(t, encoding, peak_nits=peak_nits)
+    scale = np.log2(1.0 + LINEAR_HEADROOM / LOG_SHAPER_KNEE)
+    return (np.exp2(np.asarray(t, dtype=np.float64) * scale) - 1.0) * LOG_SHAPER_KNEE
 
 
 # --------------------------------------------------------------------------------------------
 # The LUT sidecar.
 
 
-def lut_table(
-    linearity: Mapping[str, Any], *, domain_max: float, size: int = LUT_SIZE
-) -> np.ndarray:
-    """The LUT (n, 3) over drive ``[0, domain_max]``: ``r^-1(x)`` for corrected channels,
-    the identity for the others and above drive 1.0.
+@dataclasses.dataclass(frozen=True)
+class LinearityLut:
+    """The panel-linearity LUT: ``table`` (n, 3) sampled at ``t = linspace(0, 1, n)`` of the
+    :func:`shaper`; its output is the wall signal (``encoding`` != linear) or the drive."""
 
-    ``n <= size`` is chosen so that drive 1.0 is a knot (``domain_max`` is a whole number):
-    the identity above it is then reproduced exactly by linear interpolation.
-    """
-    per_unit = (size - 1) // int(domain_max)
-    x = np.linspace(0.0, domain_max, per_unit * int(domain_max) + 1)
-    table = np.repeat(x[:, None], 3, axis=1)
+    table: np.ndarray
+    encoding: str
+    peak_nits: float = DEFAULT_PEAK_NITS
+
+
+def lut_table(
+    linearity: Mapping[str, Any],
+    encoding: str = "linear",
+    *,
+    peak_nits: float = DEFAULT_PEAK_NITS,
+    size: int = LUT_SIZE,
+) -> LinearityLut:
+    """The LUT: at each ``t``, ``r^-1`` of the drive ``t`` stands for, re-encoded; the
+    identity for channels that are not corrected and above drive 1.0."""
+    check_encoding(encoding, peak_nits)
+    drive = _unshape(np.linspace(0.0, 1.0, size), encoding, peak_nits)
+    table = np.repeat(drive[:, None], 3, axis=1)
     for k, name in enumerate(CHANNELS):
         channel = linearity["channels"][name]
         if channel["corrected"]:
             table[:, k] = inverse_response(
-                np.asarray(channel["drive"]), np.asarray(channel["response"]), x
+                np.asarray(channel["drive"]), np.asarray(channel["response"]), drive
             )
-    return table
+    if encoding != "linear":
+        table = encode(table, encoding, peak_nits=peak_nits)
+    return LinearityLut(table=table, encoding=encoding, peak_nits=float(peak_nits))
 
 
-def apply_lut(table: np.ndarray, domain_max: float, rgb: np.ndarray) -> np.ndarray:
-    """Numpy model of the sidecar: scale by ``1/domain_max``, clamp to [0, 1], interpolate."""
-    rgb = np.asarray(rgb, dtype=np.float64)
-    n = table.shape[0]
-    position = np.clip(rgb / domain_max, 0.0, 1.0) * (n - 1)
+def apply_lut(lut: LinearityLut, drive: np.ndarray) -> np.ndarray:
+    """Numpy model of the wall tail: linear drive (..., 3) -> shaper -> LUT (clamped to its
+    [0, 1] input, linear interpolation) = the wall signal."""
+    t = shaper(drive, lut.encoding, peak_nits=lut.peak_nits)
+    n = lut.table.shape[0]
+    position = np.clip(t, 0.0, 1.0) * (n - 1)
     index = np.minimum(np.floor(position).astype(int), n - 2)
     frac = position - index
     out = np.empty_like(position)
     for k in range(3):
-        column = table[:, k]
+        column = lut.table[:, k]
         i = index[..., k]
         out[..., k] = column[i] * (1 - frac[..., k]) + column[i + 1] * frac[..., k]
     return out
 
 
-def lut_accuracy(linearity: Mapping[str, Any], table: np.ndarray, domain_max: float) -> float:
-    """max |r(LUT(x)) - x| over drive [0, 1]: how linear the modelled panel is after the LUT."""
-    x = np.linspace(0.0, 1.0, _CHECK_POINTS)
-    corrected = apply_lut(table, domain_max, np.repeat(x[:, None], 3, axis=1))
-    worst = 0.0
+def lut_drive(lut: LinearityLut, drive: np.ndarray) -> np.ndarray:
+    """The drive the panel receives for linear ``drive``: :func:`apply_lut`, decoded."""
+    return decode(apply_lut(lut, drive), lut.encoding, peak_nits=lut.peak_nits)
+
+
+def lut_accuracy(linearity: Mapping[str, Any], lut: LinearityLut) -> dict[str, Any]:
+    """How linear the modelled panel is after the LUT: the relative error
+    ``|r(LUT(x)) - x| / x`` over ``x`` from 0.1% to 100% of drive 1.0 (log-spaced).
+
+    Returns ``max_error`` (worst above 0.2% of peak, over the corrected channels), the worst
+    per band of :data:`ACCURACY_BANDS`, and the level it occurs at.
+    """
+    x = np.geomspace(ACCURACY_BANDS[0][0], 1.0, _CHECK_POINTS)
+    out = lut_drive(lut, np.repeat(x[:, None], 3, axis=1))
+    error = np.zeros_like(x)
     for k, name in enumerate(CHANNELS):
         channel = linearity["channels"][name]
         if channel["corrected"]:
             model = response_model(np.asarray(channel["drive"]), np.asarray(channel["response"]))
             # the LUT's output can pass 1.0 by an ulp; the response is linear there
-            drive = np.clip(corrected[:, k], 0.0, 1.0)
-            worst = max(worst, float(np.max(np.abs(model(drive) - x))))
-    return worst
+            error = np.maximum(error, np.abs(model(np.clip(out[:, k], 0.0, 1.0)) - x) / x)
+    bands = []
+    for lo, hi in ACCURACY_BANDS:
+        inside = (x >= lo) & (x <= hi)
+        i = int(np.argmax(np.where(inside, error, -1.0)))
+        bands.append({"from": lo, "to": hi, "max_error": float(error[i]), "at": float(x[i])})
+    return {
+        "max_error": max(b["max_error"] for b in bands[1:]),
+        "bands": bands,
+        "definition": "max |r(LUT(x)) - x| / x, x = linear drive (1.0 = top step)",
+    }
 
 
 def with_wall_encoding(

@@ -2,37 +2,56 @@
 
 The paper assumes a linear LED volume (LeGendre et al. 2022, Section 3.2, "Panel and Camera
 Linearity") and suggests verifying it with displayed ramps and correcting it when needed. Here,
-per LED channel k:
+per LED channel k, from ramps as a camera delivers them:
 
 1. every ramp step's camera RGB ``C_i`` is projected onto that primary's column ``s_k`` of [SL]
    by least squares, ``y_i = s_k . C_i / (s_k . s_k)``, so the response is one scalar per step;
-2. the zero-drive step (flare, wall black) is subtracted and the response normalised at the top
-   step (drive 1.0, the level of ``primaries``): ``r_i = (y_i - y_0) / (y_top - y_0)``;
-3. ``r(d)`` is interpolated monotonically (PCHIP, never a polynomial) and inverted exactly
-   (bisection on the interpolant), giving the pre-correction ``d = r^-1(x)`` that makes the
-   panel linear. :mod:`ocio_vp.wall.encoding` turns it into the CLF sidecar.
+2. the camera's black and the wall's flare -- the zero-drive step, or else a separate ``black``
+   frame -- is subtracted (it may read slightly negative after the camera's own black
+   subtraction) and the response normalised at the top step (drive 1.0, the level of
+   ``primaries``): ``r_i = (y_i - y_0) / (y_top - y_0)``;
+3. the measurement noise is estimated from the ramp itself (or given as ``noise_floor``):
+   an absolute floor plus a part proportional to the level, see :func:`estimate_noise`;
+4. a ramp that *falls* by more than the noise is refused; smaller dips are removed by a
+   weighted isotonic (monotone) regression, whose merged steps become one knot, and steps
+   below the detection limit (3 noise floors) are dropped from the knots -- all named in the
+   ``linearity`` block;
+5. ``r(d)`` is interpolated monotonically through the knots (PCHIP, never a polynomial) and
+   inverted exactly (bisection on the interpolant), giving the pre-correction
+   ``d = r^-1(x)`` that makes the panel linear. :mod:`ocio_vp.wall.encoding` turns it into
+   the CLF sidecar.
 
 Only what a scene requires is modelled: a channel within :data:`LINEARITY_TOLERANCE` of linear
-is left alone, and when every channel is, no LUT is written (``solution.json`` says so).
+(absolute) and :data:`RELATIVE_TOLERANCE` of each level (where that exceeds the noise) is left
+alone; when every channel is, no LUT is written (``solution.json`` says so).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from scipy.interpolate import PchipInterpolator
+from scipy.optimize import isotonic_regression, minimize
 
 from ocio_vp.errors import InputError, format_key_path
 
 __all__ = [
     "CHANNELS",
+    "DETECTION_SIGMAS",
     "LINEARITY_TOLERANCE",
     "MIN_STEPS",
+    "QUANTIFICATION_SIGMAS",
+    "REFUSAL_SIGMAS",
+    "RELATIVE_TOLERANCE",
+    "TOP_STEP_REFUSAL",
+    "ChannelResponse",
     "Ramp",
     "channel_response",
+    "estimate_noise",
     "fit_linearity",
     "inverse_response",
     "parse_ramps",
@@ -42,20 +61,46 @@ __all__ = [
 
 CHANNELS = ("red", "green", "blue")
 #: A channel whose normalised response is within this of the identity (fraction of the top
-#: step, at every ramp step) is treated as linear: 0.2% is below what a camera ramp resolves
-#: reliably and below what the 3x3 solve itself can reach.
+#: step) at every knot, and within :data:`RELATIVE_TOLERANCE` of each level, is linear.
 LINEARITY_TOLERANCE = 0.002
+#: Relative deviation (of the level itself) that makes a channel corrected, where it exceeds
+#: the noise: a wall 50% dark at 0.3% of peak is far from linear although only 0.15% of peak off.
+RELATIVE_TOLERANCE = 0.01
 #: Fewer steps cannot show the shape of a response curve.
 MIN_STEPS = 4
+#: A step whose black-subtracted level is below this many noise floors cannot be told from
+#: black (the usual "limit of detection", 3 sigma of the blank): it is dropped from the knots.
+DETECTION_SIGMAS = 3.0
+#: Levels above this many noise floors can be quantified (the "limit of quantification"):
+#: the worst relative deviation is reported among them.
+QUANTIFICATION_SIGMAS = 10.0
+#: A step lower than an earlier one by more than this many combined noise sigmas is not noise:
+#: the ramp is refused.
+REFUSAL_SIGMAS = 5.0
+#: The top step and ``primaries`` are the same level; further apart than this (relative) they
+#: are not the same capture and the ramp is refused. Beyond the noise, a warning.
+TOP_STEP_REFUSAL = 0.5
+#: Camera exposure repeatability between two captures: the smallest top-step mismatch warned of.
+TOP_STEP_WARNING = 0.01
+_NOISE_MIN = 1e-9  # a noiseless (simulated) ramp still gets a positive floor
+_TRIM = 0.8  # the noise is refitted on this fraction of the residuals, the best-fitting ones
+#: sigma of a standard normal kept within its central 80% (|z| < 1.2816): sqrt(1 - 2 z phi(z) / 0.8)
+_TRIMMED_NORMAL = math.sqrt(
+    1 - 2 * 1.2815516 * math.exp(-(1.2815516**2) / 2) / math.sqrt(2 * math.pi) / 0.8
+)
 _RAMP_KEYS = ("drive", "camera")
+_SECTION_KEYS = ("black", "noise_floor")
 
 
 @dataclass(frozen=True)
 class Ramp:
-    """One LED channel's ramp: ``drive`` (m,) values sent to the wall, ``camera`` (m, 3) RGB."""
+    """One LED channel's ramp: ``drive`` (m,) values sent to the wall, ``camera`` (m, 3) RGB;
+    the section's optional ``black`` frame (3,) and ``noise_floor`` (fraction of the top step)."""
 
     drive: np.ndarray
     camera: np.ndarray
+    black: np.ndarray | None = None
+    noise_floor: float | None = None
 
 
 # --------------------------------------------------------------------------------------------
@@ -66,27 +111,27 @@ def _error(source: str | None, key: tuple[str | int, ...], problem: str) -> Inpu
     return InputError(problem, source=source, key=format_key_path("ramps", *key))
 
 
-def _number(value: Any, source: str | None, key: tuple[str | int, ...]) -> float:
+def _number(
+    value: Any, source: str | None, key: tuple[str | int, ...], *, negative: bool = False
+) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise _error(source, key, f"expected a number, got {type(value).__name__} {value!r}"[:80])
     number = float(value)
     if not math.isfinite(number):
         raise _error(source, key, f"expected a finite number, got {value!r}")
-    if number < 0:
+    if number < 0 and not negative:
         raise _error(source, key, f"expected a number >= 0, got {value!r}")
     return number
 
 
-def _parse_ramp(raw: Any, source: str | None, channel: str) -> Ramp:
-    if not isinstance(raw, Mapping):
-        raise _error(source, (channel,), "expected a mapping with 'drive' and 'camera'")
-    for name in raw:
-        if name not in _RAMP_KEYS:
-            raise _error(source, (channel, str(name)), "unknown key; expected drive, camera")
-    for name in _RAMP_KEYS:
-        if name not in raw:
-            raise _error(source, (channel,), f"missing required key {name!r}")
-    drive_raw, camera_raw = raw["drive"], raw["camera"]
+def _rgb(value: Any, source: str | None, key: tuple[str | int, ...]) -> list[float]:
+    """Camera RGB: finite, may be slightly negative (after the camera's black subtraction)."""
+    if not isinstance(value, (list, tuple)) or len(value) != 3:
+        raise _error(source, key, "expected [r, g, b]")
+    return [_number(v, source, (*key, j), negative=True) for j, v in enumerate(value)]
+
+
+def _check_lengths(drive_raw: Any, camera_raw: Any, source: str | None, channel: str) -> None:
     if not isinstance(drive_raw, (list, tuple)):
         raise _error(source, (channel, "drive"), "expected a list of drive values")
     if not isinstance(camera_raw, (list, tuple)):
@@ -104,13 +149,24 @@ def _parse_ramp(raw: Any, source: str | None, channel: str) -> Ramp:
             f"has {len(camera_raw)} entries but drive has {len(drive_raw)}; give one camera "
             "RGB per drive step",
         )
-    drive = np.array([_number(v, source, (channel, "drive", i)) for i, v in enumerate(drive_raw)])
-    rows = []
-    for i, rgb in enumerate(camera_raw):
-        if not isinstance(rgb, (list, tuple)) or len(rgb) != 3:
-            raise _error(source, (channel, "camera", i), "expected [r, g, b]")
-        rows.append([_number(v, source, (channel, "camera", i, j)) for j, v in enumerate(rgb)])
-    camera = np.array(rows, dtype=np.float64)
+
+
+def _parse_ramp(raw: Any, source: str | None, channel: str) -> Ramp:
+    if not isinstance(raw, Mapping):
+        raise _error(source, (channel,), "expected a mapping with 'drive' and 'camera'")
+    for name in raw:
+        if name not in _RAMP_KEYS:
+            raise _error(source, (channel, str(name)), "unknown key; expected drive, camera")
+    for name in _RAMP_KEYS:
+        if name not in raw:
+            raise _error(source, (channel,), f"missing required key {name!r}")
+    _check_lengths(raw["drive"], raw["camera"], source, channel)
+    drive = np.array(
+        [_number(v, source, (channel, "drive", i)) for i, v in enumerate(raw["drive"])]
+    )
+    camera = np.array(
+        [_rgb(rgb, source, (channel, "camera", i)) for i, rgb in enumerate(raw["camera"])]
+    )
     for i in range(1, len(drive)):
         if drive[i] <= drive[i - 1]:
             raise _error(
@@ -132,27 +188,47 @@ def _parse_ramp(raw: Any, source: str | None, channel: str) -> Ramp:
 def parse_ramps(raw: Any, *, source: str | None = None) -> dict[str, Ramp]:
     """Validate the ``ramps`` section of a measurements file (see ``docs/measurements.md``).
 
+    Camera values may be negative (a camera's black subtraction leaves the zero step slightly
+    below 0); what is done with noise and dips is decided when the response is fitted.
+
     Raises
     ------
     InputError
         Naming ``ramps.<channel>.<key>[i]`` for unknown keys, fewer than :data:`MIN_STEPS`
-        steps, lengths that disagree, non-finite or negative values, drive values that do not
-        increase, a top step that is not drive 1.0 or is black.
+        steps, lengths that disagree, non-finite values, negative drive, drive values that do
+        not increase, a top step that is not drive 1.0 or is black, a bad ``black`` or
+        ``noise_floor``.
     """
     if not isinstance(raw, Mapping):
         raise _error(source, (), "expected a mapping with red, green and blue ramps")
     for name in raw:
-        if name not in CHANNELS:
-            raise _error(source, (str(name),), "unknown key; expected red, green, blue")
+        if name not in CHANNELS + _SECTION_KEYS:
+            raise _error(
+                source, (str(name),), "unknown key; expected red, green, blue, black, noise_floor"
+            )
     for name in CHANNELS:
         if name not in raw:
             raise _error(source, (), f"missing the {name!r} ramp (all three channels are needed)")
-    return {c: _parse_ramp(raw[c], source, c) for c in CHANNELS}
+    black = None if raw.get("black") is None else np.array(_rgb(raw["black"], source, ("black",)))
+    noise = raw.get("noise_floor")
+    if noise is not None:
+        noise = _number(noise, source, ("noise_floor",))
+        if not 0 < noise < 0.5:
+            raise _error(
+                source,
+                ("noise_floor",),
+                f"expected a fraction of the top step in (0, 0.5), got {noise:g}",
+            )
+    ramps = {c: _parse_ramp(raw[c], source, c) for c in CHANNELS}
+    return {
+        c: Ramp(drive=r.drive, camera=r.camera, black=black, noise_floor=noise)
+        for c, r in ramps.items()
+    }
 
 
 def ramps_to_dict(ramps: Mapping[str, Ramp]) -> dict[str, Any]:
     """The inverse of :func:`parse_ramps` (plain Python types)."""
-    return {
+    data: dict[str, Any] = {
         c: {
             "drive": [float(v) for v in ramps[c].drive],
             "camera": [[float(v) for v in row] for row in ramps[c].camera],
@@ -160,10 +236,172 @@ def ramps_to_dict(ramps: Mapping[str, Ramp]) -> dict[str, Any]:
         for c in CHANNELS
         if c in ramps
     }
+    first = next(iter(ramps.values()), None)
+    if first is not None and first.black is not None:
+        data["black"] = [float(v) for v in first.black]
+    if first is not None and first.noise_floor is not None:
+        data["noise_floor"] = float(first.noise_floor)
+    return data
+
+
+# --------------------------------------------------------------------------------------------
+# Noise and the monotone fit.
+
+
+def _pseudo_residuals(drive: np.ndarray, response: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each interior step against the quadratic through three neighbours (Gasser, Sroka &
+    Jennen-Steinmetz 1986, one order up so a curved response adds little), scaled to the noise
+    of one step: ``(r_i - sum w_j r_j) / sqrt(1 + sum w_j^2)``. Returns (levels, residuals)."""
+    m = len(drive)
+    levels, residuals = [], []
+    for i in range(1, m - 1):
+        others = [i - 1, i + 1, i + 2 if i + 2 < m else i - 2]
+        d = drive[others]
+        w = np.array(
+            [
+                np.prod([(drive[i] - d[k]) / (d[j] - d[k]) for k in range(3) if k != j])
+                for j in range(3)
+            ]
+        )
+        levels.append(response[i])
+        residuals.append((response[i] - w @ response[others]) / math.sqrt(1.0 + w @ w))
+    return np.array(levels), np.array(residuals)
+
+
+def estimate_noise(drive: np.ndarray, response: np.ndarray) -> tuple[float, float]:
+    """The ramp's noise, ``sigma(r) = sqrt(floor^2 + (relative * r)^2)`` in fractions of the
+    top step, estimated from the step-to-step scatter (see :func:`_pseudo_residuals`).
+
+    Maximum likelihood of the two parameters for Gaussian residuals, refitted twice on the
+    80% of residuals that fit best and scaled by the trimmed normal's consistency factor, so
+    that one bad step (which spoils up to four residuals) does not widen the noise that judges
+    it.
+
+    Examples
+    --------
+    >>> d = np.linspace(0, 1, 65)
+    >>> noise = np.random.default_rng(0).normal(0, 0.001, 65)
+    >>> floor, relative = estimate_noise(d, d + noise)
+    >>> 0.0005 < floor < 0.002
+    True
+    """
+    levels, residuals = _pseudo_residuals(
+        np.asarray(drive, dtype=np.float64), np.asarray(response, dtype=np.float64)
+    )
+    levels = np.maximum(levels, 0.0)
+    spread = 1.4826 * float(np.median(np.abs(residuals))) + _NOISE_MIN
+    start = np.log([spread, spread / max(float(np.median(levels)), 1e-3)])
+    bounds = [(math.log(_NOISE_MIN), math.log(0.5))] * 2
+    keep = np.ones(len(residuals), dtype=bool)
+    scale = 0.0
+    for _ in range(3):
+        start = minimize(
+            _noise_nll,
+            start,
+            args=(levels[keep], residuals[keep]),
+            bounds=bounds,
+            method="L-BFGS-B",
+        ).x
+        scale = 0.0 if keep.all() else math.log(_TRIMMED_NORMAL)
+        z = np.abs(residuals) / np.sqrt(np.exp(2 * start[0]) + np.exp(2 * start[1]) * levels**2)
+        keep = z <= np.quantile(z, _TRIM)
+    return float(np.exp(start[0] - scale)), float(np.exp(start[1] - scale))
+
+
+def _noise_nll(log_sigma: np.ndarray, levels: np.ndarray, residuals: np.ndarray) -> float:
+    variance = np.exp(2 * log_sigma[0]) + np.exp(2 * log_sigma[1]) * levels**2
+    return float(np.sum(np.log(variance) + residuals**2 / variance))
+
+
+def _check_falls(
+    drive: np.ndarray, r: np.ndarray, sigma: np.ndarray, steps: np.ndarray, where: tuple
+) -> None:
+    """Refuse a ramp with a step lower than an earlier one by more than the noise:
+    ``r_i - r_j > REFUSAL_SIGMAS (sigma_i + sigma_j)`` for some ``i < j``."""
+    high = np.maximum.accumulate(r - REFUSAL_SIGMAS * sigma)
+    falls = np.nonzero(r[1:] + REFUSAL_SIGMAS * sigma[1:] < high[:-1])[0]
+    if len(falls) == 0:
+        return
+    j = int(falls[0]) + 1
+    i = int(np.argmax(r[:j] - REFUSAL_SIGMAS * sigma[:j]))
+    source, name = where
+    raise _error(
+        source,
+        (name, "camera", int(steps[j])),
+        f"response not monotone: step {steps[j]} (drive {drive[j]:g}) reads "
+        f"{100 * r[j]:.4g}% of the top step, {100 * (r[i] - r[j]):.3g}% below "
+        f"{_step_name(steps[i])} (drive {drive[i]:g}, {100 * r[i]:.4g}%): more than "
+        f"{REFUSAL_SIGMAS:g} noise sigmas ({100 * sigma[j]:.2g}% there), so not noise; "
+        "check that step's capture",
+    )
+
+
+def _step_name(step: int) -> str:
+    return "the assumed black" if step < 0 else f"step {step}"
+
+
+def _monotone_knots(
+    drive: np.ndarray, r: np.ndarray, sigma: np.ndarray, limit: float
+) -> tuple[np.ndarray, np.ndarray, dict[str, list]]:
+    """Weighted isotonic regression of the interior steps (black fixed at 0, top at 1).
+
+    Each block the regression pools becomes one knot at its weighted mean drive, so the knots
+    increase strictly; blocks below ``limit`` (the detection limit) or reaching the top are
+    dropped. Returns knot drive, knot response and the indices (into ``r``) of the ``merged``
+    blocks (more than one step), the steps ``below`` the limit and those ``at_top``.
+    """
+    weights = 1.0 / sigma[1:-1] ** 2
+    fit = isotonic_regression(r[1:-1], weights=weights, increasing=True)
+    knots_d, knots_r = [0.0], [0.0]
+    groups: dict[str, list] = {"merged": [], "below": [], "at_top": []}
+    for start, stop in zip(fit.blocks[:-1], fit.blocks[1:], strict=True):
+        idx = np.arange(start, stop) + 1
+        value = float(fit.x[start])
+        if len(idx) > 1:
+            groups["merged"].append(idx.tolist())
+        if value < limit:
+            groups["below"].extend(idx.tolist())
+        elif value >= 1.0:
+            groups["at_top"].extend(idx.tolist())
+        else:
+            knots_d.append(float(np.average(drive[idx], weights=weights[idx - 1])))
+            knots_r.append(value)
+    knots_d.append(1.0)
+    knots_r.append(1.0)
+    return np.array(knots_d), np.array(knots_r), groups
 
 
 # --------------------------------------------------------------------------------------------
 # The response and its inverse.
+
+
+@dataclass(frozen=True)
+class ChannelResponse:
+    """One LED channel's fitted response (see :func:`channel_response`).
+
+    ``drive``/``response`` are the knots of the monotone model (from (0, 0) to (1, 1));
+    ``measured`` the black-subtracted, normalised response at every ramp step; ``black`` and
+    ``noise`` what was subtracted and estimated; ``below_floor``, ``merged`` and ``at_top`` the
+    ramp steps (their index in ``ramps.<channel>``) the knots leave out or pool.
+    """
+
+    drive: np.ndarray
+    response: np.ndarray
+    measured: np.ndarray
+    black: dict[str, Any]
+    noise: dict[str, Any]
+    projection_residual: float
+    below_floor: list[int] = field(default_factory=list)
+    merged: list[list[int]] = field(default_factory=list)
+    at_top: list[int] = field(default_factory=list)
+
+
+def _black(ramp: Ramp, camera_y: np.ndarray, s: np.ndarray) -> tuple[float, np.ndarray, str]:
+    if ramp.drive[0] == 0.0:
+        return float(camera_y[0]), ramp.camera[0], "zero step"
+    if ramp.black is not None:
+        return float(ramp.black @ s / (s @ s)), ramp.black, "black frame"
+    return 0.0, np.zeros(3), "assumed 0 (no zero step, no black frame)"
 
 
 def channel_response(
@@ -172,59 +410,66 @@ def channel_response(
     channel: int,
     *,
     source: str | None = None,
-) -> tuple[np.ndarray, np.ndarray, float]:
-    """Normalised panel response of one LED channel from its ramp.
+) -> ChannelResponse:
+    """Normalised panel response of one LED channel from its ramp, as a camera delivers it.
 
     Each step's camera RGB is projected onto column ``channel`` of [SL] (paper eq. 1: the
-    camera sees ``[SL] d`` for drive ``d``) by least squares; the zero-drive step is subtracted
-    (or ``r(0) = 0`` is assumed when the ramp has none) and the result divided by the top step.
+    camera sees ``[SL] d`` for drive ``d``) by least squares; the black (zero-drive step, else
+    the ``black`` frame, else 0) is subtracted and the result divided by the top step. The
+    noise is estimated (:func:`estimate_noise`) unless ``noise_floor`` is given; dips within
+    the noise are pooled by a weighted isotonic regression and steps below
+    :data:`DETECTION_SIGMAS` noise floors are dropped from the knots.
 
-    Returns
-    -------
-    drive, response : ndarray (m,)
-        Knots of the response, starting at drive 0 with response 0, ending at (1, 1).
-    projection_residual : float
-        Largest part of a step's (black-subtracted) camera RGB that is *not* along the
-        primary's column, relative to the top step: a 1D LUT cannot fix a channel whose colour
-        shifts along the ramp, and this says how much it does.
+    ``projection_residual`` is the largest part of a step's (black-subtracted) camera RGB that
+    is *not* along the primary's column, relative to the top step: a 1D LUT cannot fix a
+    channel whose colour shifts along the ramp, and this says how much it does.
 
     Raises
     ------
     InputError
-        When the projected response is not strictly increasing or the top step is not brighter
-        than the zero step.
+        When the top step is not brighter than the black, or the response falls by more than
+        :data:`REFUSAL_SIGMAS` noise sigmas (naming the step).
     """
     s = np.asarray(SL, dtype=np.float64)[:, channel]
     name = CHANNELS[channel]
     y = ramp.camera @ s / (s @ s)
-    drive, camera = ramp.drive, ramp.camera
-    if drive[0] == 0.0:
-        y0, black = y[0], camera[0]
-    else:
-        y0, black = 0.0, np.zeros(3)
-        drive, y, camera = np.r_[0.0, drive], np.r_[0.0, y], np.vstack([black, camera])
+    y0, black, black_source = _black(ramp, y, s)
+    drive, camera, steps = ramp.drive, ramp.camera, np.arange(len(ramp.drive))
+    if drive[0] != 0.0:
+        drive, y, steps = np.r_[0.0, drive], np.r_[y0, y], np.r_[-1, steps]
+        camera = np.vstack([black, camera])
     top = y[-1] - y0
-    offset = len(drive) - len(ramp.drive)
     if not top > 0:
         raise _error(
             source,
             (name, "camera", len(ramp.drive) - 1),
             f"zero top step: its projection on primaries.{name} ({y[-1]:.6g}) is not above "
-            f"the zero step's ({y0:.6g})",
+            f"the black's ({y0:.6g}, {black_source})",
         )
-    response = (y - y0) / top
-    for i in range(1, len(response)):
-        if response[i] <= response[i - 1]:
-            raise _error(
-                source,
-                (name, "camera", i - offset),
-                f"response not monotone: step {i - offset} (drive {drive[i]:g}) is "
-                f"{response[i]:.6g} of the top step, not above the step before "
-                f"({response[i - 1]:.6g})",
-            )
+    r = (y - y0) / top
+    floor, relative = estimate_noise(drive, r)
+    if ramp.noise_floor is not None:
+        floor = ramp.noise_floor
+    sigma = np.hypot(floor, relative * np.maximum(r, 0.0))
+    _check_falls(drive, r, sigma, steps, (source, name))
+    knot_d, knot_r, groups = _monotone_knots(drive, r, sigma, DETECTION_SIGMAS * floor)
     excess = (camera - black) - np.outer(y - y0, s)
-    residual = float(np.max(np.linalg.norm(excess, axis=1)) / np.linalg.norm(top * s))
-    return drive, response, residual
+    return ChannelResponse(
+        drive=knot_d,
+        response=knot_r,
+        measured=r[steps >= 0],
+        black={"source": black_source, "camera": [float(v) for v in black], "level": y0 / top},
+        noise={
+            "floor": floor,
+            "relative": relative,
+            "source": "given" if ramp.noise_floor is not None else "estimated from the ramp",
+            "detection_limit": DETECTION_SIGMAS * floor,
+        },
+        projection_residual=float(np.max(np.linalg.norm(excess, axis=1)) / np.linalg.norm(top * s)),
+        below_floor=[int(steps[i]) for i in groups["below"]],
+        merged=[[int(steps[i]) for i in block] for block in groups["merged"]],
+        at_top=[int(steps[i]) for i in groups["at_top"]],
+    )
 
 
 def response_model(drive: np.ndarray, response: np.ndarray):
@@ -233,8 +478,6 @@ def response_model(drive: np.ndarray, response: np.ndarray):
     PCHIP (Fritsch & Carlson 1980) preserves the monotonicity of the data, so its inverse
     exists; a fitted polynomial could wiggle and fold back.
     """
-    from scipy.interpolate import PchipInterpolator
-
     return PchipInterpolator(
         np.asarray(drive, float), np.asarray(response, float), extrapolate=False
     )
@@ -267,6 +510,121 @@ def inverse_response(drive: np.ndarray, response: np.ndarray, x: np.ndarray) -> 
     return np.where(inside, 0.5 * (lo + hi), x)
 
 
+# --------------------------------------------------------------------------------------------
+# The ``linearity`` block of solution.json.
+
+
+def _deviations(fit: ChannelResponse, tolerance: float) -> dict[str, Any]:
+    """Absolute and relative deviation from linear at the knots, and whether to correct."""
+    d, r = fit.drive[1:-1], fit.response[1:-1]
+    absolute = float(np.max(np.abs(fit.response - fit.drive)))
+    out: dict[str, Any] = {"max_deviation": absolute, "shadow_deviation": None}
+    if len(d) == 0:
+        out["corrected"] = absolute > tolerance
+        return out
+    relative = r / d - 1.0
+    sigma = np.hypot(fit.noise["floor"], fit.noise["relative"] * r)
+    # deviations smaller than the noise say nothing about the wall (at 0.03% of peak a 0.02%
+    # floor is 70% of the level)
+    significant = np.abs(r - d) > DETECTION_SIGMAS * sigma
+    # the worst deviation is reported where a level can be quantified (10 noise floors, where
+    # one step's own noise is 10% of it or less): further down, the largest of many noisy
+    # deviations is mostly noise
+    quantified = significant & (r >= QUANTIFICATION_SIGMAS * fit.noise["floor"])
+    if np.any(quantified):
+        i = int(np.argmax(np.where(quantified, np.abs(relative), -1.0)))
+        out["shadow_deviation"] = {"relative": float(relative[i]), "drive": float(d[i])}
+    out["corrected"] = bool(
+        absolute > tolerance or np.any(significant & (np.abs(relative) > RELATIVE_TOLERANCE))
+    )
+    return out
+
+
+def _top_step(
+    ramp: Ramp, fit: ChannelResponse, SL: np.ndarray, k: int, source: str | None
+) -> tuple[float, str | None]:
+    """How far the ramp's top step is from ``primaries``: refused beyond
+    :data:`TOP_STEP_REFUSAL`, a warning beyond the noise (and camera repeatability)."""
+    black = np.asarray(fit.black["camera"])
+    primary = SL[:, k]
+    mismatch = float(np.linalg.norm(ramp.camera[-1] - black - primary) / np.linalg.norm(primary))
+    name = CHANNELS[k]
+    if mismatch > TOP_STEP_REFUSAL:
+        raise _error(
+            source,
+            (name, "camera", len(ramp.drive) - 1),
+            f"the top step (black subtracted) differs from primaries.{name} by "
+            f"{100 * mismatch:.3g}% (more than {100 * TOP_STEP_REFUSAL:g}%): the ramp and the "
+            "primaries must be shot at the same level and exposure",
+        )
+    noise = 3.0 * math.hypot(fit.noise["floor"], fit.noise["relative"])
+    if mismatch <= max(noise, TOP_STEP_WARNING):
+        return mismatch, None
+    return mismatch, (
+        f"ramps.{name}: the top step differs from primaries.{name} by {100 * mismatch:.3g}% "
+        f"(noise {100 * noise:.2g}%, repeatability {100 * TOP_STEP_WARNING:g}%): ramps and "
+        "primaries were not shot at the same level; the response is normalised at the top step"
+    )
+
+
+def _steps_text(steps: list[int], drive: np.ndarray) -> str:
+    listed = ", ".join(map(str, steps[:8])) + (", ..." if len(steps) > 8 else "")
+    return f"step{'s' if len(steps) > 1 else ''} {listed} (drive <= {drive[max(steps)]:.3g})"
+
+
+def _channel_notes(name: str, ramp: Ramp, fit: ChannelResponse) -> list[str]:
+    """What was done to the ramp, in words (terminal and ``solution.json``)."""
+    black, noise = fit.black, fit.noise
+    rgb = ", ".join(f"{v + 0.0:.4g}" for v in black["camera"])  # + 0.0: no "-0"
+    notes = [
+        f"{name}: black ({black['source']}) camera [{rgb}] = {100 * black['level']:.3g}% of "
+        f"the top step, subtracted; noise {100 * noise['floor']:.2g}% of the top step + "
+        f"{100 * noise['relative']:.2g}% of the level ({noise['source']})"
+    ]
+    if fit.below_floor:
+        notes.append(
+            f"{name}: {_steps_text(fit.below_floor, ramp.drive)} below the detection limit "
+            f"({100 * noise['detection_limit']:.2g}% of the top step): dropped from the fit"
+        )
+    for block in fit.merged:
+        if not set(block) & set(fit.below_floor + fit.at_top):
+            notes.append(
+                f"{name}: steps {block[0]}-{block[-1]} dip within the noise: merged into one "
+                "knot by the monotone (isotonic) fit"
+            )
+    if fit.at_top:
+        notes.append(
+            f"{name}: {_steps_text(fit.at_top, ramp.drive)} read at the top step's level "
+            "within the noise: merged with it"
+        )
+    return notes
+
+
+def _summary(channels: Mapping[str, Any], tolerance: float) -> str:
+    corrected = [c for c in CHANNELS if channels[c]["corrected"]]
+    worst = max(channels[c]["max_deviation"] for c in CHANNELS)
+
+    def shadow(c: str) -> str:
+        dev = channels[c]["shadow_deviation"]
+        if dev is None:
+            return f"{c} within the noise"
+        word = "dark" if dev["relative"] < 0 else "bright"
+        return f"{c} {100 * abs(dev['relative']):.3g}% {word} at {100 * dev['drive']:.3g}% of peak"
+
+    if corrected:
+        verb = "deviates" if len(corrected) == 1 else "deviate"
+        return (
+            f"{', '.join(corrected)} {verb} from linear; worst relative to the level: "
+            f"{'; '.join(shadow(c) for c in corrected)} (largest absolute deviation "
+            f"{100 * worst:.3g}% of the top step): corrected by a per-channel 1D LUT"
+        )
+    return (
+        f"every channel is linear within {100 * tolerance:.3g}% of the top step and "
+        f"{100 * RELATIVE_TOLERANCE:.3g}% of the level above the noise (largest deviation "
+        f"{100 * worst:.3g}%; {'; '.join(shadow(c) for c in CHANNELS)}): no LUT"
+    )
+
+
 def fit_linearity(
     ramps: Mapping[str, Ramp],
     SL: np.ndarray,
@@ -276,51 +634,49 @@ def fit_linearity(
 ) -> dict[str, Any]:
     """The ``linearity`` block of ``solution.json`` from the measured ramps.
 
-    Per channel: the response knots, the largest deviation from linear over the ramp steps
-    (``max |r_i - d_i|``, a fraction of the top step), whether it is corrected (deviation above
-    ``tolerance``), the projection residual (see :func:`channel_response`) and how far the top
-    step is from ``primaries`` (they should be the same capture level).
+    Per channel: the response knots, the black subtracted, the noise, the steps dropped or
+    merged (see :func:`channel_response`), the largest deviation from linear over the knots
+    (``max |r_k - d_k|``, a fraction of the top step) and the worst relative to the level
+    (``shadow_deviation``: ``r/d - 1`` and the drive it is at), whether it is corrected, the
+    projection residual and how far the top step is from ``primaries``. ``notes`` and
+    ``warnings`` say the same in words, for the terminal.
 
     The pre-correction LUT is built from the knots when the config is written
     (:func:`ocio_vp.ocio.wall.wall_outputs`); ``corrected`` false everywhere means no LUT.
     """
     SL = np.asarray(SL, dtype=np.float64)
     channels: dict[str, Any] = {}
+    notes: list[str] = []
+    warnings: list[str] = []
     for k, name in enumerate(CHANNELS):
         ramp = ramps[name]
-        drive, response, residual = channel_response(ramp, SL, k, source=source)
-        deviation = float(np.max(np.abs(response - drive)))
-        black = ramp.camera[0] if ramp.drive[0] == 0.0 else np.zeros(3)
-        top_vs_primary = float(
-            np.linalg.norm(ramp.camera[-1] - black - SL[:, k]) / np.linalg.norm(SL[:, k])
-        )
+        fit = channel_response(ramp, SL, k, source=source)
+        top_vs_primary, warning = _top_step(ramp, fit, SL, k, source)
+        warnings += [warning] if warning else []
+        notes += _channel_notes(name, ramp, fit)
         channels[name] = {
-            "drive": drive.tolist(),
-            "response": response.tolist(),
-            "max_deviation": deviation,
-            "corrected": deviation > tolerance,
-            "projection_residual": residual,
+            "drive": fit.drive.tolist(),
+            "response": fit.response.tolist(),
+            "measured_response": fit.measured.tolist(),
+            **_deviations(fit, tolerance),
+            "black": fit.black,
+            "noise": fit.noise,
+            "below_floor": fit.below_floor,
+            "merged": fit.merged,
+            "at_top": fit.at_top,
+            "projection_residual": fit.projection_residual,
             "top_step_vs_primary": top_vs_primary,
         }
-    corrected = [c for c in CHANNELS if channels[c]["corrected"]]
-    worst = max(channels[c]["max_deviation"] for c in CHANNELS)
-    if corrected:
-        verb = "deviates" if len(corrected) == 1 else "deviate"
-        summary = (
-            f"{', '.join(corrected)} {verb} from linear by up to {100 * worst:.3g}% of the "
-            f"top step (tolerance {100 * tolerance:.3g}%): corrected by a per-channel 1D LUT"
-        )
-    else:
-        summary = (
-            f"every channel is linear within {100 * tolerance:.3g}% (largest deviation "
-            f"{100 * worst:.3g}%): no LUT"
-        )
+    corrected = any(channels[c]["corrected"] for c in CHANNELS)
     return {
         "measured": True,
-        "model": "pchip-inverse-1d-lut" if corrected else "linear",
-        "summary": summary,
+        "model": "isotonic-pchip-inverse-1d-lut" if corrected else "linear",
+        "summary": _summary(channels, tolerance),
+        "notes": notes,
+        "warnings": warnings,
         "tolerance": tolerance,
-        "max_deviation": worst,
+        "relative_tolerance": RELATIVE_TOLERANCE,
+        "max_deviation": max(channels[c]["max_deviation"] for c in CHANNELS),
         "projection": "least squares of each step's camera RGB onto the primary's column of [SL]",
         "channels": channels,
         "lut": None,
