@@ -14,7 +14,7 @@ from ocio_vp.cli import main
 from ocio_vp.formats.solution import load_solution
 from ocio_vp.ocio.clf import CLF_V3_NAMESPACE, clf_v3
 from ocio_vp.ocio.config import OUT_OF_FRUSTUM, REFERENCE
-from ocio_vp.wall.encoding import apply_lut, encode, lut_table
+from ocio_vp.wall.encoding import apply_lut, lut_table
 
 
 @pytest.fixture(scope="module")
@@ -39,11 +39,10 @@ def solved(tmp_path_factory):
 
 
 def expected_outer(folder, rgb: np.ndarray, encoding: str) -> np.ndarray:
-    """numpy model of the outer wall: M, clamp to the LUT's domain, the LUT, the encoding."""
+    """numpy model of the outer wall: M, the encoding (or the linear wall's log shaper), the
+    LUT clamped to its [0, 1] domain: the wall signal."""
     solution = load_solution(folder)
-    H = solution.linearity["lut"]["domain_max"]
-    table = lut_table(solution.linearity, domain_max=H)
-    return encode(apply_lut(table, H, rgb @ solution.M.T), encoding)
+    return apply_lut(lut_table(solution.linearity, encoding), rgb @ solution.M.T)
 
 
 def test_two_calibrations_of_one_stage_in_one_process(solved):
@@ -76,14 +75,14 @@ def test_sidecar_is_clf_v3_read_by_colour(solved):
         assert f'xmlns="{CLF_V3_NAMESPACE}"' in text and 'compCLFversion="3.0"' in text
         process_list = colour_clf_io.read_clf(lut.read_bytes())
         solution = load_solution(folder)
-        H = solution.linearity["lut"]["domain_max"]
-        table = lut_table(solution.linearity, domain_max=H)
+        encoding = solution.linearity["wall_encoding"]["name"]
+        table = lut_table(solution.linearity, encoding).table
         *shaper, lut = process_list.process_nodes
         assert type(lut).__name__ == "LUT1D" and lut.array.dim == table.shape
         values = np.reshape(lut.array.values, table.shape)
         np.testing.assert_allclose(values, table, rtol=1e-7, atol=1e-9)  # float32 text
-        scale = [np.reshape(node.array.values, (3, 3)) for node in shaper]
-        np.testing.assert_allclose(scale or [np.eye(3) / H], [np.eye(3) / H])
+        # a linear wall's LUT is fed by a log2 shaper; the others by their own signal
+        assert [type(node).__name__ for node in shaper] == (["Log"] if encoding == "linear" else [])
 
 
 @pytest.mark.parametrize(

@@ -57,12 +57,15 @@ def encoding_transforms(encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS) 
             OCIO.ExponentTransform(value=[2.4, 2.4, 2.4, 1.0], direction=OCIO.TRANSFORM_DIR_INVERSE)
         ]
     if encoding == "srgb":  # IEC 61966-2-1 as OCIO's moncurve (gamma 2.4, offset 0.055)
+        # the moncurve continues its linear part below 0: clamp first (negative drive is black)
+        black = OCIO.RangeTransform(minInValue=0.0, minOutValue=0.0)
         return [
+            black,
             OCIO.ExponentWithLinearTransform(
                 gamma=[2.4, 2.4, 2.4, 1.0],
                 offset=[0.055, 0.055, 0.055, 0.0],
                 direction=OCIO.TRANSFORM_DIR_INVERSE,
-            )
+            ),
         ]
     # The builtin takes linear nits/100.
     return [

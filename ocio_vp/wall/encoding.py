@@ -126,8 +126,10 @@ def decode(
 
     Examples
     --------
-    >>> [round(float(v), 6) for v in decode(np.array([0.508078, 0.01292]), "pq")]
-    [0.1, 0.000128]
+    >>> round(float(decode(np.array(0.508078), "pq")), 6)
+    0.1
+    >>> round(float(decode(np.array(0.735357), "srgb")), 6)
+    0.5
     """
     check_encoding(encoding, peak_nits)
     signal = np.asarray(signal, dtype=np.float64)
@@ -150,7 +152,7 @@ def shaper(drive: np.ndarray, encoding: str, *, peak_nits: float = DEFAULT_PEAK_
     Examples
     --------
     >>> [round(float(v), 6) for v in shaper(np.array([0.0, 1.0, LINEAR_HEADROOM]), "linear")]
-    [0.0, 0.768084, 1.0]
+    [0.0, 0.76863, 1.0]
     """
     if encoding != "linear":
         return encode(drive, encoding, peak_nits=peak_nits)
