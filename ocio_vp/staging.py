@@ -15,7 +15,18 @@ from pathlib import Path
 
 from ocio_vp.errors import InputError
 
-__all__ = ["publish_dir", "staged_dir", "write_file_atomically"]
+__all__ = ["default_mode", "publish_dir", "staged_dir", "write_file_atomically"]
+
+
+def default_mode(*, folder: bool = False) -> int:
+    """The mode a plain ``open``/``mkdir`` would give under the current umask.
+
+    :mod:`tempfile` creates private files (0600) and folders (0700); what we publish from them
+    must look like any other output of the user's.
+    """
+    mask = os.umask(0)
+    os.umask(mask)
+    return (0o777 if folder else 0o666) & ~mask
 
 
 @contextlib.contextmanager
@@ -34,6 +45,7 @@ def staged_dir(parent: str | os.PathLike[str]) -> Iterator[Path]:
         raise InputError(f"cannot create output folder: {error.strerror}", source=parent) from None
     stage = Path(tempfile.mkdtemp(prefix=".ocio-vp-staging-", dir=parent))
     try:
+        stage.chmod(default_mode(folder=True))  # it may itself be published
         yield stage
     finally:
         shutil.rmtree(stage, ignore_errors=True)
@@ -54,11 +66,19 @@ def publish_dir(staged: Path, final: Path) -> None:
 
 
 def write_file_atomically(path: str | os.PathLike[str], data: bytes | str) -> None:
-    """Write ``data`` to ``path`` through a temporary file and a rename."""
+    """Write ``data`` to ``path`` through a temporary file and a rename.
+
+    A file that is replaced keeps its mode; a new one gets the umask's default.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        mode = path.stat().st_mode & 0o7777
+    except OSError:
+        mode = default_mode()
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
+        os.chmod(tmp, mode)
         with os.fdopen(fd, "wb") as handle:
             handle.write(data.encode("utf-8") if isinstance(data, str) else data)
         os.replace(tmp, path)
