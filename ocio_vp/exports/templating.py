@@ -1,7 +1,9 @@
-"""Find and render the jinja2 templates in the top-level ``templates/`` folder.
+"""Find and render the jinja2 templates shipped inside the package (``ocio_vp/templates``).
 
-In a source checkout the folder sits beside the package; an installed (non-editable) wheel
-ships it as data files under ``sys.prefix/share/ocio-vp/templates``.
+The source is the top-level ``templates/`` folder; ``ocio_vp/templates`` links to it and the
+build copies its files into the package, so :mod:`importlib.resources` finds them in every kind
+of install (editable, wheel, ``pip install --user``, a zip on ``sys.path``). Templates are read
+as resources, never as paths, so a zipped package works too.
 
 Autoescaping is off on purpose: each target language (Tcl, C, Markdown) needs its own
 escaping, applied explicitly through the filters registered here (``tcl``, ``c_comment``,
@@ -11,35 +13,42 @@ escaping, applied explicitly through the filters registered here (``tcl``, ``c_c
 from __future__ import annotations
 
 import functools
-import sys
-from pathlib import Path
+from importlib import resources
 from typing import Any
 
 from ocio_vp.exports.escape import c_comment, c_float, markdown_text, tcl_float, tcl_string
 
-__all__ = ["render_template", "template_dir"]
+__all__ = ["jinja_environment", "read_template", "render_template"]
+
+#: The package that holds the templates as resources.
+TEMPLATE_PACKAGE = "ocio_vp"
 
 
-def template_dir() -> Path:
-    """The folder holding ``*.j2`` templates (source checkout first, then the install)."""
-    candidates = [
-        Path(__file__).resolve().parents[2] / "templates",
-        Path(sys.prefix) / "share" / "ocio-vp" / "templates",
-    ]
-    for folder in candidates:
-        if folder.is_dir() and any(folder.glob("*.j2")):
-            return folder
-    raise FileNotFoundError(
-        "ocio-vp templates not found; looked in " + ", ".join(str(c) for c in candidates)
-    )
+def read_template(name: str) -> str:
+    """The text of template ``name`` from the package's ``templates`` resources.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the install lacks it (a broken install, not a user mistake).
+    """
+    resource = resources.files(TEMPLATE_PACKAGE).joinpath("templates", name)
+    try:
+        return resource.read_text(encoding="utf-8")
+    except (FileNotFoundError, NotADirectoryError):
+        raise FileNotFoundError(
+            f"ocio-vp template {name!r} is missing from the installed package ({resource}); "
+            "reinstall ocio-vp"
+        ) from None
 
 
 @functools.lru_cache(maxsize=1)
-def _environment() -> Any:
+def jinja_environment() -> Any:
+    """The jinja2 environment with our escaping filters, loading templates as resources."""
     import jinja2
 
     env = jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(template_dir())),
+        loader=jinja2.FunctionLoader(lambda name: (read_template(name), None, lambda: True)),
         autoescape=False,
         undefined=jinja2.StrictUndefined,
         keep_trailing_newline=True,
@@ -54,4 +63,4 @@ def _environment() -> Any:
 
 def render_template(name: str, **context: Any) -> str:
     """Render ``templates/<name>`` with ``context`` (undefined variables are an error)."""
-    return _environment().get_template(name).render(**context)
+    return jinja_environment().get_template(name).render(**context)
