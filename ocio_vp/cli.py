@@ -6,10 +6,13 @@ User mistakes (:class:`ocio_vp.errors.InputError`) end with one line on stderr a
 from __future__ import annotations
 
 import argparse
+import functools
 import importlib
 import sys
 from collections.abc import Sequence
 
+from ocio_vp import __version__
+from ocio_vp.commands.common import HelpFormatter
 from ocio_vp.errors import InputError
 
 __all__ = ["main"]
@@ -32,9 +35,17 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="ocio-vp",
         description="Colour-calibrate an RGB LED virtual-production stage and write OpenColorIO "
-        "configs (LeGendre, Lepicovsky & Debevec, DigiPro 2022).",
+        "configs (LeGendre, Lepicovsky & Debevec, DigiPro 2022). `ocio-vp COMMAND --help` "
+        "explains each command.",
+        formatter_class=HelpFormatter,
     )
-    subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    subparsers = parser.add_subparsers(
+        dest="command",
+        required=True,
+        metavar="COMMAND",
+        parser_class=functools.partial(argparse.ArgumentParser, formatter_class=HelpFormatter),
+    )
     for name in COMMANDS:
         try:
             module = importlib.import_module(f"ocio_vp.commands.{name}")

@@ -12,6 +12,7 @@ from ocio_vp.calibration.diagnostics import (
     out_of_frustum_drive,
     residuals_per_patch,
     stability_diagnostics,
+    summary_errors,
 )
 from ocio_vp.calibration.equations import (
     BLACK_LEVEL_METHODS,
@@ -57,5 +58,6 @@ __all__ = [
     "solve_N",
     "stability_diagnostics",
     "stage_beta",
+    "summary_errors",
     "w_avg_from_white_patch",
 ]

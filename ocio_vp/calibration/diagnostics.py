@@ -30,7 +30,9 @@ __all__ = [
     "out_of_frustum_drive",
     "residuals_per_patch",
     "stability_diagnostics",
+    "summary_errors",
 ]
+
 
 def residuals_per_patch(
     predicted: ArrayLike, target: ArrayLike, white_patch: int = 18, weights: ArrayLike | None = None
@@ -146,7 +148,7 @@ def stability_diagnostics(
     ``rank_target``, ``cross_validated_error`` (per channel, leave one patch out: the fit's own
     or ``cross_validated``),
     ``residuals_per_patch`` (n, 3, white-relative), ``out_of_frustum_negative_channels``,
-    ``lit_chart_error_clipped_drive`` (the lit chart when the wall clips a negative drive),
+    ``lit_chart_error[_baseline]_clipped_drive`` (when the wall clips a negative drive),
     ``in_frustum_drive_range``, ``black_level_bounce``, ``clipped_patches``,
     ``N_equals_M`` and ``identity_check``.
     """
@@ -156,10 +158,11 @@ def stability_diagnostics(
     warnings: list[str] = []
     cv = notes.get("cross_validated_error", cross_validated)
     drive = out_of_frustum_drive(M, problem.w_avg)
-    lit_clipped = None
+    lit_clipped = lit_clipped_baseline = None
     if drive["negative_channels"]:
         lit = predict_lit_chart(problem.SRL, problem.beta, np.eye(3), drive["clipped_drive"])
         lit_clipped = error_relative_to_white(lit @ Q.T, target, white, weights)
+        lit_clipped_baseline = error_relative_to_white(lit, target, white, weights)
     in_matrix = M if N is None else N
     in_range = in_frustum_drive_range(
         target, M=problem.M, matrix=in_matrix, offset=offset, white_patch=white
@@ -195,6 +198,7 @@ def stability_diagnostics(
         "residuals_per_patch": residuals_per_patch(corrected, target, white, weights),
         "out_of_frustum_negative_channels": drive["negative_channels"],
         "lit_chart_error_clipped_drive": lit_clipped,
+        "lit_chart_error_baseline_clipped_drive": lit_clipped_baseline,
         "in_frustum_drive_range": in_range,
         "black_level_bounce": None
         if black_level is None
@@ -204,6 +208,32 @@ def stability_diagnostics(
         "identity_check": identity_check(Q, problem.SL, N),
     }
     return block, warnings
+
+
+def summary_errors(diagnostics: dict[str, Any]) -> dict[str, np.ndarray | None]:
+    """The per-channel errors (relative to white, (3,)) every table shows: ``solve``, ``demo``
+    and the report all take them from here, so one environment shows one set of numbers.
+
+    ``lit_baseline``/``lit``: the chart lit by the wall through M alone / after Q, with the
+    drive the wall can emit (where ``M w_avg`` has a negative channel the wall clips it to 0,
+    and the clipped-drive errors are the ones shown); ``shown_baseline``/``shown``: the
+    in-frustum background through M / through N, the offset and Q; ``cross_validated``:
+    leave-one-patch-out after Q (None when the method does not give it).
+    """
+
+    def get(key: str) -> np.ndarray | None:
+        value = diagnostics.get(key)
+        return None if value is None else np.asarray(value, dtype=np.float64)
+
+    clipped = get("lit_chart_error_clipped_drive") is not None
+    lit_baseline = get("lit_chart_error_baseline_clipped_drive") if clipped else None
+    return {
+        "lit_baseline": get("lit_chart_error_baseline") if lit_baseline is None else lit_baseline,
+        "lit": get("lit_chart_error_clipped_drive" if clipped else "lit_chart_error"),
+        "shown_baseline": get("displayed_chart_error_baseline"),
+        "shown": get("displayed_chart_error"),
+        "cross_validated": get("cross_validated_error"),
+    }
 
 
 #: A black-level offset whose light ``[SL] offset`` stays below this fraction of the wall's

@@ -5,7 +5,11 @@ from __future__ import annotations
 import argparse
 from collections.abc import Sequence
 
-__all__ = ["add_parser", "print_linearity", "print_table", "run"]
+from ocio_vp.commands.common import add_method_argument, progress, summary_table, warn
+
+__all__ = ["add_parser", "print_linearity", "run"]
+
+PEAK_NITS_DEFAULT = 1000.0
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -16,32 +20,37 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "DIR/<environment>/config.ocio and solution.json.",
     )
     parser.add_argument("measurements", help="measurements file (.yaml/.yml/.json)")
-    parser.add_argument("--out", required=True, help="output folder")
     parser.add_argument(
-        "--method",
-        default=None,
-        help="Q-solve method (default: %(default)s = the library default; "
-        "'least-squares' is the paper's eq. 5)",
+        "--out",
+        required=True,
+        help="output folder (created if needed; DIR/<environment>/ of a re-run is replaced)",
     )
+    add_method_argument(parser)
     parser.add_argument(
         "--black-level",
         choices=("exact", "paper"),
         default="exact",
         help="in-frustum black-level offset: exact (-M b, default) or the paper's b/w_camera",
     )
-    parser.add_argument("--environment", action="append", help="solve only these (repeatable)")
+    parser.add_argument(
+        "--environment",
+        action="append",
+        metavar="NAME",
+        help="solve only this environment (repeatable; default: all)",
+    )
     parser.add_argument(
         "--hdri",
         action="append",
         default=[],
         metavar="ENV=FILE",
         help="take ENV's w_avg from its equirectangular HDRI (camera linear RGB) instead of the "
-        "white patch (repeatable; a bare FILE when solving one environment)",
+        "white patch (repeatable; a bare FILE when solving one environment; default: none)",
     )
     parser.add_argument(
         "--scheduler",
         metavar="ADDRESS",
-        help="solve the environments on a Dask cluster, e.g. tcp://host:8786 (docs/distributed.md)",
+        help="solve the environments on a Dask cluster, e.g. tcp://host:8786 (docs/distributed.md;"
+        " default: here, one after the other)",
     )
     parser.add_argument(
         "--hdri-width",
@@ -61,53 +70,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--peak-nits",
         type=float,
-        default=1000.0,
-        help="with --wall-encoding pq: luminance (cd/m2) of drive 1.0, the level of the "
-        "measured primaries (default: %(default)s)",
+        default=None,
+        help="with --wall-encoding pq only: luminance (cd/m2) of drive 1.0, the level of the "
+        f"measured primaries (default: {PEAK_NITS_DEFAULT:g})",
     )
     parser.set_defaults(func=run)
-
-
-def print_table(solutions: Sequence) -> None:
-    """The terminal summary: one row per environment."""
-    header = (
-        "environment",
-        "method",
-        "model",
-        "cond[SL]",
-        "cond(Q)",
-        "N",
-        "lit error M-only",
-        "lit error M+Q",
-        "CV error",
-        "drive<0",
-        "clipped",
-    )
-    rows = []
-    for s in solutions:
-        d = s.diagnostics
-        rows.append(
-            (
-                s.environment,
-                s.method,
-                d.get("model", s.method),
-                f"{d['cond_SL']:.3g}",
-                f"{d['cond_Q']:.3g}",
-                ("= M" if d.get("N_equals_M") else "solved") if s.N is not None else "NOT solved",
-                f"{100 * float(sum(d['lit_chart_error_baseline'])) / 3:.2f}%",
-                f"{100 * float(sum(d['lit_chart_error'])) / 3:.2f}%",
-                _percent(d.get("cross_validated_error")),
-                ",".join("RGB"[c] for c in d.get("out_of_frustum_negative_channels") or []) or "-",
-                str(len(d.get("clipped_patches") or [])),
-            )
-        )
-    widths = [max(len(str(r[i])) for r in [header, *rows]) for i in range(len(header))]
-    for row in [header, *rows]:
-        print("  ".join(str(v).ljust(w) for v, w in zip(row, widths, strict=True)))
-    for s in solutions:
-        for warning in s.diagnostics.get("warnings", []):
-            print(f"warning: {s.environment}: {warning}")
-    print_linearity(solutions)
 
 
 def print_linearity(solutions: Sequence) -> None:
@@ -130,18 +97,19 @@ def print_linearity(solutions: Sequence) -> None:
         return
 
 
-def _percent(per_channel) -> str:
-    """Mean of a per-channel error as a percentage ('-' when absent)."""
-    if per_channel is None:
-        return "-"
-    return f"{100 * float(sum(per_channel)) / len(per_channel):.2f}%"
-
-
 def run(args: argparse.Namespace) -> int:
+    from ocio_vp.errors import InputError
     from ocio_vp.formats.measurements import load_measurements
     from ocio_vp.ocio.writer import write_solutions
-    from ocio_vp.pipeline import DEFAULT_METHOD, solve_environment
+    from ocio_vp.wall.encoding import with_wall_encoding
 
+    if args.peak_nits is not None and args.wall_encoding != "pq":
+        warn("solve", f"--peak-nits has no effect with --wall-encoding {args.wall_encoding}")
+    peak_nits = PEAK_NITS_DEFAULT if args.peak_nits is None else args.peak_nits
+    if not 0 < peak_nits <= 10000:
+        raise InputError(f"expected 0 < cd/m2 <= 10000, got {peak_nits:g}", key="--peak-nits")
+    if args.hdri_width is not None and not args.hdri:
+        warn("solve", "--hdri-width has no effect without --hdri")
     measurements = load_measurements(args.measurements)
     environments = measurements.environments
     if args.environment:
@@ -154,31 +122,31 @@ def run(args: argparse.Namespace) -> int:
             measurements, environments, args.hdri, width=width
         )
         print("\n".join(notes))
-    method = args.method or DEFAULT_METHOD
+    solutions = _solve(measurements, environments, args)
+    solutions = [with_wall_encoding(s, args.wall_encoding, peak_nits=peak_nits) for s in solutions]
+    written = write_solutions(solutions, args.out)
+    print(summary_table(written))
+    print_linearity(written)
+    print(f"wrote {len(written)} environment(s) to {args.out}")
+    return 0
+
+
+def _solve(measurements, environments, args: argparse.Namespace) -> list:
+    """Every environment, on a Dask cluster or here (with a progress bar on a terminal)."""
+    from ocio_vp.pipeline import solve_environment
+
     if args.scheduler:
         from ocio_vp.footage.distributed import solve_environments
 
-        solutions = solve_environments(
+        return solve_environments(
             measurements,
             environments,
             scheduler=args.scheduler,
-            method=method,
+            method=args.method,
             black_level=args.black_level,
         )
-    else:
-        solutions = [
-            solve_environment(measurements, env, method=method, black_level=args.black_level)
-            for env in environments
-        ]
-    from ocio_vp.errors import InputError
-    from ocio_vp.wall.encoding import with_wall_encoding
-
-    if not 0 < args.peak_nits <= 10000:
-        raise InputError(f"expected 0 < cd/m2 <= 10000, got {args.peak_nits:g}", key="--peak-nits")
-    solutions = [
-        with_wall_encoding(s, args.wall_encoding, peak_nits=args.peak_nits) for s in solutions
+    bar = progress(environments, desc="solving", unit="environment")
+    return [
+        solve_environment(measurements, env, method=args.method, black_level=args.black_level)
+        for env in bar
     ]
-    written = write_solutions(solutions, args.out)
-    print_table(written)
-    print(f"wrote {len(written)} environment(s) to {args.out}")
-    return 0

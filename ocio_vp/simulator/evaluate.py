@@ -17,7 +17,14 @@ from ocio_vp.simulator.data import ENVIRONMENTS
 from ocio_vp.simulator.predict import predict_solution, predict_stage
 from ocio_vp.simulator.stage import SpectralStage
 
-__all__ = ["Evaluation", "NoiseStudy", "evaluate_solution", "format_table", "noise_study"]
+__all__ = [
+    "Evaluation",
+    "NoiseStudy",
+    "agreement_with_spectra",
+    "evaluate_solution",
+    "format_table",
+    "noise_study",
+]
 
 
 @dataclass(frozen=True)
@@ -193,3 +200,33 @@ def noise_study(
         p95=float(np.percentile(changes, 95)),
         maximum=float(np.max(changes)),
     )
+
+
+#: :class:`Evaluation` fields and the :func:`~ocio_vp.calibration.diagnostics.summary_errors`
+#: keys that estimate the same thing from the measurements.
+SUMMARY_FIELDS = {
+    "lit_baseline": "lit_baseline",
+    "lit": "lit",
+    "displayed_baseline": "shown_baseline",
+    "displayed": "shown",
+}
+
+
+def agreement_with_spectra(stage: SpectralStage, solutions) -> tuple[float, str]:
+    """Largest |spectral truth - reported figure| (fraction of white, mean over R, G, B).
+
+    The figures ``solve``, ``demo`` and the report print come from the measurements
+    (:func:`~ocio_vp.calibration.diagnostics.summary_errors`); on a noise-free simulated stage
+    they must match what the spectra predict. Returns the largest gap and where it is.
+    """
+    from ocio_vp.calibration.diagnostics import summary_errors
+
+    worst, where = 0.0, "-"
+    for solution in solutions:
+        truth = evaluate_solution(stage, solution)
+        figures = summary_errors(solution.diagnostics)
+        for field, key in SUMMARY_FIELDS.items():
+            gap = abs(float(np.mean(getattr(truth, field))) - float(np.mean(figures[key])))
+            if gap >= worst:
+                worst, where = gap, f"{solution.environment} {key}"
+    return worst, where
