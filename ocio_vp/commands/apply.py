@@ -1,11 +1,15 @@
-"""``ocio-vp apply SOLUTION_DIR FRAMES... --out DIR``: post-correct footage with Q."""
+"""``ocio-vp apply SOLUTION... FRAMES... --out DIR``: post-correct footage with Q."""
 
 from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
-__all__ = ["add_parser", "run"]
+from ocio_vp.commands.common import warn
+from ocio_vp.commands.report import SOLUTIONS_HELP
+
+__all__ = ["add_parser", "post_correction_caveats", "run", "split_inputs"]
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -13,16 +17,17 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "apply",
         help="post-correct footage shot on the stage (Q) with OCIO, keeping every channel",
         description="Apply the solution's post-correction (its config's 'Stage Footage' -> "
-        "reference) to frames, writing DIR/<frame name>. Alpha, depth and AOV channels, "
-        "metadata, data window and compression are kept. Frames already in DIR are skipped "
-        "(resume); a bad frame is reported and the others are still done (exit 2 at the end).",
+        "reference) to frames, writing DIR/<frame name> (DIR/<environment>/<frame name> when "
+        "several environments are given). Alpha, depth and AOV channels, metadata, data window "
+        "and compression are kept. Frames already in DIR are skipped (resume); a bad frame is "
+        "reported and the others are still done (exit 2 at the end).",
     )
-    parser.add_argument("solution", metavar="SOLUTION_DIR", help="an environment folder of solve")
     parser.add_argument(
-        "frames",
-        metavar="FRAMES",
+        "inputs",
+        metavar="SOLUTION... FRAMES",
         nargs="+",
-        help="frame files or patterns: plate.####.exr (n '#' = n digits), plate.%%04d.exr",
+        help=f"first the solutions ({SOLUTIONS_HELP}), then frame files or patterns: "
+        "plate.####.exr (n '#' = n digits), plate.%%04d.exr",
     )
     parser.add_argument("--out", required=True, help="output folder")
     parser.add_argument(
@@ -40,32 +45,82 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         metavar="ADDRESS",
         help="run on a Dask cluster, e.g. tcp://farm-scheduler:8786 (see docs/distributed.md)",
     )
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument(
+        "--no-progress",
+        action="store_true",
+        help="no progress bar (there is none anyway when stderr is not a terminal)",
+    )
     parser.set_defaults(func=run)
 
 
+def split_inputs(inputs: list[str]) -> tuple[list[str], list[str]]:
+    """Leading folders (and ``solution.json`` files) are solutions; the rest are frames."""
+    count = 0
+    for raw in inputs:
+        path = Path(raw)
+        if not (path.is_dir() or path.name == "solution.json"):
+            break
+        count += 1
+    return inputs[:count], inputs[count:]
+
+
+def post_correction_caveats(solution) -> list[str]:
+    """Why post-correcting with this solution's Q may harm a shot (empty when it is safe)."""
+    d = solution.diagnostics
+    caveats = []
+    rank = d.get("rank_Q")
+    if rank is not None and rank < 3:
+        caveats.append(
+            f"Q is rank {rank} (cond {d.get('cond_Q', float('inf')):.3g}): it maps every colour "
+            "onto a line or plane, so corrected footage loses colours the camera recorded"
+        )
+    if solution.N is None:
+        caveats.append(
+            "N was not solved, so the wall's in-frustum content was not pre-corrected: do not "
+            "post-correct shots with the wall in frame (the background would be wrong)"
+        )
+    return caveats
+
+
 def run(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
-    from tqdm import tqdm
-
-    from ocio_vp.footage.apply import FrameTask, load_post_correction, run_task
-    from ocio_vp.footage.distributed import default_workers, map_unordered
+    from ocio_vp.errors import InputError
+    from ocio_vp.footage.apply import FrameTask, load_post_correction
+    from ocio_vp.footage.distributed import default_workers
     from ocio_vp.footage.sequences import expand_frames, output_paths, parse_frame_range
+    from ocio_vp.formats.solution import load_solution
+    from ocio_vp.formats.solution_inputs import solution_folders
 
-    post = load_post_correction(args.solution)
+    solutions, frames = split_inputs(args.inputs)
+    if not solutions:
+        raise InputError("expected the solution(s) first, then the frames", key="SOLUTION")
+    if not frames:
+        raise InputError("no frames given after the solution(s)", key="FRAMES")
+    chosen = solution_folders(solutions, key="SOLUTION")
     frame_range = parse_frame_range(args.frame_range) if args.frame_range else None
-    inputs = expand_frames(args.frames, frames=frame_range)
-    outputs = output_paths(inputs, Path(args.out))
+    inputs = expand_frames(frames, frames=frame_range)
     workers = default_workers() if args.workers is None else args.workers
     # One frame at a time in this process: let it use every core; in a pool, one core each.
     threads = default_workers() if (workers == 1 and not args.scheduler) else 1
-    tasks = [
-        FrameTask(str(s), str(d), post, overwrite=args.overwrite, threads=threads)
-        for s, d in zip(inputs, outputs, strict=True)
-    ]
+    tasks = []
+    for folder in chosen.folders:
+        for caveat in post_correction_caveats(load_solution(folder)):
+            warn("apply", f"{folder.name}: {caveat}")
+        post = load_post_correction(folder)
+        out = Path(args.out) if len(chosen.folders) == 1 else Path(args.out) / folder.name
+        tasks += [
+            FrameTask(str(s), str(d), post, overwrite=args.overwrite, threads=threads)
+            for s, d in zip(inputs, output_paths(inputs, out), strict=True)
+        ]
+    return _run_tasks(tasks, args, workers)
+
+
+def _run_tasks(tasks: list, args: argparse.Namespace, workers: int) -> int:
+    from ocio_vp.commands.common import progress
+    from ocio_vp.footage.apply import run_task
+    from ocio_vp.footage.distributed import map_unordered
+
     counts = {"done": 0, "skipped": 0, "input-error": 0, "error": 0}
-    bar = tqdm(total=len(tasks), unit="frame", disable=args.no_progress or None, file=sys.stderr)
+    bar = progress(total=len(tasks), unit="frame", disable=args.no_progress or None, leave=True)
     with bar:
         for i, result in map_unordered(run_task, tasks, workers=workers, scheduler=args.scheduler):
             if isinstance(result, BaseException):  # a worker died: count it, keep going

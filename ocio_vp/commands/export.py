@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import argparse
 
+from ocio_vp.commands.report import SOLUTIONS_HELP
+
 __all__ = ["add_parser", "run"]
 
 TARGETS = ("unreal", "nuke", "resolve")
@@ -15,11 +17,20 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "export",
         help="write Unreal nDisplay, Nuke and Resolve files from solved environments",
         description="Export solved environments (OUT/<environment>/ from `ocio-vp solve`). "
-        "Output: SOLUTION_DIR/exports/<target>/, or --out DIR/<environment>/<target>/.",
+        "Output: <environment>/exports/<target>/, or --out DIR/<environment>/<target>/; an "
+        "earlier export of the same target is replaced.",
     )
-    parser.add_argument("solution_dirs", nargs="+", metavar="SOLUTION_DIR")
-    parser.add_argument("--target", choices=(*TARGETS, "all"), default="all")
-    parser.add_argument("--out", default=None, help="output folder (default: beside each solution)")
+    parser.add_argument("solution_dirs", nargs="+", metavar="SOLUTION", help=SOLUTIONS_HELP)
+    parser.add_argument(
+        "--target",
+        choices=(*TARGETS, "all"),
+        default="all",
+        help="unreal: .ocioz + UNREAL.md + mapping JSON; nuke: .nk; resolve: CLF, DCTL, .cube; "
+        "all: the three",
+    )
+    parser.add_argument(
+        "--out", default=None, help="output folder (default: exports/ inside each environment)"
+    )
     parser.add_argument(
         "--cube-size", type=int, default=33, help="3D LUT size of the baked .cube (default 33)"
     )
@@ -36,10 +47,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ocio_vp.exports import export_solutions
+    from ocio_vp.formats.solution_inputs import solution_folders
 
     targets = TARGETS if args.target == "all" else (args.target,)
+    chosen = solution_folders(args.solution_dirs)
+    for note in chosen.notes():
+        print(note)
     results = export_solutions(
-        args.solution_dirs,
+        chosen.folders,
         targets=targets,
         out=args.out,
         cube_size=args.cube_size,

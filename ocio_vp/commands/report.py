@@ -1,4 +1,4 @@
-"""``ocio-vp report SOLUTION_DIR... [--out DIR]``: an HTML report with the paper's charts."""
+"""``ocio-vp report SOLUTION... [--out DIR]``: an HTML report with the paper's charts."""
 
 from __future__ import annotations
 
@@ -6,22 +6,35 @@ import argparse
 
 __all__ = ["add_parser", "run"]
 
+SOLUTIONS_HELP = (
+    "an environment folder (OUT/<environment>/), its solution.json, or an `ocio-vp solve` "
+    "output folder (= all its environments); several allowed, e.g. calib/* (report, export "
+    "and measurement files in there are skipped)"
+)
+
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "report",
         help="write an HTML report (comparison charts, error plots) for solved environments",
-        description="Write a self-contained HTML report (index.html + PNGs, no network "
-        "resources) with the paper's comparison charts and Fig. 11 error bars for every "
-        "solution: a solution.json, an environment folder, or an `ocio-vp solve` output folder.",
+        description="Write a self-contained HTML report (index.html + PNGs + report.json, no "
+        "network resources) with the paper's comparison charts and Fig. 11 error bars. "
+        "Default place: SOLVE/report for all environments of a solve output folder, "
+        "SOLVE/<environment>/report for one, SOLVE/report-<env>+<env> for some. A report on "
+        "other environments is never replaced silently.",
     )
-    parser.add_argument("solutions", nargs="+", metavar="SOLUTION_DIR", help="solutions to show")
+    parser.add_argument("solutions", nargs="+", metavar="SOLUTION", help=SOLUTIONS_HELP)
     parser.add_argument(
         "--out",
         default=None,
-        help="report folder (default: report/ beside the first environment folder)",
+        help="report folder (default: chosen from the solutions, see above)",
     )
-    parser.add_argument("--dpi", type=float, default=110, help="PNG resolution (default 110)")
+    parser.add_argument(
+        "--replace",
+        action="store_true",
+        help="replace the report at --out even if it shows environments this one leaves out",
+    )
+    parser.add_argument("--dpi", type=float, default=110, help="PNG resolution")
     parser.add_argument(
         "--no-match-white",
         action="store_true",
@@ -33,11 +46,21 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ocio_vp.errors import InputError
+    from ocio_vp.formats.solution_inputs import solution_folders
     from ocio_vp.report.build import build_report, default_report_dir
 
     if not args.dpi > 0:
         raise InputError(f"expected a positive number, got {args.dpi}", key="--dpi")
-    out = args.out or default_report_dir(args.solutions)
-    report = build_report(args.solutions, out, dpi=args.dpi, match_white=not args.no_match_white)
+    chosen = solution_folders(args.solutions)
+    for note in chosen.notes():
+        print(note)
+    out = args.out or default_report_dir(chosen.folders)
+    report = build_report(
+        chosen.folders,
+        out,
+        dpi=args.dpi,
+        match_white=not args.no_match_white,
+        replace=args.replace,
+    )
     print(f"wrote {report.index} ({len(report.environments)} environment(s))")
     return 0

@@ -14,6 +14,8 @@ camera-to-display matrix and ΔE conventions, :mod:`ocio_vp.report.plots` for th
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,12 +24,13 @@ from typing import Any
 import numpy as np
 
 from ocio_vp.calibration.equations import condition_number
+from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import Solution
+from ocio_vp.formats.solution_inputs import solution_folders
 from ocio_vp.report.data import (
     STAGE_CHARTS,
     EnvironmentData,
     environment_data,
-    find_solutions,
 )
 from ocio_vp.report.plots import (
     ChartPlot,
@@ -68,9 +71,31 @@ class Report:
 
 
 def default_report_dir(paths: Sequence[str | Path]) -> Path:
-    """``report/`` beside the first solution's environment folder (inside the solve output)."""
-    first = find_solutions(paths)[0]
-    return first.resolve().parent.parent / "report"
+    """Where a report goes when ``--out`` is not given; never onto a report of other solutions.
+
+    All environments of one ``solve`` output folder: ``SOLVE/report``. One environment:
+    ``SOLVE/<environment>/report``. Some of them: ``SOLVE/report-<env>+<env>...``. Solutions
+    from several solve folders have no natural home: give ``--out``.
+
+    Raises
+    ------
+    InputError
+        Solutions from several ``solve`` output folders.
+    """
+    chosen = solution_folders(paths)
+    if len(chosen.solve_folders) != 1:
+        raise InputError(
+            "these solutions come from several solve output folders: give --out", key="--out"
+        )
+    if chosen.complete:
+        return chosen.solve_folders[0] / "report"
+    if len(chosen.folders) == 1:
+        return chosen.folders[0].resolve() / "report"
+    name = "report-" + "+".join(chosen.environments)
+    if len(name) > 120:
+        digest = hashlib.sha256("+".join(chosen.environments).encode()).hexdigest()[:10]
+        name = f"report-{len(chosen.folders)}-environments-{digest}"
+    return chosen.solve_folders[0] / name
 
 
 def linearity_curves(linearity: Any) -> dict[str, tuple[np.ndarray, np.ndarray]]:
@@ -109,8 +134,6 @@ def panel_description(solution: Solution, path: Path) -> str | None:
     for in the solve output folder (where ``ocio-vp demo`` writes it) and used only if its
     SHA-256 matches the one recorded in the solution.
     """
-    import hashlib
-
     name = solution.measurements_file
     if not name or not solution.measurements_sha256:
         return None
@@ -186,7 +209,7 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
                 "error": [f"{100 * v:.2f}%" for v in data.errors[chart]],
                 "mean": _percent(data.errors[chart]),
                 "de2000": f"{float(np.mean(data.delta_e['CIE 2000'][chart])):.2f}",
-                "deitp": f"{float(np.mean(data.delta_e['ITP'][chart])):.2f}",
+                "deitp": mean_defined(data.delta_e["ITP"][chart]),
             }
         )
     return {
@@ -259,10 +282,34 @@ def _summary(environments: Sequence[EnvironmentData]) -> list[dict[str, str]]:
     return rows
 
 
-def _check_replaceable(out_dir: Path, environments: Sequence[EnvironmentData]) -> None:
-    """The report folder is replaced as a whole: never let that be anything but a report."""
-    from ocio_vp.errors import InputError
+#: Beside index.html: which solutions the report shows (read before a report is replaced).
+MANIFEST = "report.json"
 
+
+def _manifest(environments: Sequence[EnvironmentData]) -> dict[str, Any]:
+    return {
+        "format": "ocio-vp/report",
+        "version": 1,
+        "environments": [data.solution.environment for data in environments],
+        "solutions": [str(data.path.resolve()) for data in environments],
+    }
+
+
+def mean_defined(values: np.ndarray) -> str:
+    """Mean of the defined (non-NaN) values, saying how many were undefined."""
+    values = np.asarray(values, dtype=np.float64)
+    undefined = int(np.count_nonzero(np.isnan(values)))
+    if undefined == values.size:
+        return "undefined"
+    mean = f"{float(np.nanmean(values)):.2f}"
+    return mean if not undefined else f"{mean} ({undefined} of {values.size} undefined)"
+
+
+def _check_replaceable(
+    out_dir: Path, environments: Sequence[EnvironmentData], *, replace: bool = False
+) -> None:
+    """The report folder is replaced as a whole: never let that be anything but a report, and
+    never a report on solutions this one leaves out (unless ``replace``)."""
     for data in environments:
         if data.path.resolve().is_relative_to(out_dir):
             raise InputError(
@@ -276,6 +323,22 @@ def _check_replaceable(out_dir: Path, environments: Sequence[EnvironmentData]) -
             "exists and is not an ocio-vp report (no index.html); refusing to replace it",
             source=out_dir,
         )
+    try:
+        old = json.loads((out_dir / MANIFEST).read_text(encoding="utf-8"))
+        old_solutions = dict(zip(old["solutions"], old["environments"], strict=True))
+    except (OSError, ValueError, KeyError, TypeError):
+        return  # no report there, or one written before manifests: nothing to compare
+    dropped = [
+        env
+        for path, env in old_solutions.items()
+        if path not in _manifest(environments)["solutions"]
+    ]
+    if dropped and not replace:
+        raise InputError(
+            f"holds a report on {len(old_solutions)} environment(s); this one would drop "
+            f"{', '.join(dropped)}: choose another --out, or pass --replace",
+            source=out_dir,
+        )
 
 
 def build_report(
@@ -285,6 +348,7 @@ def build_report(
     dpi: float = 110,
     match_white: bool = True,
     camera_to_xyz: np.ndarray | None = None,
+    replace: bool = False,
 ) -> Report:
     """Write ``out_dir/index.html`` and its PNGs for every solution in ``paths``, all or nothing.
 
@@ -306,11 +370,11 @@ def build_report(
 
     out_dir = Path(out_dir).resolve()
     environments = environment_data(paths, match_white=match_white, camera_to_xyz=camera_to_xyz)
-    _check_replaceable(out_dir, environments)
+    _check_replaceable(out_dir, environments, replace=replace)
     report = Report(index=out_dir / "index.html", environments=environments)
-    from ocio_vp.exports.templating import template_dir
+    from ocio_vp.exports.templating import read_template
 
-    loader = jinja2.FileSystemLoader(str(template_dir()))
+    loader = jinja2.FunctionLoader(lambda name: (read_template(name), None, lambda: True))
     env = jinja2.Environment(loader=loader, autoescape=True, undefined=jinja2.StrictUndefined)
     with staged_dir(out_dir.parent) as stage:
         folder = stage / "report"
@@ -343,6 +407,8 @@ def build_report(
             transforms=sorted({e.transform.description for e in environments}),
         )
         (folder / "index.html").write_text(html, encoding="utf-8")
+        manifest = json.dumps(_manifest(environments), indent=2) + "\n"
+        (folder / MANIFEST).write_text(manifest, encoding="utf-8")
         publish_dir(folder, out_dir)
     _relocate(report, folder, out_dir)
     return report

@@ -39,8 +39,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ocio_vp.calibration.diagnostics import summary_errors
 from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import Solution, load_solution
+from ocio_vp.formats.solution_inputs import solution_folders
 from ocio_vp.metrics import error_relative_to_white
 
 __all__ = [
@@ -58,6 +60,7 @@ __all__ = [
     "find_solutions",
     "fit_display_matrix",
     "infer_white_patch",
+    "itp_defined",
     "patch_names",
 ]
 
@@ -75,6 +78,13 @@ STAGE_CHARTS = {
     "lit_corrected": "lit_chart_error",
     "displayed_baseline": "displayed_chart_error_baseline",
     "displayed_corrected": "displayed_chart_error",
+}
+#: The stage charts and their :func:`~ocio_vp.calibration.diagnostics.summary_errors` keys.
+SUMMARY_KEYS = {
+    "lit_baseline": "lit_baseline",
+    "lit_corrected": "lit",
+    "displayed_baseline": "shown_baseline",
+    "displayed_corrected": "shown",
 }
 COLORCHECKER = "ColorChecker24 - After November 2014"
 #: Display-linear value of the target white patch's largest channel.
@@ -115,30 +125,16 @@ class EnvironmentData:
 
 
 def find_solutions(paths: Sequence[str | Path]) -> list[Path]:
-    """Every ``solution.json`` named: a file, an environment folder, or a ``solve`` output.
+    """Every ``solution.json`` named, in the vocabulary of
+    :func:`ocio_vp.formats.solution_inputs.solution_folders` (environment folders, their
+    ``solution.json``, ``solve`` output folders, several of these; generated folders skipped).
 
     Raises
     ------
     InputError
         When a path does not exist or holds no solution.
     """
-    found: list[Path] = []
-    for raw in paths:
-        path = Path(raw)
-        if path.is_file():
-            found.append(path)
-        elif (path / "solution.json").is_file():
-            found.append(path / "solution.json")
-        elif path.is_dir() and sorted(path.glob("*/solution.json")):
-            found.extend(sorted(path.glob("*/solution.json")))
-        elif not path.exists():
-            raise InputError("no such file or folder", source=path)
-        else:
-            raise InputError(
-                "no solution.json here or in its sub-folders; run `ocio-vp solve` first",
-                source=path,
-            )
-    return found
+    return [folder / "solution.json" for folder in solution_folders(paths).folders]
 
 
 def _charts(solution: Solution, source: Path) -> dict[str, np.ndarray]:
@@ -316,24 +312,53 @@ def delta_e(
     if not (np.asarray(camera_to_xyz) @ charts["target"][white_patch])[1] > 0:
         raise InputError("the target white patch has no luminance; ΔE is undefined")
     out: dict[str, dict[str, np.ndarray]] = {"CIE 2000": {}, "ITP": {}}
+    target_ok = itp_defined(charts["target"], camera_to_xyz)
     for chart in STAGE_CHARTS:
         errors = chart_errors(
             charts[chart], charts["target"], camera_to_xyz=camera_to_xyz, white_patch=white_patch
         )
         out["CIE 2000"][chart] = np.asarray(errors.delta_E_2000, dtype=np.float64)
-        out["ITP"][chart] = np.asarray(errors.delta_E_ITP, dtype=np.float64)
+        itp = np.asarray(errors.delta_E_ITP, dtype=np.float64)
+        defined = target_ok & itp_defined(charts[chart], camera_to_xyz)
+        out["ITP"][chart] = np.where(defined, itp, np.nan)
     return out
+
+
+def itp_defined(chart: np.ndarray, camera_to_xyz: np.ndarray) -> np.ndarray:
+    """(n,) bool: where ΔE ITP means something for these camera RGB colours.
+
+    ICtCp applies the PQ curve to BT.2100 LMS, which is defined for non-negative light only.
+    A colour with a negative LMS component (outside what any light can produce: an
+    extrapolated rendition, a rank-deficient post-correction) falls beyond the PQ formula's
+    pole, about -1e-4 cd/m^2, where ICtCp and ΔE ITP take arbitrary values (1e8 and more). Such
+    patches are reported as undefined rather than as a number. The scale is irrelevant here
+    (only the sign is tested), so the normalisation of :func:`ocio_vp.metrics.chart_errors`
+    need not be repeated; its colour conversion (XYZ -> BT.2020 with CAT02, then LMS) is.
+    """
+    import colour
+    from colour.models.rgb.ictcp import MATRIX_ICTCP_RGB_TO_LMS
+
+    xyz = np.asarray(chart, dtype=np.float64) @ np.asarray(camera_to_xyz, dtype=np.float64).T
+    rgb = colour.XYZ_to_RGB(
+        xyz, colour.RGB_COLOURSPACES["ITU-R BT.2020"], chromatic_adaptation_transform="CAT02"
+    )
+    lms = rgb @ MATRIX_ICTCP_RGB_TO_LMS.T
+    scale = max(float(np.max(np.abs(lms))), 1e-300)
+    return np.all(lms >= -1e-9 * scale, axis=-1)
 
 
 def _errors(
     diagnostics: dict, charts: dict[str, np.ndarray], white_patch: int
 ) -> dict[str, np.ndarray]:
-    """The solve's Fig. 11 errors; recomputed from the charts only if an old file lacks them."""
+    """The solve's Fig. 11 errors, the figures ``solve`` and ``demo`` print
+    (:func:`ocio_vp.calibration.diagnostics.summary_errors`); recomputed from the charts only
+    if an old file lacks them."""
+    figures = summary_errors(diagnostics)
     out = {}
-    for chart, key in STAGE_CHARTS.items():
-        stored = diagnostics.get(key)
+    for chart, key in SUMMARY_KEYS.items():
+        stored = figures[key]
         if stored is not None and np.shape(stored) == (3,):
-            out[chart] = np.asarray(stored, dtype=np.float64)
+            out[chart] = stored
         else:
             out[chart] = error_relative_to_white(charts[chart], charts["target"], white_patch)
     return out

@@ -281,6 +281,9 @@ def plot_delta_e(data: EnvironmentData, path: Path, *, dpi: float = 110) -> Delt
                     label="baseline (M only)" if hatch is None else "ours",
                 )
                 drawn[metric][chart] = np.array([b.get_height() for b in bars])
+                undefined = np.flatnonzero(np.isnan(data.delta_e[metric][chart]))
+                if undefined.size:  # no bar to draw: mark the patch so it is not read as 0
+                    ax.plot(x[undefined] + shift, np.zeros(undefined.size), "x", color="#c0392b")
             label = "ΔE2000" if metric == "CIE 2000" else "ΔE ITP"
             place = "lit chart" if kind == "lit" else "in-camera background"
             ax.set_title(f"{label}, {place}", fontsize=10)
@@ -292,7 +295,10 @@ def plot_delta_e(data: EnvironmentData, path: Path, *, dpi: float = 110) -> Delt
         ax.set_xticks(x, labels, fontsize=7, rotation=60 if n == 24 else 0, ha="right")
         ax.set_xlabel("chart patch (grey line = white patch)")
     axes[0, 0].legend(fontsize=8)
-    figure.suptitle(f"{data.solution.environment}: colour difference per patch", fontsize=11)
+    title = f"{data.solution.environment}: colour difference per patch"
+    if any(np.isnan(v).any() for v in data.delta_e["ITP"].values()):
+        title += " (red x: ΔE ITP undefined, a colour with negative light)"
+    figure.suptitle(title, fontsize=11)
     return DeltaEPlot(_save(figure, path, dpi), drawn)
 
 
