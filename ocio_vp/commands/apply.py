@@ -29,7 +29,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help=f"first the solutions ({SOLUTIONS_HELP}), then frame files or patterns: "
         "plate.####.exr (n '#' = n digits), plate.%%04d.exr",
     )
-    parser.add_argument("--out", required=True, help="output folder")
+    parser.add_argument(
+        "--out", required=True, help="output folder (created; never one of the input frames)"
+    )
     parser.add_argument(
         "--frames",
         dest="frame_range",
@@ -43,7 +45,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--scheduler",
         metavar="ADDRESS",
-        help="run on a Dask cluster, e.g. tcp://farm-scheduler:8786 (see docs/distributed.md)",
+        help="run on a Dask cluster, e.g. tcp://farm-scheduler:8786 (see docs/distributed.md; "
+        "default: local processes)",
     )
     parser.add_argument(
         "--no-progress",

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import argparse
 
-from ocio_vp.commands.common import add_method_argument, summary_table
+from ocio_vp.commands.common import add_method_argument, progress, summary_table
 
 __all__ = ["add_parser", "run"]
 
@@ -64,11 +64,13 @@ def run(args: argparse.Namespace) -> int:
         from ocio_vp.report.build import build_report
 
         # The simulated camera is known: its own camera-to-XYZ drives the report's colours and ΔE.
-        report = build_report(
-            [out / s.environment for s in written],
-            out / "report",
-            camera_to_xyz=camera_to_xyz_matrix(stage.camera),
-        )
+        with progress(total=len(written), desc="report", unit="environment") as bar:
+            report = build_report(
+                [out / s.environment for s in written],
+                out / "report",
+                camera_to_xyz=camera_to_xyz_matrix(stage.camera),
+                on_step=lambda: bar.update(1),
+            )
         print(f"report: {report.index} (open it in a browser)")
     print(
         f"wrote {len(written)} environments and {scratch.name} to {out} "

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from ocio_vp.commands.common import progress
+
 __all__ = ["add_parser", "run"]
 
 
@@ -15,7 +17,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "patches and regions, and write a measurements file plus an overlay PNG per plate "
         "(OUT_STEM.overlays/) showing exactly which pixels were sampled.",
     )
-    parser.add_argument("capture", help="capture file (.yaml/.yml/.json), format ocio-vp/capture")
+    parser.add_argument(
+        "capture",
+        help="capture file (.yaml/.yml/.json), format ocio-vp/capture (see docs/capture.md; "
+        "`ocio-vp simulate --plates DIR` writes a sample one)",
+    )
     parser.add_argument("--out", required=True, help="measurements file to write (.yaml or .json)")
     parser.add_argument(
         "--overlays", default=None, help="overlay folder (default: next to --out, STEM.overlays)"
@@ -30,7 +36,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ocio_vp.plates.capture import load_capture, save_capture_document, with_corners
-    from ocio_vp.plates.measure import measure_capture, write_measure_outputs
+    from ocio_vp.plates.measure import measure_capture, measure_steps, write_measure_outputs
 
     capture = load_capture(args.capture)
     detect = None
@@ -38,7 +44,8 @@ def run(args: argparse.Namespace) -> int:
         from ocio_vp.plates.detection import detector
 
         detect = detector(source=capture.source)
-    result = measure_capture(capture, detect=detect)
+    with progress(total=measure_steps(capture), desc="measuring", unit="plate") as bar:
+        result = measure_capture(capture, detect=detect, on_step=lambda: bar.update(1))
     folder = write_measure_outputs(result, args.out, overlays=args.overlays)
     if result.detected and not args.no_write_back:
         save_capture_document(with_corners(capture.document, result.detected), capture.source)

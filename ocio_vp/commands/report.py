@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from ocio_vp.commands.common import progress
+
 __all__ = ["add_parser", "run"]
 
 SOLUTIONS_HELP = (
@@ -55,12 +57,14 @@ def run(args: argparse.Namespace) -> int:
     for note in chosen.notes():
         print(note)
     out = args.out or default_report_dir(chosen.folders)
-    report = build_report(
-        chosen.folders,
-        out,
-        dpi=args.dpi,
-        match_white=not args.no_match_white,
-        replace=args.replace,
-    )
+    with progress(total=len(chosen.folders), desc="report", unit="environment") as bar:
+        report = build_report(
+            chosen.folders,
+            out,
+            dpi=args.dpi,
+            match_white=not args.no_match_white,
+            replace=args.replace,
+            on_step=lambda: bar.update(1),
+        )
     print(f"wrote {report.index} ({len(report.environments)} environment(s))")
     return 0

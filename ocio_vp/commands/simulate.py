@@ -4,20 +4,64 @@ from __future__ import annotations
 
 import argparse
 
+from ocio_vp.commands.common import progress, warn
+
 __all__ = ["add_parser", "run"]
+
+
+class ListEnvironments(argparse.Action):
+    """``--list-environments``: print them and exit before required options are checked."""
+
+    def __init__(self, option_strings, dest, **kwargs):
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from ocio_vp.simulator.data import ENVIRONMENTS
+
+        for spec in ENVIRONMENTS.values():
+            print(f"{spec.name:22s} {spec.description}")
+        parser.exit()
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "simulate",
         help="simulate a stage from spectra and write a measurements file",
-        description="Simulate the calibration photographs of an RGB LED stage from spectra "
-        "(colour-science's offline datasets) and write a measurements file (.yaml or .json) "
-        "that `ocio-vp solve` reads. Defaults: the paper-like stage of `ocio-vp demo`.",
+        description="Simulate an RGB LED stage from spectra (colour-science's offline "
+        "datasets) and write its exact measurements file (.yaml or .json) that `ocio-vp solve` "
+        "reads; with --plates, also the calibration photographs a stage engineer would shoot "
+        "(EXR, with perspective, vignetting and noise), a capture file for `ocio-vp measure` "
+        "and a few frames of footage per environment for `ocio-vp apply`. Defaults: the "
+        "paper-like stage of `ocio-vp demo`.",
     )
-    parser.add_argument("--out", help="measurements file to write (.yaml/.yml or .json)")
     parser.add_argument(
-        "--camera", default=None, help="colour.MSDS_CAMERA_SENSITIVITIES key (Nikon 5100 (NPL))"
+        "--out", required=True, help="measurements file to write (.yaml/.yml or .json)"
+    )
+    parser.add_argument(
+        "--plates",
+        metavar="DIR",
+        default=None,
+        help="also render the plates into DIR: DIR/capture.yaml, DIR/*.exr (flat fields, "
+        "primaries, lit charts, target charts, black-level frames), DIR/footage/<env>.####.exr "
+        "(default: no plates)",
+    )
+    parser.add_argument(
+        "--vignetting",
+        type=float,
+        default=0.05,
+        help="with --plates: lens fall-off at the frame corners (removed by the flat fields)",
+    )
+    parser.add_argument(
+        "--noise",
+        type=float,
+        default=0.01,
+        help="with --plates: relative sensor noise (std; plus 1e-4 absolute read noise)",
+    )
+    parser.add_argument("--seed", type=int, default=0, help="with --plates: noise seed")
+    parser.add_argument(
+        "--camera",
+        default=None,
+        help="a colour.MSDS_CAMERA_SENSITIVITIES key (default: Nikon 5100 (NPL))",
     )
     parser.add_argument(
         "--leds",
@@ -26,7 +70,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "file of measured spectra with columns wavelength,red,green,blue",
     )
     parser.add_argument(
-        "--chart", default=None, help="'ColorChecker N Ohta' (default) or 'BabelColor Average'"
+        "--chart", default=None, help="'ColorChecker N Ohta' (the default) or 'BabelColor Average'"
     )
     parser.add_argument(
         "--environment",
@@ -49,7 +93,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--name", default=None, help="stage name (default simulated-stage)")
     parser.add_argument(
-        "--list-environments", action="store_true", help="list the known environments and exit"
+        "--list-environments",
+        action=ListEnvironments,
+        help="list the known environments and exit (no --out needed)",
     )
     parser.set_defaults(func=run)
 
@@ -57,17 +103,18 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from ocio_vp.errors import InputError
     from ocio_vp.formats.measurements import save_measurements
-    from ocio_vp.simulator.data import ENVIRONMENTS
     from ocio_vp.simulator.options import environments_from_args, stage_options_from_args
     from ocio_vp.simulator.stage import simulate_measurements
 
-    if args.list_environments:
-        for spec in ENVIRONMENTS.values():
-            print(f"{spec.name:22s} {spec.description}")
-        return 0
-    if not args.out:
-        raise InputError("--out FILE is required", key="--out")
     options = stage_options_from_args(args)
+    if args.plates is None:
+        for name in ("vignetting", "noise", "seed"):
+            if getattr(args, name) != _DEFAULTS[name]:
+                warn("simulate", f"--{name} has no effect without --plates")
+    elif not (0 <= args.vignetting < 1 and 0 <= args.noise < 1):
+        raise InputError("expected 0 <= value < 1", key="--vignetting/--noise")
+    if args.plates is not None:
+        _check_plates_folder(args.plates)
     measurements = simulate_measurements(environments_from_args(args.environment), **options)
     try:
         save_measurements(measurements, args.out)
@@ -75,4 +122,44 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"cannot write: {error.strerror}", source=args.out, key="--out") from None
     names = ", ".join(e.name for e in measurements.environments)
     print(f"wrote {args.out}: stage {measurements.stage.name}, environments {names}")
+    if args.plates is not None:
+        capture = _write_plates(measurements, args)
+        print(f"wrote {capture} and its plates; next: ocio-vp measure {capture} --out FILE.yaml")
     return 0
+
+
+_DEFAULTS = {"vignetting": 0.05, "noise": 0.01, "seed": 0}
+
+
+def _check_plates_folder(folder: str) -> None:
+    """--plates may name a new or empty folder, or one this command wrote before."""
+    from pathlib import Path
+
+    from ocio_vp.errors import InputError
+
+    final = Path(folder)
+    if final.exists() and not (final / "capture.yaml").is_file():
+        if final.is_file() or any(final.iterdir()):
+            raise InputError(
+                "exists and is not a folder of simulated plates (no capture.yaml); refusing to "
+                "replace it",
+                source=final,
+                key="--plates",
+            )
+
+
+def _write_plates(measurements, args: argparse.Namespace):
+    """Render the plates into a staging folder, then rename it to --plates (all or nothing)."""
+    from pathlib import Path
+
+    from ocio_vp.simulator.plates import PlateOptions, plate_count, write_capture
+    from ocio_vp.staging import publish_dir, staged_dir
+
+    final = Path(args.plates)
+    options = PlateOptions(vignetting=args.vignetting, noise=args.noise, seed=args.seed)
+    with staged_dir(final.resolve().parent) as stage:
+        bar = progress(total=plate_count(measurements, options), desc="plates", unit="plate")
+        with bar:
+            write_capture(measurements, stage / "plates", options, bar=bar)
+        publish_dir(stage / "plates", final)
+    return final / "capture.yaml"

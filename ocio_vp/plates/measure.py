@@ -28,7 +28,13 @@ from ocio_vp.plates.capture import Capture, ChartShot, PlateRef, RegionShot
 from ocio_vp.plates.reader import PlateInfo, open_plate, read_region
 from ocio_vp.plates.sampling import ChartSamples, patch_labels, sample_chart, sample_region
 
-__all__ = ["MeasureResult", "PlateSampling", "measure_capture", "write_measure_outputs"]
+__all__ = [
+    "MeasureResult",
+    "PlateSampling",
+    "measure_capture",
+    "measure_steps",
+    "write_measure_outputs",
+]
 
 _OVERLAY_MARGIN = 16
 
@@ -184,7 +190,13 @@ def _sample_regions(
     return out
 
 
-def measure_capture(capture: Capture, *, detect: Any = None) -> MeasureResult:
+def measure_steps(capture: Capture) -> int:
+    """How many times :func:`measure_capture` calls ``on_step``."""
+    blacks = sum(env.black_level is not None for env in capture.environments)
+    return 1 + len(CHANNELS) + len(capture.environments) + blacks
+
+
+def measure_capture(capture: Capture, *, detect: Any = None, on_step: Any = None) -> MeasureResult:
     """Sample every plate of ``capture`` and build the measurements.
 
     Parameters
@@ -194,6 +206,9 @@ def measure_capture(capture: Capture, *, detect: Any = None) -> MeasureResult:
     detect
         ``detect(plate_info, rows=, columns=) -> (4, 2) corners`` for charts whose corners
         are ``detect`` (see :mod:`ocio_vp.plates.detection`); ``None`` makes them an error.
+    on_step
+        Called with no argument after each step (the primaries, each chart, each black level):
+        :func:`measure_steps` of them in all, for a progress bar.
 
     Raises
     ------
@@ -203,8 +218,10 @@ def measure_capture(capture: Capture, *, detect: Any = None) -> MeasureResult:
     """
     plates: list[PlateSampling] = []
     detected: dict[tuple[str | int, ...], np.ndarray] = {}
+    step = on_step or (lambda: None)
     primaries = _sample_regions(capture, capture.primaries, "primaries")
     plates.extend(primaries)
+    step()
     primary_means = {}
     for sampling in primaries:
         for label, mean in zip(sampling.labels, sampling.samples.means, strict=True):
@@ -215,6 +232,7 @@ def measure_capture(capture: Capture, *, detect: Any = None) -> MeasureResult:
         plates.append(sampling)
         if found is not None:
             detected[shot.key] = found
+        step()
         return sampling.samples.means
 
     lit = {c: chart(capture.lit_chart[c]) for c in CHANNELS}
@@ -224,6 +242,7 @@ def measure_capture(capture: Capture, *, detect: Any = None) -> MeasureResult:
         if env.black_level is not None:
             black = _sample_regions(capture, {"black_level": env.black_level}, env.name)
             plates.extend(black)
+            step()
             entry["black_level"] = black[0].samples.means[0].tolist()
         if env.w_avg is not None:
             entry["w_avg"] = env.w_avg.tolist()

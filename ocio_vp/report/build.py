@@ -349,6 +349,7 @@ def build_report(
     match_white: bool = True,
     camera_to_xyz: np.ndarray | None = None,
     replace: bool = False,
+    on_step: Any = None,
 ) -> Report:
     """Write ``out_dir/index.html`` and its PNGs for every solution in ``paths``, all or nothing.
 
@@ -400,6 +401,8 @@ def build_report(
                 path, images["linearity"] = png(f"{data.key}-linearity.png")
                 report.linearity[data.key] = plot_linearity(curves, path, dpi=dpi)
             sections.append(_context(data, images))
+            if on_step is not None:
+                on_step()
         html = env.get_template(TEMPLATE).render(
             summary=_summary(environments),
             summary_images=summary_images,

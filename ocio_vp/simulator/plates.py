@@ -1,0 +1,339 @@
+"""Calibration photographs of a simulated stage, as a stage engineer would shoot them.
+
+From a measurements file's exact values (usually :func:`ocio_vp.simulator.stage.simulate_measurements`)
+this renders the plates of ``docs/capture.md``: the panel showing each primary, the chart lit by
+each LED channel, the chart in every real location, a black-level frame per environment, flat
+fields for the lens's vignetting, and a few frames of footage shot on the stage, all as OpenEXR
+with perspective, vignetting and sensor noise; and the capture file that points at them, so
+``ocio-vp measure`` can be run on them.
+
+A chart is rendered by mapping every pixel centre through the inverse of the chart's homography,
+fitted here as the null space of the 8 x 9 DLT system (SVD), independently of the direct solve
+:mod:`ocio_vp.plates.sampling` uses, so perspective is exact and the two can check each other.
+Noise: a relative ("shot") part and an absolute read-noise part, Gaussian, per pixel and channel.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+__all__ = [
+    "CHART_CORNERS",
+    "PLATE_SIZE",
+    "PlateOptions",
+    "homography",
+    "plate_count",
+    "render_chart",
+    "render_regions",
+    "vignetting_gain",
+    "write_capture",
+    "write_plate",
+]
+
+#: (width, height) of the rendered plates: small, so a whole stage renders in seconds.
+PLATE_SIZE = (600, 400)
+#: The chart's four outer corners (TL, TR, BR, BL) on a 600 x 400 plate, seen at an angle.
+CHART_CORNERS = np.array([[128.0, 82.0], [478.0, 104.0], [466.0, 322.0], [140.0, 306.0]])
+#: Black border between patches, as a fraction of a cell (``measure``'s default inset is 0.25).
+PATCH_GAP = 0.08
+#: Where the panel (primaries) and the dark in-frustum panel (black level) are on their plates.
+PANEL_REGION = (180, 100, 420, 300)
+
+
+def homography(corners: ArrayLike, rows: int, columns: int) -> np.ndarray:
+    """(3, 3) map from grid coordinates (u right, v down, in cells) to pixel (x, y).
+
+    The null-space fit of the four correspondences ``(0, 0), (columns, 0), (columns, rows),
+    (0, rows)`` -> ``corners`` (SVD of the 8 x 9 DLT system), normalised so ``H[2, 2] = 1``.
+
+    Examples
+    --------
+    >>> H = homography([[0, 0], [6, 0], [6, 4], [0, 4]], 4, 6)
+    >>> bool(np.allclose(H, np.eye(3)))
+    True
+    """
+    src = [(0, 0), (columns, 0), (columns, rows), (0, rows)]
+    A = []
+    for (u, v), (x, y) in zip(src, np.asarray(corners, dtype=np.float64), strict=True):
+        A.append([u, v, 1, 0, 0, 0, -x * u, -x * v, -x])
+        A.append([0, 0, 0, u, v, 1, -y * u, -y * v, -y])
+    h = np.linalg.svd(np.asarray(A, dtype=np.float64))[2][-1]
+    return h.reshape(3, 3) / h[-1]
+
+
+def vignetting_gain(size: tuple[int, int], vignetting: float) -> np.ndarray:
+    """(h, w) lens gain ``1 - v (r / r_corner)^2`` about the image centre."""
+    width, height = size
+    ys, xs = np.mgrid[0:height, 0:width]
+    r2 = ((xs + 0.5 - width / 2) ** 2 + (ys + 0.5 - height / 2) ** 2) / (
+        (width / 2) ** 2 + (height / 2) ** 2
+    )
+    return 1 - vignetting * r2
+
+
+def _sensor(
+    image: np.ndarray, *, vignetting: float, noise: float, read_noise: float, seed: int
+) -> np.ndarray:
+    """Lens fall-off, then shot and read noise; float32 like a camera's linear output."""
+    height, width = image.shape[:2]
+    image = image * vignetting_gain((width, height), vignetting)[..., None]
+    if noise or read_noise:
+        sigma = np.sqrt((noise * image) ** 2 + read_noise**2)
+        image = image + sigma * np.random.default_rng(seed).standard_normal(image.shape)
+    return image.astype(np.float32)
+
+
+def render_chart(
+    values: ArrayLike,
+    *,
+    corners: ArrayLike = CHART_CORNERS,
+    rows: int = 4,
+    columns: int = 6,
+    size: tuple[int, int] = PLATE_SIZE,
+    background: float = 0.01,
+    vignetting: float = 0.0,
+    noise: float = 0.0,
+    read_noise: float = 0.0,
+    highlight: int | None = None,
+    highlight_value: float = 8.0,
+    highlight_radius: float = 3.5,
+    seed: int = 0,
+) -> np.ndarray:
+    """(h, w, 3) float32 linear plate of a chart whose patches have ``values`` (rows*columns, 3).
+
+    ``vignetting`` v: gain ``1 - v (r / r_corner)^2``. ``noise``: relative Gaussian std;
+    ``read_noise``: absolute std. ``highlight``: index of a patch that gets a clipped disc
+    (a specular glint) of ``highlight_value`` and ``highlight_radius`` pixels at its centre.
+    """
+    width, height = size
+    values = np.asarray(values, dtype=np.float64)
+    H = homography(corners, rows, columns)
+    ys, xs = np.mgrid[0:height, 0:width]
+    centres = np.stack([xs + 0.5, ys + 0.5, np.ones_like(xs, dtype=float)], axis=-1)
+    uvw = centres @ np.linalg.inv(H).T
+    u, v = uvw[..., 0] / uvw[..., 2], uvw[..., 1] / uvw[..., 2]
+    col, row = np.floor(u).astype(int), np.floor(v).astype(int)
+    fu, fv = u - col, v - row
+    inside = (col >= 0) & (col < columns) & (row >= 0) & (row < rows)
+    gap = PATCH_GAP
+    on_patch = inside & (fu > gap) & (fu < 1 - gap) & (fv > gap) & (fv < 1 - gap)
+    image = np.full((height, width, 3), background, dtype=np.float64)
+    image[inside & ~on_patch] = 0.005  # the chart's black frame
+    image[on_patch] = values[(row * columns + col)[on_patch]]
+    image = _sensor(image, vignetting=vignetting, noise=noise, read_noise=read_noise, seed=seed)
+    if highlight is not None:
+        r, c = divmod(highlight, columns)
+        p = H @ [c + 0.5, r + 0.5, 1.0]
+        disc = (xs + 0.5 - p[0] / p[2]) ** 2 + (ys + 0.5 - p[1] / p[2]) ** 2 <= highlight_radius**2
+        image[disc] = highlight_value
+    return image
+
+
+def render_regions(
+    regions: Mapping[str, tuple[tuple[int, int, int, int], ArrayLike]],
+    *,
+    size: tuple[int, int] = PLATE_SIZE,
+    background: float = 0.002,
+    vignetting: float = 0.0,
+    noise: float = 0.0,
+    read_noise: float = 0.0,
+    seed: int = 0,
+) -> np.ndarray:
+    """A plate of flat rectangles ``name -> ((x0, y0, x1, y1), rgb)`` (end-exclusive)."""
+    width, height = size
+    image = np.full((height, width, 3), background, dtype=np.float64)
+    for (x0, y0, x1, y1), rgb in regions.values():
+        image[y0:y1, x0:x1] = np.asarray(rgb, dtype=np.float64)
+    return _sensor(image, vignetting=vignetting, noise=noise, read_noise=read_noise, seed=seed)
+
+
+def write_plate(
+    path: str | Path,
+    image: ArrayLike,
+    *,
+    dtype: str = "half",
+    channels: tuple[str, ...] = ("R", "G", "B"),
+    scale: float = 1.0,
+    tile: int = 0,
+) -> Path:
+    """Write ``image * scale`` with OpenImageIO as ``dtype`` ("half", "float", "uint16", ...).
+
+    Channel names beyond R, G, B get zeros; another order is honoured by name (``layer.R``
+    counts as R). Integer types are clipped to [0, 1] first.
+
+    Raises
+    ------
+    OSError
+        When OpenImageIO cannot write the file.
+    """
+    import OpenImageIO as oiio  # deferred: heavy, and only plate writing needs it
+
+    path = Path(path)
+    data = np.asarray(image, dtype=np.float32) * np.float32(scale)
+    h, w, _ = data.shape
+    planes = []
+    for name in channels:
+        index = {"R": 0, "G": 1, "B": 2}.get(name.rpartition(".")[2])
+        planes.append(data[..., index] if index is not None else np.zeros((h, w), np.float32))
+    full = np.ascontiguousarray(np.stack(planes, axis=-1))
+    if dtype.startswith("uint"):
+        full = np.clip(full, 0, 1)
+    spec = oiio.ImageSpec(w, h, len(channels), dtype)
+    spec.channelnames = channels
+    if tile:
+        spec.tile_width = spec.tile_height = tile
+    out = oiio.ImageOutput.create(str(path))
+    if out is None or not out.open(str(path), spec):
+        raise OSError(f"{path}: cannot write: {oiio.geterror()}")
+    ok = out.write_image(full)
+    error = out.geterror()
+    out.close()
+    if not ok:
+        raise OSError(f"{path}: cannot write: {error}")
+    return path
+
+
+@dataclass(frozen=True)
+class PlateOptions:
+    """How the simulated camera shoots: lens fall-off, noise, flat-field and footage frames."""
+
+    vignetting: float = 0.05
+    noise: float = 0.01
+    read_noise: float = 1e-4
+    flat_frames: int = 4
+    footage_frames: int = 3
+    seed: int = 0
+
+
+def _grid(patches: int) -> tuple[int, int]:
+    """(rows, columns) of a chart: a ColorChecker's 4 x 6, otherwise one row."""
+    return (4, 6) if patches == 24 else (1, patches)
+
+
+def _plates(measurements: Any, options: PlateOptions) -> Iterator[tuple[str, np.ndarray]]:
+    """(file name, image) of every plate, in a fixed order (seeds depend on the position)."""
+    from ocio_vp.calibration.equations import predict_lit_chart, solve_M
+    from ocio_vp.calibration.geometry import stage_beta
+
+    rows, columns = _grid(measurements.SRL.shape[0])
+    sensor = {"vignetting": options.vignetting, "noise": options.noise}
+    sensor["read_noise"] = options.read_noise
+    seed = iter(range(options.seed * 1000, options.seed * 1000 + 1000))
+    white = {"flat": ((0, 0, *PLATE_SIZE), (0.5, 0.5, 0.5))}
+    for i in range(options.flat_frames):
+        flat = render_regions(white, vignetting=options.vignetting, noise=0.003, seed=next(seed))
+        yield f"flat.{i + 1:04d}.exr", flat
+    for k, channel in enumerate(("red", "green", "blue")):
+        panel = {channel: (PANEL_REGION, measurements.SL[:, k])}
+        yield f"primary_{channel}.exr", render_regions(panel, seed=next(seed), **sensor)
+    for k, channel in enumerate(("red", "green", "blue")):
+        values = measurements.SRL[:, :, k]
+        chart = render_chart(values, rows=rows, columns=columns, seed=next(seed), **sensor)
+        yield f"lit_{channel}.exr", chart
+    M = solve_M(measurements.SL)
+    for env in measurements.environments:
+        chart = render_chart(
+            env.target_chart, rows=rows, columns=columns, seed=next(seed), **sensor
+        )
+        yield f"{env.name}.exr", chart
+        if env.black_level is not None:
+            dark = {"panel": (PANEL_REGION, env.black_level)}
+            yield f"{env.name}_black.exr", render_regions(dark, seed=next(seed), **sensor)
+        if env.w_avg is None or not options.footage_frames:
+            continue
+        # Footage: the chart lit by the wall through M alone (what Q then post-corrects).
+        drive = np.clip(M @ np.asarray(env.w_avg, dtype=np.float64), 0.0, None)
+        lit = predict_lit_chart(measurements.SRL, stage_beta(measurements), np.eye(3), drive)
+        for frame in range(1, options.footage_frames + 1):
+            image = render_chart(lit, rows=rows, columns=columns, seed=next(seed), **sensor)
+            yield f"footage/{env.name}.{frame:04d}.exr", image
+
+
+def _capture_document(measurements: Any, names: set[str], options: PlateOptions) -> dict:
+    """The ``ocio-vp/capture`` document pointing at the plates (paths relative to it)."""
+    from ocio_vp.formats.measurements import measurements_to_dict
+
+    rows, columns = _grid(measurements.SRL.shape[0])
+    stage = measurements_to_dict(measurements)["stage"]
+    document: dict[str, Any] = {
+        "format": "ocio-vp/capture",
+        "version": 1,
+        "stage": stage,
+        "chart": {"rows": rows, "columns": columns, "inset": 0.25},
+    }
+    flats = sorted(n for n in names if n.startswith("flat."))
+    if flats:
+        document["flat_field"] = flats
+    document["primaries"] = {
+        c: {"plate": f"primary_{c}.exr", "region": list(PANEL_REGION)}
+        for c in ("red", "green", "blue")
+    }
+    document["lit_chart"] = {
+        c: {"plate": f"lit_{c}.exr", "corners": CHART_CORNERS.tolist()}
+        for c in ("red", "green", "blue")
+    }
+    environments = []
+    for env in measurements.environments:
+        entry: dict[str, Any] = {
+            "name": env.name,
+            "target_chart": {"plate": f"{env.name}.exr", "corners": CHART_CORNERS.tolist()},
+        }
+        if f"{env.name}_black.exr" in names:
+            entry["black_level"] = {"plate": f"{env.name}_black.exr", "region": list(PANEL_REGION)}
+        if env.w_avg is not None:
+            entry["w_avg"] = [float(v) for v in env.w_avg]
+        environments.append(entry)
+    document["environments"] = environments
+    return document
+
+
+def write_capture(
+    measurements: Any, folder: str | Path, options: PlateOptions = PlateOptions(), *, bar=None
+) -> Path:
+    """Render every plate of ``measurements`` into ``folder`` and write ``folder/capture.yaml``.
+
+    ``folder`` must be new or empty (callers stage it and rename it into place). ``bar``: an
+    optional progress bar (``update(1)`` per plate). Returns the capture file's path.
+
+    The values are those of ``measurements`` exactly, before lens and sensor: ``measure`` on
+    these plates gives them back within the noise (the vignetting is removed by the flat
+    fields when ``flat_frames`` > 0).
+    """
+    import yaml  # deferred like the other writers of YAML in the package
+
+    folder = Path(folder)
+    (folder / "footage").mkdir(parents=True, exist_ok=True)
+    names = set()
+    for name, image in _plates(measurements, options):
+        write_plate(folder / name, image)
+        names.add(name)
+        if bar is not None:
+            bar.update(1)
+    if not options.footage_frames or not any(n.startswith("footage/") for n in names):
+        (folder / "footage").rmdir()
+    document = _capture_document(measurements, names, options)
+    path = folder / "capture.yaml"
+    header = (
+        "# Simulated calibration plates (ocio-vp simulate --plates): `ocio-vp measure` reads\n"
+        "# this file; the format is described in docs/capture.md.\n"
+    )
+    path.write_text(
+        header + yaml.safe_dump(document, sort_keys=False, default_flow_style=None),
+        encoding="utf-8",
+    )
+    return path
+
+
+def plate_count(measurements: Any, options: PlateOptions = PlateOptions()) -> int:
+    """How many plates :func:`write_capture` writes (for a progress bar)."""
+    per_env = sum(
+        1 + (e.black_level is not None) + (options.footage_frames if e.w_avg is not None else 0)
+        for e in measurements.environments
+    )
+    return options.flat_frames + 6 + per_env
