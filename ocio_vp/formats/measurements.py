@@ -149,9 +149,7 @@ class Validator:
     ) -> Mapping[str, Any]:
         if not isinstance(value, Mapping):
             raise self.error(key, f"expected a mapping, got {_kind(value)}")
-        for name in required:
-            if name not in value:
-                raise self.error(key, f"missing required key {name!r}")
+        # Unknown keys first: a misspelt required key is reported as the typo it is.
         allowed = set(required) | set(optional)
         for name in value:
             if name not in allowed:
@@ -161,6 +159,9 @@ class Validator:
                 raise self.error(
                     (*key, str(name)), f"unknown key{suggestion}; expected one of: {expected}"
                 )
+        for name in required:
+            if name not in value:
+                raise self.error(key, f"missing required key {name!r}")
         return value
 
     def number(
