@@ -1,6 +1,7 @@
 """The spectral stage simulator: colour-science datasets, the simulated stage and its
 measurements, the ground-truth prediction of what a solution does, evaluation, sample data,
-and the ground truth on colours the chart does not contain (:mod:`ocio_vp.simulator.truth`).
+sample calibration photographs (plates), and the ground truth on colours the chart does not
+contain (:mod:`ocio_vp.simulator.truth`).
 """
 
 from ocio_vp.simulator.data import (
@@ -20,14 +21,22 @@ from ocio_vp.simulator.data import (
 from ocio_vp.simulator.evaluate import (
     Evaluation,
     NoiseStudy,
+    agreement_with_spectra,
     evaluate_solution,
-    format_table,
     noise_study,
 )
 from ocio_vp.simulator.options import (
     environments_from_args,
     read_spectra_csv,
     stage_options_from_args,
+)
+from ocio_vp.simulator.plates import (
+    PlateOptions,
+    plate_count,
+    render_chart,
+    render_regions,
+    write_capture,
+    write_plate,
 )
 from ocio_vp.simulator.predict import (
     StagePrediction,
@@ -76,8 +85,10 @@ __all__ = [
     "Evaluation",
     "HeldOutErrors",
     "NoiseStudy",
+    "PlateOptions",
     "SpectralStage",
     "StagePrediction",
+    "agreement_with_spectra",
     "align",
     "camera_rgb",
     "camera_sensitivities",
@@ -85,7 +96,6 @@ __all__ = [
     "environment_spectrum",
     "environments_from_args",
     "evaluate_solution",
-    "format_table",
     "gaussian_leds",
     "held_out_errors",
     "held_out_reflectances",
@@ -93,14 +103,19 @@ __all__ = [
     "noisy_measurements",
     "paper_stage",
     "paper_stage_measurements",
+    "plate_count",
     "predict_solution",
     "predict_stage",
     "read_spectra_csv",
+    "render_chart",
+    "render_regions",
     "simulate_and_solve",
     "simulate_measurements",
     "spectral_stage",
     "stage_options_from_args",
     "wavelengths",
     "white_reflectance",
+    "write_capture",
     "write_paper_samples",
+    "write_plate",
 ]

@@ -1,13 +1,13 @@
 """Judge solves against the simulated stage's spectral truth, and how noise moves them.
 
-:func:`evaluate_solution` gives the numbers of ``ocio-vp demo``'s table (the paper's "theory"
-column, from :func:`ocio_vp.simulator.predict.predict_solution`); :func:`noise_study` re-solves an
+:func:`evaluate_solution` judges a solve on the spectra (the paper's "theory" column, from
+:func:`ocio_vp.simulator.predict.predict_solution`); :func:`agreement_with_spectra` checks the
+figures ``solve``/``demo`` print against it; :func:`noise_study` re-solves an
 environment from measurements with multiplicative noise and reports how much N moves.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,7 +22,6 @@ __all__ = [
     "NoiseStudy",
     "agreement_with_spectra",
     "evaluate_solution",
-    "format_table",
     "noise_study",
 ]
 
@@ -76,52 +75,6 @@ def evaluate_solution(stage: SpectralStage, solution, environment=None) -> Evalu
         drive_clipped=ours.lit_drive_clipped,
         displayed_patches_clipped=int(np.count_nonzero(ours.displayed_drive_clipped)),
     )
-
-
-def _pct(error: np.ndarray) -> str:
-    return f"{100 * float(np.mean(error)):.2f}%"
-
-
-def format_table(evaluations: Sequence[Evaluation]) -> str:
-    """The demo's summary table (errors are the mean over R, G, B relative to target white)."""
-    header = (
-        "environment",
-        "kind",
-        "method",
-        "cond(Q)",
-        "lit M-only",
-        "lit M+Q",
-        "shown M",
-        "shown N+Q",
-        "N",
-    )
-    rows = [header]
-    for e in evaluations:
-        kind = {True: "broadband", False: "narrow", None: "?"}[e.broadband]
-        rows.append(
-            (
-                e.environment,
-                kind,
-                e.method,
-                f"{e.cond_Q:.3g}",
-                _pct(e.lit_baseline),
-                _pct(e.lit),
-                _pct(e.displayed_baseline),
-                _pct(e.displayed),
-                "solved" if e.N_solved else "SKIPPED",
-            )
-        )
-    widths = [max(len(r[i]) for r in rows) for i in range(len(header))]
-    lines = ["  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)).rstrip() for r in rows]
-    for e in evaluations:
-        if not e.N_solved:
-            lines.append(f"{e.environment}: N not solved: {e.N_reason}")
-        if e.drive_clipped:
-            lines.append(
-                f"{e.environment}: the light is outside the LED gamut: the wall clips a "
-                "negative drive of M w_avg to 0 (the lit-chart errors include that)"
-            )
-    return "\n".join(lines)
 
 
 # --------------------------------------------------------------------------------------------
