@@ -74,7 +74,7 @@ def post_correction_caveats(solution) -> list[str]:
     rank = d.get("rank_Q")
     if rank is not None and rank < 3:
         caveats.append(
-            f"Q is rank {rank} (cond {d.get('cond_Q', float('inf')):.3g}): it maps every colour "
+            f"Q is rank {rank} (cond {float(d.get('cond_Q', 'inf')):.3g}): it maps every colour "
             "onto a line or plane, so corrected footage loses colours the camera recorded"
         )
     if solution.N is None:

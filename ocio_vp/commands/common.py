@@ -114,8 +114,8 @@ def summary_row(solution) -> tuple[str, ...]:
     return (
         solution.environment,
         method,
-        f"{d.get('cond_SL', float('nan')):.3g}",
-        f"{d.get('cond_Q', float('nan')):.3g}",
+        f"{float(d.get('cond_SL', 'nan')):.3g}",
+        f"{float(d.get('cond_Q', 'nan')):.3g}",
         _n_state(solution),
         _percent(errors["lit_baseline"]),
         _percent(errors["lit"]),
