@@ -7,12 +7,14 @@ Sources: the simulator (tests/test_spectral.py checks it against direct sums), O
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import subprocess
 
 import numpy as np
 import pytest
 
+from ocio_vp.calibration.diagnostics import summary_errors
 from ocio_vp.cli import main
 from ocio_vp.formats.measurements import load_measurements
 from ocio_vp.formats.solution import load_solution
@@ -43,14 +45,35 @@ def test_demo_writes_every_environment(demo):
     assert not [p.name for p in out.iterdir() if p.name.startswith(".")]  # no staging left
 
 
-def test_demo_table_and_sodium_reason(demo):
+def test_demo_and_solve_print_one_table(demo, tmp_path, capsys):
+    """One set of numbers: the demo's rows and warnings are solve's, for the same data, and
+    the figures are solution.json's (the lit chart with the drive the wall can emit)."""
     _, out, text = demo
-    lines = {line.split()[0]: line for line in text.splitlines() if line.split()}
-    for name in PAPER_ENVIRONMENTS:
-        assert name in lines
-    assert "SKIPPED" in lines["sodium_vapour"]
-    assert "sodium_vapour: N not solved:" in text
-    assert "direct_sun" in text and "solved" in lines["direct_sun"]
+    args = ["solve", str(out / "paper_stage.yaml"), "--out", str(tmp_path / "s")]
+    assert main([*args, "--method", "least-squares"]) == 0
+    solved = capsys.readouterr().out
+
+    def rows(output: str) -> list[str]:
+        names = ("environment", *PAPER_ENVIRONMENTS)
+        return [
+            line for line in output.splitlines() if line.split()[:1] and line.split()[0] in names
+        ]
+
+    def warnings(output: str) -> list[str]:
+        return [line for line in output.splitlines() if line.startswith("warning:")]
+
+    assert len(rows(text)) == 1 + len(PAPER_ENVIRONMENTS)
+    assert rows(text) == rows(solved)
+    assert warnings(text) == warnings(solved) and warnings(text)
+    line = {row.split()[0]: row for row in rows(text)}["sodium_vapour"]
+    assert "NOT solved" in line
+    diagnostics = load_solution(out / "sodium_vapour").diagnostics
+    figures = summary_errors(diagnostics)
+    np.testing.assert_array_equal(figures["lit"], diagnostics["lit_chart_error_clipped_drive"])
+    for key in ("lit_baseline", "lit", "shown_baseline", "shown"):
+        assert f"{100 * np.mean(figures[key]):.2f}%" in line.split()
+    gap = re.search(r"agree within (\S+) percentage points", text)
+    assert gap and float(gap.group(1)) < 1e-9  # measurements-based figures = spectral truth
     data = json.loads((out / "sodium_vapour" / "solution.json").read_text())
     assert data["N"] is None
 
@@ -138,10 +161,14 @@ def test_unwritable_out_exits_2(tmp_path, capsys):
 
 
 def test_simulate_lists_environments(capsys):
-    assert main(["simulate", "--list-environments"]) == 0
+    with pytest.raises(SystemExit) as exited:  # no --out needed
+        main(["simulate", "--list-environments"])
+    assert exited.value.code == 0
     names = [line.split()[0] for line in capsys.readouterr().out.splitlines()]
     assert set(PAPER_ENVIRONMENTS) <= set(names)
-    assert main(["simulate"]) == 2  # no --out
+    with pytest.raises(SystemExit) as exited:
+        main(["simulate"])  # --out is required, and argparse says so
+    assert exited.value.code == 2
     assert "--out" in capsys.readouterr().err
 
 

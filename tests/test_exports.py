@@ -1,5 +1,6 @@
 """The export command's contract: all or nothing, clear one-line errors (exit 2), templates
-shipped with the package. Independent checks: the file system and pyproject.toml.
+shipped inside the package (read as resources, so a zipped package works). Independent checks:
+the file system, pyproject.toml and a fresh interpreter importing the package from a zip.
 
 Exports of a config that carries the panel-linearity LUT sidecar (``luts/*.clf``): the sidecar
 must travel with every exported config (``ociocheck`` parses every LUT and fails on a missing
@@ -9,7 +10,10 @@ file), be inside the ``.ocioz``, and the wall CLFs must carry the LUT1D: checked
 from __future__ import annotations
 
 import json
+import os
 import shutil
+import subprocess
+import sys
 import zipfile
 from pathlib import Path
 
@@ -23,7 +27,7 @@ import ocio_vp.exports as exports
 from ocio_vp.cli import main
 from ocio_vp.errors import InputError
 from ocio_vp.exports import export_solutions
-from ocio_vp.exports.templating import template_dir
+from ocio_vp.exports.templating import read_template
 from ocio_vp.formats.measurements import measurements_from_dict
 from ocio_vp.ocio.config import IN_FRUSTUM, OUT_OF_FRUSTUM, REFERENCE
 from ocio_vp.ocio.writer import write_solutions
@@ -96,7 +100,7 @@ def test_broken_solution_exits_2(solved, tmp_path, capsys, edit, words):
 
 def test_missing_folder_and_config(tmp_path, solved, capsys):
     assert main(["export", str(tmp_path / "nope")]) == 2
-    assert "not a solution folder" in capsys.readouterr().err
+    assert "nope: SOLUTION_DIR: no such file or folder" in capsys.readouterr().err
     folder = tmp_path / "env"
     copy_solution(solved[0], folder)
     (folder / "config.ocio").unlink()
@@ -124,12 +128,42 @@ def test_n_not_solved_is_said(solved, tmp_path):
     assert mapping["N_solved"] is False
 
 
-def test_templates_are_shipped():
-    """Every template is found in the checkout and listed by pyproject's data-files glob."""
-    assert template_dir() == ROOT / "templates"
-    assert '"share/ocio-vp/templates" = ["templates/*"]' in (ROOT / "pyproject.toml").read_text()
-    names = {p.name for p in template_dir().glob("*.j2")}
-    assert {"nuke_environment.nk.j2", "resolve_matrix.dctl.j2", "UNREAL.md.j2"} <= names
+def test_templates_are_package_resources():
+    """The templates are read from the package, which ships the top-level templates/ folder."""
+    assert (ROOT / "ocio_vp" / "templates").resolve() == (ROOT / "templates").resolve()
+    assert '"templates/*.j2"' in (ROOT / "pyproject.toml").read_text()
+    sources = sorted((ROOT / "templates").glob("*.j2"))
+    assert {"nuke_environment.nk.j2", "resolve_matrix.dctl.j2", "UNREAL.md.j2"} <= {
+        p.name for p in sources
+    }
+    for source in sources:
+        assert read_template(source.name) == source.read_text(encoding="utf-8")
+
+
+def test_templates_load_from_a_zipped_package(tmp_path):
+    """A zip on sys.path (no folder to look in) still renders: resources, not paths."""
+    archive = tmp_path / "ocio_vp.zip"
+    with zipfile.ZipFile(archive, "w") as bundle:
+        for folder, _, files in os.walk(ROOT / "ocio_vp", followlinks=True):
+            for name in files:
+                if name.endswith((".py", ".j2")):
+                    path = Path(folder) / name
+                    bundle.write(path, path.relative_to(ROOT).as_posix())
+    script = (
+        "import sys; sys.path.insert(0, sys.argv[1]); "
+        "import ocio_vp.exports.templating as t; "
+        "assert t.__file__.startswith(sys.argv[1]), t.__file__; "
+        "print(t.read_template('UNREAL.md.j2') == open(sys.argv[2], encoding='utf-8').read())"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", script, str(archive), str(ROOT / "templates" / "UNREAL.md.j2")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=tmp_path,
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "True"
 
 
 CHANNELS = ("red", "green", "blue")

@@ -63,6 +63,17 @@ def test_unknown_key_suggests_the_right_one() -> None:
         measurements_from_dict(data)
 
 
+def test_misspelt_required_key_is_named_as_a_typo() -> None:
+    """A misspelt required key is reported as unknown (with the suggestion), not only missing."""
+    data = make_measurements_dict()
+    data["primaries_"] = data.pop("primaries")
+    with pytest.raises(InputError, match=r"primaries_: unknown key \(did you mean 'primaries'\?\)"):
+        measurements_from_dict(data)
+    del data["primaries_"]
+    with pytest.raises(InputError, match="missing required key 'primaries'"):
+        measurements_from_dict(data)
+
+
 def test_bool_is_not_a_number() -> None:
     data = make_measurements_dict()
     data["primaries"]["red"][0] = True

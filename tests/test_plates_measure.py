@@ -8,13 +8,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from synthetic_plates import CORNERS, render_chart, render_regions, write_image
 
 from ocio_vp.cli import main
 from ocio_vp.formats.measurements import load_measurements, measurements_from_dict
 from ocio_vp.pipeline import solve_environment
 from ocio_vp.plates.capture import capture_from_dict, load_capture
 from ocio_vp.plates.measure import measure_capture
+from ocio_vp.simulator.plates import CHART_CORNERS, render_chart, render_regions, write_plate
 
 NOISE, READ_NOISE = 0.01, 1e-4
 # 10 % fall-off at the frame's corners, removed with a flat field (4 frames of a white target).
@@ -39,32 +39,35 @@ def write_capture(folder: Path, truth, *, seed: int = 0) -> Path:
     flats = []
     for i in range(4):
         flat = render_regions(white, vignetting=VIGNETTING, noise=0.003, seed=seed + 90 + i)
-        flats.append(f"plates/{write_image(folder / f'flat.{i}.exr', flat).name}")
+        flats.append(f"plates/{write_plate(folder / f'flat.{i}.exr', flat).name}")
     primaries = {c: (REGIONS[c], truth.SL[:, k]) for k, c in enumerate(REGIONS)}
-    write_image(folder / "primaries.exr", render_regions(primaries, seed=seed, **noise))
+    write_plate(folder / "primaries.exr", render_regions(primaries, seed=seed, **noise))
     lit = {}
     for k, c in enumerate(("red", "green", "blue")):
         image = render_chart(truth.SRL[:, :, k], highlight=11, seed=seed + 1 + k, **noise)
         # One lit plate as 16-bit TIFF, the others half-float EXR with extra channels.
         if c == "green":
-            name = write_image(folder / "lit_green.tif", image, dtype="uint16").name
+            name = write_plate(folder / "lit_green.tif", image, dtype="uint16").name
         else:
-            name = write_image(
+            name = write_plate(
                 folder / f"lit_{c}.exr", image, channels=("A", "B", "G", "R", "Z")
             ).name
-        lit[c] = {"plate": f"plates/{name}", "corners": CORNERS.tolist()}
+        lit[c] = {"plate": f"plates/{name}", "corners": CHART_CORNERS.tolist()}
     environments = []
     for i, env in enumerate(truth.environments):
         image = render_chart(env.target_chart, seed=seed + 10 + i, **noise)
-        write_image(folder / f"{env.name}.exr", image, dtype="float")
+        write_plate(folder / f"{env.name}.exr", image, dtype="float")
         black = render_regions(
             {"b": ((200, 150, 400, 250), env.black_level)}, seed=seed + 20 + i, **noise
         )
-        write_image(folder / f"{env.name}_black.exr", black, dtype="float")
+        write_plate(folder / f"{env.name}_black.exr", black, dtype="float")
         environments.append(
             {
                 "name": env.name,
-                "target_chart": {"plate": f"plates/{env.name}.exr", "corners": CORNERS.tolist()},
+                "target_chart": {
+                    "plate": f"plates/{env.name}.exr",
+                    "corners": CHART_CORNERS.tolist(),
+                },
                 "black_level": {
                     "plate": f"plates/{env.name}_black.exr",
                     "region": [200, 150, 400, 250],
@@ -269,7 +272,7 @@ class TestBadInput:
 
     def test_no_rgb_channels(self, tmp_path, capture_file, capsys):
         def edit(d, plates):
-            write_image(plates / "yz.exr", np.ones((400, 600, 3)), channels=("Y", "Z"))
+            write_plate(plates / "yz.exr", np.ones((400, 600, 3)), channels=("Y", "Z"))
             d["lit_chart"]["green"]["plate"] = "plates/yz.exr"
 
         err = self._run(tmp_path, capture_file, edit, capsys)
@@ -278,7 +281,7 @@ class TestBadInput:
     def test_fully_clipped_chart(self, tmp_path, capture_file, truth, capsys):
         def edit(d, plates):
             image = np.minimum(render_chart(truth.SRL[:, :, 0] * 100, noise=NOISE), 1.0)
-            write_image(plates / "clipped.tif", image, dtype="uint16")
+            write_plate(plates / "clipped.tif", image, dtype="uint16")
             d["lit_chart"]["red"]["plate"] = "plates/clipped.tif"
 
         err = self._run(tmp_path, capture_file, edit, capsys)
@@ -286,7 +289,7 @@ class TestBadInput:
 
     def test_8bit_without_encoding(self, tmp_path, capture_file, capsys):
         def edit(d, plates):
-            write_image(plates / "eight.png", np.full((400, 600, 3), 0.5), dtype="uint8")
+            write_plate(plates / "eight.png", np.full((400, 600, 3), 0.5), dtype="uint8")
             d["environments"][1]["target_chart"]["plate"] = "plates/eight.png"
 
         err = self._run(tmp_path, capture_file, edit, capsys)
@@ -298,7 +301,7 @@ def test_detect_corners_written_back(tmp_path):
     ccd = pytest.importorskip("colour_checker_detection")
     values = ccd.SETTINGS_SEGMENTATION_COLORCHECKER_CLASSIC["reference_values"].clip(0.01) * 0.5
     corners = np.array([[100.0, 80.0], [500.0, 90.0], [495.0, 350.0], [105.0, 345.0]])
-    plate = write_image(tmp_path / "chart.exr", render_chart(values, corners=corners, noise=0.005))
+    plate = write_plate(tmp_path / "chart.exr", render_chart(values, corners=corners, noise=0.005))
     from ocio_vp.plates.detection import detect_chart_corners
     from ocio_vp.plates.reader import open_plate
     from ocio_vp.plates.sampling import sample_chart
@@ -325,7 +328,7 @@ def test_detect_through_the_command(tmp_path, truth, capsys):
     document = yaml.safe_load(capture.read_text())
     frontal = np.array([[100.0, 80.0], [500.0, 90.0], [495.0, 350.0], [105.0, 345.0]])
     image = render_chart(truth.SRL[:, :, 1], corners=frontal, noise=NOISE, read_noise=READ_NOISE)
-    write_image(tmp_path / "plates" / "frontal.exr", image)
+    write_plate(tmp_path / "plates" / "frontal.exr", image)
     document["lit_chart"]["green"] = {"plate": "plates/frontal.exr", "corners": "detect"}
     document["lit_chart"]["green"]["flat_field"] = None  # rendered without vignetting
     document["chart"]["inset"] = 0.3  # absorbs the detector's approximate quadrilateral

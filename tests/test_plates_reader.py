@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from synthetic_plates import write_image
 
 from ocio_vp.errors import InputError
 from ocio_vp.plates.reader import open_plate, read_region
+from ocio_vp.simulator.plates import write_plate
 
 
 @pytest.fixture
@@ -30,7 +30,7 @@ class TestReadRegion:
     @pytest.mark.parametrize("tile", [0, 32])
     @pytest.mark.parametrize("channels", [("R", "G", "B"), ("A", "B", "G", "R", "Z")])
     def test_region_equals_full_read(self, tmp_path, image, tile, channels):
-        path = write_image(tmp_path / "p.exr", image, channels=channels, tile=tile)
+        path = write_plate(tmp_path / "p.exr", image, channels=channels, tile=tile)
         full = _oiio_full(path)
         box = (17, 9, 151, 103)
         np.testing.assert_array_equal(read_region(path, box), full[9:103, 17:151])
@@ -39,15 +39,15 @@ class TestReadRegion:
         ("suffix", "dtype", "step"), [("tif", "uint16", 1 / 65535), ("dpx", "uint10", 1 / 1023)]
     )
     def test_integer_formats(self, tmp_path, image, suffix, dtype, step):
-        path = write_image(tmp_path / f"p.{suffix}", image, dtype=dtype)
+        path = write_plate(tmp_path / f"p.{suffix}", image, dtype=dtype)
         info = open_plate(path)
         assert not info.is_float and info.encoding == "linear"
         np.testing.assert_allclose(read_region(path, (0, 0, 200, 120)), image, atol=step)
 
     def test_layers(self, tmp_path, image):
-        path = write_image(tmp_path / "l.exr", image, channels=("beauty.R", "beauty.G", "beauty.B"))
+        path = write_plate(tmp_path / "l.exr", image, channels=("beauty.R", "beauty.G", "beauty.B"))
         np.testing.assert_array_equal(read_region(path, (0, 0, 10, 10)), _half(image[:10, :10]))
-        two = write_image(
+        two = write_plate(
             tmp_path / "two.exr", image, channels=("a.R", "a.G", "a.B", "b.R", "b.G", "b.B")
         )
         with pytest.raises(InputError, match="several RGB layers"):
@@ -58,7 +58,7 @@ class TestReadRegion:
         import colour
 
         codes = np.linspace(0, 1, 200 * 120 * 3).reshape(120, 200, 3)
-        path = write_image(tmp_path / "s.png", codes, dtype="uint8")
+        path = write_plate(tmp_path / "s.png", codes, dtype="uint8")
         with pytest.raises(InputError, match="display-referred"):
             open_plate(path)
         got = read_region(open_plate(path, encoding="srgb"), (0, 0, 200, 120))
@@ -90,7 +90,7 @@ class TestReadRegion:
         (tmp_path / "junk.exr").write_bytes(b"not an image at all")
         with pytest.raises(InputError, match="cannot read"):
             open_plate(tmp_path / "junk.exr")
-        path = write_image(tmp_path / "p.exr", image)
+        path = write_plate(tmp_path / "p.exr", image)
         with pytest.raises(InputError, match="outside the image"):
             read_region(path, (150, 0, 201, 10))
         with pytest.raises(InputError, match="unknown encoding"):

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from synthetic_plates import CORNERS, GAP, homography, render_chart, render_regions, write_image
 
 from ocio_vp.errors import InputError
 from ocio_vp.plates.sampling import (
@@ -13,6 +12,14 @@ from ocio_vp.plates.sampling import (
     patch_labels,
     sample_chart,
     sample_region,
+)
+from ocio_vp.simulator.plates import (
+    CHART_CORNERS,
+    PATCH_GAP,
+    homography,
+    render_chart,
+    render_regions,
+    write_plate,
 )
 
 # Noise of the synthetic sensor: 1 % of the signal plus 1e-4 absolute; vignetting 0.6 % at the
@@ -49,8 +56,8 @@ class TestSampleChart:
     @pytest.mark.parametrize("dtype", ["half", "float", "uint16"])
     def test_within_half_percent_and_highlight_flagged(self, tmp_path, truth, dtype):
         suffix = "tif" if dtype == "uint16" else "exr"
-        path = write_image(tmp_path / f"chart.{suffix}", _plate(truth), dtype=dtype)
-        samples = sample_chart(path, CORNERS, 4, 6)
+        path = write_plate(tmp_path / f"chart.{suffix}", _plate(truth), dtype=dtype)
+        samples = sample_chart(path, CHART_CORNERS, 4, 6)
         _check_values(samples.means, truth)
         # Only the patch with the specular glint is flagged (clipped and too many outliers).
         assert np.flatnonzero(samples.flagged).tolist() == [7]
@@ -66,15 +73,15 @@ class TestSampleChart:
     def test_independent_homography(self):
         # grid_homography (8x8 DLT) against the tests' SVD null-space fit.
         np.testing.assert_allclose(
-            grid_homography(CORNERS, 4, 6), homography(CORNERS, 4, 6), atol=1e-9
+            grid_homography(CHART_CORNERS, 4, 6), homography(CHART_CORNERS, 4, 6), atol=1e-9
         )
 
     def test_labels_cover_the_inset_quad(self):
         # Pixel count of each patch ~ area of its inset quadrilateral (shoelace formula).
         inset = 0.25
         box = (100, 60, 500, 340)
-        labels = patch_labels(CORNERS, 4, 6, inset=inset, box=box)
-        H = homography(CORNERS, 4, 6)
+        labels = patch_labels(CHART_CORNERS, 4, 6, inset=inset, box=box)
+        H = homography(CHART_CORNERS, 4, 6)
         for j in range(24):
             r, c = divmod(j, 6)
             uv = np.array(
@@ -94,29 +101,29 @@ class TestSampleChart:
             assert abs(np.count_nonzero(labels == j) - area) < 0.5 * perimeter
 
     def test_sampled_pixels_stay_inside_patches(self, truth):
-        # With a large inset no sampled pixel touches the black gaps (GAP < inset).
+        # With a large inset no sampled pixel touches the black gaps (PATCH_GAP < inset).
         image = render_chart(truth)
-        labels = patch_labels(CORNERS, 4, 6, inset=GAP + 0.02, box=(0, 0, 600, 400))
+        labels = patch_labels(CHART_CORNERS, 4, 6, inset=PATCH_GAP + 0.02, box=(0, 0, 600, 400))
         for j in range(24):
             assert np.all(image[labels == j] == image[labels == j][0])
 
     @pytest.mark.parametrize("method", sorted(ROBUST_MEAN_METHODS))
     def test_methods_without_glint(self, truth, method):
-        samples = sample_chart(_plate(truth, highlight=None), CORNERS, 4, 6, method=method)
+        samples = sample_chart(_plate(truth, highlight=None), CHART_CORNERS, 4, 6, method=method)
         _check_values(samples.means, truth)
         assert not samples.flagged.any()
 
     def test_plain_mean_is_biased_by_the_glint(self, truth):
         # The reason for a robust mean: the glint drags the plain mean far off.
-        mean = sample_chart(_plate(truth), CORNERS, 4, 6, method="mean").means[7]
-        robust = sample_chart(_plate(truth), CORNERS, 4, 6).means[7]
+        mean = sample_chart(_plate(truth), CHART_CORNERS, 4, 6, method="mean").means[7]
+        robust = sample_chart(_plate(truth), CHART_CORNERS, 4, 6).means[7]
         assert np.all(mean > truth[7] * 1.2)
         np.testing.assert_allclose(robust, truth[7], rtol=TOLERANCE)
 
     def test_frames_are_averaged(self, truth):
         frames = [_plate(truth, highlight=None, seed=s) for s in range(4)]
-        one = sample_chart(frames[0], CORNERS, 4, 6)
-        four = sample_chart(frames, CORNERS, 4, 6)
+        one = sample_chart(frames[0], CHART_CORNERS, 4, 6)
+        four = sample_chart(frames, CHART_CORNERS, 4, 6)
         assert four.frames == 4
         # pixel noise of the average of 4 frames is half of one frame's (sqrt(4)).
         bright = truth > 0.1
@@ -134,14 +141,14 @@ class TestSampleChart:
             )
             for s in range(4)
         ]
-        paths = [write_image(tmp_path / f"flat.{i}.exr", f) for i, f in enumerate(flats)]
-        raw = sample_chart(plate, CORNERS, 4, 6)
+        paths = [write_plate(tmp_path / f"flat.{i}.exr", f) for i, f in enumerate(flats)]
+        raw = sample_chart(plate, CHART_CORNERS, 4, 6)
         assert np.max(np.abs(raw.means / truth - 1)) > 0.05
-        corrected = sample_chart(plate, CORNERS, 4, 6, flat_field=paths)
+        corrected = sample_chart(plate, CHART_CORNERS, 4, 6, flat_field=paths)
         _check_values(corrected.means, truth)
         assert np.flatnonzero(corrected.flagged).tolist() == [7]
         with pytest.raises(InputError, match="differs from the plate"):
-            sample_chart(plate[:, :590], CORNERS, 4, 6, flat_field=paths)
+            sample_chart(plate[:, :590], CHART_CORNERS, 4, 6, flat_field=paths)
 
     def test_example_exact(self):
         # A noise-free 2 x 2 chart gives its exact patch values with any method.
@@ -156,15 +163,15 @@ class TestSampleChart:
 
 class TestErrors:
     def test_corners_outside(self, truth, tmp_path):
-        path = write_image(tmp_path / "c.exr", render_chart(truth))
-        corners = CORNERS + np.array([[0, 0], [200, 0], [200, 0], [0, 0]])
+        path = write_plate(tmp_path / "c.exr", render_chart(truth))
+        corners = CHART_CORNERS + np.array([[0, 0], [200, 0], [200, 0], [0, 0]])
         with pytest.raises(InputError, match="outside the image") as info:
             sample_chart(path, corners, 4, 6)
         assert str(path) in str(info.value)
 
     def test_not_convex(self, truth):
         with pytest.raises(InputError, match="convex"):
-            sample_chart(render_chart(truth), CORNERS[[0, 2, 1, 3]], 4, 6)
+            sample_chart(render_chart(truth), CHART_CORNERS[[0, 2, 1, 3]], 4, 6)
 
     def test_too_small(self, truth):
         corners = np.array([[10.0, 10], [22, 10], [22, 18], [10, 18]])
@@ -175,11 +182,11 @@ class TestErrors:
     def test_fully_clipped(self, truth, tmp_path, dtype):
         # Overexposed 100x: every patch at the sensor's flat top (1.0, the TIFF's max code).
         image = np.minimum(render_chart(truth * 100, noise=NOISE), 1.0)
-        path = write_image(
+        path = write_plate(
             tmp_path / f"clip.{'tif' if dtype == 'uint16' else 'exr'}", image, dtype=dtype
         )
         with pytest.raises(InputError, match="clipped") as info:
-            sample_chart(path, CORNERS, 4, 6)
+            sample_chart(path, CHART_CORNERS, 4, 6)
         assert str(path) in str(info.value)
 
 

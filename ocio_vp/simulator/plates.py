@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike
 
 __all__ = [
     "CHART_CORNERS",
+    "PATCH_GAP",
     "PLATE_SIZE",
     "PlateOptions",
     "homography",

@@ -1,0 +1,86 @@
+"""Where ``ocio-vp report`` writes, re-runs on globs, never dropping a larger report; ΔE ITP
+where it is undefined."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ocio_vp.cli import main
+from ocio_vp.errors import InputError
+from ocio_vp.report.build import default_report_dir
+from ocio_vp.report.data import environment_data, itp_defined
+
+SAMPLE = Path(__file__).resolve().parent.parent / "sample_configs" / "paper_stage"
+ENVIRONMENTS = ("direct_sun", "sodium_vapour", "incandescent")
+DPI = "20"  # tiny PNGs: these tests are about folders, not pictures
+
+
+@pytest.fixture
+def calib(tmp_path) -> Path:
+    root = tmp_path / "calib"
+    for name in ENVIRONMENTS:
+        shutil.copytree(SAMPLE / name, root / name)
+    return root
+
+
+def _report(*args: str | Path) -> int:
+    return main(["report", *map(str, args), "--dpi", DPI])
+
+
+def _shown(folder: Path) -> list[str]:
+    return json.loads((folder / "report.json").read_text())["environments"]
+
+
+def test_default_report_dir(calib, tmp_path):
+    assert default_report_dir([calib]) == calib.resolve() / "report"
+    assert default_report_dir(sorted(calib.iterdir())) == calib.resolve() / "report"
+    assert default_report_dir([calib / "direct_sun"]) == calib.resolve() / "direct_sun" / "report"
+    some = default_report_dir([calib / "sodium_vapour", calib / "direct_sun"])
+    assert some == calib.resolve() / "report-sodium_vapour+direct_sun"
+    other = tmp_path / "other"
+    shutil.copytree(SAMPLE / "direct_sun", other / "direct_sun")
+    with pytest.raises(InputError, match="give --out"):
+        default_report_dir([calib / "direct_sun", other / "direct_sun"])
+
+
+def test_reruns_and_never_drops_a_larger_report(tmp_path, capsys):
+    calib = tmp_path / "calib"
+    for name in ENVIRONMENTS[:2]:
+        shutil.copytree(SAMPLE / name, calib / name)
+    assert _report(*sorted(calib.iterdir())) == 0
+    assert _shown(calib / "report") == sorted(ENVIRONMENTS[:2])
+    index = (calib / "report" / "index.html").read_bytes()
+    capsys.readouterr()
+    assert _report(calib / "direct_sun", "--out", calib / "report") == 2
+    err = capsys.readouterr().err
+    assert "would drop sodium_vapour" in err and "--replace" in err
+    assert (calib / "report" / "index.html").read_bytes() == index
+    # (A re-run of the same glob skips calib/report: tests/test_formats_solution_inputs.py.)
+
+
+def test_itp_domain():
+    """ICtCp's PQ needs non-negative LMS: a colour with negative light is flagged."""
+    xyz_to_xyz = np.eye(3)
+    # grey, black, a red, and pure Z (no luminance: no light has it; its L cone value is < 0)
+    chart = np.array([[0.2, 0.2, 0.2], [0.0, 0.0, 0.0], [0.5, 0.1, 0.05], [0.0, 0.0, 0.5]])
+    defined = itp_defined(chart, xyz_to_xyz)
+    assert defined.tolist() == [True, True, True, False]
+
+
+def test_sodium_itp_is_undefined_not_huge():
+    """Sodium's rank-1 lit chart has negative light: those patches are NaN, the rest sane."""
+    (data,) = environment_data([SAMPLE / "sodium_vapour"])
+    itp = data.delta_e["ITP"]
+    undefined = sum(int(np.isnan(v).sum()) for v in itp.values())
+    assert undefined > 0
+    for chart, values in itp.items():
+        assert np.nanmax(values) < 1000, chart  # ICtCp distances are bounded for real light
+        ok = itp_defined(data.charts[chart], data.transform.camera_to_xyz) & itp_defined(
+            data.charts["target"], data.transform.camera_to_xyz
+        )
+        assert np.array_equal(np.isnan(values), ~ok)
