@@ -29,9 +29,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("measurements", help="measurements file (.yaml/.yml/.json)")
     parser.add_argument("--environment", required=True, metavar="NAME", help="environment name")
-    parser.add_argument("--hdri", metavar="FILE", help="the environment's equirectangular HDRI")
     parser.add_argument(
-        "--average-rgb", metavar="R,G,B", help="instead of --hdri: its diffuse integral (w_avg)"
+        "--hdri",
+        metavar="FILE",
+        help="the environment's equirectangular HDRI (default: none; give it or --average-rgb)",
+    )
+    parser.add_argument(
+        "--average-rgb",
+        metavar="R,G,B",
+        help="instead of --hdri: its diffuse integral (w_avg) (default: none)",
     )
     parser.add_argument(
         "--hdri-colorspace",
@@ -42,10 +48,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "(needs stage.camera_colorspace)",
     )
     parser.add_argument(
-        "--camera", metavar="NAME", help="camera in colour.MSDS_CAMERA_SENSITIVITIES"
+        "--camera",
+        metavar="NAME",
+        help="camera in colour.MSDS_CAMERA_SENSITIVITIES (default: from --camera-sensitivities, "
+        "else approximated from stage.camera_colorspace)",
     )
     parser.add_argument(
-        "--camera-sensitivities", metavar="CSV", help="camera sensitivities: wavelength,R,G,B (nm)"
+        "--camera-sensitivities",
+        metavar="CSV",
+        help="camera sensitivities: wavelength,R,G,B (nm) (default: none)",
     )
     parser.add_argument(
         "--chart",
@@ -62,10 +73,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--illuminant-spectrum",
         metavar="CSV",
-        help="the light's known spectrum (wavelength,value), e.g. for LED, fluorescent or sodium",
+        help="the light's known spectrum (wavelength,value), e.g. for LED, fluorescent or sodium "
+        "(default: estimated, see --illuminant-method)",
     )
     parser.add_argument(
-        "--hdri-width", type=int, default=None, metavar="N", help="integration width"
+        "--hdri-width",
+        type=int,
+        default=None,
+        metavar="N",
+        help="HDRI integration width (default: 1024)",
     )
     parser.add_argument("--out", required=True, help="output measurements file (.yaml/.json)")
     parser.add_argument("--force", action="store_true", help="replace --out if it exists")
