@@ -64,6 +64,58 @@ def test_failure_mid_way_publishes_nothing(solved, tmp_path, monkeypatch):
     assert sorted(p.name for p in (out / "env_0").iterdir()) == ["nuke", "unreal"]
 
 
+def test_one_bad_environment_never_stops_the_others(solved, tmp_path, capsys):
+    """A broken folder and a folder OCIO refuses are reported on stderr, one line each; the
+    good environment is exported (exit 0) and the bad ones' folders stay untouched."""
+    good, bad, refused = tmp_path / "good", tmp_path / "bad", tmp_path / "refused"
+    for folder in (good, bad, refused):
+        copy_solution(solved[0], folder)
+    (bad / "solution.json").write_text("{")
+    config = refused / "config.ocio"
+    config.write_text(
+        config.read_text().replace("ocio_profile_version: 2.1", "ocio_profile_version: 9")
+    )
+    assert main(["export", str(good), str(bad), str(refused), "--target", "nuke"]) == 0
+    captured = capsys.readouterr()
+    assert "env_0: nuke -> " in captured.out
+    lines = captured.err.splitlines()
+    assert len(lines) == 2 and all(line.startswith("not exported: ") for line in lines)
+    assert str(bad) in lines[0] and str(refused) in lines[1]
+    assert (good / "exports" / "nuke").is_dir()
+    assert not (bad / "exports").exists() and not (refused / "exports").exists()
+
+
+def test_an_ocio_failure_in_one_environment_keeps_the_others(solved, tmp_path, monkeypatch):
+    """Each environment is all or nothing: env_1's failing target leaves no env_1 folder,
+    env_0 is published whole."""
+    import PyOpenColorIO as OCIO
+
+    nuke = exports.EXPORT_TARGETS["nuke"]
+
+    def fails_for_env_1(source, folder, **kwargs):
+        if source.solution.environment == "env_1":
+            raise OCIO.Exception("simulated OCIO failure")
+        return nuke(source, folder, **kwargs)
+
+    monkeypatch.setitem(exports.EXPORT_TARGETS, "nuke", fails_for_env_1)
+    report = export_solutions(solved, targets=["unreal", "nuke"], out=tmp_path / "o")
+    assert [(r.environment, r.target) for r in report] == [("env_0", "unreal"), ("env_0", "nuke")]
+    assert len(report.failures) == 1 and "simulated OCIO failure" in report.failures[0].reason
+    assert sorted(p.name for p in (tmp_path / "o").iterdir()) == ["env_0"]
+    assert sorted(p.name for p in (tmp_path / "o" / "env_0").iterdir()) == ["nuke", "unreal"]
+
+
+def test_nothing_exported_is_one_line_exit_2(solved, tmp_path, capsys):
+    a, b = tmp_path / "a", tmp_path / "b"
+    for folder in (a, b):
+        copy_solution(solved[0], folder)
+        (folder / "solution.json").write_text("{")
+    assert main(["export", str(a), str(b)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ocio-vp export: error: nothing exported: ") and err.count("\n") == 1
+    assert str(a) in err and str(b) in err
+
+
 def test_all_targets_default_location(solved, capsys):
     assert main(["export", *map(str, solved)]) == 0
     for folder in solved:
@@ -217,7 +269,13 @@ def test_wall_clf_carries_the_lut(exported, stem, space):
         np.testing.assert_allclose(got, want, rtol=2e-6, atol=2e-6)
 
 
-def test_cube_error_is_reported(exported):
-    report = json.loads((exported / "exports" / "resolve" / "cube_errors.json").read_text())
-    for entry in report["cubes"].values():
-        assert np.isfinite(entry["max_abs_error"]) and entry["samples"] > 1000
+def test_wall_cubes_are_not_written_and_the_manifest_says_why(exported):
+    """The linearity LUT clips drive at black: no 17^3 lattice follows that to 1/1023."""
+    folder = exported / "exports" / "resolve"
+    manifest = json.loads((folder / "manifest.json").read_text())
+    for stem in ("wall_out_of_frustum", "wall_in_frustum"):
+        assert not (folder / f"{stem}_17.cube").exists()
+        reason = manifest["not_written"][f"{stem}_17.cube"]
+        assert "over the limit" in reason and f"use {stem}.clf (exact)" in reason
+    accuracy = manifest["files"]["post_correction_Q_17.cube"]["accuracy"]
+    assert accuracy["max_error"] <= accuracy["limit"]

@@ -71,64 +71,73 @@ class TestClf:
         assert '<Array dim="3 4">' in text  # 3x4: matrix with offset (CLF spec, Matrix node)
 
 
+def read_manifest(folder: Path) -> dict:
+    return json.loads((folder / "manifest.json").read_text())
+
+
 class TestCube:
     @pytest.mark.parametrize("stem", STEMS)
     def test_colour_reads_cube_within_reported_error(self, exported, stem):
         import colour
 
         folder = exported[0] / "exports" / "resolve"
-        report = json.loads((folder / "cube_errors.json").read_text())["cubes"]
-        entry = report[f"{stem}_17.cube"]
+        entry = read_manifest(folder)["files"][f"{stem}_17.cube"]["accuracy"]
         assert entry["cube_size"] == 17 and entry["input_range"] == [-0.25, 16.0]
-        assert 0 <= entry["max_abs_error"] < 1e-3
+        assert 0 <= entry["max_error"] <= entry["limit"] == pytest.approx(1 / 1023)
         lut = colour.io.read_LUT(str(folder / f"{stem}_17.cube"))
-        got = lut.apply(COLOURS)
-        error = np.abs(got - exact(stem, load_solution(exported[0]))).max()
+        want = exact(stem, load_solution(exported[0]))
+        error = np.abs(lut.apply(COLOURS) - want) / np.maximum(1, np.abs(want))
         # colour evaluates in float64 and OCIO (which measured the report) in float32.
-        assert error <= entry["max_abs_error"] + 1e-6, (error, entry)
+        assert error.max() <= entry["max_error"] + 1e-6, (error.max(), entry)
 
-    def test_reported_error_is_real(self, tmp_path):
-        """For a curve (gamma 2.4 wall encoding) a coarse bake is visibly inexact: the report
-        says so, and colour-science's reading of the cube stays within it."""
+    def test_identity_is_still_a_3d_cube(self, tmp_path):
+        """A transform without crosstalk still gets the documented 3D LUT (OCIO's own baker
+        writes a 1D-only cube for it)."""
         import colour
         import PyOpenColorIO as OCIO
 
-        from ocio_vp.exports.resolve import bake_cube, cube_bake_error
+        from ocio_vp.exports.cube import fit_cube
 
-        config = OCIO.Config.CreateRaw()
-        config.addColorSpace(OCIO.ColorSpace(name="lin"))
-        encoded = OCIO.ColorSpace(name="enc")
-        encoded.setTransform(
-            OCIO.ExponentTransform(
-                value=[2.4, 2.4, 2.4, 1.0], direction=OCIO.TRANSFORM_DIR_INVERSE
-            ),
-            OCIO.COLORSPACE_DIR_FROM_REFERENCE,
+        identity = OCIO.Config.CreateRaw().getProcessor(OCIO.MatrixTransform())
+        result = fit_cube(identity, tmp_path / "i.cube", size=9, input_range=(-0.25, 16.0))
+        assert result.path is not None and result.errors["max_error"] < 1e-5
+        text = result.path.read_text()
+        assert "LUT_3D_SIZE 9" in text and "LUT_1D_SIZE" in text
+        rgb = np.random.default_rng(2).uniform(-0.25, 16.0, size=(500, 3))
+        np.testing.assert_allclose(colour.io.read_LUT(str(result.path)).apply(rgb), rgb,
+                                   rtol=1e-5, atol=1e-5)  # fmt: skip
+
+    def test_reported_error_is_real(self, tmp_path):
+        """For a curve (gamma 2.4 wall encoding) a coarse bake is visibly inexact: the
+        measured error says so, colour-science's reading of the cube stays within it, and
+        fit_cube refuses to keep the file."""
+        import colour
+        import PyOpenColorIO as OCIO
+
+        from ocio_vp.exports.cube import bake_cube, cube_error, fit_cube
+
+        processor = OCIO.Config.CreateRaw().getProcessor(
+            OCIO.ExponentTransform(value=[2.4, 2.4, 2.4, 1.0], direction=OCIO.TRANSFORM_DIR_INVERSE)
         )
-        config.addColorSpace(encoded)
-        cube = bake_cube(
-            config,
-            "lin",
-            "enc",
-            tmp_path / "g.cube",
-            reference="lin",
-            size=9,
-            input_range=(0.0, 1.0),
-        )
-        report = cube_bake_error(config, "lin", "enc", cube, size=9, input_range=(0.0, 1.0))
-        assert report["max_abs_error"] > 1e-3
+        cube = bake_cube(processor, tmp_path / "g.cube", size=9, input_range=(0.0, 1.0))
+        report = cube_error(processor, cube, input_range=(0.0, 1.0))
+        assert report["max_error"] > 1e-3
         rgb = np.random.default_rng(1).uniform(size=(2000, 3))
         error = np.abs(colour.io.read_LUT(str(cube)).apply(rgb) - rgb ** (1 / 2.4)).max()
-        assert 1e-3 < error <= report["max_abs_error"] + 1e-5
+        assert 1e-3 < error <= report["max_error"] + 1e-5
+        refused = fit_cube(processor, tmp_path / "r.cube", size=9, input_range=(0.0, 1.0))
+        assert refused.path is None and "over the limit" in refused.reason
+        assert not list(tmp_path.glob("r*.cube")) and not list(tmp_path.glob(".*trial*"))
 
     def test_cli_prints_errors(self, exported, tmp_path, capsys):
         assert (
             main(["export", str(exported[0]), "--target", "resolve", "--out", str(tmp_path)]) == 0
         )
         out = capsys.readouterr().out
-        assert out.count("worst bake error") == 3
-        report = json.loads((tmp_path / "env_0" / "resolve" / "cube_errors.json").read_text())
-        worst = report["cubes"]["wall_in_frustum_33.cube"]["max_abs_error"]
-        assert f"wall_in_frustum_33.cube: worst bake error {worst:.3g}" in out
+        assert out.count("worst error") == 3
+        files = read_manifest(tmp_path / "env_0" / "resolve")["files"]
+        worst = files["wall_in_frustum_33.cube"]["accuracy"]["max_error"]
+        assert f"wall_in_frustum_33.cube: worst error {worst:.2g} <= limit" in out
 
     def test_bad_cube_size_exits_2(self, exported, tmp_path, capsys):
         code = main(["export", str(exported[0]), "--out", str(tmp_path / "o"), "--cube-size", "1"])

@@ -74,16 +74,34 @@ class TestUnrealFiles:
         result = run_tool("ociocheck", "--iconfig", str(folder / f"env_{index}.ocioz"))
         assert result.returncode == 0, result.stdout + result.stderr
 
+    def test_reexport_is_byte_identical(self, exported, tmp_path):
+        """Fixed timestamps, permissions and member order: the same config, the same bytes."""
+        first = (exported[0] / "exports" / "unreal" / "env_0.ocioz").read_bytes()
+        export_solutions(exported[:1], targets=["unreal"], out=tmp_path / "again")
+        again = (tmp_path / "again" / "env_0" / "unreal" / "env_0.ocioz").read_bytes()
+        assert again == first
+        with zipfile.ZipFile(tmp_path / "again" / "env_0" / "unreal" / "env_0.ocioz") as zf:
+            assert zf.namelist()[0] == "config.ocio"
+            assert {info.date_time for info in zf.infolist()} == {(1980, 1, 1, 0, 0, 0)}
+
     def test_mapping(self, exported):
         folder = exported[0] / "exports" / "unreal"
         mapping = json.loads((folder / "unreal_ocio.json").read_text())
-        slots = {a["ui"]: a for a in mapping["assignments"]}
-        viewports = slots["nDisplay root actor > OCIO > All Viewports Color Configuration"]
-        camera = slots["ICVFX camera component > OCIO > All Nodes Color Configuration"]
-        cards = slots["nDisplay root actor > Light Cards > Light Cards OCIO"]
+        # Property paths and enum values as in Epic's nDisplay API reference (UE 5.2+).
+        slots = {a["property"]: a for a in mapping["assignments"]}
+        viewports = slots["StageSettings.ViewportOCIO.AllViewportsOCIOConfiguration"]
+        camera = slots["CameraSettings.CameraOCIO.AllNodesOCIOConfiguration"]
+        cards = slots["StageSettings.Lightcard.LightcardOCIO.LightcardOCIOMode"]
         assert (viewports["source"], viewports["destination"]) == (REFERENCE, OUT_OF_FRUSTUM)
+        assert viewports["set"] == {
+            "bIsEnabled": True,
+            "ColorConfiguration.SourceColorSpace": REFERENCE,
+            "ColorConfiguration.DestinationColorSpace": OUT_OF_FRUSTUM,
+        }
         assert (camera["source"], camera["destination"]) == (REFERENCE, IN_FRUSTUM)
-        assert cards["value"] == "Use nDisplay Viewport OCIO"
+        assert camera["owner"] == "UDisplayClusterICVFXCameraComponent"
+        assert cards["enum"] == "EDisplayClusterConfigurationViewportLightcardOCIOMode"
+        assert cards["value"] == "nDisplay"
         assert cards["destination"] == OUT_OF_FRUSTUM
         assert mapping["config"] == "config/config.ocio"
         assert (folder / mapping["config"]).is_file() and (folder / mapping["ocioz"]).is_file()

@@ -4,6 +4,7 @@ studios run (Unreal nDisplay, Nuke, DaVinci Resolve) from solved environments.""
 from __future__ import annotations
 
 import argparse
+import sys
 
 from ocio_vp.commands.report import SOLUTIONS_HELP
 
@@ -62,10 +63,14 @@ def run(args: argparse.Namespace) -> int:
     )
     for result in results:
         print(f"{result.environment}: {result.target} -> {result.folder}")
-        for name, error in result.summary.get("cube_errors", {}).items():
+        for name, error in result.summary.get("cubes", {}).items():
             print(
-                f"  {name}: worst bake error {error['max_abs_error']:.3g} "
-                f"(rms {error['rms_error']:.3g}) over [{error['input_range'][0]:g}, "
-                f"{error['input_range'][1]:g}]^3"
+                f"  {name}: worst error {error['max_error']:.2g} <= limit "
+                f"{error['limit']:.2g} ({error['shaper']} shaper; trilinear and tetrahedral, "
+                f"content [0, 1] and [{error['input_range'][0]:g}, {error['input_range'][1]:g}])"
             )
+        for name, reason in result.summary.get("not_written", {}).items():
+            print(f"  {name}: not written: {reason}")
+    for failure in results.failures:
+        print(f"not exported: {failure.reason}", file=sys.stderr)
     return 0

@@ -1,18 +1,21 @@
 """Writers for the tools studios already run: Unreal nDisplay, Nuke, DaVinci Resolve.
 
 :func:`export_solutions` reads solved environment folders (``OUT/<environment>/`` from
-``ocio-vp solve``), re-validates them and writes each target into a staging folder; the
-folders are renamed into place only when every export succeeded.
+``ocio-vp solve``), re-validates them and writes each target into a staging folder; an
+environment's folders are renamed into place only when all its targets succeeded. One
+environment that cannot be exported is reported and never stops the others.
 """
 
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+import PyOpenColorIO as OCIO
 
 from ocio_vp.errors import InputError
 from ocio_vp.exports.escape import inside
@@ -22,7 +25,7 @@ from ocio_vp.exports.source import ExportSource, load_export_source
 from ocio_vp.exports.unreal import write_unreal
 from ocio_vp.staging import publish_dir, staged_dir
 
-__all__ = ["EXPORT_TARGETS", "ExportResult", "export_solutions"]
+__all__ = ["EXPORT_TARGETS", "ExportFailure", "ExportReport", "ExportResult", "export_solutions"]
 
 #: Target name -> writer(source, folder, *, final_folder, cube_size, cube_range) -> summary.
 EXPORT_TARGETS: dict[str, Callable[..., dict[str, Any]]] = {
@@ -42,6 +45,37 @@ class ExportResult:
     summary: dict[str, Any]
 
 
+@dataclass(frozen=True)
+class ExportFailure:
+    """An environment (or a folder that could not be read) that was not exported, and why."""
+
+    source: str
+    reason: str
+
+
+@dataclass(frozen=True)
+class ExportReport:
+    """What :func:`export_solutions` wrote (``results``, iterable as the report itself) and
+    what it could not (``failures``: one per environment, whose folders were left untouched)."""
+
+    results: list[ExportResult] = field(default_factory=list)
+    failures: list[ExportFailure] = field(default_factory=list)
+
+    def __iter__(self) -> Iterator[ExportResult]:
+        return iter(self.results)
+
+    def __len__(self) -> int:
+        return len(self.results)
+
+    def __getitem__(self, index: int) -> ExportResult:
+        return self.results[index]
+
+
+#: Failures that concern one environment (bad input, OCIO refusing it, a file system error):
+#: they are reported and the other environments are still exported. Anything else is a bug.
+ENVIRONMENT_ERRORS = (InputError, OCIO.Exception, ValueError, OSError)
+
+
 def _final_folder(source: ExportSource, target: str, out: Path | None) -> Path:
     if out is None:
         root = source.directory / "exports"
@@ -49,25 +83,7 @@ def _final_folder(source: ExportSource, target: str, out: Path | None) -> Path:
     return inside(out / source.solution.environment / target, out, source=out)
 
 
-def export_solutions(
-    solution_dirs: Sequence[str | Path],
-    *,
-    targets: Sequence[str],
-    out: str | Path | None = None,
-    cube_size: int = DEFAULT_CUBE_SIZE,
-    cube_range: tuple[float, float] = DEFAULT_CUBE_RANGE,
-) -> list[ExportResult]:
-    """Export every solved environment to every target, all or nothing.
-
-    Output goes to ``SOLUTION_DIR/exports/<target>/``, or ``OUT/<environment>/<target>/``
-    when ``out`` is given; an existing folder of that name is replaced.
-
-    Raises
-    ------
-    InputError
-        Unknown target, bad cube size/range, an unreadable or unsafe solution folder, or two
-        folders of the same environment exported to the same ``out``.
-    """
+def _check_options(targets, cube_size, cube_range) -> tuple[float, float]:
     unknown = [t for t in targets if t not in EXPORT_TARGETS]
     if unknown or not targets:
         raise InputError(
@@ -78,11 +94,16 @@ def export_solutions(
     lo, hi = (float(v) for v in cube_range)
     if not (lo < hi and abs(lo) < 1e6 and abs(hi) < 1e6):
         raise InputError(f"expected LO < HI (finite), got {lo} {hi}", key="--cube-range")
-    sources = [load_export_source(d) for d in solution_dirs]
-    out_path = None if out is None else Path(out)
-    jobs = []
+    return lo, hi
+
+
+def _plan(sources, targets, out_path) -> list[tuple[ExportSource, list[tuple[str, Path]]]]:
+    """Each source with its (target, final folder) jobs; refuses two sources writing one
+    folder (a usage error: nothing is exported)."""
+    plan = []
     seen: dict[Path, Path] = {}
     for source in sources:
+        jobs = []
         for target in dict.fromkeys(targets):
             final = _final_folder(source, target, out_path)
             key = final.resolve()
@@ -92,45 +113,84 @@ def export_solutions(
                     key="SOLUTION_DIR",
                 )
             seen[key] = source.directory
-            jobs.append((source, target, final))
+            jobs.append((target, final))
+        plan.append((source, jobs))
+    return plan
 
-    # Folders this call creates; removed again (when left empty) if an export fails.
+
+def export_solutions(
+    solution_dirs: Sequence[str | Path],
+    *,
+    targets: Sequence[str],
+    out: str | Path | None = None,
+    cube_size: int = DEFAULT_CUBE_SIZE,
+    cube_range: tuple[float, float] = DEFAULT_CUBE_RANGE,
+) -> ExportReport:
+    """Export every solved environment to every target; each environment all or nothing.
+
+    Output goes to ``SOLUTION_DIR/exports/<target>/``, or ``OUT/<environment>/<target>/``
+    when ``out`` is given; an existing folder of that name is replaced. An environment that
+    cannot be exported (unreadable folder, a config OCIO refuses, ...) is listed in the
+    report's ``failures`` with the reason, its folders untouched, and the others go on.
+
+    Raises
+    ------
+    InputError
+        Unknown target, bad cube size/range, two folders of the same environment exported to
+        the same ``out``, or nothing could be exported (the message names every reason).
+    """
+    lo, hi = _check_options(targets, cube_size, cube_range)
+    report = ExportReport()
+    sources = []
+    for directory in solution_dirs:
+        try:
+            sources.append(load_export_source(directory))
+        except InputError as error:
+            report.failures.append(ExportFailure(str(directory), str(error)))
+    plan = _plan(sources, targets, None if out is None else Path(out))
+    for source, jobs in plan:
+        try:
+            report.results.extend(
+                _export_environment(source, jobs, cube_size=int(cube_size), cube_range=(lo, hi))
+            )
+        except ENVIRONMENT_ERRORS as error:
+            reason = str(error) if isinstance(error, InputError) else f"{source.directory}: {error}"
+            report.failures.append(ExportFailure(str(source.directory), " ".join(reason.split())))
+    if not report.results:
+        raise InputError("nothing exported: " + "; ".join(f.reason for f in report.failures))
+    return report
+
+
+def _export_environment(
+    source: ExportSource, jobs, *, cube_size: int, cube_range: tuple[float, float]
+) -> list[ExportResult]:
+    """All targets of one environment into staging folders, published only when all succeed.
+
+    Folders this creates (``OUT/<environment>/``...) are removed again, when left empty, if an
+    export fails."""
     created = sorted(
-        {
-            p
-            for _, _, final in jobs
-            for p in (final.parent, *final.parent.parents)
-            if not p.exists()
-        },
+        {p for _, final in jobs for p in (final.parent, *final.parent.parents) if not p.exists()},
         key=lambda p: len(p.parts),
         reverse=True,
     )
+    results = []
     try:
-        return _run_jobs(jobs, cube_size=int(cube_size), cube_range=(lo, hi))
+        with ExitStack() as stack:
+            staged = []
+            for target, final in jobs:
+                stage = stack.enter_context(staged_dir(final.parent))
+                folder = stage / target
+                folder.mkdir()
+                summary = EXPORT_TARGETS[target](
+                    source, folder, final_folder=final, cube_size=cube_size, cube_range=cube_range
+                )
+                staged.append((folder, final))
+                results.append(ExportResult(source.solution.environment, target, final, summary))
+            for folder, final in staged:
+                publish_dir(folder, final)
     except BaseException:
         for folder in created:
             with contextlib.suppress(OSError):
                 folder.rmdir()
         raise
-
-
-def _run_jobs(jobs, *, cube_size: int, cube_range: tuple[float, float]) -> list[ExportResult]:
-    results = []
-    with ExitStack() as stack:
-        staged = []
-        for source, target, final in jobs:
-            stage = stack.enter_context(staged_dir(final.parent))
-            folder = stage / target
-            folder.mkdir()
-            summary = EXPORT_TARGETS[target](
-                source,
-                folder,
-                final_folder=final,
-                cube_size=cube_size,
-                cube_range=cube_range,
-            )
-            staged.append((folder, final))
-            results.append(ExportResult(source.solution.environment, target, final, summary))
-        for folder, final in staged:
-            publish_dir(folder, final)
     return results

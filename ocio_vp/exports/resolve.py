@@ -4,15 +4,16 @@
   (content -> drive: M, and N plus the black-level offset, with the panel-linearity LUT1D when
   the config carries one), serialised by OCIO's own CLF writer from the config's processors.
 - ``post_correction_Q.dctl``: Q (LeGendre et al. 2022, eq. 5) as a DCTL in full float precision.
-- ``*_<size>.cube``: the same transforms baked by OCIO's Baker (``resolve_cube``) over an HDR
-  input range. The range is covered by a 1D shaper that is *linear* in the input space, so an
-  affine transform (a matrix with offset) bakes exactly up to the file's decimal precision;
-  the worst error against the exact transform is measured and stored in ``cube_errors.json``.
+- ``*_<size>.cube``: the same transforms as a 1D shaper + 3D LUT over an HDR input range,
+  written only when the measured worst error meets :data:`ocio_vp.exports.cube.CUBE_LIMIT`
+  (:mod:`ocio_vp.exports.cube`): in practice the affine transforms (Q; walls without a
+  linearity LUT or encoding). A wall chain with a clip or a curve gets no cube; the manifest
+  says why and points to its CLF.
+- ``manifest.json``: every file with its accuracy, every file not written with the reason.
 """
 
 from __future__ import annotations
 
-import copy
 import json
 from collections.abc import Sequence
 from pathlib import Path
@@ -21,25 +22,24 @@ from typing import Any
 import numpy as np
 import PyOpenColorIO as OCIO
 
+from ocio_vp.exports.cube import CUBE_LIMIT, fit_cube
 from ocio_vp.exports.source import ExportSource
 from ocio_vp.exports.templating import render_template
-from ocio_vp.ocio.config import matrix_transform
+from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
 
 __all__ = [
     "DEFAULT_CUBE_RANGE",
     "DEFAULT_CUBE_SIZE",
-    "bake_cube",
-    "cube_bake_error",
+    "MANIFEST",
     "render_dctl",
     "resolve_transforms",
     "write_clf",
     "write_resolve",
 ]
 
-CLF_FORMAT = "Academy/ASC Common LUT Format"
 DEFAULT_CUBE_SIZE = 33
 DEFAULT_CUBE_RANGE = (-0.25, 16.0)
-SHAPER_NAME = "ocio-vp cube shaper"
+MANIFEST = "manifest.json"
 
 
 def resolve_transforms(source: ExportSource) -> dict[str, tuple[str, str, str]]:
@@ -67,13 +67,13 @@ def resolve_transforms(source: ExportSource) -> dict[str, tuple[str, str, str]]:
 def write_clf(
     config: OCIO.Config, src: str, dst: str, path: Path, *, name: str, description: str
 ) -> Path:
-    """Serialise the processor ``src -> dst`` as CLF with OCIO's writer."""
+    """Serialise the processor ``src -> dst`` as CLF with OCIO's writer (CLF v3 header)."""
     group = config.getProcessor(src, dst).createGroupTransform()
     metadata = group.getFormatMetadata()
     metadata.setName(name)
     metadata.setID(name)
     metadata.addChildElement("Description", description)
-    group.write(CLF_FORMAT, str(path), config)
+    path.write_text(clf_v3(group.write(CLF_FORMAT, config)), encoding="utf-8")
     return path
 
 
@@ -100,97 +100,22 @@ def render_dctl(
     )
 
 
-def _shaper_config(
-    config: OCIO.Config, src: str, reference: str, lo: float, hi: float
-) -> OCIO.Config:
-    """A copy of ``config`` with a shaper colorspace that is ``src`` rescaled from [lo, hi] to
-    [0, 1] per channel, so the Baker's 1D shaper is linear in the input space."""
-    baking = copy.deepcopy(config)
-    scale = 1.0 / (hi - lo)
-    to_unit = matrix_transform(np.eye(3) * scale, np.full(3, -lo * scale))
-    shaper = OCIO.ColorSpace(
-        referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
-        name=SHAPER_NAME,
-        description=f"{src} mapped linearly from [{lo}, {hi}] to [0, 1] (bake shaper).",
+def _cube_entry(
+    source: ExportSource, folder: Path, stem: str, clf: str, *, size: int, input_range
+) -> tuple[str, dict[str, Any] | None, str | None]:
+    """Bake one transform's cube; returns (file name, accuracy or None, reason not written)."""
+    src, dst, _ = resolve_transforms(source)[stem]
+    name = f"{stem}_{size}.cube"
+    result = fit_cube(
+        source.config.getProcessor(src, dst),
+        folder / name,
+        size=size,
+        input_range=input_range,
+        title=f"ocio-vp {stem}: {src} -> {dst}",
     )
-    shaper.setTransform(
-        OCIO.GroupTransform([OCIO.ColorSpaceTransform(src=reference, dst=src), to_unit]),
-        OCIO.COLORSPACE_DIR_FROM_REFERENCE,
-    )
-    baking.addColorSpace(shaper)
-    return baking
-
-
-def bake_cube(
-    config: OCIO.Config,
-    src: str,
-    dst: str,
-    path: Path,
-    *,
-    reference: str,
-    size: int = DEFAULT_CUBE_SIZE,
-    input_range: tuple[float, float] = DEFAULT_CUBE_RANGE,
-) -> Path:
-    """Bake ``src -> dst`` to a Resolve ``.cube`` (1D linear shaper over ``input_range`` +
-    ``size``^3 3D LUT) with OCIO's Baker."""
-    lo, hi = (float(v) for v in input_range)
-    baker = OCIO.Baker()
-    baker.setConfig(_shaper_config(config, src, reference, lo, hi))
-    baker.setFormat("resolve_cube")
-    baker.setInputSpace(src)
-    baker.setTargetSpace(dst)
-    baker.setShaperSpace(SHAPER_NAME)
-    baker.setShaperSize(max(2, size))
-    baker.setCubeSize(size)
-    baker.bake(str(path))
-    return path
-
-
-def _apply(processor: OCIO.Processor, rgb: np.ndarray) -> np.ndarray:
-    data = np.ascontiguousarray(rgb, dtype=np.float32).copy()
-    processor.getDefaultCPUProcessor().applyRGB(data)
-    return data.astype(np.float64)
-
-
-def cube_bake_error(
-    config: OCIO.Config,
-    src: str,
-    dst: str,
-    cube_path: Path,
-    *,
-    size: int,
-    input_range: tuple[float, float],
-    samples: int = 20000,
-    seed: int = 0,
-) -> dict[str, Any]:
-    """Worst and RMS difference between the baked cube (read back by OCIO's own cube reader)
-    and the exact transform, over the lattice cell centres plus uniform random points of the
-    input range (float32 evaluation on both sides)."""
-    lo, hi = (float(v) for v in input_range)
-    rng = np.random.default_rng(seed)
-    centres = (np.arange(size - 1) + 0.5) / (size - 1)
-    grid = np.stack(np.meshgrid(centres, centres, centres, indexing="ij"), -1).reshape(-1, 3)
-    if len(grid) > samples:
-        grid = grid[rng.choice(len(grid), samples, replace=False)]
-    unit = np.concatenate([grid, rng.uniform(size=(samples, 3)), np.eye(3), np.ones((1, 3))])
-    rgb = lo + unit * (hi - lo)
-    exact = _apply(config.getProcessor(src, dst), rgb)
-    raw = OCIO.Config.CreateRaw()
-    cube = OCIO.FileTransform(src=str(cube_path.resolve()), interpolation=OCIO.INTERP_LINEAR)
-    baked = _apply(raw.getProcessor(cube), rgb)
-    diff = np.abs(baked - exact)
-    worst = int(np.argmax(diff.max(axis=1)))
-    return {
-        "max_abs_error": float(diff.max()),
-        "rms_error": float(np.sqrt(np.mean(diff**2))),
-        "max_abs_output": float(np.abs(exact).max()),
-        "worst_input": rgb[worst].tolist(),
-        "samples": len(rgb),
-        "cube_size": size,
-        "input_range": [lo, hi],
-        "evaluated_with": f"OpenColorIO {OCIO.__version__} FileTransform (linear) vs the "
-        "config's processor",
-    }
+    if result.path is not None:
+        return name, result.errors, None
+    return name, None, f"{result.reason}; use {clf} (exact)"
 
 
 def write_resolve(
@@ -201,34 +126,23 @@ def write_resolve(
     cube_range: tuple[float, float] = DEFAULT_CUBE_RANGE,
     **_: Any,
 ) -> dict[str, Any]:
-    """Write the CLFs, the Q DCTL, the baked cubes and ``cube_errors.json`` into ``folder``."""
+    """Write the CLFs, the Q DCTL, the cubes that meet :data:`CUBE_LIMIT` and ``manifest.json``
+    (every file with its accuracy, every file not written with the reason)."""
     folder.mkdir(parents=True, exist_ok=True)
     solution, config = source.solution, source.config
-    reference = source.names["reference"]
-    errors: dict[str, Any] = {}
-    files: list[str] = []
+    files: dict[str, dict[str, Any]] = {}
+    not_written: dict[str, str] = {}
     for stem, (src, dst, description) in resolve_transforms(source).items():
-        clf = write_clf(
-            config,
-            src,
-            dst,
-            folder / f"{stem}.clf",
-            name=f"ocio-vp {stem}",
-            description=description,
+        clf = write_clf(config, src, dst, folder / f"{stem}.clf", name=f"ocio-vp {stem}",
+                        description=description)  # fmt: skip
+        files[clf.name] = {"kind": "clf", "from": src, "to": dst, "accuracy": "exact"}
+        name, errors, reason = _cube_entry(
+            source, folder, stem, clf.name, size=cube_size, input_range=cube_range
         )
-        cube = bake_cube(
-            config,
-            src,
-            dst,
-            folder / f"{stem}_{cube_size}.cube",
-            reference=reference,
-            size=cube_size,
-            input_range=cube_range,
-        )
-        errors[cube.name] = cube_bake_error(
-            config, src, dst, cube, size=cube_size, input_range=cube_range
-        )
-        files += [clf.name, cube.name]
+        if errors is None:
+            not_written[name] = reason or "not written"
+        else:
+            files[name] = {"kind": "cube", "from": src, "to": dst, "accuracy": errors}
     dctl = folder / "post_correction_Q.dctl"
     dctl.write_text(
         render_dctl(
@@ -240,15 +154,18 @@ def write_resolve(
         ),
         encoding="utf-8",
     )
-    report = {
-        "format": "ocio-vp/cube-errors",
+    files[dctl.name] = {"kind": "dctl", "accuracy": "Q as float32 literals"}
+    manifest = {
+        "format": "ocio-vp/resolve-export",
         "version": 1,
         "stage": solution.stage,
         "environment": solution.environment,
-        "cubes": errors,
+        "cube_limit": CUBE_LIMIT,
+        "files": files,
+        "not_written": not_written,
     }
-    (folder / "cube_errors.json").write_text(
-        json.dumps(report, indent=2, allow_nan=False) + "\n", encoding="utf-8"
+    (folder / MANIFEST).write_text(
+        json.dumps(manifest, indent=2, allow_nan=False) + "\n", encoding="utf-8"
     )
-    files += [dctl.name, "cube_errors.json"]
-    return {"files": files, "cube_errors": errors}
+    cubes = {k: v["accuracy"] for k, v in files.items() if v["kind"] == "cube"}
+    return {"files": [*files, MANIFEST], "cubes": cubes, "not_written": not_written}

@@ -1,10 +1,12 @@
 """Unreal Engine nDisplay (ICVFX) export: the config folder, a ``.ocioz``, ``UNREAL.md`` and
 ``unreal_ocio.json`` saying which colorspace goes where.
 
-nDisplay picks a source and a destination colorspace per OCIO slot (UI names checked against
-Epic's nDisplay API docs: ``AllViewportsOCIOConfiguration`` shown as "All Viewports Color
-Configuration", the ICVFX camera's ``CameraOCIO.AllNodesOCIOConfiguration`` shown as "All Nodes
-Color Configuration", and ``LightcardOCIOMode`` = "Use nDisplay Viewport OCIO"):
+nDisplay picks a source and a destination colorspace per OCIO slot. Property paths and enum
+values are those of Epic's nDisplay API reference (UE 5.2+; see docs/exports.md for the pages):
+the root actor's ``StageSettings.ViewportOCIO.AllViewportsOCIOConfiguration`` (UI "All Viewports
+Color Configuration"), ``StageSettings.Lightcard.LightcardOCIO.LightcardOCIOMode`` = ``nDisplay``
+(UI "Use nDisplay Viewport OCIO"), and the ICVFX camera component's
+``CameraSettings.CameraOCIO.AllNodesOCIOConfiguration`` (UI "All Nodes Color Configuration"):
 
 - the outer viewports and the light cards light the actors: destination = out-of-frustum (M);
 - the ICVFX camera's inner frustum is the in-camera background: destination = in-frustum
@@ -16,6 +18,7 @@ Color Configuration", and ``LightcardOCIOMode`` = "Use nDisplay Viewport OCIO"):
 from __future__ import annotations
 
 import json
+import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -29,19 +32,59 @@ from ocio_vp.ocio.config import WORKING_SPACE_NAMES
 __all__ = ["MAPPING_FILE", "unreal_mapping", "write_ocioz", "write_unreal"]
 
 MAPPING_FILE = "unreal_ocio.json"
+#: Owner of the two stage-wide slots: the root actor's configuration data.
+ROOT_CONFIG = "ADisplayClusterRootActor config data (UDisplayClusterConfigurationData)"
+#: Where the property paths below were checked (Epic's nDisplay C++ and Python API pages).
+UNREAL_VERSIONS = (
+    "Checked in Epic's API reference for UE 5.2 to 5.7: FDisplayClusterConfigurationOCIOConfiguration "
+    "holds bIsEnabled and ColorConfiguration, and light cards have LightcardOCIO.LightcardOCIOMode. "
+    "UE 5.0 nests the conversion as OCIOConfiguration.ColorConfiguration."
+)
 UNREAL_WORKING_SPACE = WORKING_SPACE_NAMES["ITU-R BT.709"]
 ACESCG = WORKING_SPACE_NAMES["ACEScg"]
 
 
+#: Every archive member gets this timestamp (the zip format's earliest), so re-exports of the
+#: same config are byte-identical.
+ZIP_DATE = (1980, 1, 1, 0, 0, 0)
+
+
+def _archive_members(config_path: Path, config: OCIO.Config) -> list[tuple[str, Path]]:
+    """(name in the archive, file) for the config and every file of its search-path folders,
+    the config first and the rest sorted: the layout ``Config.archive`` writes."""
+    members = [(config_path.name, config_path)]
+    root = config_path.parent
+    sidecars = []
+    for entry in config.getSearchPaths():
+        folder = root / entry
+        if entry in ("", ".") or not folder.is_dir():
+            continue
+        sidecars += [p for p in folder.rglob("*") if p.is_file()]
+    for path in sorted(set(sidecars)):
+        members.append((path.relative_to(root).as_posix(), path))
+    return members
+
+
 def write_ocioz(config_path: Path, archive_path: Path) -> Path:
-    """Archive the config at ``config_path`` (with its LUT files) with ``Config.archive``."""
+    """Archive the config at ``config_path`` with its LUT files as an OCIO ``.ocioz``.
+
+    Same layout as ``Config.archive`` (``config.ocio`` at the root, sidecars under their
+    search-path folder, deflated), but written with fixed timestamps, permissions and member
+    order, so the same config always gives the same bytes.
+    """
     config = OCIO.Config.CreateFromFile(str(config_path))
     if not config.isArchivable():
         raise InputError(
             "config cannot be archived (absolute or out-of-folder search paths)",
             source=config_path,
         )
-    config.archive(str(archive_path))
+    with zipfile.ZipFile(archive_path, "w") as archive:
+        for name, path in _archive_members(config_path, config):
+            info = zipfile.ZipInfo(name, date_time=ZIP_DATE)
+            info.compress_type = zipfile.ZIP_DEFLATED
+            info.create_system = 3  # Unix, so the permissions below are read as such
+            info.external_attr = 0o100644 << 16
+            archive.writestr(info, path.read_bytes(), compresslevel=9)
     return archive_path
 
 
@@ -53,10 +96,16 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> dict[str
     content = UNREAL_WORKING_SPACE if has_working else names["reference"]
     alternatives = [ACESCG] if has_working and source.config.getColorSpace(ACESCG) else []
 
-    def slot(ui: str, prop: str, destination: str, role: str) -> dict[str, str]:
+    def slot(ui: str, owner: str, prop: str, destination: str, role: str) -> dict[str, Any]:
         return {
             "ui": ui,
+            "owner": owner,
             "property": prop,
+            "set": {
+                "bIsEnabled": True,
+                "ColorConfiguration.SourceColorSpace": content,
+                "ColorConfiguration.DestinationColorSpace": destination,
+            },
             "source": content,
             "destination": destination,
             "role": role,
@@ -64,7 +113,7 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> dict[str
 
     return {
         "format": "ocio-vp/unreal-ocio",
-        "version": 1,
+        "version": 2,
         "stage": solution.stage,
         "environment": solution.environment,
         "config": config,
@@ -72,6 +121,7 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> dict[str
         "content_working_space": content,
         # The OpenColorIO Configuration asset only offers the colour spaces listed here.
         "configuration_asset": {
+            "class": "UOpenColorIOConfiguration",
             "configuration_file": config,
             "desired_color_spaces": [content, names["out_of_frustum"], names["in_frustum"]],
             "desired_display_views": [
@@ -82,22 +132,30 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> dict[str
             else [],
         },
         "content_working_space_alternatives": alternatives,
+        "unreal_versions": UNREAL_VERSIONS,
         "assignments": [
             slot(
-                "nDisplay root actor > OCIO > All Viewports Color Configuration",
-                "ViewportOCIO.AllViewportsOCIOConfiguration",
+                "nDisplay root actor > ICVFX > OCIO > All Viewports Color Configuration",
+                ROOT_CONFIG,
+                "StageSettings.ViewportOCIO.AllViewportsOCIOConfiguration",
                 names["out_of_frustum"],
                 "out_of_frustum",
             ),
             {
-                "ui": "nDisplay root actor > Light Cards > Light Cards OCIO",
+                "ui": "nDisplay root actor > ICVFX > Light Cards > Light Cards OCIO "
+                "= Use nDisplay Viewport OCIO",
+                "owner": ROOT_CONFIG,
                 "property": "StageSettings.Lightcard.LightcardOCIO.LightcardOCIOMode",
-                "value": "Use nDisplay Viewport OCIO",
+                "enum": "EDisplayClusterConfigurationViewportLightcardOCIOMode",
+                "value": "nDisplay",
+                "python_value": "unreal.DisplayClusterConfigurationViewportLightcardOCIOMode"
+                ".N_DISPLAY",
                 "destination": names["out_of_frustum"],
                 "role": "out_of_frustum",
             },
             slot(
                 "ICVFX camera component > OCIO > All Nodes Color Configuration",
+                "UDisplayClusterICVFXCameraComponent",
                 "CameraSettings.CameraOCIO.AllNodesOCIOConfiguration",
                 names["in_frustum"],
                 "in_frustum",

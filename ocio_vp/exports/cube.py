@@ -1,0 +1,190 @@
+"""Resolve ``.cube`` files that meet a stated accuracy, or are not written.
+
+A cube is a per-channel 1D shaper (``LUT_1D_SIZE`` entries over ``LUT_1D_INPUT_RANGE``) followed
+by a ``size``^3 3D LUT (``LUT_3D_SIZE``, always 3D: also when the transform has no crosstalk,
+where OCIO's own baker would drop the 3D part). The 3D lattice holds the exact transform (the
+config's processor, evaluated by OCIO) at the points the shaper sends to the lattice knots.
+
+Accuracy is measured, not assumed: the written file is read back by OCIO's ``.cube`` reader and
+compared with the exact transform on dense uniform random samples, once with trilinear and once
+with tetrahedral interpolation (hosts use either), over two boxes: content in [0, 1]^3 and the
+whole input range. The error is ``|cube - exact| / max(1, |exact|)``: absolute for signals up to
+full scale, relative above it. A cube is kept only when the worst error of both interpolations
+over both boxes is at most :data:`CUBE_LIMIT` (1/1023: one code value of a 10-bit signal).
+
+Candidate shapers are tried in order and the first that meets the limit is kept: linear in the
+input (exact for an affine transform such as a matrix with offset, since both interpolations
+reproduce affine maps), then log2 (lattice knots dense near black, where wall encodings curve
+most). Transforms that fold (the clip of out-of-gamut drive to black, the kink of a linearity
+LUT, a PQ or gamma curve with infinite slope at black) generally cannot meet the limit with any
+shaper; then no cube is written and the caller says why and points to the exact CLF.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import PyOpenColorIO as OCIO
+
+__all__ = ["CUBE_LIMIT", "SHAPERS", "CubeResult", "bake_cube", "cube_error", "fit_cube"]
+
+#: Largest accepted error: one code value of a 10-bit signal (absolute up to 1.0, relative above).
+CUBE_LIMIT = 1.0 / 1023.0
+SHAPERS = ("linear", "log2")
+SHAPER_SIZE = 4096
+#: log2 shaper: log2(x - lo + LOG_OFFSET), so black keeps a finite slope.
+LOG_OFFSET = 2.0**-10
+SAMPLES = 40000
+
+
+@dataclass(frozen=True)
+class CubeResult:
+    """The outcome of :func:`fit_cube`: the file (None when not written) and its accuracy."""
+
+    path: Path | None
+    shaper: str | None
+    errors: dict[str, Any]
+    reason: str | None = None
+
+
+def _apply(processor: OCIO.Processor, rgb: np.ndarray) -> np.ndarray:
+    pixels = np.ascontiguousarray(rgb, dtype=np.float32).copy()
+    processor.getDefaultCPUProcessor().applyRGB(pixels)
+    return pixels.astype(np.float64)
+
+
+def shaper_table(kind: str, lo: float, hi: float, size: int = SHAPER_SIZE) -> np.ndarray:
+    """The 1D shaper: ``size`` values in [0, 1] for inputs evenly spaced over [lo, hi].
+
+    Examples
+    --------
+    >>> shaper_table("linear", -1.0, 1.0, 5).tolist()
+    [0.0, 0.25, 0.5, 0.75, 1.0]
+    """
+    x = np.linspace(lo, hi, size)
+    if kind == "linear":
+        table = (x - lo) / (hi - lo)
+    elif kind == "log2":
+        log = np.log2(x - lo + LOG_OFFSET)
+        table = (log - log[0]) / (log[-1] - log[0])
+    else:
+        raise ValueError(f"unknown shaper {kind!r}; expected one of {SHAPERS}")
+    table[0], table[-1] = 0.0, 1.0
+    return table
+
+
+def _lattice(table: np.ndarray, lo: float, hi: float, size: int) -> np.ndarray:
+    """Input RGB of every 3D knot (red fastest, the .cube order): the piecewise-linear shaper
+    (as a host interpolates the 1D table) inverted at the knots."""
+    x = np.linspace(lo, hi, table.size)
+    knots = np.interp(np.linspace(0.0, 1.0, size), table, x)
+    b, g, r = np.meshgrid(knots, knots, knots, indexing="ij")
+    return np.stack([r, g, b], axis=-1).reshape(-1, 3)
+
+
+def bake_cube(
+    processor: OCIO.Processor,
+    path: Path,
+    *,
+    size: int,
+    input_range: tuple[float, float],
+    shaper: str = "linear",
+    title: str = "ocio-vp",
+) -> Path:
+    """Write ``processor`` as a Resolve ``.cube`` (1D shaper + ``size``^3 3D LUT)."""
+    lo, hi = (float(v) for v in input_range)
+    table = shaper_table(shaper, lo, hi)
+    values = _apply(processor, _lattice(table, lo, hi, size))
+    if not np.all(np.isfinite(values)):
+        raise ValueError("the transform returns non-finite values inside the cube's range")
+    safe_title = "".join(c if c.isprintable() else "?" for c in title)
+    lines = [
+        f"# {safe_title}",
+        f"LUT_1D_SIZE {table.size}",
+        f"LUT_1D_INPUT_RANGE {lo!r} {hi!r}",
+        f"LUT_3D_SIZE {size}",
+        "LUT_3D_INPUT_RANGE 0.0 1.0",
+    ]
+    lines += [f"{v:.9g} {v:.9g} {v:.9g}" for v in table]
+    lines += [f"{r:.9g} {g:.9g} {b:.9g}" for r, g, b in values]
+    path.write_text("\n".join(lines) + "\n", encoding="ascii")
+    return path
+
+
+def cube_error(
+    processor: OCIO.Processor,
+    path: Path,
+    *,
+    input_range: tuple[float, float],
+    samples: int = SAMPLES,
+    seed: int = 0,
+) -> dict[str, Any]:
+    """Worst ``|cube - exact| / max(1, |exact|)`` by interpolation and box (see the module
+    docstring), with the input where the worst one occurs."""
+    lo, hi = (float(v) for v in input_range)
+    rng = np.random.default_rng(seed)
+    raw = OCIO.Config.CreateRaw()
+    report: dict[str, Any] = {"samples_per_box": samples, "input_range": [lo, hi]}
+    worst, worst_input = -1.0, None
+    for box, (a, b) in (("content_0_1", (max(lo, 0.0), min(hi, 1.0))), ("input_range", (lo, hi))):
+        rgb = rng.uniform(a, b, size=(samples, 3))
+        exact = _apply(processor, rgb)
+        for name, interpolation in (("trilinear", OCIO.INTERP_LINEAR),
+                                    ("tetrahedral", OCIO.INTERP_TETRAHEDRAL)):  # fmt: skip
+            cube = OCIO.FileTransform(src=str(path.resolve()), interpolation=interpolation)
+            error = np.abs(_apply(raw.getProcessor(cube), rgb) - exact) / np.maximum(
+                1.0, np.abs(exact)
+            )
+            per_sample = error.max(axis=1)
+            report[f"{box}_{name}"] = float(per_sample.max())
+            if per_sample.max() > worst:
+                worst, worst_input = float(per_sample.max()), rgb[int(np.argmax(per_sample))]
+    report["max_error"] = worst
+    report["worst_input"] = [float(v) for v in worst_input]
+    report["evaluated_with"] = f"OpenColorIO {OCIO.__version__} (.cube reader vs the processor)"
+    return report
+
+
+def fit_cube(
+    processor: OCIO.Processor,
+    path: Path,
+    *,
+    size: int,
+    input_range: tuple[float, float],
+    title: str = "ocio-vp",
+    limit: float = CUBE_LIMIT,
+) -> CubeResult:
+    """Bake ``processor`` with each shaper in turn; keep the first cube within ``limit``.
+
+    Trial files get their own names (OCIO caches files by path for the whole process) and are
+    removed; ``path`` exists afterwards only when a cube met the limit.
+    """
+    best: dict[str, Any] | None = None
+    for shaper in SHAPERS:
+        trial = path.with_name(f".{path.stem}.{shaper}.trial.cube")
+        try:
+            bake_cube(processor, trial, size=size, input_range=input_range, shaper=shaper,
+                      title=title)  # fmt: skip
+        except ValueError as error:
+            return CubeResult(None, None, {}, reason=str(error))
+        errors = cube_error(processor, trial, input_range=input_range)
+        errors.update(shaper=shaper, cube_size=size, limit=limit)
+        if errors["max_error"] <= limit:
+            trial.replace(path)
+            return CubeResult(path, shaper, errors)
+        trial.unlink()
+        if best is None or errors["max_error"] < best["max_error"]:
+            best = errors
+    assert best is not None
+    return CubeResult(
+        None,
+        None,
+        best,
+        reason=f"a {size}^3 cube cannot follow this transform's clip or curve: the best bake "
+        f"({best['shaper']} shaper) is off by {best['max_error']:.3g} (content in [0, 1]: "
+        f"{max(best['content_0_1_trilinear'], best['content_0_1_tetrahedral']):.3g}) at input "
+        f"{[round(v, 4) for v in best['worst_input']]}, over the limit {limit:.3g} (1/1023)",
+    )
