@@ -7,14 +7,17 @@ For one environment spectrum E on a :class:`~ocio_vp.simulator.stage.SpectralSta
 - with measurement noise (every measured value times ``1 + noise N(0, 1)``, independently, for
   [SL], [SRL]_j, the photographed chart and w_avg; several seeds), Q is solved (paper eq. 5) from
   each target against the same noisy stage measurements;
-- each Q is judged on colours *not on the chart*: colour-science's 190 RAW to ACES training
-  reflectances, lit by the wall as it really emits (``L clip(M w_avg, 0)``), post-corrected by
-  Q and compared with the same reflectances under E (mean CIE ΔE2000 through the camera's
-  fitted XYZ matrix, white = a perfect diffuser under E). M alone (Q = I) is the baseline.
+- each Q is judged on colours *not on the chart*: colour-science's RAW to ACES training
+  reflectances minus those that duplicate a chart patch, lit by the wall as it really emits
+  (``L clip(M w_avg, 0)``), post-corrected by Q and compared with the same reflectances under E
+  (mean CIE ΔE2000 through the camera's fitted XYZ matrix, white = a perfect diffuser under E),
+  by :mod:`ocio_vp.simulator.truth` as in the accuracy benchmark. M alone (Q = I) is the
+  baseline.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -22,23 +25,10 @@ import numpy as np
 
 from ocio_vp.correction.registry import QProblem, solve_post_correction
 from ocio_vp.metrics import camera_to_xyz_matrix, chart_errors
-from ocio_vp.simulator.stage import (
-    SpectralStage,
-    camera_rgb,
-    environment_spectrum,
-    simulate_measurements,
-)
-from ocio_vp.spectra import spectral_shape
+from ocio_vp.simulator.stage import SpectralStage, environment_spectrum, simulate_measurements
+from ocio_vp.simulator.truth import held_out_errors, held_out_reflectances, noisy_measurements
 
-__all__ = ["HeldOutStudy", "held_out_reflectances", "study_environment"]
-
-
-def held_out_reflectances() -> np.ndarray:
-    """(190, W) colour-science's RAW to ACES v1 training reflectances on the project's grid."""
-    import colour
-
-    data = colour.characterisation.read_training_data_rawtoaces_v1().copy().align(spectral_shape())
-    return np.asarray(data.values, dtype=np.float64).T
+__all__ = ["HeldOutStudy", "study_environment"]
 
 
 @dataclass(frozen=True)
@@ -63,35 +53,35 @@ class HeldOutStudy:
         return self.q_synthesized / self.q_real
 
 
-def _held_out_delta_E(stage, spectrum, drive, Q, reflectances, to_xyz) -> float:
-    white = camera_rgb(stage, spectrum)
-    target = np.vstack([camera_rgb(stage, reflectances * spectrum), white])
-    lit = camera_rgb(stage, reflectances * (stage.leds @ np.clip(drive, 0.0, None)))
-    predicted = np.vstack([lit @ np.asarray(Q).T, white])
-    errors = chart_errors(predicted, target, camera_to_xyz=to_xyz, white_patch=-1)
-    return float(np.mean(errors.delta_E_2000[:-1]))
+def _noisy(clean, noise, w_avg_noise, rng):
+    noisy = noisy_measurements(clean, noise, rng)
+    env = noisy.environments[0]
+    if w_avg_noise is not None:  # w_avg with its own noise level (0: a rendered HDRI)
+        true = clean.environments[0].w_avg
+        env = dataclasses.replace(env, w_avg=true * (1.0 + w_avg_noise * rng.standard_normal(3)))
+    return noisy, env
 
 
-def _one_seed(stage, truth, spectrum, synthesize, rng, noise, method, held_out, to_xyz):
-    noises = (noise[0], noise[0], noise[0], noise[1])
-    SL, SRL, real, w_avg = (
-        a * (1.0 + n * rng.standard_normal(np.shape(a))) for a, n in zip(truth, noises, strict=True)
-    )
-    M = np.linalg.inv(SL)
-    beta = stage.beta
-    row = [_held_out_delta_E(stage, spectrum, M @ w_avg, np.eye(3), held_out, to_xyz)]
-    for target in (real, synthesize(w_avg)):
+def _one_seed(stage, clean, spectrum, synthesize, rng, noise, method, held_out):
+    noisy, env = _noisy(clean, noise[0], noise[1], rng)
+    M = np.linalg.inv(noisy.SL)
+
+    def mean_delta_E(Q):
+        errors = held_out_errors(stage, spectrum, M=M, w_avg=env.w_avg, Q=Q, reflectances=held_out)
+        return float(np.mean(errors.delta_E_2000))
+
+    row = [mean_delta_E(np.eye(3))]
+    for target in (env.target_chart, synthesize(env.w_avg)):
         problem = QProblem(
-            SL=SL,
-            SRL=SRL,
-            beta=beta,
+            SL=noisy.SL,
+            SRL=noisy.SRL,
+            beta=stage.beta,
             M=M,
-            w_avg=w_avg,
+            w_avg=env.w_avg,
             target=target,
             white_patch=stage.white_patch,
         )
-        Q = solve_post_correction(problem, method=method).Q
-        row.append(_held_out_delta_E(stage, spectrum, M @ w_avg, Q, held_out, to_xyz))
+        row.append(mean_delta_E(solve_post_correction(problem, method=method).Q))
     return row
 
 
@@ -112,27 +102,28 @@ def study_environment(
     ``environment`` is a simulator environment name, a colour ``SpectralDistribution`` or a
     (W,) spectrum; ``synthesize(w_avg) -> (n, 3)`` makes the target from camera-RGB w_avg.
     ``w_avg_noise`` (default ``noise``) is the noise on w_avg alone: 0 models a rendered HDRI,
-    whose w_avg has no measurement error.
+    whose w_avg has no measurement error. ``held_out`` (k, W) defaults to the RAW to ACES
+    training reflectances that are not on the chart
+    (:func:`ocio_vp.simulator.truth.held_out_reflectances`).
     """
     spectrum = environment_spectrum(stage, environment)
-    measured = simulate_measurements({"env": spectrum}, stage=stage)
-    env = measured.environments[0]
-    truth = (measured.SL, measured.SRL, env.target_chart, env.w_avg)
-    held_out = held_out_reflectances() if held_out is None else held_out
+    clean = simulate_measurements({"env": spectrum}, stage=stage)
+    env = clean.environments[0]
+    if held_out is None:
+        held_out = held_out_reflectances(stage.chart_name)["rawtoaces"]
     to_xyz = camera_to_xyz_matrix(stage.camera)
     chart = chart_errors(synthesize(env.w_avg), env.target_chart, camera_to_xyz=to_xyz)
     rows = np.array(
         [
             _one_seed(
                 stage,
-                truth,
+                clean,
                 spectrum,
                 synthesize,
                 np.random.default_rng(seed),
-                (noise, noise if w_avg_noise is None else w_avg_noise),
+                (noise, w_avg_noise),
                 method,
                 held_out,
-                to_xyz,
             )
             for seed in range(seeds)
         ]
