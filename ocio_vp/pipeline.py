@@ -26,11 +26,11 @@ from ocio_vp.calibration.equations import (
     solve_N,
 )
 from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
-from ocio_vp.correction.registry import QProblem, solve_post_correction
+from ocio_vp.correction.registry import QFit, QProblem, solve_post_correction
 from ocio_vp.correction.validation import CLOSED_FORM_METHODS, cross_validated_error
 from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import Environment, Measurements
-from ocio_vp.formats.solution import Solution
+from ocio_vp.formats.solution import Diagnostics, Solution
 from ocio_vp.formats.synthesis import synthesis_to_dict, synthesis_warnings
 from ocio_vp.metrics import error_relative_to_white
 
@@ -65,11 +65,53 @@ def solve_environment(
     """
     if black_level not in BLACK_LEVEL_METHODS:
         raise ValueError(f"black_level must be one of {BLACK_LEVEL_METHODS}, got {black_level!r}")
-    source = measurements.source
-    SL = measurements.SL
-    M_calibrated = solve_M(SL, source=source)
-    beta = stage_beta(measurements)
-    w_avg = environment_w_avg(measurements, environment)
+    clipped = _clipped_patches(measurements, environment)
+    problem = _problem(measurements, environment, clipped)
+    fit = _fit(problem, method, measurements, environment)
+    SL, M_calibrated = problem.SL, problem.M
+    M = M_calibrated if fit.M is None else np.asarray(fit.M, dtype=np.float64)
+    Q = np.asarray(fit.Q, dtype=np.float64)
+    # N inverts Q for the calibrated wall (paper eq. 7: Q [SL] N = I), whatever M lights with.
+    N, n_reason = solve_N(M_calibrated, Q, max_condition=max_condition_q, SL=SL)
+    offset = None
+    if environment.black_level is not None:
+        offset = black_level_offset(
+            environment.black_level, M=M_calibrated, SL=SL, method=black_level
+        )
+    charts = _charts(problem, fit, M=M, Q=Q, N=N, offset=offset, environment=environment)
+    diagnostics = _diagnostics(
+        problem, fit, charts, method=method, M=M, Q=Q, N=N, n_reason=n_reason,
+        max_condition_q=max_condition_q, offset=offset, environment=environment, clipped=clipped,
+    )  # fmt: skip
+    return Solution(
+        stage=measurements.stage.name,
+        environment=environment.name,
+        method=method,
+        beta=problem.beta,
+        w_avg=problem.w_avg,
+        SL=SL,
+        M=M,
+        Q=Q,
+        N=N,
+        black_level_offset=offset,
+        black_level_method=None if offset is None else black_level,
+        diagnostics=diagnostics,
+        measurements_file=Path(measurements.source).name if measurements.source else None,
+        measurements_sha256=measurements.sha256,
+        camera_colorspace=measurements.stage.camera_colorspace,
+        linearity=_panel_linearity(measurements),
+    )
+
+
+def _environment_key(measurements: Measurements, environment: Environment, key: str) -> str:
+    """``environments[i].key``: where an environment's value sits in the measurements file."""
+    index = [e.name for e in measurements.environments].index(environment.name)
+    return f"environments[{index}].{key}"
+
+
+def _clipped_patches(measurements: Measurements, environment: Environment) -> list[int]:
+    """The chart patches at the clip level; an error when a primary or needed white clips."""
+    source, SL = measurements.source, measurements.SL
     white = measurements.stage.white_patch
     clip_level = measurements.stage.clip_level
     if clip_level is not None and np.any(SL >= clip_level):
@@ -81,58 +123,105 @@ def solve_environment(
         )
     clipped = clipped_patches(measurements.SRL, environment.target_chart, clip_level)
     if white in clipped and environment.w_avg is None:
-        index = [e.name for e in measurements.environments].index(environment.name)
         raise InputError(
             f"the white patch {white} is clipped, so w_avg cannot come from it: give w_avg",
             source=source,
-            key=f"environments[{index}].w_avg",
+            key=_environment_key(measurements, environment, "w_avg"),
         )
+    return clipped
+
+
+def _problem(measurements: Measurements, environment: Environment, clipped: list[int]) -> QProblem:
+    """The post-correction problem: M = [SL]^-1, beta, w_avg, the target; clipped weigh 0."""
     weights = np.ones(measurements.n_patches)
     weights[clipped] = 0.0
-    problem = QProblem(
-        SL=SL,
+    return QProblem(
+        SL=measurements.SL,
         SRL=measurements.SRL,
-        beta=beta,
-        M=M_calibrated,
-        w_avg=w_avg,
+        beta=stage_beta(measurements),
+        M=solve_M(measurements.SL, source=measurements.source),
+        w_avg=environment_w_avg(measurements, environment),
         target=environment.target_chart,
-        white_patch=white,
+        white_patch=measurements.stage.white_patch,
         weights=weights,
     )
+
+
+def _fit(
+    problem: QProblem, method: str, measurements: Measurements, environment: Environment
+) -> QFit:
+    """Q by ``method``; a bad target chart is reported at its place in the measurements file."""
     try:
-        fit = solve_post_correction(problem, method=method)
+        return solve_post_correction(problem, method=method)
     except InputError as error:
         if error.key != "target_chart" or error.source is not None:
             raise
-        index = [e.name for e in measurements.environments].index(environment.name)
-        key = f"environments[{index}].target_chart"
-        raise InputError(error.problem, source=source, key=key) from None
-    M = M_calibrated if fit.M is None else np.asarray(fit.M, dtype=np.float64)
-    Q = np.asarray(fit.Q, dtype=np.float64)
-    # N inverts Q for the calibrated wall (paper eq. 7: Q [SL] N = I), whatever M lights with.
-    N, n_reason = solve_N(M_calibrated, Q, max_condition=max_condition_q, SL=SL)
+        key = _environment_key(measurements, environment, "target_chart")
+        raise InputError(error.problem, source=measurements.source, key=key) from None
 
-    offset = None
-    if environment.black_level is not None:
-        offset = black_level_offset(
-            environment.black_level, M=M_calibrated, SL=SL, method=black_level
-        )
 
+def _charts(
+    problem: QProblem,
+    fit: QFit,
+    *,
+    M: np.ndarray,
+    Q: np.ndarray,
+    N: np.ndarray | None,
+    offset: np.ndarray | None,
+    environment: Environment,
+) -> dict[str, np.ndarray]:
+    """Per-patch camera RGB, for reports and the errors.
+
+    The target p_j, the lit chart under M alone (baseline) and after Q, and the chart shown
+    in-frustum as the camera records it (baseline: through M, no Q; ours: through N and the
+    offset, then Q).
+    """
     baseline = problem.predicted
     lit = baseline if fit.M is None else dataclasses.replace(problem, M=M).predicted
-    corrected = lit @ Q.T
     displayed = predict_displayed_chart(
         environment.target_chart,
-        SL=SL,
-        matrix=M_calibrated if N is None else N,
+        SL=problem.SL,
+        matrix=problem.M if N is None else N,
         offset=offset,
         black_level=environment.black_level,
     )
-    displayed_corrected = displayed if N is None else displayed @ Q.T
     displayed_baseline = predict_displayed_chart(
-        environment.target_chart, SL=SL, matrix=M_calibrated, black_level=environment.black_level
+        environment.target_chart,
+        SL=problem.SL,
+        matrix=problem.M,
+        black_level=environment.black_level,
     )
-    drive = M @ w_avg
+    return {
+        "target": environment.target_chart,
+        "lit_baseline": baseline,
+        "lit_corrected": lit @ Q.T,
+        "displayed_baseline": displayed_baseline,
+        "displayed_corrected": displayed if N is None else displayed @ Q.T,
+    }
+
+
+def _diagnostics(
+    problem: QProblem,
+    fit: QFit,
+    charts: dict[str, np.ndarray],
+    *,
+    method: str,
+    M: np.ndarray,
+    Q: np.ndarray,
+    N: np.ndarray | None,
+    n_reason: str | None,
+    max_condition_q: float,
+    offset: np.ndarray | None,
+    environment: Environment,
+    clipped: list[int],
+) -> Diagnostics:
+    """Errors, conditioning, warnings and the stability block (calibration.diagnostics)."""
+    target, white, weights = problem.target, problem.white_patch, problem.weights
+
+    def error(chart: str) -> np.ndarray:
+        return error_relative_to_white(charts[chart], target, white, weights)
+
+    drive = M @ problem.w_avg
     warnings = []
     if n_reason:
         warnings.append(f"N not solved: {n_reason}")
@@ -141,43 +230,7 @@ def solve_environment(
             "the out-of-frustum drive M w_avg has a negative channel: this light is outside the "
             "LED gamut and the wall will clip it"
         )
-    diagnostics = {
-        "white_patch": white,
-        "cond_SL": condition_number(SL),
-        "cond_Q": condition_number(Q),
-        "rank_Q": int(np.linalg.matrix_rank(Q)),
-        "N_solved": N is not None,
-        "N_reason": n_reason,
-        "max_condition_q_for_N": max_condition_q,
-        "lit_chart_error_baseline": error_relative_to_white(
-            baseline, environment.target_chart, white, weights
-        ),
-        "lit_chart_error": error_relative_to_white(
-            corrected, environment.target_chart, white, weights
-        ),
-        "residual_rms": float(np.sqrt(np.mean((corrected - environment.target_chart) ** 2))),
-        "displayed_chart_error_baseline": error_relative_to_white(
-            displayed_baseline, environment.target_chart, white, weights
-        ),
-        "displayed_chart_error": error_relative_to_white(
-            displayed_corrected, environment.target_chart, white, weights
-        ),
-        "out_of_frustum_drive": drive,
-        "method_notes": dict(fit.notes),
-        "warnings": warnings,
-        # Per-patch camera RGB, for reports: the target p_j, the lit chart under M alone
-        # (baseline) and after Q, and the chart shown in-frustum as the camera records it
-        # (baseline: through M, no Q; ours: through N and the offset, then Q).
-        "charts": {
-            "target": environment.target_chart,
-            "lit_baseline": baseline,
-            "lit_corrected": corrected,
-            "displayed_baseline": displayed_baseline,
-            "displayed_corrected": displayed_corrected,
-        },
-    }
-    # Issue 7: model choice, cross-validation, drive ranges, bounce, clipping (diagnostics.py).
-    extra, extra_warnings = stability_diagnostics(
+    stability, stability_warnings = stability_diagnostics(
         problem,
         fit,
         method=method,
@@ -186,41 +239,35 @@ def solve_environment(
         N=N,
         offset=offset,
         black_level=environment.black_level,
-        corrected=corrected,
+        corrected=charts["lit_corrected"],
         clipped=clipped,
         cross_validated=cross_validated_error(problem, method)
         if "cross_validated_error" not in fit.notes and method in CLOSED_FORM_METHODS
         else None,
     )
-    diagnostics.update(extra)
-    warnings.extend(extra_warnings)
-    _note_synthesized(environment, diagnostics)
-    return Solution(
-        stage=measurements.stage.name,
-        environment=environment.name,
-        method=method,
-        beta=beta,
-        w_avg=w_avg,
-        SL=SL,
-        M=M,
-        Q=Q,
-        N=N,
-        black_level_offset=offset,
-        black_level_method=None if offset is None else black_level,
-        diagnostics=diagnostics,
-        measurements_file=Path(source).name if source else None,
-        measurements_sha256=measurements.sha256,
-        camera_colorspace=measurements.stage.camera_colorspace,
-        linearity=_panel_linearity(measurements),
+    # A target chart synthesized by ``ocio-vp target-chart`` is recorded, with its warnings.
+    synthesized = environment.synthesized
+    synthesized_warnings = [] if synthesized is None else synthesis_warnings(synthesized)
+    return Diagnostics(
+        white_patch=white,
+        cond_SL=condition_number(problem.SL),
+        cond_Q=condition_number(Q),
+        rank_Q=int(np.linalg.matrix_rank(Q)),
+        N_solved=N is not None,
+        N_reason=n_reason,
+        max_condition_q_for_N=max_condition_q,
+        lit_chart_error_baseline=error("lit_baseline"),
+        lit_chart_error=error("lit_corrected"),
+        residual_rms=float(np.sqrt(np.mean((charts["lit_corrected"] - target) ** 2))),
+        displayed_chart_error_baseline=error("displayed_baseline"),
+        displayed_chart_error=error("displayed_corrected"),
+        out_of_frustum_drive=drive,
+        method_notes=dict(fit.notes),
+        warnings=warnings + stability_warnings + synthesized_warnings,
+        charts=charts,
+        **stability,
+        synthesized_target=None if synthesized is None else synthesis_to_dict(synthesized),
     )
-
-
-def _note_synthesized(environment: Environment, diagnostics: dict) -> None:
-    """Record a synthesized target (``ocio-vp target-chart``) and warn that it is one."""
-    if environment.synthesized is None:
-        return
-    diagnostics["synthesized_target"] = synthesis_to_dict(environment.synthesized)
-    diagnostics["warnings"].extend(synthesis_warnings(environment.synthesized))
 
 
 def _panel_linearity(measurements: Measurements) -> dict | None:

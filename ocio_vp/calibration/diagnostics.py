@@ -142,7 +142,7 @@ def stability_diagnostics(
     clipped: list[int],
     cross_validated: np.ndarray | None = None,
 ) -> tuple[dict[str, Any], list[str]]:
-    """The issue-7 block of ``solution.json`` diagnostics, and the warnings it raises.
+    """The stability part of ``solution.json`` diagnostics, and the warnings it raises.
 
     Keys: ``model`` and ``model_reason`` (what was fitted and why), ``cond_SL`` warnings,
     ``rank_target``, ``cross_validated_error`` (per channel, leave one patch out: the fit's own

@@ -25,6 +25,7 @@ from ocio_vp.formats.measurements import (
 )
 from ocio_vp.formats.solution import (
     SOLUTION_FORMAT,
+    Diagnostics,
     Solution,
     load_solution,
     solution_to_json,
@@ -37,6 +38,7 @@ __all__ = [
     "SAFE_NAME",
     "SOLUTION_FORMAT",
     "VERSION",
+    "Diagnostics",
     "Environment",
     "Measurements",
     "PanelGeometry",

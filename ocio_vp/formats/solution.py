@@ -7,18 +7,156 @@ report): matrices as 3x3 row-major lists, ``N`` null when it was not solved (the
 
 from __future__ import annotations
 
+import dataclasses
 import json
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from ocio_vp.errors import InputError
 
-__all__ = ["SOLUTION_FORMAT", "Solution", "load_solution", "solution_to_json"]
+__all__ = ["SOLUTION_FORMAT", "Diagnostics", "Solution", "load_solution", "solution_to_json"]
 
 SOLUTION_FORMAT = "ocio-vp/solution"
+
+
+@dataclass(frozen=True)
+class Diagnostics(Mapping[str, Any]):
+    """What a solve measured about itself: ``solution.json``'s ``diagnostics`` block.
+
+    Errors are the paper's Fig. 11 metric, per channel, relative to the target white patch
+    (:func:`ocio_vp.metrics.error_relative_to_white`), over the patches the fit used. Arrays are
+    float64 after a solve; after :func:`load_solution` they are the file's JSON values. The
+    object reads like the ``dict`` it is written as (``diagnostics["cond_Q"]``, ``.get``,
+    iteration in file order), so code that reads ``solution.json`` reads a fresh solve alike.
+
+    Attributes
+    ----------
+    white_patch
+        Index of the chart's white patch.
+    cond_SL, cond_Q
+        2-norm condition numbers of [SL] and Q.
+    rank_Q
+        Numerical rank of Q.
+    N_solved, N_reason
+        Whether N = M Q^-1 was solved (eq. 8), and why not when it was not.
+    max_condition_q_for_N
+        The cond(Q) above which N is not solved.
+    lit_chart_error_baseline, lit_chart_error
+        (3,) the lit chart (eq. 3) against the target: through M alone, and after Q.
+    residual_rms
+        RMS of the lit chart after Q minus the target, in camera units.
+    displayed_chart_error_baseline, displayed_chart_error
+        (3,) the chart shown on the wall in-frustum as the camera records it, against the
+        target: through M (no Q), and through N and the black-level offset, then Q.
+    out_of_frustum_drive
+        (3,) the lighting drive M w_avg.
+    method_notes
+        What the Q method reported about itself (free-form, method specific).
+    warnings
+        Sentences for the stage engineer (also printed by ``ocio-vp solve``).
+    charts
+        Per-patch (n, 3) camera RGB for the report: ``target``, ``lit_baseline``,
+        ``lit_corrected``, ``displayed_baseline``, ``displayed_corrected``.
+    model, model_reason
+        The Q model fitted (``auto`` chooses one) and why.
+    rank_target
+        The target chart's rank as the method saw it (rank-aware methods), else None.
+    cross_validated_error
+        (3,) leave-one-patch-out lit-chart error, None for an iterative method that does not
+        report its own (re-solving once per patch would multiply the solve time by n).
+    residuals_per_patch
+        (n, 3) signed residuals after Q, relative to the target white.
+    out_of_frustum_negative_channels
+        Channels of M w_avg below zero (the light is outside the LED gamut; the wall clips).
+    lit_chart_error_clipped_drive, lit_chart_error_baseline_clipped_drive
+        (3,) the lit-chart error after Q, and through M alone, when the wall clips a negative
+        drive, else None.
+    in_frustum_drive_range
+        How many chart colours the in-frustum matrix drives outside [0, 1] (``below_zero``,
+        ``above_max``, ``patches_outside``, ``max_drive``, ``content_scale``,
+        ``below_zero_with_M``, ``above_max_with_M``); see
+        :func:`ocio_vp.calibration.diagnostics.in_frustum_drive_range`.
+    black_level_bounce
+        (3,) the panels' bounced light relative to the wall's white (Section 3.4), or None.
+    clipped_patches
+        Chart patches left out of the fit because they reach the clip level.
+    N_equals_M
+        True when N is exactly M (Q is the identity).
+    identity_check
+        ``max_abs_error`` of eq. 7 (``Q [SL] N = I``) and its rounding ``bound``, or None.
+    synthesized_target
+        How a synthesized target chart was made (``ocio-vp target-chart``); only written for
+        an environment whose chart was synthesized.
+    extra
+        Keys of a loaded file that this version does not know, kept so they round-trip.
+    """
+
+    white_patch: int | None = None
+    cond_SL: float | None = None
+    cond_Q: float | None = None
+    rank_Q: int | None = None
+    N_solved: bool | None = None
+    N_reason: str | None = None
+    max_condition_q_for_N: float | None = None
+    lit_chart_error_baseline: Any = None
+    lit_chart_error: Any = None
+    residual_rms: float | None = None
+    displayed_chart_error_baseline: Any = None
+    displayed_chart_error: Any = None
+    out_of_frustum_drive: Any = None
+    method_notes: dict[str, Any] | None = None
+    warnings: list[str] | None = None
+    charts: dict[str, Any] | None = None
+    model: str | None = None
+    model_reason: str | None = None
+    rank_target: int | None = None
+    cross_validated_error: Any = None
+    residuals_per_patch: Any = None
+    out_of_frustum_negative_channels: list[int] | None = None
+    lit_chart_error_clipped_drive: Any = None
+    lit_chart_error_baseline_clipped_drive: Any = None
+    in_frustum_drive_range: dict[str, Any] | None = None
+    black_level_bounce: Any = None
+    clipped_patches: list[int] | None = None
+    N_equals_M: bool | None = None
+    identity_check: dict[str, float] | None = None
+    synthesized_target: dict[str, Any] | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+    #: The keys a loaded file had (None: every field, as after a solve).
+    present: tuple[str, ...] | None = field(default=None, repr=False, compare=False)
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Diagnostics:
+        """The block as read from ``solution.json``; missing keys stay missing, unknown kept."""
+        known = {f.name for f in dataclasses.fields(cls)} - {"extra", "present"}
+        values = {k: v for k, v in data.items() if k in known}
+        extra = {k: v for k, v in data.items() if k not in known}
+        return cls(**values, extra=extra, present=tuple(data))
+
+    #: Fields written only when set.
+    OPTIONAL: ClassVar[tuple[str, ...]] = ("synthesized_target",)
+
+    def _keys(self) -> tuple[str, ...]:
+        if self.present is not None:
+            return self.present
+        names = [f.name for f in dataclasses.fields(self)[:-2]]
+        names = [n for n in names if n not in self.OPTIONAL or getattr(self, n) is not None]
+        return (*names, *self.extra)
+
+    def __getitem__(self, key: str) -> Any:
+        if key not in self._keys():
+            raise KeyError(key)
+        return self.extra[key] if key in self.extra else getattr(self, key)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._keys())
+
+    def __len__(self) -> int:
+        return len(self._keys())
 
 
 @dataclass(frozen=True)
@@ -42,7 +180,7 @@ class Solution:
     N: np.ndarray | None
     black_level_offset: np.ndarray | None
     black_level_method: str | None
-    diagnostics: dict[str, Any] = field(default_factory=dict)
+    diagnostics: Mapping[str, Any] = field(default_factory=dict)
     measurements_file: str | None = None
     measurements_sha256: str | None = None
     camera_colorspace: str | None = None
@@ -63,7 +201,7 @@ def _plain(value: Any) -> Any:
     """Convert numpy values to JSON types; non-finite floats become an error (never written)."""
     if isinstance(value, np.ndarray):
         return _plain(value.tolist())
-    if isinstance(value, dict):
+    if isinstance(value, Mapping):
         return {str(k): _plain(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
         return [_plain(v) for v in value]
@@ -122,6 +260,13 @@ def _matrix(data: dict[str, Any], key: str, source: str, optional: bool = False)
     return array
 
 
+def _diagnostics(data: dict[str, Any], source: str) -> dict[str, Any]:
+    block = data.get("diagnostics", {})
+    if not isinstance(block, dict):
+        raise InputError("expected a mapping", source=source, key="diagnostics")
+    return block
+
+
 def load_solution(path: str | Path) -> Solution:
     """Read ``solution.json`` (or a folder holding one) back into a :class:`Solution`."""
     path = Path(path)
@@ -161,7 +306,7 @@ def load_solution(path: str | Path) -> Solution:
         N=_matrix(data, "N", source, optional=True),
         black_level_offset=offset,
         black_level_method=data.get("black_level_method"),
-        diagnostics=data.get("diagnostics", {}),
+        diagnostics=Diagnostics.from_dict(_diagnostics(data, source)),
         measurements_file=data.get("measurements", {}).get("file"),
         measurements_sha256=data.get("measurements", {}).get("sha256"),
         camera_colorspace=data.get("camera_colorspace"),
