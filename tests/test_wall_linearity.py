@@ -11,6 +11,8 @@ that real data solves without hand cleaning.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import shutil
 import subprocess
@@ -263,13 +265,11 @@ def realistic(tmp_path_factory):
     out = {}
     for encoding in ("linear", "gamma2.4", "srgb", "pq"):
         folder = root / encoding
-        capture = subprocess.run(
-            ["ocio-vp", "solve", str(path), "--out", str(folder), "--wall-encoding", encoding],
-            capture_output=True,
-            text=True,
-        )
-        assert capture.returncode == 0, capture.stderr
-        out[encoding] = (capture.stdout, folder / "env_0")
+        terminal = io.StringIO()
+        with contextlib.redirect_stdout(terminal):
+            status = main(["solve", str(path), "--out", str(folder), "--wall-encoding", encoding])
+        assert status == 0
+        out[encoding] = (terminal.getvalue(), folder / "env_0")
     return out
 
 

@@ -252,20 +252,19 @@ def _pseudo_residuals(drive: np.ndarray, response: np.ndarray) -> tuple[np.ndarr
     """Each interior step against the quadratic through three neighbours (Gasser, Sroka &
     Jennen-Steinmetz 1986, one order up so a curved response adds little), scaled to the noise
     of one step: ``(r_i - sum w_j r_j) / sqrt(1 + sum w_j^2)``. Returns (levels, residuals)."""
-    m = len(drive)
-    levels, residuals = [], []
-    for i in range(1, m - 1):
-        others = [i - 1, i + 1, i + 2 if i + 2 < m else i - 2]
-        d = drive[others]
-        w = np.array(
-            [
-                np.prod([(drive[i] - d[k]) / (d[j] - d[k]) for k in range(3) if k != j])
-                for j in range(3)
-            ]
-        )
-        levels.append(response[i])
-        residuals.append((response[i] - w @ response[others]) / math.sqrt(1.0 + w @ w))
-    return np.array(levels), np.array(residuals)
+    i = np.arange(1, len(drive) - 1)
+    third = np.where(i + 2 < len(drive), i + 2, i - 2)
+    others = np.stack([i - 1, i + 1, third], axis=1)  # (n, 3) neighbours of each step i
+    d, x = drive[others], drive[i]
+    w = np.stack(
+        [
+            np.prod([(x - d[:, k]) / (d[:, j] - d[:, k]) for k in range(3) if k != j], axis=0)
+            for j in range(3)
+        ],
+        axis=1,
+    )
+    predicted = np.sum(w * response[others], axis=1)
+    return response[i], (response[i] - predicted) / np.sqrt(1.0 + np.sum(w * w, axis=1))
 
 
 def estimate_noise(drive: np.ndarray, response: np.ndarray) -> tuple[float, float]:
@@ -299,8 +298,9 @@ def estimate_noise(drive: np.ndarray, response: np.ndarray) -> tuple[float, floa
             _noise_nll,
             start,
             args=(levels[keep], residuals[keep]),
+            jac=True,
             bounds=bounds,
-            method="L-BFGS-B",
+            method="TNC",  # bounded, and an order faster here than L-BFGS-B
         ).x
         scale = 0.0 if keep.all() else math.log(_TRIMMED_NORMAL)
         z = np.abs(residuals) / np.sqrt(np.exp(2 * start[0]) + np.exp(2 * start[1]) * levels**2)
@@ -308,9 +308,15 @@ def estimate_noise(drive: np.ndarray, response: np.ndarray) -> tuple[float, floa
     return float(np.exp(start[0] - scale)), float(np.exp(start[1] - scale))
 
 
-def _noise_nll(log_sigma: np.ndarray, levels: np.ndarray, residuals: np.ndarray) -> float:
-    variance = np.exp(2 * log_sigma[0]) + np.exp(2 * log_sigma[1]) * levels**2
-    return float(np.sum(np.log(variance) + residuals**2 / variance))
+def _noise_nll(
+    log_sigma: np.ndarray, levels: np.ndarray, residuals: np.ndarray
+) -> tuple[float, np.ndarray]:
+    """Twice the negative log-likelihood of the residuals, and its gradient."""
+    floor2, relative2 = np.exp(2 * log_sigma[0]), np.exp(2 * log_sigma[1]) * levels**2
+    variance = floor2 + relative2
+    slope = 1 / variance - residuals**2 / variance**2
+    gradient = np.array([np.sum(slope * 2 * floor2), np.sum(slope * 2 * relative2)])
+    return float(np.sum(np.log(variance) + residuals**2 / variance)), gradient
 
 
 def _check_falls(
