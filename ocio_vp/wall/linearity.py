@@ -534,12 +534,19 @@ def _deviations(fit: ChannelResponse, tolerance: float) -> dict[str, Any]:
     # floor is 70% of the level)
     significant = np.abs(r - d) > DETECTION_SIGMAS * sigma
     # the worst deviation is reported where a level can be quantified (10 noise floors, where
-    # one step's own noise is 10% of it or less): further down, the largest of many noisy
-    # deviations is mostly noise
+    # one step's own noise is 10% of it or less), with its uncertainty (the step's and the
+    # black's noise), and chosen by its lower bound: the largest of many noisy deviations is
+    # otherwise mostly noise
     quantified = significant & (r >= QUANTIFICATION_SIGMAS * fit.noise["floor"])
+    uncertainty = np.hypot(sigma, fit.noise["floor"]) / d
     if np.any(quantified):
-        i = int(np.argmax(np.where(quantified, np.abs(relative), -1.0)))
-        out["shadow_deviation"] = {"relative": float(relative[i]), "drive": float(d[i])}
+        bound = np.abs(relative) - 2 * uncertainty
+        i = int(np.argmax(np.where(quantified, bound, -np.inf)))
+        out["shadow_deviation"] = {
+            "relative": float(relative[i]),
+            "uncertainty": float(uncertainty[i]),
+            "drive": float(d[i]),
+        }
     out["corrected"] = bool(
         absolute > tolerance or np.any(significant & (np.abs(relative) > RELATIVE_TOLERANCE))
     )
@@ -615,7 +622,10 @@ def _summary(channels: Mapping[str, Any], tolerance: float) -> str:
         if dev is None:
             return f"{c} within the noise"
         word = "dark" if dev["relative"] < 0 else "bright"
-        return f"{c} {100 * abs(dev['relative']):.3g}% {word} at {100 * dev['drive']:.3g}% of peak"
+        return (
+            f"{c} {100 * abs(dev['relative']):.3g}% (+-{100 * dev['uncertainty']:.2g}%) {word} "
+            f"at {100 * dev['drive']:.3g}% of peak"
+        )
 
     if corrected:
         verb = "deviates" if len(corrected) == 1 else "deviate"
