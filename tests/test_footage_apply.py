@@ -16,7 +16,16 @@ import yaml
 from conftest import make_measurements_dict
 
 from ocio_vp.cli import main
-from ocio_vp.footage.apply import apply_in_place, cpu_processor, load_post_correction
+from ocio_vp.footage.apply import (
+    TRANSFORMS,
+    FrameTask,
+    apply_file,
+    apply_in_place,
+    cpu_processor,
+    load_post_correction,
+    pixel_transform,
+)
+from ocio_vp.footage.stream import apply_frames
 
 oiio = pytest.importorskip("OpenImageIO")
 
@@ -256,3 +265,79 @@ class TestApplyInPlace:
         cpu = cpu_processor(load_post_correction(solution_dir))
         with pytest.raises(ValueError, match="float32"):
             apply_in_place(cpu, np.zeros((2, 2, 3)))
+
+    def test_half_in_place_equals_float32_then_rounded_to_half(self, solution_dir):
+        # OCIO's own half path against the float32 path rounded to half by numpy's cast
+        # (round to nearest even): bitwise the same, including an RGBA layout and 2 threads.
+        pc = load_post_correction(solution_dir)
+        rng = np.random.default_rng(4)
+        half = rng.uniform(-0.05, 60000.0 / 3, size=(29, 13, 4)).astype(np.float16)
+        half[0, 0, :3] = [6.1e-5, 3e-8, 65504.0]  # smallest normal, a subnormal, the largest
+        expected = half[..., :3].astype(np.float32)
+        apply_in_place(cpu_processor(pc), expected, threads=1)
+        with np.errstate(over="ignore"):
+            expected = expected.astype(np.float16)
+        got = half.copy()
+        apply_in_place(pixel_transform(pc), got, rgb=(0, 1, 2), threads=2)
+        np.testing.assert_array_equal(got[..., :3].view(np.uint16), expected.view(np.uint16))
+        np.testing.assert_array_equal(got[..., 3], half[..., 3])
+
+
+def test_half_frame_stays_half_and_matches_numpy(tmp_path, solution_dir):
+    rng = np.random.default_rng(5)
+    rgb = rng.uniform(0.0, 8.0, size=(40, 24, 3)).astype(np.float16)
+    src = tmp_path / "in.exr"
+    write_image(src, rgb.astype(np.float32), "RGB", fmt="half", attrs={"compression": "zip"})
+    apply_file(src, tmp_path / "out.exr", load_post_correction(solution_dir), threads=2)
+    spec, got = read_image(tmp_path / "out.exr")
+    assert str(spec.format) == "half" and not spec.channelformats
+    assert spec.get_string_attribute("compression") == "zip"
+    # numpy's float64 maths on the stored half values, rounded to half: at most one half ulp
+    # apart (float32 arithmetic may round the other way at a tie).
+    expected = (rgb.astype(np.float64) @ _Q(solution_dir).T).astype(np.float16)
+    ulp = np.spacing(np.abs(expected)).astype(np.float64)
+    assert np.max(np.abs(got - expected.astype(np.float64)) / ulp) <= 1.0
+
+
+def test_pipeline_keeps_order_skips_failures_and_frames(tmp_path, solution_dir):
+    pc = load_post_correction(solution_dir)
+    frames = []
+    for i in range(5):
+        frames.append(tmp_path / f"p.{i}.exr")
+        write_image(frames[-1], np.full((9, 7, 3), 0.1 * (i + 1)), "RGB")
+    frames[2].write_bytes(b"not an image")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "p.3.exr").write_bytes(b"already there")
+    tasks = [FrameTask(str(f), str(out / f.name), pc) for f in frames]
+    results = dict(apply_frames(tasks, threads=2))
+    assert sorted(results) == [0, 1, 2, 3, 4]
+    assert [results[i].status for i in range(5)] == [
+        "done",
+        "done",
+        "input-error",
+        "skipped",
+        "done",
+    ]
+    assert "p.2.exr" in results[2].message
+    assert (out / "p.3.exr").read_bytes() == b"already there"
+    assert sorted(p.name for p in out.iterdir()) == ["p.0.exr", "p.1.exr", "p.3.exr", "p.4.exr"]
+    _, px = read_image(out / "p.4.exr")
+    np.testing.assert_allclose(px[4, 3], _Q(solution_dir) @ np.full(3, 0.5), atol=1e-5)
+
+
+def test_pixel_transform_is_pluggable(tmp_path, solution_dir, monkeypatch):
+    # A post-correction of another kind runs its own transform (here: doubling, in numpy).
+    def doubling(pc):
+        def transform(rgb):
+            rgb *= 2
+
+        return transform
+
+    monkeypatch.setitem(TRANSFORMS, "double", doubling)
+    pc = load_post_correction(solution_dir)
+    pc = type(pc)(pc.config, pc.source, pc.target, pc.environment, kind="double")
+    write_image(tmp_path / "in.exr", np.full((6, 5, 3), 0.25), "RGB")
+    apply_file(tmp_path / "in.exr", tmp_path / "out.exr", pc)
+    _, got = read_image(tmp_path / "out.exr")
+    np.testing.assert_array_equal(got, np.full((6, 5, 3), 0.5))

@@ -40,7 +40,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--overwrite", action="store_true", help="redo frames already in --out")
     parser.add_argument(
-        "--workers", type=int, default=None, help="local processes (default: one per core)"
+        "--workers",
+        type=int,
+        default=None,
+        help="local processes, one frame and one core each (default 1: this process, frames "
+        "pipelined on every core)",
     )
     parser.add_argument(
         "--scheduler",
@@ -101,8 +105,8 @@ def run(args: argparse.Namespace) -> int:
     chosen = solution_folders(solutions, key="SOLUTION")
     frame_range = parse_frame_range(args.frame_range) if args.frame_range else None
     inputs = expand_frames(frames, frames=frame_range)
-    workers = default_workers() if args.workers is None else args.workers
-    # One frame at a time in this process: let it use every core; in a pool, one core each.
+    workers = 1 if args.workers is None else args.workers
+    # In this process: frames pipelined on every core; in a pool or on Dask, one core each.
     threads = default_workers() if (workers == 1 and not args.scheduler) else 1
     tasks = []
     for folder in chosen.folders:
@@ -121,11 +125,16 @@ def _run_tasks(tasks: list, args: argparse.Namespace, workers: int) -> int:
     from ocio_vp.commands.common import progress
     from ocio_vp.footage.apply import run_task
     from ocio_vp.footage.distributed import map_unordered
+    from ocio_vp.footage.stream import apply_frames
 
     counts = {"done": 0, "skipped": 0, "input-error": 0, "error": 0}
     bar = progress(total=len(tasks), unit="frame", disable=args.no_progress or None, leave=True)
     with bar:
-        for i, result in map_unordered(run_task, tasks, workers=workers, scheduler=args.scheduler):
+        if workers == 1 and not args.scheduler:
+            results = apply_frames(tasks, threads=tasks[0].threads if tasks else 1)
+        else:
+            results = map_unordered(run_task, tasks, workers=workers, scheduler=args.scheduler)
+        for i, result in results:
             if isinstance(result, BaseException):  # a worker died: count it, keep going
                 counts["error"] += 1
                 bar.write(f"ocio-vp apply: error: {tasks[i].src}: {result}", file=sys.stderr)

@@ -4,14 +4,22 @@ over a local pool or a Dask cluster.
 
 from ocio_vp.footage.apply import (
     OPTIMIZATIONS,
+    TRANSFORMS,
     FrameResult,
     FrameTask,
+    OcioTransform,
+    PixelTransform,
     PostCorrection,
     apply_file,
     apply_in_place,
     cpu_processor,
+    load_frame,
     load_post_correction,
+    pixel_transform,
     run_task,
+    set_io_threads,
+    store_frame,
+    transform_frame,
 )
 from ocio_vp.footage.distributed import (
     default_workers,
@@ -24,22 +32,32 @@ from ocio_vp.footage.sequences import (
     output_paths,
     parse_frame_range,
 )
+from ocio_vp.footage.stream import apply_frames
 
 __all__ = [
     "OPTIMIZATIONS",
+    "TRANSFORMS",
     "FrameResult",
     "FrameTask",
+    "OcioTransform",
+    "PixelTransform",
     "PostCorrection",
     "apply_file",
+    "apply_frames",
     "apply_in_place",
     "cpu_processor",
     "default_workers",
     "expand_frames",
     "frame_pattern",
+    "load_frame",
     "load_post_correction",
     "map_unordered",
     "output_paths",
     "parse_frame_range",
+    "pixel_transform",
     "run_task",
+    "set_io_threads",
     "solve_environments",
+    "store_frame",
+    "transform_frame",
 ]

@@ -2,9 +2,15 @@
 
 The colour maths is the solution's own OCIO config, ``Stage Footage`` -> reference (Q, the
 paper's post-correction, eq. 5, plus whatever that colorspace carries), run by OCIO's CPU
-processor on float32 buffers in place (``apply(PackedImageDesc)``; ``applyRGB`` on a numpy
-array is ~10x slower). Every other channel (alpha, depth, AOVs), every subimage, the metadata,
-data and display windows, tiling, pixel formats and compression of each input are kept.
+processor in place (``apply(PackedImageDesc)``; ``applyRGB`` on a numpy array is ~10x slower)
+through the pluggable :class:`PixelTransform` (:data:`TRANSFORMS`). Every other channel (alpha,
+depth, AOVs), every subimage, the metadata, data and display windows, tiling, pixel formats and
+compression of each input are kept.
+
+Pixels stay in the file's own type when every channel of a subimage is half or every one is
+float: OpenImageIO's half <-> float conversions cost more than the transform itself (about as
+much as decoding the frame), and OCIO converts half itself, rounding exactly as storing a
+float32 result as half does. Other files are read as float32 and stored back in their types.
 
 A frame is written under a temporary name and renamed when complete, so an interrupted run
 never leaves a partial frame under its final name; a rerun skips the frames already written.
@@ -22,9 +28,11 @@ import functools
 import itertools
 import os
 import time
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -32,14 +40,22 @@ from ocio_vp.errors import InputError
 
 __all__ = [
     "OPTIMIZATIONS",
+    "TRANSFORMS",
     "FrameResult",
     "FrameTask",
+    "OcioTransform",
+    "PixelTransform",
     "PostCorrection",
     "apply_file",
     "apply_in_place",
     "cpu_processor",
+    "load_frame",
     "load_post_correction",
+    "pixel_transform",
     "run_task",
+    "set_io_threads",
+    "store_frame",
+    "transform_frame",
 ]
 
 #: OCIO optimisation levels by name (``benchmarks/bench_ocio_optim.py`` measures them).
@@ -48,12 +64,16 @@ OPTIMIZATIONS = ("lossless", "default", "good", "draft")
 
 @dataclass(frozen=True)
 class PostCorrection:
-    """Which OCIO conversion post-corrects footage: ``source`` -> ``target`` in ``config``."""
+    """Which OCIO conversion post-corrects footage: ``source`` -> ``target`` in ``config``.
+
+    ``kind`` names the :data:`TRANSFORMS` factory that turns it into a :class:`PixelTransform`.
+    """
 
     config: str
     source: str
     target: str
     environment: str = ""
+    kind: str = "ocio"
 
 
 def load_post_correction(solution_dir: str | Path) -> PostCorrection:
@@ -80,44 +100,102 @@ def load_post_correction(solution_dir: str | Path) -> PostCorrection:
     return PostCorrection(str(config_path), source, target, solution.environment)
 
 
+_LEVELS = {
+    "lossless": "OPTIMIZATION_LOSSLESS",
+    "default": "OPTIMIZATION_DEFAULT",
+    "good": "OPTIMIZATION_GOOD",
+    "draft": "OPTIMIZATION_DRAFT",
+}
+
+
 @functools.lru_cache(maxsize=8)
-def cpu_processor(pc: PostCorrection, optimization: str = "default"):
-    """The float32 CPU processor for ``pc`` (cached per process: workers build it once)."""
+def cpu_processor(pc: PostCorrection, optimization: str = "default", bit_depth: str = "f32"):
+    """The CPU processor for ``pc`` on ``bit_depth`` (``f32`` or ``f16``) buffers, in and out.
+
+    Cached per process, so workers build it once.
+    """
     import PyOpenColorIO as OCIO
 
-    levels = {
-        "lossless": OCIO.OPTIMIZATION_LOSSLESS,
-        "default": OCIO.OPTIMIZATION_DEFAULT,
-        "good": OCIO.OPTIMIZATION_GOOD,
-        "draft": OCIO.OPTIMIZATION_DRAFT,
-    }
-    if optimization not in levels:
+    if optimization not in _LEVELS:
         raise ValueError(f"optimization must be one of {OPTIMIZATIONS}, got {optimization!r}")
+    depth = {"f32": OCIO.BIT_DEPTH_F32, "f16": OCIO.BIT_DEPTH_F16}[bit_depth]
     config = OCIO.Config.CreateFromFile(pc.config)
     processor = config.getProcessor(pc.source, pc.target)
-    return processor.getOptimizedCPUProcessor(
-        OCIO.BIT_DEPTH_F32, OCIO.BIT_DEPTH_F32, levels[optimization]
-    )
+    return processor.getOptimizedCPUProcessor(depth, depth, getattr(OCIO, _LEVELS[optimization]))
+
+
+class PixelTransform(Protocol):
+    """What ``apply`` runs on every pixel: called on a C-contiguous (h, w, 3) RGB array of
+    float32 or float16 (OpenEXR half), which it modifies in place. It may be called from several
+    threads at once on different rows."""
+
+    def __call__(self, rgb: np.ndarray) -> None: ...
+
+
+@dataclass(frozen=True)
+class OcioTransform:
+    """A :class:`PixelTransform` running OCIO CPU processors: ``f32`` for float32 buffers and
+    ``f16`` for half ones (OCIO converts half to float32 and back itself, with the same
+    round-to-nearest-even as a float32 result stored as half, so the output is bitwise the same
+    as converting, transforming in float32 and converting back, at a third of the memory
+    traffic)."""
+
+    f32: Any
+    f16: Any = None
+
+    def __call__(self, rgb: np.ndarray) -> None:
+        import PyOpenColorIO as OCIO
+
+        height, width = rgb.shape[:2]
+        if rgb.dtype == np.float16 and self.f16 is not None:
+            desc = OCIO.PackedImageDesc(rgb, width, height, 3, OCIO.BIT_DEPTH_F16, 2, 6, 6 * width)
+            self.f16.apply(desc)
+        elif rgb.dtype == np.float16:  # no half processor: through a float32 copy
+            work = rgb.astype(np.float32)
+            self.f32.apply(OCIO.PackedImageDesc(work, width, height, 3))
+            rgb[...] = work
+        else:
+            self.f32.apply(OCIO.PackedImageDesc(rgb, width, height, 3))
+
+
+#: How to build the per-pixel transform of a :class:`PostCorrection`, by its ``kind``. Today
+#: every solution's post-correction is an OCIO conversion in its config; another kind (e.g. a
+#: transform OCIO cannot express) registers its factory here.
+TRANSFORMS: dict[str, Callable[[PostCorrection], PixelTransform]] = {
+    "ocio": lambda pc: OcioTransform(cpu_processor(pc), cpu_processor(pc, bit_depth="f16")),
+}
+
+
+@functools.lru_cache(maxsize=8)
+def pixel_transform(pc: PostCorrection) -> PixelTransform:
+    """The :class:`PixelTransform` of ``pc`` (cached per process)."""
+    if pc.kind not in TRANSFORMS:
+        raise ValueError(f"no pixel transform for post-correction kind {pc.kind!r}")
+    return TRANSFORMS[pc.kind](pc)
 
 
 _THREADS: dict[int, ThreadPoolExecutor] = {}
 
 
-def _apply_rows(cpu, rgb: np.ndarray) -> None:
-    import PyOpenColorIO as OCIO
-
-    height, width = rgb.shape[:2]
-    cpu.apply(OCIO.PackedImageDesc(rgb, width, height, 3))
+def _as_transform(transform: Any) -> PixelTransform:
+    # An OCIO float32 CPU processor (what cpu_processor returns) is accepted as it is.
+    return OcioTransform(transform) if hasattr(transform, "applyRGB") else transform
 
 
 def apply_in_place(
-    cpu, pixels: np.ndarray, *, rgb: tuple[int, int, int] = (0, 1, 2), threads: int = 1
+    transform: Any,
+    pixels: np.ndarray,
+    *,
+    rgb: tuple[int, int, int] = (0, 1, 2),
+    threads: int = 1,
 ) -> np.ndarray:
-    """Apply ``cpu`` to the RGB channels of a (height, width, channels) float32 image, in place.
+    """Apply ``transform`` to the RGB channels of a (height, width, channels) image, in place.
 
-    Other channels are not touched (not even through OCIO's alpha path, which turns alpha into
-    NaN where RGB is infinite). A C-contiguous RGB image is processed with no copy; otherwise
-    RGB is gathered into a scratch buffer and scattered back. ``threads`` > 1 splits the rows
+    ``transform`` is a :class:`PixelTransform` or an OCIO float32 CPU processor; ``pixels`` is
+    float32, or float16 when the transform handles half (:class:`OcioTransform` does). Other
+    channels are not touched (not even through OCIO's alpha path, which turns alpha into NaN
+    where RGB is infinite). A C-contiguous RGB image is processed with no copy; otherwise RGB
+    is gathered into a scratch buffer and scattered back. ``threads`` > 1 splits the rows
     (OCIO releases the GIL while it works).
 
     Returns
@@ -125,18 +203,20 @@ def apply_in_place(
     numpy.ndarray
         ``pixels``, modified.
     """
-    if pixels.dtype != np.float32 or pixels.ndim != 3:
+    if pixels.dtype not in (np.float32, np.float16) or pixels.ndim != 3:
         raise ValueError(
-            f"expected a (height, width, channels) float32 image, got {pixels.dtype} {pixels.shape}"
+            "expected a (height, width, channels) float32 or float16 image, got "
+            f"{pixels.dtype} {pixels.shape}"
         )
+    transform = _as_transform(transform)
     direct = pixels.shape[2] == 3 and tuple(rgb) == (0, 1, 2) and pixels.flags.c_contiguous
     work = pixels if direct else np.ascontiguousarray(pixels[..., list(rgb)])
     if threads <= 1 or work.shape[0] < 2 * threads:
-        _apply_rows(cpu, work)
+        transform(work)
     else:
         pool = _THREADS.setdefault(threads, ThreadPoolExecutor(threads))
         bounds = np.linspace(0, work.shape[0], threads + 1).astype(int)
-        jobs = [pool.submit(_apply_rows, cpu, work[a:b]) for a, b in itertools.pairwise(bounds)]
+        jobs = [pool.submit(transform, work[a:b]) for a, b in itertools.pairwise(bounds)]
         for job in jobs:
             job.result()
     if not direct:
@@ -153,10 +233,23 @@ def _rgb_channels(spec) -> tuple[int, int, int] | None:
     return None
 
 
-def _read_all(src: Path):
-    """Every subimage of ``src`` as (spec, float32 pixels); InputError if unreadable."""
+def _read_type(spec, oiio):
+    """The type to read a subimage in: its own when uniformly half or float, else float."""
+    formats = {str(t) for t in spec.channelformats} or {str(spec.format)}
+    return spec.format if formats in ({"half"}, {"float"}) else oiio.FLOAT
+
+
+def load_frame(src: str | Path) -> list[tuple[Any, np.ndarray]]:
+    """Every subimage of ``src`` as (spec, (h, w, channels) pixels), half or float32.
+
+    Raises
+    ------
+    InputError
+        Missing, unreadable, deep or corrupt frame.
+    """
     import OpenImageIO as oiio
 
+    src = Path(src)
     if not src.is_file():
         raise InputError("no such frame", source=str(src))
     inp = oiio.ImageInput.open(str(src))
@@ -169,15 +262,39 @@ def _read_all(src: Path):
             spec = oiio.ImageSpec(inp.spec())
             if spec.deep:
                 raise InputError("deep images are not supported", source=str(src))
-            pixels = inp.read_image(index, 0, 0, spec.nchannels, oiio.FLOAT)
+            pixels = inp.read_image(index, 0, 0, spec.nchannels, _read_type(spec, oiio))
             if pixels is None or inp.has_error:
                 raise InputError(f"corrupt or truncated frame: {inp.geterror()}", source=str(src))
-            pixels = np.asarray(pixels, dtype=np.float32)
             parts.append((spec, pixels.reshape(spec.height, spec.width, spec.nchannels)))
             index += 1
     finally:
         inp.close()
     return parts
+
+
+def transform_frame(
+    parts: list[tuple[Any, np.ndarray]], pc: PostCorrection, *, threads: int = 1, source: str = ""
+) -> int:
+    """Post-correct, in place, every subimage of ``parts`` that has R, G, B; returns how many.
+
+    Raises
+    ------
+    InputError
+        No subimage has R, G, B channels.
+    """
+    transform = pixel_transform(pc)
+    done = 0
+    for spec, pixels in parts:
+        rgb = _rgb_channels(spec)
+        if rgb is not None:
+            apply_in_place(transform, pixels, rgb=rgb, threads=threads)
+            spec.attribute(
+                "ocio_vp:postCorrection", f"{pc.source} -> {pc.target} ({pc.environment})"
+            )
+            done += 1
+    if done == 0:
+        raise InputError("no R, G, B channels to post-correct", source=source or None)
+    return done
 
 
 def _write_all(dst: Path, parts) -> None:
@@ -199,6 +316,25 @@ def _write_all(dst: Path, parts) -> None:
         raise OSError(f"{dst}: {out.geterror() or oiio.geterror()}")
 
 
+def store_frame(dst: str | Path, parts: list[tuple[Any, np.ndarray]]) -> None:
+    """Write ``parts`` to ``dst`` atomically (a temporary name in its folder, then a rename).
+
+    Raises
+    ------
+    OSError
+        The output could not be written.
+    """
+    dst = Path(dst)
+    dst.parent.mkdir(parents=True, exist_ok=True)
+    # Same folder (same file system) for an atomic rename; the extension picks the format.
+    tmp = dst.with_name(f".{dst.stem}.partial-{os.getpid()}{dst.suffix}")
+    try:
+        _write_all(tmp, parts)
+        os.replace(tmp, dst)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
 def apply_file(src: str | Path, dst: str | Path, pc: PostCorrection, *, threads: int = 1) -> int:
     """Post-correct one frame file into ``dst`` (atomically); returns the RGB layers processed.
 
@@ -209,28 +345,9 @@ def apply_file(src: str | Path, dst: str | Path, pc: PostCorrection, *, threads:
     OSError
         The output could not be written.
     """
-    src, dst = Path(src), Path(dst)
-    parts = _read_all(src)
-    cpu = cpu_processor(pc)
-    done = 0
-    for spec, pixels in parts:
-        rgb = _rgb_channels(spec)
-        if rgb is not None:
-            apply_in_place(cpu, pixels, rgb=rgb, threads=threads)
-            spec.attribute(
-                "ocio_vp:postCorrection", f"{pc.source} -> {pc.target} ({pc.environment})"
-            )
-            done += 1
-    if done == 0:
-        raise InputError("no R, G, B channels to post-correct", source=str(src))
-    dst.parent.mkdir(parents=True, exist_ok=True)
-    # Same folder (same file system) for an atomic rename; the extension picks the format.
-    tmp = dst.with_name(f".{dst.stem}.partial-{os.getpid()}{dst.suffix}")
-    try:
-        _write_all(tmp, parts)
-        os.replace(tmp, dst)
-    finally:
-        tmp.unlink(missing_ok=True)
+    parts = load_frame(src)
+    done = transform_frame(parts, pc, threads=threads, source=str(src))
+    store_frame(dst, parts)
     return done
 
 
@@ -262,15 +379,19 @@ def run_task(task: FrameTask) -> FrameResult:
     if not task.overwrite and Path(task.dst).is_file():
         return FrameResult(task.src, task.dst, "skipped", "already written")
     try:
-        import OpenImageIO as oiio
-
-        # OpenEXR has its own thread pool besides OIIO's: cap both, so a task given one core
-        # (a pool or Dask worker) uses one core and the workers do not oversubscribe the node.
-        oiio.attribute("threads", max(1, task.threads))
-        oiio.attribute("exr_threads", max(1, task.threads))
+        set_io_threads(task.threads)
         apply_file(task.src, task.dst, task.post_correction, threads=task.threads)
     except InputError as exc:
         return FrameResult(task.src, task.dst, "input-error", str(exc))
     except Exception as exc:  # a write failure, out of disk...: report it, go on
         return FrameResult(task.src, task.dst, "error", f"{type(exc).__name__}: {exc}")
     return FrameResult(task.src, task.dst, "done", seconds=time.perf_counter() - start)
+
+
+def set_io_threads(threads: int) -> None:
+    """Cap OpenImageIO's thread pool and OpenEXR's own one (both) at ``threads``, so a task
+    given one core (a pool or Dask worker) uses one core and workers do not oversubscribe."""
+    import OpenImageIO as oiio
+
+    oiio.attribute("threads", max(1, threads))
+    oiio.attribute("exr_threads", max(1, threads))

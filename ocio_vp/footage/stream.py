@@ -1,0 +1,88 @@
+"""A sequence of frames through one process: read ahead, transform, write behind.
+
+OpenEXR decodes and encodes a frame on all cores with its own threads, but each read and each
+write also has serial parts (opening the file, the header, the system calls, Python between
+them). Reading frame i+1 and writing frame i-1 while frame i is transformed fills those gaps
+with useful work, and a single process pays the imports and OCIO set-up once, where a pool of
+worker processes pays them per worker. At most three frames are held at any time (one being
+read, one transformed, one written), whatever the length of the sequence.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Any
+
+from ocio_vp.errors import InputError
+from ocio_vp.footage.apply import (
+    FrameResult,
+    FrameTask,
+    load_frame,
+    set_io_threads,
+    store_frame,
+    transform_frame,
+)
+
+__all__ = ["apply_frames"]
+
+
+def _failure(task: FrameTask, exc: Exception) -> FrameResult:
+    if isinstance(exc, InputError):
+        return FrameResult(task.src, task.dst, "input-error", str(exc))
+    return FrameResult(task.src, task.dst, "error", f"{type(exc).__name__}: {exc}")
+
+
+def _load(task: FrameTask) -> tuple[float, Any]:
+    """(start time, the frame's parts or the FrameResult that ends it: skipped or failed)."""
+    start = time.perf_counter()
+    if not task.overwrite and Path(task.dst).is_file():
+        return start, FrameResult(task.src, task.dst, "skipped", "already written")
+    try:
+        return start, load_frame(task.src)
+    except Exception as exc:  # reported in its result, the other frames go on
+        return start, _failure(task, exc)
+
+
+def _store(task: FrameTask, start: float, parts: Any) -> FrameResult:
+    try:
+        store_frame(task.dst, parts)
+    except Exception as exc:  # out of disk, permissions...: reported, the others go on
+        return _failure(task, exc)
+    return FrameResult(task.src, task.dst, "done", seconds=time.perf_counter() - start)
+
+
+def apply_frames(tasks: Sequence[FrameTask], *, threads: int) -> Iterator[tuple[int, FrameResult]]:
+    """Do ``tasks`` in this process, pipelined; yield ``(index, FrameResult)`` as frames finish.
+
+    ``threads`` is what OpenImageIO, OpenEXR and the transform may each use (the cores this
+    process has). Never raises for a frame: failures become results, as with
+    :func:`ocio_vp.footage.apply.run_task`.
+    """
+    tasks = list(tasks)
+    if not tasks:
+        return
+    set_io_threads(threads)
+    with ThreadPoolExecutor(1) as reader, ThreadPoolExecutor(1) as writer:
+        ahead = reader.submit(_load, tasks[0])
+        behind: tuple[int, Any] | None = None
+        for i, task in enumerate(tasks):
+            start, parts = ahead.result()
+            if i + 1 < len(tasks):
+                ahead = reader.submit(_load, tasks[i + 1])
+            if isinstance(parts, FrameResult):
+                yield i, parts
+                continue
+            try:
+                transform_frame(parts, task.post_correction, threads=threads, source=task.src)
+            except Exception as exc:  # no RGB in this frame...: reported, the others go on
+                yield i, _failure(task, exc)
+                continue
+            if behind is not None:
+                yield behind[0], behind[1].result()
+            behind = (i, writer.submit(_store, task, start, parts))
+            del parts  # the writer holds the frame now, and only it
+        if behind is not None:
+            yield behind[0], behind[1].result()
