@@ -74,6 +74,23 @@ class TestRender:
         bars = matplotlib.image.imread(report.error_bars["lit"].path)
         assert bars.shape[0] == round(4.2 * DPI)
 
+    def test_reused_figures_draw_the_pictures_of_new_ones(self, report, tmp_path):
+        # The report redraws one figure per kind for every environment; each PNG must be the
+        # pixels a figure built for that environment alone gives.
+        import matplotlib.image
+
+        from ocio_vp.report.plots import plot_comparison_charts, plot_delta_e
+
+        for data in report.environments:
+            for plot, drawn in (
+                (plot_comparison_charts, report.charts[data.key]),
+                (plot_delta_e, report.delta_e[data.key]),
+            ):
+                fresh = plot(data, tmp_path / "fresh.png", dpi=DPI).path
+                np.testing.assert_array_equal(
+                    matplotlib.image.imread(fresh), matplotlib.image.imread(drawn.path)
+                )
+
     def test_no_external_urls(self, report):
         html = report.index.read_text()
         assert not re.search(r"https?:", html, re.IGNORECASE)

@@ -390,12 +390,13 @@ def build_report(
             report.error_bars[kind] = plot_error_bars(environments, kind, path, dpi=dpi)
             summary_images[kind] = link
         sections = []
+        figures: dict = {}  # one figure per kind and patch count, redrawn per environment
         for data in environments:
             images = {}
             path, images["charts"] = png(f"{data.key}-charts.png")
-            report.charts[data.key] = plot_comparison_charts(data, path, dpi=dpi)
+            report.charts[data.key] = plot_comparison_charts(data, path, dpi=dpi, reuse=figures)
             path, images["delta_e"] = png(f"{data.key}-delta_e.png")
-            report.delta_e[data.key] = plot_delta_e(data, path, dpi=dpi)
+            report.delta_e[data.key] = plot_delta_e(data, path, dpi=dpi, reuse=figures)
             curves = linearity_curves(data.solution.linearity)
             if curves:
                 path, images["linearity"] = png(f"{data.key}-linearity.png")

@@ -126,13 +126,15 @@ def _draw_chart(ax: Any, squares: np.ndarray, circles: np.ndarray) -> tuple[list
 
     columns, rows = _grid(len(squares))
     square_artists, circle_artists = [], []
+    # add_artist, not add_patch: the limits are set below, and add_patch's data-limit update
+    # (every circle's Bezier path transformed) was a third of a chart figure's time.
     for j, (square, circle) in enumerate(zip(squares, circles, strict=True)):
         x, y = j % columns, rows - 1 - j // columns
         square_artists.append(
-            ax.add_patch(Rectangle((x + 0.04, y + 0.04), 0.92, 0.92, facecolor=square, lw=0))
+            ax.add_artist(Rectangle((x + 0.04, y + 0.04), 0.92, 0.92, facecolor=square, lw=0))
         )
         circle_artists.append(
-            ax.add_patch(Circle((x + 0.5, y + 0.5), 0.26, facecolor=circle, lw=0))
+            ax.add_artist(Circle((x + 0.5, y + 0.5), 0.26, facecolor=circle, lw=0))
         )
     ax.set_xlim(0, columns)
     ax.set_ylim(0, rows)
@@ -143,28 +145,53 @@ def _draw_chart(ax: Any, squares: np.ndarray, circles: np.ndarray) -> tuple[list
     return square_artists, circle_artists
 
 
-def plot_comparison_charts(data: EnvironmentData, path: Path, *, dpi: float = 110) -> ChartPlot:
+def _reused(reuse: dict | None, key: tuple, build: Any) -> Any:
+    """``build()``, or what it built before under ``key`` in ``reuse`` (one report's figures).
+
+    A figure is built with its first environment's numbers, as it always was; the next ones
+    only update it (and tests compare those pictures with figures built for them).
+    """
+    if reuse is None:
+        return build()
+    if key not in reuse:
+        reuse[key] = build()
+    return reuse[key]
+
+
+def _charts_figure(data: EnvironmentData) -> tuple[Any, dict[str, tuple[Any, list, list]]]:
+    figure = _figure(
+        10.0, 7.4, left=0.015, right=0.985, top=0.88, bottom=0.01, hspace=0.2, wspace=0.05
+    )
+    panels = {}
+    for ax, chart in zip(figure.subplots(2, 2).ravel(), PANELS, strict=True):
+        panels[chart] = (ax, *_draw_chart(ax, data.display["target"], data.display[chart]))
+    return figure, panels
+
+
+def plot_comparison_charts(
+    data: EnvironmentData, path: Path, *, dpi: float = 110, reuse: dict | None = None
+) -> ChartPlot:
     """The paper's comparison charts for one environment (Section 4, its result figures).
 
     Squares are the target chart (real location), inset circles the stage chart; a 2x2 grid:
     lit chart (top) and in-camera background chart (bottom), baseline (left) and ours (right).
-    Colours are ``data.display`` (see :mod:`ocio_vp.report.data`).
+    Colours are ``data.display`` (see :mod:`ocio_vp.report.data`). With ``reuse`` (a dict kept
+    across the environments of one report) the figure is built once per patch count and only
+    its colours and titles change: the same picture, without rebuilding every artist.
     """
     from matplotlib.colors import to_rgb
 
-    figure = _figure(
-        10.0, 7.4, left=0.015, right=0.985, top=0.88, bottom=0.01, hspace=0.2, wspace=0.05
-    )
-    axes = figure.subplots(2, 2)
+    n = len(data.display["target"])
+    figure, panels = _reused(reuse, ("charts", n), lambda: _charts_figure(data))
     squares, circles, drawn_titles = {}, {}, {}
     titles = panel_titles(data.solution)
-    for ax, chart in zip(axes.ravel(), PANELS, strict=True):
-        title = titles[chart]
-        square_artists, circle_artists = _draw_chart(
-            ax, data.display["target"], data.display[chart]
-        )
+    for chart, (ax, square_artists, circle_artists) in panels.items():
+        for artist, colour in zip(square_artists, data.display["target"], strict=True):
+            artist.set_facecolor(colour)
+        for artist, colour in zip(circle_artists, data.display[chart], strict=True):
+            artist.set_facecolor(colour)
         error = 100 * float(np.mean(data.errors[chart]))
-        ax.set_title(f"{title}\nmean error {error:.2f}% of white", fontsize=10)
+        ax.set_title(f"{titles[chart]}\nmean error {error:.2f}% of white", fontsize=10)
         drawn_titles[chart] = ax.get_title()
         squares[chart] = np.array([to_rgb(a.get_facecolor()) for a in square_artists])
         circles[chart] = np.array([to_rgb(a.get_facecolor()) for a in circle_artists])
@@ -252,27 +279,24 @@ def plot_error_bars(
     )
 
 
-def plot_delta_e(data: EnvironmentData, path: Path, *, dpi: float = 110) -> DeltaEPlot:
-    """Per-patch ΔE2000 and ΔE ITP of the stage charts against the target, baseline vs ours."""
+def _delta_e_figure(data: EnvironmentData) -> tuple[Any, Any, dict, dict]:
+    n = len(data.charts["target"])
     figure = _figure(
         11.0, 6.8, left=0.06, right=0.99, top=0.91, bottom=0.2, hspace=0.2, wspace=0.14
     )
     axes = figure.subplots(2, 2, sharex=True)
-    n = len(data.charts["target"])
     x = np.arange(n)
-    drawn: dict[str, dict[str, np.ndarray]] = {}
+    bars, white_lines = {}, {}
     for col, metric in enumerate(("CIE 2000", "ITP")):
-        drawn[metric] = {}
         for row, kind in enumerate(("lit", "displayed")):
             ax = axes[row, col]
             for series, colour, hatch, shift in (
                 ("baseline", "#7f7f7f", None, -0.2),
                 ("corrected", "white", "///", 0.2),
             ):
-                chart = f"{kind}_{series}"
-                bars = ax.bar(
+                bars[metric, f"{kind}_{series}"] = ax.bar(
                     x + shift,
-                    data.delta_e[metric][chart],
+                    data.delta_e[metric][f"{kind}_{series}"],
                     0.4,
                     color=colour,
                     edgecolor="#333333",
@@ -280,21 +304,51 @@ def plot_delta_e(data: EnvironmentData, path: Path, *, dpi: float = 110) -> Delt
                     linewidth=0.8,
                     label="baseline (M only)" if hatch is None else "ours",
                 )
-                drawn[metric][chart] = np.array([b.get_height() for b in bars])
-                undefined = np.flatnonzero(np.isnan(data.delta_e[metric][chart]))
-                if undefined.size:  # no bar to draw: mark the patch so it is not read as 0
-                    ax.plot(x[undefined] + shift, np.zeros(undefined.size), "x", color="#c0392b")
             label = "ΔE2000" if metric == "CIE 2000" else "ΔE ITP"
             place = "lit chart" if kind == "lit" else "in-camera background"
             ax.set_title(f"{label}, {place}", fontsize=10)
             ax.set_ylabel(label)
             ax.grid(axis="y", alpha=0.3)
-            ax.axvline(data.white_patch, color="#bbbbbb", lw=0.8, zorder=0)
+            white_lines[ax] = ax.axvline(data.white_patch, color="#bbbbbb", lw=0.8, zorder=0)
     labels = patch_names(n)
     for ax in axes[1]:
         ax.set_xticks(x, labels, fontsize=7, rotation=60 if n == 24 else 0, ha="right")
         ax.set_xlabel("chart patch (grey line = white patch)")
     axes[0, 0].legend(fontsize=8)
+    return figure, axes, bars, white_lines
+
+
+def plot_delta_e(
+    data: EnvironmentData, path: Path, *, dpi: float = 110, reuse: dict | None = None
+) -> DeltaEPlot:
+    """Per-patch ΔE2000 and ΔE ITP of the stage charts against the target, baseline vs ours.
+
+    ``reuse`` as in :func:`plot_comparison_charts`: bar heights, the white patch's line and the
+    axis limits are updated in a figure built once per patch count.
+    """
+    n = len(data.charts["target"])
+    figure, axes, bars, white_lines = _reused(reuse, ("delta_e", n), lambda: _delta_e_figure(data))
+    drawn: dict[str, dict[str, np.ndarray]] = {"CIE 2000": {}, "ITP": {}}
+    for (metric, chart), container in bars.items():
+        for bar, height in zip(container, data.delta_e[metric][chart], strict=True):
+            bar.set_height(height)
+        drawn[metric][chart] = np.array([b.get_height() for b in container])
+    for marker in reuse.pop(("delta_e markers", n), []) if reuse is not None else []:
+        marker.remove()
+    markers = []
+    for (metric, chart), container in bars.items():
+        undefined = np.flatnonzero(np.isnan(data.delta_e[metric][chart]))
+        if undefined.size:  # no bar to draw: mark the patch so it is not read as 0
+            shift = -0.2 if chart.endswith("baseline") else 0.2  # as the bars are placed
+            ax = container.patches[0].axes
+            x = np.arange(n)[undefined] + shift
+            markers += ax.plot(x, np.zeros(undefined.size), "x", color="#c0392b")
+    if reuse is not None:
+        reuse["delta_e markers", n] = markers
+    for ax, line in white_lines.items():
+        line.set_xdata([data.white_patch, data.white_patch])
+        ax.relim()  # as a new figure's limits: from the bars (and the line's x), then margins
+        ax.autoscale_view()
     title = f"{data.solution.environment}: colour difference per patch"
     if any(np.isnan(v).any() for v in data.delta_e["ITP"].values()):
         title += " (red x: ΔE ITP undefined, a colour with negative light)"
