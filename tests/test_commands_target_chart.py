@@ -155,6 +155,21 @@ def test_aces_input_is_converted_like_the_config_converts_it(stage_file, tmp_pat
     np.testing.assert_allclose(env.w_avg, expected, rtol=1e-12)
     assert env.synthesized.camera == "ARRI Wide Gamut 4 colour space from XYZ"
     assert any("CAT02" in a for a in env.synthesized.assumptions)
+    # ACEScg pure red is outside ARRI Wide Gamut 4 (blue -0.005): refused, not clipped.
+    code, _, err = _run(
+        capsys,
+        path,
+        "--environment",
+        "cg",
+        "--average-rgb",
+        "1,0,0",
+        "--hdri-colorspace",
+        "ACEScg",
+        "--out",
+        tmp_path / "red.yaml",
+    )
+    assert code == 2 and "outside the camera gamut ARRI Wide Gamut 4" in err
+    assert not (tmp_path / "red.yaml").exists()
 
 
 def test_an_off_locus_light_is_written_with_a_warning(stage_file, tmp_path, capsys):

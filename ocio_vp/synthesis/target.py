@@ -229,6 +229,13 @@ def synthesize_environment(
             key="--chart",
         )
     w_avg = rgb_to_camera(light.rgb, light.colorspace, stage.camera_colorspace)
+    if np.any(w_avg < 0):
+        raise InputError(
+            f"the light's {light.colorspace} RGB {np.round(light.rgb, 6).tolist()} is outside "
+            f"the camera gamut {stage.camera_colorspace} (camera RGB "
+            f"{np.round(w_avg, 6).tolist()}): no light the camera can see",
+            key="--hdri-colorspace",
+        )
     synth = synthesize_target(
         w_avg,
         camera,
