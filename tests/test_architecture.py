@@ -21,7 +21,6 @@ MAX_TOP_LEVEL_MODULES = 12
 LONG_FUNCTIONS_BEING_SPLIT = {
     "ocio_vp/correction/joint.py:make_q_joint",
     "ocio_vp/correction/joint.py:q_joint_method",
-    "ocio_vp/ocio/config.py:build_config",
     "ocio_vp/plates/sampling.py:sample_chart",
     "ocio_vp/plates/capture.py:capture_from_dict",
     "ocio_vp/hdri/prepare.py:_spread",

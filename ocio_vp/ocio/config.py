@@ -156,18 +156,42 @@ def build_config(
     PyOpenColorIO.Exception
         If the config does not validate (never expected: that is a bug).
     """
-    env, stage = solution.environment, solution.stage
-    origin = f"stage {stage!r}, environment {env!r}"
+    origin = _origin(solution)
+    config = _empty_config(solution, origin, search_path)
+    _add_camera_spaces(config, solution.camera_colorspace)
+    chains = wall_transforms(solution)
+    for name, extra in (extra_wall_transforms or {}).items():
+        chains[name] = chains[name] + list(extra)
+    config.addColorSpace(_out_of_frustum_space(solution, chains[OUT_OF_FRUSTUM], origin))
+    config.addColorSpace(_in_frustum_space(solution, chains[IN_FRUSTUM], origin))
+    _add_post_correction(config, solution, origin)
+    _set_roles(config, solution.camera_colorspace)
+    config.addDisplayView(DISPLAY, VIEW_OUTER, OUT_OF_FRUSTUM)
+    config.addDisplayView(DISPLAY, VIEW_INNER, IN_FRUSTUM)
+    config.addDisplayView(DISPLAY, "Raw", RAW)
+    config.setActiveDisplays(DISPLAY)
+    config.setActiveViews(f"{VIEW_INNER}, {VIEW_OUTER}, Raw")
+    config.validate()
+    return config
+
+
+def _origin(solution: Solution) -> str:
+    """Which stage, environment and measurements file a description speaks of."""
+    origin = f"stage {solution.stage!r}, environment {solution.environment!r}"
     if solution.measurements_sha256:
         origin += (
             f", from {solution.measurements_file or 'measurements'} "
             f"(sha256 {solution.measurements_sha256[:16]})"
         )
+    return origin
 
+
+def _empty_config(solution: Solution, origin: str, search_path: str | None) -> OCIO.Config:
+    """A v2.1 config named and described after the solve, with no colorspace yet."""
     config = OCIO.Config()
     config.setMajorVersion(2)
     config.setMinorVersion(1)
-    config.setName(f"ocio-vp_{stage}_{env}")
+    config.setName(f"ocio-vp_{solution.stage}_{solution.environment}")
     config.setDescription(
         f"ocio_vp calibration of {origin}. Q method: {solution.method} "
         f"(model {solution.diagnostics.get('model') or solution.method}). "
@@ -175,8 +199,11 @@ def build_config(
     )
     if search_path:
         config.setSearchPath(search_path)
+    return config
 
-    camera = solution.camera_colorspace
+
+def _add_camera_spaces(config: OCIO.Config, camera: str | None) -> None:
+    """The reference (camera native linear) and the raw data colorspace."""
     gamut_text = f" ({camera} primaries)" if camera else " (as measured; gamut not stated)"
     config.addColorSpace(
         _colorspace(
@@ -190,10 +217,11 @@ def build_config(
     raw.setIsData(True)
     config.addColorSpace(raw)
 
-    chains = wall_transforms(solution)
-    for name, extra in (extra_wall_transforms or {}).items():
-        chains[name] = chains[name] + list(extra)
 
+def _out_of_frustum_space(
+    solution: Solution, chain: list[OCIO.Transform], origin: str
+) -> OCIO.ColorSpace:
+    """The panel drive for content outside the camera frustum: M, then the wall's tail."""
     outer = _colorspace(
         OUT_OF_FRUSTUM,
         f"Panel drive for content OUTSIDE the camera frustum (lights the actors): M = [SL]^-1 "
@@ -201,38 +229,47 @@ def build_config(
         family="LED Wall",
         encoding=_wall_signal_encoding(solution),
     )
-    outer.setTransform(_group(chains[OUT_OF_FRUSTUM]), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
-    config.addColorSpace(outer)
+    outer.setTransform(_group(chain), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+    return outer
 
-    q_identity = is_identity(solution.Q)
-    if solution.N is not None and q_identity:
-        inner_text = (
-            f"N = M (Q is the identity, so no in-frustum change is needed) {_fmt(solution.N)}"
-        )
+
+def _in_frustum_text(solution: Solution) -> str:
+    """What the in-frustum drive is: N, or M when N was not solved, plus the offset."""
+    if solution.N is not None and is_identity(solution.Q):
+        text = f"N = M (Q is the identity, so no in-frustum change is needed) {_fmt(solution.N)}"
     elif solution.N is not None:
-        inner_text = f"N = M Q^-1 {_fmt(solution.N)}"
+        text = f"N = M Q^-1 {_fmt(solution.N)}"
     else:
         reason = solution.diagnostics.get("N_reason") or "Q is not invertible"
-        inner_text = f"N NOT SOLVED ({reason}); M is used instead, {_fmt(solution.M)}"
+        text = f"N NOT SOLVED ({reason}); M is used instead, {_fmt(solution.M)}"
     if solution.black_level_offset is not None:
-        inner_text += (
+        text += (
             f", plus black-level offset {_fmt(solution.black_level_offset[None])} "
             f"({solution.black_level_method})"
         )
         if offset_is_negligible(solution.black_level_offset, solution.SL):
-            inner_text += (
-                " - negligible (below 1e-5 of the wall's white), left out of this transform"
-            )
+            text += " - negligible (below 1e-5 of the wall's white), left out of this transform"
+    return text
+
+
+def _in_frustum_space(
+    solution: Solution, chain: list[OCIO.Transform], origin: str
+) -> OCIO.ColorSpace:
+    """The panel drive for the in-camera background: N (or M) and the offset, then the tail."""
     inner = _colorspace(
         IN_FRUSTUM,
         f"Panel drive for content INSIDE the camera frustum (the in-camera background): "
-        f"{inner_text}. {origin}.",
+        f"{_in_frustum_text(solution)}. {origin}.",
         family="LED Wall",
         encoding=_wall_signal_encoding(solution),
     )
-    inner.setTransform(_group(chains[IN_FRUSTUM]), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
-    config.addColorSpace(inner)
+    inner.setTransform(_group(chain), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+    return inner
 
+
+def _add_post_correction(config: OCIO.Config, solution: Solution, origin: str) -> None:
+    """Q twice: the ``Stage Footage`` colorspace and the ``Post-Correction Q`` named transform."""
+    q_identity = is_identity(solution.Q)
     model = solution.diagnostics.get("model") or solution.method
     reason = solution.diagnostics.get("model_reason")
     q_text = (
@@ -251,7 +288,6 @@ def build_config(
     if not q_identity:
         footage.setTransform(matrix_transform(solution.Q), OCIO.COLORSPACE_DIR_TO_REFERENCE)
     config.addColorSpace(footage)
-
     named = OCIO.NamedTransform(
         name=POST_CORRECTION,
         family=f"{FAMILY}/Post",
@@ -260,6 +296,9 @@ def build_config(
     )
     config.addNamedTransform(named)
 
+
+def _set_roles(config: OCIO.Config, camera: str | None) -> None:
+    """Every role on the reference (or on a working space when the camera gamut is known)."""
     roles = {
         OCIO.ROLE_SCENE_LINEAR: REFERENCE,
         OCIO.ROLE_REFERENCE: REFERENCE,
@@ -275,14 +314,6 @@ def build_config(
         roles.update(_add_working_spaces(config, camera))
     for role, space in roles.items():
         config.setRole(role, space)
-
-    config.addDisplayView(DISPLAY, VIEW_OUTER, OUT_OF_FRUSTUM)
-    config.addDisplayView(DISPLAY, VIEW_INNER, IN_FRUSTUM)
-    config.addDisplayView(DISPLAY, "Raw", RAW)
-    config.setActiveDisplays(DISPLAY)
-    config.setActiveViews(f"{VIEW_INNER}, {VIEW_OUTER}, Raw")
-    config.validate()
-    return config
 
 
 def _add_working_spaces(config: OCIO.Config, camera: str) -> dict[str, str]:
