@@ -147,184 +147,232 @@ def make_q_joint(
         )
 
     def q_joint_method(problem: QProblem) -> QFit:
-        from scipy.optimize import minimize
-
         if camera_to_xyz is None:
             from ocio_vp.correction.perceptual import default_camera_to_xyz
 
             matrix = default_camera_to_xyz()
         else:
             matrix = np.asarray(camera_to_xyz, dtype=np.float64)
-        SL = np.asarray(problem.SL, dtype=np.float64)
-        M = np.asarray(problem.M, dtype=np.float64)
-        w_avg = np.asarray(problem.w_avg, dtype=np.float64)
-        A = np.asarray(problem.SRL, dtype=np.float64) / float(problem.beta)  # x_j = A_j d
-        P = np.asarray(problem.target, dtype=np.float64)
-        w = problem.fit_weights
-        d0 = M @ w_avg
-        baseline_light = SL @ d0
-        y_row = matrix[1] @ SL  # luminance of the stage light, linear in d
-        y0 = float(y_row @ d0)
-        top = float(np.max(d0)) if max_drive is None else float(max_drive)
-        scale = max(float(np.max(np.abs(d0))), 1e-12)
-        norm = float(np.sum(w) * np.sum(P[problem.white_patch] ** 2))
+        joint = _JointProblem(
+            problem, matrix, max_delta_e=max_delta_e, max_drive=max_drive,
+            max_condition=max_condition,
+        )  # fmt: skip
+        return _solve_joint(
+            joint, max_iterations, "sample camera" if camera_to_xyz is None else "given"
+        )
 
-        def unpack(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            return z[:3] * scale, z[3:].reshape(3, 3)
+    return q_joint_method
 
-        def objective(z: np.ndarray) -> tuple[float, np.ndarray]:
-            d, Q = unpack(z)
-            X = A @ d  # (n, 3)
-            R = X @ Q.T - P
-            value = float(np.sum(w[:, None] * R * R)) / norm
-            gQ = 2.0 * (R * w[:, None]).T @ X / norm
-            gd = 2.0 * np.einsum("n,ni,nij->j", w, R @ Q, A) / norm
-            return value, np.concatenate([gd * scale, gQ.ravel()])
 
-        def delta_e(z: np.ndarray) -> float:
-            d = unpack(z)[0]
-            light = SL @ d
-            if not float(matrix[1] @ light) > 0:
-                return 1e3
-            value = float(white_point_delta_e(light, baseline_light, camera_to_xyz=matrix))
-            return value if np.isfinite(value) else 1e3
+class _JointProblem:
+    """Eq. 5 over (d, Q) for one problem: the objective, the limits, SLSQP's constraints.
 
-        def log_cond_margin(z: np.ndarray) -> float:
-            # log keeps the scale sane; capped so a singular Q gives no inf - inf.
-            cond = min(condition_number(unpack(z)[1]), 1e12)
-            return float(np.log(max_condition) - np.log(cond))
+    The unknowns are ``z = [d / scale, Q.ravel()]`` (scaled drive, so all 12 are of order 1).
+    """
 
-        def limits(d: np.ndarray, Q: np.ndarray) -> dict[str, float]:
-            return {
-                "white_point_delta_e": float(delta_e(np.concatenate([d / scale, Q.ravel()]))),
-                "drive_min": float(np.min(d)),
-                "drive_max": float(np.max(d)),
-                "cond_Q": condition_number(Q),
-            }
+    def __init__(
+        self,
+        problem: QProblem,
+        matrix: np.ndarray,
+        *,
+        max_delta_e: float,
+        max_drive: float | None,
+        max_condition: float,
+    ) -> None:
+        self.matrix, self.max_delta_e, self.max_condition = matrix, max_delta_e, max_condition
+        self.SL = np.asarray(problem.SL, dtype=np.float64)
+        self.M = np.asarray(problem.M, dtype=np.float64)
+        self.w_avg = np.asarray(problem.w_avg, dtype=np.float64)
+        self.A = np.asarray(problem.SRL, dtype=np.float64) / float(problem.beta)  # x_j = A_j d
+        self.P = np.asarray(problem.target, dtype=np.float64)
+        self.w = problem.fit_weights
+        self.d0 = self.M @ self.w_avg
+        self.baseline_light = self.SL @ self.d0
+        self.y_row = matrix[1] @ self.SL  # luminance of the stage light, linear in d
+        self.y0 = float(self.y_row @ self.d0)
+        self.top = float(np.max(self.d0)) if max_drive is None else float(max_drive)
+        self.scale = max(float(np.max(np.abs(self.d0))), 1e-12)
+        self.norm = float(np.sum(self.w) * np.sum(self.P[problem.white_patch] ** 2))
 
-        def feasible(values: dict[str, float]) -> bool:
-            return (
-                values["white_point_delta_e"] <= max_delta_e + 1e-6
-                and values["drive_min"] >= -_TOL * top
-                and values["drive_max"] <= top * (1 + _TOL)
-                and values["cond_Q"] <= max_condition * (1 + _TOL)
-            )
+    def unpack(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return z[:3] * self.scale, z[3:].reshape(3, 3)
 
-        Q0 = fit_least_squares(A @ d0, P, w)
-        if not (y0 > 0 and top > 0):  # no visible baseline light: no white point to keep
-            return QFit(
-                Q=Q0,
-                notes={
-                    "model": "joint",
-                    "joint_applied": False,
-                    "limits_met": False,
-                    "reason": "the baseline stage light M w_avg has no luminance or no "
-                    "positive drive: the white-point and drive limits are undefined",
-                    "lit_chart_error_reduction": 0.0,
-                    "active_limits": [],
-                },
-            )
-        z0 = np.concatenate([d0 / scale, Q0.ravel()])
-        start_error = objective(z0)[0]
-        constraints = [
+    def objective(self, z: np.ndarray) -> tuple[float, np.ndarray]:
+        """Eq. 5 normalised by the white patch, and its exact gradient in z."""
+        d, Q = self.unpack(z)
+        A, w, norm = self.A, self.w, self.norm
+        X = A @ d  # (n, 3)
+        R = X @ Q.T - self.P
+        value = float(np.sum(w[:, None] * R * R)) / norm
+        gQ = 2.0 * (R * w[:, None]).T @ X / norm
+        gd = 2.0 * np.einsum("n,ni,nij->j", w, R @ Q, A) / norm
+        return value, np.concatenate([gd * self.scale, gQ.ravel()])
+
+    def delta_e(self, z: np.ndarray) -> float:
+        """White-point CIEDE2000 of the stage light for drive z (1e3 where undefined)."""
+        light = self.SL @ self.unpack(z)[0]
+        if not float(self.matrix[1] @ light) > 0:
+            return 1e3
+        value = float(white_point_delta_e(light, self.baseline_light, camera_to_xyz=self.matrix))
+        return value if np.isfinite(value) else 1e3
+
+    def log_cond_margin(self, z: np.ndarray) -> float:
+        # log keeps the scale sane; capped so a singular Q gives no inf - inf.
+        cond = min(condition_number(self.unpack(z)[1]), 1e12)
+        return float(np.log(self.max_condition) - np.log(cond))
+
+    def limits(self, d: np.ndarray, Q: np.ndarray) -> dict[str, float]:
+        return {
+            "white_point_delta_e": float(self.delta_e(np.concatenate([d / self.scale, Q.ravel()]))),
+            "drive_min": float(np.min(d)),
+            "drive_max": float(np.max(d)),
+            "cond_Q": condition_number(Q),
+        }
+
+    def feasible(self, values: dict[str, float]) -> bool:
+        top = self.top
+        return (
+            values["white_point_delta_e"] <= self.max_delta_e + 1e-6
+            and values["drive_min"] >= -_TOL * top
+            and values["drive_max"] <= top * (1 + _TOL)
+            and values["cond_Q"] <= self.max_condition * (1 + _TOL)
+        )
+
+    def constraints(self) -> list[dict]:
+        """Luminance kept (eq.), white point and cond(Q) limits (ineq.); drive is a bound."""
+        y_row, y0, scale = self.y_row, self.y0, self.scale
+        return [
             {
                 "type": "eq",
-                "fun": lambda z: np.array([(float(y_row @ unpack(z)[0]) - y0) / y0]),
+                "fun": lambda z: np.array([(float(y_row @ self.unpack(z)[0]) - y0) / y0]),
                 "jac": lambda z: np.concatenate([y_row * scale / y0, np.zeros(9)])[None, :],
             },
             {
                 "type": "ineq",
-                "fun": lambda z: np.array([max_delta_e - delta_e(z)]),
-                "jac": lambda z: -_forward_difference(delta_e, z, slice(0, 3)),
+                "fun": lambda z: np.array([self.max_delta_e - self.delta_e(z)]),
+                "jac": lambda z: -_forward_difference(self.delta_e, z, slice(0, 3)),
             },
             {
                 "type": "ineq",
-                "fun": lambda z: np.array([log_cond_margin(z)]),
-                "jac": lambda z: _forward_difference(log_cond_margin, z, slice(3, 12)),
+                "fun": lambda z: np.array([self.log_cond_margin(z)]),
+                "jac": lambda z: _forward_difference(self.log_cond_margin, z, slice(3, 12)),
             },
         ]
-        bounds = [(0.0, top / scale)] * 3 + [(None, None)] * 9
-        z_init = z0.copy()
-        z_init[:3] = np.clip(z_init[:3], 0.0, top / scale)  # SLSQP starts inside the bounds
-        result = minimize(
-            objective,
-            z_init,
-            jac=True,
-            method="SLSQP",
-            bounds=bounds,
-            constraints=constraints,
-            options={"maxiter": max_iterations, "ftol": 1e-12},
-        )
-        d, Q = unpack(result.x)
-        start_limits = limits(d0, Q0)
-        final_limits = limits(d, Q)
-        final_error = objective(result.x)[0]
-        start_ok = feasible(start_limits)
-        ok = np.all(np.isfinite(result.x)) and feasible(final_limits)
-        if ok and start_ok and final_error >= start_error * (1 - 1e-9):
-            ok = False  # never worse than the sequential solve when that one is admissible
-        notes: dict = {
-            "model": "joint",
-            "description": "out-of-frustum matrix and Q jointly minimising eq. 5 under "
-            "white-point, drive and cond(Q) limits (paper, Future Work)",
-            "limits": {
-                "max_white_point_delta_e2000": max_delta_e,
-                "drive_range": [0.0, top],
-                "max_cond_Q": max_condition,
-            },
-            "scale_convention": "luminance of [SL] M' w_avg kept equal to the baseline's",
-            "camera_to_xyz": "sample camera" if camera_to_xyz is None else "given",
-            "sequential": {"lit_chart_error_eq5": start_error, **start_limits},
-            "optimiser": {
-                "method": "SLSQP",
-                "iterations": int(result.nit),
-                "success": bool(result.success),
-                "message": str(result.message),
-            },
-        }
-        if not ok:
-            reason = (
-                "the sequential solution already meets the limits and the optimiser found "
-                "nothing better"
-                if start_ok
-                else "no solution within the limits was found"
-            )
-            notes.update(
-                {
-                    "joint_applied": False,
-                    "reason": reason,
-                    "limits_met": start_ok,
-                    "lit_chart_error_eq5": start_error,
-                    "lit_chart_error_reduction": 0.0,
-                    "active_limits": [],
-                }
-            )
-            return QFit(Q=Q0, M=None, notes=notes)
+
+    def active_limits(self, values: dict[str, float]) -> list[str]:
+        """The limits the solution sits on."""
         active = []
-        if final_limits["white_point_delta_e"] >= max_delta_e * (1 - 1e-3) - 1e-9:
+        if values["white_point_delta_e"] >= self.max_delta_e * (1 - 1e-3) - 1e-9:
             active.append("white_point")
-        if final_limits["drive_min"] <= 1e-6 * top:
+        if values["drive_min"] <= 1e-6 * self.top:
             active.append("drive_min")
-        if final_limits["drive_max"] >= top * (1 - 1e-6):
+        if values["drive_max"] >= self.top * (1 - 1e-6):
             active.append("drive_max")
-        if final_limits["cond_Q"] >= max_condition * (1 - 1e-3):
+        if values["cond_Q"] >= self.max_condition * (1 - 1e-3):
             active.append("cond_Q")
+        return active
+
+
+def _solve_joint(joint: _JointProblem, max_iterations: int, camera: str) -> QFit:
+    """SLSQP from the sequential solution (M, least-squares Q); that one if nothing better."""
+    # scipy is imported here, when a joint solve runs: the other methods do not need it.
+    from scipy.optimize import minimize
+
+    Q0 = fit_least_squares(joint.A @ joint.d0, joint.P, joint.w)
+    if not (joint.y0 > 0 and joint.top > 0):  # no visible baseline light: no white point to keep
+        return QFit(
+            Q=Q0,
+            notes={
+                "model": "joint",
+                "joint_applied": False,
+                "limits_met": False,
+                "reason": "the baseline stage light M w_avg has no luminance or no "
+                "positive drive: the white-point and drive limits are undefined",
+                "lit_chart_error_reduction": 0.0,
+                "active_limits": [],
+            },
+        )
+    top, scale = joint.top, joint.scale
+    z0 = np.concatenate([joint.d0 / scale, Q0.ravel()])
+    start_error = joint.objective(z0)[0]
+    bounds = [(0.0, top / scale)] * 3 + [(None, None)] * 9
+    z_init = z0.copy()
+    z_init[:3] = np.clip(z_init[:3], 0.0, top / scale)  # SLSQP starts inside the bounds
+    result = minimize(
+        joint.objective,
+        z_init,
+        jac=True,
+        method="SLSQP",
+        bounds=bounds,
+        constraints=joint.constraints(),
+        options={"maxiter": max_iterations, "ftol": 1e-12},
+    )
+    d, Q = joint.unpack(result.x)
+    start_limits = joint.limits(joint.d0, Q0)
+    final_limits = joint.limits(d, Q)
+    final_error = joint.objective(result.x)[0]
+    start_ok = joint.feasible(start_limits)
+    ok = np.all(np.isfinite(result.x)) and joint.feasible(final_limits)
+    if ok and start_ok and final_error >= start_error * (1 - 1e-9):
+        ok = False  # never worse than the sequential solve when that one is admissible
+    notes = _joint_notes(joint, result, camera, start_error, start_limits)
+    if not ok:
+        reason = (
+            "the sequential solution already meets the limits and the optimiser found "
+            "nothing better"
+            if start_ok
+            else "no solution within the limits was found"
+        )
         notes.update(
             {
-                "joint_applied": True,
-                "limits_met": True,
-                "lit_chart_error_eq5": final_error,
-                "lit_chart_error_reduction": 1.0 - final_error / start_error
-                if start_error > 0
-                else 0.0,
-                "active_limits": active,
-                "drive": d.tolist(),
-                **final_limits,
+                "joint_applied": False,
+                "reason": reason,
+                "limits_met": start_ok,
+                "lit_chart_error_eq5": start_error,
+                "lit_chart_error_reduction": 0.0,
+                "active_limits": [],
             }
         )
-        return QFit(Q=Q, M=joint_matrix(M, w_avg, d), notes=notes)
+        return QFit(Q=Q0, M=None, notes=notes)
+    notes.update(
+        {
+            "joint_applied": True,
+            "limits_met": True,
+            "lit_chart_error_eq5": final_error,
+            "lit_chart_error_reduction": 1.0 - final_error / start_error
+            if start_error > 0
+            else 0.0,
+            "active_limits": joint.active_limits(final_limits),
+            "drive": d.tolist(),
+            **final_limits,
+        }
+    )
+    return QFit(Q=Q, M=joint_matrix(joint.M, joint.w_avg, d), notes=notes)
 
-    return q_joint_method
+
+def _joint_notes(
+    joint: _JointProblem, result, camera: str, start_error: float, start_limits: dict
+) -> dict:
+    """What every joint fit reports: the limits, the convention, the sequential start, SLSQP."""
+    return {
+        "model": "joint",
+        "description": "out-of-frustum matrix and Q jointly minimising eq. 5 under "
+        "white-point, drive and cond(Q) limits (paper, Future Work)",
+        "limits": {
+            "max_white_point_delta_e2000": joint.max_delta_e,
+            "drive_range": [0.0, joint.top],
+            "max_cond_Q": joint.max_condition,
+        },
+        "scale_convention": "luminance of [SL] M' w_avg kept equal to the baseline's",
+        "camera_to_xyz": camera,
+        "sequential": {"lit_chart_error_eq5": start_error, **start_limits},
+        "optimiser": {
+            "method": "SLSQP",
+            "iterations": int(result.nit),
+            "success": bool(result.success),
+            "message": str(result.message),
+        },
+    }
 
 
 #: The registry's ``joint`` method: the defaults above, the sample camera's XYZ matrix.
