@@ -273,10 +273,10 @@ def realistic(tmp_path_factory):
     return out
 
 
-def decode_independently(signal: np.ndarray, encoding: str) -> np.ndarray:
-    """The wall's decoding by colour-science (PQ at 1000 cd/m2 for drive 1.0)."""
+def decode_independently(signal: np.ndarray, encoding: str, peak: float = 1000.0) -> np.ndarray:
+    """The wall's decoding by colour-science (PQ: ``peak`` cd/m2 for drive 1.0)."""
     if encoding == "pq":
-        return colour.models.eotf_ST2084(signal) / 1000.0
+        return colour.models.eotf_ST2084(signal) / peak
     if encoding == "gamma2.4":
         return colour.models.eotf_BT1886(np.maximum(signal, 0), L_B=0, L_W=1)
     if encoding == "srgb":
@@ -284,7 +284,7 @@ def decode_independently(signal: np.ndarray, encoding: str) -> np.ndarray:
     return signal
 
 
-def linearised(folder, encoding: str, x: np.ndarray) -> np.ndarray:
+def linearised(folder, encoding: str, x: np.ndarray, peak: float = 1000.0) -> np.ndarray:
     """Grey content at linear level ``x`` through the written config (OCIO's processor), decoded
     as the wall does, through each channel's fitted response: what the wall emits (n, 3)."""
     solution = json.loads((folder / "solution.json").read_text())
@@ -294,7 +294,7 @@ def linearised(folder, encoding: str, x: np.ndarray) -> np.ndarray:
     content = np.linalg.solve(M, np.repeat(x[:, None], 3, axis=1).T).T  # M content = x
     pixels = np.ascontiguousarray(content, dtype=np.float32)
     cpu.applyRGB(pixels)
-    drive = decode_independently(pixels.astype(np.float64), encoding)
+    drive = decode_independently(pixels.astype(np.float64), encoding, peak)
     channels = solution["linearity"]["channels"]
     return np.stack(
         [
@@ -453,7 +453,106 @@ ROE_SIGNAL = [
 ]  # fmt: skip
 
 
+# The grey ramp of a 100-cd/m2 sRGB display, same source: tests/test_open_vp_cal/resources/
+# Sample_Project10_SRGB_EOTF/export/results/Wall1_calibration_results.json (commit 18a63be).
+SRGB_RAMP = [
+    [-0.0001958321954589337, -0.00017131355222469816, -0.0001818425274298837],
+    [-0.0001775320852175355, -0.00015315820443599174, -0.00016528395644854754],
+    [-7.44651867231975e-05, -4.8622102137111746e-05, -6.714734384634842e-05],
+    [9.383030070845659e-05, 0.00011668746446957812, 9.060870312775175e-05],
+    [0.00036060733449024457, 0.0003872609716684868, 0.0003278455988038331],
+    [0.0007848216337151825, 0.0008596468639249603, 0.0006935574541178843],
+    [0.0015377053835739691, 0.0015529441880062222, 0.001438591085995237],
+    [0.0028728858257333436, 0.0031648871954530478, 0.003304062799240152],
+    [0.00447666272521019, 0.005018582101911306, 0.0053439270704984665],
+    [0.006255862303078175, 0.006935941365857919, 0.007375346031039953],
+    [0.008795754984021187, 0.009827538393437862, 0.010505415499210358],
+    [0.011990095799167952, 0.013512729046245417, 0.014521120736996332],
+    [0.015478731443484625, 0.017125384882092476, 0.01818910427391529],
+    [0.020396515106161434, 0.022911425679922104, 0.024175407364964485],
+    [0.026376869529485703, 0.029584220920999844, 0.03173942615588506],
+    [0.033572595566511154, 0.03696966419617335, 0.03963554526368777],
+    [0.042465085784594216, 0.046606371800104775, 0.04948031033078829],
+    [0.053612579902013145, 0.058250922709703445, 0.061389503379662834],
+    [0.0663772001862526, 0.07130035012960434, 0.07604573418696721],
+    [0.08163263400395711, 0.087276391685009, 0.09356717516978581],
+    [0.09974593669176102, 0.10618958622217178, 0.1145383616288503],
+    [0.12125089019536972, 0.1286231279373169, 0.13931110501289368],
+    [0.1465643992026647, 0.15523936847845712, 0.16880938907464346],
+    [0.1768911431233088, 0.1866573045651118, 0.20396535595258078],
+    [0.2114556630452474, 0.22300490736961365, 0.24482696751753488],
+    [0.25299469629923504, 0.26619980732599896, 0.2933362325032552],
+    [0.3001794119675954, 0.3155246277650197, 0.34867730736732483],
+    [0.35628508528073627, 0.37432825565338135, 0.41435547669728595],
+    [0.4221084713935852, 0.4433138271172841, 0.4919649064540863],
+    [0.4966491957505544, 0.5214906930923462, 0.5799929896990458],
+    [0.5849743286768595, 0.6176460385322571, 0.6827954848607382],
+    [0.6883522669474283, 0.7292357285817465, 0.8031685551007589],
+    [0.8057058850924174, 0.8535791834195455, 0.9463136196136475],
+    [0.9418029189109802, 0.9942225416501363, 1.11541748046875],
+]
+SRGB_SIGNAL = [
+    0.0, 5.205761493069468e-05, 0.00020874006133883547, 0.0005018826297021109,
+    0.000971739779767154, 0.0016658791643220378, 0.0026400739963229514, 0.003959490383284056,
+    0.005700072238582893, 0.007950126137581252, 0.010812128379047378, 0.014404784247584792,
+    0.018865374990763392, 0.024352433478558182, 0.03104879553596461, 0.03916508080830536,
+    0.04894366492370403, 0.06066321384133771, 0.07464386181827844, 0.09125312662255551,
+    0.11091266973517948, 0.13410602563448953, 0.16138744321320098, 0.193392004377437,
+    0.23084721043132375, 0.27458625656366925, 0.3255632493398715, 0.3848706624020455,
+    0.4537593725932483, 0.5336616736235277, 0.6262177285892802, 0.7333059978014024,
+    0.8570782664516443, 1.0000000000000524,
+]  # fmt: skip
+CAPTURES = {  # name: (camera RGB, levels, wall encoding, peak cd/m2)
+    "roe-1650-pq": (ROE_RAMP, ROE_SIGNAL, "pq", 1650.0),
+    "display-100-srgb": (SRGB_RAMP, SRGB_SIGNAL, "srgb", 100.0),
+}
+
+
+def capture_document(name: str) -> tuple[dict, np.ndarray, np.ndarray]:
+    """A measurements document whose ramps are a real capture (each camera channel as its LED
+    channel) and whose primaries are the top step, black subtracted."""
+    camera, signal, _, _ = CAPTURES[name]
+    camera = np.array(camera)
+    drive = np.array(signal) / signal[-1]
+    drive[-1] = 1.0
+    document = make_measurements_dict(environments=1)
+    SL = np.diag(camera[-1] - camera[0])
+    document["primaries"] = {c: SL[:, k].tolist() for k, c in enumerate(CHANNELS)}
+    document["ramps"] = {
+        c: {"drive": drive.tolist(), "camera": np.where(np.eye(3)[k] > 0, camera, 0.0).tolist()}
+        for k, c in enumerate(CHANNELS)
+    }
+    return document, camera, drive
+
+
 class TestRealCapture:
+    @pytest.mark.parametrize("name", list(CAPTURES))
+    def test_solves_as_captured_and_the_config_follows_the_ramp(self, name, tmp_path):
+        document, camera, drive = capture_document(name)
+        _, _, encoding, peak = CAPTURES[name]
+        path = tmp_path / "m.json"
+        path.write_text(json.dumps(document))
+        terminal = io.StringIO()
+        with contextlib.redirect_stdout(terminal):
+            status = main(
+                ["solve", str(path), "--out", str(tmp_path / "o"), "--wall-encoding", encoding,
+                 "--peak-nits", str(peak)]
+            )  # fmt: skip
+        assert status == 0
+        assert "red: black (zero step) camera [-0.000" in terminal.getvalue()
+        folder = tmp_path / "o" / "env_0"
+        linearity = json.loads((folder / "solution.json").read_text())["linearity"]
+        assert linearity["model"] != "linear" and not linearity["warnings"]
+        for k, c in enumerate(CHANNELS):
+            channel = linearity["channels"][c]
+            assert channel["black"]["source"] == "zero step" and channel["black"]["level"] < 0
+            expected = (camera[:, k] - camera[0, k]) / (camera[-1, k] - camera[0, k])
+            np.testing.assert_allclose(channel["measured_response"], expected, rtol=1e-12)
+        # through the written config, the wall's decoding and the fitted response: linear
+        x = np.geomspace(0.002, 1.0, 2001)
+        error = np.max(np.abs(linearised(folder, encoding, x, peak) / x[:, None] - 1), axis=1)
+        assert np.max(error[x >= 0.02]) < 0.005 and np.max(error) < 0.03
+
     def test_the_roe_wall_solves_as_captured(self):
         camera = np.array(ROE_RAMP)
         drive = np.array(ROE_SIGNAL) / ROE_SIGNAL[-1]
