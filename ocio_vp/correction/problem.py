@@ -40,11 +40,15 @@ class QProblem:
     target: np.ndarray
     white_patch: int = 18
     weights: np.ndarray | None = None
+    #: (n, 3) light on the chart beyond eq. 3's (practical fixtures, a changed wall drive:
+    #: :mod:`ocio_vp.fixtures.lighting`); None for the wall alone.
+    extra_light: np.ndarray | None = None
 
     @property
     def predicted(self) -> np.ndarray:
-        """(n, 3) the lit chart under M alone, eq. 3: the x_j that Q maps to p_j."""
-        return predict_lit_chart(self.SRL, self.beta, self.M, self.w_avg)
+        """(n, 3) the lit chart, eq. 3 plus ``extra_light``: the x_j that Q maps to p_j."""
+        lit = predict_lit_chart(self.SRL, self.beta, self.M, self.w_avg)
+        return lit if self.extra_light is None else lit + self.extra_light
 
     @property
     def fit_weights(self) -> np.ndarray:

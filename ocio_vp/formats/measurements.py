@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from ocio_vp.formats.fixtures import Fixture, fixtures_to_dict, parse_fixtures
 from ocio_vp.errors import InputError, format_key_path
 from ocio_vp.formats.synthesis import SynthesisRecord, parse_synthesis, synthesis_to_dict
 
@@ -108,6 +109,7 @@ class Measurements:
     SRL: np.ndarray
     environments: tuple[Environment, ...]
     ramps: Mapping[str, Any] | None = None
+    fixtures: tuple[Fixture, ...] = ()
     source: str | None = None
     sha256: str | None = None
     extra: Mapping[str, Any] = field(default_factory=dict)
@@ -231,7 +233,7 @@ def measurements_from_dict(
         data,
         (),
         required=("format", "version", "stage", "primaries", "lit_chart", "environments"),
-        optional=("ramps",),
+        optional=("ramps", "fixtures"),
     )
     if top["format"] != FORMAT:
         raise ctx.error(("format",), f"expected {FORMAT!r}, got {top['format']!r}")
@@ -262,12 +264,14 @@ def measurements_from_dict(
         from ocio_vp.wall.linearity import parse_ramps  # the optional section lives with its maths
 
         ramps = parse_ramps(top["ramps"], source=source)
+    fixtures = parse_fixtures(ctx, top["fixtures"], n) if "fixtures" in top else ()
     return Measurements(
         stage=stage,
         SL=SL,
         SRL=SRL,
         environments=environments,
         ramps=ramps,
+        fixtures=fixtures,
         source=source,
         sha256=sha256,
     )
@@ -486,6 +490,8 @@ def measurements_to_dict(measurements: Measurements) -> dict[str, Any]:
         from ocio_vp.wall.linearity import ramps_to_dict
 
         data["ramps"] = ramps_to_dict(measurements.ramps)
+    if measurements.fixtures:
+        data["fixtures"] = fixtures_to_dict(measurements.fixtures)
     return data
 
 
