@@ -26,9 +26,16 @@ from ocio_vp.calibration.equations import (
     solve_N,
 )
 from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
+from ocio_vp.correction.perceptual import default_camera_to_xyz
 from ocio_vp.correction.registry import QFit, QProblem, solve_post_correction
 from ocio_vp.correction.validation import CLOSED_FORM_METHODS, cross_validated_error
 from ocio_vp.errors import InputError
+from ocio_vp.fixtures.lighting import (
+    FixtureLighting,
+    fixtures_block,
+    fixtures_diagnostics,
+    light_with_fixtures,
+)
 from ocio_vp.formats.measurements import Environment, Measurements
 from ocio_vp.formats.solution import Diagnostics, Solution
 from ocio_vp.formats.synthesis import synthesis_to_dict, synthesis_warnings
@@ -47,6 +54,7 @@ def solve_environment(
     method: str = DEFAULT_METHOD,
     black_level: str = "exact",
     max_condition_q: float = MAX_CONDITION_Q_FOR_N,
+    fixtures: bool = True,
 ) -> Solution:
     """Solve M, Q, N and the black-level offset for one environment.
 
@@ -62,14 +70,22 @@ def solve_environment(
         ``"exact"`` (``-M b_camera`` in drive space) or ``"paper"`` (``b / w_camera``).
     max_condition_q
         N is not solved when cond(Q) is above this.
+    fixtures
+        Drive the measurements' practical fixtures with the wall (:mod:`ocio_vp.fixtures`);
+        False lights with the wall alone. No effect without a ``fixtures`` section.
     """
     if black_level not in BLACK_LEVEL_METHODS:
         raise ValueError(f"black_level must be one of {BLACK_LEVEL_METHODS}, got {black_level!r}")
     clipped = _clipped_patches(measurements, environment)
     problem = _problem(measurements, environment, clipped)
+    lighting = _lighting(measurements, problem, method) if fixtures else None
+    if lighting is not None and lighting.result.applied:
+        problem = dataclasses.replace(problem, extra_light=lighting.extra_light)
     fit = _fit(problem, method, measurements, environment)
     SL, M_calibrated = problem.SL, problem.M
     M = M_calibrated if fit.M is None else np.asarray(fit.M, dtype=np.float64)
+    if lighting is not None:
+        M = lighting.M
     Q = np.asarray(fit.Q, dtype=np.float64)
     # N inverts Q for the calibrated wall (paper eq. 7: Q [SL] N = I), whatever M lights with.
     N, n_reason = solve_N(M_calibrated, Q, max_condition=max_condition_q, SL=SL)
@@ -82,6 +98,7 @@ def solve_environment(
     diagnostics = _diagnostics(
         problem, fit, charts, method=method, M=M, Q=Q, N=N, n_reason=n_reason,
         max_condition_q=max_condition_q, offset=offset, environment=environment, clipped=clipped,
+        lighting=lighting,
     )  # fmt: skip
     return Solution(
         stage=measurements.stage.name,
@@ -100,6 +117,23 @@ def solve_environment(
         measurements_sha256=measurements.sha256,
         camera_colorspace=measurements.stage.camera_colorspace,
         linearity=_panel_linearity(measurements),
+        fixtures=None if lighting is None else fixtures_block(lighting),
+    )
+
+
+def _lighting(measurements: Measurements, problem: QProblem, method: str) -> FixtureLighting | None:
+    """The fixtures' drives with the wall's (None without a ``fixtures`` section)."""
+    if not measurements.fixtures:
+        return None
+    if method == "joint":
+        raise InputError(
+            "--method joint re-solves the wall's light itself and cannot share it with "
+            "fixtures: use another method, or solve --no-fixtures",
+            source=measurements.source,
+            key="fixtures",
+        )
+    return light_with_fixtures(
+        measurements.fixtures, problem, camera_to_xyz=default_camera_to_xyz()
     )
 
 
@@ -214,6 +248,7 @@ def _diagnostics(
     offset: np.ndarray | None,
     environment: Environment,
     clipped: list[int],
+    lighting: FixtureLighting | None = None,
 ) -> Diagnostics:
     """Errors, conditioning, warnings and the stability block (calibration.diagnostics)."""
     target, white, weights = problem.target, problem.white_patch, problem.weights
@@ -267,6 +302,7 @@ def _diagnostics(
         charts=charts,
         **stability,
         synthesized_target=None if synthesized is None else synthesis_to_dict(synthesized),
+        fixtures=None if lighting is None else fixtures_diagnostics(lighting),
     )
 
 

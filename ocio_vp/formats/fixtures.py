@@ -22,7 +22,6 @@ its ``lit_chart``.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -72,7 +71,9 @@ def _parse_one(ctx: Any, value: Any, key: tuple, n: int) -> Fixture:
     chart = np.stack([ctx.chart(lit[c], (*key, "lit_chart", c), n) for c in channels])
     for k, c in enumerate(channels):
         if not np.any(chart[k] > 0):
-            raise ctx.error((*key, "lit_chart", c), "the chart is black: the channel gives no light")
+            raise ctx.error(
+                (*key, "lit_chart", c), "the chart is black: the channel gives no light"
+            )
     direct = None
     if "direct" in entry:
         seen = ctx.mapping(entry["direct"], (*key, "direct"), required=channels)

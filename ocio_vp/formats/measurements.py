@@ -20,8 +20,8 @@ from typing import Any
 import numpy as np
 import yaml
 
-from ocio_vp.formats.fixtures import Fixture, fixtures_to_dict, parse_fixtures
 from ocio_vp.errors import InputError, format_key_path
+from ocio_vp.formats.fixtures import Fixture, fixtures_to_dict, parse_fixtures
 from ocio_vp.formats.synthesis import SynthesisRecord, parse_synthesis, synthesis_to_dict
 
 __all__ = [

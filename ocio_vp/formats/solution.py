@@ -88,6 +88,10 @@ class Diagnostics(Mapping[str, Any]):
         True when N is exactly M (Q is the identity).
     identity_check
         ``max_abs_error`` of eq. 7 (``Q [SL] N = I``) and its rounding ``bound``, or None.
+    fixtures
+        The practical fixtures' drive solve (:func:`ocio_vp.fixtures.fixtures_diagnostics`):
+        whether they are used and why, the error Q cannot remove with and without them, the
+        active limits; only written when the measurements have a ``fixtures`` section.
     synthesized_target
         How a synthesized target chart was made (``ocio-vp target-chart``); only written for
         an environment whose chart was synthesized.
@@ -125,6 +129,7 @@ class Diagnostics(Mapping[str, Any]):
     N_equals_M: bool | None = None
     identity_check: dict[str, float] | None = None
     synthesized_target: dict[str, Any] | None = None
+    fixtures: dict[str, Any] | None = None
     extra: dict[str, Any] = field(default_factory=dict)
     #: The keys a loaded file had (None: every field, as after a solve).
     present: tuple[str, ...] | None = field(default=None, repr=False, compare=False)
@@ -138,7 +143,7 @@ class Diagnostics(Mapping[str, Any]):
         return cls(**values, extra=extra, present=tuple(data))
 
     #: Fields written only when set.
-    OPTIONAL: ClassVar[tuple[str, ...]] = ("synthesized_target",)
+    OPTIONAL: ClassVar[tuple[str, ...]] = ("synthesized_target", "fixtures")
 
     def _keys(self) -> tuple[str, ...]:
         if self.present is not None:
@@ -167,6 +172,9 @@ class Solution:
     ``None`` when the environment has no black-level measurement. ``ocio`` maps the roles
     ``config``, ``reference``, ``out_of_frustum``, ``in_frustum``, ``post_correction`` (and
     ``post_correction_colorspace``) to names in the config; filled in when the config is written.
+    ``fixtures`` maps each practical fixture to its ``channels`` and ``drive`` per channel (units
+    of its ``reference_drive``), ``None`` without a ``fixtures`` section; ``M`` is then the
+    matrix to light with while the fixtures are on.
     """
 
     stage: str
@@ -186,6 +194,7 @@ class Solution:
     camera_colorspace: str | None = None
     ocio: dict[str, str] = field(default_factory=dict)
     linearity: dict[str, Any] | None = None
+    fixtures: dict[str, Any] | None = None
 
     @property
     def in_frustum_matrix(self) -> np.ndarray:
@@ -242,6 +251,7 @@ def solution_to_dict(solution: Solution) -> dict[str, Any]:
             "diagnostics": solution.diagnostics,
             "ocio": solution.ocio,
         }
+        | ({} if solution.fixtures is None else {"fixtures": solution.fixtures})
     )
 
 
@@ -264,6 +274,24 @@ def _diagnostics(data: dict[str, Any], source: str) -> dict[str, Any]:
     block = data.get("diagnostics", {})
     if not isinstance(block, dict):
         raise InputError("expected a mapping", source=source, key="diagnostics")
+    return block
+
+
+def _fixtures(data: dict[str, Any], source: str) -> dict[str, Any] | None:
+    block = data.get("fixtures")
+    if block is None:
+        return None
+    if not isinstance(block, dict):
+        raise InputError("expected a mapping", source=source, key="fixtures")
+    for name, entry in block.items():
+        ok = isinstance(entry, dict) and isinstance(entry.get("channels"), list)
+        drive = entry.get("drive") if ok else None
+        if not (ok and isinstance(drive, dict) and set(drive) == set(entry["channels"])):
+            raise InputError(
+                "expected channels and a drive for each", source=source, key=f"fixtures.{name}"
+            )
+        if not all(isinstance(v, (int, float)) and np.isfinite(v) for v in drive.values()):
+            raise InputError("expected finite drives", source=source, key=f"fixtures.{name}")
     return block
 
 
@@ -312,4 +340,5 @@ def load_solution(path: str | Path) -> Solution:
         camera_colorspace=data.get("camera_colorspace"),
         ocio=data.get("ocio", {}),
         linearity=data.get("linearity"),
+        fixtures=_fixtures(data, source),
     )
