@@ -1,4 +1,4 @@
-"""``ocio-vp export SOLUTION_DIR... --target unreal|nuke|resolve|all``: files for the tools
+"""``ocio-vp export SOLUTION_DIR... --target unreal|nuke|resolve|lights|all``: files for the tools
 studios run (Unreal nDisplay, Nuke, DaVinci Resolve) from solved environments."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from ocio_vp.commands.report import SOLUTIONS_HELP
 
 __all__ = ["add_parser", "run"]
 
-TARGETS = ("unreal", "nuke", "resolve")
+TARGETS = ("unreal", "nuke", "resolve", "lights")
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -27,7 +27,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         choices=(*TARGETS, "all"),
         default="all",
         help="unreal: .ocioz + UNREAL.md + mapping JSON; nuke: .nk; resolve: CLF, DCTL, .cube; "
-        "all: the three",
+        "lights: fixture drives and DMX levels (solutions with fixtures); all: every target "
+        "that applies (default: all)",
     )
     parser.add_argument(
         "--out", default=None, help="output folder (default: exports/ inside each environment)"

@@ -93,6 +93,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--name", default=None, help="stage name (default simulated-stage)")
     parser.add_argument(
+        "--fixture",
+        action="append",
+        metavar="KIND",
+        choices=("rgbw", "rgbww", "rgbacl", "rgbw-fluorescent"),
+        help="add a simulated practical fixture (repeatable): rgbw (warm phosphor white), "
+        "rgbww, rgbacl (amber, cyan, lime), rgbw-fluorescent; default: none",
+    )
+    parser.add_argument(
         "--list-environments",
         action=ListEnvironments,
         help="list the known environments and exit (no --out needed)",
@@ -103,8 +111,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from ocio_vp.errors import InputError
     from ocio_vp.formats.measurements import save_measurements
+    from ocio_vp.simulator.fixtures import with_simulated_fixtures
     from ocio_vp.simulator.options import environments_from_args, stage_options_from_args
-    from ocio_vp.simulator.stage import simulate_measurements
+    from ocio_vp.simulator.stage import simulate_measurements, spectral_stage
 
     options = stage_options_from_args(args)
     if args.plates is None:
@@ -115,7 +124,10 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("expected 0 <= value < 1", key="--vignetting/--noise")
     if args.plates is not None:
         _check_plates_folder(args.plates)
-    measurements = simulate_measurements(environments_from_args(args.environment), **options)
+    stage = spectral_stage(**options)
+    measurements = simulate_measurements(environments_from_args(args.environment), stage=stage)
+    if args.fixture:
+        measurements = with_simulated_fixtures(measurements, stage, args.fixture)
     try:
         save_measurements(measurements, args.out)
     except OSError as error:

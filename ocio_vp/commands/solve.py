@@ -7,7 +7,7 @@ from collections.abc import Sequence
 
 from ocio_vp.commands.common import add_method_argument, progress, summary_table, warn
 
-__all__ = ["add_parser", "print_linearity", "run"]
+__all__ = ["add_parser", "print_fixtures", "print_linearity", "run"]
 
 PEAK_NITS_DEFAULT = 1000.0
 
@@ -26,6 +26,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="output folder (created if needed; DIR/<environment>/ of a re-run is replaced)",
     )
     add_method_argument(parser)
+    parser.add_argument(
+        "--no-fixtures",
+        action="store_true",
+        help="light with the wall alone even if the measurements have a fixtures section "
+        "(default: drive the fixtures with the wall, docs/fixtures.md)",
+    )
     parser.add_argument(
         "--black-level",
         choices=("exact", "paper"),
@@ -77,6 +83,26 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
+def print_fixtures(solutions: Sequence) -> None:
+    """One line per environment with fixtures: on or off, the drives, the error change."""
+    for solution in solutions:
+        if not solution.fixtures:
+            continue
+        notes = solution.diagnostics["fixtures"]
+        if not notes["applied"]:
+            print(f"fixtures, {solution.environment}: off ({notes['reason']})")
+            continue
+        drives = "; ".join(
+            f"{name} " + " ".join(f"{c}={block['drive'][c]:.3f}" for c in block["channels"])
+            for name, block in solution.fixtures.items()
+        )
+        limits = ", ".join(notes["active_limits"]) or "none"
+        print(
+            f"fixtures, {solution.environment}: {drives} (error Q cannot remove "
+            f"{100 * notes['error_reduction']:.0f}% lower; active limits: {limits})"
+        )
+
+
 def print_linearity(solutions: Sequence) -> None:
     """The panel-linearity summary, once: every environment shares the stage's ramps."""
     for s in solutions:
@@ -126,6 +152,7 @@ def run(args: argparse.Namespace) -> int:
     solutions = [with_wall_encoding(s, args.wall_encoding, peak_nits=peak_nits) for s in solutions]
     written = write_solutions(solutions, args.out)
     print(summary_table(written))
+    print_fixtures(written)
     print_linearity(written)
     print(f"wrote {len(written)} environment(s) to {args.out}")
     return 0
@@ -144,9 +171,16 @@ def _solve(measurements, environments, args: argparse.Namespace) -> list:
             scheduler=args.scheduler,
             method=args.method,
             black_level=args.black_level,
+            fixtures=not args.no_fixtures,
         )
     bar = progress(environments, desc="solving", unit="environment")
     return [
-        solve_environment(measurements, env, method=args.method, black_level=args.black_level)
+        solve_environment(
+            measurements,
+            env,
+            method=args.method,
+            black_level=args.black_level,
+            fixtures=not args.no_fixtures,
+        )
         for env in bar
     ]

@@ -1,4 +1,5 @@
-"""Writers for the tools studios already run: Unreal nDisplay, Nuke, DaVinci Resolve.
+"""Writers for the tools studios already run: Unreal nDisplay, Nuke, DaVinci Resolve, and the
+fixture drives for the lighting desk (``lights``, only for solutions with fixtures).
 
 :func:`export_solutions` reads solved environment folders (``OUT/<environment>/`` from
 ``ocio-vp solve``), re-validates them and writes each target into a staging folder; an
@@ -19,6 +20,7 @@ import PyOpenColorIO as OCIO
 
 from ocio_vp.errors import InputError
 from ocio_vp.exports.escape import inside
+from ocio_vp.exports.lights import write_lights
 from ocio_vp.exports.nuke import write_nuke
 from ocio_vp.exports.resolve import DEFAULT_CUBE_RANGE, DEFAULT_CUBE_SIZE, write_resolve
 from ocio_vp.exports.source import ExportSource, load_export_source
@@ -32,6 +34,7 @@ EXPORT_TARGETS: dict[str, Callable[..., dict[str, Any]]] = {
     "unreal": write_unreal,
     "nuke": write_nuke,
     "resolve": write_resolve,
+    "lights": write_lights,
 }
 
 MAX_CUBE_SIZE = 129
@@ -105,6 +108,8 @@ def _plan(sources, targets, out_path) -> list[tuple[ExportSource, list[tuple[str
     for source in sources:
         jobs = []
         for target in dict.fromkeys(targets):
+            if target == "lights" and not source.solution.fixtures:
+                continue  # nothing for the lighting desk without fixtures
             final = _final_folder(source, target, out_path)
             key = final.resolve()
             if key in seen:
@@ -149,6 +154,10 @@ def export_solutions(
             report.failures.append(ExportFailure(str(directory), str(error)))
     plan = _plan(sources, targets, None if out is None else Path(out))
     for source, jobs in plan:
+        if not jobs:
+            reason = f"{source.directory}: no fixtures in this solution, nothing for --target lights"
+            report.failures.append(ExportFailure(str(source.directory), reason))
+            continue
         try:
             report.results.extend(
                 _export_environment(source, jobs, cube_size=int(cube_size), cube_range=(lo, hi))

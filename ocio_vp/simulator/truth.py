@@ -81,7 +81,8 @@ def noisy_measurements(
 ) -> Measurements:
     """``measurements`` with every photographed value times ``1 + noise * gauss`` (independent).
 
-    Primaries [SL], the lit chart [SRL]_j, every target chart, w_avg and black level.
+    Primaries [SL], the lit chart [SRL]_j, every target chart, w_avg, black level and every
+    fixture channel's lit chart.
     """
 
     def jitter(a):
@@ -99,11 +100,15 @@ def noisy_measurements(
         )
         for e in measurements.environments
     )
+    fixtures = tuple(
+        dataclasses.replace(f, lit_chart=jitter(f.lit_chart)) for f in measurements.fixtures
+    )
     return dataclasses.replace(
         measurements,
         SL=jitter(measurements.SL),
         SRL=jitter(measurements.SRL),
         environments=environments,
+        fixtures=fixtures,
     )
 
 
@@ -132,6 +137,7 @@ def held_out_errors(
     w_avg: np.ndarray,
     Q: np.ndarray,
     reflectances: np.ndarray,
+    extra_emission: np.ndarray | None = None,
 ) -> HeldOutErrors:
     """How a solve renders ``reflectances`` (k, W) on the stage, against the real light.
 
@@ -139,13 +145,16 @@ def held_out_errors(
     samples lit by it, Q corrects them; the reference is the samples under ``environment``
     (a name or spectrum, as :func:`~ocio_vp.simulator.stage.environment_spectrum`). ΔE uses the
     stage camera's own RGB -> XYZ matrix and a perfect white diffuser under the real light as
-    the reference white.
+    the reference white. ``extra_emission`` (W,) is light added by practical fixtures (their
+    spectra times their drives, :mod:`ocio_vp.simulator.fixtures`).
     """
     spectrum = environment_spectrum(stage, environment)
     white = camera_rgb(stage, spectrum)
     target = np.vstack([camera_rgb(stage, reflectances * spectrum), white])
     drive = np.clip(np.asarray(M, dtype=np.float64) @ np.asarray(w_avg, dtype=np.float64), 0, None)
     emitted = stage.leds @ drive
+    if extra_emission is not None:
+        emitted = emitted + np.asarray(extra_emission, dtype=np.float64)
     lit = np.vstack([camera_rgb(stage, reflectances * emitted), camera_rgb(stage, emitted)])
     corrected = lit @ np.asarray(Q, dtype=np.float64).T
     errors = chart_errors(
