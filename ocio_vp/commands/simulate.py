@@ -45,19 +45,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "primaries, lit charts, target charts, black-level frames), DIR/footage/<env>.####.exr "
         "(default: no plates)",
     )
-    parser.add_argument(
-        "--vignetting",
-        type=float,
-        default=0.05,
-        help="with --plates: lens fall-off at the frame corners (removed by the flat fields)",
-    )
-    parser.add_argument(
-        "--noise",
-        type=float,
-        default=0.01,
-        help="with --plates: relative sensor noise (std; plus 1e-4 absolute read noise)",
-    )
-    parser.add_argument("--seed", type=int, default=0, help="with --plates: noise seed")
+    _add_plate_options(parser)
     parser.add_argument(
         "--camera",
         default=None,
@@ -106,6 +94,23 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="list the known environments and exit (no --out needed)",
     )
     parser.set_defaults(func=run)
+
+
+def _add_plate_options(parser: argparse.ArgumentParser) -> None:
+    """Options that only matter with --plates."""
+    parser.add_argument(
+        "--vignetting",
+        type=float,
+        default=0.05,
+        help="with --plates: lens fall-off at the frame corners (removed by the flat fields)",
+    )
+    parser.add_argument(
+        "--noise",
+        type=float,
+        default=0.01,
+        help="with --plates: relative sensor noise (std; plus 1e-4 absolute read noise)",
+    )
+    parser.add_argument("--seed", type=int, default=0, help="with --plates: noise seed")
 
 
 def run(args: argparse.Namespace) -> int:
