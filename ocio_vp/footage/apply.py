@@ -81,15 +81,20 @@ def load_post_correction(solution_dir: str | Path) -> PostCorrection:
     import PyOpenColorIO as OCIO
 
     from ocio_vp.formats.solution import load_solution
-    from ocio_vp.ocio.config import POST_CORRECTION_COLORSPACE, REFERENCE
 
     solution = load_solution(solution_dir)
     folder = Path(solution_dir)
     folder = folder if folder.is_dir() else folder.parent
-    names = solution.ocio or {}
+    names = dict(solution.ocio or {})
+    if "post_correction_colorspace" not in names or "reference" not in names:
+        # Deferred: the ocio package pulls in the wall's encodings (scipy, ~0.7 s of start-up)
+        # and solution.json names both colorspaces; only files without them need the defaults.
+        from ocio_vp.ocio.config import POST_CORRECTION_COLORSPACE, REFERENCE
+
+        names.setdefault("post_correction_colorspace", POST_CORRECTION_COLORSPACE)
+        names.setdefault("reference", REFERENCE)
     config_path = (folder / names.get("config", "config.ocio")).resolve()
-    source = names.get("post_correction_colorspace", POST_CORRECTION_COLORSPACE)
-    target = names.get("reference", REFERENCE)
+    source, target = names["post_correction_colorspace"], names["reference"]
     try:
         config = OCIO.Config.CreateFromFile(str(config_path))
         config.getProcessor(source, target)
