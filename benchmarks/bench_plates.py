@@ -1,13 +1,17 @@
 """Memory and time of sampling a chart from an 8K float EXR (target: < 1 GB peak RSS).
 
-Each measurement runs in a fresh Python subprocess and reports its own peak resident set size
-(``resource.getrusage(RUSAGE_SELF).ru_maxrss``), so imports are counted alike on both sides:
-``sample_chart`` (reads only the chart's box, in scanline bands) against a plain full-image
-read with OpenImageIO (``ImageInput.read_image`` as float32) followed by the same sampling.
+Each measurement runs in a fresh Python subprocess that only samples and reports its own peak
+resident set size, ``VmHWM`` from ``/proc/self/status`` (not ``ru_maxrss``: on Linux that
+survives the exec that starts the child, so it reports the benchmark runner's own peak), so
+imports are counted alike on both sides: ``sample_chart`` (reads only the chart's box, in
+scanline bands) against a plain full-image read with OpenImageIO (``ImageInput.read_image`` as
+float32) followed by the same sampling. The plate is written by this process, never by the
+measured one.
 """
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 import tempfile
@@ -20,12 +24,19 @@ WIDTH, HEIGHT = 7680, 4320  # 8K UHD
 QUICK = (1920, 1080)
 
 _CHILD = r"""
-import resource, sys, time
+import json, sys, time
 import numpy as np
-mode, path, corners = sys.argv[1], sys.argv[2], np.array(eval(sys.argv[3]))
+mode, path, corners = sys.argv[1], sys.argv[2], np.array(json.loads(sys.argv[3]))
 import OpenImageIO as oiio
 from ocio_vp.plates.sampling import sample_chart
-base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+
+def hwm():  # this process's own peak RSS in bytes
+    for line in open("/proc/self/status"):
+        if line.startswith("VmHWM"):
+            return int(line.split()[1]) * 1024
+
+sample_chart(np.zeros((64, 64, 3), np.float32), [[0, 0], [64, 0], [64, 64], [0, 64]], 4, 6)
+base = hwm()  # after imports (and every lazy import sampling does)
 t = time.perf_counter()
 if mode == "region":
     s = sample_chart(path, corners, 4, 6)
@@ -37,9 +48,8 @@ else:
     inp.close()
     s = sample_chart(full, corners, 4, 6)
 elapsed = time.perf_counter() - t
-peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 # (with the plate as its own flat and the centre on the chart, every patch reads 0.18 too)
-print(peak * 1024, base * 1024, elapsed, float(s.means[18, 1]))
+print(hwm(), base, elapsed, float(s.means[18, 1]))
 """
 
 
@@ -67,7 +77,7 @@ def _write_plate(path: Path, width: int, height: int, corners: np.ndarray) -> No
 
 def _child(mode: str, path: Path, corners: np.ndarray) -> tuple[float, float, float]:
     result = subprocess.run(
-        [sys.executable, "-c", _CHILD, mode, str(path), repr(corners.tolist())],
+        [sys.executable, "-c", _CHILD, mode, str(path), json.dumps(corners.tolist())],
         check=True,
         capture_output=True,
         text=True,
@@ -105,7 +115,8 @@ def run(quick: bool = False) -> str:
         "",
         f"Plate {width}x{height} float RGB EXR ({size_mb:.0f} MiB on disk, written in "
         f"{write_s:.1f} s), chart box {w:.0f}x{h:.0f} px, 24 patches. Peak RSS of a fresh "
-        "process (`ru_maxrss`); 'after imports' is the same process before sampling.",
+        "process that only samples (its own `VmHWM`); 'after imports' is the same process "
+        "before sampling.",
         "",
         "| method | peak RSS (MiB) | after imports (MiB) | added by sampling (MiB) | time (s) |",
         "|---|---:|---:|---:|---:|",
@@ -120,11 +131,14 @@ def run(quick: bool = False) -> str:
             f"| {elapsed:.2f} |"
         )
     ratio = (full[0] - full[1]) / max(region[0] - region[1], 1)
-    verdict = "meets" if max(region[0], flat[0]) < 2**30 else "MISSES"
+    worst = max(region[0], flat[0])
+    verdict = "met" if worst < 2**30 else "**not met**"
     lines += [
         "",
-        f"Region sampling {verdict} the < 1 GB target; the full read adds {ratio:.1f}x the "
-        "memory of region sampling.",
+        f"- Peak of region sampling (with or without flat field) = **{worst / 2**30:.2f} GiB** "
+        f"(target < 1 GiB: {verdict}); the full read adds {ratio:.1f}x the memory region "
+        "sampling adds. Accuracy: every patch of the flat-grey chart reads 0.18 within 0.002 in "
+        "every run (checked).",
         "",
     ]
     return "\n".join(lines)

@@ -14,6 +14,7 @@ camera-to-display matrix and ΔE conventions, :mod:`ocio_vp.report.plots` for th
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import json
 from collections.abc import Sequence
@@ -144,15 +145,23 @@ def panel_description(solution: Solution, path: Path) -> str | None:
         return None
     if hashlib.sha256(raw).hexdigest() != solution.measurements_sha256:
         return None
+    return _panel_text(str(candidate), solution.measurements_sha256)
+
+
+@functools.lru_cache(maxsize=16)
+def _panel_text(candidate: str, sha256: str) -> str:
+    """Parse the measurements file once per content (every environment of a solve names the
+    same one; parsing it was a tenth of a 7-environment report)."""
     from ocio_vp.formats.measurements import load_measurements
 
-    panel = load_measurements(candidate).stage.panel
+    path = Path(candidate)
+    panel = load_measurements(path).stage.panel
     if panel is None:
-        return f"beta given directly in {candidate.name}"
+        return f"beta given directly in {path.name}"
     text = f"{panel.width:g} m x {panel.height:g} m at {panel.distance:g} m"
     if panel.offset_x or panel.offset_y:
         text += f", centre offset ({panel.offset_x:g}, {panel.offset_y:g}) m"
-    return f"{text} (from {candidate.name})"
+    return f"{text} (from {path.name})"
 
 
 def _matrix_rows(name: str, matrix: np.ndarray | None, meaning: str) -> dict[str, Any]:
