@@ -175,3 +175,26 @@ class TestSolveN:
 def test_condition_number_of_singular_is_inf() -> None:
     assert condition_number(np.zeros((3, 3))) == float("inf")
     assert condition_number(np.eye(3)) == pytest.approx(1.0)
+
+
+class TestByHand:
+    def test_eq3_one_patch(self) -> None:
+        # drive M w_avg = [1, 2, 3]; [SRL] drive = [1 + 4, 2, 9]; divided by beta = 0.25.
+        SRL = np.array([[[1.0, 2.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 3.0]]])
+        M = np.array([[1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [1.0, 0.0, 1.0]])
+        lit = predict_lit_chart(SRL, 0.25, M, np.array([1.0, 1.0, 2.0]))
+        np.testing.assert_array_equal(lit, [[20.0, 8.0, 36.0]])
+
+    def test_displayed_chart_clips_the_drive_the_wall_cannot_emit(self) -> None:
+        # drive N c = [0.2 - 0.5, 0.5, 0.1]: the wall shows 0 red; with max_drive 0.4, green 0.4.
+        SL = np.diag([2.0, 3.0, 4.0])
+        N = np.array([[1.0, -1.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+        content = np.array([[0.2, 0.5, 0.1]])
+        b = np.array([0.01, 0.02, 0.03])
+        shown = predict_displayed_chart(content, SL=SL, matrix=N, black_level=b)
+        np.testing.assert_allclose(shown, [[0.01, 1.52, 0.43]], rtol=1e-15)
+        capped = predict_displayed_chart(content, SL=SL, matrix=N, max_drive=0.4)
+        np.testing.assert_allclose(capped, [[0.0, 1.2, 0.4]], rtol=1e-15)
+        offset = np.array([0.0, 0.0, -0.2])  # an offset pushing blue below zero is clipped too
+        with_offset = predict_displayed_chart(content, SL=SL, matrix=N, offset=offset)
+        np.testing.assert_allclose(with_offset, [[0.0, 1.5, 0.0]], rtol=1e-15)

@@ -17,6 +17,7 @@ from ocio_vp.correction.linear import (
     AUTO_TOLERANCE_ABSOLUTE,
     AUTO_TOLERANCE_RELATIVE,
     REGULARISATION_GRID,
+    SHRINKAGE_TOLERANCE,
     soft_choice,
     target_rank,
 )
@@ -149,6 +150,37 @@ class TestDiagonalAndRegularised:
         # Gradient of sum ||Q x - p||^2 + lam ||Q - D||^2 vanishes at the minimum.
         gradient = 2 * (fit.Q @ X.T @ X - P.T @ X) + 2 * lam * (fit.Q - D)
         assert np.max(np.abs(gradient)) < 1e-10 * np.max(np.abs(P.T @ X))
+
+    def test_regularised_takes_the_strongest_admissible_shrinkage(self) -> None:
+        # A diagonal truth without noise: the diagonal model D is exact, so every strength of
+        # the shrinkage toward D fits equally (leave-one-out error 0) and the rule must take
+        # the strongest, the grid's last.
+        problem = _problem(np.diag([0.9, 1.05, 1.2]))
+        fit = solve_post_correction(problem, method="regularised")
+        assert fit.notes["shrinkage"] == REGULARISATION_GRID[-1] > REGULARISATION_GRID[0]
+        np.testing.assert_allclose(fit.Q, np.diag([0.9, 1.05, 1.2]), atol=1e-12)
+
+    def test_regularised_shrinkage_matches_a_plain_loop(self) -> None:
+        # Leave-one-out by hand: for each strength and each held-out patch, the diagonal gains
+        # and the ridge normal equations (X^T W X + lam I) Q^T = X^T W P + lam D, solved anew.
+        problem = _problem(Q_TRUE, noise=0.05, seed=5)
+        X, P, n = problem.predicted, problem.target, problem.target.shape[0]
+        lam_unit = np.trace(X.T @ X) / 3
+        errors = []
+        for alpha in REGULARISATION_GRID:
+            held = np.empty_like(P)
+            for j in range(n):
+                keep = np.arange(n) != j
+                Xk, Pk = X[keep], P[keep]
+                D = np.diag((Xk * Pk).sum(axis=0) / (Xk * Xk).sum(axis=0))
+                G = Xk.T @ Xk + alpha * lam_unit * np.eye(3)
+                QT = np.linalg.solve(G, Xk.T @ Pk + alpha * lam_unit * D.T)
+                held[j] = X[j] @ QT
+            errors.append(np.mean(np.abs(held - P) / P[18]))
+        errors = np.array(errors)
+        limit = errors.min() * (1 + SHRINKAGE_TOLERANCE[0]) + SHRINKAGE_TOLERANCE[1]
+        strongest = REGULARISATION_GRID[np.flatnonzero(errors <= limit)[-1]]
+        assert solve_post_correction(problem, method="regularised").notes["shrinkage"] == strongest
 
 
 class TestRankAware:

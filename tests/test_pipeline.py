@@ -277,3 +277,51 @@ def test_a_black_target_chart_is_an_input_error() -> None:
     with pytest.raises(InputError, match="black") as info:
         _solve(document, "auto")
     assert str(info.value).startswith("generated.yaml: environments[0].target_chart: ")
+
+
+def _diagonal_stage_document() -> tuple[dict, np.ndarray, np.ndarray]:
+    """A stage whose camera sees each LED in one channel only ([SL] = diag(2, 4, 5)), a chart
+    whose patches reflect per channel (a_j), beta 0.5 and w_avg given: every number of the solve
+    has a closed form. The target is the lit chart times g = (1.1, 1.0, 0.8)."""
+    j = np.arange(24.0)
+    a = np.stack([0.1 + 0.03 * j, 0.2 + 0.02 * j, 0.5 - 0.015 * j], axis=1)
+    a[18] = 0.9
+    s = np.array([2.0, 4.0, 5.0])
+    w_avg = np.array([0.4, 0.5, 0.6])
+    g = np.array([1.1, 1.0, 0.8])
+    lit = a * w_avg / 0.5  # eq. 3: (1/beta) [SRL]_j M w_avg, with [SRL]_j M = diag(a_j)
+    document = {
+        "format": "ocio-vp/measurements",
+        "version": 1,
+        "stage": {"name": "diagonal", "beta": 0.5},
+        "primaries": {c: (s[k] * np.eye(3)[k]).tolist() for k, c in enumerate(CHANNELS)},
+        "lit_chart": {
+            c: (a[:, k, None] * s[k] * np.eye(3)[k]).tolist() for k, c in enumerate(CHANNELS)
+        },
+        "environments": [
+            {"name": "env", "w_avg": w_avg.tolist(), "target_chart": (lit * g).tolist()}
+        ],
+    }
+    return document, a, g
+
+
+def test_a_diagonal_stage_by_hand() -> None:
+    document, a, g = _diagonal_stage_document()
+    m = measurements_from_dict(document, source="diagonal.yaml")
+    s = solve_environment(m, m.environments[0], method="least-squares")
+    d = s.diagnostics
+    np.testing.assert_allclose(s.M, np.diag([0.5, 0.25, 0.2]), rtol=1e-15)
+    np.testing.assert_allclose(s.Q, np.diag(g), atol=1e-13)
+    np.testing.assert_allclose(s.N, np.diag([0.5 / 1.1, 0.25, 0.25]), atol=1e-13)
+    np.testing.assert_allclose(d["charts"]["lit_baseline"], a * [0.8, 1.0, 1.2], rtol=1e-14)
+    # Fig. 11 error of M alone: |1 - g| / g times the mean reflectance over the white's 0.9.
+    by_hand = np.abs(1 - g) / g * a.mean(axis=0) / 0.9
+    np.testing.assert_allclose(d["lit_chart_error_baseline"], by_hand, rtol=1e-12)
+    np.testing.assert_allclose(d["lit_chart_error"], 0.0, atol=1e-13)
+    # In-frustum (eq. 7): Q [SL] N p = p, so the background is exact after Q; shown through
+    # M instead it would be off by |g - 1| p.
+    np.testing.assert_allclose(d["displayed_chart_error_baseline"], 0.0, atol=1e-13)
+    np.testing.assert_allclose(d["displayed_chart_error"], 0.0, atol=1e-13)
+    np.testing.assert_allclose(
+        d["charts"]["displayed_corrected"], d["charts"]["target"], atol=1e-13
+    )
