@@ -199,6 +199,9 @@ def test_cli_solve_and_export_lights(tmp_path, stage, capsys):
         assert row["drive"] == pytest.approx(solution.fixtures["rgbacl"]["drive"][row["channel"]])
     csv_lines = (folder / "lights.csv").read_text().splitlines()
     assert len(csv_lines) == 1 + len(channels)
+    assert main(["report", str(tmp_path / "calib" / "d65")]) == 0
+    html = next((tmp_path / "calib").rglob("index.html")).read_text()
+    assert "fixture rgbacl" in html and "error Q cannot remove" in html
 
 
 def test_export_lights_without_fixtures_says_why(tmp_path, stage, capsys):

@@ -209,6 +209,7 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
     ]
     panel = panel_description(s, data.path)
     facts.insert(3, ("calibration panel", panel or "not recorded in solution.json (beta only)"))
+    facts += _fixture_facts(s)
     notes = d.get("method_notes") or {}
     rows = []
     for chart in STAGE_CHARTS:
@@ -233,6 +234,30 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
         "transform": data.transform.description,
         "linearity": _linearity_facts(s.linearity),
     }
+
+
+def _fixture_facts(solution: Any) -> list[tuple[str, str]]:
+    """Practical fixtures: each one's drives, and what they did to the error Q cannot remove."""
+    if not solution.fixtures:
+        return []
+    notes = solution.diagnostics.get("fixtures") or {}
+    facts = [
+        (
+            f"fixture {name}",
+            ", ".join(f"{c} {block['drive'][c]:.3f}" for c in block["channels"])
+            + f" (of max {block['max_drive']:g})",
+        )
+        for name, block in solution.fixtures.items()
+    ]
+    if notes.get("applied"):
+        limits = ", ".join(notes.get("active_limits", [])) or "none"
+        change = (
+            f"{notes['error_wall_only']:.3g} with the wall alone -> {notes['error_with_fixtures']:.3g} "
+            f"with the fixtures ({100 * notes['error_reduction']:.0f}% lower); active limits: {limits}"
+        )
+    else:
+        change = f"fixtures off: {notes.get('reason', 'not solved')}"
+    return [*facts, ("error Q cannot remove (eq. 5 residual)", change)]
 
 
 def _method(solution: Any) -> str:
