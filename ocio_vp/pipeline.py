@@ -28,6 +28,7 @@ from ocio_vp.calibration.equations import (
 from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
 from ocio_vp.correction.perceptual import default_camera_to_xyz
 from ocio_vp.correction.registry import QFit, QProblem, solve_post_correction
+from ocio_vp.correction.root_polynomial import post_correction
 from ocio_vp.correction.validation import CLOSED_FORM_METHODS, cross_validated_error
 from ocio_vp.errors import InputError
 from ocio_vp.fixtures.lighting import (
@@ -211,6 +212,7 @@ def _charts(
     offset, then Q).
     """
     baseline = problem.predicted
+    correct = post_correction(Q, fit.notes)  # Q, or the non-linear model Q approximates
     lit = baseline if fit.M is None else dataclasses.replace(problem, M=M).predicted
     displayed = predict_displayed_chart(
         environment.target_chart,
@@ -228,9 +230,9 @@ def _charts(
     return {
         "target": environment.target_chart,
         "lit_baseline": baseline,
-        "lit_corrected": lit @ Q.T,
+        "lit_corrected": correct(lit),
         "displayed_baseline": displayed_baseline,
-        "displayed_corrected": displayed if N is None else displayed @ Q.T,
+        "displayed_corrected": displayed if N is None else correct(displayed),
     }
 
 

@@ -155,7 +155,7 @@ def stability_diagnostics(
     notes = dict(fit.notes)
     target = np.asarray(problem.target, dtype=np.float64)
     white, weights = problem.white_patch, problem.fit_weights
-    warnings: list[str] = []
+    warnings: list[str] = [str(w) for w in notes.get("warnings", ())]  # the method's own
     cv = notes.get("cross_validated_error", cross_validated)
     drive = out_of_frustum_drive(M, problem.w_avg)
     lit_clipped = lit_clipped_baseline = None

@@ -32,6 +32,7 @@ from ocio_vp.correction.perceptual import q_perceptual
 
 # Method modules import these two from ocio_vp.correction.problem (not from here) to avoid import cycles.
 from ocio_vp.correction.problem import QFit, QProblem
+from ocio_vp.correction.root_polynomial import make_q_root_polynomial
 from ocio_vp.errors import InputError
 
 __all__ = [
@@ -64,6 +65,9 @@ Q_SOLVE_METHODS: dict[str, Callable[[QProblem], QFit]] = {
     "auto": q_auto,
     "perceptual": q_perceptual,
     "joint": q_joint,
+    # Non-linear; QFit.Q is the 3x3 approximation, the model is in notes["root_polynomial"].
+    "root-polynomial": make_q_root_polynomial(2),
+    "root-polynomial-3": make_q_root_polynomial(3),
 }
 
 

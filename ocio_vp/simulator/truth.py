@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -138,6 +139,7 @@ def held_out_errors(
     Q: np.ndarray,
     reflectances: np.ndarray,
     extra_emission: np.ndarray | None = None,
+    correct: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> HeldOutErrors:
     """How a solve renders ``reflectances`` (k, W) on the stage, against the real light.
 
@@ -146,7 +148,8 @@ def held_out_errors(
     (a name or spectrum, as :func:`~ocio_vp.simulator.stage.environment_spectrum`). ΔE uses the
     stage camera's own RGB -> XYZ matrix and a perfect white diffuser under the real light as
     the reference white. ``extra_emission`` (W,) is light added by practical fixtures (their
-    spectra times their drives, :mod:`ocio_vp.simulator.fixtures`).
+    spectra times their drives, :mod:`ocio_vp.simulator.fixtures`). ``correct`` replaces
+    ``Q`` by a non-linear post-correction (:func:`ocio_vp.correction.post_correction`).
     """
     spectrum = environment_spectrum(stage, environment)
     white = camera_rgb(stage, spectrum)
@@ -156,7 +159,7 @@ def held_out_errors(
     if extra_emission is not None:
         emitted = emitted + np.asarray(extra_emission, dtype=np.float64)
     lit = np.vstack([camera_rgb(stage, reflectances * emitted), camera_rgb(stage, emitted)])
-    corrected = lit @ np.asarray(Q, dtype=np.float64).T
+    corrected = lit @ np.asarray(Q, dtype=np.float64).T if correct is None else correct(lit)
     errors = chart_errors(
         corrected, target, camera_to_xyz=_camera_matrix(stage), white_patch=len(target) - 1
     )
