@@ -111,8 +111,9 @@ def _figure(width: float, height: float, **margins: float) -> Any:
 
 def _save(figure: Any, path: Path, dpi: float) -> Path:
     path = Path(path)
-    # No "Software" key: matplotlib's default puts its web address into every PNG.
-    figure.savefig(path, dpi=dpi, metadata={"Software": None})
+    # No "Software" key: matplotlib's default puts its web address into every PNG. zlib level 3
+    # instead of 6: the same pixels, files within ~10%, half the encoding time.
+    figure.savefig(path, dpi=dpi, metadata={"Software": None}, pil_kwargs={"compress_level": 3})
     return path
 
 
