@@ -1,6 +1,9 @@
 """The ``ocio-vp`` command: parses arguments and dispatches to :mod:`ocio_vp.commands`.
 
-User mistakes (:class:`ocio_vp.errors.InputError`) end with one line on stderr and exit 2.
+User mistakes (:class:`ocio_vp.errors.InputError`), bad arguments and what the disk or the
+system did (disk full, read-only, permissions) end with one line on stderr and exit 2; a bug
+ends with one line and exit 1 (``OCIO_VP_TRACEBACK=1`` shows the traceback). Never a traceback
+for something the user or the disk did.
 """
 
 from __future__ import annotations
@@ -8,12 +11,14 @@ from __future__ import annotations
 import argparse
 import functools
 import importlib
+import os
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from ocio_vp import __version__
 from ocio_vp.commands.common import HelpFormatter
-from ocio_vp.errors import InputError
+from ocio_vp.errors import InputError, describe_failure
 
 __all__ = ["main"]
 
@@ -31,8 +36,16 @@ COMMANDS = (
 )
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line (``--help`` still shows the usage)."""
+
+    def error(self, message: str) -> NoReturn:
+        problem = f"{message} (see {self.prog} --help)"
+        self.exit(2, f"{self.prog}: error: {InputError(problem)}\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="ocio-vp",
         description="Colour-calibrate an RGB LED virtual-production stage and write OpenColorIO "
         "configs (LeGendre, Lepicovsky & Debevec, DigiPro 2022). `ocio-vp COMMAND --help` "
@@ -44,7 +57,7 @@ def build_parser() -> argparse.ArgumentParser:
         dest="command",
         required=True,
         metavar="COMMAND",
-        parser_class=functools.partial(argparse.ArgumentParser, formatter_class=HelpFormatter),
+        parser_class=functools.partial(OneLineParser, formatter_class=HelpFormatter),
     )
     for name in COMMANDS:
         try:
@@ -62,12 +75,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
-    except InputError as error:
-        print(f"ocio-vp {args.command}: error: {error}", file=sys.stderr)
-        return 2
     except KeyboardInterrupt:
         print(f"ocio-vp {args.command}: interrupted", file=sys.stderr)
         return 130
+    except (Exception, RecursionError) as error:
+        status, message = describe_failure(error)
+        if status != 2 and os.environ.get("OCIO_VP_TRACEBACK"):
+            raise
+        print(f"ocio-vp {args.command}: error: {message}", file=sys.stderr)
+        return status
 
 
 if __name__ == "__main__":

@@ -2,9 +2,17 @@
 
 - :mod:`~ocio_vp.formats.measurements`: ``ocio-vp/measurements`` v1 (YAML/JSON), strictly validated;
 - :mod:`~ocio_vp.formats.solution`: ``solution.json``, one solved environment;
-- :mod:`~ocio_vp.formats.synthesis`: the ``synthesized`` record of a computed target chart.
+- :mod:`~ocio_vp.formats.synthesis`: the ``synthesized`` record of a computed target chart;
+- :mod:`~ocio_vp.formats.documents`: bounded reading of YAML/JSON and other input files.
 """
 
+from ocio_vp.formats.documents import (
+    MAX_DEPTH,
+    MAX_DOCUMENT_BYTES,
+    MAX_YAML_VALUES,
+    check_regular_file,
+    read_bounded,
+)
 from ocio_vp.formats.measurements import (
     CHANNELS,
     FORMAT,
@@ -35,6 +43,9 @@ from ocio_vp.formats.synthesis import SynthesisRecord
 __all__ = [
     "CHANNELS",
     "FORMAT",
+    "MAX_DEPTH",
+    "MAX_DOCUMENT_BYTES",
+    "MAX_YAML_VALUES",
     "SAFE_NAME",
     "SOLUTION_FORMAT",
     "VERSION",
@@ -46,12 +57,14 @@ __all__ = [
     "Stage",
     "SynthesisRecord",
     "Validator",
+    "check_regular_file",
     "check_safe_name",
     "load_measurements",
     "load_solution",
     "measurements_from_dict",
     "measurements_to_dict",
     "parse_stage",
+    "read_bounded",
     "read_document",
     "save_measurements",
     "solution_to_json",
