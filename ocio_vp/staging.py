@@ -1,7 +1,16 @@
-"""Write output folders all at once or not at all.
+"""Write outputs all at once or not at all, never over an input or a file ocio-vp did not write.
 
-Files are written into a hidden staging folder beside the destination and renamed into place
-only when everything succeeded, so a failure never leaves a half-written output folder.
+- Files are written into a hidden staging folder beside the destination and renamed into place
+  only when everything succeeded, so a failure never leaves a half-written output folder.
+- Every folder ocio-vp publishes carries a marker file, :data:`MARKER`, listing the files it
+  wrote. An existing folder is replaced only if it is empty or carries the marker and holds
+  nothing else: a user's folder, or a user's file added to an output folder, stops the run
+  with a one-line error saying what to move.
+- A single output file (a measurements file) is replaced only if it starts with
+  :data:`FILE_SIGNATURE` (YAML written by ocio-vp) or already holds the same bytes.
+- No output may be, or contain, an input of the same run (:func:`check_not_input`).
+- While a run writes into a folder it holds an exclusive lock on it; a second run writing into
+  the same folder fails at once instead of mixing its files with the first one's.
 """
 
 from __future__ import annotations
@@ -9,14 +18,42 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
+import stat
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 
 from ocio_vp.errors import InputError
 
-__all__ = ["default_mode", "publish_dir", "staged_dir", "write_file_atomically"]
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - not POSIX: no locking
+    fcntl = None  # type: ignore[assignment]
 
+__all__ = [
+    "FILE_SIGNATURE",
+    "MARKER",
+    "check_file_replaceable",
+    "check_not_input",
+    "check_replaceable",
+    "default_mode",
+    "output_lock",
+    "publish_dir",
+    "publish_dirs",
+    "staged_dir",
+    "write_file_atomically",
+    "write_output_file",
+]
+
+#: Marker file in every folder ocio-vp publishes: the list of files it wrote there.
+MARKER = ".ocio-vp-output"
+_MARKER_HEADER = (
+    "# Written by ocio-vp. A later ocio-vp run may replace this folder as long as it holds\n"
+    "# only the files listed here; anything else in it makes ocio-vp refuse.\n"
+)
+#: First line of a YAML file ocio-vp writes; such a file may be replaced by a later run.
+FILE_SIGNATURE = b"# Written by ocio-vp"
+_MOVE_HINT = "move it away or choose another output"
 
 def default_mode(*, folder: bool = False) -> int:
     """The mode a plain ``open``/``mkdir`` would give under the current umask.
@@ -29,40 +66,235 @@ def default_mode(*, folder: bool = False) -> int:
     return (0o777 if folder else 0o666) & ~mask
 
 
+# Locks held by this process: folder -> (descriptor, depth), so nested use is fine.
+_LOCKS: dict[str, tuple[int, int]] = {}
+
+
+@contextlib.contextmanager
+def output_lock(folder: str | os.PathLike[str]) -> Iterator[None]:
+    """Hold an exclusive lock on the existing ``folder`` while writing into it.
+
+    Raises
+    ------
+    InputError
+        At once, when another process holds the lock (another ocio-vp run writing there).
+    """
+    key = os.path.realpath(folder)
+    if fcntl is None or key in _LOCKS:
+        fd, depth = _LOCKS.get(key, (-1, 0))
+        _LOCKS[key] = (fd, depth + 1)
+        try:
+            yield
+        finally:
+            _release(key)
+        return
+    fd = os.open(key, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(fd)
+        raise InputError(
+            "another ocio-vp run is writing into this folder; wait for it to finish", source=folder
+        ) from None
+    _LOCKS[key] = (fd, 1)
+    try:
+        yield
+    finally:
+        _release(key)
+
+
+def _release(key: str) -> None:
+    fd, depth = _LOCKS.pop(key)
+    if depth > 1:
+        _LOCKS[key] = (fd, depth - 1)
+    elif fd >= 0:
+        os.close(fd)  # closing the descriptor releases the flock
+
+
+def _make_dirs(folder: Path) -> list[Path]:
+    """Create ``folder`` and missing parents; return the ones created, deepest first."""
+    missing = [p for p in (folder, *folder.parents) if not os.path.lexists(p)]
+    for path in reversed(missing):
+        try:
+            path.mkdir()
+        except FileExistsError:
+            if not path.is_dir():
+                raise InputError(f"exists and is not a folder; {_MOVE_HINT}", source=path) from None
+        except OSError as error:
+            _remove_empty(missing)
+            raise InputError(
+                f"cannot create output folder: {error.strerror}", source=path
+            ) from None
+    return missing
+
+
+def _remove_empty(folders: Iterable[Path]) -> None:
+    for folder in folders:
+        with contextlib.suppress(OSError):
+            folder.rmdir()
+
+
 @contextlib.contextmanager
 def staged_dir(parent: str | os.PathLike[str]) -> Iterator[Path]:
     """Yield a fresh staging folder inside ``parent`` (created if needed); removed on exit.
 
-    If ``parent`` did not exist and nothing was published into it, it is removed too.
+    ``parent`` is locked (:func:`output_lock`) meanwhile. Folders this call created are
+    removed again if nothing was published into them.
     """
     parent = Path(parent)
-    created = not parent.exists()
-    if parent.exists() and not parent.is_dir():
-        raise InputError("exists and is not a folder; choose another output folder", source=parent)
+    if os.path.lexists(parent) and not parent.is_dir():
+        raise InputError(f"exists and is not a folder; {_MOVE_HINT}", source=parent)
+    created = _make_dirs(parent)
     try:
-        parent.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        raise InputError(f"cannot create output folder: {error.strerror}", source=parent) from None
-    stage = Path(tempfile.mkdtemp(prefix=".ocio-vp-staging-", dir=parent))
-    try:
-        stage.chmod(default_mode(folder=True))  # it may itself be published
-        yield stage
+        with output_lock(parent):
+            try:
+                stage = Path(tempfile.mkdtemp(prefix=".ocio-vp-staging-", dir=parent))
+            except OSError as error:
+                raise InputError(f"cannot write: {error.strerror}", source=parent) from None
+            try:
+                stage.chmod(default_mode(folder=True))  # it may itself be published
+                yield stage
+            finally:
+                shutil.rmtree(stage, ignore_errors=True)
     finally:
-        shutil.rmtree(stage, ignore_errors=True)
-        if created and parent.exists() and not any(parent.iterdir()):
-            parent.rmdir()
+        _remove_empty(created)
 
 
-def publish_dir(staged: Path, final: Path) -> None:
-    """Move a finished folder to ``final``, replacing an older one of the same name."""
+def _files(folder: Path) -> list[str]:
+    """Relative POSIX paths of every non-folder entry under ``folder``, sorted."""
+    out = []
+    for root, dirs, names in os.walk(folder):
+        dirs.sort()
+        for name in names + [d for d in dirs if os.path.islink(os.path.join(root, d))]:
+            out.append(Path(root, name).relative_to(folder).as_posix())
+    return sorted(out)
+
+
+def _write_marker(folder: Path) -> None:
+    listed = [name for name in _files(folder) if name != MARKER]
+    (folder / MARKER).write_text(_MARKER_HEADER + "".join(f"{n}\n" for n in listed), "utf-8")
+
+
+def check_replaceable(final: str | os.PathLike[str]) -> None:
+    """Raise :class:`InputError` unless ``final`` is absent, empty or an ocio-vp output folder.
+
+    An output folder qualifies only if it holds nothing but the files its :data:`MARKER` lists.
+    """
     final = Path(final)
-    if final.exists():
+    if not os.path.lexists(final):
+        return
+    if final.is_symlink() or not final.is_dir():
+        raise InputError(f"exists and is not a folder ocio-vp wrote; {_MOVE_HINT}", source=final)
+    present = _files(final)
+    if not present:
+        return
+    try:
+        lines = (final / MARKER).read_text("utf-8").splitlines()
+    except (OSError, UnicodeDecodeError):
+        raise InputError(
+            f"exists and was not written by ocio-vp (no {MARKER} file); {_MOVE_HINT}",
+            source=final,
+        ) from None
+    listed = {line for line in lines if line and not line.startswith("#")} | {MARKER}
+    foreign = [name for name in present if name not in listed]
+    if foreign:
+        more = f" and {len(foreign) - 1} more" if len(foreign) > 1 else ""
+        raise InputError(
+            f"holds {foreign[0]!r}{more}, which ocio-vp did not write; move it out so the "
+            "folder can be replaced, or choose another output",
+            source=final,
+        )
+
+
+def check_not_input(
+    outputs: Iterable[str | os.PathLike[str]], inputs: Iterable[str | os.PathLike[str]]
+) -> None:
+    """Refuse an output that is an input, contains one, or lies inside an input file."""
+    real_inputs = [(Path(p), Path(os.path.realpath(p))) for p in inputs if p is not None]
+    for output in outputs:
+        real = Path(os.path.realpath(output))
+        for given, source in real_inputs:
+            if real == source:
+                problem = "is also an input of this run"
+            elif source.is_relative_to(real):
+                problem = f"contains an input of this run ({given.name})"
+            elif real.is_relative_to(source) and not source.is_dir():
+                problem = f"lies inside an input file ({given.name})"
+            else:
+                continue
+            raise InputError(
+                f"{problem}; choose another output so no input is replaced", source=output
+            )
+
+
+def publish_dirs(
+    pairs: Sequence[tuple[Path, Path]], *, inputs: Iterable[str | os.PathLike[str]] = ()
+) -> None:
+    """Move staged folders to their final places; check every one before moving any.
+
+    Each final folder must be replaceable (:func:`check_replaceable`) and no input; each staged
+    folder gets its :data:`MARKER` first.
+    """
+    check_not_input([final for _, final in pairs], inputs)
+    for _, final in pairs:
+        check_replaceable(final)
+    for staged, final in pairs:
+        _write_marker(Path(staged))
+        _replace_dir(Path(staged), Path(final))
+
+
+def publish_dir(
+    staged: Path, final: Path, *, inputs: Iterable[str | os.PathLike[str]] = ()
+) -> None:
+    """Move one finished folder to ``final`` (see :func:`publish_dirs`)."""
+    publish_dirs([(staged, final)], inputs=inputs)
+
+
+def _replace_dir(staged: Path, final: Path) -> None:
+    if os.path.lexists(final):
         old = final.with_name(f".{final.name}.old-{os.getpid()}")
         os.replace(final, old)
-        os.replace(staged, final)
+        try:
+            os.replace(staged, final)
+        except BaseException:
+            os.replace(old, final)  # put the previous output back
+            raise
         shutil.rmtree(old, ignore_errors=True)
     else:
         os.replace(staged, final)
+
+
+def check_file_replaceable(path: str | os.PathLike[str], data: bytes | None = None) -> None:
+    """Raise unless ``path`` is absent, a file ocio-vp wrote, or already holds ``data``."""
+    path = Path(path)
+    try:
+        info = os.lstat(path)
+    except FileNotFoundError:
+        return
+    except OSError as error:
+        raise InputError(f"cannot check: {error.strerror}", source=path) from None
+    if stat.S_ISREG(info.st_mode):
+        with contextlib.suppress(OSError), open(path, "rb") as handle:
+            head = handle.read(max(len(FILE_SIGNATURE), len(data or b"") + 1))
+            if head.startswith(FILE_SIGNATURE) or (data is not None and head == data):
+                return
+    kind = "file" if stat.S_ISREG(info.st_mode) else "file system entry"
+    raise InputError(f"is a {kind} ocio-vp did not write; {_MOVE_HINT}", source=path)
+
+
+def write_output_file(path: str | os.PathLike[str], data: bytes | str) -> None:
+    """:func:`write_file_atomically`, refusing to replace a file ocio-vp did not write."""
+    raw = data.encode("utf-8") if isinstance(data, str) else data
+    check_file_replaceable(path, raw)
+    parent = Path(path).parent
+    created = _make_dirs(parent)
+    try:
+        with output_lock(parent):
+            check_file_replaceable(path, raw)
+            write_file_atomically(path, raw)
+    except BaseException:
+        _remove_empty(created)
+        raise
 
 
 def write_file_atomically(path: str | os.PathLike[str], data: bytes | str) -> None:

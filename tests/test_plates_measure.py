@@ -184,6 +184,7 @@ class TestMeasureCommand:
                 "lit_green.png",
                 "lit_blue.png",
                 "samples.json",
+                ".ocio-vp-output",  # the marker that lets a later run replace the folder
                 *(f"{e}_target.png" for e in ENVIRONMENTS),
                 *(f"{e}_black.png" for e in ENVIRONMENTS),
             ]

@@ -36,21 +36,26 @@ def run(args: argparse.Namespace) -> int:
 
     from ocio_vp.errors import InputError
     from ocio_vp.ocio.writer import write_solutions
+    from ocio_vp.simulator.data import PAPER_ENVIRONMENTS
     from ocio_vp.simulator.samples import SAMPLE_NAME, simulate_and_solve
     from ocio_vp.simulator.stage import paper_stage
-    from ocio_vp.staging import write_file_atomically
+    from ocio_vp.staging import check_file_replaceable, check_replaceable, write_output_file
 
     start = time.perf_counter()
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise InputError("exists and is not a folder", source=out, key="--out")
     stage = paper_stage()
+    # Every destination is checked before anything is written: all or nothing.
+    for name in (*PAPER_ENVIRONMENTS, *(() if args.no_report else ("report",))):
+        check_replaceable(out / name)
+    check_file_replaceable(out / f"{SAMPLE_NAME}.yaml")
     with tempfile.TemporaryDirectory() as tmp:
         scratch = Path(tmp) / f"{SAMPLE_NAME}.yaml"
         _, solutions = simulate_and_solve(scratch, method=args.method, stage=stage)
         try:
             written = write_solutions(solutions, out)
-            write_file_atomically(out / scratch.name, scratch.read_bytes())
+            write_output_file(out / scratch.name, scratch.read_bytes())
         except OSError as error:
             raise InputError(f"cannot write: {error.strerror}", source=out, key="--out") from None
     print(

@@ -36,9 +36,17 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ocio_vp.plates.capture import load_capture, save_capture_document, with_corners
-    from ocio_vp.plates.measure import measure_capture, measure_steps, write_measure_outputs
+    from ocio_vp.plates.measure import (
+        measure_capture,
+        measure_steps,
+        overlay_folder,
+        write_measure_outputs,
+    )
+    from ocio_vp.staging import check_not_input
 
     capture = load_capture(args.capture)
+    outputs = (args.out, overlay_folder(args.out, args.overlays))
+    check_not_input(outputs, [capture.source, *capture.plate_paths()])
     detect = None
     if any(shot.corners is None for shot in capture.charts()):
         from ocio_vp.plates.detection import detector

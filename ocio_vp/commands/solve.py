@@ -150,7 +150,8 @@ def run(args: argparse.Namespace) -> int:
         print("\n".join(notes))
     solutions = _solve(measurements, environments, args)
     solutions = [with_wall_encoding(s, args.wall_encoding, peak_nits=peak_nits) for s in solutions]
-    written = write_solutions(solutions, args.out)
+    hdri_files = [spec.partition("=")[2] or spec for spec in args.hdri]
+    written = write_solutions(solutions, args.out, inputs=[args.measurements, *hdri_files])
     print(summary_table(written))
     print_fixtures(written)
     print_linearity(written)

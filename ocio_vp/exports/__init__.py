@@ -25,7 +25,7 @@ from ocio_vp.exports.nuke import write_nuke
 from ocio_vp.exports.resolve import DEFAULT_CUBE_RANGE, DEFAULT_CUBE_SIZE, write_resolve
 from ocio_vp.exports.source import ExportSource, load_export_source
 from ocio_vp.exports.unreal import write_unreal
-from ocio_vp.staging import publish_dir, staged_dir
+from ocio_vp.staging import publish_dirs, staged_dir
 
 __all__ = ["EXPORT_TARGETS", "ExportFailure", "ExportReport", "ExportResult", "export_solutions"]
 
@@ -195,8 +195,7 @@ def _export_environment(
                 )
                 staged.append((folder, final))
                 results.append(ExportResult(source.solution.environment, target, final, summary))
-            for folder, final in staged:
-                publish_dir(folder, final)
+            publish_dirs(staged)  # every destination checked before any is replaced
     except BaseException:
         for folder in created:
             with contextlib.suppress(OSError):

@@ -8,7 +8,6 @@ error names the file, the key path and the problem.
 from __future__ import annotations
 
 import difflib
-import hashlib
 import json
 import math
 import re
@@ -20,13 +19,18 @@ from typing import Any
 import numpy as np
 import yaml
 
-from ocio_vp.errors import InputError, format_key_path
+from ocio_vp.errors import InputError, excerpt, format_key_path
+from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.fixtures import Fixture, fixtures_to_dict, parse_fixtures
 from ocio_vp.formats.synthesis import SynthesisRecord, parse_synthesis, synthesis_to_dict
 
 __all__ = [
     "CHANNELS",
     "FORMAT",
+    "MAX_CAMERA_VALUE",
+    "MIN_BETA",
+    "MIN_SIGNAL",
+    "PANEL_RANGE",
     "SAFE_NAME",
     "VERSION",
     "Environment",
@@ -47,7 +51,17 @@ FORMAT = "ocio-vp/measurements"
 VERSION = 1
 CHANNELS = ("red", "green", "blue")
 #: Names that are safe as folder names and inside Tcl, C, YAML and OCIO names.
-SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
+#: (``\Z``, not ``$``: ``$`` also matches before a final newline.)
+SAFE_NAME = re.compile(r"\A[A-Za-z0-9][A-Za-z0-9_-]{0,63}\Z")
+#: Largest magnitude of a camera RGB value (raw 16-bit code values and HDR merges stay far below).
+MAX_CAMERA_VALUE = 1e9
+#: A block of camera values (primaries, a chart) whose largest value is positive but below this
+#: is refused: it is not a photographed signal but data scaled by mistake.
+MIN_SIGNAL = 1e-12
+#: Smallest form factor ``beta`` (a panel ~500x farther away than it is wide).
+MIN_BETA = 1e-6
+#: Calibration panel width, height and distance (and |offset|) in metres.
+PANEL_RANGE = (1e-3, 1e3)
 
 
 @dataclass(frozen=True)
@@ -123,7 +137,9 @@ class Measurements:
             if environment.name == name:
                 return environment
         names = ", ".join(e.name for e in self.environments)
-        raise InputError(f"no environment named {name!r} (have: {names})", source=self.source)
+        raise InputError(
+            f"no environment named {excerpt(name)} (have: {names})", source=self.source
+        )
 
 
 # --------------------------------------------------------------------------------------------
@@ -155,34 +171,61 @@ class Validator:
         allowed = set(required) | set(optional)
         for name in value:
             if name not in allowed:
-                hint = difflib.get_close_matches(str(name), sorted(allowed), n=1)
+                hint = difflib.get_close_matches(str(name)[:100], sorted(allowed), n=1)
                 suggestion = f" (did you mean {hint[0]!r}?)" if hint else ""
                 expected = ", ".join(sorted(allowed))
                 raise self.error(
-                    (*key, str(name)), f"unknown key{suggestion}; expected one of: {expected}"
+                    (*key, str(name)[:60]),
+                    f"unknown key{suggestion}; expected one of: {expected}",
                 )
         for name in required:
             if name not in value:
-                raise self.error(key, f"missing required key {name!r}")
+                raise self.error(key, f"missing required key {excerpt(name)}")
         return value
 
     def number(
-        self, value: Any, key: tuple[str | int, ...], *, minimum: float = 0.0, strict: bool = False
+        self,
+        value: Any,
+        key: tuple[str | int, ...],
+        *,
+        minimum: float = 0.0,
+        strict: bool = False,
+        maximum: float = math.inf,
     ) -> float:
+        """A finite float64 in ``[minimum, maximum]`` (``(minimum, maximum]`` when ``strict``)."""
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise self.error(key, f"expected a number, got {_kind(value)}")
-        number = float(value)
+        try:
+            number = float(value)
+        except OverflowError:  # an integer beyond float64
+            raise self.error(key, "expected a number, got an integer too large for one") from None
         if not math.isfinite(number):
-            raise self.error(key, f"expected a finite number, got {value!r}")
+            raise self.error(key, f"expected a finite number, got {excerpt(value)}")
         if number < minimum or (strict and number == minimum):
             relation = ">" if strict else ">="
-            raise self.error(key, f"expected a number {relation} {minimum:g}, got {value!r}")
+            raise self.error(key, f"expected a number {relation} {minimum:g}, got {number:.6g}")
+        if number > maximum:
+            raise self.error(key, f"expected a number <= {maximum:g}, got {number:.6g}")
         return number
 
-    def rgb(self, value: Any, key: tuple[str | int, ...]) -> np.ndarray:
+    def rgb(
+        self,
+        value: Any,
+        key: tuple[str | int, ...],
+        *,
+        minimum: float = 0.0,
+        maximum: float = MAX_CAMERA_VALUE,
+    ) -> np.ndarray:
+        """Camera ``[r, g, b]``: each value in ``[minimum, maximum]``."""
         if not isinstance(value, (list, tuple)) or len(value) != 3:
             raise self.error(key, f"expected [r, g, b], got {_kind(value)}")
-        out = np.array([self.number(v, (*key, i)) for i, v in enumerate(value)], dtype=np.float64)
+        out = np.array(
+            [
+                self.number(v, (*key, i), minimum=minimum, maximum=maximum)
+                for i, v in enumerate(value)
+            ],
+            dtype=np.float64,
+        )
         return out
 
     def chart(self, value: Any, key: tuple[str | int, ...], n: int | None) -> np.ndarray:
@@ -192,11 +235,20 @@ class Validator:
             raise self.error(key, f"has {len(value)} patches, expected {n} like lit_chart.red")
         return np.stack([self.rgb(v, (*key, i)) for i, v in enumerate(value)])
 
+    def signal(self, values: np.ndarray, key: tuple[str | int, ...]) -> np.ndarray:
+        """Refuse camera values that are all positive-but-tiny: scaled data, not a photograph."""
+        peak = float(np.max(np.abs(values))) if values.size else 0.0
+        if 0.0 < peak < MIN_SIGNAL:
+            raise self.error(
+                key, f"largest value is {peak:.3g}, below {MIN_SIGNAL:g}: is the data scaled?"
+            )
+        return values
+
     def name(self, value: Any, key: tuple[str | int, ...]) -> str:
         if not isinstance(value, str) or not SAFE_NAME.match(value):
             raise self.error(
                 key,
-                f"unsafe name {value!r}: use 1-64 letters, digits, '_' or '-', "
+                f"unsafe name {excerpt(value)}: use 1-64 letters, digits, '_' or '-', "
                 "starting with a letter or digit",
             )
         return value
@@ -207,7 +259,7 @@ def _kind(value: Any) -> str:
         return f"a list of {len(value)}"
     if value is None:
         return "nothing"
-    return f"{type(value).__name__} {value!r}"[:60]
+    return f"{type(value).__name__} {excerpt(value)}"
 
 
 def check_safe_name(value: Any, *, source: object = None, key: str | None = None) -> str:
@@ -236,22 +288,23 @@ def measurements_from_dict(
         optional=("ramps", "fixtures"),
     )
     if top["format"] != FORMAT:
-        raise ctx.error(("format",), f"expected {FORMAT!r}, got {top['format']!r}")
+        raise ctx.error(("format",), f"expected {FORMAT!r}, got {excerpt(top['format'])}")
     if top["version"] != VERSION or isinstance(top["version"], bool):
         raise ctx.error(
-            ("version",), f"this ocio-vp reads version {VERSION}, got {top['version']!r}"
+            ("version",), f"this ocio-vp reads version {VERSION}, got {excerpt(top['version'])}"
         )
 
     stage = parse_stage(ctx, top["stage"])
 
     primaries = ctx.mapping(top["primaries"], ("primaries",), required=CHANNELS)
     SL = np.stack([ctx.rgb(primaries[c], ("primaries", c)) for c in CHANNELS], axis=1)
+    ctx.signal(SL, ("primaries",))
 
     lit = ctx.mapping(top["lit_chart"], ("lit_chart",), required=CHANNELS)
     red = ctx.chart(lit["red"], ("lit_chart", "red"), None)
     n = len(red)
     charts = [red] + [ctx.chart(lit[c], ("lit_chart", c), n) for c in CHANNELS[1:]]
-    SRL = np.stack(charts, axis=2)  # (n, camera channel, LED channel)
+    SRL = ctx.signal(np.stack(charts, axis=2), ("lit_chart",))  # (n, camera ch., LED ch.)
 
     if not 0 <= stage.white_patch < n:
         raise ctx.error(
@@ -303,34 +356,40 @@ def parse_stage(ctx: Validator, value: Any) -> Stage:
             required=("width", "height", "distance"),
             optional=("offset_x", "offset_y"),
         )
-        panel = PanelGeometry(
-            width=ctx.number(raw["width"], (*pkey, "width"), strict=True),
-            height=ctx.number(raw["height"], (*pkey, "height"), strict=True),
-            distance=ctx.number(raw["distance"], (*pkey, "distance"), strict=True),
-            offset_x=ctx.number(raw.get("offset_x", 0.0), (*pkey, "offset_x"), minimum=-math.inf),
-            offset_y=ctx.number(raw.get("offset_y", 0.0), (*pkey, "offset_y"), minimum=-math.inf),
-        )
+        low, high = PANEL_RANGE  # metres: a panel from a millimetre to a kilometre
+        sizes = {
+            name: ctx.number(raw[name], (*pkey, name), minimum=low, maximum=high)
+            for name in ("width", "height", "distance")
+        }
+        offsets = {
+            name: ctx.number(raw.get(name, 0.0), (*pkey, name), minimum=-high, maximum=high)
+            for name in ("offset_x", "offset_y")
+        }
+        panel = PanelGeometry(**sizes, **offsets)
     beta = None
     if "beta" in stage:
-        beta = ctx.number(stage["beta"], (*key, "beta"), strict=True)
+        beta = ctx.number(stage["beta"], (*key, "beta"), minimum=MIN_BETA)
         if beta > 1.0:
-            raise ctx.error((*key, "beta"), f"a form factor is at most 1, got {beta!r}")
+            raise ctx.error((*key, "beta"), f"a form factor is at most 1, got {beta:.6g}")
     if panel is None and beta is None:
         raise ctx.error(key, "give either calibration_panel {width, height, distance} or beta")
     white_patch = stage.get("white_patch", 18)
     if isinstance(white_patch, bool) or not isinstance(white_patch, int):
         raise ctx.error((*key, "white_patch"), f"expected a patch index, got {_kind(white_patch)}")
+    # A "white" patch reflecting under 1% is a mistake (and would blow w_avg up).
     reflectance = ctx.number(
-        stage.get("white_reflectance", 0.9), (*key, "white_reflectance"), strict=True
+        stage.get("white_reflectance", 0.9), (*key, "white_reflectance"), minimum=0.01
     )
     if reflectance > 1.0:
-        raise ctx.error((*key, "white_reflectance"), f"expected at most 1, got {reflectance!r}")
+        raise ctx.error((*key, "white_reflectance"), f"expected at most 1, got {reflectance:.6g}")
     camera = stage.get("camera_colorspace")
     if camera is not None:
         camera = _check_colourspace(ctx, camera, (*key, "camera_colorspace"))
     clip_level = None
     if "clip_level" in stage:
-        clip_level = ctx.number(stage["clip_level"], (*key, "clip_level"), strict=True)
+        clip_level = ctx.number(
+            stage["clip_level"], (*key, "clip_level"), strict=True, maximum=MAX_CAMERA_VALUE
+        )
     return Stage(
         name=name,
         panel=panel,
@@ -348,9 +407,9 @@ def _check_colourspace(ctx: Validator, value: Any, key: tuple[str | int, ...]) -
     names = sorted(colour.RGB_COLOURSPACES.keys())
     if isinstance(value, str) and value in colour.RGB_COLOURSPACES:
         return colour.RGB_COLOURSPACES[value].name
-    close = difflib.get_close_matches(str(value), names, n=3, cutoff=0.5)
+    close = difflib.get_close_matches(str(value)[:100], names, n=3, cutoff=0.5)
     hint = f"; close matches: {', '.join(close)}" if close else ""
-    raise ctx.error(key, f"unknown colour space {value!r} (colour.RGB_COLOURSPACES){hint}")
+    raise ctx.error(key, f"unknown colour space {excerpt(value)} (colour.RGB_COLOURSPACES){hint}")
 
 
 def _parse_environments(ctx: Validator, value: Any, n: int) -> tuple[Environment, ...]:
@@ -372,7 +431,9 @@ def _parse_environments(ctx: Validator, value: Any, n: int) -> tuple[Environment
                 (*key, "name"), f"duplicate name {name!r} (also environments[{seen[name]}])"
             )
         seen[name] = i
-        target = ctx.chart(env["target_chart"], (*key, "target_chart"), n)
+        target = ctx.signal(
+            ctx.chart(env["target_chart"], (*key, "target_chart"), n), (*key, "target_chart")
+        )
         w_avg = ctx.rgb(env["w_avg"], (*key, "w_avg")) if "w_avg" in env else None
         if w_avg is not None and not np.any(w_avg > 0):
             raise ctx.error((*key, "w_avg"), "is black: the environment gives no light")
@@ -394,42 +455,6 @@ def _parse_environments(ctx: Validator, value: Any, n: int) -> tuple[Environment
 
 # --------------------------------------------------------------------------------------------
 # Files.
-
-
-def read_document(path: str | Path) -> tuple[Any, str]:
-    """Read a YAML or JSON file; returns the parsed data and the sha256 of its bytes.
-
-    Raises
-    ------
-    InputError
-        When the file is missing, unreadable, not UTF-8, or not valid YAML/JSON.
-    """
-    path = Path(path)
-    source = str(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise InputError("file not found", source=source) from None
-    except OSError as error:
-        raise InputError(f"cannot read: {error.strerror}", source=source) from None
-    try:
-        text = raw.decode("utf-8")
-        if path.suffix.lower() == ".json":
-            data = json.loads(text)
-        else:
-            data = yaml.safe_load(text)
-    except UnicodeDecodeError:
-        raise InputError("not a UTF-8 text file", source=source) from None
-    except json.JSONDecodeError as error:
-        raise InputError(
-            f"invalid JSON at line {error.lineno}: {error.msg}", source=source
-        ) from None
-    except yaml.YAMLError as error:
-        mark = getattr(error, "problem_mark", None)
-        where = f" at line {mark.line + 1}" if mark is not None else ""
-        problem = getattr(error, "problem", None) or "syntax error"
-        raise InputError(f"invalid YAML{where}: {problem}", source=source) from None
-    return data, hashlib.sha256(raw).hexdigest()
 
 
 def load_measurements(path: str | Path) -> Measurements:
@@ -496,13 +521,18 @@ def measurements_to_dict(measurements: Measurements) -> dict[str, Any]:
 
 
 def save_measurements(measurements: Measurements, path: str | Path) -> None:
-    """Write a measurements file; YAML unless ``path`` ends in ``.json``. Floats round-trip."""
-    from ocio_vp.staging import write_file_atomically
+    """Write a measurements file; YAML unless ``path`` ends in ``.json``. Floats round-trip.
+
+    An existing file is replaced only if ocio-vp wrote it (YAML: its first line is the
+    ``# Written by ocio-vp`` comment) or it already holds the same bytes.
+    """
+    from ocio_vp.staging import FILE_SIGNATURE, write_output_file
 
     data = measurements_to_dict(measurements)
     path = Path(path)
     if path.suffix.lower() == ".json":
         text = json.dumps(data, indent=2) + "\n"
     else:
-        text = yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
-    write_file_atomically(path, text)
+        header = f"{FILE_SIGNATURE.decode()} ({FORMAT} v{VERSION}, docs/measurements.md)\n"
+        text = header + yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
+    write_output_file(path, text)

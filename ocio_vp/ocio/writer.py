@@ -7,13 +7,14 @@ every one of them succeeded, so a failure never leaves a half-written output fol
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+import os
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 from ocio_vp.formats.solution import Solution, solution_to_json
 from ocio_vp.ocio.config import build_config, ocio_names, write_config
 from ocio_vp.ocio.wall import wall_outputs
-from ocio_vp.staging import publish_dir, staged_dir
+from ocio_vp.staging import publish_dirs, staged_dir
 
 __all__ = ["write_environment", "write_solutions"]
 
@@ -36,8 +37,17 @@ def write_environment(solution: Solution, directory: Path) -> Solution:
     return solution
 
 
-def write_solutions(solutions: Sequence[Solution], out_dir: str | Path) -> list[Solution]:
-    """Write every solution to ``out_dir/<environment>/``, all or nothing."""
+def write_solutions(
+    solutions: Sequence[Solution],
+    out_dir: str | Path,
+    *,
+    inputs: Iterable[str | os.PathLike[str]] = (),
+) -> list[Solution]:
+    """Write every solution to ``out_dir/<environment>/``, all or nothing.
+
+    An existing environment folder is replaced only if ocio-vp wrote it and it holds nothing
+    else, and none may be one of ``inputs`` (see :mod:`ocio_vp.staging`).
+    """
     out_dir = Path(out_dir)
     written = []
     with staged_dir(out_dir) as stage:
@@ -45,6 +55,6 @@ def write_solutions(solutions: Sequence[Solution], out_dir: str | Path) -> list[
             folder = stage / solution.environment
             folder.mkdir()
             written.append(write_environment(solution, folder))
-        for solution in solutions:
-            publish_dir(stage / solution.environment, out_dir / solution.environment)
+        pairs = [(stage / s.environment, out_dir / s.environment) for s in solutions]
+        publish_dirs(pairs, inputs=inputs)
     return written

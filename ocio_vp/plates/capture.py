@@ -108,6 +108,13 @@ class Capture:
         """Every chart shot, lit charts first."""
         return [*self.lit_chart.values(), *(e.target_chart for e in self.environments)]
 
+    def plate_paths(self) -> list[Path]:
+        """Every file the capture reads: plates, their frames and flat fields."""
+        shots: list[ChartShot | RegionShot] = [*self.primaries.values(), *self.charts()]
+        shots += [e.black_level for e in self.environments if e.black_level is not None]
+        paths = [p for shot in shots for p in (*shot.plate.paths, *(shot.plate.flat_field or ()))]
+        return sorted(set(paths))
+
 
 # --------------------------------------------------------------------------------------------
 

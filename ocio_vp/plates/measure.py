@@ -321,6 +321,12 @@ def samples_document(result: MeasureResult) -> dict[str, Any]:
     return {"format": "ocio-vp/samples", "version": 1, "plates": plates}
 
 
+def overlay_folder(out: str | Path, overlays: str | Path | None = None) -> Path:
+    """Where the overlays of ``measure --out OUT`` go: ``overlays`` or ``OUT_STEM.overlays``."""
+    out = Path(out)
+    return Path(overlays) if overlays is not None else out.with_name(f"{out.stem}.overlays")
+
+
 def write_measure_outputs(
     result: MeasureResult, out: str | Path, *, overlays: str | Path | None = None
 ) -> Path:
@@ -331,10 +337,18 @@ def write_measure_outputs(
     """
     from ocio_vp.formats.measurements import save_measurements
     from ocio_vp.plates.overlay import write_png
-    from ocio_vp.staging import publish_dir, staged_dir, write_file_atomically
+    from ocio_vp.staging import (
+        check_file_replaceable,
+        check_replaceable,
+        publish_dir,
+        staged_dir,
+        write_file_atomically,
+    )
 
     out = Path(out)
-    folder = Path(overlays) if overlays is not None else out.with_name(f"{out.stem}.overlays")
+    folder = overlay_folder(out, overlays)
+    check_replaceable(folder)  # both outputs checked before either is written
+    check_file_replaceable(out)
     with staged_dir(folder.parent) as staged:
         for sampling in result.plates:
             write_png(staged / f"{sampling.name}.png", _overlay(sampling))
