@@ -13,7 +13,7 @@ import reprlib
 __all__ = ["MAX_MESSAGE", "InputError", "describe_failure", "excerpt", "format_key_path"]
 
 #: Longest message :class:`InputError` prints (the command line adds ``ocio-vp VERB: error: ``).
-MAX_MESSAGE = 280
+MAX_MESSAGE = 268
 
 _REPR = reprlib.Repr()
 _REPR.maxlevel = 2

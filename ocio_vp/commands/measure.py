@@ -42,11 +42,14 @@ def run(args: argparse.Namespace) -> int:
         overlay_folder,
         write_measure_outputs,
     )
-    from ocio_vp.staging import check_not_input
+    from ocio_vp.staging import check_file_replaceable, check_not_input, check_replaceable
 
     capture = load_capture(args.capture)
-    outputs = (args.out, overlay_folder(args.out, args.overlays))
-    check_not_input(outputs, [capture.source, *capture.plate_paths()])
+    overlays = overlay_folder(args.out, args.overlays)
+    # Before any plate is read: no output may be an input or a file ocio-vp did not write.
+    check_not_input((args.out, overlays), [capture.source, *capture.plate_paths()])
+    check_replaceable(overlays)
+    check_file_replaceable(args.out)
     detect = None
     if any(shot.corners is None for shot in capture.charts()):
         from ocio_vp.plates.detection import detector

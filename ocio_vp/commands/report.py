@@ -51,8 +51,8 @@ def run(args: argparse.Namespace) -> int:
     from ocio_vp.formats.solution_inputs import solution_folders
     from ocio_vp.report.build import build_report, default_report_dir
 
-    if not args.dpi > 0:
-        raise InputError(f"expected a positive number, got {args.dpi}", key="--dpi")
+    if not 10 <= args.dpi <= 1200:  # tiny values crash the PNG renderer, huge ones exhaust memory
+        raise InputError(f"expected 10..1200, got {args.dpi:g}", key="--dpi")
     chosen = solution_folders(args.solutions)
     for note in chosen.notes():
         print(note)

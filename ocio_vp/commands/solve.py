@@ -143,7 +143,9 @@ def run(args: argparse.Namespace) -> int:
     if args.hdri:
         from ocio_vp.hdri.diffuse import DEFAULT_HDRI_WIDTH, environments_with_hdri
 
-        width = args.hdri_width or DEFAULT_HDRI_WIDTH
+        width = DEFAULT_HDRI_WIDTH if args.hdri_width is None else args.hdri_width
+        if not 16 <= width <= 16384:
+            raise InputError(f"expected 16..16384, got {width}", key="--hdri-width")
         environments, notes = environments_with_hdri(
             measurements, environments, args.hdri, width=width
         )

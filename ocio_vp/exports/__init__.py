@@ -95,8 +95,11 @@ def _check_options(targets, cube_size, cube_range) -> tuple[float, float]:
     if not 2 <= int(cube_size) <= MAX_CUBE_SIZE:
         raise InputError(f"expected 2..{MAX_CUBE_SIZE}, got {cube_size}", key="--cube-size")
     lo, hi = (float(v) for v in cube_range)
-    if not (lo < hi and abs(lo) < 1e6 and abs(hi) < 1e6):
-        raise InputError(f"expected LO < HI (finite), got {lo} {hi}", key="--cube-range")
+    if not (hi - lo >= 1e-3 and abs(lo) < 1e6 and abs(hi) < 1e6):
+        raise InputError(
+            f"expected LO < HI (finite, at least 0.001 apart), got {lo:g} {hi:g}",
+            key="--cube-range",
+        )
     return lo, hi
 
 

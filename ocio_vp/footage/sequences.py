@@ -9,15 +9,19 @@ reported rather than silently skipped.
 
 from __future__ import annotations
 
+import os
 import re
 from collections.abc import Sequence
 from pathlib import Path
 
-from ocio_vp.errors import InputError
+from ocio_vp.errors import InputError, excerpt
 
 __all__ = ["expand_frames", "frame_pattern", "output_paths", "parse_frame_range"]
 
 _PATTERN = re.compile(r"#+|%0?(\d*)d")
+#: Most frames one range may name (an hour at 24 fps is 86,400) and widest frame number field.
+MAX_FRAMES = 1_000_000
+MAX_PADDING = 16
 
 
 def frame_pattern(text: str) -> tuple[str, str, int] | None:
@@ -35,19 +39,28 @@ def frame_pattern(text: str) -> tuple[str, str, int] | None:
         padding = len(m.group(0))
         padding = 0 if padding == 1 else padding
     else:
-        padding = int(m.group(1) or 0)
+        digits = m.group(1) or "0"
+        padding = int(digits) if len(digits) <= 3 else MAX_PADDING + 1
+    if padding > MAX_PADDING:
+        raise InputError(
+            f"a frame number field of more than {MAX_PADDING} digits", source=text[:100]
+        )
     return text[: m.start()], text[m.end() :], padding
 
 
 def parse_frame_range(text: str) -> range:
     """``"1001-1100"`` -> range(1001, 1101); a single number is a one-frame range."""
-    m = re.fullmatch(r"\s*(-?\d+)\s*(?:-\s*(-?\d+)\s*)?", text)
+    m = re.fullmatch(r"\s*(-?\d{1,15})\s*(?:-\s*(-?\d{1,15})\s*)?", text)
     if not m:
-        raise InputError(f"expected FIRST-LAST, got {text!r}", key="--frames")
+        raise InputError(
+            f"expected FIRST-LAST (whole numbers), got {excerpt(text)}", key="--frames"
+        )
     first = int(m.group(1))
     last = int(m.group(2)) if m.group(2) is not None else first
     if last < first:
         raise InputError(f"the last frame {last} is before the first {first}", key="--frames")
+    if last - first + 1 > MAX_FRAMES:
+        raise InputError(f"{last - first + 1} frames; at most {MAX_FRAMES} per run", key="--frames")
     return range(first, last + 1)
 
 
@@ -100,6 +113,8 @@ def expand_frames(args: Sequence[str], *, frames: range | None = None) -> list[P
 
 def output_paths(inputs: Sequence[Path], out_dir: Path) -> list[Path]:
     """``out_dir / name`` for each input; two inputs with one name would overwrite each other."""
+    if os.path.lexists(out_dir) and not Path(out_dir).is_dir():
+        raise InputError("exists and is not a folder; choose another --out", source=out_dir)
     outputs = [Path(out_dir) / p.name for p in inputs]
     names: dict[Path, Path] = {}
     for src, dst in zip(inputs, outputs, strict=True):

@@ -308,7 +308,8 @@ def measurements_from_dict(
 
     if not 0 <= stage.white_patch < n:
         raise ctx.error(
-            ("stage", "white_patch"), f"index {stage.white_patch} is outside the {n} chart patches"
+            ("stage", "white_patch"),
+            f"index {excerpt(stage.white_patch)} is outside the {n} chart patches",
         )
 
     environments = _parse_environments(ctx, top["environments"], n)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -16,11 +17,15 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ocio_vp.errors import InputError
+from ocio_vp.errors import InputError, excerpt
+from ocio_vp.formats.documents import read_document
+from ocio_vp.formats.measurements import check_safe_name
 
 __all__ = ["SOLUTION_FORMAT", "Diagnostics", "Solution", "load_solution", "solution_to_json"]
 
 SOLUTION_FORMAT = "ocio-vp/solution"
+#: Largest magnitude a number in a solution.json may have (far beyond any solved stage).
+MAX_SOLUTION_VALUE = 1e30
 
 
 @dataclass(frozen=True)
@@ -264,17 +269,10 @@ def _matrix(data: dict[str, Any], key: str, source: str, optional: bool = False)
     value = data.get(key)
     if value is None and optional:
         return None
-    array = np.asarray(value, dtype=np.float64) if value is not None else None
-    if array is None or array.shape != (3, 3) or not np.all(np.isfinite(array)):
+    array = _finite_array(value, (3, 3))
+    if array is None:
         raise InputError("expected a finite 3x3 matrix", source=source, key=key)
     return array
-
-
-def _diagnostics(data: dict[str, Any], source: str) -> dict[str, Any]:
-    block = data.get("diagnostics", {})
-    if not isinstance(block, dict):
-        raise InputError("expected a mapping", source=source, key="diagnostics")
-    return block
 
 
 def _fixtures(data: dict[str, Any], source: str) -> dict[str, Any] | None:
@@ -295,50 +293,109 @@ def _fixtures(data: dict[str, Any], source: str) -> dict[str, Any] | None:
     return block
 
 
-def load_solution(path: str | Path) -> Solution:
-    """Read ``solution.json`` (or a folder holding one) back into a :class:`Solution`."""
-    path = Path(path)
-    if path.is_dir():
-        path = path / "solution.json"
-    source = str(path)
+def _finite_array(value: Any, shape: tuple[int, ...]) -> np.ndarray | None:
+    """``value`` as a finite float64 array of ``shape``, or None when it is not one."""
+    if not isinstance(value, list):
+        return None
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        return None
+    if array.shape != shape or not np.all(np.isfinite(array)):
+        return None
+    if np.any(np.abs(array) > MAX_SOLUTION_VALUE):
+        return None
+    return array
+
+
+def _rgb(data: dict[str, Any], key: str, source: str, optional: bool = False) -> Any:
+    value = data.get(key)
+    if value is None and optional:
+        return None
+    array = _finite_array(value, (3,))
+    if array is None:
+        raise InputError("expected a finite [r, g, b]", source=source, key=key)
+    return array
+
+
+def _text(data: dict[str, Any], key: str, source: str, *, name: bool = False) -> str | None:
+    """An optional string field; ``name`` ones must also be safe folder/OCIO names."""
+    value = data.get(key)
+    if value is None and not name:
+        return None
+    if name:
+        return check_safe_name(value, source=source, key=key)
+    if not isinstance(value, str) or len(value) > 200 or not value.isprintable():
         raise InputError(
-            "no solution.json here; run `ocio-vp solve` first", source=source
-        ) from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise InputError(f"cannot read solution: {error}", source=source) from None
+            f"expected a short line of text, got {excerpt(value)}", source=source, key=key
+        )
+    return value
+
+
+def _mapping(data: dict[str, Any], key: str, source: str) -> dict[str, Any]:
+    value = data.get(key)
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        raise InputError(f"expected a mapping, got {excerpt(value)}", source=source, key=key)
+    return value
+
+
+def _read(path: Path) -> dict[str, Any]:
+    source = str(path)
+    if not os.path.lexists(path):
+        raise InputError("no solution.json here; run `ocio-vp solve` first", source=source)
+    data, _ = read_document(path) if path.suffix == ".json" else (None, None)
     if not isinstance(data, dict) or data.get("format") != SOLUTION_FORMAT:
         raise InputError(f"not an {SOLUTION_FORMAT} file", source=source, key="format")
     missing = [k for k in ("stage", "environment", "method", "beta", "w_avg") if k not in data]
     if missing:
         raise InputError(f"missing required key {missing[0]!r}", source=source)
-    w_avg = np.asarray(data["w_avg"], dtype=np.float64)
-    if w_avg.shape != (3,) or not np.all(np.isfinite(w_avg)):
-        raise InputError("expected a finite [r, g, b]", source=source, key="w_avg")
-    offset = data.get("black_level_offset")
-    if offset is not None:
-        offset = np.asarray(offset, dtype=np.float64)
-        if offset.shape != (3,) or not np.all(np.isfinite(offset)):
-            raise InputError("expected a finite [r, g, b]", source=source, key="black_level_offset")
+    return data
+
+
+def load_solution(path: str | Path) -> Solution:
+    """Read ``solution.json`` (or a folder holding one) back into a :class:`Solution`.
+
+    Hand-edited files are validated like measurements files: names must be safe, numbers
+    finite (|value| <= 1e30), matrices 3x3; any deviation is an :class:`InputError`.
+    """
+    path = Path(path)
+    if path.is_dir():
+        path = path / "solution.json"
+    source = str(path)
+    data = _read(path)
+    beta = data["beta"]
+    if isinstance(beta, bool) or not isinstance(beta, (int, float)) or not 0 < beta <= 1:
+        raise InputError(
+            f"expected a number in (0, 1], got {excerpt(beta)}", source=source, key="beta"
+        )
+    measurements = _mapping(data, "measurements", source)
+    linearity = data.get("linearity")
+    if linearity is not None and not isinstance(linearity, dict):
+        raise InputError(
+            f"expected a mapping, got {excerpt(linearity)}", source=source, key="linearity"
+        )
+    ocio = _mapping(data, "ocio", source)
+    if not all(isinstance(k, str) and isinstance(v, str) for k, v in ocio.items()):
+        raise InputError("expected names (text) only", source=source, key="ocio")
     return Solution(
-        stage=data["stage"],
-        environment=data["environment"],
-        method=data["method"],
-        beta=float(data["beta"]),
-        w_avg=w_avg,
+        stage=_text(data, "stage", source, name=True),
+        environment=_text(data, "environment", source, name=True),
+        method=_text(data, "method", source) or "",
+        beta=float(beta),
+        w_avg=_rgb(data, "w_avg", source),
         SL=_matrix(data, "SL", source),
         M=_matrix(data, "M", source),
         Q=_matrix(data, "Q", source),
         N=_matrix(data, "N", source, optional=True),
-        black_level_offset=offset,
-        black_level_method=data.get("black_level_method"),
-        diagnostics=Diagnostics.from_dict(_diagnostics(data, source)),
-        measurements_file=data.get("measurements", {}).get("file"),
-        measurements_sha256=data.get("measurements", {}).get("sha256"),
-        camera_colorspace=data.get("camera_colorspace"),
-        ocio=data.get("ocio", {}),
-        linearity=data.get("linearity"),
+        black_level_offset=_rgb(data, "black_level_offset", source, optional=True),
+        black_level_method=_text(data, "black_level_method", source),
+        diagnostics=Diagnostics.from_dict(_mapping(data, "diagnostics", source)),
+        measurements_file=_text(measurements, "file", source),
+        measurements_sha256=_text(measurements, "sha256", source),
+        camera_colorspace=_text(data, "camera_colorspace", source),
+        ocio=ocio,
+        linearity=linearity,
         fixtures=_fixtures(data, source),
     )

@@ -35,6 +35,7 @@ https://doi.org/10.1145/3543664.3543699
 from __future__ import annotations
 
 import dataclasses
+import os
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -42,6 +43,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.errors import InputError
+from ocio_vp.formats.documents import check_regular_file
 
 __all__ = [
     "DEFAULT_HDRI_WIDTH",
@@ -173,8 +175,9 @@ def read_equirect(path: str | Path, *, width: int | None = DEFAULT_HDRI_WIDTH) -
     import OpenImageIO as oiio
 
     source = str(path)
-    if not Path(source).is_file():
+    if not os.path.lexists(source):
         raise InputError("no such HDRI file", source=source)
+    check_regular_file(source)  # a FIFO or device would block or never end
     inp = oiio.ImageInput.open(source)
     if inp is None:
         raise InputError(f"cannot read the HDRI: {oiio.geterror()}", source=source)

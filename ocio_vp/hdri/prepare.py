@@ -48,7 +48,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.errors import InputError
+from ocio_vp.formats.documents import check_regular_file
 from ocio_vp.hdri.diffuse import diffuse_integral, equirect_solid_angles
+from ocio_vp.staging import check_not_input
 
 __all__ = [
     "PreparedHDRI",
@@ -367,6 +369,25 @@ def _rgb_channels(names: list[str], source: str) -> list[int]:
     raise InputError(f"an HDRI needs RGB, the file has channels {names}", source=source)
 
 
+def _check_target(oiio, source: str, target: Path) -> None:
+    """The output may replace neither the input nor an image prepare-hdri did not write."""
+    check_not_input([target], [source])
+    if not os.path.lexists(target):
+        return
+    if target.is_file() and not target.is_symlink():
+        image = oiio.ImageInput.open(str(target))
+        if image is not None:
+            written = bool(image.spec().get_string_attribute("ocio_vp:prepare_hdri"))
+            image.close()
+            if written:
+                return
+        oiio.geterror()
+    raise InputError(
+        "exists and is not an image prepare-hdri wrote; move it away or choose another --out",
+        source=str(target),
+    )
+
+
 def prepare_hdri_file(
     in_path: str | Path,
     out_path: str | Path,
@@ -394,8 +415,10 @@ def prepare_hdri_file(
     source, target = str(in_path), Path(out_path)
     if not (np.isfinite(peak) and peak > 0):
         raise InputError(f"the peak must be a number > 0, got {peak!r}", key="--peak")
-    if not Path(source).is_file():
+    if not os.path.lexists(source):
         raise InputError("no such file", source=source)
+    check_regular_file(source)  # a FIFO or device would block or never end
+    _check_target(oiio, source, target)
     probe = oiio.ImageOutput.create(str(target))
     if probe is None:
         oiio.geterror()

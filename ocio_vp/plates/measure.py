@@ -9,6 +9,7 @@ measurements file, an overlay PNG per plate and ``samples.json`` all together or
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -289,14 +290,26 @@ def _overlay(sampling: PlateSampling) -> np.ndarray:
     return overlay_image(pixels, labels, states)
 
 
-def samples_document(result: MeasureResult) -> dict[str, Any]:
-    """Per-plate, per-patch statistics (``samples.json`` beside the overlays)."""
+def samples_document(
+    result: MeasureResult, *, relative_to: str | Path | None = None
+) -> dict[str, Any]:
+    """Per-plate, per-patch statistics (``samples.json`` beside the overlays).
+
+    Plate paths are written relative to ``relative_to`` (the overlay folder) when given, so
+    the file does not depend on where the project lives.
+    """
+
+    def where(path: Path) -> str:
+        if relative_to is None:
+            return str(path)
+        return Path(os.path.relpath(os.path.abspath(path), os.path.abspath(relative_to))).as_posix()
+
     plates = []
     for sampling in result.plates:
         s = sampling.samples
         plates.append(
             {
-                "plate": [str(p) for p in sampling.plate.paths],
+                "plate": [where(p) for p in sampling.plate.paths],
                 "key": sampling.plate.key,
                 "overlay": f"{sampling.name}.png",
                 "box": list(s.box),
@@ -352,7 +365,7 @@ def write_measure_outputs(
     with staged_dir(folder.parent) as staged:
         for sampling in result.plates:
             write_png(staged / f"{sampling.name}.png", _overlay(sampling))
-        text = json.dumps(samples_document(result), indent=2) + "\n"
+        text = json.dumps(samples_document(result, relative_to=folder), indent=2) + "\n"
         write_file_atomically(staged / "samples.json", text)
         save_measurements(result.measurements, out)
         publish_dir(staged, folder)

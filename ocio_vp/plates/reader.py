@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ocio_vp.errors import InputError
+from ocio_vp.formats.documents import check_regular_file
 
 __all__ = [
     "DISPLAY_FORMATS",
@@ -148,6 +149,7 @@ def _open_input(path: str):  # -> oiio.ImageInput
         raise InputError("plate not found", source=path)
     if os.path.isdir(path):
         raise InputError("is a folder, expected an image", source=path)
+    check_regular_file(path)  # a FIFO or device would block or never end
     inp = oiio.ImageInput.open(path)
     if inp is None:
         message = " ".join(oiio.geterror().split()) or "unknown reason"

@@ -204,7 +204,7 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
         ("rank Q", d.get("rank_Q")),
         ("camera colour space", s.camera_colorspace or "camera native (as measured)"),
         ("measurements", f"{s.measurements_file} (sha256 {str(s.measurements_sha256)[:12]}…)"),
-        ("solution file", str(data.path)),
+        ("solution file", Path(*Path(data.path).parts[-2:]).as_posix()),  # no absolute paths
         ("white patch (index)", data.white_patch),
     ]
     panel = panel_description(s, data.path)

@@ -11,8 +11,9 @@ from typing import Any
 
 import numpy as np
 
-from ocio_vp.errors import InputError
-from ocio_vp.formats.measurements import PanelGeometry
+from ocio_vp.errors import InputError, excerpt
+from ocio_vp.formats.documents import read_bounded
+from ocio_vp.formats.measurements import PANEL_RANGE, PanelGeometry
 from ocio_vp.simulator.data import PAPER_ENVIRONMENTS, wavelengths
 
 __all__ = ["environments_from_args", "read_spectra_csv", "stage_options_from_args"]
@@ -30,11 +31,9 @@ def read_spectra_csv(path: str | Path, *, columns: int) -> np.ndarray:
     """
     source = str(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError("file not found", source=source) from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise InputError(f"cannot read: {error}", source=source) from None
+        text = read_bounded(path).decode("utf-8")
+    except UnicodeDecodeError:
+        raise InputError("not a UTF-8 text file", source=source) from None
     rows = []
     for number, line in enumerate(text.splitlines(), start=1):
         fields = [f.strip() for f in line.replace(";", ",").split(",") if f.strip()]
@@ -46,7 +45,7 @@ def read_spectra_csv(path: str | Path, *, columns: int) -> np.ndarray:
             if not rows:
                 continue  # a header line
             raise InputError(
-                f"not a number in {line!r}", source=source, key=f"line {number}"
+                f"not a number in {excerpt(line)}", source=source, key=f"line {number}"
             ) from None
         if len(values) != columns + 1 or not np.all(np.isfinite(values)):
             raise InputError(
@@ -91,10 +90,13 @@ def _panel(value: str) -> PanelGeometry:
         width, height, distance = (float(x) for x in value.lower().split("x"))
     except ValueError:
         raise InputError(
-            f"expected WIDTHxHEIGHTxDISTANCE in metres, got {value!r}", key="--panel"
+            f"expected WIDTHxHEIGHTxDISTANCE in metres, got {excerpt(value)}", key="--panel"
         ) from None
-    if not (width > 0 and height > 0 and distance > 0):
-        raise InputError(f"panel sizes must be > 0, got {value!r}", key="--panel")
+    low, high = PANEL_RANGE
+    if not all(low <= v <= high for v in (width, height, distance)):
+        raise InputError(
+            f"panel sizes must be {low:g}..{high:g} m, got {excerpt(value)}", key="--panel"
+        )
     return PanelGeometry(width=width, height=height, distance=distance)
 
 
