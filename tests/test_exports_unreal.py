@@ -55,6 +55,7 @@ class TestUnrealFiles:
     def test_layout(self, exported):
         folder = exported[0] / "exports" / "unreal"
         assert sorted(p.name for p in folder.iterdir()) == [
+            ".ocio-vp-output",  # lets a later export replace the folder
             "UNREAL.md",
             "config",
             "env_0.ocioz",

@@ -176,6 +176,8 @@ class TestMeasureCommand:
             assert np.max(np.abs(got.target_chart - want.target_chart) / scale) < 0.005
             np.testing.assert_allclose(got.black_level, want.black_level, rtol=0.005)
         folder = tmp_path / "stage.overlays"
+        # Plate paths relative to the overlay folder: no absolute path in any output.
+        assert str(capture_file.parent) not in (folder / "samples.json").read_text()
         names = sorted(p.name for p in folder.iterdir())
         assert names == sorted(
             [

@@ -17,6 +17,7 @@ import dataclasses
 import functools
 import hashlib
 import json
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -320,12 +321,17 @@ def _summary(environments: Sequence[EnvironmentData]) -> list[dict[str, str]]:
 MANIFEST = "report.json"
 
 
-def _manifest(environments: Sequence[EnvironmentData]) -> dict[str, Any]:
+def _manifest(environments: Sequence[EnvironmentData], out_dir: Path) -> dict[str, Any]:
+    """Solutions named relative to the report folder: no absolute path in any output."""
+
+    def relative(path: Path) -> str:
+        return Path(os.path.relpath(path.resolve(), out_dir.resolve())).as_posix()
+
     return {
         "format": "ocio-vp/report",
         "version": 1,
         "environments": [data.solution.environment for data in environments],
-        "solutions": [str(data.path.resolve()) for data in environments],
+        "solutions": [relative(data.path) for data in environments],
     }
 
 
@@ -365,7 +371,7 @@ def _check_replaceable(
     dropped = [
         env
         for path, env in old_solutions.items()
-        if path not in _manifest(environments)["solutions"]
+        if path not in _manifest(environments, out_dir)["solutions"]
     ]
     if dropped and not replace:
         raise InputError(
@@ -445,7 +451,7 @@ def build_report(
             transforms=sorted({e.transform.description for e in environments}),
         )
         (folder / "index.html").write_text(html, encoding="utf-8")
-        manifest = json.dumps(_manifest(environments), indent=2) + "\n"
+        manifest = json.dumps(_manifest(environments, out_dir), indent=2) + "\n"
         (folder / MANIFEST).write_text(manifest, encoding="utf-8")
         publish_dir(folder, out_dir)
     _relocate(report, folder, out_dir)
