@@ -282,15 +282,22 @@ def check_file_replaceable(path: str | os.PathLike[str], data: bytes | None = No
     raise InputError(f"is a {kind} ocio-vp did not write; {_MOVE_HINT}", source=path)
 
 
-def write_output_file(path: str | os.PathLike[str], data: bytes | str) -> None:
-    """:func:`write_file_atomically`, refusing to replace a file ocio-vp did not write."""
+def write_output_file(
+    path: str | os.PathLike[str], data: bytes | str, *, replace: bool = False
+) -> None:
+    """:func:`write_file_atomically`, refusing to replace a file ocio-vp did not write.
+
+    ``replace`` skips that check (the user asked to replace the file, e.g. ``--force``).
+    """
     raw = data.encode("utf-8") if isinstance(data, str) else data
-    check_file_replaceable(path, raw)
+    if not replace:
+        check_file_replaceable(path, raw)
     parent = Path(path).parent
     created = _make_dirs(parent)
     try:
         with output_lock(parent):
-            check_file_replaceable(path, raw)
+            if not replace:
+                check_file_replaceable(path, raw)
             write_file_atomically(path, raw)
     except BaseException:
         _remove_empty(created)

@@ -106,7 +106,7 @@ def test_simulate_refuses_a_foreign_plates_folder(tmp_path, capsys):
     (folder / "beach.jpg").write_bytes(b"x")
     out = tmp_path / "truth.yaml"
     assert main(["simulate", "--out", str(out), "--plates", str(folder)]) == 2
-    assert "refusing to replace it" in capsys.readouterr().err
+    assert "was not written by ocio-vp" in capsys.readouterr().err
     assert not out.exists() and (folder / "beach.jpg").read_bytes() == b"x"
 
 

@@ -149,20 +149,11 @@ _DEFAULTS = {"vignetting": 0.05, "noise": 0.01, "seed": 0}
 
 
 def _check_plates_folder(folder: str) -> None:
-    """--plates may name a new or empty folder, or one this command wrote before."""
-    from pathlib import Path
+    """--plates may name a new or empty folder, or one this command wrote before (checked
+    before anything is written, so a refusal leaves the measurements file unwritten too)."""
+    from ocio_vp.staging import check_replaceable
 
-    from ocio_vp.errors import InputError
-
-    final = Path(folder)
-    if final.exists() and not (final / "capture.yaml").is_file():
-        if final.is_file() or any(final.iterdir()):
-            raise InputError(
-                "exists and is not a folder of simulated plates (no capture.yaml); refusing to "
-                "replace it",
-                source=final,
-                key="--plates",
-            )
+    check_replaceable(folder)
 
 
 def _write_plates(measurements, args: argparse.Namespace):

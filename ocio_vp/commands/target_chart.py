@@ -200,7 +200,7 @@ def run(args: argparse.Namespace) -> int:
     )
     updated = with_environment(measurements, environment)
     measurements_from_dict(measurements_to_dict(updated), source=args.out)  # never write invalid
-    save_measurements(updated, args.out)
+    save_measurements(updated, args.out, replace=args.force)
     _summary(args, environment, synth)
     return 0
 

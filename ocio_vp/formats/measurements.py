@@ -521,11 +521,14 @@ def measurements_to_dict(measurements: Measurements) -> dict[str, Any]:
     return data
 
 
-def save_measurements(measurements: Measurements, path: str | Path) -> None:
+def save_measurements(
+    measurements: Measurements, path: str | Path, *, replace: bool = False
+) -> None:
     """Write a measurements file; YAML unless ``path`` ends in ``.json``. Floats round-trip.
 
     An existing file is replaced only if ocio-vp wrote it (YAML: its first line is the
-    ``# Written by ocio-vp`` comment) or it already holds the same bytes.
+    ``# Written by ocio-vp`` comment), it already holds the same bytes, or ``replace`` (the
+    user asked for it, e.g. ``--force``).
     """
     from ocio_vp.staging import FILE_SIGNATURE, write_output_file
 
@@ -536,4 +539,4 @@ def save_measurements(measurements: Measurements, path: str | Path) -> None:
     else:
         header = f"{FILE_SIGNATURE.decode()} ({FORMAT} v{VERSION}, docs/measurements.md)\n"
         text = header + yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
-    write_output_file(path, text)
+    write_output_file(path, text, replace=replace)
