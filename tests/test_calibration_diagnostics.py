@@ -192,3 +192,27 @@ def test_solution_json_and_table_carry_the_diagnostics(tmp_path, capsys) -> None
         "regularised",
         "least-squares",
     }
+
+
+def test_clipped_drive_charts_are_what_the_spectral_stage_shows() -> None:
+    """Sodium: M w_avg has a negative channel; the clipped-drive lit charts (eq. 3 with
+    clip(M w_avg, 0)) equal the simulator's spectral rendering of the wall's real light."""
+    from ocio_vp.pipeline import solve_environment
+    from ocio_vp.simulator.predict import predict_stage
+    from ocio_vp.simulator.stage import paper_stage, simulate_measurements
+
+    stage = paper_stage()
+    measurements = simulate_measurements(["sodium_vapour", "direct_sun"], stage=stage)
+    sodium, sun = (
+        solve_environment(measurements, env, method="least-squares")
+        for env in measurements.environments
+    )
+    truth = predict_stage(stage, "sodium_vapour", M=sodium.M, Q=sodium.Q)
+    assert truth.lit_drive_clipped
+    charts = sodium.diagnostics["charts_clipped_drive"]
+    scale = truth.target[18].max()
+    np.testing.assert_allclose(charts["lit_baseline"], truth.lit, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(
+        charts["lit_corrected"], truth.lit_corrected, rtol=0, atol=1e-12 * scale
+    )
+    assert sun.diagnostics["charts_clipped_drive"] is None  # nothing clipped: eq. 3 as is

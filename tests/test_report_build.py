@@ -13,7 +13,7 @@ import pytest
 from ocio_vp.cli import main
 from ocio_vp.errors import InputError
 from ocio_vp.report.build import default_report_dir
-from ocio_vp.report.data import environment_data, itp_defined
+from ocio_vp.report.data import delta_e, environment_data, itp_defined
 
 SAMPLE = Path(__file__).resolve().parent.parent / "sample_configs" / "paper_stage"
 ENVIRONMENTS = ("direct_sun", "sodium_vapour", "incandescent")
@@ -73,14 +73,29 @@ def test_itp_domain():
 
 
 def test_sodium_itp_is_undefined_not_huge():
-    """Sodium's rank-1 lit chart has negative light: those patches are NaN, the rest sane."""
+    """Sodium's eq. 3 lit chart through a rank-1 Q (before the wall clips the drive) has
+    negative light: ΔE ITP is NaN exactly there, bounded everywhere else."""
     (data,) = environment_data([SAMPLE / "sodium_vapour"])
-    itp = data.delta_e["ITP"]
-    undefined = sum(int(np.isnan(v).sum()) for v in itp.values())
-    assert undefined > 0
+    unclipped = {k: np.asarray(v) for k, v in data.solution.diagnostics["charts"].items()}
+    itp = delta_e(unclipped, data.transform.camera_to_xyz, data.white_patch)["ITP"]
+    assert sum(int(np.isnan(v).sum()) for v in itp.values()) > 0
+    target_ok = itp_defined(unclipped["target"], data.transform.camera_to_xyz)
     for chart, values in itp.items():
         assert np.nanmax(values) < 1000, chart  # ICtCp distances are bounded for real light
-        ok = itp_defined(data.charts[chart], data.transform.camera_to_xyz) & itp_defined(
-            data.charts["target"], data.transform.camera_to_xyz
-        )
+        ok = target_ok & itp_defined(unclipped[chart], data.transform.camera_to_xyz)
         assert np.array_equal(np.isnan(values), ~ok)
+    # What the report shows (the light the wall emits) is physical: every patch defined.
+    assert not any(np.isnan(v).any() for v in data.delta_e["ITP"].values())
+
+
+def test_sodium_draws_the_charts_its_figures_measure():
+    """Where the wall clips a negative drive, the lit charts drawn are the clipped ones, so the
+    Fig. 11 formula on the drawn chart gives the figure the page prints."""
+    from ocio_vp.metrics import error_relative_to_white
+
+    (data,) = environment_data([SAMPLE / "sodium_vapour"])
+    clipped = data.solution.diagnostics["charts_clipped_drive"]
+    for chart in ("lit_baseline", "lit_corrected"):
+        np.testing.assert_array_equal(data.charts[chart], np.asarray(clipped[chart]))
+        drawn = error_relative_to_white(data.charts[chart], data.charts["target"], 18)
+        np.testing.assert_allclose(drawn, data.errors[chart], rtol=1e-9)

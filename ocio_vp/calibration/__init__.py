@@ -4,6 +4,7 @@ offset, the geometry of beta and w_avg, and the diagnostics of a solved environm
 
 from ocio_vp.calibration.diagnostics import (
     black_level_bounce,
+    clipped_drive_lit,
     clipped_patches,
     identity_check,
     in_frustum_drive_range,
@@ -40,6 +41,7 @@ __all__ = [
     "MAX_CONDITION_SL",
     "black_level_bounce",
     "black_level_offset",
+    "clipped_drive_lit",
     "clipped_patches",
     "condition_number",
     "environment_w_avg",

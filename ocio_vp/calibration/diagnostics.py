@@ -22,6 +22,7 @@ from ocio_vp.metrics import error_relative_to_white, white_scale
 
 __all__ = [
     "black_level_bounce",
+    "clipped_drive_lit",
     "clipped_patches",
     "identity_check",
     "in_frustum_drive_range",
@@ -128,6 +129,28 @@ def identity_check(Q: ArrayLike, SL: ArrayLike, N: ArrayLike | None) -> dict[str
     return {"max_abs_error": error, "bound": float(bound)}
 
 
+def clipped_drive_lit(problem: Any, Q: ArrayLike, drive: dict[str, Any]) -> dict[str, Any]:
+    """The lit chart as the wall really lights it when ``M w_avg`` has a negative channel.
+
+    The wall cannot emit negative light: it clips the drive to 0, so the chart is lit by eq. 3
+    with ``clip(M w_avg, 0)``. Returns the diagnostics keys ``charts_clipped_drive``
+    (``lit_baseline`` and ``lit_corrected`` = ``lit_baseline @ Q.T``, (n, 3) each),
+    ``lit_chart_error_baseline_clipped_drive`` and ``lit_chart_error_clipped_drive``; all None
+    when the drive is not clipped (the eq. 3 charts are then what the wall shows).
+    """
+    keys = ("charts_clipped_drive", "lit_chart_error_baseline_clipped_drive")
+    out: dict[str, Any] = dict.fromkeys((*keys, "lit_chart_error_clipped_drive"))
+    if not drive["negative_channels"]:
+        return out
+    lit = predict_lit_chart(problem.SRL, problem.beta, np.eye(3), drive["clipped_drive"])
+    charts = {"lit_baseline": lit, "lit_corrected": lit @ np.asarray(Q, dtype=np.float64).T}
+    args = (problem.target, problem.white_patch, problem.fit_weights)
+    out["charts_clipped_drive"] = charts
+    out["lit_chart_error_baseline_clipped_drive"] = error_relative_to_white(lit, *args)
+    out["lit_chart_error_clipped_drive"] = error_relative_to_white(charts["lit_corrected"], *args)
+    return out
+
+
 def stability_diagnostics(
     problem: Any,
     fit: Any,
@@ -148,7 +171,7 @@ def stability_diagnostics(
     ``rank_target``, ``cross_validated_error`` (per channel, leave one patch out: the fit's own
     or ``cross_validated``),
     ``residuals_per_patch`` (n, 3, white-relative), ``out_of_frustum_negative_channels``,
-    ``lit_chart_error[_baseline]_clipped_drive`` (when the wall clips a negative drive),
+    ``lit_chart_error[_baseline]_clipped_drive`` and ``charts_clipped_drive`` (clipped drive),
     ``in_frustum_drive_range``, ``black_level_bounce``, ``clipped_patches``,
     ``N_equals_M`` and ``identity_check``.
     """
@@ -158,11 +181,6 @@ def stability_diagnostics(
     warnings: list[str] = [str(w) for w in notes.get("warnings", ())]  # the method's own
     cv = notes.get("cross_validated_error", cross_validated)
     drive = out_of_frustum_drive(M, problem.w_avg)
-    lit_clipped = lit_clipped_baseline = None
-    if drive["negative_channels"]:
-        lit = predict_lit_chart(problem.SRL, problem.beta, np.eye(3), drive["clipped_drive"])
-        lit_clipped = error_relative_to_white(lit @ Q.T, target, white, weights)
-        lit_clipped_baseline = error_relative_to_white(lit, target, white, weights)
     in_matrix = M if N is None else N
     in_range = in_frustum_drive_range(
         target, M=problem.M, matrix=in_matrix, offset=offset, white_patch=white
@@ -197,8 +215,7 @@ def stability_diagnostics(
         "cross_validated_error": None if cv is None else np.asarray(cv, dtype=np.float64),
         "residuals_per_patch": residuals_per_patch(corrected, target, white, weights),
         "out_of_frustum_negative_channels": drive["negative_channels"],
-        "lit_chart_error_clipped_drive": lit_clipped,
-        "lit_chart_error_baseline_clipped_drive": lit_clipped_baseline,
+        **clipped_drive_lit(problem, Q, drive),
         "in_frustum_drive_range": in_range,
         "black_level_bounce": None
         if black_level is None

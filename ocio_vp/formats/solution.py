@@ -80,6 +80,9 @@ class Diagnostics(Mapping[str, Any]):
     lit_chart_error_clipped_drive, lit_chart_error_baseline_clipped_drive
         (3,) the lit-chart error after Q, and through M alone, when the wall clips a negative
         drive, else None.
+    charts_clipped_drive
+        ``lit_baseline`` and ``lit_corrected`` (n, 3) as the wall lights the chart when it clips
+        a negative drive, else None (the report draws these then, like the figures it shows).
     in_frustum_drive_range
         How many chart colours the in-frustum matrix drives outside [0, 1] (``below_zero``,
         ``above_max``, ``patches_outside``, ``max_drive``, ``content_scale``,
@@ -128,6 +131,7 @@ class Diagnostics(Mapping[str, Any]):
     out_of_frustum_negative_channels: list[int] | None = None
     lit_chart_error_clipped_drive: Any = None
     lit_chart_error_baseline_clipped_drive: Any = None
+    charts_clipped_drive: dict[str, Any] | None = None
     in_frustum_drive_range: dict[str, Any] | None = None
     black_level_bounce: Any = None
     clipped_patches: list[int] | None = None

@@ -138,26 +138,35 @@ def find_solutions(paths: Sequence[str | Path]) -> list[Path]:
 
 
 def _charts(solution: Solution, source: Path) -> dict[str, np.ndarray]:
+    """The charts of ``diagnostics.charts``; the lit ones as the wall really lights them
+    (``diagnostics.charts_clipped_drive``) where it clips a negative drive, like the figures."""
     charts = solution.diagnostics.get("charts")
     if not isinstance(charts, dict):
         raise InputError(
             "missing (re-run `ocio-vp solve`)", source=source, key="diagnostics.charts"
         )
-    out = {}
-    n = None
-    for name in CHART_KEYS:
-        key = f"diagnostics.charts.{name}"
-        try:
-            array = np.asarray(charts.get(name), dtype=np.float64)
-        except (TypeError, ValueError):
-            raise InputError("expected a list of [r, g, b]", source=source, key=key) from None
-        if array.ndim != 2 or array.shape[1] != 3 or not np.all(np.isfinite(array)):
-            raise InputError("expected a finite (n, 3) chart", source=source, key=key)
-        if n is not None and array.shape[0] != n:
+    out = {name: _chart(charts, name, source, "diagnostics.charts") for name in CHART_KEYS}
+    clipped = solution.diagnostics.get("charts_clipped_drive")
+    if isinstance(clipped, dict):
+        for name in ("lit_baseline", "lit_corrected"):
+            out[name] = _chart(clipped, name, source, "diagnostics.charts_clipped_drive")
+    n = out["target"].shape[0]
+    for name, array in out.items():
+        if array.shape[0] != n:
+            key = f"diagnostics.charts.{name}"
             raise InputError(f"expected {n} patches, got {array.shape[0]}", source=source, key=key)
-        n = array.shape[0]
-        out[name] = array
     return out
+
+
+def _chart(charts: dict, name: str, source: Path, where: str) -> np.ndarray:
+    key = f"{where}.{name}"
+    try:
+        array = np.asarray(charts.get(name), dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError("expected a list of [r, g, b]", source=source, key=key) from None
+    if array.ndim != 2 or array.shape[1] != 3 or not np.all(np.isfinite(array)):
+        raise InputError("expected a finite (n, 3) chart", source=source, key=key)
+    return array
 
 
 def infer_white_patch(solution: Solution, charts: dict[str, np.ndarray]) -> int:
