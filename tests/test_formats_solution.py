@@ -23,7 +23,8 @@ DIAGNOSTICS_KEYS = [
     "displayed_chart_error_baseline", "displayed_chart_error", "out_of_frustum_drive",
     "method_notes", "warnings", "charts", "model", "model_reason", "rank_target",
     "cross_validated_error", "residuals_per_patch", "out_of_frustum_negative_channels",
-    "lit_chart_error_clipped_drive", "lit_chart_error_baseline_clipped_drive", "in_frustum_drive_range", "black_level_bounce",
+    "lit_chart_error_clipped_drive", "lit_chart_error_baseline_clipped_drive",
+    "charts_clipped_drive", "in_frustum_drive_range", "black_level_bounce",
     "clipped_patches", "N_equals_M", "identity_check",
 ]  # fmt: skip
 
