@@ -90,6 +90,9 @@ def header(quick: bool) -> str:
         f"- Mode: {'quick (small inputs, fewer repeats)' if quick else 'full'}",
         f"- Machine: {_cpu_model()}, {cores} cores ({usable} usable), {_ram_gib()} RAM, "
         f"{platform.system()} {platform.release()}",
+        "- Load average (1, 5, 15 min) when the run started: "
+        + ", ".join(f"{v:.1f}" for v in os.getloadavg())
+        + " (the machine is shared: compare ratios measured in the same run, not absolute times)",
         "- Versions: " + ", ".join(f"{k} {v}" for k, v in _versions()),
         "",
     ]
@@ -125,6 +128,11 @@ def main(argv: list[str] | None = None) -> int:
             own_docs[doc] = f"{body}\n\n_(`{name}` took {took:.0f} s)_\n"
         else:
             sections.append(f"{body}\n\n_(`{name}` took {took:.0f} s)_\n")
+    sections.append(
+        "Load average (1, 5, 15 min) when the run ended: "
+        + ", ".join(f"{v:.1f}" for v in os.getloadavg())
+        + ".\n"
+    )
     text = "\n".join(sections)
     out = args.out or (None if args.only else str(ROOT / "docs" / "performance.md"))
     if out:
