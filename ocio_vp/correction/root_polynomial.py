@@ -13,8 +13,9 @@ the same patches, the best linear approximation — because M, N, the reports an
 built on a matrix. The non-linear model itself is in ``QFit.notes["root_polynomial"]``
 (``{"degree": d, "coefficients": (3, terms) list}``), which ``solution.json`` carries in
 ``diagnostics.method_notes``; :func:`post_correction` turns a matrix and those notes back into
-the function to apply. Until the non-linear Q reaches the OCIO config, configs use the 3x3
-approximation, and the fit says so in its ``warnings`` note.
+the function to apply. The OCIO config carries the model itself as LUTs
+(:mod:`ocio_vp.ocio.root_polynomial`); the exports still use the 3x3 approximation, and the fit
+says so in its ``warnings`` note.
 
 The inverse (:func:`invert_root_polynomial`) is solved per colour on its direction (the colour
 divided by its largest absolute channel, then scaled back: homogeneity), by damped Newton
@@ -60,8 +61,9 @@ RANK_RELATIVE_TOLERANCE = 1e-10
 
 #: The warning a root-polynomial fit carries while configs use the 3x3 approximation.
 CONFIG_APPROXIMATION_WARNING = (
-    "root-polynomial Q: the OCIO config, N and the exports use its best 3x3 approximation "
-    "(Q in solution.json); the non-linear model is in diagnostics.method_notes.root_polynomial"
+    "root-polynomial Q: the OCIO config carries it (and M Q^-1 in-frustum) as baked LUTs, but Q "
+    "and N in solution.json and the Unreal/Nuke/Resolve exports are its best 3x3 approximation; "
+    "the model is in diagnostics.method_notes.root_polynomial"
 )
 
 

@@ -99,8 +99,13 @@ def _colorspace(
     return cs
 
 
-def wall_transforms(solution: Solution) -> dict[str, list[OCIO.Transform]]:
+def wall_transforms(
+    solution: Solution, q_inverse_file: str | None = None
+) -> dict[str, list[OCIO.Transform]]:
     """Reference -> drive transform chains for the two wall colorspaces.
+
+    With ``q_inverse_file`` (a non-linear Q's inverse as a LUT sidecar) the in-frustum drive is
+    ``M Q^-1(c)`` (the file, then M) instead of the matrix N.
 
     Linearity LUTs (when the solution has them) are appended by :mod:`ocio_vp.wall.encoding` (linearity LUT, then signal encoding).
     """
@@ -110,6 +115,8 @@ def wall_transforms(solution: Solution) -> dict[str, list[OCIO.Transform]]:
     if offset_is_negligible(offset, solution.SL):
         offset = None
     inner: list[OCIO.Transform] = [matrix_transform(solution.in_frustum_matrix, offset)]
+    if q_inverse_file is not None:
+        inner = [OCIO.FileTransform(src=q_inverse_file), matrix_transform(solution.M, offset)]
     return {OUT_OF_FRUSTUM: outer, IN_FRUSTUM: inner}
 
 
@@ -138,6 +145,7 @@ def build_config(
     *,
     extra_wall_transforms: dict[str, list[OCIO.Transform]] | None = None,
     search_path: str | None = None,
+    q_files: tuple[str, str] | None = None,
 ) -> OCIO.Config:
     """Build and validate the OCIO config for one solved environment.
 
@@ -150,6 +158,9 @@ def build_config(
         chains, e.g. the panel-linearity LUT and the wall signal encoding.
     search_path
         The config's search path for sidecar files (e.g. ``"luts"``).
+    q_files
+        (Q, Q^-1) LUT sidecars of a non-linear post-correction
+        (:mod:`ocio_vp.ocio.root_polynomial`), used in place of the matrices Q and N.
 
     Raises
     ------
@@ -159,12 +170,12 @@ def build_config(
     origin = _origin(solution)
     config = _empty_config(solution, origin, search_path)
     _add_camera_spaces(config, solution.camera_colorspace)
-    chains = wall_transforms(solution)
+    chains = wall_transforms(solution, None if q_files is None else q_files[1])
     for name, extra in (extra_wall_transforms or {}).items():
         chains[name] = chains[name] + list(extra)
     config.addColorSpace(_out_of_frustum_space(solution, chains[OUT_OF_FRUSTUM], origin))
     config.addColorSpace(_in_frustum_space(solution, chains[IN_FRUSTUM], origin))
-    _add_post_correction(config, solution, origin)
+    _add_post_correction(config, solution, origin, None if q_files is None else q_files[0])
     _set_roles(config, solution.camera_colorspace)
     config.addDisplayView(DISPLAY, VIEW_OUTER, OUT_OF_FRUSTUM)
     config.addDisplayView(DISPLAY, VIEW_INNER, IN_FRUSTUM)
@@ -267,15 +278,27 @@ def _in_frustum_space(
     return inner
 
 
-def _add_post_correction(config: OCIO.Config, solution: Solution, origin: str) -> None:
-    """Q twice: the ``Stage Footage`` colorspace and the ``Post-Correction Q`` named transform."""
-    q_identity = is_identity(solution.Q)
+def _add_post_correction(
+    config: OCIO.Config, solution: Solution, origin: str, q_file: str | None = None
+) -> None:
+    """Q twice: the ``Stage Footage`` colorspace and the ``Post-Correction Q`` named transform
+    (a non-linear Q: its LUT sidecar ``q_file``; Q's matrix is then its 3x3 approximation)."""
+    q_identity = is_identity(solution.Q) and q_file is None
+
+    def q_transform() -> OCIO.Transform:
+        return matrix_transform(solution.Q) if q_file is None else OCIO.FileTransform(src=q_file)
+
     model = solution.diagnostics.get("model") or solution.method
     reason = solution.diagnostics.get("model_reason")
     q_text = (
         f"Post-correction Q {_fmt(solution.Q)} for footage shot on the stage ({solution.method}, "
         f"model {model}{': ' + reason if reason else ''}). {origin}."
     )
+    if q_file is not None:
+        q_text = (
+            f"Root-polynomial Q baked as a LUT ({q_file}; the matrix is its 3x3 approximation). "
+            + q_text
+        )
     if q_identity:
         # Kept under the same names so hosts' settings survive, but as no-op transforms.
         q_text = "Q is the identity: no post-correction is needed. " + q_text
@@ -286,13 +309,13 @@ def _add_post_correction(config: OCIO.Config, solution: Solution, origin: str) -
         family="Camera",
     )
     if not q_identity:
-        footage.setTransform(matrix_transform(solution.Q), OCIO.COLORSPACE_DIR_TO_REFERENCE)
+        footage.setTransform(q_transform(), OCIO.COLORSPACE_DIR_TO_REFERENCE)
     config.addColorSpace(footage)
     named = OCIO.NamedTransform(
         name=POST_CORRECTION,
         family=f"{FAMILY}/Post",
         description=q_text,
-        forwardTransform=OCIO.GroupTransform() if q_identity else matrix_transform(solution.Q),
+        forwardTransform=OCIO.GroupTransform() if q_identity else q_transform(),
     )
     config.addNamedTransform(named)
 

@@ -13,8 +13,10 @@ from pathlib import Path
 
 from ocio_vp.formats.solution import Solution, solution_to_json
 from ocio_vp.ocio.config import build_config, ocio_names, write_config
+from ocio_vp.ocio.root_polynomial import root_polynomial_outputs
 from ocio_vp.ocio.wall import wall_outputs
 from ocio_vp.staging import publish_dirs, staged_dir
+from ocio_vp.wall.encoding import LUT_DIR
 
 __all__ = ["write_environment", "write_solutions"]
 
@@ -26,10 +28,20 @@ def write_environment(solution: Solution, directory: Path) -> Solution:
     """
     wall = wall_outputs(solution)  # panel-linearity LUT sidecar and wall signal encoding
     solution = dataclasses.replace(solution, ocio=ocio_names(), linearity=wall.linearity)
+    q_luts = root_polynomial_outputs(solution)  # a non-linear Q's LUT sidecars, else None
+    files, search_path, q_files = dict(wall.files), wall.search_path, None
+    if q_luts is not None:
+        files.update(q_luts.files)
+        search_path, q_files = LUT_DIR, (q_luts.q_file, q_luts.q_inverse_file)
+        diagnostics = {**solution.diagnostics, "root_polynomial_ocio": q_luts.block}
+        solution = dataclasses.replace(solution, diagnostics=diagnostics)
     config = build_config(
-        solution, extra_wall_transforms=wall.extra_wall_transforms, search_path=wall.search_path
+        solution,
+        extra_wall_transforms=wall.extra_wall_transforms,
+        search_path=search_path,
+        q_files=q_files,
     )
-    for relative, text in wall.files.items():
+    for relative, text in files.items():
         (directory / relative).parent.mkdir(parents=True, exist_ok=True)
         (directory / relative).write_text(text, encoding="utf-8")
     write_config(config, directory)

@@ -1,0 +1,82 @@
+"""A root-polynomial Q in the written OCIO config: the in-frustum round trip through the config.
+
+Independent check: OCIO's own processor evaluates the written config (reference -> in-frustum
+drive, camera -> reference for footage); the wall is simulated by [SL], and the exact forward
+model (colour-science's root-polynomial expansion) closes the loop: Q([SL] N(c)) = c.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+
+import numpy as np
+import PyOpenColorIO as OCIO
+import pytest
+
+from ocio_vp.correction import apply_root_polynomial
+from ocio_vp.ocio import IN_FRUSTUM, POST_CORRECTION_COLORSPACE, REFERENCE, write_solutions
+from ocio_vp.pipeline import solve_environment
+
+
+@pytest.fixture(scope="module")
+def written(tmp_path_factory):
+    from ocio_vp.simulator.stage import paper_stage_measurements
+
+    m = paper_stage_measurements(("incandescent",))
+    solution = solve_environment(m, m.environments[0], method="root-polynomial")
+    out = tmp_path_factory.mktemp("rp") / "out"
+    (written_solution,) = write_solutions([solution], out)
+    return written_solution, out / "incandescent" / "config.ocio"
+
+
+def _apply(config, src, dst, rgb):
+    cpu = config.getProcessor(src, dst).getDefaultCPUProcessor()
+    pixels = np.ascontiguousarray(rgb, dtype=np.float32).copy()
+    cpu.applyRGB(pixels)
+    return pixels.astype(np.float64)
+
+
+def _content(solution, n, rng):
+    chart = solution.diagnostics["charts"]["target"]
+    mix = rng.dirichlet(np.full(len(chart), 0.3), n) @ chart
+    return mix / mix.max() * rng.uniform(0.05, 4.0, (n, 1))
+
+
+def test_in_frustum_round_trip_through_the_config(written):
+    solution, path = written
+    config = OCIO.Config.CreateFromFile(str(path))
+    C = solution.diagnostics["method_notes"]["root_polynomial"]["coefficients"]
+    c = _content(solution, 4000, np.random.default_rng(7))
+    drive = _apply(config, REFERENCE, IN_FRUSTUM, c) - solution.in_frustum_offset
+    seen = apply_root_polynomial(C, drive @ np.asarray(solution.SL).T)
+    error = np.abs(seen - c).max(axis=1) / c.max(axis=1)
+    # The limit stated in docs: the LUT bake, ~0.1 % mean and < 1 % worst for in-gamut content.
+    assert error.mean() < 0.002 and error.max() < 0.01
+    # The 3x3 approximation the config used before is clearly worse.
+    seen_3x3 = apply_root_polynomial(C, (c @ np.asarray(solution.N).T) @ np.asarray(solution.SL).T)
+    assert np.abs(seen_3x3 - c).max(axis=1).mean() > 3 * np.abs(seen - c).max(axis=1).mean()
+    block = solution.diagnostics["root_polynomial_ocio"]
+    assert block["bake_error"]["finite_on_minus1_to_16"]
+
+
+def test_footage_q_and_finite_everywhere(written):
+    solution, path = written
+    config = OCIO.Config.CreateFromFile(str(path))
+    C = solution.diagnostics["method_notes"]["root_polynomial"]["coefficients"]
+    rng = np.random.default_rng(8)
+    x = np.linalg.solve(np.asarray(solution.Q), _content(solution, 2000, rng).T).T
+    x = x[np.all(x >= 0, axis=1)]
+    got = _apply(config, POST_CORRECTION_COLORSPACE, REFERENCE, x)
+    ref = apply_root_polynomial(C, x)
+    assert (np.abs(got - ref).max(axis=1) / ref.max(axis=1)).mean() < 0.002
+    probe = rng.uniform(-1.0, 16.0, (20000, 3))
+    for src, dst in ((POST_CORRECTION_COLORSPACE, REFERENCE), (REFERENCE, IN_FRUSTUM)):
+        assert np.all(np.isfinite(_apply(config, src, dst, probe)))
+
+
+@pytest.mark.skipif(shutil.which("ociocheck") is None, reason="ociocheck not on PATH")
+def test_ociocheck_accepts_the_config(written):
+    _, path = written
+    result = subprocess.run(["ociocheck", "--iconfig", str(path)], capture_output=True, text=True)
+    assert result.returncode == 0 and "ERROR" not in result.stdout + result.stderr
