@@ -14,7 +14,7 @@ built on a matrix. The non-linear model itself is in ``QFit.notes["root_polynomi
 (``{"degree": d, "coefficients": (3, terms) list}``), which ``solution.json`` carries in
 ``diagnostics.method_notes``; :func:`post_correction` turns a matrix and those notes back into
 the function to apply. The OCIO config carries the model itself as LUTs
-(:mod:`ocio_vp.ocio.root_polynomial`); the exports still use the 3x3 approximation, and the fit
+(:mod:`ocio_vp.ocio.root_polynomial`); the Nuke and Resolve exports still use the 3x3 approximation, and the fit
 says so in its ``warnings`` note.
 
 The inverse (:func:`invert_root_polynomial`) is solved per colour on its direction (the colour
@@ -61,8 +61,9 @@ RANK_RELATIVE_TOLERANCE = 1e-10
 
 #: The warning a root-polynomial fit carries while configs use the 3x3 approximation.
 CONFIG_APPROXIMATION_WARNING = (
-    "root-polynomial Q: the OCIO config carries it (and M Q^-1 in-frustum) as baked LUTs, but Q "
-    "and N in solution.json and the Unreal/Nuke/Resolve exports are its best 3x3 approximation; "
+    "root-polynomial Q: the OCIO config carries it (and M Q^-1 in-frustum) as baked LUTs when N "
+    "is solved (else the config uses the 3x3 approximation too), but Q "
+    "and N in solution.json and the Nuke/Resolve exports are its best 3x3 approximation; "
     "the model is in diagnostics.method_notes.root_polynomial"
 )
 
