@@ -21,9 +21,6 @@ MAX_TOP_LEVEL_MODULES = 12
 LONG_FUNCTIONS_BEING_SPLIT = {
     "ocio_vp/plates/sampling.py:sample_chart",
     "ocio_vp/plates/capture.py:capture_from_dict",
-    "ocio_vp/hdri/prepare.py:_spread",
-    "ocio_vp/hdri/prepare.py:fit_under_peak",
-    "ocio_vp/hdri/prepare.py:prepare_hdri_file",
 }
 
 

@@ -6,6 +6,9 @@ Public functions (other modules build on these; names are stable):
   of a latitude-longitude image (sums to 4 pi).
 - ``equirect_directions(height, width) -> (height, width, 3)``: unit direction of each pixel
   centre (convention below).
+- ``pixel_angles(rows, cols, height, width)``, ``angles_to_directions(theta, phi)`` and
+  ``cosines_to(direction, theta, phi)``: the pieces of those, for any set of pixels (the
+  one place the lat-long direction formula lives; :mod:`ocio_vp.hdri.prepare` uses them).
 - ``diffuse_integral(image, *, normal=FRONT) -> (channels,)``: ``(1/pi) sum L cos+ dOmega``
   over an in-memory (height, width, channels) equirectangular image.
 - ``read_equirect(path, *, width=DEFAULT_HDRI_WIDTH) -> (height, width, 3)``: read an HDRI
@@ -48,10 +51,13 @@ from ocio_vp.formats.documents import check_regular_file
 __all__ = [
     "DEFAULT_HDRI_WIDTH",
     "FRONT",
+    "angles_to_directions",
+    "cosines_to",
     "diffuse_integral",
     "environments_with_hdri",
     "equirect_directions",
     "equirect_solid_angles",
+    "pixel_angles",
     "read_equirect",
     "w_avg_from_hdri",
 ]
@@ -66,10 +72,59 @@ FRONT = (0.0, 0.0, 1.0)
 _ROWS_PER_BLOCK = 256  # bounds the temporary (rows, width) arrays at 8K to a few MB
 
 
-def _angles(height: int, width: int) -> tuple[np.ndarray, np.ndarray]:
-    theta = (np.arange(height, dtype=np.float64) + 0.5) * (np.pi / height)
-    phi = ((np.arange(width, dtype=np.float64) + 0.5) / width - 0.5) * (2.0 * np.pi)
+def pixel_angles(
+    rows: ArrayLike, cols: ArrayLike, height: int, width: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Polar angle ``theta`` (from +Y) and longitude ``phi`` (from +Z) of pixel centres.
+
+    ``rows`` and ``cols`` are pixel indices (any shapes); row ``r`` of ``height`` is centred at
+    ``theta = (r + 1/2) pi / height``, column ``c`` of ``width`` at
+    ``phi = ((c + 1/2) / width - 1/2) 2 pi`` (the image centre looks along +Z).
+
+    Examples
+    --------
+    >>> theta, phi = pixel_angles(np.array([0]), np.array([2]), 2, 4)
+    >>> float(theta[0] / np.pi), float(phi[0] / np.pi)
+    (0.25, 0.25)
+    """
+    theta = (np.asarray(rows, dtype=np.float64) + 0.5) * (np.pi / height)
+    phi = ((np.asarray(cols, dtype=np.float64) + 0.5) / width - 0.5) * (2.0 * np.pi)
     return theta, phi
+
+
+def angles_to_directions(theta: ArrayLike, phi: ArrayLike) -> np.ndarray:
+    """Unit vectors ``(sin t sin p, cos t, sin t cos p)`` of polar angles and longitudes.
+
+    ``theta`` and ``phi`` broadcast together; the result has one more axis of length 3. The
+    module's one formula for the direction of a lat-long position.
+
+    Examples
+    --------
+    >>> angles_to_directions(np.pi / 2, 0.0).round(12).tolist()
+    [0.0, 0.0, 1.0]
+    """
+    theta, phi = np.broadcast_arrays(np.asarray(theta, np.float64), np.asarray(phi, np.float64))
+    st = np.sin(theta)
+    return np.stack([st * np.sin(phi), np.cos(theta), st * np.cos(phi)], axis=-1)
+
+
+def cosines_to(direction: np.ndarray, theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """(len(theta), len(phi)) cosine between unit ``direction`` and each lat-long position.
+
+    ``d.w = sin(theta) (dx sin(phi) + dz cos(phi)) + dy cos(theta)`` is separable in
+    ``(theta, phi)``, so no (rows, cols, 3) direction array is built.
+
+    Examples
+    --------
+    >>> cosines_to(np.array([0.0, 0.0, 1.0]), np.array([np.pi / 2]), np.array([0.0])).tolist()
+    [[1.0]]
+    """
+    azimuthal = direction[0] * np.sin(phi) + direction[2] * np.cos(phi)
+    return np.sin(theta)[:, None] * azimuthal[None, :] + direction[1] * np.cos(theta)[:, None]
+
+
+def _angles(height: int, width: int) -> tuple[np.ndarray, np.ndarray]:
+    return pixel_angles(np.arange(height), np.arange(width), height, width)
 
 
 def equirect_solid_angles(height: int, width: int) -> np.ndarray:
@@ -93,15 +148,7 @@ def equirect_solid_angles(height: int, width: int) -> np.ndarray:
 def equirect_directions(height: int, width: int) -> np.ndarray:
     """(height, width, 3) unit direction of each pixel centre (module convention)."""
     theta, phi = _angles(height, width)
-    st = np.sin(theta)[:, None]
-    return np.stack(
-        [
-            st * np.sin(phi)[None, :],
-            np.broadcast_to(np.cos(theta)[:, None], (height, width)),
-            st * np.cos(phi)[None, :],
-        ],
-        axis=-1,
-    )
+    return angles_to_directions(theta[:, None], phi[None, :])
 
 
 def _unit(normal: ArrayLike) -> np.ndarray:
@@ -145,15 +192,10 @@ def diffuse_integral(image: ArrayLike, *, normal: ArrayLike = FRONT) -> np.ndarr
     height, width, channels = img.shape
     theta, phi = _angles(height, width)
     row_omega = equirect_solid_angles(height, 1)[:, 0] / width
-    # n.w = sin(theta) (nx sin(phi) + nz cos(phi)) + ny cos(theta): separable, so no
-    # (height, width, 3) direction array is ever built.
-    azimuthal = n[0] * np.sin(phi) + n[2] * np.cos(phi)
     total = np.zeros(channels, dtype=np.float64)
     for start in range(0, height, _ROWS_PER_BLOCK):
         rows = slice(start, min(start + _ROWS_PER_BLOCK, height))
-        cosine = (
-            np.sin(theta[rows])[:, None] * azimuthal[None, :] + n[1] * np.cos(theta[rows])[:, None]
-        )
+        cosine = cosines_to(n, theta[rows], phi)
         weight = np.maximum(cosine, 0.0) * row_omega[rows, None]
         total += np.einsum("hw,hwc->c", weight, img[rows].astype(np.float64, copy=False))
     return total / np.pi

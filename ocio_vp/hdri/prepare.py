@@ -49,7 +49,13 @@ from numpy.typing import ArrayLike
 
 from ocio_vp.errors import InputError
 from ocio_vp.formats.documents import check_regular_file
-from ocio_vp.hdri.diffuse import diffuse_integral, equirect_solid_angles
+from ocio_vp.hdri.diffuse import (
+    angles_to_directions,
+    cosines_to,
+    diffuse_integral,
+    equirect_solid_angles,
+    pixel_angles,
+)
 from ocio_vp.staging import check_not_input
 
 __all__ = [
@@ -202,12 +208,8 @@ def fit_under_peak(
     src = np.asarray(rgb)
     _check_map(src, float(peak))
     out = src.astype(np.float32 if src.dtype == np.float32 else np.float64, copy=True)
-    # Values are computed in float64 and rounded to out.dtype; a peak representable in that
-    # dtype keeps every rounded value <= peak (rounding is monotonic).
     requested = float(peak)
-    peak = round_down_to(requested, out.dtype)
-    if storage_dtype is not None:
-        peak = min(peak, round_down_to(requested, storage_dtype))
+    peak = _working_peak(requested, out.dtype, storage_dtype)
     height, width = out.shape[:2]
     row_omega = equirect_solid_angles(height, 1)[:, 0] / width
     brightness = np.maximum(np.maximum(out[..., 0], out[..., 1]), out[..., 2])
@@ -224,30 +226,12 @@ def fit_under_peak(
             key="--peak",
         )
     del brightness
-    # Label only the band of rows that holds over-range pixels (a sun is a few rows of 4096).
-    band = np.flatnonzero(over.any(axis=1))
-    first, last = int(band[0]), int(band[-1]) + 1
-    labels, count = label_sources(over[first:last])
-    flat = np.flatnonzero(labels) + first * width
-    lab = labels.ravel()[flat - first * width]
-    order = np.argsort(lab, kind="stable")
-    flat, lab = flat[order], lab[order]
-    bounds = np.flatnonzero(np.diff(lab)) + 1
-    groups = np.split(flat, bounds)
-
     # Remove each source's excess first (scale its pixels to the peak, chromaticity kept), so a
     # source never spreads into a neighbour that is still over range.
-    pending = []
-    for idx in groups:
-        rows, cols = np.divmod(idx, width)
-        v = out[rows, cols].astype(np.float64)
-        scale = peak / v.max(axis=1)
-        omega = row_omega[rows][:, None]
-        moved = v * (1.0 - scale[:, None]) * omega
-        excess = moved.sum(axis=0)
-        energy = (v * omega).sum(axis=0)
-        out[rows, cols] = (v * scale[:, None]).astype(out.dtype)
-        pending.append((float(excess.max()), rows, cols, energy, excess, moved.max(axis=1)))
+    pending = [
+        _remove_excess(out, idx, peak=peak, row_omega=row_omega)
+        for idx in _over_range_sources(over)
+    ]
     pending.sort(key=lambda p: -p[0])
     sources = tuple(
         _spread(out, rows, cols, energy, excess, weight, peak=peak, row_omega=row_omega)
@@ -256,10 +240,67 @@ def fit_under_peak(
     return PreparedHDRI(image=out, peak=peak, sources=sources)
 
 
-def _directions(theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    theta, phi = np.broadcast_arrays(theta, phi)
-    st = np.sin(theta)
-    return np.stack([st * np.sin(phi), np.cos(theta), st * np.cos(phi)], axis=-1)
+def _working_peak(
+    requested: float, dtype: np.dtype, storage_dtype: np.dtype | type | None
+) -> float:
+    """The peak rounded down to the working (and storage) type.
+
+    Values are computed in float64 and rounded to ``dtype``; a peak representable in that
+    dtype keeps every rounded value <= peak (rounding is monotonic).
+    """
+    peak = round_down_to(requested, dtype)
+    if storage_dtype is not None:
+        peak = min(peak, round_down_to(requested, storage_dtype))
+    return peak
+
+
+def _over_range_sources(over: np.ndarray) -> list[np.ndarray]:
+    """Flat pixel indices of each over-range source (8-connected, across the seam)."""
+    width = over.shape[1]
+    # Label only the band of rows that holds over-range pixels (a sun is a few rows of 4096).
+    band = np.flatnonzero(over.any(axis=1))
+    first, last = int(band[0]), int(band[-1]) + 1
+    labels, _ = label_sources(over[first:last])
+    flat = np.flatnonzero(labels) + first * width
+    lab = labels.ravel()[flat - first * width]
+    order = np.argsort(lab, kind="stable")
+    flat, lab = flat[order], lab[order]
+    bounds = np.flatnonzero(np.diff(lab)) + 1
+    return np.split(flat, bounds)
+
+
+def _remove_excess(out: np.ndarray, idx: np.ndarray, *, peak: float, row_omega: np.ndarray):
+    """Scale one source's pixels down to ``peak`` in place; return what was removed.
+
+    ``(max excess, rows, cols, energy, excess, per-pixel weight)``: the energy and excess are
+    solid-angle-weighted RGB sums, the weight each pixel's largest removed channel energy.
+    """
+    rows, cols = np.divmod(idx, out.shape[1])
+    v = out[rows, cols].astype(np.float64)
+    scale = peak / v.max(axis=1)
+    omega = row_omega[rows][:, None]
+    moved = v * (1.0 - scale[:, None]) * omega
+    excess = moved.sum(axis=0)
+    energy = (v * omega).sum(axis=0)
+    out[rows, cols] = (v * scale[:, None]).astype(out.dtype)
+    return float(excess.max()), rows, cols, energy, excess, moved.max(axis=1)
+
+
+def _pixel_directions(rows: np.ndarray, cols: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    return angles_to_directions(*pixel_angles(rows, cols, shape[0], shape[1]))
+
+
+@dataclass(frozen=True)
+class _Candidates:
+    """Pixels within ``reach`` of a source: where they are, how far, how much room they have."""
+
+    rows: np.ndarray
+    cols: np.ndarray
+    dist: np.ndarray
+    room: np.ndarray
+    capacity: np.ndarray
+    order: np.ndarray
+    cumulative: np.ndarray
 
 
 def _spread(
@@ -274,60 +315,23 @@ def _spread(
     row_omega: np.ndarray,
 ) -> SpreadSource:
     """Fill the pixels nearest to one source with its excess (see the module docstring)."""
-    from scipy.spatial import cKDTree
+    from scipy.spatial import cKDTree  # deferred: scipy is only needed when a map is over range
 
-    height, width = out.shape[:2]
     amount = float(excess.max())
     if not amount > 0:  # only possible with large negative values beside the source
         raise InputError("an over-range source has no positive excess: negative pixels beside it")
     colour = excess / amount
-    theta = (rows + 0.5) * (np.pi / height)
-    phi = ((cols + 0.5) / width - 0.5) * (2.0 * np.pi)
-    dirs = _directions(theta, phi)
+    dirs = _pixel_directions(rows, cols, out.shape)
     centre = (dirs * weight[:, None]).sum(axis=0)  # excess-weighted centre of the source
     norm = float(np.linalg.norm(centre))
     centre = centre / norm if norm > 0 else dirs[np.argmax(weight)]
     source_radius = float(np.arccos(np.clip(dirs @ centre, -1.0, 1.0)).max())
     tree = cKDTree(dirs)
-    theta_c = float(np.arccos(np.clip(centre[1], -1.0, 1.0)))
-    phi_c = float(np.arctan2(centre[0], centre[2]))
     # First guess: the cap the excess needs on a black background, then grow.
     reach = np.radians(minimum_cap_radius_deg(amount, peak)) + np.radians(0.1)
     while True:
-        outer = min(np.pi, source_radius + reach)
-        r0 = max(0, int(np.floor((theta_c - outer) / np.pi * height)))
-        r1 = min(height, int(np.ceil((theta_c + outer) / np.pi * height)) + 1)
-        near_pole = theta_c - outer <= 0.0 or theta_c + outer >= np.pi
-        sin_t = np.sin(theta_c)
-        if near_pole or outer >= np.pi / 2 or np.sin(outer) >= sin_t:
-            wcols = np.arange(width)
-        else:
-            half = np.arcsin(np.sin(outer) / sin_t)  # longitude half-width of the cap
-            c0 = int(np.floor((phi_c - half) / (2 * np.pi) * width + width / 2)) - 1
-            c1 = int(np.ceil((phi_c + half) / (2 * np.pi) * width + width / 2)) + 1
-            wcols = np.arange(c0, c1 + 1) % width
-            wcols = np.unique(wcols) if wcols.size >= width else wcols
-        wrows = np.arange(r0, r1)
-        th = (wrows + 0.5) * (np.pi / height)
-        ph = ((wcols + 0.5) / width - 0.5) * (2.0 * np.pi)
-        # d.centre is separable in (theta, phi): no (rows, cols, 3) array for the whole window.
-        azimuthal = centre[0] * np.sin(ph) + centre[2] * np.cos(ph)
-        cosine = np.sin(th)[:, None] * azimuthal[None, :] + centre[1] * np.cos(th)[:, None]
-        rr, cc = np.nonzero(cosine >= np.cos(outer))
-        chord, _ = tree.query(_directions(th[rr], ph[cc]), k=1)
-        dist = 2.0 * np.arcsin(np.clip(chord / 2.0, 0.0, 1.0))
-        keep = dist <= reach
-        rr, cc, dist = wrows[rr[keep]], wcols[cc[keep]], dist[keep]
-        current = out[rr, cc].astype(np.float64)
-        room = np.full(rr.shape, np.inf)
-        for k in range(3):
-            if colour[k] > 0:
-                room = np.minimum(room, (peak - current[:, k]) / colour[k])
-        room = np.maximum(room, 0.0)
-        capacity = room * row_omega[rr]
-        order = np.argsort(dist, kind="stable")
-        cumulative = np.cumsum(capacity[order])
-        if cumulative.size and cumulative[-1] >= amount:
+        near = _candidates(out, tree, centre, source_radius, reach, colour, peak, row_omega)
+        if near.cumulative.size and near.cumulative[-1] >= amount:
             break
         if reach >= np.pi:
             raise InputError(
@@ -335,24 +339,93 @@ def _spread(
                 key="--peak",
             )
         # Grow to the cap the excess needs at the room density seen so far (plus a margin).
-        density = capacity.sum() / max(row_omega[rr].sum(), 1e-300)
+        density = near.capacity.sum() / max(row_omega[near.rows].sum(), 1e-300)
         needed = np.radians(minimum_cap_radius_deg(amount, density)) if density > 0 else np.pi
         reach = min(np.pi, max(reach * 1.25, 1.1 * needed + source_radius))
-    last = int(np.searchsorted(cumulative, amount))
+    return _fill(out, near, amount, colour, centre, row_omega, rows.size, energy, excess)
+
+
+def _window(
+    centre: np.ndarray, outer: float, height: int, width: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Rows and (wrapped) columns of the lat-long box around the cap of radius ``outer``."""
+    theta_c = float(np.arccos(np.clip(centre[1], -1.0, 1.0)))
+    phi_c = float(np.arctan2(centre[0], centre[2]))
+    r0 = max(0, int(np.floor((theta_c - outer) / np.pi * height)))
+    r1 = min(height, int(np.ceil((theta_c + outer) / np.pi * height)) + 1)
+    near_pole = theta_c - outer <= 0.0 or theta_c + outer >= np.pi
+    sin_t = np.sin(theta_c)
+    if near_pole or outer >= np.pi / 2 or np.sin(outer) >= sin_t:
+        wcols = np.arange(width)
+    else:
+        half = np.arcsin(np.sin(outer) / sin_t)  # longitude half-width of the cap
+        c0 = int(np.floor((phi_c - half) / (2 * np.pi) * width + width / 2)) - 1
+        c1 = int(np.ceil((phi_c + half) / (2 * np.pi) * width + width / 2)) + 1
+        wcols = np.arange(c0, c1 + 1) % width
+        wcols = np.unique(wcols) if wcols.size >= width else wcols
+    return np.arange(r0, r1), wcols
+
+
+def _candidates(
+    out: np.ndarray,
+    tree,
+    centre: np.ndarray,
+    source_radius: float,
+    reach: float,
+    colour: np.ndarray,
+    peak: float,
+    row_omega: np.ndarray,
+) -> _Candidates:
+    """The pixels within angle ``reach`` of the source's own pixels, nearest first."""
+    height, width = out.shape[:2]
+    outer = min(np.pi, source_radius + reach)
+    wrows, wcols = _window(centre, outer, height, width)
+    th, ph = pixel_angles(wrows, wcols, height, width)
+    cosine = cosines_to(centre, th, ph)
+    rr, cc = np.nonzero(cosine >= np.cos(outer))
+    chord, _ = tree.query(angles_to_directions(th[rr], ph[cc]), k=1)
+    dist = 2.0 * np.arcsin(np.clip(chord / 2.0, 0.0, 1.0))
+    keep = dist <= reach
+    rr, cc, dist = wrows[rr[keep]], wcols[cc[keep]], dist[keep]
+    current = out[rr, cc].astype(np.float64)
+    room = np.full(rr.shape, np.inf)
+    for k in range(3):
+        if colour[k] > 0:
+            room = np.minimum(room, (peak - current[:, k]) / colour[k])
+    room = np.maximum(room, 0.0)
+    capacity = room * row_omega[rr]
+    order = np.argsort(dist, kind="stable")
+    return _Candidates(rr, cc, dist, room, capacity, order, np.cumsum(capacity[order]))
+
+
+def _fill(
+    out: np.ndarray,
+    near: _Candidates,
+    amount: float,
+    colour: np.ndarray,
+    centre: np.ndarray,
+    row_omega: np.ndarray,
+    pixels: int,
+    energy: np.ndarray,
+    excess: np.ndarray,
+) -> SpreadSource:
+    """Fill the nearest candidates to their room until ``amount`` is placed; record it."""
+    order, room = near.order, near.room
+    last = int(np.searchsorted(near.cumulative, amount))
     fill = np.zeros(order.size)
     fill[order[:last]] = room[order[:last]]
-    before = cumulative[last - 1] if last > 0 else 0.0
-    fill[order[last]] = (amount - before) / row_omega[rr[order[last]]]
+    before = near.cumulative[last - 1] if last > 0 else 0.0
+    fill[order[last]] = (amount - before) / row_omega[near.rows[order[last]]]
     touched = fill > 0
-    rr, cc, fill = rr[touched], cc[touched], fill[touched]
+    rr, cc, fill = near.rows[touched], near.cols[touched], fill[touched]
     out[rr, cc] = (out[rr, cc].astype(np.float64) + fill[:, None] * colour).astype(out.dtype)
-    filled_dirs = _directions((rr + 0.5) * (np.pi / height), ((cc + 0.5) / width - 0.5) * 2 * np.pi)
+    filled_dirs = _pixel_directions(rr, cc, out.shape)
     return SpreadSource(
-        pixels=int(rows.size),
+        pixels=int(pixels),
         energy=energy,
         excess=excess,
         direction=centre,
-        radius_deg=float(np.degrees(dist[order[last]])),
+        radius_deg=float(np.degrees(near.dist[order[last]])),
         centre_radius_deg=float(
             np.degrees(np.arccos(np.clip(filled_dirs @ centre, -1.0, 1.0)).max())
         ),
@@ -410,7 +483,7 @@ def prepare_hdri_file(
         Missing or unreadable file, not 2:1, no RGB, non-finite pixels, ``peak <= 0``, a map
         that cannot fit, or an output format OpenImageIO cannot write. Nothing is written then.
     """
-    import OpenImageIO as oiio
+    import OpenImageIO as oiio  # deferred: heavy, and only this verb writes images
 
     source, target = str(in_path), Path(out_path)
     if not (np.isfinite(peak) and peak > 0):
@@ -423,18 +496,7 @@ def prepare_hdri_file(
     if probe is None:
         oiio.geterror()
         raise InputError("OpenImageIO cannot write this file type", source=str(target))
-    inp = oiio.ImageInput.open(source)
-    if inp is None:
-        raise InputError(f"not an image OpenImageIO can read ({oiio.geterror()})", source=source)
-    try:
-        spec = oiio.ImageSpec(inp.spec())
-        pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
-        error = inp.geterror()
-    finally:
-        inp.close()
-    if pixels is None or error:
-        raise InputError(f"cannot read the image: {error or 'no pixels'}", source=source)
-    pixels = np.asarray(pixels, dtype=np.float32).reshape(spec.height, spec.width, -1)
+    spec, pixels = _read_image(oiio, source)
     rgb_index = _rgb_channels(list(spec.channelnames), source)
     half = oiio.TypeDesc(oiio.HALF)
     out_format = spec.format if spec.format.basetype in (oiio.HALF, oiio.FLOAT) else half
@@ -461,6 +523,28 @@ def prepare_hdri_file(
         f"peak={peak:.9g} (applied {prepared.peak:.9g}); sources={len(prepared.sources)}; "
         f"radius_deg={prepared.max_radius_deg:.4g} (energy-preserving spread, ocio-vp)",
     )
+    _write_image_atomically(oiio, target, out_spec, pixels)
+    return prepared
+
+
+def _read_image(oiio, source: str):
+    """(spec, (height, width, channels) float32 pixels) of the first subimage of ``source``."""
+    inp = oiio.ImageInput.open(source)
+    if inp is None:
+        raise InputError(f"not an image OpenImageIO can read ({oiio.geterror()})", source=source)
+    try:
+        spec = oiio.ImageSpec(inp.spec())
+        pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
+        error = inp.geterror()
+    finally:
+        inp.close()
+    if pixels is None or error:
+        raise InputError(f"cannot read the image: {error or 'no pixels'}", source=source)
+    return spec, np.asarray(pixels, dtype=np.float32).reshape(spec.height, spec.width, -1)
+
+
+def _write_image_atomically(oiio, target: Path, out_spec, pixels: np.ndarray) -> None:
+    """Write to a hidden temporary beside ``target``, then rename it over (never half a file)."""
     tmp = target.with_name(f".{target.stem}.tmp-{os.getpid()}{target.suffix}")
     try:
         out = oiio.ImageOutput.create(str(tmp))
@@ -474,4 +558,3 @@ def prepare_hdri_file(
     finally:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
-    return prepared
