@@ -19,6 +19,7 @@ import yaml
 
 from ocio_vp.formats.measurements import CHANNELS, Validator, parse_stage, read_document
 from ocio_vp.plates.reader import canonical_encoding, plate_path
+from ocio_vp.plates.statistics import ROBUST_MEAN_METHODS
 
 __all__ = [
     "FORMAT",
@@ -231,6 +232,37 @@ def capture_from_dict(
     """
     ctx = Validator(source)
     base = Path(source)
+    top = _header(ctx, data)
+    rows, columns, inset = _chart_grid(ctx, top.get("chart", {}))
+    sampling = _sampling(ctx, top.get("sampling", {}))
+    where = _Where(base)
+    if top.get("flat_field") is not None:
+        where = _Where(base, _paths(ctx, top["flat_field"], ("flat_field",), base))
+    prim = ctx.mapping(top["primaries"], ("primaries",), CHANNELS, _PLATE_KEYS)
+    shared = _plate(ctx, prim, ("primaries",), where, "primaries") if "plate" in prim else None
+    primaries = {
+        c: _region_shot(ctx, prim[c], ("primaries", c), where, f"primaries_{c}", shared)
+        for c in CHANNELS
+    }
+    lit = ctx.mapping(top["lit_chart"], ("lit_chart",), CHANNELS)
+    lit_chart = {c: _chart(ctx, lit[c], ("lit_chart", c), where, f"lit_{c}") for c in CHANNELS}
+    return Capture(
+        stage=dict(top["stage"]),
+        rows=rows,
+        columns=columns,
+        inset=inset,
+        sampling=sampling,
+        primaries=primaries,
+        lit_chart=lit_chart,
+        environments=_environments(ctx, top["environments"], where),
+        source=source,
+        document=data,
+        sha256=sha256,
+    )
+
+
+def _header(ctx: Validator, data: Any) -> Mapping[str, Any]:
+    """The top-level mapping, its format and version checked, its stage validated."""
     top = ctx.mapping(
         data,
         (),
@@ -244,18 +276,25 @@ def capture_from_dict(
             ("version",), f"this ocio-vp reads version {VERSION}, got {top['version']!r}"
         )
     parse_stage(ctx, top["stage"])  # same rules as the measurements file it is copied to
+    return top
 
-    chart = ctx.mapping(top.get("chart", {}), ("chart",), (), ("rows", "columns", "inset"))
+
+def _chart_grid(ctx: Validator, value: Any) -> tuple[int, int, float]:
+    """``chart``: (rows, columns, inset), defaults 4, 6, 0.25."""
+    chart = ctx.mapping(value, ("chart",), (), ("rows", "columns", "inset"))
     rows, columns = chart.get("rows", 4), chart.get("columns", 6)
-    for name, value in (("rows", rows), ("columns", columns)):
-        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-            raise ctx.error(("chart", name), f"expected a whole number >= 1, got {value!r}")
+    for name, number in (("rows", rows), ("columns", columns)):
+        if isinstance(number, bool) or not isinstance(number, int) or number < 1:
+            raise ctx.error(("chart", name), f"expected a whole number >= 1, got {number!r}")
     inset = ctx.number(chart.get("inset", 0.25), ("chart", "inset"))
     if inset > 0.45:
         raise ctx.error(("chart", "inset"), f"expected at most 0.45, got {inset!r}")
-    sampling = dict(
-        ctx.mapping(top.get("sampling", {}), ("sampling",), (), ("method", "trim", "clip_level"))
-    )
+    return rows, columns, inset
+
+
+def _sampling(ctx: Validator, value: Any) -> dict[str, Any]:
+    """``sampling``: the patch statistic's options (method, trim, clip_level), checked."""
+    sampling = dict(ctx.mapping(value, ("sampling",), (), ("method", "trim", "clip_level")))
     if "trim" in sampling:
         sampling["trim"] = ctx.number(sampling["trim"], ("sampling", "trim"))
         if sampling["trim"] >= 0.5:
@@ -264,27 +303,14 @@ def capture_from_dict(
         sampling["clip_level"] = ctx.number(
             sampling["clip_level"], ("sampling", "clip_level"), strict=True
         )
-    if "method" in sampling:
-        from ocio_vp.plates.sampling import ROBUST_MEAN_METHODS
+    if "method" in sampling and sampling["method"] not in ROBUST_MEAN_METHODS:
+        valid = ", ".join(ROBUST_MEAN_METHODS)
+        raise ctx.error(("sampling", "method"), f"unknown method; expected one of: {valid}")
+    return sampling
 
-        if sampling["method"] not in ROBUST_MEAN_METHODS:
-            valid = ", ".join(ROBUST_MEAN_METHODS)
-            raise ctx.error(("sampling", "method"), f"unknown method; expected one of: {valid}")
 
-    where = _Where(base)
-    if top.get("flat_field") is not None:
-        where = _Where(base, _paths(ctx, top["flat_field"], ("flat_field",), base))
-    prim = ctx.mapping(top["primaries"], ("primaries",), CHANNELS, _PLATE_KEYS)
-    shared = _plate(ctx, prim, ("primaries",), where, "primaries") if "plate" in prim else None
-    primaries = {
-        c: _region_shot(ctx, prim[c], ("primaries", c), where, f"primaries_{c}", shared)
-        for c in CHANNELS
-    }
-
-    lit = ctx.mapping(top["lit_chart"], ("lit_chart",), CHANNELS)
-    lit_chart = {c: _chart(ctx, lit[c], ("lit_chart", c), where, f"lit_{c}") for c in CHANNELS}
-
-    envs = top["environments"]
+def _environments(ctx: Validator, envs: Any, where: _Where) -> tuple[EnvironmentCapture, ...]:
+    """``environments``: a non-empty list, unique names, each with its target chart."""
     if not isinstance(envs, list) or not envs:
         raise ctx.error(("environments",), "expected a non-empty list")
     environments = []
@@ -304,20 +330,7 @@ def capture_from_dict(
             )
         w_avg = ctx.rgb(env["w_avg"], (*key, "w_avg")) if "w_avg" in env else None
         environments.append(EnvironmentCapture(name, target, black, w_avg))
-
-    return Capture(
-        stage=dict(top["stage"]),
-        rows=rows,
-        columns=columns,
-        inset=inset,
-        sampling=sampling,
-        primaries=primaries,
-        lit_chart=lit_chart,
-        environments=tuple(environments),
-        source=source,
-        document=data,
-        sha256=sha256,
-    )
+    return tuple(environments)
 
 
 def load_capture(path: str | Path) -> Capture:
