@@ -211,102 +211,54 @@ def sample_chart(
     flat_field: object = None,
     source: object = None,
 ) -> ChartSamples:
-    """Sample every patch of a chart photographed in perspective.
+    """Sample every patch of a chart photographed in perspective, in reading order.
 
-    The patch values are the camera RGB the paper samples from its calibration photographs:
-    the lit-chart columns of [SRL]_j (eq. 3) and the target chart p_j (eq. 5).
+    The camera RGB the paper samples from its calibration photographs (the lit-chart columns of
+    [SRL]_j, eq. 3; the target chart p_j, eq. 5). The module docstring explains the statistics.
 
     Parameters
     ----------
-    image
-        A plate path, a :class:`~ocio_vp.plates.reader.PlateInfo`, an (h, w, >=3) array, or a list of
-        them (frames of a sequence, averaged pixel by pixel before the statistics).
-    corners
-        (4, 2) pixel coordinates of the chart grid's outer corners: TL, TR, BR, BL.
-    rows, columns
-        The patch grid (a ColorChecker 24 is 4 x 6).
-    inset
-        Margin kept unsampled on each side of a patch, as a fraction of the patch (0-0.45).
-    method
-        A name in :data:`ROBUST_MEAN_METHODS`; ``"trimmed"`` uses ``trim`` per side.
-    clip_level
-        Linear value at which a pixel counts as clipped; default 1.0 for integer plates and a
-        detected flat top for float plates (see :func:`ocio_vp.plates.statistics.clip_levels`).
-    encoding
-        The plates' encoding when they are display-referred (see :mod:`ocio_vp.plates.reader`).
-    outlier_sigma, max_outlier_fraction, max_spread
-        A pixel farther than ``outlier_sigma`` robust sigmas (1.4826 MAD) from its patch median
-        is an outlier; a patch is flagged ``high_spread`` when more than
-        ``max_outlier_fraction`` of its pixels are, or when its standard deviation exceeds
-        ``max_spread`` times the brightest patch mean.
-    min_pixels
-        Fewer sampled pixels than this in a patch is an error (chart too small or inset too big).
+    image, encoding
+        A plate path, a :class:`~ocio_vp.plates.reader.PlateInfo`, an (h, w, >=3) array, or a
+        list of them (frames, averaged pixel by pixel); their encoding if display-referred.
+    corners, rows, columns, inset
+        (4, 2) pixel corners of the patch grid (TL, TR, BR, BL); the grid (a ColorChecker 24 is
+        4 x 6); the margin of each patch left unsampled (a fraction, 0-0.45).
+    method, trim, clip_level
+        A :data:`ROBUST_MEAN_METHODS` name (``"trimmed"`` trims ``trim`` per side); the level
+        of a clipped pixel (default 1.0 for integer plates, a detected flat top for float).
+    outlier_sigma, max_outlier_fraction, max_spread, min_pixels
+        An outlier is over ``outlier_sigma`` robust sigmas (1.4826 MAD) from its patch median;
+        ``high_spread``: over ``max_outlier_fraction`` outliers, or a standard deviation over
+        ``max_spread`` x the brightest patch mean. Under ``min_pixels`` pixels is an error.
     flat_field
-        Optional flat-field plate(s) (same forms as ``image``, same size and encoding): the
-        pixels are divided by its gain relative to the frame's centre, which removes vignetting
-        (:func:`ocio_vp.plates.frames.flat_field_gain`). Clipping is judged before the division.
-
-    Returns
-    -------
-    ChartSamples
-        Patches in reading order (row by row from the top-left).
+        Flat-field plate(s) (forms of ``image``) dividing out vignetting
+        (:func:`ocio_vp.plates.frames.flat_field_gain`); clipping is judged before the division.
 
     Raises
     ------
     InputError
-        Unreadable plate, corners not a convex quadrilateral or outside the image, too few
-        pixels in a patch, or a chart whose patches are mostly clipped.
+        Unreadable plate, corners not convex or outside the image, too few pixels in a patch,
+        or most patches clipped.
 
     Examples
     --------
-    >>> import numpy as np
-    >>> img = np.zeros((40, 60, 3), np.float32)
-    >>> img[:20, :30] = 0.5
+    >>> img = np.zeros((40, 60, 3), np.float32); img[:20, :30] = 0.5
     >>> s = sample_chart(img, [[0, 0], [60, 0], [60, 40], [0, 40]], 2, 2, clip_level=1.0)
     >>> s.means[:, 0].tolist()
     [0.5, 0.0, 0.0, 0.0]
     """
-    if isinstance(rows, bool) or int(rows) < 1 or isinstance(columns, bool) or int(columns) < 1:
-        raise InputError(f"rows and columns must be >= 1, got {rows} x {columns}", source=source)
-    if not 0 <= inset <= 0.45:
-        raise InputError(f"inset must be in [0, 0.45], got {inset!r}", source=source, key="inset")
-    frames = list(image) if isinstance(image, (list, tuple)) else [image]
-    where = source or (str(frames[0]) if isinstance(frames[0], (str, os.PathLike)) else None)
+    _check_grid(rows, columns, inset, source)
+    frames, where = _frames_and_source(image, source)
     c = _check_corners(corners, where)
-    box = chart_box(c)
-    box = (box[0], box[1], max(box[2], box[0] + 1), max(box[3], box[1] + 1))
+    box = _sampling_box(c)
     pixels, is_float, n_frames = frames_pixels(
         frames, box, encoding=encoding, source=source, what="chart corners' box"
     )
     labels = patch_labels(c, rows, columns, inset=inset, box=box)
-    order = np.argsort(labels.ravel(), kind="stable")  # raster order within each patch
-    sorted_labels = labels.ravel()[order]
-    n = rows * columns
-    starts = np.searchsorted(sorted_labels, np.arange(n + 1))
-
-    def split(values: np.ndarray) -> list[np.ndarray]:
-        values = values.reshape(-1, 3)
-        return [values[order[starts[j] : starts[j + 1]]] for j in range(n)]
-
-    raw_groups = split(pixels)
-    groups = raw_groups
-    if flat_field is not None:
-        gain = flat_field_gain(
-            flat_field,
-            box,
-            encoding=encoding,
-            plate_box=_plate_box(frames[0], encoding),
-            source=where,
-        )
-        groups = split(pixels / gain)
-    small = [j for j, g in enumerate(groups) if len(g) < min_pixels]
-    if small:
-        raise InputError(
-            f"patch {small[0]} has {len(groups[small[0]])} pixels (< {min_pixels}): the chart is "
-            "too small in the image or the inset too large",
-            source=where,
-            key="corners",
-        )
+    gain = None if flat_field is None else _gain(flat_field, box, encoding, frames[0], where)
+    raw_groups, groups = _patch_pixels(pixels, labels, rows * columns, gain)
+    _check_patch_sizes(groups, min_pixels, where)
     stats = patch_statistics(
         groups,
         method=method,
@@ -319,13 +271,69 @@ def sample_chart(
         source=where,
         raw_groups=raw_groups,
     )
-    mostly = np.asarray(stats["clipped_fraction"]) > 0.5
+    _check_not_mostly_clipped(stats["clipped_fraction"], rows * columns, where)
+    return ChartSamples(box=box, method=method, frames=n_frames, **stats)  # type: ignore[arg-type]
+
+
+def _sampling_box(corners: np.ndarray) -> Box:
+    """The corners' pixel box, at least one pixel wide and high."""
+    box = chart_box(corners)
+    return (box[0], box[1], max(box[2], box[0] + 1), max(box[3], box[1] + 1))
+
+
+def _check_grid(rows: int, columns: int, inset: float, source: object) -> None:
+    if isinstance(rows, bool) or int(rows) < 1 or isinstance(columns, bool) or int(columns) < 1:
+        raise InputError(f"rows and columns must be >= 1, got {rows} x {columns}", source=source)
+    if not 0 <= inset <= 0.45:
+        raise InputError(f"inset must be in [0, 0.45], got {inset!r}", source=source, key="inset")
+
+
+def _frames_and_source(image: object, source: object) -> tuple[list, object]:
+    """The frames to average, and what messages name (``source``, else the first path)."""
+    frames = list(image) if isinstance(image, (list, tuple)) else [image]
+    where = source or (str(frames[0]) if isinstance(frames[0], (str, os.PathLike)) else None)
+    return frames, where
+
+
+def _gain(flat_field: object, box: Box, encoding: str | None, frame: object, where: object):
+    """The flat field's gain over ``box`` of a plate like ``frame``."""
+    plate_box = _plate_box(frame, encoding)
+    return flat_field_gain(flat_field, box, encoding=encoding, plate_box=plate_box, source=where)
+
+
+def _patch_pixels(
+    pixels: np.ndarray, labels: np.ndarray, n: int, gain: np.ndarray | None
+) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Each patch's (k, 3) pixels in raster order: as read, and divided by ``gain`` if any."""
+    order = np.argsort(labels.ravel(), kind="stable")
+    starts = np.searchsorted(labels.ravel()[order], np.arange(n + 1))
+
+    def split(values: np.ndarray) -> list[np.ndarray]:
+        values = values.reshape(-1, 3)
+        return [values[order[starts[j] : starts[j + 1]]] for j in range(n)]
+
+    raw = split(pixels)
+    return raw, (raw if gain is None else split(pixels / gain))
+
+
+def _check_patch_sizes(groups: list[np.ndarray], min_pixels: int, where: object) -> None:
+    small = [j for j, g in enumerate(groups) if len(g) < min_pixels]
+    if small:
+        raise InputError(
+            f"patch {small[0]} has {len(groups[small[0]])} pixels (< {min_pixels}): the chart is "
+            "too small in the image or the inset too large",
+            source=where,
+            key="corners",
+        )
+
+
+def _check_not_mostly_clipped(clipped_fraction: object, n: int, where: object) -> None:
+    mostly = np.asarray(clipped_fraction) > 0.5
     if np.count_nonzero(mostly) * 2 >= n:
         raise InputError(
             f"{np.count_nonzero(mostly)} of {n} patches are clipped: expose lower and reshoot",
             source=where,
         )
-    return ChartSamples(box=box, method=method, frames=n_frames, **stats)  # type: ignore[arg-type]
 
 
 def sample_region(
@@ -351,22 +359,14 @@ def sample_region(
     if len(values) != 4:
         raise InputError(f"expected a region [x0, y0, x1, y1], got {list(box)}", source=source)
     b: Box = (values[0], values[1], values[2], values[3])
-    frames = list(image) if isinstance(image, (list, tuple)) else [image]
-    where = source or (str(frames[0]) if isinstance(frames[0], (str, os.PathLike)) else None)
+    frames, where = _frames_and_source(image, source)
     pixels, is_float, n_frames = frames_pixels(
         frames, b, encoding=encoding, source=where, what="region"
     )
     raw = pixels.reshape(-1, 3)
     corrected = raw
     if flat_field is not None:
-        gain = flat_field_gain(
-            flat_field,
-            b,
-            encoding=encoding,
-            plate_box=_plate_box(frames[0], encoding),
-            source=where,
-        )
-        corrected = (pixels / gain).reshape(-1, 3)
+        corrected = (pixels / _gain(flat_field, b, encoding, frames[0], where)).reshape(-1, 3)
     stats = patch_statistics(
         [corrected],
         method=method,
