@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ocio_vp.calibration.equations import condition_number, predict_lit_chart
+from ocio_vp.calibration.equations import condition_number, in_frustum_drive, predict_lit_chart
 from ocio_vp.metrics import error_relative_to_white, white_scale
 
 __all__ = [
@@ -74,9 +74,8 @@ def in_frustum_drive_range(
     M = np.asarray(M, dtype=np.float64)
     peak = float(np.max(M @ target[white_patch]))
     scale = max_drive / peak if peak > 0 else 1.0
-    drive = (target * scale) @ np.asarray(matrix, dtype=np.float64).T
-    if offset is not None:
-        drive = drive + np.asarray(offset, dtype=np.float64) * scale
+    scaled_offset = None if offset is None else np.asarray(offset, dtype=np.float64) * scale
+    drive = in_frustum_drive(target * scale, matrix=matrix, offset=scaled_offset)
     below = np.any(drive < 0, axis=1)
     above = np.any(drive > max_drive, axis=1)
     return {

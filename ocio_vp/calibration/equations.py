@@ -27,6 +27,7 @@ __all__ = [
     "MAX_CONDITION_SL",
     "black_level_offset",
     "condition_number",
+    "in_frustum_drive",
     "predict_displayed_chart",
     "predict_lit_chart",
     "solve_M",
@@ -208,6 +209,23 @@ def black_level_offset(
     )
 
 
+def in_frustum_drive(
+    content: ArrayLike, *, matrix: ArrayLike, offset: ArrayLike | None = None
+) -> np.ndarray:
+    """The LED drive ``matrix c + offset`` the in-frustum wall is asked for (before clipping).
+
+    Examples
+    --------
+    >>> in_frustum_drive([[0.5, 0.2, 0.1]], matrix=np.eye(3), offset=[-0.3, 0.0, 0.0]).tolist()
+    [[0.2, 0.2, 0.1]]
+    """
+    content = np.asarray(content, dtype=np.float64)
+    drive = content @ np.asarray(matrix, dtype=np.float64).T
+    if offset is not None:
+        drive = drive + np.asarray(offset, dtype=np.float64)
+    return drive
+
+
 def predict_displayed_chart(
     content: ArrayLike,
     *,
@@ -223,10 +241,7 @@ def predict_displayed_chart(
     more than ``max_drive``, when given), and the camera also sees the light bounced off the
     panels, ``b_camera``.
     """
-    content = np.asarray(content, dtype=np.float64)
-    drive = content @ np.asarray(matrix, dtype=np.float64).T
-    if offset is not None:
-        drive = drive + np.asarray(offset, dtype=np.float64)
+    drive = in_frustum_drive(content, matrix=matrix, offset=offset)
     drive = np.clip(drive, 0.0, np.inf if max_drive is None else max_drive)
     seen = drive @ np.asarray(SL, dtype=np.float64).T
     if black_level is not None:

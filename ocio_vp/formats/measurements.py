@@ -23,6 +23,7 @@ from ocio_vp.errors import InputError, excerpt, format_key_path
 from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.fixtures import Fixture, fixtures_to_dict, parse_fixtures
 from ocio_vp.formats.synthesis import SynthesisRecord, parse_synthesis, synthesis_to_dict
+from ocio_vp.wall.linearity import CHANNELS, parse_ramps, ramps_to_dict
 
 __all__ = [
     "CHANNELS",
@@ -49,7 +50,6 @@ __all__ = [
 
 FORMAT = "ocio-vp/measurements"
 VERSION = 1
-CHANNELS = ("red", "green", "blue")
 #: Names that are safe as folder names and inside Tcl, C, YAML and OCIO names.
 #: (``\Z``, not ``$``: ``$`` also matches before a final newline.)
 SAFE_NAME = re.compile(r"\A[A-Za-z0-9][A-Za-z0-9_-]{0,63}\Z")
@@ -315,8 +315,6 @@ def measurements_from_dict(
     environments = _parse_environments(ctx, top["environments"], n)
     ramps = None
     if "ramps" in top:
-        from ocio_vp.wall.linearity import parse_ramps  # the optional section lives with its maths
-
         ramps = parse_ramps(top["ramps"], source=source)
     fixtures = parse_fixtures(ctx, top["fixtures"], n) if "fixtures" in top else ()
     return Measurements(
@@ -513,8 +511,6 @@ def measurements_to_dict(measurements: Measurements) -> dict[str, Any]:
             entry["synthesized"] = synthesis_to_dict(env.synthesized)
         data["environments"].append(entry)
     if measurements.ramps is not None:
-        from ocio_vp.wall.linearity import ramps_to_dict
-
         data["ramps"] = ramps_to_dict(measurements.ramps)
     if measurements.fixtures:
         data["fixtures"] = fixtures_to_dict(measurements.fixtures)

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ocio_vp.calibration.equations import in_frustum_drive, predict_displayed_chart
 from ocio_vp.simulator.stage import (
     SpectralStage,
     black_level_reading,
@@ -74,12 +75,11 @@ def predict_stage(
     lit = camera_rgb(stage, stage.reflectances * (stage.leds @ emitted))
     black = black_level_reading(stage, M, w_avg)
     c = target if content is None else np.asarray(content, dtype=np.float64)
-    in_drive = c @ (M if N is None else np.asarray(N, dtype=np.float64)).T
-    if offset is not None:
-        in_drive = in_drive + np.asarray(offset, dtype=np.float64)
-    displayed = np.clip(in_drive, 0.0, None) @ stage.SL.T
-    if black is not None:
-        displayed = displayed + black
+    in_frustum = M if N is None else np.asarray(N, dtype=np.float64)
+    in_drive = in_frustum_drive(c, matrix=in_frustum, offset=offset)
+    displayed = predict_displayed_chart(
+        c, SL=stage.SL, matrix=in_frustum, offset=offset, black_level=black
+    )
     return StagePrediction(
         target=target,
         lit=lit,
