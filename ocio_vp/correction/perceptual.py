@@ -28,6 +28,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ocio_vp.correction.linear import fit_least_squares
 from ocio_vp.correction.problem import QFit, QProblem
 
 __all__ = [
@@ -119,10 +120,7 @@ def make_q_perceptual(
         X = np.asarray(problem.predicted, dtype=np.float64)
         P = np.asarray(problem.target, dtype=np.float64)
         w = problem.fit_weights
-        sw = np.sqrt(w)[:, None]
-        # Start: eq. 5 least squares (X Q^T = P, weighted).
-        QT, *_ = np.linalg.lstsq(X * sw, P * sw, rcond=None)
-        start = QT.T.copy()
+        start = fit_least_squares(X, P, w).copy()  # start: eq. 5's weighted least squares
         encode = _encoder(P, matrix, problem.white_patch, metric)
         reference = encode(P)
         total = float(np.sum(w))
