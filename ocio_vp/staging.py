@@ -55,6 +55,7 @@ _MARKER_HEADER = (
 FILE_SIGNATURE = b"# Written by ocio-vp"
 _MOVE_HINT = "move it away or choose another output"
 
+
 def default_mode(*, folder: bool = False) -> int:
     """The mode a plain ``open``/``mkdir`` would give under the current umask.
 
@@ -175,6 +176,23 @@ def _write_marker(folder: Path) -> None:
     (folder / MARKER).write_text(_MARKER_HEADER + "".join(f"{n}\n" for n in listed), "utf-8")
 
 
+def _nested_outputs(final: Path, present: list[str]) -> set[str]:
+    """Files of ocio-vp output folders published inside ``final`` after it (an environment's
+    ``exports/<target>/`` or ``report/``): each carries its own marker listing them."""
+    owned: set[str] = set()
+    for name in present:
+        if name.rpartition("/")[2] != MARKER or "/" not in name:
+            continue
+        folder = name.rpartition("/")[0]
+        try:
+            lines = (final / name).read_text("utf-8").splitlines()
+        except (OSError, UnicodeDecodeError):
+            continue
+        owned |= {f"{folder}/{line}" for line in lines if line and not line.startswith("#")}
+        owned.add(name)
+    return owned
+
+
 def check_replaceable(final: str | os.PathLike[str]) -> None:
     """Raise :class:`InputError` unless ``final`` is absent, empty or an ocio-vp output folder.
 
@@ -196,6 +214,7 @@ def check_replaceable(final: str | os.PathLike[str]) -> None:
             source=final,
         ) from None
     listed = {line for line in lines if line and not line.startswith("#")} | {MARKER}
+    listed |= _nested_outputs(final, present)
     foreign = [name for name in present if name not in listed]
     if foreign:
         more = f" and {len(foreign) - 1} more" if len(foreign) > 1 else ""
