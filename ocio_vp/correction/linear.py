@@ -8,22 +8,28 @@ model               dof   what it fits
 ==================  ====  ==================================================================
 identity            0     ``Q = I``: the stage's LEDs already light the scene like the real one
 diagonal            3     white balance: per-channel gains, least squares over all patches
-regularised         3..9  least squares shrunk toward the diagonal model: the most shrinkage
-                          whose LOO error is within half auto's tolerance of the best strength
+regularised         3..9  least squares shrunk toward the diagonal model, the strength with the
+                          lowest leave-one-out ΔE2000
 least-squares       9     the paper's eq. 5
 white-preserving    6     full Q with ``Q x_w = p_w`` exactly, the rest least squares (not in
                           auto's ladder: one patch's noise goes straight into Q and N)
 rank-r              5, 8  reduced-rank least squares, for a (nearly) monochromatic target
 ==================  ====  ==================================================================
 
-``auto`` measures every model's leave-one-patch-out cross-validated error and keeps the
-simplest whose error is within ``best * (1 + AUTO_TOLERANCE_RELATIVE) + AUTO_TOLERANCE_ABSOLUTE``
-of the best (a model just inside the limit is blended with the next one, :func:`soft_choice`,
-so that Q moves continuously with the data); when the target chart has numerical rank below 3
-it fits a reduced-rank Q instead (N is then not solved). See docs/stability.md for the reasoning and the measured figures.
+``auto`` judges the models the way the calibration is used, on colours it was not fitted to:
+each model's **leave-one-patch-out** predictions (every patch predicted by the model fitted
+without it), in **ΔE2000** through a camera RGB -> XYZ matrix
+(:func:`ocio_vp.correction.perceptual.patch_delta_e`). It keeps the paper's least squares
+unless another model is better by more than :data:`AUTO_SE_FACTOR` standard errors of the
+paired per-patch differences (a one-standard-error rule: the comparison's own noise decides
+what "better" means), and among equals takes the simplest (:func:`choose_model`). When the
+target chart has numerical rank below 3 it fits a reduced-rank Q instead (N is then not
+solved). See
+docs/stability.md and docs/accuracy.md for the reasoning and the measured figures.
 
-The errors are the paper's (Fig. 11): mean absolute error per channel relative to the target
-white patch, averaged over channels (:func:`ocio_vp.calibration.diagnostics.error_relative_to_white`).
+Every leave-one-out here is in closed form: each patch's fit is the full fit's normal
+equations with that patch's rank-one term removed (a batch of 3x3 solves, the hat-matrix
+identity done exactly), so a solve is linear in the number of patches.
 """
 
 from __future__ import annotations
@@ -32,56 +38,97 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ocio_vp.correction.perceptual import patch_delta_e
 from ocio_vp.correction.problem import QFit, QProblem
 from ocio_vp.errors import InputError
-from ocio_vp.metrics import error_relative_to_white, white_scale
+from ocio_vp.metrics import error_relative_to_white
 
 __all__ = [
     "AUTO_LADDER",
-    "AUTO_TOLERANCE_ABSOLUTE",
-    "AUTO_TOLERANCE_RELATIVE",
-    "BLEND_BAND",
+    "AUTO_LADDER_NARROW",
+    "AUTO_SE_FACTOR",
+    "AUTO_TIE",
+    "LOO_KERNELS",
     "MODEL_KERNELS",
+    "NARROW_TARGET",
     "RANK_RELATIVE_TOLERANCE",
     "REGULARISATION_GRID",
+    "choose_model",
+    "choose_shrinkage",
+    "colour_spread",
     "fit_least_squares",
     "loo_cv_error",
+    "loo_predictions",
     "q_auto",
     "q_diagonal",
     "q_identity",
     "q_regularised",
     "q_white_preserving",
-    "soft_choice",
     "target_rank",
 ]
 
-#: ``auto`` keeps the simplest model whose cross-validated error is at most
-#: ``best * (1 + relative) + absolute``: 5 % of the best error plus 0.2 % of the target white,
-#: well below a visible difference on a chart (docs/stability.md), above LOO's own jitter.
-AUTO_TOLERANCE_RELATIVE = 0.05
-AUTO_TOLERANCE_ABSOLUTE = 0.002
+#: ``auto`` replaces least squares by another model only when that model's mean leave-one-out
+#: ΔE2000 is lower by more than this many standard errors of the paired per-patch differences
+#: (docs/accuracy.md measures the choice on colours off the chart).
+AUTO_SE_FACTOR = 1.0
+#: Mean leave-one-out ΔE2000 differences up to this are ties (rounding, not colour), which go to
+#: the simplest model.
+AUTO_TIE = 1e-6
 
 #: A colour direction of the target chart carrying less than this fraction of its largest
-#: singular value is treated as absent (low-pressure sodium: ~1e-16; high-pressure sodium: 0.04).
-RANK_RELATIVE_TOLERANCE = 0.01
+#: singular value, relative to the lit chart's (:func:`target_rank`), is treated as absent
+#: (low-pressure sodium: ~1e-15; high-pressure sodium: 0.4; daylight and tungsten: 0.7-1).
+RANK_RELATIVE_TOLERANCE = 1e-3
 
-#: ``regularised`` takes the strongest shrinkage whose inner leave-one-out error is within
-#: ``best * (1 + relative) + absolute`` of the best strength's: half ``auto``'s tolerance, so the
-#: shrunk model usually stays within ``auto``'s tolerance when cross-validated from outside.
-SHRINKAGE_TOLERANCE = (AUTO_TOLERANCE_RELATIVE / 2, AUTO_TOLERANCE_ABSOLUTE / 2)
+#: A target chart whose colours spread less than this fraction of the lit chart's
+#: (:func:`colour_spread`: a line-spectrum light the wall cannot reproduce, e.g. sodium lamps
+#: 0.02-0.74 on the simulator, broadband lights 0.81-1) is a *narrow* target: ``auto`` then also
+#: weighs reduced-rank models (rank-1, rank-2) against the others.
+NARROW_TARGET = 0.78
 
 #: Shrinkage strengths tried by ``regularised``, relative to ``trace(X^T W X) / 3``.
-REGULARISATION_GRID = (0.0, *np.logspace(-4, 2, 7).tolist())
-
-#: Width of the band under ``auto``'s limit, as a fraction of it, where a model shares its weight
-#: with the models after it (:func:`soft_choice`): 1 at the band's floor, 0 at the limit.
-BLEND_BAND = 0.05
+REGULARISATION_GRID = (0.0, *np.logspace(-4, 2, 13).tolist())
 
 #: ``auto``'s candidates, simplest first. ``white-preserving`` is not one: pinning Q to a single
 #: patch makes Q and N inherit that patch's noise (docs/stability.md), so it is never "simpler".
 AUTO_LADDER = ("identity", "diagonal", "regularised", "least-squares")
+#: The ladder for a narrow target (:data:`NARROW_TARGET`).
+AUTO_LADDER_NARROW = ("identity", "diagonal", "rank-1", "rank-2", "regularised", "least-squares")
 
 Kernel = Callable[[np.ndarray, np.ndarray, np.ndarray, int], np.ndarray]
+
+
+# ---------------------------------------------------------------------------------------------
+# Normal equations, whole and with one patch removed.
+
+
+def _normal_equations(X: np.ndarray, P: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, ...]:
+    """``G = X^T W X`` (d, d) and ``B = X^T W P`` (d, k)."""
+    return np.einsum("j,jc,jd->cd", w, X, X), np.einsum("j,jc,jd->cd", w, X, P)
+
+
+def _downdated(X: np.ndarray, P: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, ...]:
+    """(n, d, d) and (n, d, k): the normal equations without patch j, for every j."""
+    G, B = _normal_equations(X, P, w)
+    Gj = G[None] - w[:, None, None] * X[:, :, None] * X[:, None, :]
+    Bj = B[None] - w[:, None, None] * X[:, :, None] * P[:, None, :]
+    return Gj, Bj
+
+
+def _solve(G: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """``G^-1 B`` for (batches of) symmetric G; the pseudo-inverse where G is singular."""
+    scale = np.max(np.abs(G), axis=(-2, -1), keepdims=True)
+    scale = np.where(scale > 0, scale, 1.0)
+    Gs = G / scale
+    singular = np.linalg.cond(Gs) > 1e12
+    if not np.any(singular):
+        return np.linalg.solve(Gs, B / scale)
+    return np.linalg.pinv(Gs, hermitian=True) @ (B / scale)
+
+
+def _loo(Qt: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """(n, 3) held-out predictions ``Q_(-j) x_j`` from (n, d, 3) transposed fits."""
+    return np.einsum("jc,jcd->jd", X, Qt)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -99,13 +146,29 @@ def _fit_identity(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> np
     return np.eye(3)
 
 
+def _gains(num: np.ndarray, den: np.ndarray, peak: np.ndarray) -> np.ndarray:
+    """Per-channel gains ``num / den``; 1 where a channel carries (next to) no signal."""
+    safe = den > 1e-12 * peak
+    return np.where(safe, num / np.where(safe, den, 1.0), 1.0)
+
+
+def _diagonal_terms(X: np.ndarray, P: np.ndarray, w: np.ndarray):
+    num = np.einsum("j,jc,jc->c", w, X, P)
+    den = np.einsum("j,jc,jc->c", w, X, X)
+    return num, den, np.max(den) if den.size else 0.0
+
+
 def _fit_diagonal(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> np.ndarray:
     """Per-channel gains by least squares over every fitted patch (a white balance that no
     single noisy patch sets); a channel with no signal keeps gain 1."""
-    num = np.einsum("j,jc,jc->c", w, X, P)
-    den = np.einsum("j,jc,jc->c", w, X, X)
-    safe = den > 0
-    return np.diag(np.where(safe, num / np.where(safe, den, 1.0), 1.0))
+    num, den, peak = _diagonal_terms(X, P, w)
+    return np.diag(_gains(num, den, peak))
+
+
+def _loo_diagonal_gains(X: np.ndarray, P: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """(n, 3) the diagonal model's gains fitted without patch j."""
+    num, den, peak = _diagonal_terms(X, P, w)
+    return _gains(num - w[:, None] * X * P, den - w[:, None] * X * X, peak)
 
 
 def _fit_white_preserving(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> np.ndarray:
@@ -114,58 +177,55 @@ def _fit_white_preserving(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: in
     norm = float(x_w @ x_w)
     if not w[white] > 0 or not norm > 0:
         return fit_least_squares(X, P, w)
-    _, _, vt = np.linalg.svd(x_w[None, :])
-    Z = vt[1:].T  # (3, 2) orthonormal basis of {q : x_w . q = 0}
-    Q0 = np.outer(P[white], x_w) / norm  # rows q0_c with x_w . q0_c = p_w,c
+    Z, Q0 = _white_basis(X[white], P[white])
     sw = np.sqrt(w)[:, None]
-    A = (X @ Z) * sw
-    B = (P - X @ Q0.T) * sw
-    Y, *_ = np.linalg.lstsq(A, B, rcond=None)  # (2, 3)
+    Y, *_ = np.linalg.lstsq((X @ Z) * sw, (P - X @ Q0.T) * sw, rcond=None)  # (2, 3)
     return Q0 + (Z @ Y).T
 
 
-def _ridge_batch(
-    X: np.ndarray, P: np.ndarray, w: np.ndarray, D: np.ndarray, lam: np.ndarray
-) -> np.ndarray:
-    """Q minimising sum w_j ||Q x_j - p_j||^2 + lam ||Q - D||_F^2, batched over leading axes of
-    ``w`` (..., n), ``D`` (..., 3, 3) and ``lam`` (...)."""
-    G = np.einsum("...j,jc,jd->...cd", w, X, X) + lam[..., None, None] * np.eye(3)
-    B = np.einsum("...j,jc,jd->...cd", w, X, P) + lam[..., None, None] * np.swapaxes(D, -1, -2)
-    return np.swapaxes(np.linalg.pinv(G) @ B, -1, -2)
+def _white_basis(x_w: np.ndarray, p_w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Z (3, 2) orthonormal basis of {q : x_w . q = 0}, and Q0 with ``Q0 x_w = p_w``."""
+    _, _, vt = np.linalg.svd(x_w[None, :])
+    return vt[1:].T, np.outer(p_w, x_w) / float(x_w @ x_w)
 
 
-def _choose_shrinkage(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> float:
-    """The grid strength with the lowest leave-one-out error (ties go to more shrinkage)."""
-    scale = float(np.einsum("j,jc,jc->", w, X, X)) / 3.0
-    active = np.flatnonzero(w > 0)
-    if not scale > 0 or active.size < 2:
+def _ridge(X: np.ndarray, P: np.ndarray, w: np.ndarray, alpha: float) -> np.ndarray:
+    """Least squares + ``alpha tr(X^T W X)/3 ||Q - D||_F^2``, D the diagonal fit."""
+    G, B = _normal_equations(X, P, w)
+    D = _fit_diagonal(X, P, w, 0)
+    lam = alpha * np.trace(G) / 3.0
+    return _solve(G + lam * np.eye(3), B + lam * D).T
+
+
+def _loo_ridge(X: np.ndarray, P: np.ndarray, w: np.ndarray, alphas: np.ndarray) -> np.ndarray:
+    """(g, n, 3) held-out predictions of the ridge model for each strength in ``alphas``."""
+    Gj, Bj = _downdated(X, P, w)
+    D = _loo_diagonal_gains(X, P, w)[:, :, None] * np.eye(3)  # (n, 3, 3)
+    lam = (
+        np.asarray(alphas)[:, None, None, None]
+        * (np.trace(Gj, axis1=1, axis2=2) / 3.0)[None, :, None, None]
+    )
+    Qt = _solve(Gj[None] + lam * np.eye(3), Bj[None] + lam * D[None])
+    return np.einsum("jc,gjcd->gjd", X, Qt)
+
+
+def choose_shrinkage(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> float:
+    """The grid strength with the lowest mean leave-one-out ΔE2000 (ties: more shrinkage)."""
+    active = w > 0
+    if not np.trace(_normal_equations(X, P, w)[0]) > 0 or np.count_nonzero(active) < 2:
         return float("inf")
     grid = np.asarray(REGULARISATION_GRID)
-    w_loo = np.repeat(w[None, :], active.size, axis=0)
-    w_loo[np.arange(active.size), active] = 0.0
-    D = np.stack([_fit_diagonal(X, P, wj, white) for wj in w_loo])  # (k, 3, 3)
-    Q = _ridge_batch(X, P, w_loo[None], D[None], grid[:, None] * scale)  # (g, k, 3, 3)
-    held = np.einsum("gkcd,kd->gkc", Q, X[active])
-    denom = white_scale(P, white, w)
-    errors = np.mean(np.abs(held - P[active]) / denom, axis=(1, 2))
-    # Like Breiman's one-standard-error rule: the most shrinkage whose error is within
-    # SHRINKAGE_TOLERANCE of the best, because shrinkage toward D is what keeps N stable.
-    limit = errors.min() * (1 + SHRINKAGE_TOLERANCE[0]) + SHRINKAGE_TOLERANCE[1]
-    return float(grid[np.flatnonzero(errors <= limit)[-1]])
+    held = _loo_ridge(X, P, w, grid)
+    scores = [np.mean(patch_delta_e(h, P, white_patch=white, weights=w)[active]) for h in held]
+    scores = np.where(np.isfinite(scores), scores, np.inf)
+    return float(grid[np.flatnonzero(scores <= np.min(scores) + AUTO_TIE)[-1]])
 
 
 def _fit_regularised(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> np.ndarray:
-    D = _fit_diagonal(X, P, w, white)
-    alpha = _choose_shrinkage(X, P, w, white)
+    alpha = choose_shrinkage(X, P, w, white)
     if not np.isfinite(alpha):
-        return D
-    scale = float(np.einsum("j,jc,jc->", w, X, X)) / 3.0
-    sw = np.sqrt(w)[:, None]
-    root = np.sqrt(alpha * scale)
-    A = np.vstack([X * sw, root * np.eye(3)])
-    B = np.vstack([P * sw, root * D.T])
-    QT, *_ = np.linalg.lstsq(A, B, rcond=None)
-    return QT.T
+        return _fit_diagonal(X, P, w, white)
+    return _ridge(X, P, w, alpha)
 
 
 def _fit_reduced_rank(X: np.ndarray, P: np.ndarray, w: np.ndarray, rank: int) -> np.ndarray:
@@ -187,38 +247,114 @@ MODEL_KERNELS: dict[str, Kernel] = {
 
 
 # ---------------------------------------------------------------------------------------------
-# Model assessment.
+# Closed-form leave-one-out: (X, P, w, white) -> (n, 3) held-out predictions Q_(-j) x_j. A
+# patch with weight 0 gets the full fit's prediction (which is its held-out prediction).
 
 
-def loo_cv_error(
-    kernel: Kernel, X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int
-) -> np.ndarray:
-    """(3,) leave-one-patch-out cross-validated chart error of a model, per channel.
+def _loo_identity(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> np.ndarray:
+    return X.copy()
 
-    Each active patch is predicted by the model fitted without it; the error is
-    :func:`ocio_vp.calibration.diagnostics.error_relative_to_white` of those held-out predictions.
+
+def _loo_diagonal(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> np.ndarray:
+    return X * _loo_diagonal_gains(X, P, w)
+
+
+def _loo_least_squares(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> np.ndarray:
+    return _loo(_solve(*_downdated(X, P, w)), X)
+
+
+def _loo_regularised(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> np.ndarray:
+    """Held out at the strength chosen on all patches (the choice itself is not re-made)."""
+    alpha = choose_shrinkage(X, P, w, white)
+    if not np.isfinite(alpha):
+        return _loo_diagonal(X, P, w, white)
+    return _loo_ridge(X, P, w, np.array([alpha]))[0]
+
+
+def _loo_white_preserving(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> np.ndarray:
+    """Each patch but the white from the constrained fit without it; the white patch from
+    the least-squares fit without it (what the kernel does with the white excluded)."""
+    held = _loo_least_squares(X, P, w, white)
+    if not (w[white] > 0 and float(X[white] @ X[white]) > 0):
+        return held
+    Z, Q0 = _white_basis(X[white], P[white])
+    A, B = X @ Z, P - X @ Q0.T
+    Gj, Bj = _downdated(A, B, w)
+    Y = _solve(Gj, Bj)  # (n, 2, 3)
+    constrained = X @ Q0.T + np.einsum("jc,jcd->jd", A, Y)
+    keep = np.arange(len(X)) != white
+    held[keep] = constrained[keep]
+    return held
+
+
+def _loo_reduced_rank(X: np.ndarray, P: np.ndarray, w: np.ndarray, rank: int) -> np.ndarray:
+    Gj, Bj = _downdated(X, P, w)
+    Qt = _solve(Gj, Bj)  # (n, 3, 3) = Q_(-j)^T
+    S = np.einsum("jac,jcd,jdb->jab", np.swapaxes(Qt, 1, 2), Gj, Qt)  # fitted^T W fitted
+    _, vectors = np.linalg.eigh(S)
+    V = vectors[:, :, ::-1][:, :, :rank]  # top ``rank`` output directions
+    projector = V @ np.swapaxes(V, 1, 2)
+    return np.einsum("jab,jb->ja", projector, _loo(Qt, X))
+
+
+LOO_KERNELS: dict[str, Kernel] = {
+    "identity": _loo_identity,
+    "diagonal": _loo_diagonal,
+    "white-preserving": _loo_white_preserving,
+    "regularised": _loo_regularised,
+    "least-squares": _loo_least_squares,
+}
+
+
+def loo_predictions(name: str, X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int):
+    """(n, 3) leave-one-patch-out predictions of the model ``name`` (closed form)."""
+    if name.startswith("rank-"):
+        return _loo_reduced_rank(X, P, w, int(name.removeprefix("rank-")))
+    return LOO_KERNELS[name](X, P, w, white)
+
+
+def loo_cv_error(name: str, X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int):
+    """(3,) leave-one-patch-out chart error of a model, per channel, relative to white.
+
+    :func:`ocio_vp.calibration.diagnostics.error_relative_to_white` of the held-out predictions.
     """
-    active = np.flatnonzero(w > 0)
-    held = np.zeros_like(P)
-    for j in active:
-        wj = w.copy()
-        wj[j] = 0.0
-        held[j] = kernel(X, P, wj, white) @ X[j]
-    return error_relative_to_white(held, P, white, w)
+    return error_relative_to_white(loo_predictions(name, X, P, w, white), P, white, w)
 
 
-def target_rank(P: np.ndarray, w: np.ndarray) -> tuple[int, np.ndarray]:
+def colour_spread(chart: np.ndarray) -> float:
+    """How far a chart's colours spread beyond one direction: the second singular value over
+    the first, of the patches scaled to unit length (so no single bright patch dominates)."""
+    size = np.linalg.norm(chart, axis=1, keepdims=True)
+    s = np.linalg.svd(chart / np.where(size > 0, size, 1.0), compute_uv=False)
+    return float(s[1] / s[0]) if s[0] > 0 else 0.0
+
+
+def target_rank(
+    P: np.ndarray, w: np.ndarray, X: np.ndarray | None = None
+) -> tuple[int, np.ndarray]:
     """Numerical rank of the (weighted) target chart and its relative singular values.
+
+    With the lit chart ``X``, each relative singular value of the target is compared with the
+    lit chart's (``(s_P[i] / s_P[0]) / (s_X[i] / s_X[0])``, at most 1): a camera whose channels
+    overlap strongly sees *every* chart with small minor singular values, and only a light with
+    much less colour than the wall shows (a line spectrum) should count as rank-deficient.
 
     Raises
     ------
     InputError
         When the fitted patches of the target chart are all black.
     """
-    s = np.linalg.svd(P * np.sqrt(w)[:, None], compute_uv=False)
+    sw = np.sqrt(w)[:, None]
+    s = np.linalg.svd(P * sw, compute_uv=False)
     if not s[0] > 0:
         raise InputError("the target chart is black on every fitted patch", key="target_chart")
     relative = s / s[0]
+    if X is not None:
+        t = np.linalg.svd(X * sw, compute_uv=False)
+        if t[0] > 0:
+            lit = t / t[0]
+            relative = np.minimum(relative / np.where(lit > 0, lit, np.inf), 1.0)
+            relative[0] = 1.0
     return int(np.sum(relative >= RANK_RELATIVE_TOLERANCE)), relative
 
 
@@ -256,49 +392,128 @@ q_white_preserving = _method(
 
 
 def q_regularised(problem: QProblem) -> QFit:
-    """Least squares shrunk toward the white-balance (diagonal) Q; strength by LOO CV."""
+    """Least squares shrunk toward the white-balance (diagonal) Q; strength by LOO ΔE2000."""
     X, P, w, white = _data(problem)
-    alpha = _choose_shrinkage(X, P, w, white)
+    alpha = choose_shrinkage(X, P, w, white)
+    Q = _fit_diagonal(X, P, w, white) if not np.isfinite(alpha) else _ridge(X, P, w, alpha)
     return QFit(
-        Q=_fit_regularised(X, P, w, white),
+        Q=Q,
         notes={
             "model": "regularised",
-            "description": "least squares + alpha*trace(X^T W X)/3*||Q - D||^2, D = white balance",
+            "description": "least squares + alpha*trace(X^T W X)/3*||Q - D||^2, D = white "
+            "balance, alpha with the lowest leave-one-patch-out ΔE2000",
             "shrinkage": alpha,
         },
     )
 
 
-def soft_choice(errors: dict[str, float], limit: float) -> dict[str, float]:
-    """Weights of ``auto``'s models: the hard "simplest within the limit", made continuous.
+def choose_model(
+    scores: dict[str, np.ndarray],
+    factor: float = AUTO_SE_FACTOR,
+    reference: str = "least-squares",
+):
+    """``auto``'s rule on per-patch leave-one-out ΔE (same patches; ladder order, simplest first).
 
-    Down the ladder, each model takes ``clip((limit - error) / (BLEND_BAND * limit), 0, 1)`` of
-    the weight still unassigned; the best model takes what is left. A model clear of the band
-    (error <= (1 - BLEND_BAND) limit) takes everything, so clear cases stay a single model
-    (e.g. exactly Q = I), and every model with weight has error <= limit.
+    The ``reference`` (the paper's least squares) is kept unless another model is *clearly*
+    better: its mean is lower by more than ``factor`` standard errors of the paired per-patch
+    differences. Among the reference and the clearly better models the lowest mean wins;
+    models within :data:`AUTO_TIE` of it are tied and the simplest of them is taken (a chart
+    the stage reproduces exactly gives ``identity``).
+
+    Returns ``(chosen, table)``; ``table[name]`` has the model's ``mean``, its ``difference``
+    from the reference's mean and that difference's ``standard_error``.
+
+    Examples
+    --------
+    A simpler model 0.05 better on average, but with paired differences spreading by 0.5, is
+    not clearly better; 0.5 better with the same spread is:
+
+    >>> d = np.array([0.45, -0.55] * 12)
+    >>> choose_model({"simple": 1.0 + d, "least-squares": np.ones(24)})[0]
+    'least-squares'
+    >>> choose_model({"simple": 0.55 + d, "least-squares": np.ones(24)})[0]
+    'simple'
     """
-    best = min(errors, key=errors.__getitem__)
-    band = BLEND_BAND * limit
-    remaining, weights = 1.0, {}
-    for name in AUTO_LADDER:
-        if name == best:
-            break
-        share = remaining * min(max((limit - errors[name]) / band, 0.0), 1.0)
-        if share > 0:
-            weights[name] = share
-            remaining -= share
-        if remaining <= 0:
-            return weights
-    weights[best] = weights.get(best, 0.0) + remaining
-    return weights
+    means = {name: float(np.mean(s)) for name, s in scores.items()}
+    base = scores[reference]
+    table = {}
+    for name, s in scores.items():
+        difference = s - base
+        se = float(np.std(difference, ddof=1) / np.sqrt(len(s))) if len(s) > 1 else 0.0
+        table[name] = {
+            "mean": means[name],
+            "difference": means[name] - means[reference],
+            "standard_error": se,
+        }
+    eligible = [
+        name
+        for name, row in table.items()
+        if name == reference
+        or abs(row["difference"]) <= AUTO_TIE
+        or row["difference"] < -factor * row["standard_error"]
+    ]
+    lowest = min(means[name] for name in eligible)
+    chosen = next(name for name in eligible if means[name] <= lowest + AUTO_TIE)
+    return chosen, table
+
+
+def _auto_reason(chosen: str, table: dict, factor: float, reference: str) -> str:
+    row = table[chosen]
+    rest = ", ".join(
+        f"{k} {v['mean']:.3g} ({v['difference']:+.2g} ± {v['standard_error']:.2g})"
+        for k, v in table.items()
+        if k not in (chosen, reference)
+    )
+    if chosen == reference:
+        head = (
+            f"{reference} (the paper's eq. 5): leave-one-patch-out mean ΔE2000 "
+            f"{row['mean']:.3g}; no other model is better by more than {factor:g} standard "
+            "error of the paired per-patch differences"
+        )
+    elif abs(row["difference"]) <= AUTO_TIE:
+        head = (
+            f"{chosen}: leave-one-patch-out mean ΔE2000 {row['mean']:.3g}, the same as "
+            f"{reference}'s: the simplest model that fits as well"
+        )
+    else:
+        head = (
+            f"{chosen}: leave-one-patch-out mean ΔE2000 {row['mean']:.3g}, better than "
+            f"{reference}'s {table[reference]['mean']:.3g} by {-row['difference']:.2g} ± "
+            f"{row['standard_error']:.2g} (more than {factor:g} standard error of the paired "
+            "per-patch differences)"
+        )
+    return f"{head}; others (difference from {reference}): {rest}"
+
+
+def _auto_reduced_rank(X, P, w, white, rank: int, singular: np.ndarray, notes: dict) -> QFit:
+    name = f"rank-{rank}"
+    held = loo_predictions(name, X, P, w, white)
+    active = w > 0
+    notes |= {
+        "model": name,
+        "reason": (
+            f"the target chart has rank {rank} (its singular values relative to the largest, "
+            "over the lit chart's: "
+            f"{', '.join(f'{v:.2g}' for v in singular)}; below {RANK_RELATIVE_TOLERANCE:g} "
+            "counts as absent): a near-monochromatic light, so Q is fitted with rank "
+            f"{rank} and cannot be inverted; N is not solved"
+        ),
+        "cv_delta_e": {
+            name: float(np.mean(patch_delta_e(held, P, white_patch=white, weights=w)[active]))
+        },
+        "cross_validated_error": error_relative_to_white(held, P, white, w),
+    }
+    return QFit(Q=_fit_reduced_rank(X, P, w, rank), notes=notes)
 
 
 def q_auto(problem: QProblem) -> QFit:
-    """The simplest model the scene needs (see the module docstring and docs/stability.md).
+    """The simplest model the scene needs, judged in leave-one-out ΔE2000 (module docstring).
 
-    The notes say which model was chosen (``model``; ``a+b`` with ``blend`` weights when
-    :func:`soft_choice` blends), why (``reason``), every candidate's cross-validated error
-    (``cv_error``), the ``limit``, the tolerance and the target chart's rank.
+    The notes say which model was chosen (``model``), why (``reason``, in ΔE2000), every
+    candidate's leave-one-out mean ΔE2000 (``cv_delta_e``) with its excess over the best and
+    that excess's standard error (``cv_comparison``), the rule's factor, the target chart's
+    rank, and the chosen model's leave-one-out error per channel relative to white
+    (``cross_validated_error``).
 
     Examples
     --------
@@ -313,61 +528,46 @@ def q_auto(problem: QProblem) -> QFit:
     'identity'
     """
     X, P, w, white = _data(problem)
-    rank, singular = target_rank(P, w)
-    tolerance = {"relative": AUTO_TOLERANCE_RELATIVE, "absolute": AUTO_TOLERANCE_ABSOLUTE}
+    rank, singular = target_rank(P, w, X)
     notes: dict = {
         "target_rank": rank,
         "target_singular_values": singular,
         "rank_relative_tolerance": RANK_RELATIVE_TOLERANCE,
-        "tolerance": tolerance,
+        "se_factor": AUTO_SE_FACTOR,
+        "metric": "leave-one-patch-out ΔE2000",
     }
     if rank < 3:
-        name = f"rank-{rank}"
-
-        def kernel(X, P, w, white):
-            return _fit_reduced_rank(X, P, w, rank)
-
-        cv = loo_cv_error(kernel, X, P, w, white)
-        notes["cross_validated_error"] = cv
-        notes |= {
-            "model": name,
-            "reason": (
-                f"the target chart has rank {rank} (singular values relative to the largest: "
-                f"{', '.join(f'{v:.2g}' for v in singular)}; below {RANK_RELATIVE_TOLERANCE:g} "
-                "counts as absent): a near-monochromatic light, so Q is fitted with rank "
-                f"{rank} and cannot be inverted; N is not solved"
-            ),
-            "cv_error": {name: float(np.mean(cv))},
-        }
-        return QFit(Q=kernel(X, P, w, white), notes=notes)
-
-    per_channel = {name: loo_cv_error(MODEL_KERNELS[name], X, P, w, white) for name in AUTO_LADDER}
-    errors = {name: float(np.mean(cv)) for name, cv in per_channel.items()}
-    best_name = min(errors, key=errors.__getitem__)
-    limit = errors[best_name] * (1 + AUTO_TOLERANCE_RELATIVE) + AUTO_TOLERANCE_ABSOLUTE
-    chosen = next(name for name in AUTO_LADDER if errors[name] <= limit)
-    Q = MODEL_KERNELS[chosen](X, P, w, white)
-    notes |= {"model": chosen, "cv_error": errors, "limit": limit}
-    reason = (
-        f"simplest model whose leave-one-patch-out error {100 * errors[chosen]:.3g}% is within "
-        f"{100 * limit:.3g}% (best: {best_name} {100 * errors[best_name]:.3g}%, +"
-        f"{100 * AUTO_TOLERANCE_RELATIVE:g}% relative +{100 * AUTO_TOLERANCE_ABSOLUTE:g}% of white)"
-    )
-    cv = per_channel[chosen]
-    weights = soft_choice(errors, limit)
-    if len(weights) > 1:
-        # Near the limit a hard switch would make Q (and N) jump under measurement noise, so
-        # the models straddling it are blended, continuously in the errors.
-        def blend(X, P, w, white):
-            return sum(v * MODEL_KERNELS[k](X, P, w, white) for k, v in weights.items())
-
-        Q = blend(X, P, w, white)
-        cv = loo_cv_error(blend, X, P, w, white)
-        notes |= {"model": "+".join(weights), "blend": weights}
-        reason += "; near the limit, so blended " + ", ".join(
-            f"{k} {v:.2f}" for k, v in weights.items()
-        )
-    notes |= {"reason": reason, "cross_validated_error": cv}
-    if "regularised" in weights:
-        notes["shrinkage"] = _choose_shrinkage(X, P, w, white)
+        return _auto_reduced_rank(X, P, w, white, rank, singular, notes)
+    active = w > 0
+    narrow = colour_spread(P[active]) < NARROW_TARGET * colour_spread(X[active])
+    ladder = AUTO_LADDER_NARROW if narrow else AUTO_LADDER
+    alpha = choose_shrinkage(X, P, w, white)
+    held = {
+        name: _loo_ridge(X, P, w, np.array([alpha]))[0]
+        if name == "regularised" and np.isfinite(alpha)
+        else loo_predictions(name, X, P, w, white)
+        for name in ladder
+    }
+    scores = {
+        name: patch_delta_e(h, P, white_patch=white, weights=w)[active] for name, h in held.items()
+    }
+    chosen, table = choose_model(scores, AUTO_SE_FACTOR)
+    notes |= {
+        "model": chosen,
+        "reason": _auto_reason(chosen, table, AUTO_SE_FACTOR, "least-squares"),
+        "cv_delta_e": {k: v["mean"] for k, v in table.items()},
+        "cv_comparison": table,
+        "cv_error": {
+            k: float(np.mean(error_relative_to_white(h, P, white, w))) for k, h in held.items()
+        },
+        "cross_validated_error": error_relative_to_white(held[chosen], P, white, w),
+    }
+    notes["narrow_target"] = narrow
+    if chosen == "regularised":
+        notes["shrinkage"] = alpha
+        Q = _ridge(X, P, w, alpha) if np.isfinite(alpha) else _fit_diagonal(X, P, w, white)
+    elif chosen.startswith("rank-"):
+        Q = _fit_reduced_rank(X, P, w, int(chosen.removeprefix("rank-")))
+    else:
+        Q = MODEL_KERNELS[chosen](X, P, w, white)
     return QFit(Q=Q, notes=notes)

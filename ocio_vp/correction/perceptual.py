@@ -36,6 +36,7 @@ __all__ = [
     "default_camera_to_xyz",
     "make_q_perceptual",
     "mean_delta_e",
+    "patch_delta_e",
     "q_perceptual",
 ]
 
@@ -74,6 +75,37 @@ def _encoder(
         factor = camera_to_xyz.T * (scale * _ITP_WHITE_NITS)
         return lambda rgb: colour.XYZ_to_ICtCp(rgb @ factor, method="ITU-R BT.2100-2 PQ")
     raise ValueError(f"metric must be one of {PERCEPTUAL_METRICS}, got {metric!r}")
+
+
+def patch_delta_e(
+    predicted: ArrayLike,
+    target: ArrayLike,
+    *,
+    camera_to_xyz: ArrayLike | None = None,
+    white_patch: int = 18,
+    weights: ArrayLike | None = None,
+    metric: str = "CIE 2000",
+) -> np.ndarray:
+    """(n,) ΔE (``metric``) of each patch of ``predicted`` against ``target`` (camera RGB).
+
+    Normalised on the target white patch; when that patch is excluded (weight 0) or has no
+    luminance, on the fitted patch of highest luminance instead, so a corrupted or clipped
+    white patch never makes the metric undefined. ``camera_to_xyz`` defaults to
+    :func:`default_camera_to_xyz`.
+    """
+    import colour
+
+    target = np.asarray(target, dtype=np.float64)
+    matrix = default_camera_to_xyz() if camera_to_xyz is None else np.asarray(camera_to_xyz, float)
+    w = np.ones(len(target)) if weights is None else np.asarray(weights, dtype=np.float64)
+    luminance = target @ matrix[1]
+    white = white_patch
+    if not (w[white] > 0 and luminance[white] > 0):
+        white = int(np.argmax(np.where(w > 0, luminance, -np.inf)))
+    encode = _encoder(target, matrix, white, metric)
+    return np.asarray(
+        colour.delta_E(encode(target), encode(np.asarray(predicted, float)), method=metric)
+    )
 
 
 def mean_delta_e(

@@ -7,25 +7,30 @@ from typing import Any
 
 import numpy as np
 
+from ocio_vp.correction.linear import LOO_KERNELS, loo_predictions
 from ocio_vp.correction.registry import solve_post_correction
 from ocio_vp.metrics import error_relative_to_white
 
-__all__ = ["CLOSED_FORM_METHODS", "cross_validated_error"]
+__all__ = ["CLOSED_FORM_METHODS", "cross_validated_error", "held_out_predictions"]
 
-#: Methods cheap enough (closed forms) to cross-validate by re-solving once per patch.
+#: Methods cheap enough (closed forms) to cross-validate on every solve.
 CLOSED_FORM_METHODS = frozenset(
     {"least-squares", "white-preserving", "regularised", "diagonal", "identity", "auto"}
 )
 
 
-def cross_validated_error(problem: Any, method: str) -> np.ndarray:
-    """(3,) leave-one-patch-out error of a registry method (white-relative, per channel).
+def held_out_predictions(problem: Any, method: str) -> np.ndarray:
+    """(n, 3) every fitted patch predicted by ``method`` solved without it.
 
-    Every fitted patch is predicted by ``method`` solved on the other patches, through the M
-    that fit returns (joint methods) or the calibrated M.
+    In closed form for the linear models (:data:`ocio_vp.correction.linear.LOO_KERNELS`,
+    linear in the number of patches); otherwise by re-solving once per patch, through the M that
+    the fit returns (joint methods) or the calibrated M.
     """
     weights = problem.fit_weights
     target = np.asarray(problem.target, dtype=np.float64)
+    if method in LOO_KERNELS:
+        X = problem.predicted
+        return loo_predictions(method, X, target, weights, int(problem.white_patch))
     held = target.copy()
     for j in np.flatnonzero(weights > 0):
         w = weights.copy()
@@ -35,4 +40,11 @@ def cross_validated_error(problem: Any, method: str) -> np.ndarray:
         if fit.M is not None:
             sub = dataclasses.replace(sub, M=np.asarray(fit.M, dtype=np.float64))
         held[j] = np.asarray(fit.Q, dtype=np.float64) @ sub.predicted[j]
-    return error_relative_to_white(held, target, problem.white_patch, weights)
+    return held
+
+
+def cross_validated_error(problem: Any, method: str) -> np.ndarray:
+    """(3,) leave-one-patch-out error of a registry method (white-relative, per channel)."""
+    held = held_out_predictions(problem, method)
+    target = np.asarray(problem.target, dtype=np.float64)
+    return error_relative_to_white(held, target, problem.white_patch, problem.fit_weights)
