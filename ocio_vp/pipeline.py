@@ -26,6 +26,8 @@ from ocio_vp.calibration.equations import (
     solve_N,
 )
 from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
+from ocio_vp.correction.guards import check_problem, singular_q_cause
+from ocio_vp.correction.outliers import Inconsistency, inconsistent_patches
 from ocio_vp.correction.perceptual import default_camera_to_xyz
 from ocio_vp.correction.registry import QFit, QProblem, solve_post_correction
 from ocio_vp.correction.root_polynomial import post_correction
@@ -56,6 +58,7 @@ def solve_environment(
     black_level: str = "exact",
     max_condition_q: float = MAX_CONDITION_Q_FOR_N,
     fixtures: bool = True,
+    keep_all_patches: bool = False,
 ) -> Solution:
     """Solve M, Q, N and the black-level offset for one environment.
 
@@ -74,6 +77,9 @@ def solve_environment(
     fixtures
         Drive the measurements' practical fixtures with the wall (:mod:`ocio_vp.fixtures`);
         False lights with the wall alone. No effect without a ``fixtures`` section.
+    keep_all_patches
+        Fit every unclipped patch, even those inconsistent with the rest of the chart
+        (:func:`ocio_vp.correction.outliers.inconsistent_patches`; otherwise excluded and named).
     """
     if black_level not in BLACK_LEVEL_METHODS:
         raise ValueError(f"black_level must be one of {BLACK_LEVEL_METHODS}, got {black_level!r}")
@@ -82,6 +88,7 @@ def solve_environment(
     lighting = _lighting(measurements, problem, method) if fixtures else None
     if lighting is not None and lighting.result.applied:
         problem = dataclasses.replace(problem, extra_light=lighting.extra_light)
+    problem, excluded = _screen(problem, measurements, environment, keep_all_patches)
     fit = _fit(problem, method, measurements, environment)
     SL, M_calibrated = problem.SL, problem.M
     M = M_calibrated if fit.M is None else np.asarray(fit.M, dtype=np.float64)
@@ -90,6 +97,8 @@ def solve_environment(
     Q = np.asarray(fit.Q, dtype=np.float64)
     # N inverts Q for the calibrated wall (paper eq. 7: Q [SL] N = I), whatever M lights with.
     N, n_reason = solve_N(M_calibrated, Q, max_condition=max_condition_q, SL=SL)
+    if n_reason:
+        n_reason = f"{singular_q_cause(problem, dict(fit.notes))}; {n_reason}"
     offset = None
     if environment.black_level is not None:
         offset = black_level_offset(
@@ -100,6 +109,7 @@ def solve_environment(
         problem, fit, charts, method=method, M=M, Q=Q, N=N, n_reason=n_reason,
         max_condition_q=max_condition_q, offset=offset, environment=environment, clipped=clipped,
         lighting=lighting,
+        excluded=None if keep_all_patches else excluded,
     )  # fmt: skip
     return Solution(
         stage=measurements.stage.name,
@@ -182,17 +192,52 @@ def _problem(measurements: Measurements, environment: Environment, clipped: list
     )
 
 
+def _located(error: InputError, measurements: Measurements, environment: Environment):
+    """A Q-solve error placed in the measurements file (``environments[i].target_chart``...)."""
+    if error.source is not None or error.key not in ("target_chart", "lit_chart", "w_avg"):
+        return error
+    key = error.key
+    if key != "lit_chart":
+        key = _environment_key(measurements, environment, key)
+    return InputError(error.problem, source=measurements.source, key=key)
+
+
+def _screen(
+    problem: QProblem, measurements: Measurements, environment: Environment, keep_all: bool
+) -> tuple[QProblem, list[Inconsistency]]:
+    """Check the chart (guards every method relies on), then exclude the patches inconsistent
+    with the rest unless ``keep_all``; a white patch that sets w_avg is refused instead."""
+    try:
+        check_problem(problem)
+        if keep_all:
+            return problem, []
+        w = problem.fit_weights
+        excluded = inconsistent_patches(problem.predicted, problem.target, w, problem.white_patch)
+        white = [f for f in excluded if f.index == problem.white_patch]
+        if white and environment.w_avg is None:
+            raise InputError(
+                f"the white patch is inconsistent with the rest of the chart "
+                f"({white[0].describe()}) and w_avg is derived from it: give w_avg, or "
+                "re-measure the white patch",
+                key="w_avg",
+            )
+    except InputError as error:
+        raise _located(error, measurements, environment) from None
+    if not excluded:
+        return problem, []
+    weights = w.copy()
+    weights[[f.index for f in excluded]] = 0.0
+    return dataclasses.replace(problem, weights=weights), excluded
+
+
 def _fit(
     problem: QProblem, method: str, measurements: Measurements, environment: Environment
 ) -> QFit:
-    """Q by ``method``; a bad target chart is reported at its place in the measurements file."""
+    """Q by ``method``; a bad chart is reported at its place in the measurements file."""
     try:
         return solve_post_correction(problem, method=method)
     except InputError as error:
-        if error.key != "target_chart" or error.source is not None:
-            raise
-        key = _environment_key(measurements, environment, "target_chart")
-        raise InputError(error.problem, source=measurements.source, key=key) from None
+        raise _located(error, measurements, environment) from None
 
 
 def _charts(
@@ -251,6 +296,7 @@ def _diagnostics(
     environment: Environment,
     clipped: list[int],
     lighting: FixtureLighting | None = None,
+    excluded: list[Inconsistency] | None = None,
 ) -> Diagnostics:
     """Errors, conditioning, warnings and the stability block (calibration.diagnostics)."""
     target, white, weights = problem.target, problem.white_patch, problem.weights
@@ -259,7 +305,10 @@ def _diagnostics(
         return error_relative_to_white(charts[chart], target, white, weights)
 
     drive = M @ problem.w_avg
-    warnings = []
+    warnings = [
+        f"chart patch excluded from the fit, inconsistent with the rest: {f.describe()}"
+        for f in excluded or []
+    ]
     if n_reason:
         warnings.append(f"N not solved: {n_reason}")
     if np.any(drive < 0):
@@ -305,6 +354,8 @@ def _diagnostics(
         **stability,
         synthesized_target=None if synthesized is None else synthesis_to_dict(synthesized),
         fixtures=None if lighting is None else fixtures_diagnostics(lighting),
+        patch_screening=excluded is not None,
+        excluded_patches=[dataclasses.asdict(f) for f in excluded or []],
     )
 
 
@@ -318,10 +369,20 @@ def _panel_linearity(measurements: Measurements) -> dict | None:
 
 
 def solve_measurements(
-    measurements: Measurements, *, method: str = DEFAULT_METHOD, black_level: str = "exact"
+    measurements: Measurements,
+    *,
+    method: str = DEFAULT_METHOD,
+    black_level: str = "exact",
+    keep_all_patches: bool = False,
 ) -> list[Solution]:
     """:func:`solve_environment` for every environment, in file order."""
     return [
-        solve_environment(measurements, env, method=method, black_level=black_level)
+        solve_environment(
+            measurements,
+            env,
+            method=method,
+            black_level=black_level,
+            keep_all_patches=keep_all_patches,
+        )
         for env in measurements.environments
     ]

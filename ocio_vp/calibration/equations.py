@@ -149,9 +149,8 @@ def solve_N(
         rank = int(np.linalg.matrix_rank(Q)) if np.all(np.isfinite(Q)) else 0
         return None, (
             f"Q is rank {rank} / cond {cond:.3g} > {max_condition:.0e}: its inverse would "
-            "amplify measurement noise into the in-frustum drive (a near-monochromatic "
-            "environment such as sodium vapour); in-frustum content uses M, so do not apply Q "
-            "to shots with the wall in frame"
+            "amplify measurement noise into the in-frustum drive; in-frustum content uses M, "
+            "so do not apply Q to shots with the wall in frame"
         )
     if SL is not None:
         return np.linalg.solve(Q @ np.asarray(SL, dtype=np.float64), np.eye(3)), None

@@ -134,5 +134,8 @@ def summary_table(solutions) -> str:
     lines = [SUMMARY_LEGEND]
     lines += ["  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)).rstrip() for r in rows]
     for s in solutions:
+        if s.diagnostics.get("model_reason"):
+            lines.append(f"model: {s.environment}: {s.diagnostics['model_reason']}")
+    for s in solutions:
         lines += [f"warning: {s.environment}: {w}" for w in s.diagnostics.get("warnings", [])]
     return "\n".join(lines)

@@ -39,6 +39,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="in-frustum black-level offset: exact (-M b, default) or the paper's b/w_camera",
     )
     parser.add_argument(
+        "--keep-all-patches",
+        action="store_true",
+        help="fit every unclipped chart patch, even ones inconsistent with the rest (by default "
+        "they are excluded and named; docs/stability.md)",
+    )
+    parser.add_argument(
         "--environment",
         action="append",
         metavar="NAME",
@@ -175,6 +181,7 @@ def _solve(measurements, environments, args: argparse.Namespace) -> list:
             method=args.method,
             black_level=args.black_level,
             fixtures=not args.no_fixtures,
+            keep_all_patches=args.keep_all_patches,
         )
     bar = progress(environments, desc="solving", unit="environment")
     return [
@@ -184,6 +191,7 @@ def _solve(measurements, environments, args: argparse.Namespace) -> list:
             method=args.method,
             black_level=args.black_level,
             fixtures=not args.no_fixtures,
+            keep_all_patches=args.keep_all_patches,
         )
         for env in bar
     ]

@@ -1,8 +1,15 @@
 """Post-correction Q: the problem dataclass, the registry of methods (``Q_SOLVE_METHODS``) and
-the methods themselves (the linear family and ``auto``, ``perceptual``, ``joint``), plus their
-leave-one-patch-out validation.
+the methods themselves (the linear family and ``auto``, ``perceptual``, ``joint``), their
+leave-one-patch-out validation, the checks every method relies on (``guards``) and the screening
+of patches inconsistent with the rest of the chart (``outliers``).
 """
 
+from ocio_vp.correction.guards import (
+    MAX_DYNAMIC_RANGE,
+    MIN_LIT_DIRECTION,
+    check_problem,
+    singular_q_cause,
+)
 from ocio_vp.correction.joint import (
     DEFAULT_MAX_CONDITION,
     DEFAULT_MAX_DELTA_E,
@@ -13,27 +20,45 @@ from ocio_vp.correction.joint import (
 )
 from ocio_vp.correction.linear import (
     AUTO_LADDER,
-    AUTO_TOLERANCE_ABSOLUTE,
-    AUTO_TOLERANCE_RELATIVE,
-    BLEND_BAND,
+    AUTO_LADDER_NARROW,
+    AUTO_SE_FACTOR,
+    AUTO_TIE,
+    LOO_KERNELS,
     MODEL_KERNELS,
+    NARROW_TARGET,
     RANK_RELATIVE_TOLERANCE,
     REGULARISATION_GRID,
+    choose_model,
+    choose_shrinkage,
+    colour_spread,
     fit_least_squares,
     loo_cv_error,
+    loo_predictions,
     q_auto,
     q_diagonal,
     q_identity,
     q_regularised,
     q_white_preserving,
-    soft_choice,
     target_rank,
+)
+from ocio_vp.correction.outliers import (
+    COLORCHECKER_NAMES,
+    MAX_EXCLUDED_FRACTION,
+    OUTLIER_FLOOR,
+    OUTLIER_RELATIVE,
+    OUTLIER_RELATIVE_NARROW,
+    OUTLIER_Z,
+    Inconsistency,
+    inconsistent_patches,
+    patch_name,
+    patch_scores,
 )
 from ocio_vp.correction.perceptual import (
     PERCEPTUAL_METRICS,
     default_camera_to_xyz,
     make_q_perceptual,
     mean_delta_e,
+    patch_delta_e,
     q_perceptual,
 )
 from ocio_vp.correction.problem import (
@@ -58,36 +83,58 @@ from ocio_vp.correction.root_polynomial import (
 from ocio_vp.correction.validation import (
     CLOSED_FORM_METHODS,
     cross_validated_error,
+    held_out_predictions,
 )
 
 __all__ = [
     "AUTO_LADDER",
-    "AUTO_TOLERANCE_ABSOLUTE",
-    "AUTO_TOLERANCE_RELATIVE",
-    "BLEND_BAND",
+    "AUTO_LADDER_NARROW",
+    "AUTO_SE_FACTOR",
+    "AUTO_TIE",
     "CLOSED_FORM_METHODS",
+    "COLORCHECKER_NAMES",
     "DEFAULT_MAX_CONDITION",
     "DEFAULT_MAX_DELTA_E",
+    "LOO_KERNELS",
+    "MAX_DYNAMIC_RANGE",
+    "MAX_EXCLUDED_FRACTION",
+    "MIN_LIT_DIRECTION",
     "MODEL_KERNELS",
+    "NARROW_TARGET",
+    "OUTLIER_FLOOR",
+    "OUTLIER_RELATIVE",
+    "OUTLIER_RELATIVE_NARROW",
+    "OUTLIER_Z",
     "PERCEPTUAL_METRICS",
     "Q_SOLVE_METHODS",
     "RANK_RELATIVE_TOLERANCE",
     "REGULARISATION_GRID",
     "ROOT_POLYNOMIAL_TERMS",
+    "Inconsistency",
     "QFit",
     "QProblem",
     "apply_root_polynomial",
+    "check_problem",
+    "choose_model",
+    "choose_shrinkage",
+    "colour_spread",
     "cross_validated_error",
     "default_camera_to_xyz",
     "fit_least_squares",
     "fit_root_polynomial",
+    "held_out_predictions",
+    "inconsistent_patches",
     "invert_root_polynomial",
     "joint_matrix",
     "loo_cv_error",
+    "loo_predictions",
     "make_q_joint",
     "make_q_perceptual",
     "make_q_root_polynomial",
     "mean_delta_e",
+    "patch_delta_e",
+    "patch_name",
+    "patch_scores",
     "post_correction",
     "q_auto",
     "q_diagonal",
@@ -99,7 +146,7 @@ __all__ = [
     "q_root_polynomial",
     "q_white_preserving",
     "root_polynomial_expansion",
-    "soft_choice",
+    "singular_q_cause",
     "solve_post_correction",
     "target_rank",
     "white_point_delta_e",

@@ -100,6 +100,14 @@ class Diagnostics(Mapping[str, Any]):
         The practical fixtures' drive solve (:func:`ocio_vp.fixtures.fixtures_diagnostics`):
         whether they are used and why, the error Q cannot remove with and without them, the
         active limits; only written when the measurements have a ``fixtures`` section.
+    patch_screening
+        Whether patches inconsistent with the rest of the chart were looked for (False with
+        ``--keep-all-patches``).
+    excluded_patches
+        The patches excluded as inconsistent: ``index``, ``name``, ``relative`` (how far off,
+        relative to the patch itself), ``z`` (robust standard deviations) and ``residual`` (the
+        held-out prediction minus the target, per channel, relative to white); see
+        :mod:`ocio_vp.correction.outliers`.
     synthesized_target
         How a synthesized target chart was made (``ocio-vp target-chart``); only written for
         an environment whose chart was synthesized.
@@ -137,6 +145,8 @@ class Diagnostics(Mapping[str, Any]):
     clipped_patches: list[int] | None = None
     N_equals_M: bool | None = None
     identity_check: dict[str, float] | None = None
+    patch_screening: bool | None = None
+    excluded_patches: list[dict[str, Any]] | None = None
     synthesized_target: dict[str, Any] | None = None
     fixtures: dict[str, Any] | None = None
     extra: dict[str, Any] = field(default_factory=dict)
