@@ -41,7 +41,7 @@ import numpy as np
 from ocio_vp.correction.perceptual import patch_delta_e
 from ocio_vp.correction.problem import QFit, QProblem
 from ocio_vp.errors import InputError
-from ocio_vp.metrics import error_relative_to_white
+from ocio_vp.metrics import error_relative_to_white, white_scale
 
 __all__ = [
     "AUTO_LADDER",
@@ -59,6 +59,7 @@ __all__ = [
     "fit_least_squares",
     "loo_cv_error",
     "loo_predictions",
+    "patch_errors",
     "q_auto",
     "q_diagonal",
     "q_identity",
@@ -209,6 +210,17 @@ def _loo_ridge(X: np.ndarray, P: np.ndarray, w: np.ndarray, alphas: np.ndarray) 
     return np.einsum("jc,gjcd->gjd", X, Qt)
 
 
+def patch_errors(held: np.ndarray, P: np.ndarray, w: np.ndarray, white: int):
+    """(n,) per-patch error of predictions and its unit: ΔE2000 through the default camera
+    matrix, or, where no fitted patch has a luminance to normalise by (a target the camera
+    matrix sees as black), the mean absolute error per channel relative to white."""
+    try:
+        return patch_delta_e(held, P, white_patch=white, weights=w), "ΔE2000"
+    except ValueError:
+        relative = np.abs(held - P) / white_scale(P, white, w)
+        return relative.mean(axis=1), "error relative to white"
+
+
 def choose_shrinkage(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> float:
     """The grid strength with the lowest mean leave-one-out ΔE2000 (ties: more shrinkage)."""
     active = w > 0
@@ -216,7 +228,7 @@ def choose_shrinkage(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) ->
         return float("inf")
     grid = np.asarray(REGULARISATION_GRID)
     held = _loo_ridge(X, P, w, grid)
-    scores = [np.mean(patch_delta_e(h, P, white_patch=white, weights=w)[active]) for h in held]
+    scores = [np.mean(patch_errors(h, P, w, white)[0][active]) for h in held]
     scores = np.where(np.isfinite(scores), scores, np.inf)
     return float(grid[np.flatnonzero(scores <= np.min(scores) + AUTO_TIE)[-1]])
 
@@ -457,7 +469,7 @@ def choose_model(
     return chosen, table
 
 
-def _auto_reason(chosen: str, table: dict, factor: float, reference: str) -> str:
+def _auto_reason(chosen: str, table: dict, factor: float, reference: str, unit: str) -> str:
     row = table[chosen]
     rest = ", ".join(
         f"{k} {v['mean']:.3g} ({v['difference']:+.2g} ± {v['standard_error']:.2g})"
@@ -466,18 +478,18 @@ def _auto_reason(chosen: str, table: dict, factor: float, reference: str) -> str
     )
     if chosen == reference:
         head = (
-            f"{reference} (the paper's eq. 5): leave-one-patch-out mean ΔE2000 "
+            f"{reference} (the paper's eq. 5): leave-one-patch-out mean {unit} "
             f"{row['mean']:.3g}; no other model is better by more than {factor:g} standard "
             "error of the paired per-patch differences"
         )
     elif abs(row["difference"]) <= AUTO_TIE:
         head = (
-            f"{chosen}: leave-one-patch-out mean ΔE2000 {row['mean']:.3g}, the same as "
+            f"{chosen}: leave-one-patch-out mean {unit} {row['mean']:.3g}, the same as "
             f"{reference}'s: the simplest model that fits as well"
         )
     else:
         head = (
-            f"{chosen}: leave-one-patch-out mean ΔE2000 {row['mean']:.3g}, better than "
+            f"{chosen}: leave-one-patch-out mean {unit} {row['mean']:.3g}, better than "
             f"{reference}'s {table[reference]['mean']:.3g} by {-row['difference']:.2g} ± "
             f"{row['standard_error']:.2g} (more than {factor:g} standard error of the paired "
             "per-patch differences)"
@@ -498,9 +510,7 @@ def _auto_reduced_rank(X, P, w, white, rank: int, singular: np.ndarray, notes: d
             "counts as absent): a near-monochromatic light, so Q is fitted with rank "
             f"{rank} and cannot be inverted; N is not solved"
         ),
-        "cv_delta_e": {
-            name: float(np.mean(patch_delta_e(held, P, white_patch=white, weights=w)[active]))
-        },
+        "cv_delta_e": {name: float(np.mean(patch_errors(held, P, w, white)[0][active]))},
         "cross_validated_error": error_relative_to_white(held, P, white, w),
     }
     return QFit(Q=_fit_reduced_rank(X, P, w, rank), notes=notes)
@@ -548,13 +558,14 @@ def q_auto(problem: QProblem) -> QFit:
         else loo_predictions(name, X, P, w, white)
         for name in ladder
     }
-    scores = {
-        name: patch_delta_e(h, P, white_patch=white, weights=w)[active] for name, h in held.items()
-    }
+    errors = {name: patch_errors(h, P, w, white) for name, h in held.items()}
+    scores = {name: e[active] for name, (e, _) in errors.items()}
+    unit = next(iter(errors.values()))[1]
     chosen, table = choose_model(scores, AUTO_SE_FACTOR)
     notes |= {
         "model": chosen,
-        "reason": _auto_reason(chosen, table, AUTO_SE_FACTOR, "least-squares"),
+        "reason": _auto_reason(chosen, table, AUTO_SE_FACTOR, "least-squares", unit),
+        "metric": f"leave-one-patch-out {unit}",
         "cv_delta_e": {k: v["mean"] for k, v in table.items()},
         "cv_comparison": table,
         "cv_error": {

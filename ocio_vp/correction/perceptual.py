@@ -101,7 +101,7 @@ def patch_delta_e(
     luminance = target @ matrix[1]
     white = white_patch
     if not (w[white] > 0 and luminance[white] > 0):
-        white = int(np.argmax(np.where(w > 0, luminance, -np.inf)))
+        white = int(np.argmax(np.where(w > 0, luminance, -np.inf)))  # ValueError if none > 0
     encode = _encoder(target, matrix, white, metric)
     return np.asarray(
         colour.delta_E(encode(target), encode(np.asarray(predicted, float)), method=metric)
