@@ -291,7 +291,9 @@ def report(results: Results, cfg: Config, quick: bool) -> str:
 def run(quick: bool = False, methods=None) -> str:
     cfg = config(quick, methods)
     results = measure(cfg, progress=lambda text: print(f"  {text}", file=sys.stderr, flush=True))
-    return report(results, cfg, quick)
+    seeds = 3 if quick else 20
+    screening = outlier_report(outlier_study(cfg, seeds), seeds)
+    return report(results, cfg, quick) + "\n\n" + screening
 
 
 def main(argv=None) -> int:

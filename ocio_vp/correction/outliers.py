@@ -4,8 +4,9 @@ One bad patch (a mis-placed sampling box, flare, a reflection on the chart, a sw
 moves a least-squares Q by tens of percent. :func:`inconsistent_patches` finds such patches
 from the data alone, so that every method fits without them and the engineer is told which:
 
-1. Every patch is predicted by the richest linear model (the paper's 9-parameter least squares)
-   fitted on the *other* patches (closed-form leave-one-out,
+1. Every patch is predicted by the richest linear model (the paper's 9-parameter least squares,
+   made robust by Huber weights so that several bad patches cannot drag it) fitted on the
+   *other* patches (closed-form leave-one-out,
    :func:`ocio_vp.correction.linear.loo_predictions`). A patch that model cannot predict from
    the rest is inconsistent with every simpler model as well.
 2. A patch is inconsistent when that held-out residual is large on three scales at once:
@@ -16,7 +17,10 @@ from the data alone, so that every method fits without them and the engineer is 
    (:data:`OUTLIER_FLOOR`). Under a near-monochromatic light the model's own misses are
    larger, and only a patch that is almost entirely wrong is flagged
    (:data:`OUTLIER_RELATIVE_NARROW`).
-3. The worst such patch is excluded and the search repeats, up to
+3. The worst such patch is excluded and the search repeats (a further patch must also have
+   looked suspect on the whole chart, :data:`FIRST_PASS_SUPPORT`, or be far off,
+   :data:`UNSUPPORTED_SCORE`: once a patch is gone, those of a similar colour are predicted
+   less well without being wrong), up to
    :data:`MAX_EXCLUDED_FRACTION` of the chart; past that the chart is refused.
 
 The thresholds were set on the spectral simulator (docs/stability.md gives the measured false
@@ -29,17 +33,25 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ocio_vp.correction.linear import NARROW_TARGET, colour_spread, loo_predictions
+from ocio_vp.correction.linear import (
+    NARROW_TARGET,
+    colour_spread,
+    fit_least_squares,
+    loo_predictions,
+)
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import white_scale
 
 __all__ = [
     "COLORCHECKER_NAMES",
+    "FIRST_PASS_SUPPORT",
+    "HUBER",
     "MAX_EXCLUDED_FRACTION",
     "OUTLIER_FLOOR",
     "OUTLIER_RELATIVE",
     "OUTLIER_RELATIVE_NARROW",
     "OUTLIER_Z",
+    "UNSUPPORTED_SCORE",
     "Inconsistency",
     "inconsistent_patches",
     "patch_name",
@@ -60,6 +72,14 @@ OUTLIER_FLOOR = 0.02
 #: by up to ~70% of their value, so only a patch at least this far off (read as zero, or its
 #: row lost) is flagged.
 OUTLIER_RELATIVE_NARROW = 0.9
+#: Residuals beyond this many robust standard deviations weigh less in the fit that judges
+#: the patches (Huber).
+HUBER = 2.0
+#: A patch found after another was excluded needs a score of 1 if it scored at least
+#: FIRST_PASS_SUPPORT on the whole chart, else UNSUPPORTED_SCORE (a patch read as zero scores
+#: 3.3 on the relative test; a patch merely missing a similar neighbour stays near 1).
+FIRST_PASS_SUPPORT = 0.5
+UNSUPPORTED_SCORE = 2.0
 #: More inconsistent patches than this fraction of the chart: refuse rather than guess.
 MAX_EXCLUDED_FRACTION = 0.125
 #: Patches needed after exclusion (a 9-parameter fit with headroom to judge it).
@@ -121,16 +141,35 @@ class Inconsistency:
         )
 
 
+def _robust_weights(X, P, w, scale, steps: int = 8) -> np.ndarray:
+    """Weights of a Huber fit (iteratively reweighted least squares, threshold 2 robust
+    standard deviations): several bad patches cannot drag the fit that judges them."""
+    weights = np.asarray(w, dtype=np.float64).copy()
+    active = weights > 0
+    for _ in range(steps):
+        Q = fit_least_squares(X, P, weights)
+        size = np.linalg.norm((X @ Q.T - P) / scale, axis=1)
+        spread = 1.4826 * float(np.median(size[active]))
+        if not spread > 0:
+            break
+        weights = np.where(
+            active, w * np.minimum(1.0, HUBER * spread / np.maximum(size, 1e-300)), 0.0
+        )
+    return weights
+
+
 def patch_scores(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> dict:
     """Per patch: ``relative`` and white-relative ``residual`` of the held-out least-squares
     prediction, its robust ``z`` score, and ``score`` (> 1: inconsistent; 0 for excluded)."""
-    held = loo_predictions("least-squares", X, P, w, white)
-    residual = (held - P) / white_scale(P, white, w)
+    scale = white_scale(P, white, w)
+    robust = _robust_weights(X, P, w, scale)
+    held = loo_predictions("least-squares", X, P, robust, white)
+    residual = (held - P) / scale
     active = w > 0
     # A held-out residual's spread grows as 1 / sqrt(1 - leverage): a patch of a colour few
     # others share is predicted less surely, so its residual is scaled back before comparing.
-    G = np.einsum("j,jc,jd->cd", w, X, X)
-    leverage = w * np.einsum("jc,cd,jd->j", X, np.linalg.pinv(G, hermitian=True), X)
+    G = np.einsum("j,jc,jd->cd", robust, X, X)
+    leverage = robust * np.einsum("jc,cd,jd->j", X, np.linalg.pinv(G, hermitian=True), X)
     size = np.linalg.norm(residual, axis=1) * np.sqrt(np.clip(1.0 - leverage, 0.0, 1.0))
     spread = max(1.4826 * float(np.median(size[active])), 1e-12)
     z = size / spread
@@ -160,10 +199,16 @@ def inconsistent_patches(
     n = len(P)
     limit = max(1, int(MAX_EXCLUDED_FRACTION * np.count_nonzero(w > 0)))
     found: list[Inconsistency] = []
+    first = None
     while np.count_nonzero(w > 0) > _MIN_REMAINING:
         scores = patch_scores(X, P, w, white)
-        j = int(np.argmax(scores["score"]))
-        if not scores["score"][j] > 1.0:
+        if first is None:
+            first = scores["score"]
+        # After an exclusion, a patch of a similar colour is predicted from fewer neighbours:
+        # unless it already looked suspect on the whole chart, it needs stronger evidence.
+        needed = np.where(bool(found) & (first < FIRST_PASS_SUPPORT), UNSUPPORTED_SCORE, 1.0)
+        j = int(np.argmax(scores["score"] / needed))
+        if not scores["score"][j] > needed[j]:
             break
         found.append(
             Inconsistency(
