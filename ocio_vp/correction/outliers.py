@@ -223,9 +223,9 @@ def inconsistent_patches(
         if len(found) > limit:
             names = ", ".join(f.name for f in found)
             raise InputError(
-                f"{len(found)} or more chart patches are inconsistent with the rest ({names}): "
-                "too many to exclude safely; check the chart's sampling boxes, flare and the "
-                "patch order (or solve with --keep-all-patches to fit them anyway)",
+                f"{len(found)} or more chart patches are inconsistent with the rest, too many "
+                "to exclude safely (check the sampling boxes, flare and the patch order, or "
+                f"solve with --keep-all-patches): {names}",
                 key="target_chart",
             )
     return found
