@@ -39,7 +39,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ocio_vp.correction.perceptual import patch_delta_e
-from ocio_vp.correction.problem import QFit, QProblem
+from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import error_relative_to_white, white_scale
 
@@ -134,13 +134,6 @@ def _loo(Qt: np.ndarray, X: np.ndarray) -> np.ndarray:
 
 # ---------------------------------------------------------------------------------------------
 # Kernels: (X (n,3) lit chart x_j, P (n,3) target p_j, w (n,) weights, white index) -> Q (3,3).
-
-
-def fit_least_squares(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int = 0) -> np.ndarray:
-    """argmin_Q sum_j w_j ||Q x_j - p_j||^2 (eq. 5), via an SVD least-squares solve."""
-    sw = np.sqrt(w)[:, None]
-    QT, *_ = np.linalg.lstsq(X * sw, P * sw, rcond=None)  # rows: x_j^T Q^T = p_j^T
-    return QT.T
 
 
 def _fit_identity(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> np.ndarray:

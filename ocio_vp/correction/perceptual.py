@@ -28,8 +28,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ocio_vp.correction.linear import fit_least_squares
-from ocio_vp.correction.problem import QFit, QProblem
+from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
 
 __all__ = [
     "PERCEPTUAL_METRICS",

@@ -21,7 +21,7 @@ import numpy as np
 
 from ocio_vp.calibration.equations import predict_lit_chart
 
-__all__ = ["QFit", "QProblem"]
+__all__ = ["QFit", "QProblem", "fit_least_squares"]
 
 
 @dataclass(frozen=True)
@@ -63,3 +63,12 @@ class QFit:
     Q: np.ndarray
     M: np.ndarray | None = None
     notes: Mapping[str, Any] = field(default_factory=dict)
+
+
+# Eq. 5's kernel lives with the problem: the linear family, perceptual (its start) and joint all
+# use it, and linear judges models with perceptual's ΔE, so neither may import the other for it.
+def fit_least_squares(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int = 0) -> np.ndarray:
+    """argmin_Q sum_j w_j ||Q x_j - p_j||^2 (eq. 5), via an SVD least-squares solve."""
+    sw = np.sqrt(w)[:, None]
+    QT, *_ = np.linalg.lstsq(X * sw, P * sw, rcond=None)  # rows: x_j^T Q^T = p_j^T
+    return QT.T
