@@ -25,7 +25,7 @@ DIAGNOSTICS_KEYS = [
     "cross_validated_error", "residuals_per_patch", "out_of_frustum_negative_channels",
     "lit_chart_error_clipped_drive", "lit_chart_error_baseline_clipped_drive",
     "charts_clipped_drive", "in_frustum_drive_range", "black_level_bounce",
-    "clipped_patches", "N_equals_M", "identity_check",
+    "clipped_patches", "N_equals_M", "identity_check", "patch_screening", "excluded_patches",
 ]  # fmt: skip
 
 
