@@ -23,7 +23,7 @@ from ocio_vp.calibration.diagnostics import IDENTITY_BOUND_FACTOR
 from ocio_vp.calibration.equations import MAX_CONDITION_SL, condition_number
 from ocio_vp.correction.validation import CLOSED_FORM_METHODS
 from ocio_vp.errors import InputError
-from ocio_vp.formats.measurements import measurements_from_dict
+from ocio_vp.formats.measurements import MAX_CAMERA_VALUE, MIN_SIGNAL, measurements_from_dict
 from ocio_vp.formats.solution import solution_to_json
 from ocio_vp.ocio.config import build_config
 from ocio_vp.pipeline import solve_environment
@@ -184,6 +184,12 @@ def test_invariant_to_the_exposure_of_the_calibration_plates(
         _, s = _solve(document, "auto")
     except InputError:
         return
+    peaks = [max(np.abs(scaled[k][c]).max() for c in CHANNELS) for k in ("primaries", "lit_chart")]
+    if min(peaks) < MIN_SIGNAL or max(peaks) > MAX_CAMERA_VALUE:
+        # Scaled out of the range a camera reading can have: refused, not solved.
+        with pytest.raises(InputError, match=r"scaled|expected a number"):
+            _solve(scaled, "auto")
+        return
     _, t = _solve(scaled, "auto")
     # Relative rounding of each solve grows with cond([SL]) (M) and cond(Q) (N).
     rtol = 1e-13 * s.diagnostics["cond_SL"] * max(1.0, min(s.diagnostics["cond_Q"], 1e3))
@@ -212,6 +218,12 @@ def test_invariant_to_the_exposure_of_the_target_chart(document: dict, log_scale
     try:
         _, s = _solve(document, "auto")
     except InputError:
+        return
+    values = [np.abs(env[k]).max() for k in ("target_chart", "w_avg", "black_level") if k in env]
+    if max(values) > MAX_CAMERA_VALUE:
+        # Scaled out of the range a camera reading can have: refused, not solved.
+        with pytest.raises(InputError, match=r"expected a number <="):
+            _solve(scaled, "auto")
         return
     _, t = _solve(scaled, "auto")
     rtol = max(1e-13 * s.diagnostics["cond_SL"], 1e-10)
