@@ -8,7 +8,9 @@ nothing but the standard library, numpy and PyOpenColorIO::
 For every ``*.ocio`` and ``*.ocioz`` under each ROOT it loads the config, validates it, and
 builds every processor a host can ask for: each colorspace to each other one, each colorspace
 to each display/view (both directions), each named transform (both directions), and every
-``.clf`` / ``.cube`` file under the ROOTs as a FileTransform (CLF both directions). Each is
+``.clf`` / ``.cube`` file under the ROOTs as a FileTransform (CLF both directions, except the
+inverse of a CLF that is a singular matrix, which is undefined: the post-correction Q of a
+rank-1 environment). Each is
 applied on the CPU to the rows of INPUTS (float32 RGB), and its GPU shader text is extracted as
 Unreal's OpenColorIO plugin does (HLSL for DirectX 11; this machine has no GPU, so the shader
 is generated but not run). RESULT.npz holds one array per processor, named
@@ -90,12 +92,27 @@ def config_processors(config) -> dict[str, object]:
     return procs
 
 
+#: A file whose forward transform has a Jacobian (at black) worse conditioned than this has no
+#: inverse (the CLF of a rank-1 post-correction Q): its inverse is not built.
+MAX_CONDITION = 1e3
+
+
+def invertible(processor) -> bool:
+    """False when ``processor`` is (locally at black) a singular linear map."""
+    probe = np.vstack([np.zeros(3), np.eye(3) * 1e-2]).astype(np.float32)
+    out = apply(processor, probe).astype(np.float64)
+    jacobian = (out[1:] - out[0]).T / 1e-2
+    return bool(np.linalg.cond(jacobian) <= MAX_CONDITION)
+
+
 def file_processors(path: Path) -> dict[str, object]:
-    """A LUT file as a FileTransform (CLF both directions; a 3D ``.cube`` forward only)."""
+    """A LUT file as a FileTransform (a CLF both directions unless its forward transform is
+    singular; a 3D ``.cube`` forward only)."""
     raw = OCIO.Config.CreateRaw()
     procs = {}
     directions = [OCIO.TRANSFORM_DIR_FORWARD]
-    if path.suffix.lower() == ".clf":
+    forward = raw.getProcessor(OCIO.FileTransform(src=str(path.resolve())))
+    if path.suffix.lower() == ".clf" and invertible(forward):
         directions.append(OCIO.TRANSFORM_DIR_INVERSE)
     for direction in directions:
         transform = OCIO.FileTransform(

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import shutil
 import subprocess
 from pathlib import Path
@@ -135,3 +136,85 @@ def test_wall_colorspace_encoding_follows_the_wall_signal(written, wall, encodin
     config = oc.build_config(dataclasses.replace(solutions[0], linearity=linearity))
     for name in (oc.OUT_OF_FRUSTUM, oc.IN_FRUSTUM):
         assert config.getColorSpace(name).getEncoding() == encoding
+
+
+# --------------------------------------------------------------------------------------------
+# Every processor of every exported file, with the installed OCIO: the invariants that
+# benchmarks/ocio_compat.py checks across OCIO 2.2-2.6 (there also against each other).
+
+
+@pytest.fixture(scope="module")
+def exported_matrix(tmp_path_factory) -> list[Path]:
+    """The demo's sodium environment (rank-1 Q) and a PQ wall with a linearity LUT, solved and
+    exported to every target through the command line."""
+    import yaml
+
+    from benchmarks.ocio_compat import add_ramps
+    from ocio_vp.cli import main
+
+    root = tmp_path_factory.mktemp("compat")
+    assert main(["demo", "--out", str(root / "demo"), "--no-report"]) == 0
+    stage = root / "demo" / "paper_stage.yaml"
+    ramps = root / "ramps.yaml"
+    ramps.write_text(yaml.safe_dump(add_ramps(yaml.safe_load(stage.read_text()))))
+    args = ["solve", str(ramps), "--out", str(root / "pq"), "--wall-encoding", "pq"]
+    assert main([*args, "--environment", "sodium_vapour", "--environment", "incandescent"]) == 0
+    folders = [root / "demo" / "sodium_vapour", root / "pq" / "sodium_vapour",
+               root / "pq" / "incandescent"]  # fmt: skip
+    assert main(["export", *map(str, folders)]) == 0
+    return folders
+
+
+def test_every_processor_is_bounded_finite_and_has_a_shader(exported_matrix):
+    from benchmarks.ocio_compat import test_inputs
+    from benchmarks.ocio_compat_worker import run
+
+    results, problems, count = run(test_inputs(), exported_matrix)
+    assert problems == []
+    assert count > 500 and len(results) > 100
+    for values in results.values():
+        assert np.abs(values).max() <= 1e6
+
+
+def test_singular_q_has_a_bounded_inverse(exported_matrix):
+    """Sodium's Q is rank 1: reference -> Stage Footage used to return ~1e17 for (1, 1, 1).
+    The inverse direction is the truncated pseudo-inverse (numpy's pinv at the same cutoff)."""
+    config = OCIO.Config.CreateFromFile(str(exported_matrix[0] / "config.ocio"))
+    Q = np.array(json.loads((exported_matrix[0] / "solution.json").read_text())["Q"])
+    assert np.linalg.matrix_rank(Q, tol=np.linalg.norm(Q, 2) / 1e3) == 1
+    rgb = np.array([[1.0, 1.0, 1.0], [16.0, -1.0, 16.0], [0.18, 0.2, 0.1]])
+    got = _apply(config.getProcessor(oc.REFERENCE, oc.POST_CORRECTION_COLORSPACE), rgb)
+    want = rgb @ np.linalg.pinv(Q, rcond=1e-3).T
+    np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-5)
+    named = config.getNamedTransform(oc.POST_CORRECTION)
+    inverse = config.getProcessor(named.getTransform(OCIO.TRANSFORM_DIR_INVERSE))
+    np.testing.assert_allclose(_apply(inverse, rgb), want, rtol=1e-5, atol=1e-5)
+    # the forward direction is still Q exactly
+    forward = _apply(config.getProcessor(oc.POST_CORRECTION_COLORSPACE, oc.REFERENCE), rgb)
+    np.testing.assert_allclose(forward, rgb @ Q.T, rtol=1e-5, atol=1e-6)
+
+
+def test_negative_drive_is_black_before_the_pq_curve(exported_matrix):
+    """Content whose in-frustum drive has a negative channel is shown as that channel at black:
+    making the drive more negative changes nothing (OCIO 2.4+ mirrors negatives through the
+    PQ builtin, 2.2/2.3 clamp them; the explicit clamp makes both give the same numbers)."""
+    folder = exported_matrix[2]
+    N = np.array(json.loads((folder / "solution.json").read_text())["N"])
+    config = OCIO.Config.CreateFromFile(str(folder / "config.ocio"))
+    processor = config.getProcessor(oc.REFERENCE, oc.IN_FRUSTUM)
+    content = np.array([[-0.05, 0.1, 0.2], [0.3, -0.02, 0.05]])
+    drive = content @ N.T
+    assert drive[0, 0] < 0 and drive[1, 1] < 0
+    more_negative = content - 0.5 * np.linalg.solve(N, np.eye(3)[:, :2]).T  # drive - 0.5 e_k
+    signal = _apply(processor, content)
+    np.testing.assert_allclose(_apply(processor, more_negative), signal, atol=1e-6)
+    assert signal.min() >= 0
+
+
+def test_every_clf_is_academy_clf_v3(exported_matrix):
+    colour_clf_io = pytest.importorskip("colour_clf_io", reason="colour-clf-io not installed")
+    clfs = [p for folder in exported_matrix for p in folder.rglob("*.clf")]
+    assert len(clfs) > 10
+    for clf in clfs:
+        assert 'xmlns="urn:AMPAS:CLF:v3.0"' in clf.read_text()
+        assert colour_clf_io.read_clf(clf.read_bytes()) is not None

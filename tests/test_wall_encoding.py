@@ -75,7 +75,8 @@ class TestSrgb:
         rgb = np.random.default_rng(0).uniform(0, 1, size=(200, 3)).astype(np.float32)
         drive = rgb.astype(np.float64) @ np.array(solution["M"]).T
         config.getProcessor(REFERENCE, OUT_OF_FRUSTUM).getDefaultCPUProcessor().applyRGB(rgb)
-        expected = colour.models.eotf_inverse_sRGB(np.maximum(drive, 0))
+        # drive below 0 is black, above 1 (the signal's top) is clipped
+        expected = colour.models.eotf_inverse_sRGB(np.clip(drive, 0, 1))
         np.testing.assert_allclose(rgb, expected, atol=2e-5)
 
 

@@ -24,6 +24,7 @@ import numpy as np
 import PyOpenColorIO as OCIO
 
 from ocio_vp.calibration.diagnostics import is_identity, offset_is_negligible
+from ocio_vp.calibration.equations import MAX_CONDITION_Q_FOR_N
 from ocio_vp.formats.solution import Solution
 
 __all__ = [
@@ -36,6 +37,8 @@ __all__ = [
     "REFERENCE",
     "build_config",
     "matrix_transform",
+    "post_correction_transforms",
+    "wall_signal_tail",
     "write_config",
 ]
 
@@ -140,6 +143,71 @@ def _group(transforms: list[OCIO.Transform]) -> OCIO.Transform:
     return OCIO.GroupTransform(transforms)
 
 
+def post_correction_transforms(
+    solution: Solution,
+) -> tuple[OCIO.Transform, OCIO.Transform | None, str]:
+    """Q as OCIO transforms: (footage -> corrected, an explicit inverse or None, its note).
+
+    OCIO inverts a matrix by itself when a host asks for the other direction (the reference to
+    ``Stage Footage``, the inverse of the named transform). For a Q that is singular or too
+    ill-conditioned to invert (cond(Q) above :data:`MAX_CONDITION_Q_FOR_N`, the limit for N),
+    that inverse would amplify a finite input to 1e17 and more, so the inverse direction is
+    given explicitly as the truncated pseudo-inverse of Q: singular values below
+    ``sigma_max / MAX_CONDITION_Q_FOR_N`` are dropped, so its gain is at most
+    ``MAX_CONDITION_Q_FOR_N / sigma_max``. It maps content to the smallest footage that Q
+    maps to its projection onto Q's range (a bounded stand-in, not a true inverse).
+
+    The forward transform is a chain of OCIO transforms, so a non-matrix Q fits here too.
+    """
+    Q = np.asarray(solution.Q, dtype=np.float64)
+    forward = matrix_transform(Q)
+    U, sigma, Vt = np.linalg.svd(Q)
+    if sigma[-1] > 0 and sigma[0] / sigma[-1] <= MAX_CONDITION_Q_FOR_N:
+        return forward, None, ""
+    keep = sigma >= sigma[0] / MAX_CONDITION_Q_FOR_N
+    pinv = (Vt.T[:, keep] / sigma[keep]) @ U[:, keep].T
+    note = (
+        f"Q has rank {int(keep.sum())} at cond <= {MAX_CONDITION_Q_FOR_N:g} (cond(Q) "
+        f"{np.linalg.cond(Q):.3g}): it cannot be inverted, so the inverse direction (reference "
+        f"-> Stage Footage, the inverse of the named transform) is Q's truncated pseudo-inverse "
+        f"{_fmt(pinv)}, bounded, not a true inverse."
+    )
+    return forward, matrix_transform(pinv), note
+
+
+#: Drive at which an encoded wall signal reaches 1.0, by encoding (PQ: 10000 nits / peak).
+def _signal_top(encoding: dict) -> float | None:
+    name = encoding.get("name", "linear")
+    if name == "linear":
+        return None
+    if name == "pq":
+        return 10000.0 / float(encoding.get("peak_nits", 1000.0))
+    return 1.0
+
+
+def wall_signal_tail(solution: Solution, extra: list[OCIO.Transform]) -> list[OCIO.Transform]:
+    """``extra`` (the wall's LUT and encoding) between explicit clamps.
+
+    Where the wall signal starts, drive below 0 is black and drive above the encoding's top
+    (1.0 for gamma 2.4 and sRGB, 10000 nits / peak for PQ) is clipped; an encoded signal
+    ends clamped to [0, 1], so the inverse direction never feeds a curve values outside its
+    domain. OCIO versions disagree outside it (the PQ builtin mirrors negative values from
+    OCIO 2.4 on, 2.2/2.3 clamp them), so the clamps make every version give the same numbers.
+    A linear wall without a LUT has no tail and stays affine (its Resolve cube is exact).
+    """
+    if not extra:
+        return []
+    encoding = (solution.linearity or {}).get("wall_encoding") or {}
+    top = _signal_top(encoding)
+    if top is None:
+        return [OCIO.RangeTransform(minInValue=0.0, minOutValue=0.0), *extra]
+    return [
+        OCIO.RangeTransform(minInValue=0.0, maxInValue=top, minOutValue=0.0, maxOutValue=top),
+        *extra,
+        OCIO.RangeTransform(minInValue=0.0, maxInValue=1.0, minOutValue=0.0, maxOutValue=1.0),
+    ]
+
+
 def build_config(
     solution: Solution,
     *,
@@ -172,7 +240,7 @@ def build_config(
     _add_camera_spaces(config, solution.camera_colorspace)
     chains = wall_transforms(solution, None if q_files is None else q_files[1])
     for name, extra in (extra_wall_transforms or {}).items():
-        chains[name] = chains[name] + list(extra)
+        chains[name] = chains[name] + wall_signal_tail(solution, list(extra))
     config.addColorSpace(_out_of_frustum_space(solution, chains[OUT_OF_FRUSTUM], origin))
     config.addColorSpace(_in_frustum_space(solution, chains[IN_FRUSTUM], origin))
     _add_post_correction(config, solution, origin, None if q_files is None else q_files[0])
@@ -308,15 +376,25 @@ def _add_post_correction(
         + q_text,
         family="Camera",
     )
+    forward, inverse, inverse_text = post_correction_transforms(solution)
+    if q_file is not None:  # a root-polynomial Q: its LUT sidecar (N is solved, so Q inverts)
+        forward, inverse, inverse_text = q_transform(), None, ""
+    if inverse is not None:
+        q_text += " " + inverse_text
+        footage.setDescription(footage.getDescription() + " " + inverse_text)
     if not q_identity:
-        footage.setTransform(q_transform(), OCIO.COLORSPACE_DIR_TO_REFERENCE)
+        footage.setTransform(forward, OCIO.COLORSPACE_DIR_TO_REFERENCE)
+        if inverse is not None:
+            footage.setTransform(inverse, OCIO.COLORSPACE_DIR_FROM_REFERENCE)
     config.addColorSpace(footage)
     named = OCIO.NamedTransform(
         name=POST_CORRECTION,
         family=f"{FAMILY}/Post",
         description=q_text,
-        forwardTransform=OCIO.GroupTransform() if q_identity else q_transform(),
+        forwardTransform=OCIO.GroupTransform() if q_identity else forward,
     )
+    if inverse is not None:
+        named.setTransform(inverse, OCIO.TRANSFORM_DIR_INVERSE)
     config.addNamedTransform(named)
 
 
