@@ -6,8 +6,8 @@
 Creates one throwaway venv per OCIO version (``pip install opencolorio==V numpy`` from PyPI;
 ``--venvs DIR`` keeps and reuses them), solves and exports a test matrix unless ``--solves``
 names folders already exported (the demo's seven environments, and the demo stage with a
-``ramps`` section solved for a linear, gamma 2.4 and PQ wall, and without ramps for gamma 2.4
-and PQ: 42 environments), then runs :mod:`benchmarks.ocio_compat_worker` in each venv. The worker
+``ramps`` section solved for a linear, gamma 2.4, sRGB and PQ wall, and without ramps for gamma
+2.4 and PQ: 49 environments), then runs :mod:`benchmarks.ocio_compat_worker` in each venv. The worker
 loads every ``.ocio`` and ``.ocioz``, builds every processor (colorspace pairs, display/views
 both ways, named transforms both ways, every ``.clf``/``.cube`` as a FileTransform), applies it
 on the CPU to inputs in [-1, 16] (out-of-gamut and HDR included) and extracts its HLSL shader
@@ -102,8 +102,8 @@ def build_solves(root: Path) -> list[Path]:
     document = yaml.safe_load(stage.read_text())
     ramps.write_text(yaml.safe_dump(add_ramps(document)))
     solves = [root / "demo"]
-    for measurements, encoding in [(ramps, "linear"), (ramps, "gamma2.4"), (ramps, "pq"),
-                                   (stage, "gamma2.4"), (stage, "pq")]:  # fmt: skip
+    for measurements, encoding in [(ramps, "linear"), (ramps, "gamma2.4"), (ramps, "srgb"),
+                                   (ramps, "pq"), (stage, "gamma2.4"), (stage, "pq")]:  # fmt: skip
         out = root / f"{measurements.stem}_{encoding}"
         run("solve", str(measurements), "--out", str(out), "--wall-encoding", encoding)
         solves.append(out)
