@@ -230,7 +230,8 @@ def _pct(errors: list[float]) -> list[str]:
 def baked_cubes(quick: bool, configs: dict[str, Path], folder: Path) -> str:
     import PyOpenColorIO as OCIO
 
-    from ocio_vp.exports.resolve import DEFAULT_CUBE_RANGE, bake_cube
+    from ocio_vp.exports.cube import bake_cube
+    from ocio_vp.exports.resolve import DEFAULT_CUBE_RANGE
     from ocio_vp.ocio.config import IN_FRUSTUM, POST_CORRECTION_COLORSPACE, REFERENCE
 
     lo, hi = DEFAULT_CUBE_RANGE
@@ -252,8 +253,8 @@ def baked_cubes(quick: bool, configs: dict[str, Path], folder: Path) -> str:
         for size in (17, 33, 65):
             path = folder / f"{encoding}_{a == REFERENCE}_{size}.cube"
             seconds = median_time(
-                lambda s=size, p=path, a=a, b=b, c=config: bake_cube(
-                    c, a, b, p, reference=REFERENCE, size=s
+                lambda s=size, p=path, e=exact: bake_cube(
+                    e, p, size=s, input_range=DEFAULT_CUBE_RANGE
                 ),
                 repeats=1 if (quick or size == 65) else 3,
                 warmup=0,
