@@ -28,12 +28,14 @@ colour differences in television.
 
 from __future__ import annotations
 
+import functools
+import os
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ocio_vp.spectra import align, spectral_shape
+from ocio_vp.spectra import spectral_shape, wavelengths
 
 __all__ = [
     "ITP_WHITE_NITS",
@@ -49,7 +51,6 @@ __all__ = [
 #: Luminance (cd/m^2) that the target white patch is mapped to for ΔE ITP.
 ITP_WHITE_NITS = 100.0
 _CMFS = "CIE 1931 2 Degree Standard Observer"
-
 
 
 #: A white-patch channel below this fraction of the white's brightest channel is floored to it,
@@ -109,10 +110,61 @@ def error_relative_to_white(
     return np.tensordot(w, error, axes=([0], [-2])) / w.sum()
 
 
+def _on_grid(spectra) -> np.ndarray:
+    """Values of a colour spectral distribution (or multi-) on the project's grid, float64.
+
+    When every grid wavelength is one of the data's own, the values are taken there (what
+    colour's interpolating ``align`` returns at its own nodes, to rounding, without
+    interpolating 190 spectra); otherwise colour's ``align``.
+    """
+    grid = wavelengths()
+    own = np.asarray(spectra.wavelengths, dtype=np.float64)
+    index = np.searchsorted(own, grid)
+    if np.all(index < len(own)) and np.array_equal(own[np.minimum(index, len(own) - 1)], grid):
+        return np.asarray(spectra.values, dtype=np.float64)[index]
+    return np.asarray(spectra.copy().align(spectral_shape()).values, dtype=np.float64)
+
+
+def _training_reflectances() -> np.ndarray:
+    """(190, W) the RAW to ACES v1 training reflectances on the project's grid.
+
+    Read from colour-science's own CSV file with numpy (the same numbers as colour's
+    ``read_training_data_rawtoaces_v1``, which takes ~50x longer to parse it); colour's
+    reader and ``align`` when the file's wavelengths are not the grid's.
+    """
+    import colour
+    from colour.characterisation.aces_it import ROOT_RESOURCES_RAWTOACES
+
+    table = np.loadtxt(
+        os.path.join(ROOT_RESOURCES_RAWTOACES, "190_Patches.csv"), delimiter=",", skiprows=1
+    )
+    if np.array_equal(table[:, 0], wavelengths()):
+        return table[:, 1:].T
+    return _on_grid(colour.characterisation.read_training_data_rawtoaces_v1()).T
+
+
+@functools.lru_cache(maxsize=8)
+def _training_radiance_xyz(illuminant: str) -> tuple[np.ndarray, np.ndarray]:
+    """(190, W) radiances of the training reflectances under ``illuminant`` and their (190, 3)
+    XYZ, on the project's grid; computed once per illuminant (read-only arrays)."""
+    import colour
+
+    reflectances = _training_reflectances()
+    light = np.maximum(_on_grid(colour.SDS_ILLUMINANTS[illuminant]), 0.0)
+    radiance = reflectances * light
+    xyz = radiance @ _on_grid(colour.MSDS_CMFS[_CMFS])
+    for array in (radiance, xyz):
+        array.setflags(write=False)
+    return radiance, xyz
+
+
 def training_rgb_xyz(
     camera: ArrayLike, *, illuminant: str = "D65"
 ) -> tuple[np.ndarray, np.ndarray]:
     """Camera RGB and CIE XYZ of the RAW to ACES v1 training reflectances under ``illuminant``.
+
+    The spectra are put on the project's grid once per illuminant; each call is then one
+    matrix product with the camera's sensitivities.
 
     Parameters
     ----------
@@ -126,18 +178,8 @@ def training_rgb_xyz(
     (RGB, XYZ)
         Both (190, 3), unnormalised sums over wavelength.
     """
-    import colour
-
-
-    shape = spectral_shape()
-    reflectances = np.asarray(
-        colour.characterisation.read_training_data_rawtoaces_v1().copy().align(shape).values,
-        dtype=np.float64,
-    ).T  # (samples, W)
-    light = align(colour.SDS_ILLUMINANTS[illuminant])
-    cmfs = np.asarray(colour.MSDS_CMFS[_CMFS].copy().align(shape).values, dtype=np.float64)
-    radiance = reflectances * light
-    return radiance @ np.asarray(camera, dtype=np.float64), radiance @ cmfs
+    radiance, xyz = _training_radiance_xyz(illuminant)
+    return radiance @ np.asarray(camera, dtype=np.float64), xyz.copy()
 
 
 def camera_to_xyz_matrix(camera: ArrayLike, *, illuminant: str = "D65") -> np.ndarray:

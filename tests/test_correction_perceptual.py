@@ -16,6 +16,7 @@ from ocio_vp.correction.perceptual import (
     default_camera_to_xyz,
     make_q_perceptual,
     mean_delta_e,
+    patch_delta_e,
     q_perceptual,
 )
 from ocio_vp.correction.problem import QProblem
@@ -82,6 +83,22 @@ def test_reachable_target_is_found(problem):
     fit = q_perceptual(exact)
     np.testing.assert_allclose(fit.Q, Q_true, atol=1e-6)
     assert fit.notes["mean_delta_e"] < 1e-6
+
+
+@pytest.mark.parametrize("metric", ["CIE 2000", "ITP"])
+def test_a_stack_of_predictions_equals_one_call_each(problem, metric):
+    # auto scores every candidate model in one call: the same numbers as one call per
+    # prediction, and as metrics.chart_errors (its own normalisation on the target white, so
+    # equal to rounding: 1e-9).
+    rng = np.random.default_rng(3)
+    stack = problem.target * rng.normal(1.0, 0.03, (2, 4, *problem.target.shape))
+    batched = patch_delta_e(stack, problem.target, metric=metric)
+    field = "delta_E_2000" if metric == "CIE 2000" else "delta_E_ITP"
+    for index in np.ndindex(2, 4):
+        single = patch_delta_e(stack[index], problem.target, metric=metric)
+        np.testing.assert_allclose(batched[index], single, rtol=1e-12, atol=1e-12)
+        one = chart_errors(stack[index], problem.target, camera_to_xyz=default_camera_to_xyz())
+        np.testing.assert_allclose(batched[index], getattr(one, field), rtol=1e-9)
 
 
 def test_excluded_patches_do_not_count(problem):

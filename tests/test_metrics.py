@@ -18,6 +18,7 @@ from ocio_vp.metrics import (
     camera_to_xyz_matrix,
     chart_errors,
     error_relative_to_white,
+    training_rgb_xyz,
     white_scale,
 )
 from ocio_vp.simulator.stage import environment_spectrum, paper_stage
@@ -126,3 +127,21 @@ class TestErrorRelativeToWhite:
         r = diagnostics.residuals_per_patch(predicted, target, 18)
         np.testing.assert_allclose(r[2], [0.1, -0.1, 0.0])
         assert not np.any(r[np.arange(24) != 2])
+
+
+@pytest.mark.parametrize("illuminant", ["D65", "A"])
+def test_training_rgb_xyz_matches_colour_align_path(illuminant):
+    # The oracle: colour's own reader and interpolating align of every spectrum onto the grid
+    # (what training_rgb_xyz did before it took the grid's values directly and cached them).
+    shape = colour.SpectralShape(380, 780, 5)
+    reflectances = np.asarray(
+        colour.characterisation.read_training_data_rawtoaces_v1().copy().align(shape).values
+    ).T
+    light = colour.SDS_ILLUMINANTS[illuminant].copy().align(shape).values
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape).values
+    camera = paper_stage().camera
+    rgb, xyz = training_rgb_xyz(camera, illuminant=illuminant)
+    np.testing.assert_allclose(rgb, (reflectances * light) @ camera, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(xyz, (reflectances * light) @ cmfs, rtol=1e-12, atol=0)
+    again, _ = training_rgb_xyz(2 * camera, illuminant=illuminant)  # cached spectra, new camera
+    np.testing.assert_allclose(again, 2 * rgb, rtol=1e-15)

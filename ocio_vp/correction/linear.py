@@ -204,14 +204,15 @@ def _loo_ridge(X: np.ndarray, P: np.ndarray, w: np.ndarray, alphas: np.ndarray) 
 
 
 def patch_errors(held: np.ndarray, P: np.ndarray, w: np.ndarray, white: int):
-    """(n,) per-patch error of predictions and its unit: ΔE2000 through the default camera
-    matrix, or, where no fitted patch has a luminance to normalise by (a target the camera
-    matrix sees as black), the mean absolute error per channel relative to white."""
+    """(..., n) per-patch error of predictions (n, 3) or a stack of them (..., n, 3), and its
+    unit: ΔE2000 through the default camera matrix, or, where no fitted patch has a luminance
+    to normalise by (a target the camera matrix sees as black), the mean absolute error per
+    channel relative to white. A stack goes through colour-science in one call."""
     try:
         return patch_delta_e(held, P, white_patch=white, weights=w), "ΔE2000"
     except ValueError:
         relative = np.abs(held - P) / white_scale(P, white, w)
-        return relative.mean(axis=1), "error relative to white"
+        return relative.mean(axis=-1), "error relative to white"
 
 
 def choose_shrinkage(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> float:
@@ -220,8 +221,8 @@ def choose_shrinkage(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) ->
     if not np.trace(_normal_equations(X, P, w)[0]) > 0 or np.count_nonzero(active) < 2:
         return float("inf")
     grid = np.asarray(REGULARISATION_GRID)
-    held = _loo_ridge(X, P, w, grid)
-    scores = [np.mean(patch_errors(h, P, w, white)[0][active]) for h in held]
+    held = _loo_ridge(X, P, w, grid)  # (g, n, 3): every strength's held-out predictions
+    scores = np.mean(patch_errors(held, P, w, white)[0][:, active], axis=1)
     scores = np.where(np.isfinite(scores), scores, np.inf)
     return float(grid[np.flatnonzero(scores <= np.min(scores) + AUTO_TIE)[-1]])
 
@@ -551,9 +552,8 @@ def q_auto(problem: QProblem) -> QFit:
         else loo_predictions(name, X, P, w, white)
         for name in ladder
     }
-    errors = {name: patch_errors(h, P, w, white) for name, h in held.items()}
-    scores = {name: e[active] for name, (e, _) in errors.items()}
-    unit = next(iter(errors.values()))[1]
+    stacked, unit = patch_errors(np.stack(list(held.values())), P, w, white)
+    scores = {name: e[active] for name, e in zip(held, stacked, strict=True)}
     chosen, table = choose_model(scores, AUTO_SE_FACTOR)
     notes |= {
         "model": chosen,

@@ -85,9 +85,10 @@ def patch_delta_e(
     weights: ArrayLike | None = None,
     metric: str = "CIE 2000",
 ) -> np.ndarray:
-    """(n,) ΔE (``metric``) of each patch of ``predicted`` against ``target`` (camera RGB).
+    """(..., n) ΔE (``metric``) of each patch of ``predicted`` against ``target`` (camera RGB).
 
-    Normalised on the target white patch; when that patch is excluded (weight 0) or has no
+    ``predicted`` is (n, 3) or a stack of predictions (..., n, 3) of the same (n, 3) target
+    (candidate models): the whole stack goes through colour-science in one call. Normalised on the target white patch; when that patch is excluded (weight 0) or has no
     luminance, on the fitted patch of highest luminance instead, so a corrupted or clipped
     white patch never makes the metric undefined. ``camera_to_xyz`` defaults to
     :func:`default_camera_to_xyz`.
