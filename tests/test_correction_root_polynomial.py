@@ -22,11 +22,15 @@ from ocio_vp.calibration.equations import solve_M
 from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
 from ocio_vp.correction import (
     Q_SOLVE_METHODS,
+    ROOT_POLYNOMIAL_TERMS,
     apply_root_polynomial,
     fit_least_squares,
     fit_root_polynomial,
     invert_root_polynomial,
     post_correction,
+    root_polynomial_expansion,
+    root_polynomial_jacobian,
+    root_polynomial_loo_predictions,
     solve_post_correction,
 )
 from ocio_vp.correction.problem import QProblem
@@ -175,3 +179,45 @@ def test_inverse_is_unique_on_the_content_range(problem):
     np.testing.assert_allclose(
         invert_root_polynomial(C, apply_root_polynomial(C, x)), x, rtol=1e-8, atol=1e-12
     )
+
+
+@pytest.mark.parametrize("degree", [1, 2, 3, 4])
+def test_expansion_matches_colour_science(degree):
+    """The hand-vectorised expansion is colour-science's, term for term, signs included."""
+    from colour.characterisation import polynomial_expansion_Finlayson2015
+
+    rng = np.random.default_rng(9)
+    rgb = np.vstack([rng.uniform(-1, 16, (500, 3)), np.zeros((1, 3)), [[0, 1e-8, 1e4]]])
+    oracle = polynomial_expansion_Finlayson2015(rgb, degree, root_polynomial_expansion=True)
+    np.testing.assert_allclose(
+        root_polynomial_expansion(rgb, degree), oracle, rtol=1e-14, atol=1e-14
+    )
+
+
+@pytest.mark.parametrize("degree", [2, 3, 4])
+def test_analytic_jacobian_matches_finite_differences(degree):
+    rng = np.random.default_rng(10)
+    C = rng.normal(size=(3, ROOT_POLYNOMIAL_TERMS[degree]))
+    x = rng.uniform(0.05, 2.0, (200, 3))
+    h = 1e-6
+    numeric = np.stack(
+        [
+            (apply_root_polynomial(C, x + h * e) - apply_root_polynomial(C, x - h * e)) / (2 * h)
+            for e in np.eye(3)
+        ],
+        axis=-1,
+    )
+    np.testing.assert_allclose(root_polynomial_jacobian(C, x), numeric, rtol=1e-6, atol=1e-7)
+
+
+@pytest.mark.parametrize("degree", [2, 3])
+def test_closed_form_leave_one_out_matches_refitting(problem, degree):
+    X, P = problem.predicted, problem.target
+    w = np.random.default_rng(11).uniform(0.5, 2.0, len(X))
+    w[4] = 0.0
+    held = root_polynomial_loo_predictions(X, P, w, degree)
+    for j in range(len(X)):
+        w_j = w.copy()
+        w_j[j] = 0.0
+        refit = apply_root_polynomial(fit_root_polynomial(X, P, w_j, degree), X[j])
+        np.testing.assert_allclose(held[j], refit, rtol=1e-8, atol=1e-10)

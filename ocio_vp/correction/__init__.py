@@ -79,6 +79,8 @@ from ocio_vp.correction.root_polynomial import (
     post_correction,
     q_root_polynomial,
     root_polynomial_expansion,
+    root_polynomial_jacobian,
+    root_polynomial_loo_predictions,
 )
 from ocio_vp.correction.validation import (
     CLOSED_FORM_METHODS,
@@ -146,6 +148,8 @@ __all__ = [
     "q_root_polynomial",
     "q_white_preserving",
     "root_polynomial_expansion",
+    "root_polynomial_jacobian",
+    "root_polynomial_loo_predictions",
     "singular_q_cause",
     "solve_post_correction",
     "target_rank",

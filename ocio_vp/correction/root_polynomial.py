@@ -4,9 +4,12 @@ A root-polynomial Q maps camera RGB ``x`` to ``C e(x)``, where ``e`` is the root
 expansion of degree d (degree 2: ``r, g, b, sqrt(rg), sqrt(gb), sqrt(rb)``; degree 3 adds the
 cube roots of ``r^2 g`` etc. and ``rgb``: 13 terms) and ``C`` is (3, terms). Every term is
 homogeneous of degree 1, so ``Q(k x) = k Q(x)`` for ``k > 0``: exposure-invariant like a matrix.
-The expansion is colour-science's :func:`colour.characterisation.polynomial_expansion_Finlayson2015`,
-whose roots are sign-preserving (``sign(t) |t|^(1/d)``), so negative inputs (noise around black)
-give finite, continuous values.
+The expansion is the one of colour-science's
+:func:`colour.characterisation.polynomial_expansion_Finlayson2015` (same terms, same order,
+tested against it), written here as one numpy expression per term so that baking a LUT or
+post-correcting a frame does not pay colour-science's per-call overhead. Its roots are
+sign-preserving (``sign(t) |t|^(1/k)``), so negative inputs (noise around black) give finite,
+continuous values and zero maps to zero.
 
 How it travels through the pipeline: ``QFit.Q`` stays a 3x3 — the weighted least-squares 3x3 on
 the same patches, the best linear approximation — because M, N, the reports and the exports are
@@ -17,9 +20,10 @@ the function to apply. The OCIO config carries the model itself as LUTs
 (:mod:`ocio_vp.ocio.root_polynomial`); the Nuke and Resolve exports still use the 3x3 approximation, and the fit
 says so in its ``warnings`` note.
 
-The inverse (:func:`invert_root_polynomial`) is solved per colour on its direction (the colour
+The inverse (:func:`invert_root_polynomial`) is solved on each colour's direction (the colour
 divided by its largest absolute channel, then scaled back: homogeneity), by damped Newton
-iterations started from the 3x3 approximation's inverse.
+iterations started from the 3x3 approximation's inverse, all colours at once (batched 3x3
+solves with the analytic Jacobian, :func:`root_polynomial_jacobian`).
 
 References
 ----------
@@ -34,10 +38,8 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
-from colour.characterisation import polynomial_expansion_Finlayson2015
 
-from ocio_vp.correction.linear import fit_least_squares
-from ocio_vp.correction.problem import QFit, QProblem
+from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import error_relative_to_white
 
@@ -50,6 +52,8 @@ __all__ = [
     "post_correction",
     "q_root_polynomial",
     "root_polynomial_expansion",
+    "root_polynomial_jacobian",
+    "root_polynomial_loo_predictions",
 ]
 
 #: Number of root-polynomial terms per degree (colour-science supports degrees 1-4).
@@ -68,15 +72,70 @@ CONFIG_APPROXIMATION_WARNING = (
 )
 
 
+#: Each term of the expansion as (exponents of r, g, b; root): the term is
+#: ``sign(p) |p|^(1/root)`` with ``p = r^a g^b b^c``, in colour-science's order.
+_TERMS = (
+    ((1, 0, 0), 1), ((0, 1, 0), 1), ((0, 0, 1), 1),
+    ((1, 1, 0), 2), ((0, 1, 1), 2), ((1, 0, 1), 2),
+    ((1, 2, 0), 3), ((0, 1, 2), 3), ((1, 0, 2), 3),
+    ((2, 1, 0), 3), ((0, 2, 1), 3), ((2, 0, 1), 3), ((1, 1, 1), 3),
+    ((3, 1, 0), 4), ((3, 0, 1), 4), ((1, 3, 0), 4),
+    ((0, 3, 1), 4), ((1, 0, 3), 4), ((0, 1, 3), 4),
+    ((2, 1, 1), 4), ((1, 2, 1), 4), ((1, 1, 2), 4),
+)  # fmt: skip
+
+
+def _signed_root(p: np.ndarray, root: int) -> np.ndarray:
+    if root == 1:
+        return p
+    if root == 2:
+        return np.copysign(np.sqrt(np.abs(p)), p)
+    if root == 3:
+        return np.cbrt(p)
+    return np.copysign(np.abs(p) ** (1.0 / root), p)
+
+
 def root_polynomial_expansion(rgb: np.ndarray, degree: int) -> np.ndarray:
     """(..., terms) root-polynomial expansion of (..., 3) ``rgb``, float64.
 
     >>> root_polynomial_expansion(np.array([4.0, 1.0, 9.0]), 2).tolist()
     [4.0, 1.0, 9.0, 2.0, 3.0, 6.0]
+    >>> root_polynomial_expansion(np.array([-4.0, 1.0, 0.0]), 2).tolist()
+    [-4.0, 1.0, 0.0, -2.0, 0.0, -0.0]
     """
+    if degree not in ROOT_POLYNOMIAL_TERMS:
+        raise ValueError(f"root-polynomial degree must be 1-4, got {degree}")
     rgb = np.asarray(rgb, dtype=np.float64)
-    expanded = polynomial_expansion_Finlayson2015(rgb, degree, root_polynomial_expansion=True)
-    return np.asarray(expanded, dtype=np.float64).reshape(*rgb.shape[:-1], -1)
+    channels = (rgb[..., 0], rgb[..., 1], rgb[..., 2])
+    out = np.empty((*rgb.shape[:-1], ROOT_POLYNOMIAL_TERMS[degree]))
+    for index, (powers, root) in enumerate(_TERMS[: ROOT_POLYNOMIAL_TERMS[degree]]):
+        p = None
+        for channel, power in zip(channels, powers, strict=True):
+            for _ in range(power):
+                p = channel if p is None else p * channel
+        out[..., index] = _signed_root(p, root)
+    return out
+
+
+def root_polynomial_jacobian(coefficients: np.ndarray, rgb: np.ndarray) -> np.ndarray:
+    """(n, 3, 3) Jacobian of Q = C e(x) at (n, 3) ``rgb`` (row: output channel, column: d/dx_k).
+
+    Each term ``t = sign(p)|p|^(1/k)`` has ``dt/dx_c = (a_c / k) t / x_c``; where a channel the
+    term uses is 0 the derivative is infinite (the square root's slope) and is returned as is
+    (callers fall back to another step there).
+    """
+    C = np.asarray(coefficients, dtype=np.float64)
+    x = np.asarray(rgb, dtype=np.float64).reshape(-1, 3)
+    terms = root_polynomial_expansion(x, _degree_of(C))
+    dterms = np.zeros((*terms.shape, 3))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for index, (powers, root) in enumerate(_TERMS[: C.shape[1]]):
+            for channel, power in enumerate(powers):
+                if power and root == 1:
+                    dterms[:, index, channel] = 1.0
+                elif power:
+                    dterms[:, index, channel] = power / root * terms[:, index] / x[:, channel]
+    return np.matmul(C, dterms)  # (3, t) @ (n, t, 3)
 
 
 def _degree_of(coefficients: np.ndarray) -> int:
@@ -160,20 +219,45 @@ def make_q_root_polynomial(degree: int = 2) -> Callable[[QProblem], QFit]:
     return q_root_polynomial_method
 
 
+def root_polynomial_loo_predictions(
+    X: np.ndarray, P: np.ndarray, w: np.ndarray, degree: int = 2
+) -> np.ndarray:
+    """(n, 3) leave-one-patch-out predictions of the root-polynomial fit, in closed form.
+
+    The fit is weighted least squares, linear in its parameters, so removing patch j changes
+    its residual to ``r_j / (1 - h_j)`` with ``h_j = w_j e_j^T (E^T W E)^-1 e_j`` (the hat
+    matrix's diagonal): one fit instead of one per patch. Patches with weight 0 are not in the
+    fit, so their prediction is the fit's own. NaN where removing the patch leaves the design
+    rank-deficient (``h_j`` ~ 1).
+
+    Raises
+    ------
+    InputError
+        The fit itself is impossible (see :func:`fit_root_polynomial`).
+    """
+    X, P = np.asarray(X, dtype=np.float64), np.asarray(P, dtype=np.float64)
+    w = np.asarray(w, dtype=np.float64)
+    C = fit_root_polynomial(X, P, w, degree)
+    E = root_polynomial_expansion(X, degree)
+    keep = w > 0
+    U = np.linalg.svd(E[keep] * np.sqrt(w[keep])[:, None], full_matrices=False)[0]
+    h = np.zeros(len(X))
+    h[keep] = np.sum(U**2, axis=1)  # the hat matrix's diagonal, without forming (E^T W E)^-1
+    fitted = E @ C.T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        held = P - (P - fitted) / (1.0 - h)[:, None]
+    held[~keep] = fitted[~keep]
+    held[keep & (h > 1.0 - 1e-9)] = np.nan
+    return held
+
+
 def _loo_error(X, P, w, degree: int, white: int) -> np.ndarray | None:
     """(3,) leave-one-patch-out error (white-relative); None with no patch to spare."""
-    fitted = np.flatnonzero(w > 0)
-    if len(fitted) <= ROOT_POLYNOMIAL_TERMS[degree]:
+    if int(np.count_nonzero(np.asarray(w) > 0)) <= ROOT_POLYNOMIAL_TERMS[degree]:
         return None
-    held = np.asarray(P, dtype=np.float64).copy()
-    for j in fitted:
-        w_j = np.asarray(w, dtype=np.float64).copy()
-        w_j[j] = 0.0
-        try:
-            C = fit_root_polynomial(X, P, w_j, degree)
-        except InputError:
-            return None
-        held[j] = apply_root_polynomial(C, X[j])
+    held = root_polynomial_loo_predictions(X, P, w, degree)
+    if not np.all(np.isfinite(held)):
+        return None
     return error_relative_to_white(held, P, white, w)
 
 
@@ -203,23 +287,12 @@ def _linear_approximation(C: np.ndarray) -> np.ndarray:
     return fit_least_squares(grid, apply_root_polynomial(C, grid), np.ones(len(grid)))
 
 
-def _jacobian(C: np.ndarray, y: np.ndarray, step: float = 1e-7) -> np.ndarray:
-    """(n, 3, 3) central-difference Jacobian of Q at (n, 3) y (columns: d/dy_k)."""
-    J = np.empty((len(y), 3, 3))
-    for k in range(3):
-        h = np.zeros(3)
-        h[k] = step
-        J[:, :, k] = (apply_root_polynomial(C, y + h) - apply_root_polynomial(C, y - h)) / (
-            2 * step
-        )
-    return J
-
-
 def _newton_step(C: np.ndarray, A: np.ndarray, y: np.ndarray, r: np.ndarray) -> np.ndarray:
     """Newton direction -J^-1 r; the 3x3 approximation's where J is singular or not finite."""
-    J = _jacobian(C, y)
-    det = np.linalg.det(J)
-    bad = ~np.isfinite(det) | (np.abs(det) < 1e-12 * abs(np.linalg.det(A)))
+    J = root_polynomial_jacobian(C, y)
+    with np.errstate(invalid="ignore", over="ignore"):
+        det = np.linalg.det(np.where(np.isfinite(J), J, 0.0))
+    bad = ~np.all(np.isfinite(J), axis=(1, 2)) | (np.abs(det) < 1e-12 * abs(np.linalg.det(A)))
     J[bad] = A
     return -np.linalg.solve(J, r[..., None])[..., 0]
 
