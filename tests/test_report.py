@@ -1,11 +1,13 @@
-"""Tests for the HTML report: it renders, its PNGs decode, and every plotted number is the
-solution's own number (read back from the matplotlib artists, not from pixels)."""
+"""Tests for the HTML report: it renders, its SVG figures parse, and every plotted number is the
+solution's own number (the plot records here; read back from the SVG files in
+tests/test_report_plots.py)."""
 
 from __future__ import annotations
 
 import copy
 import json
 import re
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +29,7 @@ from ocio_vp.report.data import (
 )
 
 TOL = 1e-9
-DPI = 30  # small PNGs keep the tests fast; sizes below are figsize (inches) x DPI
+DPI = 30  # the figures' displayed size: figsize (inches) x DPI pixels
 SAMPLE = Path(__file__).resolve().parent.parent / "sample_configs"
 
 
@@ -59,26 +61,40 @@ def _srgb_decode(v: np.ndarray) -> np.ndarray:
 
 
 class TestRender:
-    def test_every_image_exists_and_decodes(self, report):
-        import matplotlib.image
-
+    def test_every_image_exists_and_parses(self, report):
         html = report.index.read_text()
         sources = re.findall(r'<img[^>]*\bsrc="([^"]+)"', html)
         # 2 Fig. 11 panels + (charts, ΔE) per environment; no linearity in this data.
         assert len(sources) == 2 + 2 * 3
+        assert all(re.fullmatch(r"img/[\w.-]+\.svg", source) for source in sources)
+        sizes = {}
         for source in sources:
-            image = matplotlib.image.imread(report.index.parent / source)
-            assert image.ndim == 3 and image.shape[2] in (3, 4)
-        charts = matplotlib.image.imread(next(iter(report.charts.values())).path)
-        assert charts.shape[:2] == (round(7.4 * DPI), round(10.0 * DPI))
-        bars = matplotlib.image.imread(report.error_bars["lit"].path)
-        assert bars.shape[0] == round(4.2 * DPI)
+            root = ET.parse(report.index.parent / source).getroot()
+            assert root.tag == "{http://www.w3.org/2000/svg}svg"
+            sizes[source] = (float(root.get("width")), float(root.get("height")))
+            # The viewBox is the figure in points (72 per inch): the same aspect ratio.
+            _, _, w, h = map(float, root.get("viewBox").split())
+            assert w / h == pytest.approx(sizes[source][0] / sizes[source][1], rel=1e-3)
+        charts = next(iter(report.charts.values())).path.relative_to(report.index.parent)
+        assert sizes[charts.as_posix()] == pytest.approx((10.0 * DPI, 7.4 * DPI), abs=0.01)
+        bars = report.error_bars["lit"].path.relative_to(report.index.parent)
+        assert sizes[bars.as_posix()][1] == pytest.approx(4.2 * DPI, abs=0.01)
+        # Element counts: 4 panels x 24 squares and circles; 3 environments x 6 bars per
+        # Fig. 11 panel; 4 panels x 2 series x 24 bars per ΔE figure.
+        svg = "{http://www.w3.org/2000/svg}"
+        charts_root = ET.parse(report.index.parent / charts).getroot()
+        assert len([e for e in charts_root.iter(f"{svg}rect") if e.get("class") == "square"]) == 96
+        assert (
+            len([e for e in charts_root.iter(f"{svg}circle") if e.get("class") == "circle"]) == 96
+        )
+        bars_root = ET.parse(report.error_bars["lit"].path).getroot()
+        assert len([e for e in bars_root.iter(f"{svg}rect") if e.get("class") == "bar"]) == 18
+        delta_root = ET.parse(next(iter(report.delta_e.values())).path).getroot()
+        assert len([e for e in delta_root.iter(f"{svg}rect") if e.get("class") == "bar"]) == 192
 
-    def test_reused_figures_draw_the_pictures_of_new_ones(self, report, tmp_path):
-        # The report redraws one figure per kind for every environment; each PNG must be the
-        # pixels a figure built for that environment alone gives.
-        import matplotlib.image
-
+    def test_each_figure_is_the_one_drawn_for_its_environment_alone(self, report, tmp_path):
+        # Drawn in one loop over the environments, each SVG must be byte for byte the one a
+        # call for that environment alone writes (nothing carried over between figures).
         from ocio_vp.report.plots import plot_comparison_charts, plot_delta_e
 
         for data in report.environments:
@@ -86,10 +102,8 @@ class TestRender:
                 (plot_comparison_charts, report.charts[data.key]),
                 (plot_delta_e, report.delta_e[data.key]),
             ):
-                fresh = plot(data, tmp_path / "fresh.png", dpi=DPI).path
-                np.testing.assert_array_equal(
-                    matplotlib.image.imread(fresh), matplotlib.image.imread(drawn.path)
-                )
+                fresh = plot(data, tmp_path / "fresh.svg", dpi=DPI).path
+                assert fresh.read_bytes() == drawn.path.read_bytes()
 
     def test_no_external_urls(self, report):
         html = report.index.read_text()
@@ -99,10 +113,18 @@ class TestRender:
         for link in re.findall(r'(?:src|href)="([^"]*)"', html):
             assert link.startswith("#") or (report.index.parent / link).is_file(), link
 
-    def test_pngs_carry_no_web_address(self, report):
-        # matplotlib writes its web address into the PNG "Software" text chunk by default.
-        for plot in [*report.charts.values(), *report.error_bars.values()]:
-            assert b"http" not in plot.path.read_bytes()
+    def test_svgs_load_nothing_from_outside(self, report):
+        # An SVG can reference files and URLs (href, url(...)): ours only name their own
+        # patterns and clip paths; the one web address is the SVG namespace's name.
+        for plot in [
+            *report.charts.values(),
+            *report.error_bars.values(),
+            *report.delta_e.values(),
+        ]:
+            text = plot.path.read_text()
+            assert text.count("http") == 1 and 'xmlns="http://www.w3.org/2000/svg"' in text
+            assert all(u.startswith("#") for u in re.findall(r"url\(([^)]*)\)", text))
+            assert "href" not in text and "<script" not in text and "<image" not in text
 
     def test_every_environment_has_a_section(self, report, solved):
         html = report.index.read_text()

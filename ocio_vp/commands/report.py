@@ -19,7 +19,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "report",
         help="write an HTML report (comparison charts, error plots) for solved environments",
-        description="Write a self-contained HTML report (index.html + PNGs + report.json, no "
+        description="Write a self-contained HTML report (index.html + SVG figures + report.json, no "
         "network resources) with the paper's comparison charts and Fig. 11 error bars. "
         "Default place: SOLVE/report for all environments of a solve output folder, "
         "SOLVE/<environment>/report for one, SOLVE/report-<env>+<env> for some. A report on "
@@ -36,7 +36,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         action="store_true",
         help="replace the report at --out even if it shows environments this one leaves out",
     )
-    parser.add_argument("--dpi", type=float, default=110, help="PNG resolution")
+    parser.add_argument(
+        "--dpi",
+        type=float,
+        default=110,
+        help="size of the figures on the page, pixels per inch (they are SVG, sharp at any zoom)",
+    )
     parser.add_argument(
         "--no-match-white",
         action="store_true",
@@ -51,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
     from ocio_vp.formats.solution_inputs import solution_folders
     from ocio_vp.report.build import build_report, default_report_dir
 
-    if not 10 <= args.dpi <= 1200:  # tiny values crash the PNG renderer, huge ones exhaust memory
+    if not 10 <= args.dpi <= 1200:  # outside, the figures are unreadably small or huge
         raise InputError(f"expected 10..1200, got {args.dpi:g}", key="--dpi")
     chosen = solution_folders(args.solutions)
     for note in chosen.notes():

@@ -1,5 +1,4 @@
-"""The HTML/PNG report: per-environment data, plots, and the page.
-"""
+"""The HTML report: per-environment data, its SVG figures, and the page."""
 
 from ocio_vp.report.build import (
     Report,

@@ -1,9 +1,9 @@
-"""``ocio-vp report``: a self-contained HTML page (plus its PNGs) for one or more solutions.
+"""``ocio-vp report``: a self-contained HTML page (plus its SVG figures) for one or more solutions.
 
 For each environment: the paper's comparison charts (baseline M only vs ours), per-patch ΔE,
 the matrices with their condition numbers, model choices, warnings, beta, w_avg and the
 linearity curves when the solve has them; for all environments together the paper's Fig. 11
-error bars. The page links its PNGs relatively and loads nothing from the network, so the folder
+error bars. The page links its SVGs relatively and loads nothing from the network, so the folder
 can be zipped, mailed or opened from a USB stick. It is written into a staging folder and
 renamed into place, so a failed run never leaves half a report.
 
@@ -391,7 +391,7 @@ def build_report(
     replace: bool = False,
     on_step: Any = None,
 ) -> Report:
-    """Write ``out_dir/index.html`` and its PNGs for every solution in ``paths``, all or nothing.
+    """Write ``out_dir/index.html`` and its SVGs for every solution in ``paths``, all or nothing.
 
     Parameters
     ----------
@@ -400,7 +400,8 @@ def build_report(
     out_dir
         The report folder; replaced as a whole if it exists.
     dpi
-        PNG resolution (tests use a small one).
+        Pixels per inch of the figures' displayed size (their ``width``/``height``; the
+        drawings are vectors, so this only scales them on the page).
     match_white
         Scale each stage chart so its white's green matches the target's (paper, Section 4).
     camera_to_xyz
@@ -421,25 +422,24 @@ def build_report(
         folder = stage / "report"
         (folder / "img").mkdir(parents=True)
 
-        def png(name: str) -> tuple[Path, str]:
+        def image(name: str) -> tuple[Path, str]:
             return folder / "img" / name, f"img/{name}"
 
         summary_images = {}
         for kind in ("lit", "displayed"):
-            path, link = png(f"error_{kind}.png")
+            path, link = image(f"error_{kind}.svg")
             report.error_bars[kind] = plot_error_bars(environments, kind, path, dpi=dpi)
             summary_images[kind] = link
         sections = []
-        figures: dict = {}  # one figure per kind and patch count, redrawn per environment
         for data in environments:
             images = {}
-            path, images["charts"] = png(f"{data.key}-charts.png")
-            report.charts[data.key] = plot_comparison_charts(data, path, dpi=dpi, reuse=figures)
-            path, images["delta_e"] = png(f"{data.key}-delta_e.png")
-            report.delta_e[data.key] = plot_delta_e(data, path, dpi=dpi, reuse=figures)
+            path, images["charts"] = image(f"{data.key}-charts.svg")
+            report.charts[data.key] = plot_comparison_charts(data, path, dpi=dpi)
+            path, images["delta_e"] = image(f"{data.key}-delta_e.svg")
+            report.delta_e[data.key] = plot_delta_e(data, path, dpi=dpi)
             curves = linearity_curves(data.solution.linearity)
             if curves:
-                path, images["linearity"] = png(f"{data.key}-linearity.png")
+                path, images["linearity"] = image(f"{data.key}-linearity.svg")
                 report.linearity[data.key] = plot_linearity(curves, path, dpi=dpi)
             sections.append(_context(data, images))
             if on_step is not None:

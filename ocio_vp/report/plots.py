@@ -1,9 +1,11 @@
-"""The report's figures (matplotlib, Agg canvas, no pyplot state): the paper's comparison
-charts, its Fig. 11 error bars, per-patch ΔE, and the panel linearity curves.
+"""The report's figures as SVG (:mod:`ocio_vp.report.svg`, no matplotlib): the paper's
+comparison charts, its Fig. 11 error bars, per-patch ΔE, and the panel linearity curves.
 
-Every plot function writes one PNG and returns the numbers it drew, read back from the
-matplotlib artists after drawing (face colours of the patches, heights of the bars, points of the
-lines), so tests compare what is on the page with ``solution.json`` rather than pixels.
+Every plot function writes one SVG file and returns the numbers it drew (colours, bar heights,
+curve points). The file's elements carry ``class`` and ``data-*`` attributes (``data-panel``,
+``data-patch``, ``data-series``, ``data-channel``, ``data-environment``, ``data-curve``) and
+their axes carry their tick values, so a test, or a user, reads back from the file what is on
+the page: fills of the swatches, bar heights through the axis scale, curve points.
 
 References
 ----------
@@ -23,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from ocio_vp.report.data import EnvironmentData, patch_names
+from ocio_vp.report.svg import Axes, Canvas, data_limits, hex_colour, num, subplot_boxes
 
 __all__ = [
     "ChartPlot",
@@ -40,6 +43,8 @@ CHANNEL_COLOURS = ("#c0392b", "#27ae60", "#2e6fbd")
 CHANNEL_NAMES = ("R", "G", "B")
 #: The four comparison panels: stage chart, rows lit/displayed, columns baseline/ours.
 PANELS = ("lit_baseline", "lit_corrected", "displayed_baseline", "displayed_corrected")
+#: The two series of every bar plot: baseline (M only) and ours.
+SERIES = ("baseline", "corrected")
 
 
 def panel_titles(solution: Any) -> dict[str, str]:
@@ -62,7 +67,10 @@ BACKGROUND = "#3a3a3a"
 
 @dataclass(frozen=True)
 class ChartPlot:
-    """sRGB face colours drawn per panel: ``squares`` (target) and ``circles`` (stage)."""
+    """sRGB colours drawn per panel: ``squares`` (target) and ``circles`` (stage).
+
+    The display values clipped to [0, 1]; the file holds them rounded to 8-bit hex.
+    """
 
     path: Path
     squares: dict[str, np.ndarray]
@@ -96,112 +104,83 @@ class LinearityPlot:
     curves: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
 
 
-def _figure(width: float, height: float, **margins: float) -> Any:
-    # A Figure on its own Agg canvas: no pyplot, so no global backend or figure registry.
-    # Fixed margins rather than constrained layout, which draws every figure twice (2-3x the
-    # time of a report).
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    figure = Figure(figsize=(width, height))
-    figure.subplots_adjust(**margins)
-    FigureCanvasAgg(figure)
-    return figure
-
-
-def _save(figure: Any, path: Path, dpi: float) -> Path:
-    path = Path(path)
-    # No "Software" key: matplotlib's default puts its web address into every PNG. zlib level 3
-    # instead of 6: the same pixels, files within ~10%, half the encoding time.
-    figure.savefig(path, dpi=dpi, metadata={"Software": None}, pil_kwargs={"compress_level": 3})
-    return path
-
-
 def _grid(n: int) -> tuple[int, int]:
     columns = 6 if n % 6 == 0 else math.ceil(math.sqrt(n))
     return columns, math.ceil(n / columns)
 
 
-def _draw_chart(ax: Any, squares: np.ndarray, circles: np.ndarray) -> tuple[list, list]:
-    from matplotlib.patches import Circle, Rectangle
-
+def _draw_chart(
+    canvas: Canvas, box: tuple, panel: str, squares: np.ndarray, circles: np.ndarray
+) -> tuple[float, float, float, float]:
+    """Squares with inset circles on a dark ground, in reading order; the chart's box (the
+    given box shrunk to square cells and centred, like an equal-aspect matplotlib axes)."""
     columns, rows = _grid(len(squares))
-    square_artists, circle_artists = [], []
-    # add_artist, not add_patch: the limits are set below, and add_patch's data-limit update
-    # (every circle's Bezier path transformed) was a third of a chart figure's time.
+    x0, y0, w, h = box
+    unit = min(w / columns, h / rows)
+    left, top = x0 + (w - unit * columns) / 2, y0 + (h - unit * rows) / 2
+    canvas.open(class_="chart", data_panel=panel)
+    canvas.rect(left, top, unit * columns, unit * rows, fill=BACKGROUND)
     for j, (square, circle) in enumerate(zip(squares, circles, strict=True)):
-        x, y = j % columns, rows - 1 - j // columns
-        square_artists.append(
-            ax.add_artist(Rectangle((x + 0.04, y + 0.04), 0.92, 0.92, facecolor=square, lw=0))
+        x, y = left + (j % columns) * unit, top + (j // columns) * unit
+        patch = {"data_panel": panel, "data_patch": str(j)}
+        canvas.rect(
+            x + 0.04 * unit,
+            y + 0.04 * unit,
+            0.92 * unit,
+            0.92 * unit,
+            fill=hex_colour(square),
+            class_="square",
+            **patch,
         )
-        circle_artists.append(
-            ax.add_artist(Circle((x + 0.5, y + 0.5), 0.26, facecolor=circle, lw=0))
+        canvas.circle(
+            x + 0.5 * unit,
+            y + 0.5 * unit,
+            0.26 * unit,
+            fill=hex_colour(circle),
+            class_="circle",
+            **patch,
         )
-    ax.set_xlim(0, columns)
-    ax.set_ylim(0, rows)
-    ax.set_aspect("equal")
-    ax.set_facecolor(BACKGROUND)
-    ax.set_xticks([])
-    ax.set_yticks([])
-    return square_artists, circle_artists
-
-
-def _reused(reuse: dict | None, key: tuple, build: Any) -> Any:
-    """``build()``, or what it built before under ``key`` in ``reuse`` (one report's figures).
-
-    A figure is built with its first environment's numbers, as it always was; the next ones
-    only update it (and tests compare those pictures with figures built for them).
-    """
-    if reuse is None:
-        return build()
-    if key not in reuse:
-        reuse[key] = build()
-    return reuse[key]
-
-
-def _charts_figure(data: EnvironmentData) -> tuple[Any, dict[str, tuple[Any, list, list]]]:
-    figure = _figure(
-        10.0, 7.4, left=0.015, right=0.985, top=0.88, bottom=0.01, hspace=0.2, wspace=0.05
+    canvas.rect(
+        left, top, unit * columns, unit * rows, fill="none", stroke="black", stroke_width=0.8
     )
-    panels = {}
-    for ax, chart in zip(figure.subplots(2, 2).ravel(), PANELS, strict=True):
-        panels[chart] = (ax, *_draw_chart(ax, data.display["target"], data.display[chart]))
-    return figure, panels
+    canvas.close()
+    return left, top, unit * columns, unit * rows
 
 
-def plot_comparison_charts(
-    data: EnvironmentData, path: Path, *, dpi: float = 110, reuse: dict | None = None
-) -> ChartPlot:
+def _suptitle(canvas: Canvas, text: str) -> None:
+    canvas.text(
+        canvas.width / 2, 0.02 * canvas.height, text, size=11, valign="top", class_="suptitle"
+    )
+
+
+def plot_comparison_charts(data: EnvironmentData, path: Path, *, dpi: float = 110) -> ChartPlot:
     """The paper's comparison charts for one environment (Section 4, its result figures).
 
     Squares are the target chart (real location), inset circles the stage chart; a 2x2 grid:
     lit chart (top) and in-camera background chart (bottom), baseline (left) and ours (right).
-    Colours are ``data.display`` (see :mod:`ocio_vp.report.data`). With ``reuse`` (a dict kept
-    across the environments of one report) the figure is built once per patch count and only
-    its colours and titles change: the same picture, without rebuilding every artist.
+    Colours are ``data.display`` (see :mod:`ocio_vp.report.data`), clipped to [0, 1] and written
+    as 8-bit sRGB hex.
     """
-    from matplotlib.colors import to_rgb
-
-    n = len(data.display["target"])
-    figure, panels = _reused(reuse, ("charts", n), lambda: _charts_figure(data))
-    squares, circles, drawn_titles = {}, {}, {}
+    canvas = Canvas(10.0, 7.4, dpi, label=f"{data.solution.environment}: comparison charts")
+    boxes = subplot_boxes(
+        canvas, 2, 2, left=0.015, right=0.985, top=0.88, bottom=0.01, hspace=0.2, wspace=0.05
+    )
     titles = panel_titles(data.solution)
-    for chart, (ax, square_artists, circle_artists) in panels.items():
-        for artist, colour in zip(square_artists, data.display["target"], strict=True):
-            artist.set_facecolor(colour)
-        for artist, colour in zip(circle_artists, data.display[chart], strict=True):
-            artist.set_facecolor(colour)
+    target = np.clip(data.display["target"], 0.0, 1.0)
+    squares, circles, drawn_titles = {}, {}, {}
+    for box, chart in zip(boxes, PANELS, strict=True):
+        stage = np.clip(data.display[chart], 0.0, 1.0)
+        chart_box = _draw_chart(canvas, box, chart, target, stage)
         error = 100 * float(np.mean(data.errors[chart]))
-        ax.set_title(f"{titles[chart]}\nmean error {error:.2f}% of white", fontsize=10)
-        drawn_titles[chart] = ax.get_title()
-        squares[chart] = np.array([to_rgb(a.get_facecolor()) for a in square_artists])
-        circles[chart] = np.array([to_rgb(a.get_facecolor()) for a in circle_artists])
-    figure.suptitle(
+        drawn_titles[chart] = f"{titles[chart]}\nmean error {error:.2f}% of white"
+        Axes(canvas, chart_box, (0, 1), (0, 1), name=chart).title(drawn_titles[chart])
+        squares[chart], circles[chart] = target, stage
+    _suptitle(
+        canvas,
         f"{data.solution.environment}: squares = target chart in the real location, "
         "circles = on the stage",
-        fontsize=11,
     )
-    return ChartPlot(_save(figure, path, dpi), squares, circles, drawn_titles)
+    return ChartPlot(canvas.write(path), squares, circles, drawn_titles)
 
 
 def _axis_top(values: np.ndarray) -> float | None:
@@ -209,12 +188,31 @@ def _axis_top(values: np.ndarray) -> float | None:
 
     ``values`` is (environments, 6). When one environment's worst bar is over 2.5 times every
     other environment's, the axis stops at 1.6 times the second worst and the outlier bars are
-    labelled with their value; otherwise ``None`` (matplotlib's own limits).
+    labelled with their value; otherwise ``None`` (the data's range with 5% margins).
     """
     worst = np.sort(np.max(values, axis=1))[::-1] if len(values) > 1 else np.array([])
     if len(worst) < 2 or not worst[1] > 0 or worst[0] <= 2.5 * worst[1]:
         return None
     return float(1.6 * worst[1])
+
+
+def _bar(axes: Axes, centre: float, width: float, height: float, **attributes: object) -> None:
+    """A bar from 0 to ``height`` (data units) centred on ``centre``; nothing for NaN."""
+    if not math.isfinite(height):
+        return
+    x0, x1 = axes.x(centre - width / 2), axes.x(centre + width / 2)
+    y0, y1 = axes.y(0.0), axes.y(height)
+    axes.canvas.rect(x0, min(y0, y1), x1 - x0, abs(y0 - y1), class_="bar", **attributes)
+
+
+def _label_clipped(axes: Axes, x: float, top: float, value: float) -> None:
+    """The value of a bar cut by the axis top, written down the bar on a white ground."""
+    text = f"{value:.3g}%"
+    cx, y = float(axes.x(x)), float(axes.y(0.98 * top))
+    axes.canvas.rect(cx - 4.5, y, 9.0, 0.6 * 7 * len(text) + 2, fill="white")
+    axes.canvas.text(
+        cx, y + 1, text, size=7, anchor="end", valign="center", rotate=-90, class_="clipped-value"
+    )
 
 
 def plot_error_bars(
@@ -223,138 +221,179 @@ def plot_error_bars(
     """The paper's Fig. 11: mean error per channel relative to the target white patch.
 
     ``kind`` is ``"lit"`` (out-of-frustum lit chart, Fig. 11a) or ``"displayed"`` (in-frustum
-    displayed chart, Fig. 11b). Solid bars: baseline (M only); hatched bars: ours.
+    displayed chart, Fig. 11b). Solid bars: baseline (M only); hatched bars: ours. Bars are
+    ``<rect class="bar">`` with ``data-environment``, ``data-series`` (``<kind>_baseline`` or
+    ``<kind>_corrected``) and ``data-channel``; heights in percent on the y axis.
     """
     if kind not in ("lit", "displayed"):
         raise ValueError(f"kind must be 'lit' or 'displayed', got {kind!r}")
     names = [e.solution.environment for e in environments]
+    values = {
+        series: np.array([e.errors[f"{kind}_{series}"] for e in environments]).reshape(-1, 3)
+        for series in SERIES
+    }
     width = max(7.0, 1.3 * len(names) + 3.5)
-    figure = _figure(width, 4.2, left=0.8 / width, right=1 - 1.9 / width, top=0.92, bottom=0.2)
-    ax = figure.subplots()
-    width = 0.13
-    x = np.arange(len(names))
-    heights: dict[str, list[Any]] = {"baseline": [], "corrected": []}
-    for series, hatch, offset in (("baseline", None, 0), ("corrected", "///", 3)):
-        values = np.array([e.errors[f"{kind}_{series}"] for e in environments]).reshape(-1, 3)
-        bars_per_channel = []
-        for c in range(3):
-            bars = ax.bar(
-                x + (offset + c - 2.5) * width,
-                100 * values[:, c],
-                width,
-                color=CHANNEL_COLOURS[c] if hatch is None else "white",
-                edgecolor=CHANNEL_COLOURS[c],
-                hatch=hatch,
-                linewidth=1.0,
-                label=f"{CHANNEL_NAMES[c]} {'baseline (M only)' if hatch is None else 'ours'}",
-            )
-            bars_per_channel.append([b.get_height() / 100 for b in bars])
-        heights[series] = np.array(bars_per_channel).T
-    top = _axis_top(np.concatenate([heights["baseline"], heights["corrected"]], axis=1))
-    if top is not None:
-        ax.set_ylim(0, 100 * top)
-        for bar in ax.patches:
-            if bar.get_height() > 100 * top:  # clipped by the axis: print its value
-                ax.text(
-                    bar.get_x() + bar.get_width() / 2,
-                    100 * top * 0.98,
-                    f"{bar.get_height():.3g}%",
-                    rotation=90,
-                    ha="center",
-                    va="top",
-                    fontsize=7,
-                    color="black",
-                    bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.5},
+    canvas = Canvas(width, 4.2, dpi, label=f"Fig. 11 error bars, {kind} chart")
+    (box,) = subplot_boxes(
+        canvas, 1, 1, left=0.8 / width, right=1 - 1.9 / width, top=0.92, bottom=0.2
+    )
+    bar, x = 0.13, np.arange(len(names), dtype=np.float64)
+    top = _axis_top(np.concatenate([values["baseline"], values["corrected"]], axis=1))
+    ylim = (
+        (0.0, 100 * top)
+        if top is not None
+        else data_limits(100 * np.concatenate(list(values.values())), zero=True)
+    )
+    xlim = (-2.5 * bar - bar / 2, len(names) - 1 + 2.5 * bar + bar / 2)
+    pad = 0.05 * (xlim[1] - xlim[0])
+    axes = Axes(canvas, box, (xlim[0] - pad, xlim[1] + pad), ylim, name="errors")
+    axes.yticks()
+    canvas.open(clip_path=axes.clip())
+    legend, cut = [], []
+    for series, offset in (("baseline", 0), ("corrected", 3)):
+        for c, colour in enumerate(CHANNEL_COLOURS):
+            fill = colour if series == "baseline" else canvas.hatch(colour)
+            style = {"fill": fill, "stroke": colour, "stroke_width": 1.0}
+            what = "baseline (M only)" if series == "baseline" else "ours"
+            legend.append((f"{CHANNEL_NAMES[c]} {what}", style))
+            for i, name in enumerate(names):
+                centre, height = x[i] + (offset + c - 2.5) * bar, 100 * values[series][i, c]
+                _bar(
+                    axes,
+                    centre,
+                    bar,
+                    height,
+                    data_environment=name,
+                    data_series=f"{kind}_{series}",
+                    data_channel=CHANNEL_NAMES[c],
+                    **style,
                 )
-    ax.set_xticks(x, names, rotation=20, ha="right")
-    ax.set_ylabel("mean |error| / target white (%)")
+                if top is not None and height > 100 * top:
+                    cut.append((centre, height))
+    canvas.close()
+    for centre, height in cut:  # clipped by the axis: print its value
+        _label_clipped(axes, centre, 100 * top, height)
+    axes.frame()
+    axes.xticks(x, names, rotate=20)
+    axes.ylabel("mean |error| / target white (%)")
     what = "out-of-frustum lit chart" if kind == "lit" else "in-camera-frustum displayed chart"
-    ax.set_title(f"Error relative to white: {what}", fontsize=11)
-    ax.grid(axis="y", alpha=0.3)
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    return ErrorBarsPlot(
-        _save(figure, path, dpi),
-        names,
-        np.asarray(heights["baseline"], dtype=np.float64).reshape(-1, 3),
-        np.asarray(heights["corrected"], dtype=np.float64).reshape(-1, 3),
-    )
+    axes.title(f"Error relative to white: {what}", size=11)
+    axes.legend(legend, outside=True)
+    return ErrorBarsPlot(canvas.write(path), names, values["baseline"], values["corrected"])
 
 
-def _delta_e_figure(data: EnvironmentData) -> tuple[Any, Any, dict, dict]:
+def _delta_e_panel(
+    canvas: Canvas, box: tuple, data: EnvironmentData, metric: str, kind: str, bottom: bool
+) -> None:
+    """One panel of :func:`plot_delta_e`: baseline and ours per patch, the white patch's line."""
     n = len(data.charts["target"])
-    figure = _figure(
-        11.0, 6.8, left=0.06, right=0.99, top=0.91, bottom=0.2, hspace=0.2, wspace=0.14
+    series = {s: np.asarray(data.delta_e[metric][f"{kind}_{s}"], float) for s in SERIES}
+    pad = 0.05 * (n - 1 + 0.8)
+    label = "ΔE2000" if metric == "CIE 2000" else "ΔE ITP"
+    axes = Axes(
+        canvas,
+        box,
+        (-0.4 - pad, n - 0.6 + pad),
+        data_limits(np.concatenate(list(series.values())), zero=True),
+        name=f"{label} {kind}",
     )
-    axes = figure.subplots(2, 2, sharex=True)
-    x = np.arange(n)
-    bars, white_lines = {}, {}
-    for col, metric in enumerate(("CIE 2000", "ITP")):
-        for row, kind in enumerate(("lit", "displayed")):
-            ax = axes[row, col]
-            for series, colour, hatch, shift in (
-                ("baseline", "#7f7f7f", None, -0.2),
-                ("corrected", "white", "///", 0.2),
-            ):
-                bars[metric, f"{kind}_{series}"] = ax.bar(
-                    x + shift,
-                    data.delta_e[metric][f"{kind}_{series}"],
-                    0.4,
-                    color=colour,
-                    edgecolor="#333333",
-                    hatch=hatch,
-                    linewidth=0.8,
-                    label="baseline (M only)" if hatch is None else "ours",
-                )
-            label = "ΔE2000" if metric == "CIE 2000" else "ΔE ITP"
-            place = "lit chart" if kind == "lit" else "in-camera background"
-            ax.set_title(f"{label}, {place}", fontsize=10)
-            ax.set_ylabel(label)
-            ax.grid(axis="y", alpha=0.3)
-            white_lines[ax] = ax.axvline(data.white_patch, color="#bbbbbb", lw=0.8, zorder=0)
-    labels = patch_names(n)
-    for ax in axes[1]:
-        ax.set_xticks(x, labels, fontsize=7, rotation=60 if n == 24 else 0, ha="right")
-        ax.set_xlabel("chart patch (grey line = white patch)")
-    axes[0, 0].legend(fontsize=8)
-    return figure, axes, bars, white_lines
+    white = float(axes.x(data.white_patch))
+    canvas.line(
+        white,
+        box[1],
+        white,
+        box[1] + box[3],
+        stroke="#bbbbbb",
+        stroke_width=0.8,
+        class_="white-patch",
+        data_patch=str(data.white_patch),
+        data_axes=axes.name,
+    )
+    axes.yticks()
+    for name, values in series.items():
+        shift = -0.2 if name == "baseline" else 0.2
+        fill = "#7f7f7f" if name == "baseline" else canvas.hatch("#333333")
+        tags = {"data_metric": metric, "data_series": f"{kind}_{name}"}
+        for j, value in enumerate(values):
+            _bar(
+                axes,
+                j + shift,
+                0.4,
+                float(value),
+                fill=fill,
+                stroke="#333333",
+                stroke_width=0.8,
+                data_patch=str(j),
+                **tags,
+            )
+        for j in np.flatnonzero(np.isnan(values)):  # no bar: mark it so it is not read as 0
+            x, y = float(axes.x(j + shift)), float(axes.y(0.0))
+            d = (
+                f"M{num(x - 3)},{num(y - 3)}L{num(x + 3)},{num(y + 3)}"
+                f"M{num(x - 3)},{num(y + 3)}L{num(x + 3)},{num(y - 3)}"
+            )
+            canvas.element(
+                "path",
+                d=d,
+                stroke="#c0392b",
+                stroke_width=1.0,
+                class_="undefined",
+                data_patch=str(j),
+                **tags,
+            )
+    axes.frame()
+    place = "lit chart" if kind == "lit" else "in-camera background"
+    axes.title(f"{label}, {place}")
+    axes.ylabel(label)
+    if bottom:
+        rotate = 60 if n == 24 else 0
+        axes.xticks(np.arange(n), patch_names(n), size=7, rotate=rotate)
+        axes.xlabel("chart patch (grey line = white patch)", offset=62 if rotate else 16)
+    else:
+        axes.xticks(np.arange(n), None)
 
 
-def plot_delta_e(
-    data: EnvironmentData, path: Path, *, dpi: float = 110, reuse: dict | None = None
-) -> DeltaEPlot:
+def plot_delta_e(data: EnvironmentData, path: Path, *, dpi: float = 110) -> DeltaEPlot:
     """Per-patch ΔE2000 and ΔE ITP of the stage charts against the target, baseline vs ours.
 
-    ``reuse`` as in :func:`plot_comparison_charts`: bar heights, the white patch's line and the
-    axis limits are updated in a figure built once per patch count.
+    Columns ΔE2000, ΔE ITP; rows lit chart, in-camera background. Bars are ``<rect class="bar">``
+    with ``data-metric``, ``data-series`` (a stage chart) and ``data-patch``; an undefined ΔE
+    ITP (NaN) has no bar but a red x, ``<path class="undefined">``, at 0.
     """
-    n = len(data.charts["target"])
-    figure, axes, bars, white_lines = _reused(reuse, ("delta_e", n), lambda: _delta_e_figure(data))
+    canvas = Canvas(11.0, 6.8, dpi, label=f"{data.solution.environment}: ΔE per patch")
+    boxes = subplot_boxes(
+        canvas, 2, 2, left=0.06, right=0.99, top=0.91, bottom=0.2, hspace=0.2, wspace=0.14
+    )
     drawn: dict[str, dict[str, np.ndarray]] = {"CIE 2000": {}, "ITP": {}}
-    for (metric, chart), container in bars.items():
-        for bar, height in zip(container, data.delta_e[metric][chart], strict=True):
-            bar.set_height(height)
-        drawn[metric][chart] = np.array([b.get_height() for b in container])
-    for marker in reuse.pop(("delta_e markers", n), []) if reuse is not None else []:
-        marker.remove()
-    markers = []
-    for (metric, chart), container in bars.items():
-        undefined = np.flatnonzero(np.isnan(data.delta_e[metric][chart]))
-        if undefined.size:  # no bar to draw: mark the patch so it is not read as 0
-            shift = -0.2 if chart.endswith("baseline") else 0.2  # as the bars are placed
-            ax = container.patches[0].axes
-            x = np.arange(n)[undefined] + shift
-            markers += ax.plot(x, np.zeros(undefined.size), "x", color="#c0392b")
-    if reuse is not None:
-        reuse["delta_e markers", n] = markers
-    for ax, line in white_lines.items():
-        line.set_xdata([data.white_patch, data.white_patch])
-        ax.relim()  # as a new figure's limits: from the bars (and the line's x), then margins
-        ax.autoscale_view()
+    for i, box in enumerate(boxes):
+        metric, kind = ("CIE 2000", "ITP")[i % 2], ("lit", "displayed")[i // 2]
+        _delta_e_panel(canvas, box, data, metric, kind, bottom=i >= 2)
+        for name in SERIES:
+            chart = f"{kind}_{name}"
+            drawn[metric][chart] = np.asarray(data.delta_e[metric][chart], dtype=np.float64)
+    Axes(canvas, boxes[0], (0, 1), (0, 1), name="legend").legend(
+        [
+            ("baseline (M only)", {"fill": "#7f7f7f", "stroke": "#333333", "stroke_width": 0.8}),
+            ("ours", {"fill": canvas.hatch("#333333"), "stroke": "#333333", "stroke_width": 0.8}),
+        ],
+        corner="upper right",
+    )
     title = f"{data.solution.environment}: colour difference per patch"
     if any(np.isnan(v).any() for v in data.delta_e["ITP"].values()):
         title += " (red x: ΔE ITP undefined, a colour with negative light)"
-    figure.suptitle(title, fontsize=11)
-    return DeltaEPlot(_save(figure, path, dpi), drawn)
+    _suptitle(canvas, title)
+    return DeltaEPlot(canvas.write(path), drawn)
+
+
+def _curve(axes: Axes, x: np.ndarray, y: np.ndarray, label: str, style: dict) -> None:
+    """A polyline with a dot at each point, ``data-curve`` = its label."""
+    canvas = axes.canvas
+    xs, ys = axes.x(x), axes.y(y)
+    canvas.open(class_="curve", data_curve=label, data_axes=axes.name)
+    canvas.polyline(xs, ys, stroke_width=1.5, **style)
+    for px, py in zip(xs, ys, strict=True):
+        canvas.circle(px, py, 1.4, fill=style["stroke"])
+    canvas.close()
 
 
 def plot_linearity(
@@ -369,27 +408,44 @@ def plot_linearity(
     ``curves`` maps a label such as ``"red before"``/``"red after"`` to ``(x, y)``; the label's
     first word picks the channel colour, ``after`` curves are dashed. Left: the curves with the
     ideal line y = x; right: ``y - x`` in percent of the top step, where small deviations show.
+    Each curve is a ``<g class="curve" data-curve=LABEL data-axes="response"|"deviation">``.
     """
-    figure = _figure(10.0, 4.0, left=0.07, right=0.98, top=0.88, bottom=0.13, wspace=0.25)
-    response_ax, deviation_ax = figure.subplots(1, 2)
-    response_ax.plot([0, 1], [0, 1], color="#999999", lw=0.8, label="linear")
-    deviation_ax.axhline(0.0, color="#999999", lw=0.8)
-    drawn = {}
-    for label, (x, y) in curves.items():
+    canvas = Canvas(10.0, 4.0, dpi, label=title)
+    boxes = subplot_boxes(canvas, 1, 2, left=0.07, right=0.98, top=0.88, bottom=0.13, wspace=0.25)
+    drawn = {
+        k: (np.asarray(x, np.float64), np.asarray(y, np.float64)) for k, (x, y) in curves.items()
+    }
+    xs = np.concatenate([[0.0, 1.0], *(x for x, _ in drawn.values())])
+    ys = np.concatenate([[0.0, 1.0], *(y for _, y in drawn.values())])
+    dev = np.concatenate([[0.0], *(100 * (y - x) for x, y in drawn.values())])
+    response = Axes(canvas, boxes[0], data_limits(xs), data_limits(ys), name="response")
+    deviation = Axes(canvas, boxes[1], data_limits(xs), data_limits(dev), name="deviation")
+    ideal = {"stroke": "#999999", "stroke_width": 0.8}
+    legend = [("linear", ideal)]
+    for axes, line in (
+        (response, ([0.0, 1.0], [0.0, 1.0])),
+        (deviation, ([xs.min(), xs.max()], [0.0, 0.0])),
+    ):
+        axes.yticks()
+        axes.xticks(grid=True)
+        canvas.polyline(
+            axes.x(line[0]), axes.y(line[1]), class_="ideal", data_axes=axes.name, **ideal
+        )
+    for label, (x, y) in drawn.items():
         words = label.lower().split()
         channel = {"red": 0, "green": 1, "blue": 2}.get(words[0] if words else "", None)
-        colour = "#333333" if channel is None else CHANNEL_COLOURS[channel]
-        style = "--" if "after" in words else "-"
-        x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-        (line,) = response_ax.plot(x, y, style, color=colour, marker=".", ms=4, label=label)
-        deviation_ax.plot(x, 100 * (y - x), style, color=colour, marker=".", ms=4, label=label)
-        drawn[label] = (np.asarray(line.get_xdata(), float), np.asarray(line.get_ydata(), float))
-    response_ax.set_xlabel("drive sent to the wall")
-    response_ax.set_ylabel("camera response (normalised at the top step)")
-    deviation_ax.set_xlabel("drive sent to the wall")
-    deviation_ax.set_ylabel("response - drive (% of the top step)")
-    for ax in (response_ax, deviation_ax):
-        ax.grid(alpha=0.3)
-    response_ax.legend(fontsize=8)
-    figure.suptitle(f"{title}: solid = measured, dashed = through the 1D LUT", fontsize=11)
-    return LinearityPlot(_save(figure, path, dpi), drawn)
+        style = {
+            "stroke": "#333333" if channel is None else CHANNEL_COLOURS[channel],
+            "stroke_dasharray": "5.55,2.4" if "after" in words else None,
+        }
+        _curve(response, x, y, label, style)
+        _curve(deviation, x, 100 * (y - x), label, style)
+        legend.append((label, {**style, "stroke_width": 1.5, "marker": True}))
+    for axes in (response, deviation):
+        axes.frame()
+        axes.xlabel("drive sent to the wall")
+    response.ylabel("camera response (normalised at the top step)", offset=36)
+    deviation.ylabel("response - drive (% of the top step)", offset=36)
+    response.legend(legend)
+    _suptitle(canvas, f"{title}: solid = measured, dashed = through the 1D LUT")
+    return LinearityPlot(canvas.write(path), drawn)
