@@ -8,6 +8,7 @@ children is not an edge of the graph: it is how a subpackage publishes its API.
 from __future__ import annotations
 
 import ast
+import importlib
 import subprocess
 import sys
 from pathlib import Path
@@ -142,6 +143,47 @@ def test_every_subpackage_imports_first_in_a_fresh_interpreter(package):
         [sys.executable, "-c", f"import {package}"], capture_output=True, text=True, timeout=120
     )
     assert run.returncode == 0, run.stderr.strip().splitlines()[-1:]
+
+
+HEAVY = ("colour", "scipy", "matplotlib", "dask")
+
+#: What a command imports before it does its job: parsing its arguments, and for ``apply`` the
+#: modules that post-correct frames. None of them may load colour-science (its own import loads
+#: matplotlib and scipy: ~2 s, more than post-correcting six 4K frames) or scipy or dask.
+LIGHT_PATHS = {
+    "parser": "from ocio_vp.cli import build_parser; build_parser()",
+    "apply": "from ocio_vp.cli import build_parser; build_parser(); "
+    "import ocio_vp.footage.apply, ocio_vp.footage.stream, ocio_vp.footage.sequences, "
+    "ocio_vp.formats.solution, ocio_vp.commands.apply",
+    "package": "import ocio_vp; ocio_vp.__version__; ocio_vp.InputError",
+}
+
+
+@pytest.mark.parametrize("path", sorted(LIGHT_PATHS))
+def test_commands_do_not_import_heavy_libraries_they_do_not_use(path):
+    code = (
+        f"import sys; {LIGHT_PATHS[path]}; print(sorted({{m.split('.')[0] for m in sys.modules}}))"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr.strip().splitlines()[-1:]
+    loaded = set(ast.literal_eval(run.stdout))
+    assert not loaded & set(HEAVY), sorted(loaded & set(HEAVY))
+
+
+def test_the_package_exports_load_on_first_use():
+    # ``import ocio_vp`` (which every command pays) loads none of its modules...
+    code = "import sys, ocio_vp; print(sorted(m for m in sys.modules if m.startswith('ocio_vp.')))"
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert ast.literal_eval(run.stdout) == []
+    # ...and each public name is loaded when first used.
+    import ocio_vp
+
+    for name in ocio_vp.__all__:  # each public name resolves, to what its module defines
+        value = getattr(ocio_vp, name)
+        assert value is getattr(importlib.import_module(ocio_vp._EXPORTS[name]), name)
+    assert sorted(ocio_vp.__all__) == sorted(ocio_vp._EXPORTS)
+    with pytest.raises(AttributeError, match="no attribute 'nope'"):
+        ocio_vp.nope  # noqa: B018
 
 
 def _tested_source(test_name: str) -> list[Path]:

@@ -34,8 +34,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
-from scipy.optimize import isotonic_regression, minimize
 
 from ocio_vp.errors import InputError, format_key_path
 
@@ -293,6 +291,8 @@ def estimate_noise(drive: np.ndarray, response: np.ndarray) -> tuple[float, floa
     bounds = [(math.log(_NOISE_MIN), math.log(0.5))] * 2
     keep = np.ones(len(residuals), dtype=bool)
     scale = 0.0
+    from scipy.optimize import minimize  # deferred: see response_model
+
     for _ in range(3):
         start = minimize(
             _noise_nll,
@@ -356,6 +356,8 @@ def _monotone_knots(
     dropped. Returns knot drive, knot response and the indices (into ``r``) of the ``merged``
     blocks (more than one step), the steps ``below`` the limit and those ``at_top``.
     """
+    from scipy.optimize import isotonic_regression  # deferred: see response_model
+
     weights = 1.0 / sigma[1:-1] ** 2
     fit = isotonic_regression(r[1:-1], weights=weights, increasing=True)
     knots_d, knots_r = [0.0], [0.0]
@@ -484,6 +486,10 @@ def response_model(drive: np.ndarray, response: np.ndarray):
     PCHIP (Fritsch & Carlson 1980) preserves the monotonicity of the data, so its inverse
     exists; a fitted polynomial could wiggle and fold back.
     """
+    # scipy is imported here, not at the top: ~0.6 s, and this module is imported by every
+    # `ocio-vp` command (through the measurements reader) while few of them fit a response.
+    from scipy.interpolate import PchipInterpolator
+
     return PchipInterpolator(
         np.asarray(drive, float), np.asarray(response, float), extrapolate=False
     )
