@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from ocio_vp.report.data import EnvironmentData, patch_names
-from ocio_vp.report.svg import Axes, Canvas, data_limits, hex_colour, num, subplot_boxes
+from ocio_vp.report.svg import Axes, Canvas, data_limits, hex_colours, num, subplot_boxes
 
 __all__ = [
     "ChartPlot",
@@ -120,7 +120,9 @@ def _draw_chart(
     left, top = x0 + (w - unit * columns) / 2, y0 + (h - unit * rows) / 2
     canvas.open(class_="chart", data_panel=panel)
     canvas.rect(left, top, unit * columns, unit * rows, fill=BACKGROUND)
-    for j, (square, circle) in enumerate(zip(squares, circles, strict=True)):
+    for j, (square, circle) in enumerate(
+        zip(hex_colours(squares), hex_colours(circles), strict=True)
+    ):
         x, y = left + (j % columns) * unit, top + (j // columns) * unit
         patch = {"data_panel": panel, "data_patch": str(j)}
         canvas.rect(
@@ -128,7 +130,7 @@ def _draw_chart(
             y + 0.04 * unit,
             0.92 * unit,
             0.92 * unit,
-            fill=hex_colour(square),
+            fill=square,
             class_="square",
             **patch,
         )
@@ -136,7 +138,7 @@ def _draw_chart(
             x + 0.5 * unit,
             y + 0.5 * unit,
             0.26 * unit,
-            fill=hex_colour(circle),
+            fill=circle,
             class_="circle",
             **patch,
         )

@@ -17,8 +17,8 @@ Conventions:
 
 from __future__ import annotations
 
+import functools
 import math
-import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,6 +33,7 @@ __all__ = [
     "data_limits",
     "escape",
     "hex_colour",
+    "hex_colours",
     "nice_ticks",
     "num",
     "subplot_boxes",
@@ -42,8 +43,26 @@ __all__ = [
 #: User units per inch: one unit is one point.
 PT = 72.0
 FONT = "DejaVu Sans, Verdana, Arial, Helvetica, sans-serif"
-#: Characters XML 1.0 does not allow (a solution file may hold anything in a name).
-_NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffe\uffff]")
+#: One pass of str.translate: markup characters to entities, tab and line breaks to character
+#: references; characters XML 1.0 does not allow (a solution file may hold anything in a name)
+#: and lone surrogates (not encodable as UTF-8) dropped.
+_ESCAPES: dict[int, str | None] = {
+    **dict.fromkeys([*range(0x00, 0x09), 0x0B, 0x0C, *range(0x0E, 0x20), 0xFFFE, 0xFFFF]),
+    **dict.fromkeys(range(0xD800, 0xE000)),
+    **{
+        ord(k): v
+        for k, v in {
+            "&": "&amp;",
+            "<": "&lt;",
+            ">": "&gt;",
+            '"': "&quot;",
+            "'": "&#39;",
+            "\t": "&#9;",
+            "\n": "&#10;",
+            "\r": "&#13;",
+        }.items()
+    },
+}
 
 
 def escape(text: object) -> str:
@@ -51,23 +70,12 @@ def escape(text: object) -> str:
 
     ``&``, ``<``, ``>``, ``"`` and ``'`` become entities, tab and line breaks character
     references (an attribute keeps them); characters XML 1.0 forbids (other control
-    characters) are dropped, so any string gives a well-formed file.
+    characters) and lone surrogates are dropped, so any string gives a well-formed file.
 
     >>> escape('a < b & "c"')
     'a &lt; b &amp; &quot;c&quot;'
     """
-    text = _NOT_XML.sub("", str(text))
-    for raw, entity in (
-        ("&", "&amp;"),
-        ("<", "&lt;"),
-        (">", "&gt;"),
-        ('"', "&quot;"),
-        ("\t", "&#9;"),
-        ("\n", "&#10;"),
-        ("\r", "&#13;"),
-    ):
-        text = text.replace(raw, entity)
-    return text.replace("'", "&#39;")
+    return str(text).translate(_ESCAPES)
 
 
 def num(value: float) -> str:
@@ -86,8 +94,17 @@ def hex_colour(rgb: Sequence[float]) -> str:
     >>> hex_colour([1.0, 0.5, -0.2])
     '#ff8000'
     """
-    values = np.clip(np.asarray(rgb, dtype=np.float64), 0.0, 1.0)
-    return "#" + "".join(f"{round(255 * float(v)):02x}" for v in values)
+    return hex_colours(np.reshape(rgb, (1, 3)))[0]
+
+
+def hex_colours(rgb: np.ndarray) -> list[str]:
+    """:func:`hex_colour` of every row of an (n, 3) array (one numpy pass).
+
+    >>> hex_colours(np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]))
+    ['#000000', '#ffffff']
+    """
+    levels = np.rint(255 * np.clip(np.asarray(rgb, dtype=np.float64), 0.0, 1.0)).astype(int)
+    return [f"#{r:02x}{g:02x}{b:02x}" for r, g, b in levels.tolist()]
 
 
 def nice_ticks(low: float, high: float, max_ticks: int = 7) -> np.ndarray:
@@ -136,14 +153,25 @@ def tick_labels(ticks: np.ndarray) -> list[str]:
     ]
 
 
+@functools.cache
+def _name(key: str) -> str:
+    """A keyword argument as an attribute name: ``class_`` -> ``class``, ``data_patch`` ->
+    ``data-patch``."""
+    return key.rstrip("_").replace("_", "-")
+
+
 def _attrs(attributes: dict[str, object]) -> str:
     out = []
     for key, value in attributes.items():
         if value is None:
             continue
-        name = key.rstrip("_").replace("_", "-")
-        text = num(value) if isinstance(value, float | np.floating) else escape(value)
-        out.append(f' {name}="{text}"')
+        if isinstance(value, float):  # numpy's float64 too
+            text = num(value)
+        elif isinstance(value, str):
+            text = value.translate(_ESCAPES)
+        else:
+            text = num(value) if isinstance(value, np.floating) else escape(value)
+        out.append(f' {_name(key)}="{text}"')
     return "".join(out)
 
 
@@ -316,21 +344,17 @@ class Axes:
     ylim: tuple[float, float]
     name: str = "axes"
 
-    def x(self, value: float | np.ndarray) -> float | np.ndarray:
+    def x(self, value: float | Sequence[float] | np.ndarray) -> float | np.ndarray:
+        """Canvas x of data ``value`` (a number, or an array of them)."""
         x0, _, w, _ = self.box
-        return x0 + (np.asarray(value, dtype=np.float64) - self.xlim[0]) * w / (
-            self.xlim[1] - self.xlim[0]
-        )
+        value = value if isinstance(value, float | int) else np.asarray(value, dtype=np.float64)
+        return x0 + (value - self.xlim[0]) * w / (self.xlim[1] - self.xlim[0])
 
-    def y(self, value: float | np.ndarray) -> float | np.ndarray:
+    def y(self, value: float | Sequence[float] | np.ndarray) -> float | np.ndarray:
+        """Canvas y of data ``value``; SVG's y grows downwards."""
         _, y0, _, h = self.box
-        return (
-            y0
-            + h
-            - (np.asarray(value, dtype=np.float64) - self.ylim[0])
-            * h
-            / (self.ylim[1] - self.ylim[0])
-        )
+        value = value if isinstance(value, float | int) else np.asarray(value, dtype=np.float64)
+        return y0 + h - (value - self.ylim[0]) * h / (self.ylim[1] - self.ylim[0])
 
     def clip(self) -> str:
         return self.canvas.clip(f"clip-{self.name}", *self.box)
