@@ -8,7 +8,8 @@ with 0.5% multiplicative noise, as a photograph has). The ColorChecker stays pat
 white is patch 18). Each method is timed once per size (the sizes take seconds, so noise is
 small against the growth measured; one untimed warm-up solve first); a method whose solve took over :data:`BUDGET_S` seconds is
 not run on larger charts. Accuracy: mean ΔE2000 of 200 mixtures that are in no fitted chart,
-corrected by the fitted Q (the simulated camera's XYZ matrix, as ``bench_qsolve``).
+corrected by the fitted post-correction (the model itself for root-polynomial, not its 3x3
+approximation; the simulated camera's XYZ matrix, as ``bench_qsolve``).
 """
 
 from __future__ import annotations
@@ -50,6 +51,7 @@ def run(quick: bool = False) -> str:
     from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
     from ocio_vp.correction.problem import QProblem
     from ocio_vp.correction.registry import Q_SOLVE_METHODS
+    from ocio_vp.correction.root_polynomial import post_correction
     from ocio_vp.metrics import camera_to_xyz_matrix, chart_errors
     from ocio_vp.simulator.stage import paper_stage, paper_stage_measurements
 
@@ -88,7 +90,7 @@ def run(quick: bool = False) -> str:
             fit = solver(problem)
             last = time.perf_counter() - start
             lit = held_problem if fit.M is None else _with_M(held_problem, fit.M)
-            corrected = lit.predicted @ np.asarray(fit.Q).T
+            corrected = post_correction(fit.Q, fit.notes)(lit.predicted)  # the model, not Q
             de = float(
                 chart_errors(corrected, lit.target, camera_to_xyz=matrix).delta_E_2000.mean()
             )
