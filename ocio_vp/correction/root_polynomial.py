@@ -335,20 +335,22 @@ def invert_root_polynomial(
     y = t @ np.linalg.inv(A).T
     r = apply_root_polynomial(C, y) - t
     norm = np.max(np.abs(r), axis=1)
+    stalled = np.zeros(len(flat), dtype=bool)  # no step lowers the residual: the best iterate
     for _ in range(max_iterations):
-        todo = live & (norm > tolerance)
+        todo = live & ~stalled & (norm > tolerance)
         if not todo.any():
             break
         dy = _newton_step(C, A, y[todo], r[todo])
-        _line_search(C, t, y, r, norm, todo, dy)
+        stalled[_line_search(C, t, y, r, norm, todo, dy)] = True
     x = np.where(live[:, None], y * np.where(live, s, 0.0)[:, None], 0.0).reshape(c.shape)
     if return_residual:
         return x, np.where(live, norm, 0.0).reshape(c.shape[:-1])
     return x
 
 
-def _line_search(C, t, y, r, norm, todo, dy, halvings: int = 30) -> None:
-    """Move y[todo] along dy by the largest 2^-k step that lowers the residual (in place)."""
+def _line_search(C, t, y, r, norm, todo, dy, halvings: int = 30) -> np.ndarray:
+    """Move y[todo] along dy by the largest 2^-k step that lowers the residual (in place);
+    returns the indices where no step did."""
     index = np.flatnonzero(todo)
     alpha = np.ones(len(index))
     for _ in range(halvings):
@@ -360,4 +362,5 @@ def _line_search(C, t, y, r, norm, todo, dy, halvings: int = 30) -> None:
         y[done], r[done], norm[done] = trial[better], r_trial[better], n_trial[better]
         index, alpha, dy = index[~better], alpha[~better] / 2, dy[~better]
         if len(index) == 0:
-            return
+            break
+    return index
