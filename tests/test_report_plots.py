@@ -225,3 +225,25 @@ def test_the_report_does_not_use_matplotlib():
             names = [a.name for a in node.names] if isinstance(node, ast.Import) else []
             names += [node.module or ""] if isinstance(node, ast.ImportFrom) else []
             assert not [n for n in names if n.split(".")[0] == "matplotlib"], source.name
+
+
+def test_names_with_markup_are_text(report, tmp_path):
+    # An environment name is whatever solution.json says: it must stay text in every figure.
+    from ocio_vp.report.plots import plot_error_bars
+
+    name = "<b>sun & \"shade\" 'x'</b>\x01"
+    data = report.environments[0]
+    odd = dataclasses.replace(data, solution=dataclasses.replace(data.solution, environment=name))
+    kept = name.replace("\x01", "")  # not allowed in XML 1.0: dropped
+    for path in (
+        plot_comparison_charts(odd, tmp_path / "c.svg", dpi=DPI).path,
+        plot_delta_e(odd, tmp_path / "d.svg", dpi=DPI).path,
+        plot_error_bars([odd, *report.environments[1:]], "lit", tmp_path / "e.svg", dpi=DPI).path,
+    ):
+        root = load(path)  # well-formed
+        assert root.get("aria-label").startswith(kept) or root.get("aria-label").startswith("Fig")
+        texts = [text_of(t) for t in root.iter("{http://www.w3.org/2000/svg}text")]
+        assert any(kept in t for t in texts), path.name
+        assert "<b>" not in path.read_text()
+    bars = find(load(tmp_path / "e.svg"), "rect", class_="bar", data_environment=kept)
+    assert len(bars) == 6

@@ -35,12 +35,15 @@ from ocio_vp.report.plots import (
     plot_error_bars,
     plot_linearity,
 )
+from ocio_vp.report.svg import Axes, Canvas, nice_ticks
 
 __all__ = [
     "CHART_KEYS",
     "COLORCHECKER",
     "DISPLAY_WHITE",
     "STAGE_CHARTS",
+    "Axes",
+    "Canvas",
     "ChartPlot",
     "DeltaEPlot",
     "DisplayTransform",
@@ -59,6 +62,7 @@ __all__ = [
     "fit_display_matrix",
     "infer_white_patch",
     "linearity_curves",
+    "nice_ticks",
     "panel_description",
     "panel_titles",
     "patch_names",

@@ -426,7 +426,7 @@ def plot_linearity(
     legend = [("linear", ideal)]
     for axes, line in (
         (response, ([0.0, 1.0], [0.0, 1.0])),
-        (deviation, ([xs.min(), xs.max()], [0.0, 0.0])),
+        (deviation, (deviation.xlim, [0.0, 0.0])),  # across the whole panel
     ):
         axes.yticks()
         axes.xticks(grid=True)
