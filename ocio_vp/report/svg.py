@@ -201,14 +201,23 @@ class Canvas:
     def close(self, tag: str = "g") -> None:
         self._parts.append(f"</{tag}>")
 
+    # The shapes write their geometry directly (the report draws a few thousand of them).
     def rect(self, x: float, y: float, w: float, h: float, **attributes: object) -> None:
-        self.element("rect", x=float(x), y=float(y), width=float(w), height=float(h), **attributes)
+        self._parts.append(
+            f'<rect x="{num(x)}" y="{num(y)}" width="{num(w)}" height="{num(h)}"'
+            f"{_attrs(attributes)}/>"
+        )
 
     def circle(self, cx: float, cy: float, r: float, **attributes: object) -> None:
-        self.element("circle", cx=float(cx), cy=float(cy), r=float(r), **attributes)
+        self._parts.append(
+            f'<circle cx="{num(cx)}" cy="{num(cy)}" r="{num(r)}"{_attrs(attributes)}/>'
+        )
 
     def line(self, x1: float, y1: float, x2: float, y2: float, **attributes: object) -> None:
-        self.element("line", x1=float(x1), y1=float(y1), x2=float(x2), y2=float(y2), **attributes)
+        self._parts.append(
+            f'<line x1="{num(x1)}" y1="{num(y1)}" x2="{num(x2)}" y2="{num(y2)}"'
+            f"{_attrs(attributes)}/>"
+        )
 
     def polyline(self, xs: Iterable[float], ys: Iterable[float], **attributes: object) -> None:
         points = " ".join(f"{num(x)},{num(y)}" for x, y in zip(xs, ys, strict=True))
