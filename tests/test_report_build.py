@@ -1,8 +1,9 @@
 """Where ``ocio-vp report`` writes, re-runs on globs, never dropping a larger report; ΔE ITP
-where it is undefined."""
+where it is undefined; a root-polynomial Q named with its degree, terms and coefficients."""
 
 from __future__ import annotations
 
+import html
 import json
 import shutil
 from pathlib import Path
@@ -12,7 +13,9 @@ import pytest
 
 from ocio_vp.cli import main
 from ocio_vp.errors import InputError
-from ocio_vp.report.build import default_report_dir
+from ocio_vp.ocio.writer import write_solutions
+from ocio_vp.pipeline import solve_environment
+from ocio_vp.report.build import build_report, default_report_dir
 from ocio_vp.report.data import delta_e, environment_data, itp_defined
 
 SAMPLE = Path(__file__).resolve().parent.parent / "sample_configs" / "paper_stage"
@@ -99,3 +102,20 @@ def test_sodium_draws_the_charts_its_figures_measure():
         np.testing.assert_array_equal(data.charts[chart], np.asarray(clipped[chart]))
         drawn = error_relative_to_white(data.charts[chart], data.charts["target"], 18)
         np.testing.assert_allclose(drawn, data.errors[chart], rtol=1e-9)
+
+
+def test_report_shows_the_root_polynomial_model(tmp_path):
+    from ocio_vp.simulator.stage import paper_stage_measurements
+
+    m = paper_stage_measurements(("indoor_daylight",))
+    write_solutions([solve_environment(m, m.environments[0], method="root-polynomial")], tmp_path)
+    report = build_report([tmp_path], tmp_path / "report", dpi=20)
+    text = html.unescape(report.index.read_text(encoding="utf-8"))
+    model = json.loads((tmp_path / "indoor_daylight" / "solution.json").read_text())["diagnostics"][
+        "method_notes"
+    ]["root_polynomial"]
+    assert model["terms"] == ["r", "g", "b", "√(rg)", "√(gb)", "√(rb)"]
+    assert "root-polynomial degree 2, 6 terms: r, g, b, √(rg), √(gb), √(rb)" in text
+    assert "Q (root-polynomial)" in text and "3x3 approximation of Q" in text
+    for value in np.ravel(model["coefficients"]):
+        assert f"{value:+.5f}" in text

@@ -81,6 +81,7 @@ from ocio_vp.correction.root_polynomial import (
     root_polynomial_expansion,
     root_polynomial_jacobian,
     root_polynomial_loo_predictions,
+    root_polynomial_terms,
 )
 from ocio_vp.correction.validation import (
     CLOSED_FORM_METHODS,
@@ -150,6 +151,7 @@ __all__ = [
     "root_polynomial_expansion",
     "root_polynomial_jacobian",
     "root_polynomial_loo_predictions",
+    "root_polynomial_terms",
     "singular_q_cause",
     "solve_post_correction",
     "target_rank",

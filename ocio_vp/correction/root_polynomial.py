@@ -54,6 +54,7 @@ __all__ = [
     "root_polynomial_expansion",
     "root_polynomial_jacobian",
     "root_polynomial_loo_predictions",
+    "root_polynomial_terms",
 ]
 
 #: Number of root-polynomial terms per degree (colour-science supports degrees 1-4).
@@ -83,6 +84,26 @@ _TERMS = (
     ((0, 3, 1), 4), ((1, 0, 3), 4), ((0, 1, 3), 4),
     ((2, 1, 1), 4), ((1, 2, 1), 4), ((1, 1, 2), 4),
 )  # fmt: skip
+
+
+_ROOT_SIGNS = {1: "", 2: "√", 3: "∛", 4: "∜"}
+
+
+def root_polynomial_terms(degree: int) -> list[str]:
+    """The expansion's terms, as a person reads them.
+
+    >>> root_polynomial_terms(2)
+    ['r', 'g', 'b', '√(rg)', '√(gb)', '√(rb)']
+    >>> root_polynomial_terms(3)[6:8]
+    ['∛(rg²)', '∛(gb²)']
+    """
+    names = []
+    for powers, root in _TERMS[: ROOT_POLYNOMIAL_TERMS[degree]]:
+        product = "".join(
+            c + {1: "", 2: "²", 3: "³"}[p] for c, p in zip("rgb", powers, strict=True) if p
+        )
+        names.append(product if root == 1 else f"{_ROOT_SIGNS[root]}({product})")
+    return names
 
 
 def _signed_root(p: np.ndarray, root: int) -> np.ndarray:
@@ -209,7 +230,11 @@ def make_q_root_polynomial(degree: int = 2) -> Callable[[QProblem], QFit]:
                 "model": f"root-polynomial-{degree}",
                 "description": f"root-polynomial regression of degree {degree} "
                 "(Finlayson et al. 2015); Q is its best 3x3 approximation",
-                "root_polynomial": {"degree": degree, "coefficients": C.tolist()},
+                "root_polynomial": {
+                    "degree": degree,
+                    "terms": root_polynomial_terms(degree),
+                    "coefficients": C.tolist(),
+                },
                 "warnings": [CONFIG_APPROXIMATION_WARNING],
                 **({} if cv is None else {"cross_validated_error": cv}),
             },

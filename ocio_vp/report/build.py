@@ -186,7 +186,7 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
     matrices = [
         _matrix_rows("[SL]", s.SL, "camera RGB of the LED primaries (columns)"),
         _matrix_rows("M", s.M, "out-of-frustum pre-correction, [SL]^-1 (eq. 2)"),
-        _matrix_rows("Q", s.Q, "post-correction of the footage (eq. 5)"),
+        *_q_rows(s),
         _matrix_rows("N", s.N, "in-frustum pre-correction, M Q^-1 (eq. 8)"),
     ]
     facts = [
@@ -263,10 +263,34 @@ def _fixture_facts(solution: Any) -> list[tuple[str, str]]:
 
 def _method(solution: Any) -> str:
     """The Q method, with the model an automatic method chose (from its notes)."""
-    model = (solution.diagnostics.get("method_notes") or {}).get("model")
+    notes = solution.diagnostics.get("method_notes") or {}
+    model = notes.get("model")
+    text = solution.method
     if isinstance(model, str) and model != solution.method:
-        return f"{solution.method} → {model}"
-    return solution.method
+        text = f"{solution.method} → {model}"
+    rp = notes.get("root_polynomial")
+    if isinstance(rp, dict):
+        terms = rp.get("terms") or []
+        text += f" (root-polynomial degree {rp.get('degree')}, {len(rp.get('coefficients', [[]])[0])} terms"
+        text += f": {', '.join(terms)})" if terms else ")"
+    return text
+
+
+def _q_rows(solution: Any) -> list[dict[str, Any]]:
+    """Q's matrix; for a root-polynomial Q, its coefficients too (what the config's LUTs and
+    ``ocio-vp apply`` use) and the matrix named as the model's 3x3 approximation."""
+    rp = (solution.diagnostics.get("method_notes") or {}).get("root_polynomial")
+    if not isinstance(rp, dict):
+        return [_matrix_rows("Q", solution.Q, "post-correction of the footage (eq. 5)")]
+    terms = rp.get("terms") or [f"term {i + 1}" for i in range(len(rp["coefficients"][0]))]
+    model = _matrix_rows(
+        "Q (root-polynomial)",
+        np.asarray(rp["coefficients"], dtype=np.float64),
+        f"Q(x) = C ({', '.join(terms)}): the footage's post-correction (config LUTs, apply)",
+    )
+    model["cond"] = None  # not square
+    approximation = "3x3 approximation of Q (solution.json, N = M Q^-1 there; matrix-only tools)"
+    return [model, _matrix_rows("Q (3x3)", solution.Q, approximation)]
 
 
 def _short(value: Any) -> str:
