@@ -66,3 +66,43 @@ def test_a_solve_folder_means_every_environment(calib, frames, tmp_path, capsys)
 def test_frames_before_solutions_is_an_error(frames, tmp_path, capsys):
     assert _apply(frames / "A001.####.exr", "--out", tmp_path / "o") == 2
     assert "expected the solution(s) first" in capsys.readouterr().err
+
+
+def test_a_rerun_replaces_only_frames_apply_wrote(calib, frames, tmp_path, capsys):
+    out = tmp_path / "o"
+    args = (calib / "direct_sun", frames / "A001.####.exr", "--out", out)
+    assert _apply(*args) == 0
+    capsys.readouterr()
+    written = {p.name: p.stat().st_mtime_ns for p in out.iterdir()}
+    assert _apply(*args) == 0  # its own frames: skipped, then replaced with --overwrite
+    assert "0 frame(s) written, 2 already done" in capsys.readouterr().out
+    assert _apply(*args, "--overwrite") == 0
+    assert "2 frame(s) written" in capsys.readouterr().out
+    assert all(p.stat().st_mtime_ns >= written[p.name] for p in out.iterdir())
+
+
+@pytest.mark.parametrize("overwrite", [False, True])
+def test_a_file_apply_did_not_write_is_never_replaced_nor_counted(
+    calib, frames, tmp_path, capsys, overwrite
+):
+    out = tmp_path / "o"
+    out.mkdir()
+    # Someone's own frame under the name apply would write: a valid EXR, without the mark.
+    write_plate(out / "A001.0002.exr", np.full((4, 6, 3), 0.5), dtype="float")
+    before = (out / "A001.0002.exr").read_bytes()
+    flags = ["--overwrite"] if overwrite else []
+    assert _apply(calib / "direct_sun", frames / "A001.####.exr", "--out", out, *flags) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "A001.0002.exr" in err[0]
+    assert "was not written by ocio-vp apply" in err[0] and "nothing was written" in err[0]
+    assert (out / "A001.0002.exr").read_bytes() == before
+    assert sorted(p.name for p in out.iterdir()) == ["A001.0002.exr"]  # frame 1 not written
+
+
+def test_a_non_image_under_an_output_name_is_foreign(calib, frames, tmp_path, capsys):
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "A001.0001.exr").write_text("notes, not a frame")
+    assert _apply(calib / "direct_sun", frames / "A001.####.exr", "--out", out) == 2
+    assert "was not written by ocio-vp apply" in capsys.readouterr().err
+    assert (out / "A001.0001.exr").read_text() == "notes, not a frame"

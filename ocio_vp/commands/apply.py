@@ -118,7 +118,23 @@ def run(args: argparse.Namespace) -> int:
             FrameTask(str(s), str(d), post, overwrite=args.overwrite, threads=threads)
             for s, d in zip(inputs, output_paths(inputs, out), strict=True)
         ]
+    _refuse_foreign([Path(task.dst) for task in tasks])
     return _run_tasks(tasks, args, workers)
+
+
+def _refuse_foreign(outputs: list[Path]) -> None:
+    """Before any work: an output name taken by a file ocio-vp did not write is an error."""
+    from ocio_vp.errors import InputError
+    from ocio_vp.footage.sequences import MARK, foreign_outputs
+
+    foreign = foreign_outputs(outputs)
+    if foreign:
+        more = f" (and {len(foreign) - 1} more)" if len(foreign) > 1 else ""
+        raise InputError(
+            f"exists and was not written by ocio-vp apply (no {MARK} in its header){more}: "
+            "move it away or choose another --out; nothing was written",
+            source=str(foreign[0]),
+        )
 
 
 def _run_tasks(tasks: list, args: argparse.Namespace, workers: int) -> int:

@@ -37,6 +37,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from ocio_vp.errors import InputError
+from ocio_vp.footage.sequences import MARK
 
 __all__ = [
     "OPTIMIZATIONS",
@@ -293,9 +294,7 @@ def transform_frame(
         rgb = _rgb_channels(spec)
         if rgb is not None:
             apply_in_place(transform, pixels, rgb=rgb, threads=threads)
-            spec.attribute(
-                "ocio_vp:postCorrection", f"{pc.source} -> {pc.target} ({pc.environment})"
-            )
+            spec.attribute(MARK, f"{pc.source} -> {pc.target} ({pc.environment})")
             done += 1
     if done == 0:
         raise InputError("no R, G, B channels to post-correct", source=source or None)

@@ -16,12 +16,22 @@ from pathlib import Path
 
 from ocio_vp.errors import InputError, excerpt
 
-__all__ = ["expand_frames", "frame_pattern", "output_paths", "parse_frame_range"]
+__all__ = [
+    "MARK",
+    "expand_frames",
+    "foreign_outputs",
+    "frame_pattern",
+    "output_paths",
+    "parse_frame_range",
+]
 
 _PATTERN = re.compile(r"#+|%0?(\d*)d")
 #: Most frames one range may name (an hour at 24 fps is 86,400) and widest frame number field.
 MAX_FRAMES = 1_000_000
 MAX_PADDING = 16
+#: The header attribute ``ocio-vp apply`` puts in every frame it writes (in each post-corrected
+#: subimage): what tells its own earlier output from a file it must not replace.
+MARK = "ocio_vp:postCorrection"
 
 
 def frame_pattern(text: str) -> tuple[str, str, int] | None:
@@ -124,3 +134,28 @@ def output_paths(inputs: Sequence[Path], out_dir: Path) -> list[Path]:
         if src.resolve() == dst.resolve():
             raise InputError("--out would overwrite the input frame", source=str(src))
     return outputs
+
+
+def foreign_outputs(outputs: Sequence[Path]) -> list[Path]:
+    """The existing files among ``outputs`` that ``ocio-vp apply`` did not write.
+
+    A frame it wrote carries :data:`MARK` in its header (only the header is read); a file
+    without it, or that cannot be read as an image, was put there by someone else, and neither
+    ``--overwrite`` may replace it nor a rerun count it as done.
+    """
+    import OpenImageIO as oiio
+
+    foreign = []
+    for path in outputs:
+        if not os.path.lexists(path):
+            continue
+        inp = oiio.ImageInput.open(str(path)) if Path(path).is_file() else None
+        try:
+            ours = inp is not None and inp.spec().getattribute(MARK) is not None
+        finally:
+            if inp is not None:
+                inp.close()
+        if not ours:
+            foreign.append(Path(path))
+    oiio.geterror()  # a failed open leaves a message behind: it is reported by the caller
+    return foreign
