@@ -199,12 +199,18 @@ def _axis_top(values: np.ndarray) -> float | None:
 
 
 def _bar(axes: Axes, centre: float, width: float, height: float, **attributes: object) -> None:
-    """A bar from 0 to ``height`` (data units) centred on ``centre``; nothing for NaN."""
+    """A bar from 0 to ``height`` (data units) centred on ``centre``; nothing for NaN.
+
+    A bar too low to show (SVG does not draw a zero-height rectangle) also gets its outline's
+    bottom edge, as matplotlib drew it: a value of 0 is seen, not read as missing.
+    """
     if not math.isfinite(height):
         return
     x0, x1 = axes.x(centre - width / 2), axes.x(centre + width / 2)
     y0, y1 = axes.y(0.0), axes.y(height)
     axes.canvas.rect(x0, min(y0, y1), x1 - x0, abs(y0 - y1), class_="bar", **attributes)
+    if abs(y0 - y1) < 0.005 and "stroke" in attributes:
+        axes.canvas.line(x0, y0, x1, y0, stroke=attributes["stroke"], class_="bar-edge")
 
 
 def _label_clipped(axes: Axes, x: float, top: float, value: float) -> None:

@@ -199,27 +199,32 @@ class Canvas:
         self._parts.append(f"<{tag}{_attrs(attributes)}>")
 
     def close(self, tag: str = "g") -> None:
+        """End the group :meth:`open` started."""
         self._parts.append(f"</{tag}>")
 
     # The shapes write their geometry directly (the report draws a few thousand of them).
     def rect(self, x: float, y: float, w: float, h: float, **attributes: object) -> None:
+        """A rectangle with its top left corner at (x, y)."""
         self._parts.append(
             f'<rect x="{num(x)}" y="{num(y)}" width="{num(w)}" height="{num(h)}"'
             f"{_attrs(attributes)}/>"
         )
 
     def circle(self, cx: float, cy: float, r: float, **attributes: object) -> None:
+        """A circle of radius ``r`` centred on (cx, cy)."""
         self._parts.append(
             f'<circle cx="{num(cx)}" cy="{num(cy)}" r="{num(r)}"{_attrs(attributes)}/>'
         )
 
     def line(self, x1: float, y1: float, x2: float, y2: float, **attributes: object) -> None:
+        """A straight line from (x1, y1) to (x2, y2)."""
         self._parts.append(
             f'<line x1="{num(x1)}" y1="{num(y1)}" x2="{num(x2)}" y2="{num(y2)}"'
             f"{_attrs(attributes)}/>"
         )
 
     def polyline(self, xs: Iterable[float], ys: Iterable[float], **attributes: object) -> None:
+        """An open, unfilled line through the points (xs[i], ys[i])."""
         points = " ".join(f"{num(x)},{num(y)}" for x, y in zip(xs, ys, strict=True))
         self.element("polyline", points=points, fill="none", **attributes)
 
@@ -279,6 +284,7 @@ class Canvas:
         return f"url(#{escape(key)})"
 
     def tostring(self) -> str:
+        """The document: a white ground, the definitions (hatches, clips), then the drawing."""
         head = _attrs(
             {
                 "xmlns": "http://www.w3.org/2000/svg",
@@ -296,6 +302,7 @@ class Canvas:
         return f"<svg{head}>\n{defs}\n{background}\n{body}\n</svg>\n"
 
     def write(self, path: Path) -> Path:
+        """Write the document as UTF-8 to ``path``; returns the path."""
         path = Path(path)
         path.write_text(self.tostring(), encoding="utf-8")
         return path
@@ -366,6 +373,7 @@ class Axes:
         return y0 + h - (value - self.ylim[0]) * h / (self.ylim[1] - self.ylim[0])
 
     def clip(self) -> str:
+        """A clip path of the plot area (for bars the axis cuts); its ``url(#...)``."""
         return self.canvas.clip(f"clip-{self.name}", *self.box)
 
     def frame(self) -> None:
@@ -420,6 +428,7 @@ class Axes:
             self.canvas.close()
 
     def title(self, text: str, *, size: float = 10.0) -> None:
+        """Centred above the box; a multi-line title grows upwards."""
         x0, y0, w, _ = self.box
         lines = text.count("\n")
         self.canvas.text(
@@ -432,10 +441,12 @@ class Axes:
         )
 
     def ylabel(self, text: str, *, offset: float = 30.0, size: float = 10.0) -> None:
+        """Rotated, ``offset`` points left of the box."""
         x0, y0, _, h = self.box
         self.canvas.text(x0 - offset, y0 + h / 2, text, size=size, rotate=-90, class_="ylabel")
 
     def xlabel(self, text: str, *, offset: float = 18.0, size: float = 10.0) -> None:
+        """Centred, ``offset`` points below the box (below the tick labels)."""
         x0, y0, w, h = self.box
         self.canvas.text(
             x0 + w / 2, y0 + h + offset, text, size=size, valign="top", class_="xlabel"
