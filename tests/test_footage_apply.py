@@ -341,3 +341,77 @@ def test_pixel_transform_is_pluggable(tmp_path, solution_dir, monkeypatch):
     apply_file(tmp_path / "in.exr", tmp_path / "out.exr", pc)
     _, got = read_image(tmp_path / "out.exr")
     np.testing.assert_array_equal(got, np.full((6, 5, 3), 0.5))
+
+
+@pytest.fixture(scope="module")
+def rp_solution_dir(tmp_path_factory) -> Path:
+    root = tmp_path_factory.mktemp("solve_rp")
+    path = root / "stage.yaml"
+    path.write_text(yaml.safe_dump(make_measurements_dict(environments=1)))
+    args = ["solve", str(path), "--out", str(root / "calib"), "--method", "root-polynomial"]
+    assert main(args) == 0
+    return root / "calib" / "env_0"
+
+
+def _finlayson(solution_dir: Path, rgb: np.ndarray) -> np.ndarray:
+    """colour-science's root-polynomial expansion @ the solution's coefficients, float64."""
+    from colour.characterisation import polynomial_expansion_Finlayson2015
+
+    notes = json.loads((solution_dir / "solution.json").read_text())["diagnostics"]
+    C = np.asarray(notes["method_notes"]["root_polynomial"]["coefficients"])
+    x = np.asarray(rgb, dtype=np.float64).reshape(-1, 3)
+    return (polynomial_expansion_Finlayson2015(x, 2, root_polynomial_expansion=True) @ C.T).reshape(
+        np.shape(rgb)
+    )
+
+
+def _extremes(rng) -> np.ndarray:
+    rgb = rng.uniform(-0.5, 8.0, size=(20, 33, 3))
+    rgb[0, :4] = 0.0
+    rgb[1, :4] = 1e-8
+    rgb[2, :4] = 1e4
+    rgb[3, :4] = [[-1e-8, 1e-8, 0.0], [1e-8, -1e-8, 1e-8], [-1.0, -1.0, -1.0], [0.0, 1e4, -1e-8]]
+    return rgb
+
+
+def test_root_polynomial_apply_is_the_exact_model(tmp_path, rp_solution_dir):
+    """``apply`` with a root-polynomial solution runs the model itself (not the config's LUT):
+    colour-science's expansion @ C^T on the float32 pixels, to the float32 output's rounding,
+    including zeros, negatives around black, 1e-8 and 1e4."""
+    pc = load_post_correction(rp_solution_dir)
+    assert pc.kind == "root-polynomial" and np.shape(pc.coefficients) == (3, 6)
+    rgb = _extremes(np.random.default_rng(12))
+    write_image(tmp_path / "in.exr", rgb, "RGB")
+    apply_file(tmp_path / "in.exr", tmp_path / "out.exr", pc, threads=2)
+    spec, got = read_image(tmp_path / "out.exr")
+    ref = _finlayson(rp_solution_dir, rgb.astype(np.float32))
+    assert np.all(np.isfinite(got))
+    scale = np.abs(ref).max(axis=-1, keepdims=True)
+    assert np.all(np.abs(got - ref) <= 2.0**-23 * scale)
+    assert np.array_equal(got[0, :4], np.zeros((4, 3)))  # black stays black
+    assert "root-polynomial applied exactly" in spec.get_string_attribute("ocio_vp:postCorrection")
+
+
+def test_root_polynomial_apply_half_and_continuity_around_black(rp_solution_dir):
+    """Half buffers: the float64 result rounded once to half. Around black the result is
+    continuous through zero (sign-preserving roots), never NaN."""
+    transform = pixel_transform(load_post_correction(rp_solution_dir))
+    rgb = _extremes(np.random.default_rng(13))
+    rgb[rgb > 1e3] = 1e3  # keep the corrected values inside half's range (65504)
+    rgb = rgb.astype(np.float16)
+    ref = _finlayson(rp_solution_dir, rgb).astype(np.float16)
+    work = rgb.copy()
+    apply_in_place(transform, work)
+    assert np.array_equal(work, ref)
+    t = np.linspace(-1e-3, 1e-3, 2001, dtype=np.float32)
+    ramp = np.ascontiguousarray(np.stack([t, 2e-3 + 0 * t, 1e-3 + 0 * t], -1)[None])
+    out = ramp.copy()
+    apply_in_place(transform, out)
+    assert np.all(np.isfinite(out))
+    # No jump at r = 0: a step dr moves each output by at most |C_lin| dr + |C_sqrt| sqrt(dr g)
+    # (the square roots go through 0 continuously; the bound holds for the sqrt's steepest
+    # step, which is at 0).
+    C = np.abs(np.asarray(load_post_correction(rp_solution_dir).coefficients))
+    dr = float(np.abs(np.diff(t)).max())
+    bound = C[:, :3].sum(axis=1) * dr + C[:, 3:].sum(axis=1) * np.sqrt(dr * 2e-3)
+    assert np.all(np.abs(np.diff(out[0], axis=0)) <= 1.01 * bound + 1e-9)

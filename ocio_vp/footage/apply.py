@@ -3,7 +3,10 @@
 The colour maths is the solution's own OCIO config, ``Stage Footage`` -> reference (Q, the
 paper's post-correction, eq. 5, plus whatever that colorspace carries), run by OCIO's CPU
 processor in place (``apply(PackedImageDesc)``; ``applyRGB`` on a numpy array is ~10x slower)
-through the pluggable :class:`PixelTransform` (:data:`TRANSFORMS`). Every other channel (alpha,
+through the pluggable :class:`PixelTransform` (:data:`TRANSFORMS`). A root-polynomial Q is
+applied exactly instead (:class:`RootPolynomialTransform`: float64 maths, not the config's
+baked LUT), with the same sign-preserving roots as the fit: zeros give zero and negatives
+(noise around black) give finite values continuous with the positive side. Every other channel (alpha,
 depth, AOVs), every subimage, the metadata, data and display windows, tiling, pixel formats and
 compression of each input are kept.
 
@@ -47,6 +50,7 @@ __all__ = [
     "OcioTransform",
     "PixelTransform",
     "PostCorrection",
+    "RootPolynomialTransform",
     "apply_file",
     "apply_in_place",
     "cpu_processor",
@@ -67,7 +71,9 @@ OPTIMIZATIONS = ("lossless", "default", "good", "draft")
 class PostCorrection:
     """Which OCIO conversion post-corrects footage: ``source`` -> ``target`` in ``config``.
 
-    ``kind`` names the :data:`TRANSFORMS` factory that turns it into a :class:`PixelTransform`.
+    ``kind`` names the :data:`TRANSFORMS` factory that turns it into a :class:`PixelTransform`;
+    ``coefficients`` is a root-polynomial Q's (3, terms) model (kind ``root-polynomial``),
+    as nested tuples so that the post-correction stays hashable and picklable.
     """
 
     config: str
@@ -75,6 +81,7 @@ class PostCorrection:
     target: str
     environment: str = ""
     kind: str = "ocio"
+    coefficients: tuple[tuple[float, ...], ...] = ()
 
 
 def load_post_correction(solution_dir: str | Path) -> PostCorrection:
@@ -103,6 +110,12 @@ def load_post_correction(solution_dir: str | Path) -> PostCorrection:
         raise InputError(
             f"cannot build the post-correction: {exc}", source=str(config_path)
         ) from None
+    model = (solution.diagnostics.get("method_notes") or {}).get("root_polynomial")
+    if model is not None:  # the exact model, not the config's LUT bake of it
+        coefficients = tuple(tuple(float(v) for v in row) for row in model["coefficients"])
+        return PostCorrection(
+            str(config_path), source, target, solution.environment, "root-polynomial", coefficients
+        )
     return PostCorrection(str(config_path), source, target, solution.environment)
 
 
@@ -164,11 +177,51 @@ class OcioTransform:
             self.f32.apply(OCIO.PackedImageDesc(rgb, width, height, 3))
 
 
-#: How to build the per-pixel transform of a :class:`PostCorrection`, by its ``kind``. Today
-#: every solution's post-correction is an OCIO conversion in its config; another kind (e.g. a
-#: transform OCIO cannot express) registers its factory here.
+@dataclass(frozen=True)
+class RootPolynomialTransform:
+    """A :class:`PixelTransform` applying a root-polynomial Q exactly: ``C e(x)`` in float64.
+
+    Pixels are converted to float64 in bands of :attr:`band` pixels (bounded memory, ~100 bytes
+    per pixel of the band for degree 2; 16384 pixels keep a band's temporaries in the CPU's
+    cache, several times faster than larger bands) and stored back in the buffer's own type (a
+    half result that overflows becomes inf, as OCIO's half output does). Roots are sign-preserving
+    (``sign(p)|p|^(1/k)``), as in the fit: 0 maps to 0, and a negative channel gives a finite
+    value continuous with the positive side (for degree 2 and a pixel (r, g, b) with r < 0 < g,
+    ``sqrt(rg)`` is ``-sqrt(|rg|)``).
+    """
+
+    coefficients: np.ndarray
+    band: int = 1 << 14
+
+    def __call__(self, rgb: np.ndarray) -> None:
+        model = _exact_model()
+        flat = rgb.reshape(-1, 3)  # a view: rgb is C-contiguous
+        for start in range(0, len(flat), self.band):
+            block = flat[start : start + self.band]
+            with np.errstate(over="ignore"):  # half overflow: inf, documented above
+                block[...] = model(self.coefficients, block)
+
+
+def _exact_model() -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    # Deferred: the correction package (its solvers, ~0.1 s of imports) is needed only by
+    # root-polynomial solutions; OCIO ones never load it.
+    from ocio_vp.correction.root_polynomial import apply_root_polynomial
+
+    return apply_root_polynomial
+
+
+def _root_polynomial(pc: PostCorrection) -> RootPolynomialTransform:
+    coefficients = np.asarray(pc.coefficients, dtype=np.float64)
+    _exact_model()(coefficients, np.ones((1, 3)))  # checks the shape, with a clear error
+    return RootPolynomialTransform(coefficients)
+
+
+#: How to build the per-pixel transform of a :class:`PostCorrection`, by its ``kind``: an OCIO
+#: conversion in the solution's config, or the exact root-polynomial model (which the config
+#: can only carry as a LUT bake). Another kind registers its factory here.
 TRANSFORMS: dict[str, Callable[[PostCorrection], PixelTransform]] = {
     "ocio": lambda pc: OcioTransform(cpu_processor(pc), cpu_processor(pc, bit_depth="f16")),
+    "root-polynomial": _root_polynomial,
 }
 
 
@@ -294,7 +347,8 @@ def transform_frame(
         rgb = _rgb_channels(spec)
         if rgb is not None:
             apply_in_place(transform, pixels, rgb=rgb, threads=threads)
-            spec.attribute(MARK, f"{pc.source} -> {pc.target} ({pc.environment})")
+            exact = "" if pc.kind == "ocio" else f", {pc.kind} applied exactly"
+            spec.attribute(MARK, f"{pc.source} -> {pc.target} ({pc.environment}{exact})")
             done += 1
     if done == 0:
         raise InputError("no R, G, B channels to post-correct", source=source or None)
