@@ -46,7 +46,7 @@ from ocio_vp.metrics import error_relative_to_white
 
 __all__ = ["DEFAULT_METHOD", "solve_environment", "solve_measurements"]
 
-#: The simplest Q model the scene needs (ocio_vp.correction.linear.q_auto); "least-squares" is the paper.
+#: The simplest Q model the scene needs (ocio_vp.correction.auto.q_auto); "least-squares" is the paper.
 DEFAULT_METHOD = "auto"
 
 

@@ -25,11 +25,16 @@ from ocio_vp.correction.linear import (
 )
 from ocio_vp.correction.perceptual import default_camera_to_xyz
 from ocio_vp.correction.registry import Q_SOLVE_METHODS, QProblem, solve_post_correction
+from ocio_vp.correction.root_polynomial import (
+    fit_root_polynomial,
+    post_correction,
+    root_polynomial_expansion,
+)
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import chart_errors
 from ocio_vp.pipeline import DEFAULT_METHOD, solve_environment
 from ocio_vp.simulator.data import ENVIRONMENTS
-from ocio_vp.simulator.stage import simulate_measurements, spectral_stage
+from ocio_vp.simulator.stage import camera_rgb, simulate_measurements, spectral_stage
 from ocio_vp.simulator.truth import held_out_errors, held_out_reflectances, noisy_measurements
 
 ATOL = 1e-10
@@ -197,6 +202,47 @@ def simulated():
 
 
 class TestAutoOnTheSimulator:
+    def test_broadband_light_gets_the_root_polynomial_and_it_helps_off_the_chart(
+        self, simulated
+    ) -> None:
+        # The simulator's held-out reflectances (not on the chart), lit by what the wall emits,
+        # judge the choice: auto's root-polynomial renders them better than least squares.
+        env = simulated.environment("direct_sun")
+        s = solve_environment(simulated, env, method="auto")
+        notes = s.diagnostics["method_notes"]
+        assert s.diagnostics["model"] == "root-polynomial"
+        assert notes["root_polynomial"]["degree"] == 2
+        assert "degree 3 is not a candidate" in s.diagnostics["model_reason"]
+        ls = solve_environment(simulated, env, method="least-squares")
+        stage = spectral_stage()
+        samples = held_out_reflectances()["rawtoaces"]
+        errors = [
+            held_out_errors(
+                stage, "direct_sun", M=x.M, w_avg=x.w_avg, Q=x.Q, reflectances=samples,
+                correct=post_correction(x.Q, x.diagnostics["method_notes"]),
+            ).delta_E_2000.mean()
+            for x in (s, ls)
+        ]  # fmt: skip
+        assert errors[0] < 0.95 * errors[1]
+
+    def test_the_lit_chart_is_lit_by_the_drive_the_wall_can_emit(self, simulated) -> None:
+        # Sodium's drive M w_avg has a negative channel, which the wall clips: the lit chart Q
+        # is fitted to is the simulator's chart under the LEDs driven at clip(M w_avg, 0)
+        # (up to the panel's overall scale), not eq. 3's chart lit partly by negative light.
+        env = simulated.environment("sodium_vapour")
+        s = solve_environment(simulated, env, method="least-squares")
+        problem = QProblem(
+            SL=simulated.SL, SRL=simulated.SRL, beta=s.beta, M=s.M, w_avg=s.w_avg,
+            target=env.target_chart,
+        )  # fmt: skip
+        drive = s.M @ s.w_avg
+        assert drive.min() < 0
+        stage = spectral_stage()
+        emitted = stage.leds @ np.clip(drive, 0, None)
+        truth = camera_rgb(stage, stage.reflectances * emitted)
+        ratio = problem.predicted / truth
+        np.testing.assert_allclose(ratio, ratio[0, 0], rtol=1e-9)
+
     def test_stage_led_white_gives_identity_and_N_equals_M(self, simulated) -> None:
         s = solve_environment(simulated, simulated.environment("rgb_led_white"), method="auto")
         assert s.diagnostics["model"] == "identity"
@@ -234,10 +280,11 @@ class TestAutoOnTheSimulator:
                     lam = alpha * np.trace(G) / 3
                     Q = np.linalg.solve(G + lam * np.eye(3), (X * w[:, None]).T @ P + lam * D).T
                 else:
-                    Q = solve_post_correction(
+                    fit = solve_post_correction(
                         dataclasses.replace(problem, weights=w), method=name
-                    ).Q
-                held[j] = Q @ X[j]
+                    )
+                    Q = post_correction(fit.Q, fit.notes)  # the root-polynomial's own model
+                held[j] = Q(X[j]) if callable(Q) else Q @ X[j]
             de = chart_errors(held, P, camera_to_xyz=default_camera_to_xyz()).delta_E_2000
             np.testing.assert_allclose(notes["cv_delta_e"][name], de.mean(), rtol=1e-9)
         assert s.diagnostics["model"] in AUTO_LADDER
@@ -324,6 +371,24 @@ class TestClosedFormLeaveOneOut:
         np.testing.assert_allclose(
             loo_predictions(f"rank-{rank}", X, P, np.ones(24), 18), expected, atol=1e-12
         )
+
+    @pytest.mark.parametrize("degree", [2, 3])
+    def test_root_polynomial_matches_its_own_fit_without_each_patch(self, degree: int) -> None:
+        # The oracle: the root-polynomial method's own fit (an SVD least squares on colour's
+        # expansion) refitted with each patch's weight set to 0.
+        problem = _problem(Q_TRUE, noise=0.03, seed=9)
+        X, P = problem.predicted, problem.target
+        w = np.ones(24)
+        w[7] = 0.0
+        expected = np.array(
+            [
+                root_polynomial_expansion(X[j], degree)
+                @ fit_root_polynomial(X, P, np.where(np.arange(24) == j, 0.0, w), degree).T
+                for j in range(24)
+            ]
+        )
+        name = {2: "root-polynomial", 3: "root-polynomial-3"}[degree]
+        np.testing.assert_allclose(loo_predictions(name, X, P, w, 18), expected, atol=1e-12)
 
     def test_hundreds_of_patches(self) -> None:
         rng = np.random.default_rng(2)

@@ -1,9 +1,10 @@
 """Post-correction Q: the problem dataclass, the registry of methods (``Q_SOLVE_METHODS``) and
-the methods themselves (the linear family and ``auto``, ``perceptual``, ``joint``), their
+the methods themselves (the linear family, ``auto``, ``perceptual``, ``joint``), their
 leave-one-patch-out validation, the checks every method relies on (``guards``) and the screening
 of patches inconsistent with the rest of the chart (``outliers``).
 """
 
+from ocio_vp.correction.auto import DEGREE_3_EXCLUDED, q_auto
 from ocio_vp.correction.guards import (
     MAX_DYNAMIC_RANGE,
     MIN_LIT_DIRECTION,
@@ -28,13 +29,16 @@ from ocio_vp.correction.linear import (
     NARROW_TARGET,
     RANK_RELATIVE_TOLERANCE,
     REGULARISATION_GRID,
+    ROOT_POLYNOMIAL_DEGREES,
     choose_model,
     choose_shrinkage,
     colour_spread,
     fit_least_squares,
     loo_cv_error,
+    fit_model,
+    ladder_predictions,
     loo_predictions,
-    q_auto,
+    problem_arrays,
     q_diagonal,
     q_identity,
     q_regularised,
@@ -96,6 +100,7 @@ __all__ = [
     "AUTO_TIE",
     "CLOSED_FORM_METHODS",
     "COLORCHECKER_NAMES",
+    "DEGREE_3_EXCLUDED",
     "DEFAULT_MAX_CONDITION",
     "DEFAULT_MAX_DELTA_E",
     "LOO_KERNELS",
@@ -112,6 +117,7 @@ __all__ = [
     "Q_SOLVE_METHODS",
     "RANK_RELATIVE_TOLERANCE",
     "REGULARISATION_GRID",
+    "ROOT_POLYNOMIAL_DEGREES",
     "ROOT_POLYNOMIAL_TERMS",
     "Inconsistency",
     "QFit",
@@ -124,11 +130,13 @@ __all__ = [
     "cross_validated_error",
     "default_camera_to_xyz",
     "fit_least_squares",
+    "fit_model",
     "fit_root_polynomial",
     "held_out_predictions",
     "inconsistent_patches",
     "invert_root_polynomial",
     "joint_matrix",
+    "ladder_predictions",
     "loo_cv_error",
     "loo_predictions",
     "make_q_joint",
@@ -139,6 +147,7 @@ __all__ = [
     "patch_name",
     "patch_scores",
     "post_correction",
+    "problem_arrays",
     "q_auto",
     "q_diagonal",
     "q_identity",

@@ -16,20 +16,15 @@ white-preserving    6     full Q with ``Q x_w = p_w`` exactly, the rest least sq
 rank-r              5, 8  reduced-rank least squares, for a (nearly) monochromatic target
 ==================  ====  ==================================================================
 
-``auto`` judges the models the way the calibration is used, on colours it was not fitted to:
-each model's **leave-one-patch-out** predictions (every patch predicted by the model fitted
-without it), in **ΔE2000** through a camera RGB -> XYZ matrix
-(:func:`ocio_vp.correction.perceptual.patch_delta_e`). It keeps the paper's least squares
-unless another model is better by more than :data:`AUTO_SE_FACTOR` standard errors of the
-paired per-patch differences (a one-standard-error rule: the comparison's own noise decides
-what "better" means), and among equals takes the simplest (:func:`choose_model`). When the
-target chart has numerical rank below 3 it fits a reduced-rank Q instead (N is then not
-solved). See
-docs/stability.md and docs/accuracy.md for the reasoning and the measured figures.
+``auto`` (:mod:`ocio_vp.correction.auto`) picks among these and the root-polynomial model
+by their **leave-one-patch-out** predictions in **ΔE2000** (:func:`choose_model`, the
+one-standard-error rule); the kernels it needs (:func:`ladder_predictions`,
+:func:`fit_model`, :func:`target_rank`, :func:`colour_spread`) live here.
 
 Every leave-one-out here is in closed form: each patch's fit is the full fit's normal
-equations with that patch's rank-one term removed (a batch of 3x3 solves, the hat-matrix
-identity done exactly), so a solve is linear in the number of patches.
+equations with that patch's rank-one term removed (a batch of 3x3 solves, 6x6 for the
+root-polynomial's six terms: the hat-matrix identity done exactly), so a solve is linear in the
+number of patches.
 """
 
 from __future__ import annotations
@@ -54,13 +49,16 @@ __all__ = [
     "RANK_RELATIVE_TOLERANCE",
     "REGULARISATION_GRID",
     "choose_model",
+    "ROOT_POLYNOMIAL_DEGREES",
     "choose_shrinkage",
     "colour_spread",
     "fit_least_squares",
+    "fit_model",
+    "ladder_predictions",
     "loo_cv_error",
     "loo_predictions",
     "patch_errors",
-    "q_auto",
+    "problem_arrays",
     "q_diagonal",
     "q_identity",
     "q_regularised",
@@ -92,9 +90,22 @@ REGULARISATION_GRID = (0.0, *np.logspace(-4, 2, 13).tolist())
 
 #: ``auto``'s candidates, simplest first. ``white-preserving`` is not one: pinning Q to a single
 #: patch makes Q and N inherit that patch's noise (docs/stability.md), so it is never "simpler".
-AUTO_LADDER = ("identity", "diagonal", "regularised", "least-squares")
+#: ``root-polynomial`` is degree 2 (6 terms per channel); degree 3 (13 terms) is not a
+#: candidate: fitted on 24 patches it over-fits and was worse than the 3x3 on held-out colours
+#: in every simulated environment (docs/accuracy.md).
+AUTO_LADDER = ("identity", "diagonal", "regularised", "least-squares", "root-polynomial")
 #: The ladder for a narrow target (:data:`NARROW_TARGET`).
-AUTO_LADDER_NARROW = ("identity", "diagonal", "rank-1", "rank-2", "regularised", "least-squares")
+AUTO_LADDER_NARROW = (
+    "identity",
+    "diagonal",
+    "rank-1",
+    "rank-2",
+    "regularised",
+    "least-squares",
+    "root-polynomial",
+)
+#: Root-polynomial models by registry name: their degree.
+ROOT_POLYNOMIAL_DEGREES = {"root-polynomial": 2, "root-polynomial-3": 3}
 
 Kernel = Callable[[np.ndarray, np.ndarray, np.ndarray, int], np.ndarray]
 
@@ -312,11 +323,75 @@ LOO_KERNELS: dict[str, Kernel] = {
 }
 
 
+def _loo_root_polynomial(X: np.ndarray, P: np.ndarray, w: np.ndarray, degree: int) -> np.ndarray:
+    """Held-out predictions of the weighted root-polynomial fit (Finlayson et al. 2015).
+
+    Linear in its parameters, so the hat-matrix identity holds: patch j's held-out prediction
+    is ``p_j - r_j / (1 - h_jj)`` (r_j the full fit's residual, h_jj its leverage), from one
+    SVD of the weighted expansion (colour-science's, as
+    :mod:`ocio_vp.correction.root_polynomial`); better conditioned than the 6x6 or 13x13
+    normal equations. A patch that alone decides a term (h_jj ~ 1) falls back to them.
+    """
+    # Deferred: colour-science is heavy to import and only this model needs it here.
+    from colour.characterisation import polynomial_expansion_Finlayson2015
+
+    E = np.asarray(
+        polynomial_expansion_Finlayson2015(X, degree, root_polynomial_expansion=True),
+        dtype=np.float64,
+    ).reshape(len(X), -1)
+    sw = np.sqrt(w)[:, None]
+    U, s, vt = np.linalg.svd(E * sw, full_matrices=False)
+    keep = s > 1e-13 * s[0]
+    U, s, vt = U[:, keep], s[keep], vt[keep]
+    CT = vt.T @ ((U.T @ (P * sw)) / s[:, None])  # (terms, 3) the full weighted fit
+    fitted = E @ CT
+    leverage = np.sum(U * U, axis=1)
+    held = np.where(w[:, None] > 0, P - (P - fitted) / (1 - leverage)[:, None], fitted)
+    alone = (w > 0) & (1 - leverage < 1e-8)
+    if np.any(alone):
+        held[alone] = _loo(_solve(*_downdated(E, P, w)), E)[alone]
+    return held
+
+
 def loo_predictions(name: str, X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int):
     """(n, 3) leave-one-patch-out predictions of the model ``name`` (closed form)."""
     if name.startswith("rank-"):
         return _loo_reduced_rank(X, P, w, int(name.removeprefix("rank-")))
+    if name in ROOT_POLYNOMIAL_DEGREES:
+        return _loo_root_polynomial(X, P, w, ROOT_POLYNOMIAL_DEGREES[name])
     return LOO_KERNELS[name](X, P, w, white)
+
+
+def ladder_predictions(ladder, X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int):
+    """``({name: (n, 3) held-out predictions}, alpha)`` for the models of ``ladder``.
+
+    ``regularised`` is held out at the shrinkage ``alpha`` chosen on all patches (chosen once);
+    a root-polynomial model is left out when its terms leave no patch to spare.
+    """
+    alpha = choose_shrinkage(X, P, w, white) if "regularised" in ladder else float("inf")
+    fitted = int(np.count_nonzero(w > 0))
+    held = {}
+    for name in ladder:
+        if name in ROOT_POLYNOMIAL_DEGREES:
+            terms = {2: 6, 3: 13}[ROOT_POLYNOMIAL_DEGREES[name]]
+            if fitted <= terms:
+                continue
+        if name == "regularised" and np.isfinite(alpha):
+            held[name] = _loo_ridge(X, P, w, np.array([alpha]))[0]
+        else:
+            held[name] = loo_predictions(name, X, P, w, white)
+    return held, alpha
+
+
+def fit_model(name: str, X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int, alpha=None):
+    """The 3x3 Q of a linear model of :data:`AUTO_LADDER_NARROW` (``alpha``: the shrinkage of
+    ``regularised``, chosen by :func:`choose_shrinkage` when None)."""
+    if name.startswith("rank-"):
+        return _fit_reduced_rank(X, P, w, int(name.removeprefix("rank-")))
+    if name == "regularised":
+        alpha = choose_shrinkage(X, P, w, white) if alpha is None else alpha
+        return _ridge(X, P, w, alpha) if np.isfinite(alpha) else _fit_diagonal(X, P, w, white)
+    return MODEL_KERNELS[name](X, P, w, white)
 
 
 def loo_cv_error(name: str, X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int):
@@ -364,7 +439,8 @@ def target_rank(
     return int(np.sum(relative >= RANK_RELATIVE_TOLERANCE)), relative
 
 
-def _data(problem: QProblem) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+def problem_arrays(problem: QProblem) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """``(X, P, w, white)`` of a problem; an InputError with fewer than 3 fitted patches."""
     X = problem.predicted
     P = np.asarray(problem.target, dtype=np.float64)
     w = problem.fit_weights
@@ -381,7 +457,7 @@ def _method(name: str, description: str) -> Callable[[QProblem], QFit]:
     kernel = MODEL_KERNELS[name]
 
     def solve(problem: QProblem) -> QFit:
-        X, P, w, white = _data(problem)
+        X, P, w, white = problem_arrays(problem)
         return QFit(Q=kernel(X, P, w, white), notes={"model": name, "description": description})
 
     solve.__name__ = "q_" + name.replace("-", "_")
@@ -399,7 +475,7 @@ q_white_preserving = _method(
 
 def q_regularised(problem: QProblem) -> QFit:
     """Least squares shrunk toward the white-balance (diagonal) Q; strength by LOO ΔE2000."""
-    X, P, w, white = _data(problem)
+    X, P, w, white = problem_arrays(problem)
     alpha = choose_shrinkage(X, P, w, white)
     Q = _fit_diagonal(X, P, w, white) if not np.isfinite(alpha) else _ridge(X, P, w, alpha)
     return QFit(
@@ -461,117 +537,3 @@ def choose_model(
     lowest = min(means[name] for name in eligible)
     chosen = next(name for name in eligible if means[name] <= lowest + AUTO_TIE)
     return chosen, table
-
-
-def _auto_reason(chosen: str, table: dict, factor: float, reference: str, unit: str) -> str:
-    row = table[chosen]
-    rest = ", ".join(
-        f"{k} {v['mean']:.3g} ({v['difference']:+.2g} ± {v['standard_error']:.2g})"
-        for k, v in table.items()
-        if k not in (chosen, reference)
-    )
-    if chosen == reference:
-        head = (
-            f"{reference} (the paper's eq. 5): leave-one-patch-out mean {unit} "
-            f"{row['mean']:.3g}; no other model is better by more than {factor:g} standard "
-            "error of the paired per-patch differences"
-        )
-    elif abs(row["difference"]) <= AUTO_TIE:
-        head = (
-            f"{chosen}: leave-one-patch-out mean {unit} {row['mean']:.3g}, the same as "
-            f"{reference}'s: the simplest model that fits as well"
-        )
-    else:
-        head = (
-            f"{chosen}: leave-one-patch-out mean {unit} {row['mean']:.3g}, better than "
-            f"{reference}'s {table[reference]['mean']:.3g} by {-row['difference']:.2g} ± "
-            f"{row['standard_error']:.2g} (more than {factor:g} standard error of the paired "
-            "per-patch differences)"
-        )
-    return f"{head}; others (difference from {reference}): {rest}"
-
-
-def _auto_reduced_rank(X, P, w, white, rank: int, singular: np.ndarray, notes: dict) -> QFit:
-    name = f"rank-{rank}"
-    held = loo_predictions(name, X, P, w, white)
-    active = w > 0
-    notes |= {
-        "model": name,
-        "reason": (
-            f"the target chart has rank {rank} (its singular values relative to the largest, "
-            "over the lit chart's: "
-            f"{', '.join(f'{v:.2g}' for v in singular)}; below {RANK_RELATIVE_TOLERANCE:g} "
-            "counts as absent): a near-monochromatic light, so Q is fitted with rank "
-            f"{rank} and cannot be inverted; N is not solved"
-        ),
-        "cv_delta_e": {name: float(np.mean(patch_errors(held, P, w, white)[0][active]))},
-        "cross_validated_error": error_relative_to_white(held, P, white, w),
-    }
-    return QFit(Q=_fit_reduced_rank(X, P, w, rank), notes=notes)
-
-
-def q_auto(problem: QProblem) -> QFit:
-    """The simplest model the scene needs, judged in leave-one-out ΔE2000 (module docstring).
-
-    The notes say which model was chosen (``model``), why (``reason``, in ΔE2000), every
-    candidate's leave-one-out mean ΔE2000 (``cv_delta_e``) with its excess over the best and
-    that excess's standard error (``cv_comparison``), the rule's factor, the target chart's
-    rank, and the chosen model's leave-one-out error per channel relative to white
-    (``cross_validated_error``).
-
-    Examples
-    --------
-    A chart lit exactly as the stage lights it needs no correction:
-
-    >>> SL = np.array([[0.9, 0.1, 0.0], [0.2, 0.8, 0.1], [0.0, 0.1, 0.9]])
-    >>> rho = np.random.default_rng(0).uniform(0.05, 0.9, (24, 3, 1))
-    >>> SRL = 0.25 * rho * SL
-    >>> problem = QProblem(SL=SL, SRL=SRL, beta=0.25, M=np.linalg.inv(SL),
-    ...                    w_avg=SL.sum(axis=1), target=SRL.sum(axis=2) / 0.25)
-    >>> q_auto(problem).notes["model"]
-    'identity'
-    """
-    X, P, w, white = _data(problem)
-    rank, singular = target_rank(P, w, X)
-    notes: dict = {
-        "target_rank": rank,
-        "target_singular_values": singular,
-        "rank_relative_tolerance": RANK_RELATIVE_TOLERANCE,
-        "se_factor": AUTO_SE_FACTOR,
-        "metric": "leave-one-patch-out ΔE2000",
-    }
-    if rank < 3:
-        return _auto_reduced_rank(X, P, w, white, rank, singular, notes)
-    active = w > 0
-    narrow = colour_spread(P[active]) < NARROW_TARGET * colour_spread(X[active])
-    ladder = AUTO_LADDER_NARROW if narrow else AUTO_LADDER
-    alpha = choose_shrinkage(X, P, w, white)
-    held = {
-        name: _loo_ridge(X, P, w, np.array([alpha]))[0]
-        if name == "regularised" and np.isfinite(alpha)
-        else loo_predictions(name, X, P, w, white)
-        for name in ladder
-    }
-    stacked, unit = patch_errors(np.stack(list(held.values())), P, w, white)
-    scores = {name: e[active] for name, e in zip(held, stacked, strict=True)}
-    chosen, table = choose_model(scores, AUTO_SE_FACTOR)
-    notes |= {
-        "model": chosen,
-        "reason": _auto_reason(chosen, table, AUTO_SE_FACTOR, "least-squares", unit),
-        "metric": f"leave-one-patch-out {unit}",
-        "cv_delta_e": {k: v["mean"] for k, v in table.items()},
-        "cv_comparison": table,
-        "cv_error": {
-            k: float(np.mean(error_relative_to_white(h, P, white, w))) for k, h in held.items()
-        },
-        "cross_validated_error": error_relative_to_white(held[chosen], P, white, w),
-    }
-    notes["narrow_target"] = narrow
-    if chosen == "regularised":
-        notes["shrinkage"] = alpha
-        Q = _ridge(X, P, w, alpha) if np.isfinite(alpha) else _fit_diagonal(X, P, w, white)
-    elif chosen.startswith("rank-"):
-        Q = _fit_reduced_rank(X, P, w, int(chosen.removeprefix("rank-")))
-    else:
-        Q = MODEL_KERNELS[chosen](X, P, w, white)
-    return QFit(Q=Q, notes=notes)

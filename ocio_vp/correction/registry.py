@@ -19,10 +19,10 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ocio_vp.correction.auto import q_auto
 from ocio_vp.correction.joint import q_joint
 from ocio_vp.correction.linear import (
     fit_least_squares,
-    q_auto,
     q_diagonal,
     q_identity,
     q_regularised,
