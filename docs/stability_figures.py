@@ -13,6 +13,7 @@ from collections import Counter
 import numpy as np
 
 from ocio_vp.calibration.equations import condition_number, predict_lit_chart, solve_M, solve_N
+from ocio_vp.correction.root_polynomial import post_correction
 from ocio_vp.metrics import error_relative_to_white
 from ocio_vp.pipeline import solve_environment
 from ocio_vp.simulator.data import ENVIRONMENTS
@@ -24,8 +25,9 @@ TRIALS = 40
 
 def model_table(m) -> str:
     rows = [
-        "| environment | auto picks | N | identity | diagonal | regularised | least-squares |",
-        "|---|---|---|---|---|---|---|",
+        "| environment | auto picks | N | identity | diagonal | regularised | least-squares "
+        "| root-polynomial |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for env in m.environments:
         t0 = time.perf_counter()
@@ -33,7 +35,7 @@ def model_table(m) -> str:
         ms = 1000 * (time.perf_counter() - t0)
         cv = s.diagnostics["method_notes"]["cv_delta_e"]
         cells = [f"{cv[k]:.2f}" if k in cv else "-" for k in (
-            "identity", "diagonal", "regularised", "least-squares")]  # fmt: skip
+            "identity", "diagonal", "regularised", "least-squares", "root-polynomial")]  # fmt: skip
         n = "= M" if s.diagnostics["N_equals_M"] else ("solved" if s.N is not None else "no")
         rows.append(f"| {env.name} | {s.diagnostics['model']} | {n} | " + " | ".join(cells) + " |")
     rows.append(f"\nOne `solve_environment(method='auto')` with its diagnostics: ~{ms:.0f} ms.")
@@ -60,7 +62,8 @@ def noise_table(m) -> str:
                 Ns.append(s.in_frustum_matrix)
                 models[s.diagnostics["model"]] += 1
                 # The solve from noisy plates, played on the true stage (eq. 3 with true [SRL]).
-                lit = predict_lit_chart(m.SRL, s.beta, s.M, s.w_avg) @ s.Q.T
+                correct = post_correction(s.Q, s.diagnostics.get("method_notes"))
+                lit = correct(predict_lit_chart(m.SRL, s.beta, s.M, s.w_avg))
                 errors.append(np.mean(error_relative_to_white(lit, env.target_chart)))
             Ns = np.array(Ns)
             spread = np.sqrt(np.mean(np.sum((Ns - Ns.mean(0)) ** 2, axis=(1, 2))))

@@ -153,13 +153,18 @@ def exported_matrix(tmp_path_factory) -> list[Path]:
     from ocio_vp.cli import main
 
     root = tmp_path_factory.mktemp("compat")
-    assert main(["demo", "--out", str(root / "demo"), "--no-report"]) == 0
+    # Matrices only: least squares for the demo's stage file, then auto's rank-1 Q for sodium
+    # (auto's root-polynomial elsewhere would make LUTs, tested in test_ocio_root_polynomial).
+    demo = ["demo", "--out", str(root / "demo"), "--no-report", "--method", "least-squares"]
+    assert main(demo) == 0
     stage = root / "demo" / "paper_stage.yaml"
+    sodium = ["solve", str(stage), "--out", str(root / "auto"), "--environment", "sodium_vapour"]
+    assert main(sodium) == 0
     ramps = root / "ramps.yaml"
     ramps.write_text(yaml.safe_dump(add_ramps(yaml.safe_load(stage.read_text()))))
     args = ["solve", str(ramps), "--out", str(root / "pq"), "--wall-encoding", "pq"]
-    assert main([*args, "--environment", "incandescent"]) == 0
-    folders = [root / "demo" / "sodium_vapour", root / "pq" / "incandescent"]
+    assert main([*args, "--environment", "incandescent", "--method", "least-squares"]) == 0
+    folders = [root / "auto" / "sodium_vapour", root / "pq" / "incandescent"]
     assert main(["export", *map(str, folders)]) == 0
     return folders
 

@@ -278,7 +278,8 @@ def _solve_joint(joint: _JointProblem, max_iterations: int, camera: str) -> QFit
     # scipy is imported here, when a joint solve runs: the other methods do not need it.
     from scipy.optimize import minimize
 
-    Q0 = fit_least_squares(joint.A @ joint.d0, joint.P, joint.w)
+    # The sequential Q as every method fits it: the chart lit by the drive the wall can emit.
+    Q0 = fit_least_squares(joint.A @ np.clip(joint.d0, 0.0, None), joint.P, joint.w)
     if not (joint.y0 > 0 and joint.top > 0):  # no visible baseline light: no white point to keep
         return QFit(
             Q=Q0,
