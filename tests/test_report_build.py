@@ -76,10 +76,20 @@ def test_itp_domain():
 
 
 def test_sodium_itp_is_undefined_not_huge():
-    """Sodium's eq. 3 lit chart through a rank-1 Q (before the wall clips the drive) has
-    negative light: ΔE ITP is NaN exactly there, bounded everywhere else."""
+    """Sodium's eq. 3 lit chart with the drive unclipped (negative blue light; Q is fitted to
+    the clipped one, which the report draws), and through the rank-1 Q: negative light, so ΔE
+    ITP is NaN exactly there, bounded everywhere else."""
+    from ocio_vp.calibration.equations import predict_lit_chart
+    from ocio_vp.formats.measurements import load_measurements
+
     (data,) = environment_data([SAMPLE / "sodium_vapour"])
-    unclipped = {k: np.asarray(v) for k, v in data.solution.diagnostics["charts"].items()}
+    solution = data.solution
+    measurements = load_measurements(SAMPLE.parent / "paper_stage.yaml")
+    lit = predict_lit_chart(measurements.SRL, solution.beta, solution.M, solution.w_avg)
+    assert np.min(np.asarray(solution.M) @ np.asarray(solution.w_avg)) < 0  # a negative drive
+    charts = solution.diagnostics["charts"]
+    unclipped = {k: np.asarray(v) for k, v in charts.items()}
+    unclipped |= {"lit_baseline": lit, "lit_corrected": lit @ np.asarray(solution.Q).T}
     itp = delta_e(unclipped, data.transform.camera_to_xyz, data.white_patch)["ITP"]
     assert sum(int(np.isnan(v).sum()) for v in itp.values()) > 0
     target_ok = itp_defined(unclipped["target"], data.transform.camera_to_xyz)

@@ -107,21 +107,20 @@ def _auto_reduced_rank(X, P, w, white, rank: int, singular: np.ndarray, notes: d
     return QFit(Q=fit_model(name, X, P, w, white), notes=notes)
 
 
-def _fits(problem: QProblem, name: str) -> bool:
-    """Whether the root-polynomial method accepts the problem (enough, independent patches)."""
+def _root_polynomial_fit(problem: QProblem, name: str) -> QFit | None:
+    """The root-polynomial method's own fit; None when it refuses the chart (too few or
+    dependent patches for its terms)."""
     try:
-        make_q_root_polynomial(ROOT_POLYNOMIAL_DEGREES[name])(problem)
+        return make_q_root_polynomial(ROOT_POLYNOMIAL_DEGREES[name])(problem)
     except InputError:
-        return False
-    return True
+        return None
 
 
-def _chosen_fit(problem: QProblem, chosen: str, X, P, w, white, alpha: float, notes: dict):
-    """The chosen model's QFit: a root-polynomial one as its own method fits it (the model in
-    ``notes["root_polynomial"]``, Q its 3x3 approximation), with auto's notes on top."""
-    if chosen in ROOT_POLYNOMIAL_DEGREES:
-        fit = make_q_root_polynomial(ROOT_POLYNOMIAL_DEGREES[chosen])(problem)
-        return QFit(Q=fit.Q, notes={**fit.notes, **notes})
+def _chosen_fit(chosen: str, X, P, w, white, alpha: float, notes: dict, model: QFit | None):
+    """The chosen model's QFit: a root-polynomial one as its own method fitted it (``model``:
+    the model in ``notes["root_polynomial"]``, Q its 3x3 approximation), auto's notes on top."""
+    if model is not None:
+        return QFit(Q=model.Q, notes={**model.notes, **notes})
     if chosen == "regularised":
         notes["shrinkage"] = alpha
     return QFit(Q=fit_model(chosen, X, P, w, white, alpha), notes=notes)
@@ -166,9 +165,12 @@ def q_auto(problem: QProblem) -> QFit:
     stacked, unit = patch_errors(np.stack(list(held.values())), P, w, white)
     scores = {name: e[active] for name, e in zip(held, stacked, strict=True)}
     chosen, table = choose_model(scores, AUTO_SE_FACTOR)
-    if chosen in ROOT_POLYNOMIAL_DEGREES and not _fits(problem, chosen):
-        del scores[chosen], held[chosen]  # a design the patches do not constrain: not a candidate
-        chosen, table = choose_model(scores, AUTO_SE_FACTOR)
+    model = None
+    if chosen in ROOT_POLYNOMIAL_DEGREES:
+        model = _root_polynomial_fit(problem, chosen)
+        if model is None:  # a design the patches do not constrain: not a candidate
+            del scores[chosen], held[chosen]
+            chosen, table = choose_model(scores, AUTO_SE_FACTOR)
     notes |= {
         "model": chosen,
         "reason": _auto_reason(chosen, table, AUTO_SE_FACTOR, "least-squares", unit),
@@ -181,4 +183,4 @@ def q_auto(problem: QProblem) -> QFit:
         "cross_validated_error": error_relative_to_white(held[chosen], P, white, w),
         "narrow_target": narrow,
     }
-    return _chosen_fit(problem, chosen, X, P, w, white, alpha, notes)
+    return _chosen_fit(chosen, X, P, w, white, alpha, notes, model)
