@@ -20,6 +20,8 @@ from ocio_vp.exports import export_solutions
 from ocio_vp.formats.solution import load_solution
 
 NODE_CLASSES = ("Root", "Group", "Input", "OCIONamedTransform", "ColorMatrix", "Output")
+#: Every class the harness knows (a root-polynomial Q adds its CLF fallback node).
+KNOWN_CLASSES = (*NODE_CLASSES, "OCIOFileTransform")
 
 # Runs the script in a safe interpreter; every node class is a proc that records its knob
 # list; `pwned` records that injected code ran. Knob values leave as hex so nothing is lost.
@@ -45,7 +47,7 @@ foreach call $calls {
         puts "knob $key [binary encode hex [encoding convertto utf-8 $value]]"
     }
 }
-""".replace("NODE_CLASSES", " ".join(NODE_CLASSES))
+""".replace("NODE_CLASSES", " ".join(KNOWN_CLASSES))
 
 
 def parse_nk(path: Path, tmp_path: Path) -> list[tuple[str, dict[str, str]]]:
@@ -137,3 +139,28 @@ class TestNukeScript:
         expected = (tmp_path / "o" / "env_1" / "nuke" / "config" / "config.ocio").resolve()
         assert knobs["Root"]["customOCIOConfigPath"] == expected.as_posix()
         assert Path(knobs["Root"]["customOCIOConfigPath"]).is_file()
+
+
+def test_root_polynomial_q_has_its_clf_fallback(tmp_path):
+    """A root-polynomial Q: the OCIO node reads the config's LUT bake; a disabled
+    OCIOFileTransform reads the Q CLF sidecar (valid for ociochecklut, and the exact model
+    within the bake limit); the ColorMatrix is labelled as the 3x3 approximation."""
+    (folder,) = solve_to(tmp_path / "solved", environments=1, method="root-polynomial")
+    export_solutions([folder], targets=["nuke"])
+    nodes = parse_nk(folder / "exports" / "nuke" / "env_0.nk", tmp_path)
+    classes = [cls for cls, _ in nodes]
+    assert classes == [*NODE_CLASSES[:4], "OCIOFileTransform", *NODE_CLASSES[4:], "end_group"]
+    knobs = dict(nodes)
+    lut = Path(knobs["OCIOFileTransform"]["file"])
+    assert lut.is_file() and lut.suffix == ".clf" and lut.parent.parent.name == "config"
+    assert knobs["OCIOFileTransform"]["disable"] == "true"
+    assert "3x3 approximation" in knobs["ColorMatrix"]["label"]
+    solution = load_solution(folder)
+    C = np.asarray(solution.diagnostics["method_notes"]["root_polynomial"]["coefficients"])
+    rgb = np.array([0.3, 0.2, 0.1])
+    result = run_tool("ociochecklut", str(lut), *map(str, rgb))
+    assert result.returncode == 0, result.stdout + result.stderr
+    got = np.array(result.stdout.split()[-3:], dtype=float)
+    terms = [rgb[0], rgb[1], rgb[2], *np.sqrt(rgb[[0, 1, 0]] * rgb[[1, 2, 2]])]
+    expected = C @ np.array(terms)
+    assert np.abs(got - expected).max() <= 1e-3 * np.abs(expected).max()

@@ -168,11 +168,15 @@ int main(int argc, char **argv) {
 """
 
 
-def compile_dctl(dctl: Path, tmp_path: Path) -> Path:
+#: DCTL's math functions, as C99's (the root-polynomial DCTL uses _powf).
+MATH_HARNESS = "#include <math.h>\n#define _powf powf\n" + HARNESS
+
+
+def compile_dctl(dctl: Path, tmp_path: Path, harness: str = HARNESS) -> Path:
     if shutil.which("gcc") is None:
         pytest.skip("gcc is not on PATH")
     source = tmp_path / "harness.c"
-    source.write_text(HARNESS % dctl.resolve())
+    source.write_text(harness % dctl.resolve())
     binary = tmp_path / "harness"
     result = subprocess.run(
         [
@@ -184,6 +188,7 @@ def compile_dctl(dctl: Path, tmp_path: Path) -> Path:
             "-o",
             str(binary),
             str(source),
+            "-lm",
         ],
         capture_output=True,
         text=True,
@@ -229,3 +234,31 @@ class TestDctl:
         )
         got = run_dctl(compile_dctl(dctl, tmp_path), COLOURS)
         np.testing.assert_allclose(got, COLOURS @ matrix.T + offset, rtol=1e-6, atol=2e-6)
+
+
+def test_root_polynomial_dctl_is_the_model(tmp_path):
+    """A root-polynomial Q: the DCTL computes the model itself (gcc-compiled, float32), equal
+    to colour-science's expansion @ C^T, black to black, negatives finite; the manifest says
+    what the DCTL holds and, for the cube, either its measured accuracy or why it is absent."""
+    from colour.characterisation import polynomial_expansion_Finlayson2015
+
+    (folder,) = solve_to(tmp_path / "solved", environments=1, method="root-polynomial")
+    export_solutions([folder], targets=["resolve"], cube_size=17)
+    resolve = folder / "exports" / "resolve"
+    C = np.asarray(
+        load_solution(folder).diagnostics["method_notes"]["root_polynomial"]["coefficients"]
+    )
+    colours = np.vstack([COLOURS, [[-0.01, 0.02, 0.0], [1e-8, 2e-8, 0.0], [-1.0, -1.0, -1.0]]])
+    got = run_dctl(
+        compile_dctl(resolve / "post_correction_Q.dctl", tmp_path, MATH_HARNESS), colours
+    )
+    x = colours.astype(np.float32).astype(np.float64)
+    expected = polynomial_expansion_Finlayson2015(x, 2, root_polynomial_expansion=True) @ C.T
+    scale = np.abs(expected).max(axis=1, keepdims=True)
+    assert np.all(np.isfinite(got))
+    assert np.all(np.abs(got - expected) <= 1e-5 * scale)
+    assert np.array_equal(got[6], np.zeros(3))  # black
+    manifest = json.loads((resolve / "manifest.json").read_text())
+    assert "root-polynomial" in manifest["files"]["post_correction_Q.dctl"]["accuracy"]
+    cube = "post_correction_Q_17.cube"
+    assert cube in manifest["files"] or "post_correction_Q.clf" in manifest["not_written"][cube]

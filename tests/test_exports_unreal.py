@@ -28,12 +28,19 @@ from ocio_vp.pipeline import solve_measurements
 TOL = 1e-5  # the bar for oiiotool vs numpy
 
 
-def solve_to(folder: Path, *, camera_colorspace: str | None = None, environments: int = 2):
+def solve_to(
+    folder: Path,
+    *,
+    camera_colorspace: str | None = None,
+    environments: int = 2,
+    method: str | None = None,
+):
     data = make_measurements_dict(environments=environments)
     if camera_colorspace:
         data["stage"]["camera_colorspace"] = camera_colorspace
     measurements = measurements_from_dict(data, source="test")
-    write_solutions(solve_measurements(measurements), folder)
+    options = {} if method is None else {"method": method}
+    write_solutions(solve_measurements(measurements, **options), folder)
     return [folder / f"env_{i}" for i in range(environments)]
 
 

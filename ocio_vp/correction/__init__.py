@@ -85,6 +85,7 @@ from ocio_vp.correction.root_polynomial import (
     root_polynomial_expansion,
     root_polynomial_jacobian,
     root_polynomial_loo_predictions,
+    root_polynomial_term_powers,
     root_polynomial_terms,
 )
 from ocio_vp.correction.validation import (
@@ -160,6 +161,7 @@ __all__ = [
     "root_polynomial_expansion",
     "root_polynomial_jacobian",
     "root_polynomial_loo_predictions",
+    "root_polynomial_term_powers",
     "root_polynomial_terms",
     "singular_q_cause",
     "solve_post_correction",

@@ -54,6 +54,7 @@ __all__ = [
     "root_polynomial_expansion",
     "root_polynomial_jacobian",
     "root_polynomial_loo_predictions",
+    "root_polynomial_term_powers",
     "root_polynomial_terms",
 ]
 
@@ -87,6 +88,15 @@ _TERMS = (
 
 
 _ROOT_SIGNS = {1: "", 2: "√", 3: "∛", 4: "∜"}
+
+
+def root_polynomial_term_powers(degree: int) -> list[tuple[tuple[int, int, int], int]]:
+    """Each term as ((a, b, c), k): ``sign(p) |p|^(1/k)`` with ``p = r^a g^b b^c``.
+
+    >>> root_polynomial_term_powers(2)[3]
+    ((1, 1, 0), 2)
+    """
+    return list(_TERMS[: ROOT_POLYNOMIAL_TERMS[degree]])
 
 
 def root_polynomial_terms(degree: int) -> list[str]:

@@ -3,7 +3,10 @@
 - ``*.clf``: the exact post-correction Q (footage -> corrected) and the two wall transforms
   (content -> drive: M, and N plus the black-level offset, with the panel-linearity LUT1D when
   the config carries one), serialised by OCIO's own CLF writer from the config's processors.
-- ``post_correction_Q.dctl``: Q (LeGendre et al. 2022, eq. 5) as a DCTL in full float precision.
+- ``post_correction_Q.dctl``: Q (LeGendre et al. 2022, eq. 5) as a DCTL in full float precision;
+  for a root-polynomial Q, the model itself (its terms and coefficients, sign-preserving roots),
+  not its 3x3 approximation. The CLFs carry a root-polynomial Q as the config does (its LUT
+  bake); its ``.cube`` is written only if it meets the limit.
 - ``*_<size>.cube``: the same transforms as a 1D shaper + 3D LUT over an HDR input range,
   written only when the measured worst error meets :data:`ocio_vp.exports.cube.CUBE_LIMIT`
   (:mod:`ocio_vp.exports.cube`): in practice the affine transforms (Q; walls without a
@@ -22,6 +25,7 @@ from typing import Any
 import numpy as np
 import PyOpenColorIO as OCIO
 
+from ocio_vp.correction.root_polynomial import root_polynomial_term_powers
 from ocio_vp.exports.cube import CUBE_LIMIT, fit_cube
 from ocio_vp.exports.source import ExportSource
 from ocio_vp.exports.templating import render_template
@@ -32,6 +36,7 @@ __all__ = [
     "DEFAULT_CUBE_SIZE",
     "MANIFEST",
     "render_dctl",
+    "render_root_polynomial_dctl",
     "resolve_transforms",
     "write_clf",
     "write_resolve",
@@ -100,6 +105,48 @@ def render_dctl(
     )
 
 
+def _term_expression(powers: Sequence[int], root: int) -> str:
+    product = " * ".join(f"p_{c}" for c, n in zip("RGB", powers, strict=True) for _ in range(n))
+    return product if root == 1 else f"signed_root({product}, {root}.0f)"
+
+
+def render_root_polynomial_dctl(
+    *, title: str, stage: str, environment: str, description: str, model: dict[str, Any]
+) -> str:
+    """DCTL text computing a root-polynomial Q exactly: ``C . terms(rgb)`` (``model`` is
+    solution.json's ``diagnostics.method_notes.root_polynomial``)."""
+    degree = int(model["degree"])
+    coefficients = np.asarray(model["coefficients"], dtype=np.float64)
+    terms = [_term_expression(p, k) for p, k in root_polynomial_term_powers(degree)]
+    if coefficients.shape != (3, len(terms)):
+        raise ValueError(f"root-polynomial degree {degree} needs (3, {len(terms)}) coefficients")
+    return render_template(
+        "resolve_root_polynomial.dctl.j2",
+        title=title,
+        stage=stage,
+        environment=environment,
+        description=description,
+        degree=degree,
+        terms=terms,
+        coefficients=coefficients.tolist(),
+    )
+
+
+def _q_dctl(solution: Any) -> tuple[str, str]:
+    """(DCTL text, accuracy note) for Q: the root-polynomial model when the solve has one."""
+    common = {
+        "title": "post-correction Q",
+        "stage": solution.stage,
+        "environment": solution.environment,
+        "description": "Footage shot on the stage (camera linear) -> corrected camera linear.",
+    }
+    model = (solution.diagnostics.get("method_notes") or {}).get("root_polynomial")
+    if model is not None:
+        text = render_root_polynomial_dctl(**common, model=model)
+        return text, "root-polynomial Q (the model, not its 3x3), float32 arithmetic"
+    return render_dctl(**common, matrix=solution.Q), "Q as float32 literals"
+
+
 def _cube_entry(
     source: ExportSource, folder: Path, stem: str, clf: str, *, size: int, input_range
 ) -> tuple[str, dict[str, Any] | None, str | None]:
@@ -144,17 +191,9 @@ def write_resolve(
         else:
             files[name] = {"kind": "cube", "from": src, "to": dst, "accuracy": errors}
     dctl = folder / "post_correction_Q.dctl"
-    dctl.write_text(
-        render_dctl(
-            title="post-correction Q",
-            stage=solution.stage,
-            environment=solution.environment,
-            description="Footage shot on the stage (camera linear) -> corrected camera linear.",
-            matrix=solution.Q,
-        ),
-        encoding="utf-8",
-    )
-    files[dctl.name] = {"kind": "dctl", "accuracy": "Q as float32 literals"}
+    text, accuracy = _q_dctl(solution)
+    dctl.write_text(text, encoding="utf-8")
+    files[dctl.name] = {"kind": "dctl", "accuracy": accuracy}
     manifest = {
         "format": "ocio-vp/resolve-export",
         "version": 1,
