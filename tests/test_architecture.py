@@ -99,6 +99,56 @@ def test_the_import_graph_has_no_cycle():
     assert cycle is None, " -> ".join(cycle or [])
 
 
+#: docs/architecture.md's rows, from the leaves (0) up to the commands: a module may import a
+#: module of its own package or of a package on its row or below, never above.
+ROWS = {
+    "metrics": 0, "spectra": 0, "errors": 0,
+    "formats": 1, "wall": 1, "staging": 1,
+    "calibration": 2,
+    "correction": 3, "ocio": 3, "plates": 3, "hdri": 3, "fixtures": 3,
+    "pipeline": 4,
+    "simulator": 5, "synthesis": 5,
+    "report": 6, "exports": 6, "footage": 6,
+    "commands": 7, "cli": 7, "__main__": 7,
+}  # fmt: skip
+
+
+def _room(module: str) -> str | None:
+    """The package (or top-level module) ``module`` belongs to; None for the facade."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else None
+
+
+def upward_imports(graph: dict[str, set[str]]) -> list[str]:
+    """Imports that go up a row of :data:`ROWS` ("a -> b"), leaving out the facade."""
+    found = []
+    for module, targets in sorted(graph.items()):
+        for target in sorted(targets):
+            here, there = _room(module), _room(target)
+            if None in (here, there) or here == there:
+                continue
+            if ROWS[there] > ROWS[here]:
+                found.append(f"{module} -> {target}")
+    return found
+
+
+def test_every_package_has_a_row():
+    rooms = {_room(m) for m in MODULES} - {None}
+    assert rooms == set(ROWS), rooms ^ set(ROWS)
+
+
+def test_no_import_goes_up_a_row():
+    assert upward_imports(import_graph()) == []
+
+
+def test_upward_imports_finds_a_planted_one():
+    graph = {
+        "ocio_vp.correction.perceptual": {"ocio_vp.simulator.data"},
+        "ocio_vp": {"ocio_vp.cli"},
+    }
+    assert upward_imports(graph) == ["ocio_vp.correction.perceptual -> ocio_vp.simulator.data"]
+
+
 def test_the_graph_sees_in_function_imports():
     # ocio_vp.plates.detection imports colour_checker_detection lazily; the graph must at least
     # see the ocio_vp imports of a function body (pipeline.py imports the wall lazily, say).

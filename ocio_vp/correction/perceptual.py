@@ -10,7 +10,7 @@ colour-science's own ``delta_E`` ("CIE 2000" or "ITP"), in the normalisation of
 
 That matrix comes from the caller (``make_q_perceptual(camera_to_xyz=...)``) when the camera is
 characterised; the registry's ``perceptual`` uses :func:`default_camera_to_xyz`, the matrix of
-the sample camera of :mod:`ocio_vp.simulator.data` fitted by
+the sample camera (:func:`ocio_vp.spectra.camera_sensitivities`, as the simulator uses) fitted by
 :func:`ocio_vp.metrics.camera_to_xyz_matrix` — a generic stand-in for "a camera's RGB", good
 enough to weigh errors perceptually, not a colorimetric characterisation of *your* camera.
 
@@ -50,7 +50,7 @@ _STEP = 1e-6  # finite-difference step on Q's entries (which are ~1)
 def default_camera_to_xyz() -> np.ndarray:
     """Camera RGB -> XYZ of the sample camera (see the module docstring), cached."""
     from ocio_vp.metrics import camera_to_xyz_matrix
-    from ocio_vp.simulator.data import camera_sensitivities
+    from ocio_vp.spectra import camera_sensitivities
 
     matrix = np.asarray(camera_to_xyz_matrix(camera_sensitivities()), dtype=np.float64)
     matrix.setflags(write=False)
