@@ -17,8 +17,8 @@ built on a matrix. The non-linear model itself is in ``QFit.notes["root_polynomi
 (``{"degree": d, "coefficients": (3, terms) list}``), which ``solution.json`` carries in
 ``diagnostics.method_notes``; :func:`post_correction` turns a matrix and those notes back into
 the function to apply. The OCIO config carries the model itself as LUTs
-(:mod:`ocio_vp.ocio.root_polynomial`); the Nuke and Resolve exports still use the 3x3 approximation, and the fit
-says so in its ``warnings`` note.
+(:mod:`ocio_vp.ocio.root_polynomial`), ``ocio-vp apply`` and the Resolve DCTL compute it
+exactly, and the fit's ``warnings`` note says where the 3x3 approximation remains.
 
 The inverse (:func:`invert_root_polynomial`) is solved on each colour's direction (the colour
 divided by its largest absolute channel, then scaled back: homogeneity), by damped Newton
@@ -65,12 +65,12 @@ ROOT_POLYNOMIAL_TERMS = {1: 3, 2: 6, 3: 13, 4: 22}
 #: rank-deficient: the patches do not constrain every term.
 RANK_RELATIVE_TOLERANCE = 1e-10
 
-#: The warning a root-polynomial fit carries while configs use the 3x3 approximation.
+#: The warning a root-polynomial fit carries: where the model travels as a matrix.
 CONFIG_APPROXIMATION_WARNING = (
-    "root-polynomial Q: the OCIO config carries it (and M Q^-1 in-frustum) as baked LUTs when N "
-    "is solved (else the config uses the 3x3 approximation too), but Q "
-    "and N in solution.json and the Nuke/Resolve exports are its best 3x3 approximation; "
-    "the model is in diagnostics.method_notes.root_polynomial"
+    "root-polynomial Q: Q and N in solution.json are its best 3x3 approximation (the model is "
+    "in diagnostics.method_notes.root_polynomial); the OCIO config carries the model as baked "
+    "LUTs when N is solved (else the 3x3 too), apply and the Resolve DCTL compute it exactly, "
+    "and only Nuke's disabled ColorMatrix fallback is the 3x3"
 )
 
 
