@@ -30,7 +30,7 @@ from ocio_vp.correction.guards import check_problem, singular_q_cause
 from ocio_vp.correction.outliers import Inconsistency, inconsistent_patches
 from ocio_vp.correction.perceptual import default_camera_to_xyz
 from ocio_vp.correction.registry import QFit, QProblem, solve_post_correction
-from ocio_vp.correction.root_polynomial import post_correction
+from ocio_vp.correction.root_polynomial import invert_root_polynomial, post_correction
 from ocio_vp.correction.validation import CLOSED_FORM_METHODS, cross_validated_error
 from ocio_vp.errors import InputError
 from ocio_vp.fixtures.lighting import (
@@ -259,10 +259,15 @@ def _charts(
     baseline = problem.predicted
     correct = post_correction(Q, fit.notes)  # Q, or the non-linear model Q approximates
     lit = baseline if fit.M is None else dataclasses.replace(problem, M=M).predicted
+    content, matrix = environment.target_chart, problem.M if N is None else N
+    model = fit.notes.get("root_polynomial")
+    if N is not None and model is not None:  # N(c) = M Q^-1(c), as the config's LUT carries it
+        content = invert_root_polynomial(np.asarray(model["coefficients"]), content)
+        matrix = problem.M
     displayed = predict_displayed_chart(
-        environment.target_chart,
+        content,
         SL=problem.SL,
-        matrix=problem.M if N is None else N,
+        matrix=matrix,
         offset=offset,
         black_level=environment.black_level,
     )
