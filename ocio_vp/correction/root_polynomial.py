@@ -384,18 +384,31 @@ def invert_root_polynomial(
 
 
 def _line_search(C, t, y, r, norm, todo, dy, halvings: int = 30) -> np.ndarray:
-    """Move y[todo] along dy by the largest 2^-k step that lowers the residual (in place);
-    returns the indices where no step did."""
+    """Move y[todo] along dy by the largest 2^-k step (k < ``halvings``) that lowers the
+    residual (in place); returns the indices where no step did.
+
+    The full step is tried first; where it fails, every shorter step is evaluated at once
+    (one batched call instead of one per halving) and the longest one that helps is taken.
+    """
     index = np.flatnonzero(todo)
-    alpha = np.ones(len(index))
-    for _ in range(halvings):
-        trial = y[index] + alpha[:, None] * dy
-        r_trial = apply_root_polynomial(C, trial) - t[index]
-        n_trial = np.max(np.abs(r_trial), axis=1)
-        better = np.isfinite(n_trial) & (n_trial < norm[index])
-        done = index[better]
-        y[done], r[done], norm[done] = trial[better], r_trial[better], n_trial[better]
-        index, alpha, dy = index[~better], alpha[~better] / 2, dy[~better]
-        if len(index) == 0:
-            break
-    return index
+    trial = y[index] + dy
+    r_trial = apply_root_polynomial(C, trial) - t[index]
+    n_trial = np.max(np.abs(r_trial), axis=1)
+    better = np.isfinite(n_trial) & (n_trial < norm[index])
+    done = index[better]
+    y[done], r[done], norm[done] = trial[better], r_trial[better], n_trial[better]
+    rest, dy = index[~better], dy[~better]
+    if len(rest) == 0:
+        return rest
+    alpha = 2.0 ** -np.arange(1, halvings)
+    trials = y[rest][:, None, :] + alpha[None, :, None] * dy[:, None, :]  # (m, k, 3)
+    r_trials = apply_root_polynomial(C, trials.reshape(-1, 3)).reshape(trials.shape)
+    r_trials -= t[rest][:, None, :]
+    n_trials = np.max(np.abs(r_trials), axis=2)
+    ok = np.isfinite(n_trials) & (n_trials < norm[rest][:, None])
+    found = ok.any(axis=1)
+    k = np.argmax(ok, axis=1)[found]  # the longest step that helps
+    done = rest[found]
+    rows = np.flatnonzero(found)
+    y[done], r[done], norm[done] = trials[rows, k], r_trials[rows, k], n_trials[rows, k]
+    return rest[~found]
