@@ -6,7 +6,8 @@ OpenColorIO, OpenImageIO, colour-science), the date, and each module's section. 
 fails is reported in its section (with the error) and makes the command exit 1; the others
 still run. ``--quick`` uses smaller inputs and fewer repeats (about 3 minutes on 2 cores). A module with a
 ``DOC`` attribute (e.g. ``bench_accuracy``: ``DOC = "accuracy.md"``) writes its own document,
-``docs/<DOC>``, instead of a section of docs/performance.md.
+``docs/<DOC>``, instead of a section of docs/performance.md. ``--skip accuracy`` regenerates
+docs/performance.md alone (every section of it, in one run).
 """
 
 from __future__ import annotations
@@ -63,12 +64,16 @@ def _versions() -> list[tuple[str, str]]:
     return out
 
 
-def bench_modules(only: list[str] | None = None) -> list[str]:
-    """Module names of ``benchmarks/bench_*.py`` (sorted), optionally filtered by topic."""
+def bench_modules(only: list[str] | None = None, skip: list[str] = ()) -> list[str]:
+    """Module names of ``benchmarks/bench_*.py`` (sorted), optionally filtered by topic.
+
+    >>> "bench_apply" in bench_modules(["apply"]) and "bench_apply" not in bench_modules(skip=["apply"])
+    True
+    """
     names = sorted(p.stem for p in (ROOT / "benchmarks").glob("bench_*.py"))
     if only:
         names = [n for n in names if n.removeprefix("bench_") in only or n in only]
-    return names
+    return [n for n in names if n.removeprefix("bench_") not in skip and n not in skip]
 
 
 def header(quick: bool) -> str:
@@ -104,6 +109,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="small inputs, fewer repeats")
     parser.add_argument("--only", nargs="+", metavar="TOPIC", help="e.g. apply wavg (no write)")
     parser.add_argument(
+        "--skip",
+        nargs="+",
+        default=[],
+        metavar="TOPIC",
+        help="leave these out, e.g. accuracy (its own docs/accuracy.md takes ~15 min)",
+    )
+    parser.add_argument(
         "--out",
         default=None,
         help="output markdown (default docs/performance.md; none with --only)",
@@ -112,7 +124,7 @@ def main(argv: list[str] | None = None) -> int:
     sections = [header(args.quick)]
     own_docs: dict[str, str] = {}
     failed = 0
-    for name in bench_modules(args.only):
+    for name in bench_modules(args.only, skip=args.skip):
         start = time.perf_counter()
         print(f"benchmarks: {name} ...", file=sys.stderr, flush=True)
         try:
