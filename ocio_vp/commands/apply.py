@@ -17,7 +17,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "apply",
         help="post-correct footage shot on the stage (Q) with OCIO, keeping every channel",
         description="Apply the solution's post-correction (its config's 'Stage Footage' -> "
-        "reference) to frames, writing DIR/<frame name> (DIR/<environment>/<frame name> when "
+        "reference; a root-polynomial Q is computed exactly, not through the config's LUT) to "
+        "frames, writing DIR/<frame name> (DIR/<environment>/<frame name> when "
         "several environments are given). Alpha, depth and AOV channels, metadata, data window "
         "and compression are kept. Frames already in DIR are skipped (resume); a bad frame is "
         "reported and the others are still done (exit 2 at the end).",
