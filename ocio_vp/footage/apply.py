@@ -195,11 +195,13 @@ class RootPolynomialTransform:
 
     def __call__(self, rgb: np.ndarray) -> None:
         model = _exact_model()
-        flat = rgb.reshape(-1, 3)  # a view: rgb is C-contiguous
+        flat = rgb.reshape(-1, 3)  # a view when rgb is C-contiguous (the protocol), else a copy
         for start in range(0, len(flat), self.band):
             block = flat[start : start + self.band]
             with np.errstate(over="ignore"):  # half overflow: inf, documented above
                 block[...] = model(self.coefficients, block)
+        if not np.shares_memory(flat, rgb):
+            rgb[...] = flat.reshape(rgb.shape)
 
 
 def _exact_model() -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
