@@ -263,10 +263,10 @@ def file_to_file(quick: bool) -> str:
     from ocio_vp.footage.apply import apply_file, load_post_correction
     from ocio_vp.ocio.writer import write_solutions
 
-    count, rounds = (2, 2) if quick else (4, 3)
+    count, rounds, (height, width) = (2, 2, (1080, 2048)) if quick else (4, 3, (2160, 4096))
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
-        frames = write_frames(root / "plates", count, 2160, 4096)
+        frames = write_frames(root / "plates", count, height, width)
         (solution,) = _solutions(("incandescent",))
         write_solutions([solution], root / "rp")
         posts = {
@@ -285,7 +285,9 @@ def file_to_file(quick: bool) -> str:
     rows = [(name, threads, fmt_ms(t)) for (name, threads), t in median.items()]
     names = list(posts)
     best = {n: min(median[n, 1], median[n, 2]) for n in names}
-    table = markdown_table(["solution (4096x2160 half zip EXR)", "threads", "per frame"], rows)
+    table = markdown_table(
+        [f"solution ({width}x{height} half zip EXR)", "threads", "per frame"], rows
+    )
     return "\n".join(
         [
             "### Applying a root-polynomial Q, file to file",
