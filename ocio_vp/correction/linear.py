@@ -57,6 +57,7 @@ __all__ = [
     "ladder_predictions",
     "loo_cv_error",
     "loo_predictions",
+    "loo_root_polynomial",
     "patch_errors",
     "problem_arrays",
     "q_diagonal",
@@ -323,7 +324,7 @@ LOO_KERNELS: dict[str, Kernel] = {
 }
 
 
-def _loo_root_polynomial(X: np.ndarray, P: np.ndarray, w: np.ndarray, degree: int) -> np.ndarray:
+def loo_root_polynomial(X: np.ndarray, P: np.ndarray, w: np.ndarray, degree: int) -> np.ndarray:
     """Held-out predictions of the weighted root-polynomial fit (Finlayson et al. 2015).
 
     Linear in its parameters, so the hat-matrix identity holds: patch j's held-out prediction
@@ -358,7 +359,7 @@ def loo_predictions(name: str, X: np.ndarray, P: np.ndarray, w: np.ndarray, whit
     if name.startswith("rank-"):
         return _loo_reduced_rank(X, P, w, int(name.removeprefix("rank-")))
     if name in ROOT_POLYNOMIAL_DEGREES:
-        return _loo_root_polynomial(X, P, w, ROOT_POLYNOMIAL_DEGREES[name])
+        return loo_root_polynomial(X, P, w, ROOT_POLYNOMIAL_DEGREES[name])
     return LOO_KERNELS[name](X, P, w, white)
 
 

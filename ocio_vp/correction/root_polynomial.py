@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from ocio_vp.correction.linear import loo_root_polynomial
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import error_relative_to_white
@@ -260,30 +261,23 @@ def root_polynomial_loo_predictions(
     """(n, 3) leave-one-patch-out predictions of the root-polynomial fit, in closed form.
 
     The fit is weighted least squares, linear in its parameters, so removing patch j changes
-    its residual to ``r_j / (1 - h_j)`` with ``h_j = w_j e_j^T (E^T W E)^-1 e_j`` (the hat
-    matrix's diagonal): one fit instead of one per patch. Patches with weight 0 are not in the
-    fit, so their prediction is the fit's own. NaN where removing the patch leaves the design
-    rank-deficient (``h_j`` ~ 1).
+    its residual to ``r_j / (1 - h_j)`` (``h_j`` the hat matrix's diagonal): one fit instead of
+    one per patch. The kernel is :func:`ocio_vp.correction.linear.loo_root_polynomial`, the one
+    ``auto`` compares models with; a patch that alone decides a term is refitted without it, and
+    patches with weight 0 get the full fit's prediction.
 
     Raises
     ------
     InputError
         The fit itself is impossible (see :func:`fit_root_polynomial`).
     """
-    X, P = np.asarray(X, dtype=np.float64), np.asarray(P, dtype=np.float64)
-    w = np.asarray(w, dtype=np.float64)
-    C = fit_root_polynomial(X, P, w, degree)
-    E = root_polynomial_expansion(X, degree)
-    keep = w > 0
-    U = np.linalg.svd(E[keep] * np.sqrt(w[keep])[:, None], full_matrices=False)[0]
-    h = np.zeros(len(X))
-    h[keep] = np.sum(U**2, axis=1)  # the hat matrix's diagonal, without forming (E^T W E)^-1
-    fitted = E @ C.T
-    with np.errstate(divide="ignore", invalid="ignore"):
-        held = P - (P - fitted) / (1.0 - h)[:, None]
-    held[~keep] = fitted[~keep]
-    held[keep & (h > 1.0 - 1e-9)] = np.nan
-    return held
+    fit_root_polynomial(X, P, w, degree)  # its guards: too few or dependent patches
+    return loo_root_polynomial(
+        np.asarray(X, dtype=np.float64),
+        np.asarray(P, dtype=np.float64),
+        np.asarray(w, dtype=np.float64),
+        degree,
+    )
 
 
 def _loo_error(X, P, w, degree: int, white: int) -> np.ndarray | None:
