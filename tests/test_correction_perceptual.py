@@ -9,9 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import paper_stage_problem
 
-from ocio_vp.calibration.equations import solve_M
-from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
 from ocio_vp.correction.perceptual import (
     default_camera_to_xyz,
     make_q_perceptual,
@@ -25,18 +24,7 @@ from ocio_vp.metrics import chart_errors
 
 @pytest.fixture(scope="module")
 def problem() -> QProblem:
-    from ocio_vp.simulator.stage import paper_stage_measurements
-
-    m = paper_stage_measurements(("indoor_daylight",))
-    env = m.environments[0]
-    return QProblem(
-        SL=m.SL,
-        SRL=m.SRL,
-        beta=stage_beta(m),
-        M=solve_M(m.SL),
-        w_avg=environment_w_avg(m, env),
-        target=env.target_chart,
-    )
+    return paper_stage_problem("indoor_daylight")
 
 
 def _least_squares(problem: QProblem) -> np.ndarray:

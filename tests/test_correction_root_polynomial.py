@@ -17,9 +17,8 @@ from colour.characterisation import (
     colour_correction_Finlayson2015,
     matrix_colour_correction_Finlayson2015,
 )
+from conftest import paper_stage_problem
 
-from ocio_vp.calibration.equations import solve_M
-from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
 from ocio_vp.correction import (
     Q_SOLVE_METHODS,
     ROOT_POLYNOMIAL_TERMS,
@@ -39,18 +38,7 @@ from ocio_vp.errors import InputError
 
 @pytest.fixture(scope="module", params=["incandescent", "indoor_daylight"])
 def problem(request) -> QProblem:
-    from ocio_vp.simulator.stage import paper_stage_measurements
-
-    m = paper_stage_measurements((request.param,))
-    env = m.environments[0]
-    return QProblem(
-        SL=m.SL,
-        SRL=m.SRL,
-        beta=stage_beta(m),
-        M=solve_M(m.SL),
-        w_avg=environment_w_avg(m, env),
-        target=env.target_chart,
-    )
+    return paper_stage_problem(request.param)
 
 
 @pytest.mark.parametrize("degree", [2, 3])

@@ -25,6 +25,7 @@ from conftest import make_measurements_dict
 from exr_helpers import write_exr
 
 from ocio_vp.cli import main
+from ocio_vp.formats.documents import MAX_DEPTH
 from ocio_vp.staging import MARKER
 
 MAX_LINE = 300
@@ -98,9 +99,13 @@ PARSER_CASES = {
     ),
     "alias_bomb_lists": ("m.yaml", ALIAS_BOMB, "aliases expand"),
     "recursive_alias": ("m.yaml", "format: &a [*a]\n", "refers to itself"),
-    # Our bound (64 levels) below libyaml's own (1000 flow levels in the libyaml that PyYAML
+    # Our bound (MAX_DEPTH, 64 levels) below libyaml's own (1000 flow levels in the libyaml that PyYAML
     # 6.0.4's wheels bundle; none in 6.0.3's): our message, whichever PyYAML is installed.
-    "deep_nesting_yaml": ("m.yaml", "[" * 100 + "]" * 100, "nested deeper than 64"),
+    "deep_nesting_yaml": (
+        "m.yaml",
+        "[" * (MAX_DEPTH + 1) + "]" * (MAX_DEPTH + 1),
+        f"nested deeper than {MAX_DEPTH}",
+    ),
     # Far deeper: whichever bound stops it first, one line naming the file and the nesting.
     "deep_nesting_yaml_50000": ("m.yaml", "[" * 50_000 + "]" * 50_000, "nest"),
     "deep_nesting_json": ("m.json", "[" * 50_000 + "]" * 50_000, "nested too deep"),
@@ -237,11 +242,10 @@ def _run_cli(args: list[str], cwd: Path, timeout: float = 120, **kwargs):
 
 
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this system")
-def test_fifos_never_block(tmp_path):
-    """A FIFO nobody writes, as measurements file and as a plate: refused at once, no hang."""
-    os.mkfifo(tmp_path / "m.yaml")
-    os.mkfifo(tmp_path / "plate.exr")
-    capture = {
+def _one_plate_capture(corners: list) -> dict:
+    """A capture file whose every photograph is ``plate.exr``, the charts at ``corners``."""
+    chart = {"plate": "plate.exr", "corners": corners}
+    return {
         "format": "ocio-vp/capture",
         "version": 1,
         "stage": {"name": "s", "beta": 0.25},
@@ -252,17 +256,16 @@ def test_fifos_never_block(tmp_path):
             "green": [2, 0, 4, 2],
             "blue": [4, 0, 6, 2],
         },
-        "lit_chart": {
-            c: {"plate": "plate.exr", "corners": [[0, 0], [6, 0], [6, 4], [0, 4]]}
-            for c in ("red", "green", "blue")
-        },
-        "environments": [
-            {
-                "name": "e",
-                "target_chart": {"plate": "plate.exr", "corners": [[0, 0], [6, 0], [6, 4], [0, 4]]},
-            }
-        ],
+        "lit_chart": {c: dict(chart) for c in ("red", "green", "blue")},
+        "environments": [{"name": "e", "target_chart": dict(chart)}],
     }
+
+
+def test_fifos_never_block(tmp_path):
+    """A FIFO nobody writes, as measurements file and as a plate: refused at once, no hang."""
+    os.mkfifo(tmp_path / "m.yaml")
+    os.mkfifo(tmp_path / "plate.exr")
+    capture = _one_plate_capture([[0, 0], [6, 0], [6, 4], [0, 4]])
     write_yaml(tmp_path / "capture.yaml", capture)
     for args, name in (
         (["solve", "m.yaml", "--out", "out"], "m.yaml"),
@@ -548,22 +551,7 @@ def test_measure_never_replaces_its_inputs(tmp_path, capsys):
     plate = tmp_path / "plate.exr"
     write_exr(plate, np.full((8, 12, 3), 0.5, np.float32))
     corners = [[0, 0], [12, 0], [12, 8], [0, 8]]
-    capture = {
-        "format": "ocio-vp/capture",
-        "version": 1,
-        "stage": {"name": "s", "beta": 0.25},
-        "chart": {"rows": 4, "columns": 6},
-        "primaries": {
-            "plate": "plate.exr",
-            "red": [0, 0, 2, 2],
-            "green": [2, 0, 4, 2],
-            "blue": [4, 0, 6, 2],
-        },
-        "lit_chart": {
-            c: {"plate": "plate.exr", "corners": corners} for c in ("red", "green", "blue")
-        },
-        "environments": [{"name": "e", "target_chart": {"plate": "plate.exr", "corners": corners}}],
-    }
+    capture = _one_plate_capture(corners)
     path = write_yaml(tmp_path / "capture.yaml", capture)
     (tmp_path / "notes.txt").write_text("mine")
     before = snapshot(tmp_path)
