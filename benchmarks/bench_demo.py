@@ -91,7 +91,9 @@ def whole_command(quick: bool) -> str:
             f"{verdict}); load average (1 min) during these runs {load:.1f} on {os.cpu_count()} "
             f"cores. Accuracy of the result: mean corrected lit-chart error "
             f"{statistics.fmean(broadband):.2f}% of white over the 6 broadband environments "
-            f"(Fig. 11 metric, from the solution.json files the runs wrote).",
+            f"(Fig. 11 metric, from the solution.json files the runs wrote; in-sample: the "
+            f"chart Q was fitted on, so a check that the run worked, not an accuracy claim: "
+            f"held-out colours are in docs/accuracy.md).",
             f"- Of that, **{floor:.2f} s** ({100 * floor / total:.0f}%) is starting Python and "
             f"importing colour-science, numpy and OpenColorIO, which the demo cannot avoid "
             f"(colour-science's own import loads matplotlib and scipy); the demo's own work, "
