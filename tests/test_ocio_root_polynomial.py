@@ -111,3 +111,31 @@ def test_ociochecklut_reads_the_q_sidecar(written):
         ["ociochecklut", str(sidecar), "0", "0", "0"], capture_output=True, text=True, check=True
     )
     assert np.all(np.abs(np.array(black.stdout.split()[-3:], dtype=float)) < 1e-8)
+
+
+def _lut3d_numbers(clf_text: str) -> np.ndarray:
+    body = clf_text.split("<LUT3D", 1)[1].split("<Array", 1)[1]
+    return np.array(body.split(">", 1)[1].split("</Array>", 1)[0].split(), dtype=np.float64)
+
+
+def test_q_sidecar_lut_reads_back_as_written(written):
+    """The 3D LUT's text (formatted slice by slice) is what OCIO reads: OCIO parses the written
+    Q file and its own CLF writer gives back the same numbers. On the scale axis only the first
+    cell is distinct (the function is affine in scale), the remaining slices repeat the last."""
+    solution, path = written
+    sidecar = path.parent / solution.diagnostics["root_polynomial_ocio"]["files"][0]
+    text = sidecar.read_text(encoding="utf-8")
+    ours = _lut3d_numbers(text)
+    group = (
+        OCIO.Config.CreateRaw()
+        .getProcessor(OCIO.FileTransform(src=str(sidecar), interpolation=OCIO.INTERP_TETRAHEDRAL))
+        .createGroupTransform()
+    )
+    theirs = _lut3d_numbers(group.write(formatName="Academy/ASC Common LUT Format"))
+    size = solution.diagnostics["root_polynomial_ocio"]["lut_size"]
+    assert ours.shape == theirs.shape == (size**3 * 3,)
+    np.testing.assert_array_equal(ours, theirs)
+    slices = ours.reshape(size, size * size, 3)
+    assert np.all(slices[2:] == slices[1]) and not np.array_equal(slices[0], slices[1])
+    # one cell spans the whole scale range: 48 stops in 2^-16-stop steps on every entry
+    np.testing.assert_array_equal(slices[1] - slices[0], 48 * 2**16)
