@@ -194,8 +194,11 @@ def baked_transform(
     )
 
 
-def _apply(transform: OCIO.Transform, rgb: np.ndarray) -> np.ndarray:
-    cpu = OCIO.Config.CreateRaw().getProcessor(transform).getDefaultCPUProcessor()
+def _cpu(transform: OCIO.Transform) -> OCIO.CPUProcessor:
+    return OCIO.Config.CreateRaw().getProcessor(transform).getDefaultCPUProcessor()
+
+
+def _apply(cpu: OCIO.CPUProcessor, rgb: np.ndarray) -> np.ndarray:
     pixels = np.ascontiguousarray(rgb, dtype=np.float32).copy()
     cpu.applyRGB(pixels)
     return pixels.astype(np.float64)
@@ -231,7 +234,7 @@ def bake_errors(C, q, q_inverse, target_chart, n: int = 5000) -> dict[str, Any]:
     exposure = np.exp2(rng.uniform(-6, 4, (n, 1)))
     content = _in_gamut(chart, n, rng) * exposure
     x = rng.uniform(0.0, 1.0, (n, 3)) * exposure
-    out = {}
+    q, q_inverse, out = _cpu(q), _cpu(q_inverse), {}
     for name, c in (("in_gamut", content), ("whole_cube", apply_root_polynomial(C, x))):
         pre, residual = invert_root_polynomial(C, c, return_residual=True)
         keep = np.all((c >= 0) & (pre >= 0), axis=1) & (residual < 1e-9)
