@@ -99,8 +99,9 @@ def whole_command(quick: bool) -> str:
             f"(colour-science's own import loads matplotlib and scipy); the demo's own work, "
             f"report included, is the other {total - floor:.2f} s.",
             f"- With the paper's least squares everywhere the whole demo takes **{paper:.2f} s**: "
-            f"the default's root-polynomial environments (each bakes two 65^3 LUTs into its "
-            f"config) cost the other {total - paper:.2f} s, for a lower held-out ΔE2000 "
+            f"the default's root-polynomial environments (each bakes Q and Q^-1 as 65^3 LUTs "
+            f"into its config, checks them, and writes them as CLF text) cost the other "
+            f"{total - paper:.2f} s, for a lower held-out ΔE2000 "
             f"(auto against least squares in docs/accuracy.md).",
         ]
     )

@@ -82,6 +82,28 @@ def test_footage_q_and_finite_everywhere(written):
         assert np.all(np.isfinite(_apply(config, src, dst, probe)))
 
 
+def test_reference_to_footage_is_the_exact_inverse(written):
+    """The other direction (a host converting reference -> Stage Footage, or applying the
+    named transform inversely) is the baked Q^-1, checked against the exact inverse model
+    (Newton on colour-science's expansion): OCIO is never left to invert the Q LUT itself."""
+    from ocio_vp.correction import invert_root_polynomial
+    from ocio_vp.ocio import POST_CORRECTION
+
+    solution, path = written
+    config = OCIO.Config.CreateFromFile(str(path))
+    C = solution.diagnostics["method_notes"]["root_polynomial"]["coefficients"]
+    c = _content(solution, 2000, np.random.default_rng(10))
+    ref = invert_root_polynomial(C, c)
+    ref_max = np.abs(ref).max(axis=1)
+    got = _apply(config, REFERENCE, POST_CORRECTION_COLORSPACE, c)
+    assert (np.abs(got - ref).max(axis=1) / ref_max).max() < LIMIT
+    named = config.getNamedTransform(POST_CORRECTION)
+    cpu = config.getProcessor(named, OCIO.TRANSFORM_DIR_INVERSE).getDefaultCPUProcessor()
+    pixels = np.ascontiguousarray(c, dtype=np.float32).copy()
+    cpu.applyRGB(pixels)
+    assert (np.abs(pixels - ref).max(axis=1) / ref_max).max() < LIMIT
+
+
 @pytest.mark.skipif(shutil.which("ociocheck") is None, reason="ociocheck not on PATH")
 def test_ociocheck_accepts_the_config(written):
     _, path = written

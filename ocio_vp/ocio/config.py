@@ -243,7 +243,7 @@ def build_config(
         chains[name] = chains[name] + wall_signal_tail(solution, list(extra))
     config.addColorSpace(_out_of_frustum_space(solution, chains[OUT_OF_FRUSTUM], origin))
     config.addColorSpace(_in_frustum_space(solution, chains[IN_FRUSTUM], origin))
-    _add_post_correction(config, solution, origin, None if q_files is None else q_files[0])
+    _add_post_correction(config, solution, origin, q_files)
     _set_roles(config, solution.camera_colorspace)
     config.addDisplayView(DISPLAY, VIEW_OUTER, OUT_OF_FRUSTUM)
     config.addDisplayView(DISPLAY, VIEW_INNER, IN_FRUSTUM)
@@ -347,14 +347,20 @@ def _in_frustum_space(
 
 
 def _add_post_correction(
-    config: OCIO.Config, solution: Solution, origin: str, q_file: str | None = None
+    config: OCIO.Config,
+    solution: Solution,
+    origin: str,
+    q_files: tuple[str, str] | None = None,
 ) -> None:
-    """Q twice: the ``Stage Footage`` colorspace and the ``Post-Correction Q`` named transform
-    (a non-linear Q: its LUT sidecar ``q_file``; Q's matrix is then its 3x3 approximation)."""
-    q_identity = is_identity(solution.Q) and q_file is None
+    """Q twice: the ``Stage Footage`` colorspace and the ``Post-Correction Q`` named transform.
 
-    def q_transform() -> OCIO.Transform:
-        return matrix_transform(solution.Q) if q_file is None else OCIO.FileTransform(src=q_file)
+    A non-linear Q comes as LUT sidecars ``q_files`` = (Q, Q^-1); Q's matrix is then its 3x3
+    approximation. Both directions are given explicitly: OCIO cannot invert the Q LUT by
+    itself (a 3D LUT on scale x direction; its own inversion of such a chain is far off and
+    slow), so reference -> ``Stage Footage`` uses the baked Q^-1.
+    """
+    q_file = None if q_files is None else q_files[0]
+    q_identity = is_identity(solution.Q) and q_file is None
 
     model = solution.diagnostics.get("model") or solution.method
     reason = solution.diagnostics.get("model_reason")
@@ -377,8 +383,9 @@ def _add_post_correction(
         family="Camera",
     )
     forward, inverse, inverse_text = post_correction_transforms(solution)
-    if q_file is not None:  # a root-polynomial Q: its LUT sidecar (N is solved, so Q inverts)
-        forward, inverse, inverse_text = q_transform(), None, ""
+    if q_files is not None:  # a root-polynomial Q: its LUT sidecars (N is solved, Q inverts)
+        forward, inverse = OCIO.FileTransform(src=q_files[0]), OCIO.FileTransform(src=q_files[1])
+        inverse_text = f"The inverse direction is the baked Q^-1 ({q_files[1]})."
     if inverse is not None:
         q_text += " " + inverse_text
         footage.setDescription(footage.getDescription() + " " + inverse_text)
