@@ -109,6 +109,8 @@ def whole_command(quick: bool) -> str:
 
 def run(quick: bool = False) -> str:
     """Time the demo's steps in this process; returns a markdown section."""
+    import colour  # noqa: F401  (imported before the steps are timed: "after imports")
+
     from ocio_vp.ocio.writer import write_solutions
     from ocio_vp.simulator.evaluate import evaluate_solution
     from ocio_vp.simulator.samples import simulate_and_solve
