@@ -105,7 +105,8 @@ class Diagnostics(Mapping[str, Any]):
         ``--keep-all-patches``).
     excluded_patches
         The patches excluded as inconsistent: ``index``, ``name``, ``relative`` (how far off,
-        relative to the patch itself), ``z`` (robust standard deviations) and ``residual`` (the
+        relative to the patch itself), ``z`` (robust standard deviations), ``influence`` (mean
+        ΔE2000 by which it moves the fit's colours of the other patches) and ``residual`` (the
         held-out prediction minus the target, per channel, relative to white); see
         :mod:`ocio_vp.correction.outliers`.
     synthesized_target
