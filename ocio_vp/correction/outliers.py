@@ -81,7 +81,9 @@ OUTLIER_RELATIVE_NARROW = 0.9
 #: value (2 cameras x 2 LED sets x 10 environments x 10 draws, ``python -m
 #: benchmarks.bench_accuracy --screening-only``) the most influential patch moved them by
 #: 0.6 ΔE2000 (median) and 2.4 at most (high-pressure sodium); 3 is that maximum with a
-#: quarter to spare, and three just-noticeable differences.
+#: quarter to spare, and three just-noticeable differences. The patch must also stand
+#: :data:`OUTLIER_Z` robust standard deviations above the chart's influences (1.4826 x their
+#: median), as residuals must.
 OUTLIER_INFLUENCE = 3.0
 #: Residuals beyond this many robust standard deviations weigh less in the fit that judges
 #: the patches (Huber).
@@ -228,7 +230,12 @@ def patch_scores(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> dic
     narrow = colour_spread(P[active]) < NARROW_TARGET * colour_spread(X[active])
     limit = OUTLIER_RELATIVE_NARROW if narrow else OUTLIER_RELATIVE
     influence = patch_influence(X, P, w, white)
-    score = np.maximum(np.minimum(relative / limit, z / OUTLIER_Z), influence / OUTLIER_INFLUENCE)
+    # A patch drags the fit when its influence is large in ΔE2000 *and* stands out from the
+    # chart's other patches as residuals must (a chart the model does not fit at all, e.g.
+    # random values, has every patch influential and none of them an outlier).
+    typical = max(1.4826 * float(np.median(influence[active])), 1e-12)
+    drag = np.minimum(influence / OUTLIER_INFLUENCE, influence / typical / OUTLIER_Z)
+    score = np.maximum(np.minimum(relative / limit, z / OUTLIER_Z), drag)
     score = np.where(active & (np.max(np.abs(residual), axis=1) > OUTLIER_FLOOR), score, 0.0)
     return {
         "score": score,
