@@ -9,8 +9,14 @@ solution is then judged on reflectances that are not on the chart, lit by what t
 emits (drive clipped at 0) and compared with the real light
 (:func:`ocio_vp.simulator.truth.held_out_errors`): mean and 95th percentile ΔE2000 and ΔE ITP.
 
-Run alone: ``python -m benchmarks.bench_accuracy [--quick] [--methods ...] [--out FILE]``; by
-``python -m benchmarks.run`` it writes ``docs/accuracy.md``.
+Then the bad-patch study (:func:`outlier_study`): false alarms of the screening
+(:func:`ocio_vp.correction.outliers.inconsistent_patches`) on clean charts, and what one or two
+corrupted patches do to the corrected held-out colours with and without it, against the noise
+floor; ``--screening-only`` runs it alone (``--quick``: both cameras, default LEDs, the paper's
+environments, 3 draws; about 20 s).
+
+Run alone: ``python -m benchmarks.bench_accuracy [--quick] [--screening-only] [--methods ...]
+[--out FILE]``; by ``python -m benchmarks.run`` it writes ``docs/accuracy.md``.
 """
 
 from __future__ import annotations
@@ -449,8 +455,8 @@ def _screened(X, P, white):
 class Corrupted:
     """One corrupted chart: whether every bad patch was named (or the chart refused), the
     held-out ΔE2000 change of the corrected colours with and without screening (per colour),
-    the Frobenius Q changes, and the stage / environment's noise floor (largest p95 change
-    between two clean draws)."""
+    the Frobenius Q changes, and the stage / environment's noise floor (95th percentile of the
+    p95 change between two photographs of the clean chart)."""
 
     named: bool
     refused: bool
@@ -658,10 +664,14 @@ def _harmless_misses(out) -> list[str]:
                 max(np.nanpercentile(c.plain, 95), np.nanpercentile(c.screened, 95)) - c.floor
                 for c in missed
             )
+            kinds = defaultdict(int)
+            for c in missed:
+                kinds[c.what.split()[-1]] += 1
+            by_kind = ", ".join(f"{k} {v}" for k, v in sorted(kinds.items(), key=lambda kv: -kv[1]))
             lines.append(
                 f"- {camera}, {light}: {len(missed)} of {len(values)} single corruptions not "
-                f"named and not visible; the largest p95 change among them is {worst:+.2f} "
-                "ΔE2000 from the noise floor."
+                f"named and not visible ({by_kind}); the largest p95 change among them is "
+                f"{worst:+.2f} ΔE2000 from the noise floor."
             )
     return lines
 
@@ -708,21 +718,27 @@ def outlier_report(out: dict, seeds: int, noise: float = 0.01) -> str:
             "",
             "What users see: the **ΔE2000 change of the corrected colours** between the "
             "least-squares Q fitted on the clean chart and the one fitted on the corrupted chart "
-            "(after screening, or without it), on the held-out reflectances (RAW to ACES and CIE "
-            "2017 sets, pooled) lit by the same wall, through the camera's RGB -> XYZ matrix; mean "
-            "and 95th percentile over every chart and colour. Beside it, the same figure between "
-            "two clean noise draws (the **noise floor**, every pair of draws) and for leaving one "
-            "clean patch out (what excluding a good patch costs). A change is **visible** when its "
-            "p95 exceeds the largest p95 between two clean draws of that stage and environment by "
-            f"more than {VISIBLE_MARGIN:g} ΔE2000; a **harmful miss** is a corrupted chart whose "
-            "change is visible (with or without screening) and whose bad patch was not named. "
-            "The Frobenius distance between Q matrices is kept as a secondary column: under narrow "
-            "light and on the Sigma camera Q is ill-determined along directions no colour under "
-            "that light excites, so it moves a lot where the colours do not.",
+            "(after screening, without it, and with exactly the bad patches removed: the best any "
+            "screening can do), on the held-out reflectances (RAW to ACES and CIE 2017 sets, "
+            "pooled) lit by the same wall, through the camera's RGB -> XYZ matrix, the reference "
+            "white a perfect diffuser under the real light; mean and 95th percentile over every "
+            "chart and colour. Reference rows: the same figure between two clean draws with the "
+            "whole calibration re-measured (every pair of draws), with only the chart "
+            "re-photographed under the same wall (the **noise floor** a bad patch is judged "
+            "against), and for leaving one clean patch out (what excluding a good patch costs). "
+            "A change is **visible** when its p95 exceeds, by more than "
+            f"{VISIBLE_MARGIN:g} ΔE2000, the 95th percentile of that p95 over the re-photographed "
+            "pairs of the same stage and environment; a **harmful miss** is a corrupted chart "
+            "whose change is visible (with or without screening) and whose bad patch was not "
+            "named (a swap counts as named when both patches are). The Frobenius distance between "
+            "Q matrices is kept as a secondary column: under narrow light and on the Sigma camera "
+            "Q is ill-determined along directions no colour under that light excites, so it moves "
+            "a lot where the colours do not.",
             "",
             markdown_table(header, outlier_rows(out)),
             "",
-            "Misses that change nothing a user can see (one bad patch):",
+            "Misses that change nothing a user can see (one bad patch not named, or a swap with "
+            "only one of the pair named; counted by corruption):",
             "",
             *_harmless_misses(out),
         ]
