@@ -158,7 +158,9 @@ def export_solutions(
     plan = _plan(sources, targets, None if out is None else Path(out))
     for source, jobs in plan:
         if not jobs:
-            reason = f"{source.directory}: no fixtures in this solution, nothing for --target lights"
+            reason = (
+                f"{source.directory}: no fixtures in this solution, nothing for --target lights"
+            )
             report.failures.append(ExportFailure(str(source.directory), reason))
             continue
         try:
