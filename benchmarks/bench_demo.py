@@ -45,7 +45,7 @@ FLOOR = [sys.executable, "-c", "import colour, numpy, PyOpenColorIO"]
 
 def whole_command(quick: bool) -> str:
     """Interleaved runs of the demo with and without its report, and of its import floor."""
-    rounds = 1 if quick else 3
+    rounds = 1 if quick else 5
     runs: dict[bool | str | None, list[tuple[float, float]]] = {
         True: [], False: [], "least-squares": [], None: []
     }  # fmt: skip
