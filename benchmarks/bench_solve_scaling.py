@@ -96,18 +96,38 @@ def run(quick: bool = False) -> str:
             )
             cells.append(f"{fmt_ms(last)} / {de:.2f}")
         rows.append((f"`{name}`", *cells))
+    rows.append(_screening_row(measurements, charts, sizes, beta, M, w_avg))
     return "\n".join(
         [
             "## Q-solve time against the number of patches",
             "",
             __doc__.split("\n\n", 1)[1].replace("\n", " ").strip(),
             "",
-            "Each cell: solve time / mean ΔE2000 on the 200 held-out mixtures.",
+            "Each cell: solve time / mean ΔE2000 on the 200 held-out mixtures. The last row is "
+            "the bad-patch screening every solve runs first (unless `--keep-all-patches`): its "
+            "time / the patches it excluded (the mixtures carry 0.5% noise, no bad patch).",
             "",
             markdown_table(["method", *(f"{n} patches" for n in sizes)], rows),
             "",
         ]
     )
+
+
+def _screening_row(measurements, charts, sizes, beta, M, w_avg) -> tuple[str, ...]:
+    """Time of ``inconsistent_patches`` per chart size, and how many patches it excluded."""
+    from ocio_vp.correction.outliers import inconsistent_patches
+    from ocio_vp.correction.problem import QProblem
+
+    cells = []
+    for n in sizes:
+        srl, target = charts[n]
+        problem = QProblem(SL=measurements.SL, SRL=srl, beta=beta, M=M, w_avg=w_avg, target=target)
+        X, P = problem.predicted, problem.target
+        inconsistent_patches(X, P, np.ones(n), 18)  # warm-up at every size: not timed
+        start = time.perf_counter()
+        found = inconsistent_patches(X, P, np.ones(n), 18)
+        cells.append(f"{fmt_ms(time.perf_counter() - start)} / {len(found)} excluded")
+    return ("screening (`inconsistent_patches`)", *cells)
 
 
 def _with_M(problem, M):

@@ -297,3 +297,46 @@ def test_under_line_spectrum_light_a_patch_that_drags_the_fit_is_named(
     # Without screening the held-out colours get 2.7-4.9 ΔE2000 worse; after it, <= 0.15.
     assert plain - truth > 2.5
     assert abs(screened - truth) < 0.2
+
+
+def _large_chart(n: int, bad, seed: int = 4):
+    rng = np.random.default_rng(seed)
+    X = rng.uniform(0.03, 0.9, (n, 3))
+    X[18] = 0.9
+    Q_true = np.array([[1.2, -0.15, 0.02], [-0.05, 1.1, -0.03], [0.01, -0.1, 0.95]])
+    P = X @ Q_true.T * (1 + 0.01 * rng.standard_normal((n, 3)))
+    P[list(bad)] *= 2.5
+    return X, P
+
+
+def test_influence_on_a_large_chart_estimates_the_full_mean() -> None:
+    """Over 128 patches the influence is judged on 128 of them: against numpy re-fits without
+    each patch and colour-science's ΔE2000 over *all* the others, the estimate names the same
+    patch and is within 15 % (or 0.01 ΔE2000, 100x below the smallest threshold) everywhere."""
+    X, P = _large_chart(300, [40])
+    influence = patch_influence(X, P, np.ones(300), 18)
+    Q_all = np.linalg.lstsq(X, P, rcond=None)[0]
+    full = np.empty(300)
+    for j in range(300):
+        rest = np.arange(300) != j
+        Q_without = np.linalg.lstsq(X[rest], P[rest], rcond=None)[0]
+        full[j] = _delta_e_2000(X[rest] @ Q_without, X[rest] @ Q_all, X[18] @ Q_all).mean()
+    assert int(np.argmax(influence)) == int(np.argmax(full)) == 40
+    np.testing.assert_allclose(influence, full, rtol=0.15, atol=0.01)
+
+
+def test_screening_a_large_chart_is_bounded() -> None:
+    """1000 patches: five bad ones are named exactly; thirty are refused in one line (at most
+    MAX_EXCLUDED exclusions are tried, each re-judging the chart in linear time)."""
+    from ocio_vp.correction.outliers import MAX_EXCLUDED
+
+    bad = [100, 250, 400, 650, 900]
+    X, P = _large_chart(1000, bad)
+    assert sorted(f.index for f in inconsistent_patches(X, P, np.ones(1000), 18)) == bad
+    many = list(range(30, 930, 30))
+    X, P = _large_chart(1000, many)
+    with pytest.raises(InputError) as error:
+        inconsistent_patches(X, P, np.ones(1000), 18)
+    message = str(error.value)
+    assert f"{MAX_EXCLUDED + 1} or more chart patches" in message
+    assert "\n" not in message and len(message) < 400

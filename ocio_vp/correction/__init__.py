@@ -47,6 +47,7 @@ from ocio_vp.correction.linear import (
 )
 from ocio_vp.correction.outliers import (
     COLORCHECKER_NAMES,
+    MAX_EXCLUDED,
     MAX_EXCLUDED_FRACTION,
     OUTLIER_FLOOR,
     OUTLIER_RELATIVE,
@@ -106,6 +107,7 @@ __all__ = [
     "DEGREE_3_EXCLUDED",
     "LOO_KERNELS",
     "MAX_DYNAMIC_RANGE",
+    "MAX_EXCLUDED",
     "MAX_EXCLUDED_FRACTION",
     "MIN_LIT_DIRECTION",
     "MODEL_KERNELS",

@@ -26,8 +26,10 @@ from the data alone, so that every method fits without them and the engineer is 
    a similar colour are predicted less well without being wrong, so a further patch must also
    have looked suspect on the whole chart (:data:`FIRST_PASS_SUPPORT`) and either drag the
    others visibly or miss clearly (:data:`LATER_INFLUENCE`, :data:`LATER_RELATIVE`), or be far
-   off (:data:`UNSUPPORTED_SCORE`); up to :data:`MAX_EXCLUDED_FRACTION` of the chart, past
-   that the chart is refused.
+   off (:data:`UNSUPPORTED_SCORE`); up to :data:`MAX_EXCLUDED_FRACTION` of the chart (and at
+   most :data:`MAX_EXCLUDED` patches), past that the chart is refused. On a chart of more than
+   :data:`INFLUENCE_JUDGES` patches influence is judged on that many, so the work stays linear
+   in the chart's size.
 
 The thresholds were set on the spectral simulator, each from a measured distribution stated at
 its constant: no false alarm on clean charts with 1 % noise on every value. docs/accuracy.md
@@ -55,8 +57,10 @@ __all__ = [
     "COLORCHECKER_NAMES",
     "FIRST_PASS_SUPPORT",
     "HUBER",
+    "INFLUENCE_JUDGES",
     "LATER_INFLUENCE",
     "LATER_RELATIVE",
+    "MAX_EXCLUDED",
     "MAX_EXCLUDED_FRACTION",
     "OUTLIER_FLOOR",
     "OUTLIER_INFLUENCE",
@@ -96,6 +100,10 @@ OUTLIER_RELATIVE_NARROW = 0.9
 #: :data:`OUTLIER_Z` robust standard deviations above the chart's influences (1.4826 x their
 #: median), as residuals must.
 OUTLIER_INFLUENCE = 3.0
+#: Fitted patches whose colours judge each patch's influence on a large chart (all of them up
+#: to this many); patches judged per block. Both bound the work: linear in the chart's size.
+INFLUENCE_JUDGES = 128
+_INFLUENCE_BLOCK = 256
 #: Residuals beyond this many robust standard deviations weigh less in the fit that judges
 #: the patches (Huber).
 HUBER = 2.0
@@ -117,6 +125,10 @@ LATER_INFLUENCE = 1.0
 LATER_RELATIVE = 1.5
 #: More inconsistent patches than this fraction of the chart: refuse rather than guess.
 MAX_EXCLUDED_FRACTION = 0.125
+#: ... or than this many on a large chart (over 192 patches): each exclusion re-judges the
+#: whole chart, so this bounds the screening's work (linear in the chart's size; ~0.1 s per
+#: exclusion at 1000 patches). So many bad patches say the sampling itself went wrong.
+MAX_EXCLUDED = 24
 #: Patches needed after exclusion (a 9-parameter fit with headroom to judge it).
 _MIN_REMAINING = 12
 
@@ -196,6 +208,20 @@ def _robust_weights(X, P, w, scale, steps: int = 8) -> np.ndarray:
     return weights
 
 
+def _judges(w: np.ndarray, white: int, luminance: np.ndarray) -> tuple[np.ndarray, int]:
+    """Indices of the fitted patches whose colours judge a patch's influence (all of them, or
+    :data:`INFLUENCE_JUDGES` spread evenly over a larger chart, always with the white) and the
+    white's position among them (``white``, or the brightest fitted patch when it is not
+    usable, as :func:`~ocio_vp.correction.perceptual.patch_delta_e` would choose)."""
+    active = np.flatnonzero(w > 0)
+    if not (w[white] > 0 and luminance[white] > 0):
+        white = int(active[np.argmax(luminance[active])])
+    if len(active) > INFLUENCE_JUDGES:
+        active = active[np.linspace(0, len(active) - 1, INFLUENCE_JUDGES).round().astype(int)]
+    judges = np.union1d(active, [white])
+    return judges, int(np.searchsorted(judges, white))
+
+
 def patch_influence(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> np.ndarray:
     """(n,) how far each fitted patch drags the fit: the mean ΔE2000, over the other fitted
     patches, between their least-squares predictions with and without it (0 for excluded ones).
@@ -204,7 +230,9 @@ def patch_influence(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> 
     ΔE2000 goes through the generic camera RGB -> XYZ matrix
     (:func:`ocio_vp.correction.perceptual.patch_delta_e`), normalised on the fitted white
     patch ``white`` (or the brightest fitted patch); all zeros when no fitted colour has
-    luminance.
+    luminance. On a chart of more than :data:`INFLUENCE_JUDGES` fitted patches the mean is
+    taken over that many of them, spread evenly, and the patches are judged in blocks, so time
+    and memory grow linearly with the chart.
 
     Examples
     --------
@@ -220,16 +248,24 @@ def patch_influence(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> 
     w = np.asarray(w, dtype=np.float64)
     G = np.einsum("j,jc,jd->cd", w, X, X)
     B = np.einsum("j,jc,jd->cd", w, X, P)
-    G_without = G[None] - w[:, None, None] * X[:, :, None] * X[:, None, :]
-    B_without = B[None] - w[:, None, None] * X[:, :, None] * P[:, None, :]
     fitted = X @ (np.linalg.pinv(G, hermitian=True) @ B)
-    without = X[None] @ (np.linalg.pinv(G_without, hermitian=True) @ B_without)
-    others = (w[None, :] > 0) & ~np.eye(len(w), dtype=bool)
-    if not np.any((w > 0) & (fitted @ default_camera_to_xyz()[1] > 0)):
-        return np.zeros(len(w))
-    de = patch_delta_e(without, fitted, white_patch=white, weights=w)
-    drag = np.where(others, de, 0.0).sum(axis=1) / np.maximum(others.sum(axis=1), 1)
-    return np.where(w > 0, drag, 0.0)
+    luminance = fitted @ default_camera_to_xyz()[1]
+    influence = np.zeros(len(w))
+    if not np.any((w > 0) & (luminance > 0)):
+        return influence
+    judges, white_at = _judges(w, white, luminance)
+    for start in range(0, len(w), _INFLUENCE_BLOCK):
+        i = np.arange(start, min(start + _INFLUENCE_BLOCK, len(w)))
+        G_without = G[None] - w[i, None, None] * X[i, :, None] * X[i, None, :]
+        B_without = B[None] - w[i, None, None] * X[i, :, None] * P[i, None, :]
+        without = X[judges][None] @ (np.linalg.pinv(G_without, hermitian=True) @ B_without)
+        de = patch_delta_e(
+            without, fitted[judges], white_patch=white_at, weights=w[judges]
+        )  # (block, judges)
+        others = (w[judges][None, :] > 0) & (judges[None, :] != i[:, None])
+        drag = np.where(others, de, 0.0).sum(axis=1) / np.maximum(others.sum(axis=1), 1)
+        influence[i] = np.where(w[i] > 0, drag, 0.0)
+    return influence
 
 
 def is_narrow(X: np.ndarray, P: np.ndarray, w: np.ndarray) -> bool:
@@ -306,12 +342,13 @@ def inconsistent_patches(
     Raises
     ------
     InputError
-        When more than :data:`MAX_EXCLUDED_FRACTION` of the chart is inconsistent (the chart
-        cannot be trusted; nothing is guessed).
+        When more than :data:`MAX_EXCLUDED_FRACTION` of the chart, or more than
+        :data:`MAX_EXCLUDED` patches, are inconsistent (the chart cannot be trusted; nothing is
+        guessed).
     """
     w = np.asarray(w, dtype=np.float64).copy()
     n = len(P)
-    limit = max(1, int(MAX_EXCLUDED_FRACTION * np.count_nonzero(w > 0)))
+    limit = max(1, min(int(MAX_EXCLUDED_FRACTION * np.count_nonzero(w > 0)), MAX_EXCLUDED))
     narrow = is_narrow(X, P, w)  # the light's kind does not change when a patch is excluded
     found: list[Inconsistency] = []
     first = None
@@ -333,7 +370,7 @@ def inconsistent_patches(
         )
         w[j] = 0.0
         if len(found) > limit:
-            names = ", ".join(f.name for f in found)
+            names = ", ".join(f.name for f in found[:6]) + (", ..." if len(found) > 6 else "")
             raise InputError(
                 f"{len(found)} or more chart patches are inconsistent with the rest, too many "
                 "to exclude safely (check the sampling boxes, flare and the patch order, or "
