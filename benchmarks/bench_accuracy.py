@@ -668,10 +668,18 @@ def _harmless_misses(out) -> list[str]:
             for c in missed:
                 kinds[c.what.split()[-1]] += 1
             by_kind = ", ".join(f"{k} {v}" for k, v in sorted(kinds.items(), key=lambda kv: -kv[1]))
+            zeros = [c for c in missed if c.what.endswith(" zero")]
+            example = min(zeros, key=lambda c: np.percentile(c.plain, 95), default=None)
             lines.append(
                 f"- {camera}, {light}: {len(missed)} of {len(values)} single corruptions not "
                 f"named and not visible ({by_kind}); the largest p95 change among them is "
                 f"{worst:+.2f} ΔE2000 from the noise floor."
+                + (
+                    f" Least visible target patch read as zero: {example.what} (p95 change "
+                    f"{np.percentile(example.plain, 95):.2f} ΔE2000, noise floor {example.floor:.2f})."
+                    if example
+                    else ""
+                )
             )
     return lines
 
