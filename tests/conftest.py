@@ -42,20 +42,25 @@ def measurements_dict() -> dict:
     return make_measurements_dict()
 
 
-def paper_stage_problem(environment: str):
-    """The Q problem of one environment of the simulated paper stage, as the pipeline poses it."""
+def measurement_problem(m, env):
+    """The Q problem of environment ``env`` of measurements ``m``, as the pipeline poses it."""
     from ocio_vp.calibration.equations import solve_M
     from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
     from ocio_vp.correction.problem import QProblem
-    from ocio_vp.simulator.stage import paper_stage_measurements
 
-    m = paper_stage_measurements((environment,))
-    env = m.environments[0]
     return QProblem(
         SL=m.SL,
         SRL=m.SRL,
         beta=stage_beta(m),
         M=solve_M(m.SL),
         w_avg=environment_w_avg(m, env),
-        target=env.target_chart,
+        target=np.array(env.target_chart),  # a copy: callers corrupt it in place
     )
+
+
+def paper_stage_problem(environment: str):
+    """The Q problem of one environment of the simulated paper stage, as the pipeline poses it."""
+    from ocio_vp.simulator.stage import paper_stage_measurements
+
+    m = paper_stage_measurements((environment,))
+    return measurement_problem(m, m.environments[0])

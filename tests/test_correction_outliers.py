@@ -14,9 +14,8 @@ import json
 import colour
 import numpy as np
 import pytest
+from conftest import measurement_problem
 
-from ocio_vp.calibration.equations import solve_M
-from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
 from ocio_vp.correction.outliers import (
     COLORCHECKER_NAMES,
     inconsistent_patches,
@@ -24,7 +23,6 @@ from ocio_vp.correction.outliers import (
     patch_name,
 )
 from ocio_vp.correction.perceptual import default_camera_to_xyz
-from ocio_vp.correction.problem import QProblem
 from ocio_vp.errors import InputError
 from ocio_vp.pipeline import solve_environment
 from ocio_vp.simulator.data import ENVIRONMENTS as ALL_ENVIRONMENTS
@@ -46,20 +44,9 @@ def clean():
     return simulate_measurements(list(ENVIRONMENTS))
 
 
-def _problem(m, env):
-    return QProblem(
-        SL=m.SL,
-        SRL=m.SRL,
-        beta=stage_beta(m),
-        M=solve_M(m.SL),
-        w_avg=environment_w_avg(m, env),
-        target=np.array(env.target_chart),
-    )
-
-
 def _chart(m, env):
     """The lit chart as the wall emits it (drive clipped at 0, as the product fits it)."""
-    problem = _problem(m, env)
+    problem = measurement_problem(m, env)
     return problem.predicted, problem.target
 
 
@@ -138,7 +125,7 @@ def test_a_bad_magenta_or_moderate_red_leaves_the_clean_red_in(clean, kind: str,
     # predicted 32 % off; it drags nothing (influence < 1 ΔE2000), so it stays: losing it costs
     # the held-out colours near red more than keeping it.
     m = noisy_measurements(clean, 0.005, np.random.default_rng(1))
-    problem = _problem(m, m.environment("direct_sun"))
+    problem = measurement_problem(m, m.environment("direct_sun"))
     X, P = problem.predicted, problem.target
     Q_clean = _lstsq(X, P)
     Xc, Pc = _corrupted(X, P, j, kind)
@@ -273,7 +260,7 @@ def test_under_line_spectrum_light_a_patch_that_drags_the_fit_is_named(
     # Oracle: the simulator's held-out colours under the real light.
     m = noisy_measurements(clean, 0.01, np.random.default_rng(1))
     env = m.environment(environment)
-    problem = _problem(m, env)
+    problem = measurement_problem(m, env)
     X, P = problem.predicted, problem.target
     Xc, Pc = _corrupted(X, P, j, kind)
     found = {f.index for f in inconsistent_patches(Xc, Pc, np.ones(24), 18)}
