@@ -88,7 +88,10 @@ def gaussian_leds(primaries=DEFAULT_LEDS) -> np.ndarray:
                 key="leds",
             )
     return np.stack(
-        [align(colour.sd_gaussian(peak, fwhm, spectral_shape(), method="FWHM")) for peak, fwhm in pairs],
+        [
+            align(colour.sd_gaussian(peak, fwhm, spectral_shape(), method="FWHM"))
+            for peak, fwhm in pairs
+        ],
         axis=1,
     )
 

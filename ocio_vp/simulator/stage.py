@@ -152,7 +152,6 @@ def _resolve_leds(leds: Any) -> tuple[np.ndarray, str]:
         pairs = ", ".join(f"{p:g}/{f:g} nm" for p, f in array)
         return gaussian_leds(array), f"Gaussian LEDs (peak/FWHM) {pairs}"
     if hasattr(leds, "align"):  # a colour MultiSpectralDistributions with 3 channels
-
         array = np.asarray(leds.copy().align(spectral_shape()).values, dtype=np.float64)
     if array is None or array.shape != (len(wavelengths()), 3) or not np.all(np.isfinite(array)):
         raise InputError(
@@ -258,7 +257,9 @@ def environment_spectrum(stage: SpectralStage, environment: Any) -> np.ndarray:
     """
     if isinstance(environment, str):
         if environment not in ENVIRONMENTS:
-            raise InputError(unknown_name("environment", environment, ENVIRONMENTS), key="environment")
+            raise InputError(
+                unknown_name("environment", environment, ENVIRONMENTS), key="environment"
+            )
         spectrum = ENVIRONMENTS[environment].spectrum(stage.leds, stage.camera)
     elif hasattr(environment, "align"):
         from ocio_vp.simulator.data import align
@@ -288,7 +289,9 @@ def _environments(environments: Any) -> list[tuple[str, Any]]:
     return [(name, name) for name in environments]
 
 
-def black_level_reading(stage: SpectralStage, M: np.ndarray, w_avg: np.ndarray) -> np.ndarray | None:
+def black_level_reading(
+    stage: SpectralStage, M: np.ndarray, w_avg: np.ndarray
+) -> np.ndarray | None:
     if stage.panel_albedo is None:
         return None
     drive = np.clip(M @ w_avg, 0.0, None)
