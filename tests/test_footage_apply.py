@@ -7,6 +7,7 @@ OpenImageIO (bitwise equality of the other channels, metadata, windows, compress
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -312,16 +313,36 @@ def test_pipeline_keeps_order_skips_failures_and_frames(tmp_path, solution_dir):
     tasks = [FrameTask(str(f), str(out / f.name), pc) for f in frames]
     results = dict(apply_frames(tasks, threads=2))
     assert sorted(results) == [0, 1, 2, 3, 4]
+    # p.3's output exists but ocio-vp did not write it: neither replaced nor counted as done
     assert [results[i].status for i in range(5)] == [
         "done",
         "done",
         "input-error",
-        "skipped",
+        "input-error",
         "done",
     ]
     assert "p.2.exr" in results[2].message
+    assert "p.3.exr" in results[3].message and "not written by ocio-vp" in results[3].message
     assert (out / "p.3.exr").read_bytes() == b"already there"
     assert sorted(p.name for p in out.iterdir()) == ["p.0.exr", "p.1.exr", "p.3.exr", "p.4.exr"]
+    # A rerun skips the frames ocio-vp wrote; --overwrite redoes them but still not the foreign one
+    again = dict(apply_frames(tasks, threads=2))
+    assert [again[i].status for i in range(5)] == [
+        "skipped",
+        "skipped",
+        "input-error",
+        "input-error",
+        "skipped",
+    ]
+    forced = [dataclasses.replace(t, overwrite=True) for t in tasks]
+    forced_results = dict(apply_frames(forced, threads=2))
+    assert [forced_results[i].status for i in (0, 1, 3, 4)] == [
+        "done",
+        "done",
+        "input-error",
+        "done",
+    ]
+    assert (out / "p.3.exr").read_bytes() == b"already there"
     _, px = read_image(out / "p.4.exr")
     np.testing.assert_allclose(px[4, 3], _Q(solution_dir) @ np.full(3, 0.5), atol=1e-5)
 

@@ -40,7 +40,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from ocio_vp.errors import InputError
-from ocio_vp.footage.sequences import MARK
+from ocio_vp.footage.sequences import MARK, foreign_output_error
 
 __all__ = [
     "OPTIMIZATIONS",
@@ -436,8 +436,12 @@ class FrameResult:
 def run_task(task: FrameTask) -> FrameResult:
     """Do one :class:`FrameTask`, never raising: failures become a result."""
     start = time.perf_counter()
-    if not task.overwrite and Path(task.dst).is_file():
-        return FrameResult(task.src, task.dst, "skipped", "already written")
+    if os.path.lexists(task.dst):  # ours: done (or replaced with --overwrite); else refused
+        foreign = foreign_output_error(task.dst)
+        if foreign is not None:
+            return FrameResult(task.src, task.dst, "input-error", foreign)
+        if not task.overwrite:
+            return FrameResult(task.src, task.dst, "skipped", "already written")
     try:
         set_io_threads(task.threads)
         apply_file(task.src, task.dst, task.post_correction, threads=task.threads)

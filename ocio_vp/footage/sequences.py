@@ -19,6 +19,7 @@ from ocio_vp.errors import InputError, excerpt
 __all__ = [
     "MARK",
     "expand_frames",
+    "foreign_output_error",
     "foreign_outputs",
     "frame_pattern",
     "output_paths",
@@ -134,6 +135,17 @@ def output_paths(inputs: Sequence[Path], out_dir: Path) -> list[Path]:
         if src.resolve() == dst.resolve():
             raise InputError("--out would overwrite the input frame", source=str(src))
     return outputs
+
+
+def foreign_output_error(dst: str | Path) -> str | None:
+    """None when ``dst`` does not exist or ``ocio-vp apply`` wrote it; else the one-line reason
+    a frame must not be written there nor counted as done (see :func:`foreign_outputs`)."""
+    if not foreign_outputs([Path(dst)]):
+        return None
+    return (
+        f"{dst}: exists and was not written by ocio-vp apply (no {MARK} in its header): "
+        "move it or choose another --out"
+    )
 
 
 def foreign_outputs(outputs: Sequence[Path]) -> list[Path]:

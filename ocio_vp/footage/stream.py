@@ -10,10 +10,10 @@ read, one transformed, one written), whatever the length of the sequence.
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from pathlib import Path
 from typing import Any
 
 from ocio_vp.errors import InputError
@@ -25,6 +25,7 @@ from ocio_vp.footage.apply import (
     store_frame,
     transform_frame,
 )
+from ocio_vp.footage.sequences import foreign_output_error
 
 __all__ = ["apply_frames"]
 
@@ -38,8 +39,12 @@ def _failure(task: FrameTask, exc: Exception) -> FrameResult:
 def _load(task: FrameTask) -> tuple[float, Any]:
     """(start time, the frame's parts or the FrameResult that ends it: skipped or failed)."""
     start = time.perf_counter()
-    if not task.overwrite and Path(task.dst).is_file():
-        return start, FrameResult(task.src, task.dst, "skipped", "already written")
+    if os.path.lexists(task.dst):  # ours: done (or replaced with --overwrite); else refused
+        foreign = foreign_output_error(task.dst)
+        if foreign is not None:
+            return start, FrameResult(task.src, task.dst, "input-error", foreign)
+        if not task.overwrite:
+            return start, FrameResult(task.src, task.dst, "skipped", "already written")
     try:
         return start, load_frame(task.src)
     except Exception as exc:  # reported in its result, the other frames go on
