@@ -54,6 +54,7 @@ __all__ = [
     "apply_file",
     "apply_in_place",
     "cpu_processor",
+    "existing_output",
     "load_frame",
     "load_post_correction",
     "pixel_transform",
@@ -433,15 +434,28 @@ class FrameResult:
     seconds: float = 0.0
 
 
+def existing_output(task: FrameTask) -> FrameResult | None:
+    """The result that ends ``task`` before any work because its output exists, else None.
+
+    An output ``ocio-vp apply`` wrote is done (``skipped``), unless the task overwrites it; any
+    other file there is refused (``input-error``): neither replaced nor counted as done.
+    """
+    if not os.path.lexists(task.dst):
+        return None
+    foreign = foreign_output_error(task.dst)
+    if foreign is not None:
+        return FrameResult(task.src, task.dst, "input-error", foreign)
+    if not task.overwrite:
+        return FrameResult(task.src, task.dst, "skipped", "already written")
+    return None
+
+
 def run_task(task: FrameTask) -> FrameResult:
     """Do one :class:`FrameTask`, never raising: failures become a result."""
     start = time.perf_counter()
-    if os.path.lexists(task.dst):  # ours: done (or replaced with --overwrite); else refused
-        foreign = foreign_output_error(task.dst)
-        if foreign is not None:
-            return FrameResult(task.src, task.dst, "input-error", foreign)
-        if not task.overwrite:
-            return FrameResult(task.src, task.dst, "skipped", "already written")
+    ended = existing_output(task)
+    if ended is not None:
+        return ended
     try:
         set_io_threads(task.threads)
         apply_file(task.src, task.dst, task.post_correction, threads=task.threads)

@@ -10,7 +10,6 @@ read, one transformed, one written), whatever the length of the sequence.
 
 from __future__ import annotations
 
-import os
 import time
 from collections.abc import Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
@@ -20,12 +19,12 @@ from ocio_vp.errors import InputError
 from ocio_vp.footage.apply import (
     FrameResult,
     FrameTask,
+    existing_output,
     load_frame,
     set_io_threads,
     store_frame,
     transform_frame,
 )
-from ocio_vp.footage.sequences import foreign_output_error
 
 __all__ = ["apply_frames"]
 
@@ -39,12 +38,9 @@ def _failure(task: FrameTask, exc: Exception) -> FrameResult:
 def _load(task: FrameTask) -> tuple[float, Any]:
     """(start time, the frame's parts or the FrameResult that ends it: skipped or failed)."""
     start = time.perf_counter()
-    if os.path.lexists(task.dst):  # ours: done (or replaced with --overwrite); else refused
-        foreign = foreign_output_error(task.dst)
-        if foreign is not None:
-            return start, FrameResult(task.src, task.dst, "input-error", foreign)
-        if not task.overwrite:
-            return start, FrameResult(task.src, task.dst, "skipped", "already written")
+    ended = existing_output(task)
+    if ended is not None:
+        return start, ended
     try:
         return start, load_frame(task.src)
     except Exception as exc:  # reported in its result, the other frames go on
