@@ -63,6 +63,7 @@ from ocio_vp.correction.perceptual import (
     default_camera_to_xyz,
     make_q_perceptual,
     mean_delta_e,
+    normalising_white,
     patch_delta_e,
     q_perceptual,
 )
@@ -146,6 +147,7 @@ __all__ = [
     "make_q_perceptual",
     "make_q_root_polynomial",
     "mean_delta_e",
+    "normalising_white",
     "patch_delta_e",
     "patch_name",
     "patch_scores",

@@ -50,7 +50,11 @@ from ocio_vp.correction.linear import (
     fit_least_squares,
     loo_predictions,
 )
-from ocio_vp.correction.perceptual import default_camera_to_xyz, patch_delta_e
+from ocio_vp.correction.perceptual import (
+    default_camera_to_xyz,
+    normalising_white,
+    patch_delta_e,
+)
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import white_scale
 
@@ -214,11 +218,9 @@ def _robust_weights(X, P, w, scale, steps: int = 8) -> np.ndarray:
 def _judges(w: np.ndarray, white: int, luminance: np.ndarray) -> tuple[np.ndarray, int]:
     """Indices of the fitted patches whose colours judge a patch's influence (all of them, or
     :data:`INFLUENCE_JUDGES` spread evenly over a larger chart, always with the white) and the
-    white's position among them (``white``, or the brightest fitted patch when it is not
-    usable, as :func:`~ocio_vp.correction.perceptual.patch_delta_e` would choose)."""
+    white's position among them (the patch ΔE is normalised on: :func:`normalising_white`)."""
     active = np.flatnonzero(w > 0)
-    if not (w[white] > 0 and luminance[white] > 0):
-        white = int(active[np.argmax(luminance[active])])
+    white = normalising_white(luminance, white, w)
     if len(active) > INFLUENCE_JUDGES:
         active = active[np.linspace(0, len(active) - 1, INFLUENCE_JUDGES).round().astype(int)]
     judges = np.union1d(active, [white])

@@ -35,6 +35,7 @@ __all__ = [
     "default_camera_to_xyz",
     "make_q_perceptual",
     "mean_delta_e",
+    "normalising_white",
     "patch_delta_e",
     "q_perceptual",
 ]
@@ -76,6 +77,19 @@ def _encoder(
     raise ValueError(f"metric must be one of {PERCEPTUAL_METRICS}, got {metric!r}")
 
 
+def normalising_white(
+    luminance: ArrayLike, white_patch: int, weights: ArrayLike | None = None
+) -> int:
+    """The patch ΔE is normalised on: ``white_patch``, or, when it is excluded (weight 0) or
+    has no ``luminance``, the fitted patch of highest luminance (ValueError if none is fitted).
+    """
+    luminance = np.asarray(luminance, dtype=np.float64)
+    w = np.ones(len(luminance)) if weights is None else np.asarray(weights, dtype=np.float64)
+    if w[white_patch] > 0 and luminance[white_patch] > 0:
+        return white_patch
+    return int(np.argmax(np.where(w > 0, luminance, -np.inf)))
+
+
 def patch_delta_e(
     predicted: ArrayLike,
     target: ArrayLike,
@@ -97,11 +111,7 @@ def patch_delta_e(
 
     target = np.asarray(target, dtype=np.float64)
     matrix = default_camera_to_xyz() if camera_to_xyz is None else np.asarray(camera_to_xyz, float)
-    w = np.ones(len(target)) if weights is None else np.asarray(weights, dtype=np.float64)
-    luminance = target @ matrix[1]
-    white = white_patch
-    if not (w[white] > 0 and luminance[white] > 0):
-        white = int(np.argmax(np.where(w > 0, luminance, -np.inf)))  # ValueError if none > 0
+    white = normalising_white(target @ matrix[1], white_patch, weights)
     encode = _encoder(target, matrix, white, metric)
     return np.asarray(
         colour.delta_E(encode(target), encode(np.asarray(predicted, float)), method=metric)
