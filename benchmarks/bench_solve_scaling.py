@@ -72,20 +72,21 @@ def run(quick: bool = False) -> str:
         target=held @ base_target,
     )
     sizes = QUICK_SIZES if quick else SIZES
-    charts = {n: _charts(base_srl, base_target, n, np.random.default_rng(n)) for n in sizes}
+    problems = {}
+    for n in sizes:
+        srl, target = _charts(base_srl, base_target, n, np.random.default_rng(n))
+        problems[n] = QProblem(
+            SL=measurements.SL, SRL=srl, beta=beta, M=M, w_avg=w_avg, target=target
+        )
     rows = []
     for name, solver in Q_SOLVE_METHODS.items():
         cells, last = [], 0.0
-        srl, target = charts[sizes[0]]  # warm-up (lazy imports, caches): not timed
-        solver(QProblem(SL=measurements.SL, SRL=srl, beta=beta, M=M, w_avg=w_avg, target=target))
+        solver(problems[sizes[0]])  # warm-up (lazy imports, caches): not timed
         for n in sizes:
             if last > BUDGET_S:
                 cells.append("not run")
                 continue
-            srl, target = charts[n]
-            problem = QProblem(
-                SL=measurements.SL, SRL=srl, beta=beta, M=M, w_avg=w_avg, target=target
-            )
+            problem = problems[n]
             start = time.perf_counter()
             fit = solver(problem)
             last = time.perf_counter() - start
@@ -96,7 +97,7 @@ def run(quick: bool = False) -> str:
             )
             cells.append(f"{fmt_ms(last)} / {de:.2f}")
         rows.append((f"`{name}`", *cells))
-    rows.append(_screening_row(measurements, charts, sizes, beta, M, w_avg))
+    rows.append(_screening_row(problems))
     return "\n".join(
         [
             "## Q-solve time against the number of patches",
@@ -113,15 +114,12 @@ def run(quick: bool = False) -> str:
     )
 
 
-def _screening_row(measurements, charts, sizes, beta, M, w_avg) -> tuple[str, ...]:
+def _screening_row(problems: dict) -> tuple[str, ...]:
     """Time of ``inconsistent_patches`` per chart size, and how many patches it excluded."""
     from ocio_vp.correction.outliers import inconsistent_patches
-    from ocio_vp.correction.problem import QProblem
 
     cells = []
-    for n in sizes:
-        srl, target = charts[n]
-        problem = QProblem(SL=measurements.SL, SRL=srl, beta=beta, M=M, w_avg=w_avg, target=target)
+    for n, problem in problems.items():
         X, P = problem.predicted, problem.target
         inconsistent_patches(X, P, np.ones(n), 18)  # warm-up at every size: not timed
         start = time.perf_counter()
