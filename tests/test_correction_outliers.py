@@ -300,7 +300,8 @@ def _large_chart(n: int, bad, seed: int = 4):
 def test_influence_on_a_large_chart_estimates_the_full_mean() -> None:
     """Over 128 patches the influence is judged on 128 of them: against numpy re-fits without
     each patch and colour-science's ΔE2000 over *all* the others, the estimate names the same
-    patch and is within 15 % (or 0.01 ΔE2000, 100x below the smallest threshold) everywhere."""
+    patch and is within 15 % (or 0.01 ΔE2000, 100x below LATER_INFLUENCE, the smallest
+    threshold) everywhere. Measured on this chart: at most 8.5 % (p95), 5 % on the bad patch."""
     X, P = _large_chart(300, [40])
     influence = patch_influence(X, P, np.ones(300), 18)
     Q_all = np.linalg.lstsq(X, P, rcond=None)[0]
@@ -327,7 +328,9 @@ def test_screening_a_large_chart_is_bounded() -> None:
         inconsistent_patches(X, P, np.ones(1000), 18)
     message = str(error.value)
     assert f"{MAX_EXCLUDED + 1} or more chart patches" in message
-    assert "\n" not in message and len(message) < 400
+    # the first six names, then "...": 25 names would not fit MAX_MESSAGE (InputError clips)
+    names = message.rsplit("--keep-all-patches): ", 1)[1]
+    assert names.count("patch ") == 6 and names.endswith(", ...")
 
 
 def test_a_clean_white_that_drags_an_ill_determined_fit_is_not_flagged() -> None:

@@ -161,5 +161,6 @@ def test_q_sidecar_lut_reads_back_as_written(written):
     slices = ours.reshape(size, size * size, 3)
     np.testing.assert_array_equal(slices[2], slices[1])
     assert not np.any(slices[3:]) and np.any(slices[1])
-    # one cell spans the whole scale range: 48 stops in 2^-16-stop steps on every entry
+    # one cell spans the whole scale range: docs/root_polynomial.md's exposures 2^-32..2^16,
+    # 48 stops, in its 2^-16-stop steps, on every entry
     np.testing.assert_array_equal(slices[1] - slices[0], 48 * 2**16)

@@ -22,9 +22,9 @@ needs only one cell: its first two slices hold the scale range's two ends, the t
 the second (a clamp, so rounding at the cell's top edge changes nothing) and the other 62 are
 zeros, never reached (the 1D LUT keeps ``s`` in the first cell). A cube is what OCIO and CLF
 accept, so the file still holds 65^3 entries, but only 2 x 65^2 distinct ones are computed
-and formatted, and the zeros keep each file at about 2 MB (6.6 MB with every slice filled). The
-error is that of interpolating a smooth function of two log-ratios on a 65 x 65 grid. Measured (the bake error, in % of each colour's largest channel, six
-environments): mean 0.015-0.023 %, max <= 0.065 % for content in the target chart's gamut at
+and formatted, and the zeros keep each file at about 2 MB (6.6 MB with every slice filled).
+The error is that of interpolating a smooth function of two log-ratios on a 65 x 65 grid.
+Measured (the bake error, in % of each colour's largest channel, six environments): mean 0.015-0.023 %, max <= 0.065 % for content in the target chart's gamut at
 any exposure, where the former per-channel log shaper had up to 0.75 %. Q^-1 is exact Newton
 (:func:`~ocio_vp.correction.invert_root_polynomial`); only the 65^2 directions are solved.
 
