@@ -30,34 +30,28 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import tempfile
     import time
     from pathlib import Path
 
+    from ocio_vp.correction.registry import NON_LINEAR_METHODS
     from ocio_vp.errors import InputError
-    from ocio_vp.ocio.writer import write_solutions
+    from ocio_vp.ocio.writer import writer_pool
     from ocio_vp.simulator.data import PAPER_ENVIRONMENTS
-    from ocio_vp.simulator.samples import SAMPLE_NAME, simulate_and_solve
-    from ocio_vp.simulator.stage import paper_stage
-    from ocio_vp.staging import check_file_replaceable, check_replaceable, write_output_file
+    from ocio_vp.simulator.samples import SAMPLE_NAME
+    from ocio_vp.staging import check_file_replaceable, check_replaceable
 
     start = time.perf_counter()
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise InputError("exists and is not a folder", source=out, key="--out")
-    stage = paper_stage()
     # Every destination is checked before anything is written: all or nothing.
     for name in (*PAPER_ENVIRONMENTS, *(() if args.no_report else ("report",))):
         check_replaceable(out / name)
     check_file_replaceable(out / f"{SAMPLE_NAME}.yaml")
-    with tempfile.TemporaryDirectory() as tmp:
-        scratch = Path(tmp) / f"{SAMPLE_NAME}.yaml"
-        _, solutions = simulate_and_solve(scratch, method=args.method, stage=stage)
-        try:
-            written = write_solutions(solutions, out)
-            write_output_file(out / scratch.name, scratch.read_bytes())
-        except OSError as error:
-            raise InputError(f"cannot write: {error.strerror}", source=out, key="--out") from None
+    # The writing helper starts first: it imports while this process imports colour-science
+    # and simulates, and it is only worth it when some environment may bake LUTs.
+    with writer_pool(start=args.method in NON_LINEAR_METHODS) as pool:
+        stage, written = _simulate_and_write(out, args.method, pool)
     print(
         f"simulated stage: {stage.camera_name}, {stage.led_description}, {stage.chart_name}, "
         f"beta {stage.beta:.5f}, panel albedo {stage.panel_albedo}"
@@ -78,10 +72,33 @@ def run(args: argparse.Namespace) -> int:
             )
         print(f"report: {report.index} (open it in a browser)")
     print(
-        f"wrote {len(written)} environments and {scratch.name} to {out} "
+        f"wrote {len(written)} environments and {SAMPLE_NAME}.yaml to {out} "
         f"in {time.perf_counter() - start:.1f} s"
     )
     return 0
+
+
+def _simulate_and_write(out, method: str, pool) -> tuple:
+    """The paper-like stage, its seven environments solved and written to ``out``."""
+    import tempfile
+    from pathlib import Path
+
+    from ocio_vp.errors import InputError
+    from ocio_vp.ocio.writer import write_solutions
+    from ocio_vp.simulator.samples import SAMPLE_NAME, simulate_and_solve
+    from ocio_vp.simulator.stage import paper_stage
+    from ocio_vp.staging import write_output_file
+
+    stage = paper_stage()
+    with tempfile.TemporaryDirectory() as tmp:
+        scratch = Path(tmp) / f"{SAMPLE_NAME}.yaml"
+        _, solutions = simulate_and_solve(scratch, method=method, stage=stage)
+        try:
+            written = write_solutions(solutions, out, pool=pool)
+            write_output_file(out / scratch.name, scratch.read_bytes())
+        except OSError as error:
+            raise InputError(f"cannot write: {error.strerror}", source=out, key="--out") from None
+    return stage, written
 
 
 def spectral_check(stage, solutions) -> str:

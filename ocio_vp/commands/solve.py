@@ -130,10 +130,9 @@ def print_linearity(solutions: Sequence) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ocio_vp.correction.registry import NON_LINEAR_METHODS
     from ocio_vp.errors import InputError
-    from ocio_vp.formats.measurements import load_measurements
-    from ocio_vp.ocio.writer import write_solutions
-    from ocio_vp.wall.encoding import with_wall_encoding
+    from ocio_vp.ocio.writer import writer_pool
 
     if args.peak_nits is not None and args.wall_encoding != "pq":
         warn("solve", f"--peak-nits has no effect with --wall-encoding {args.wall_encoding}")
@@ -142,6 +141,24 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"expected 0 < cd/m2 <= 10000, got {peak_nits:g}", key="--peak-nits")
     if args.hdri_width is not None and not args.hdri:
         warn("solve", "--hdri-width has no effect without --hdri")
+    # A helper that writes some environments beside this process, started before loading and
+    # solving so that it is ready; only worth it when a Q may be baked into 3D LUTs.
+    with writer_pool(start=args.method in NON_LINEAR_METHODS) as pool:
+        written = _solve_and_write(args, peak_nits, pool)
+    print(summary_table(written))
+    print_fixtures(written)
+    print_linearity(written)
+    print(f"wrote {len(written)} environment(s) to {args.out}")
+    return 0
+
+
+def _solve_and_write(args: argparse.Namespace, peak_nits: float, pool) -> list:
+    """Load, solve every environment asked for, and write them to ``args.out``."""
+    from ocio_vp.errors import InputError
+    from ocio_vp.formats.measurements import load_measurements
+    from ocio_vp.ocio.writer import write_solutions
+    from ocio_vp.wall.encoding import with_wall_encoding
+
     measurements = load_measurements(args.measurements)
     environments = measurements.environments
     if args.environment:
@@ -159,12 +176,7 @@ def run(args: argparse.Namespace) -> int:
     solutions = _solve(measurements, environments, args)
     solutions = [with_wall_encoding(s, args.wall_encoding, peak_nits=peak_nits) for s in solutions]
     hdri_files = [spec.partition("=")[2] or spec for spec in args.hdri]
-    written = write_solutions(solutions, args.out, inputs=[args.measurements, *hdri_files])
-    print(summary_table(written))
-    print_fixtures(written)
-    print_linearity(written)
-    print(f"wrote {len(written)} environment(s) to {args.out}")
-    return 0
+    return write_solutions(solutions, args.out, inputs=[args.measurements, *hdri_files], pool=pool)
 
 
 def _solve(measurements, environments, args: argparse.Namespace) -> list:

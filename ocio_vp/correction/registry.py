@@ -22,6 +22,7 @@ import numpy as np
 from ocio_vp.correction.auto import q_auto
 from ocio_vp.correction.joint import q_joint
 from ocio_vp.correction.linear import (
+    ROOT_POLYNOMIAL_DEGREES,
     fit_least_squares,
     q_diagonal,
     q_identity,
@@ -36,6 +37,7 @@ from ocio_vp.correction.root_polynomial import make_q_root_polynomial
 from ocio_vp.errors import InputError
 
 __all__ = [
+    "NON_LINEAR_METHODS",
     "Q_SOLVE_METHODS",
     "QFit",
     "QProblem",
@@ -69,6 +71,10 @@ Q_SOLVE_METHODS: dict[str, Callable[[QProblem], QFit]] = {
     "root-polynomial": make_q_root_polynomial(2),
     "root-polynomial-3": make_q_root_polynomial(3),
 }
+
+
+#: Methods whose Q may be non-linear (root-polynomial): their configs carry baked 3D LUTs.
+NON_LINEAR_METHODS = frozenset({"auto", *ROOT_POLYNOMIAL_DEGREES})
 
 
 def solve_post_correction(problem: QProblem, *, method: str = "least-squares") -> QFit:

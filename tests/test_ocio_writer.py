@@ -1,0 +1,99 @@
+"""Writing environments with a helper process: the same files, and every failure as without it.
+
+Independent check: the files written by this process alone (no pool), byte for byte.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import multiprocessing
+import os
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ocio_vp.errors import InputError
+from ocio_vp.formats.solution import solution_to_json
+from ocio_vp.ocio.writer import _share, write_solutions, writer_pool
+from ocio_vp.pipeline import solve_environment
+
+
+@pytest.fixture(scope="module")
+def solutions():
+    from ocio_vp.simulator.stage import paper_stage_measurements
+
+    m = paper_stage_measurements(("incandescent", "direct_sun", "sodium_vapour"))
+    methods = ("root-polynomial", "root-polynomial", "least-squares")
+    return [solve_environment(m, e, method=k) for e, k in zip(m.environments, methods)]
+
+
+def _files(root: Path) -> dict[str, bytes]:
+    return {
+        str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()
+    }
+
+
+@pytest.fixture(scope="module")
+def alone(solutions, tmp_path_factory):
+    out = tmp_path_factory.mktemp("alone") / "out"
+    written = write_solutions(solutions, out)
+    return _files(out), [solution_to_json(s) for s in written]
+
+
+def test_a_helper_writes_the_same_files(solutions, alone, tmp_path):
+    with writer_pool() as pool:
+        written = write_solutions(solutions, tmp_path / "out", pool=pool)
+    assert _files(tmp_path / "out") == alone[0]
+    assert [solution_to_json(s) for s in written] == alone[1]
+    # the helper's share was not empty: one of the two root-polynomial environments
+    assert _share(solutions) == {1}
+
+
+def test_a_helper_that_dies_is_replaced_by_this_process(solutions, alone, tmp_path):
+    # The worker exits as it starts: every task sent to it fails with BrokenProcessPool.
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(1, mp_context=context, initializer=os._exit, initargs=(3,)) as pool:
+        written = write_solutions(solutions, tmp_path / "out", pool=pool)
+    assert _files(tmp_path / "out") == alone[0]
+    assert [solution_to_json(s) for s in written] == alone[1]
+
+
+def test_an_input_error_in_the_helper_is_reported_and_nothing_is_written(solutions, tmp_path):
+    # A root-polynomial Q with all-zero coefficients is not invertible: an InputError in
+    # write_environment. It is the second root-polynomial environment: the helper's share.
+    model = dict(solutions[1].diagnostics["method_notes"]["root_polynomial"])
+    model["coefficients"] = np.zeros_like(np.asarray(model["coefficients"])).tolist()
+    notes = {**solutions[1].diagnostics["method_notes"], "root_polynomial": model}
+    bad = dataclasses.replace(
+        solutions[1], diagnostics={**solutions[1].diagnostics, "method_notes": notes}
+    )
+    broken = [solutions[0], bad, solutions[2]]
+    assert _share(broken) == {1}
+    with pytest.raises(InputError) as here:
+        write_solutions(broken, tmp_path / "here")
+    with writer_pool() as pool, pytest.raises(InputError) as helper:
+        write_solutions(broken, tmp_path / "helper", pool=pool)
+    assert str(helper.value) == str(here.value)
+    assert "not invertible" in str(helper.value)
+    for out in ("here", "helper"):  # all or nothing: no environment folder, no staging left
+        assert not (tmp_path / out).exists() or not any((tmp_path / out).iterdir())
+
+
+def test_share_balances_the_bakes():
+    # five root-polynomial environments (cost 1) and two 3x3 ones (cost 0.1), in any order
+    costly = {"method_notes": {"root_polynomial": {"coefficients": []}}}
+    kinds = [costly, {}, costly, costly, {}, costly, costly]
+    fake = [dataclasses.make_dataclass("S", ["diagnostics"])(d) for d in kinds]
+    helper = _share(fake)
+    cost = [1.0 if d else 0.1 for d in kinds]
+    mine = sum(cost[i] for i in helper)
+    here = sum(cost) - mine
+    # this process takes three bakes, the helper two and both cheap ones: 3.0 vs 2.2
+    assert (here, round(mine, 6)) == (3.0, 2.2)
+
+
+def test_no_pool_when_not_started():
+    with writer_pool(start=False) as pool:
+        assert pool is None
