@@ -16,7 +16,8 @@ floor; ``--screening-only`` runs it alone (``--quick``: both cameras, default LE
 environments, 3 draws; about 20 s).
 
 Run alone: ``python -m benchmarks.bench_accuracy [--quick] [--screening-only] [--methods ...]
-[--out FILE]``; by ``python -m benchmarks.run`` it writes ``docs/accuracy.md``.
+[--out FILE]``; by ``python -m benchmarks.run`` it writes ``docs/accuracy.md``. With
+``--screening-only``, ``--out`` naming an existing document replaces only its bad-patch section.
 """
 
 from __future__ import annotations
@@ -318,7 +319,8 @@ def main(argv=None) -> int:
     parser.add_argument(
         "--screening-only",
         action="store_true",
-        help="only the bad-patch study (--quick: both cameras, default LEDs, 3 draws)",
+        help="only the bad-patch study (--quick: both cameras, default LEDs, 3 draws); with "
+        "--out naming an existing document, only its bad-patch section is replaced",
     )
     args = parser.parse_args(argv)
     if args.screening_only:
@@ -326,11 +328,30 @@ def main(argv=None) -> int:
     else:
         text = run(quick=args.quick, methods=args.methods)
     if args.out:
+        if args.screening_only:
+            text = _with_section(args.out, text)
         with open(args.out, "w", encoding="utf-8") as handle:
             handle.write(text + "\n")
     else:
         print(text)
     return 0
+
+
+def _with_section(path: str, section: str) -> str:
+    """The document at ``path`` with its bad-patch section (from its heading to the next
+    heading of the same level, or the end) replaced by ``section``; ``section`` alone when the
+    file or the section does not exist yet."""
+    heading = section.split("\n", 1)[0]
+    try:
+        with open(path, encoding="utf-8") as handle:
+            text = handle.read().rstrip("\n")
+    except FileNotFoundError:
+        return section
+    start = text.find(heading + "\n")
+    if start < 0:
+        return section
+    end = text.find("\n## ", start + len(heading))
+    return text[:start] + section + ("" if end < 0 else "\n\n" + text[end + 1 :])
 
 
 # ---------------------------------------------------------------------------------------------
@@ -717,6 +738,9 @@ def outlier_report(out: dict, seeds: int, noise: float = 0.01) -> str:
     return "\n".join(
         [
             "## Bad patches: screening before the fit",
+            "",
+            "This section alone: `python -m benchmarks.bench_accuracy --screening-only --out "
+            "docs/accuracy.md` (replaces only this section; a few minutes).",
             "",
             f"Clean charts: {seeds} noise draws ({100 * noise:g}% on every value) per stage and "
             "environment; a false alarm is any patch flagged. One bad patch: every patch of draw 0 "

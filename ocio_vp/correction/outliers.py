@@ -22,7 +22,14 @@ from the data alone, so that every method fits without them and the engineer is 
    (:func:`patch_influence`), and its held-out prediction misses it by
    :data:`OUTLIER_RELATIVE` of itself. This is what an engineer would see, and it catches, under sodium
    light, a patch read 2.5x too bright that the residual test must let pass.
-4. A suspect patch (either way, and off by at least :data:`OUTLIER_FLOOR` of white) is
+4. Two reading-order neighbours look **swapped** (the patch order mixed up, in the target or
+   the lit chart) when the rest of the chart, fitted without both (:func:`pair_residuals`),
+   predicts them far better exchanged than as read (:data:`SWAP_RATIO`, :data:`SWAP_FLOOR`)
+   and they stand out from the chart's other pairs (:data:`SWAP_Z`).
+   Under sodium light the residual test cannot see a swap between two patches the 3x3 model
+   already misses; the pair is explicit about the cause. Both are excluded, each naming the
+   other (``swapped_with``), before any single patch is.
+5. A suspect patch (either way, and off by at least :data:`OUTLIER_FLOOR` of white) is
    inconsistent. The worst is excluded and the search repeats. Once a patch is gone, those of
    a similar colour are predicted less well without being wrong, so a further patch must also
    have looked suspect on the whole chart (:data:`FIRST_PASS_SUPPORT`) and either drag the
@@ -72,10 +79,14 @@ __all__ = [
     "OUTLIER_RELATIVE",
     "OUTLIER_RELATIVE_NARROW",
     "OUTLIER_Z",
+    "SWAP_FLOOR",
+    "SWAP_RATIO",
+    "SWAP_Z",
     "UNSUPPORTED_SCORE",
     "Inconsistency",
     "inconsistent_patches",
     "is_narrow",
+    "pair_residuals",
     "patch_influence",
     "patch_name",
     "patch_scores",
@@ -136,6 +147,27 @@ MAX_EXCLUDED_FRACTION = 0.125
 #: whole chart, so this bounds the screening's work (linear in the chart's size; ~0.1 s per
 #: exclusion at 1000 patches). So many bad patches say the sampling itself went wrong.
 MAX_EXCLUDED = 24
+#: Two reading-order neighbours look **swapped** (in the target or the lit chart) when, fitted
+#: without both, the rest of the chart predicts them at least SWAP_RATIO times better exchanged
+#: than as read (the sum of the two held-out residuals' sizes, relative to white:
+#: :func:`pair_residuals`) and exchanging them explains at least SWAP_FLOOR of white. On the
+#: clean simulated charts of the bad-patch study (2 cameras x 2 LED sets x 10 environments x 20
+#: draws at 1 % noise, 17,480 pairs) no pair under broadband light was predicted better
+#: exchanged at all (as read minus exchanged: -0.13 at most); under line-spectrum light a pair
+#: exchanging explained by more than 0.2 of white was at most 2.34 times better exchanged
+#: (Sigma, sodium vapour: the model itself misses those patches), and a pair 3 or more times
+#: better exchanged gained 0.10 of white at most (two dark patches). Every visible swap under
+#: broadband light scored at least 3.7 and 0.35, most under sodium light 3 to 20 and 0.5 to 2.
+SWAP_RATIO = 3.0
+SWAP_FLOOR = 0.25
+#: ... and, as read, the pair misses by at least SWAP_Z times the chart's typical pair
+#: (1.4826 x the median over all pairs): where the model does not fit the chart at all (random
+#: values, a one-colour target) every pair misses alike and some are better exchanged by
+#: chance (on such a chart of the tests one pair was 9.4x and 1.15 of white better exchanged,
+#: yet missed by 0.9 times the typical pair; none of its pairs stood above 1.7). Of the study's
+#: 588 visible swaps (target or lit chart, every stage and light) that pass the two limits
+#: above, 586 also pass this one (the other two stand at 1.7).
+SWAP_Z = 2.0
 #: Patches needed after exclusion (a 9-parameter fit with headroom to judge it).
 _MIN_REMAINING = 12
 
@@ -186,9 +218,21 @@ class Inconsistency:
     z: float  # robust standard deviations of all patches' residuals
     influence: float  # mean ΔE2000 it moves the fit's colours of the other patches
     residual: tuple[float, float, float]  # held-out prediction - target, relative to white
+    swapped_with: int | None = None  # the neighbour it looks swapped with, if that is the cause
+    swapped_name: str | None = None
+    # the pair's held-out residuals (fitted without both), as read and exchanged, of white
+    swap_residuals: tuple[float, float] | None = None
 
     def describe(self) -> str:
         """One phrase for the terminal and solution.json."""
+        if self.swapped_with is not None:
+            as_read, exchanged = self.swap_residuals
+            return (
+                f"{self.name} and {self.swapped_name} look swapped: predicted from the other "
+                f"patches, the pair is off by {100 * as_read:.0f}% of white as read and by "
+                f"{100 * exchanged:.0f}% with the two exchanged "
+                f"({as_read / max(exchanged, 1e-12):.1f}x better); both are excluded"
+            )
         off = ", ".join(f"{100 * v:+.1f}%" for v in self.residual)
         return (
             f"{self.name}: predicted from the other patches it is off by {off} of white "
@@ -273,6 +317,55 @@ def patch_influence(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> 
     return influence
 
 
+def pair_residuals(
+    X: np.ndarray, P: np.ndarray, w: np.ndarray, scale: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """(n - 1,) each reading-order neighbour pair's held-out residuals as read and exchanged.
+
+    For the pair (j, j + 1) of fitted patches, least squares is fitted without both (a rank-two
+    downdate of the 3x3 normal equations, batched) and predicts both from the rest. ``as_read``
+    is ``|pred_j - P_j| + |pred_k - P_k|``, ``exchanged`` is ``|pred_j - P_k| + |pred_k - P_j|``
+    (Euclidean norms of the white-relative residuals, ``scale``: :func:`ocio_vp.metrics.
+    white_scale`); both NaN for a pair with an unfitted patch. A swapped lit-chart row gives the
+    same pair: the fit without both does not see it, and exchanging the rows exchanges the
+    predictions. Time and memory grow linearly with the chart.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.uniform(0.05, 1.0, (24, 3)); X[18] = 1.0
+    >>> P = X @ np.array([[1.1, -0.1, 0.0], [0.0, 1.0, 0.05], [0.02, -0.05, 0.9]]).T
+    >>> P[[7, 8]] = P[[8, 7]]
+    >>> as_read, exchanged = pair_residuals(X, P, np.ones(24), np.ones(3))
+    >>> int(np.argmax(as_read - exchanged)), float(exchanged[7]) < 1e-9
+    (7, True)
+    """
+    w = np.asarray(w, dtype=np.float64)
+    j = np.arange(len(w) - 1)
+    k = j + 1
+    G = np.einsum("j,jc,jd->cd", w, X, X)
+    B = np.einsum("j,jc,jd->cd", w, X, P)
+    G_without = G[None] - _outer(w[j], X[j], X[j]) - _outer(w[k], X[k], X[k])
+    B_without = B[None] - _outer(w[j], X[j], P[j]) - _outer(w[k], X[k], P[k])
+    Qt = np.linalg.pinv(G_without, hermitian=True) @ B_without  # (n - 1, 3, 3)
+    pred_j = np.einsum("pc,pcd->pd", X[j], Qt) / scale
+    pred_k = np.einsum("pc,pcd->pd", X[k], Qt) / scale
+    Pj, Pk = P[j] / scale, P[k] / scale
+
+    def norm(a):
+        return np.linalg.norm(a, axis=1)
+
+    as_read = norm(pred_j - Pj) + norm(pred_k - Pk)
+    exchanged = norm(pred_j - Pk) + norm(pred_k - Pj)
+    both = (w[j] > 0) & (w[k] > 0)
+    return np.where(both, as_read, np.nan), np.where(both, exchanged, np.nan)
+
+
+def _outer(weight, a, b):
+    """(m, 3, 3) ``weight a b^T`` per row."""
+    return weight[:, None, None] * a[:, :, None] * b[:, None, :]
+
+
 def is_narrow(X: np.ndarray, P: np.ndarray, w: np.ndarray) -> bool:
     """Whether the target's colours spread much less than the lit chart's (a line-spectrum
     light the wall cannot reproduce: :data:`~ocio_vp.correction.linear.NARROW_TARGET`)."""
@@ -281,11 +374,19 @@ def is_narrow(X: np.ndarray, P: np.ndarray, w: np.ndarray) -> bool:
 
 
 def patch_scores(
-    X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int, narrow: bool | None = None
+    X: np.ndarray,
+    P: np.ndarray,
+    w: np.ndarray,
+    white: int,
+    narrow: bool | None = None,
+    pair_scale: np.ndarray | None = None,
 ) -> dict:
     """Per patch: ``relative`` and white-relative ``residual`` of the held-out least-squares
     prediction, its robust ``z`` score, its ``influence`` (:func:`patch_influence`) and
-    ``score`` (> 1: inconsistent; 0 for excluded). ``narrow``: the light's kind
+    ``score`` (> 1: inconsistent; 0 for excluded). Per reading-order neighbour pair (j, j + 1):
+    ``as_read`` and ``exchanged`` (:func:`pair_residuals`, on the robust weights) and ``swap``
+    (> 1: swapped; 0 for a pair with an excluded patch), relative to ``pair_scale`` (default:
+    this chart's white, :func:`ocio_vp.metrics.white_scale`). ``narrow``: the light's kind
     (:func:`is_narrow`), computed from the chart when not given."""
     scale = white_scale(P, white, w)
     robust = _robust_weights(X, P, w, scale)
@@ -304,6 +405,7 @@ def patch_scores(
     narrow = is_narrow(X, P, w) if narrow is None else narrow
     limit = OUTLIER_RELATIVE_NARROW if narrow else OUTLIER_RELATIVE
     influence = patch_influence(X, P, w, white)
+    as_read, exchanged = pair_residuals(X, P, robust, scale if pair_scale is None else pair_scale)
     # A patch drags the fit when its influence is large in ΔE2000, stands out from the chart's
     # other patches as residuals must (a chart the model does not fit at all, e.g. random
     # values, has every patch influential and none of them an outlier), and the others do not
@@ -321,7 +423,23 @@ def patch_scores(
         "influence": influence,
         "residual": residual,
         "limit": limit,
+        "as_read": as_read,
+        "exchanged": exchanged,
+        "swap": _swap_scores(as_read, exchanged),
     }
+
+
+def _swap_scores(as_read: np.ndarray, exchanged: np.ndarray) -> np.ndarray:
+    """(n - 1,) > 1 for a pair that looks swapped (0 for a pair with an unfitted patch)."""
+    fitted = np.isfinite(as_read)
+    typical = 1.4826 * float(np.median(as_read[fitted])) if fitted.any() else 0.0
+    score = np.minimum(
+        np.minimum(
+            as_read / np.maximum(exchanged, 1e-12) / SWAP_RATIO, (as_read - exchanged) / SWAP_FLOOR
+        ),
+        as_read / max(SWAP_Z * typical, 1e-12),
+    )
+    return np.where(fitted, score, 0.0)
 
 
 def _next_patch(scores: dict, first: np.ndarray, after_exclusion: bool) -> int | None:
@@ -338,6 +456,29 @@ def _next_patch(scores: dict, first: np.ndarray, after_exclusion: bool) -> int |
         score = score / np.where(supported, 1.0, UNSUPPORTED_SCORE)
     j = int(np.argmax(score))
     return j if score[j] > 1.0 else None
+
+
+def _inconsistency(scores: dict, j: int, n: int, **swap) -> Inconsistency:
+    return Inconsistency(
+        j,
+        patch_name(j, n),
+        float(scores["relative"][j]),
+        float(scores["z"][j]),
+        float(scores["influence"][j]),
+        tuple(float(v) for v in scores["residual"][j]),
+        **swap,
+    )
+
+
+def _swapped(scores: dict, j: int, n: int) -> list[Inconsistency]:
+    """Both patches of the swapped pair (j, j + 1), each naming the other."""
+    residuals = (float(scores["as_read"][j]), float(scores["exchanged"][j]))
+    return [
+        _inconsistency(
+            scores, a, n, swapped_with=b, swapped_name=patch_name(b, n), swap_residuals=residuals
+        )
+        for a, b in ((j, j + 1), (j + 1, j))
+    ]
 
 
 def inconsistent_patches(
@@ -358,25 +499,23 @@ def inconsistent_patches(
     n = len(P)
     limit = max(1, min(int(MAX_EXCLUDED_FRACTION * np.count_nonzero(w > 0)), MAX_EXCLUDED))
     narrow = is_narrow(X, P, w)  # the light's kind does not change when a patch is excluded
+    # Nor does the white pairs are judged against: once the white patch itself is excluded the
+    # fallback scale (the chart's mean) would make every pair's residuals look several-fold.
+    pair_scale = white_scale(P, white, w)
     found: list[Inconsistency] = []
     first = None
     while np.count_nonzero(w > 0) > _MIN_REMAINING:
-        scores = patch_scores(X, P, w, white, narrow)
+        scores = patch_scores(X, P, w, white, narrow, pair_scale)
         first = scores["score"] if first is None else first
-        j = _next_patch(scores, first, bool(found))
-        if j is None:
-            break
-        found.append(
-            Inconsistency(
-                j,
-                patch_name(j, n),
-                float(scores["relative"][j]),
-                float(scores["z"][j]),
-                float(scores["influence"][j]),
-                tuple(float(v) for v in scores["residual"][j]),
-            )
-        )
-        w[j] = 0.0
+        pair = int(np.argmax(scores["swap"])) if n > 1 else 0
+        if n > 1 and scores["swap"][pair] > 1.0:
+            found += _swapped(scores, pair, n)
+        else:
+            j = _next_patch(scores, first, bool(found))
+            if j is None:
+                break
+            found.append(_inconsistency(scores, j, n))
+        w[[f.index for f in found]] = 0.0
         if len(found) > limit:
             names = ", ".join(f.name for f in found[:6]) + (", ..." if len(found) > 6 else "")
             raise InputError(

@@ -107,8 +107,11 @@ class Diagnostics(Mapping[str, Any]):
         The patches excluded as inconsistent: ``index``, ``name``, ``relative`` (how far off,
         relative to the patch itself), ``z`` (robust standard deviations), ``influence`` (mean
         ΔE2000 by which it moves the fit's colours of the other patches) and ``residual`` (the
-        held-out prediction minus the target, per channel, relative to white); see
-        :mod:`ocio_vp.correction.outliers`.
+        held-out prediction minus the target, per channel, relative to white); for two
+        neighbours that look swapped also ``swapped_with`` (the other's index),
+        ``swapped_name`` and ``swap_residuals`` (the pair's held-out residuals as read and
+        exchanged, fitted without both, relative to white; both patches are listed), otherwise
+        those three are null; see :mod:`ocio_vp.correction.outliers`.
     synthesized_target
         How a synthesized target chart was made (``ocio-vp target-chart``); only written for
         an environment whose chart was synthesized.
