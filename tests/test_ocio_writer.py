@@ -26,7 +26,7 @@ def solutions():
 
     m = paper_stage_measurements(("incandescent", "direct_sun", "sodium_vapour"))
     methods = ("root-polynomial", "root-polynomial", "least-squares")
-    return [solve_environment(m, e, method=k) for e, k in zip(m.environments, methods)]
+    return [solve_environment(m, e, method=k) for e, k in zip(m.environments, methods, strict=True)]
 
 
 def _files(root: Path) -> dict[str, bytes]:
