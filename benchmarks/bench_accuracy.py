@@ -394,20 +394,10 @@ def _lab_encoder(matrix: np.ndarray, white_rgb: np.ndarray) -> Callable:
 def _chart_view(stage, measurements, env, reflectances, matrix) -> ChartView:
     """The chart as the product fits it (``QProblem.predicted``: the clipped drive) and the
     held-out colours under the same wall."""
-    from ocio_vp.calibration.equations import solve_M
-    from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
-    from ocio_vp.correction.problem import QProblem
+    from ocio_vp.pipeline import post_correction_problem
     from ocio_vp.simulator.stage import camera_rgb, environment_spectrum
 
-    problem = QProblem(
-        SL=measurements.SL,
-        SRL=measurements.SRL,
-        beta=stage_beta(measurements),
-        M=solve_M(measurements.SL),
-        w_avg=environment_w_avg(measurements, env),
-        target=np.asarray(env.target_chart, dtype=np.float64),
-        white_patch=measurements.stage.white_patch,
-    )
+    problem = post_correction_problem(measurements, env)
     emitted = stage.leds @ np.clip(problem.M @ problem.w_avg, 0.0, None)
     white_rgb = camera_rgb(stage, environment_spectrum(stage, env.name))
     return ChartView(

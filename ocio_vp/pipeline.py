@@ -8,6 +8,7 @@ the diagnostics that say whether the result can be trusted.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -44,7 +45,7 @@ from ocio_vp.formats.solution import Diagnostics, Solution
 from ocio_vp.formats.synthesis import synthesis_to_dict, synthesis_warnings
 from ocio_vp.metrics import error_relative_to_white
 
-__all__ = ["DEFAULT_METHOD", "solve_environment", "solve_measurements"]
+__all__ = ["DEFAULT_METHOD", "post_correction_problem", "solve_environment", "solve_measurements"]
 
 #: The simplest Q model the scene needs (ocio_vp.correction.auto.q_auto); "least-squares" is the paper.
 DEFAULT_METHOD = "auto"
@@ -84,7 +85,7 @@ def solve_environment(
     if black_level not in BLACK_LEVEL_METHODS:
         raise ValueError(f"black_level must be one of {BLACK_LEVEL_METHODS}, got {black_level!r}")
     clipped = _clipped_patches(measurements, environment)
-    problem = _problem(measurements, environment, clipped)
+    problem = post_correction_problem(measurements, environment, clipped)
     lighting = _lighting(measurements, problem, method) if fixtures else None
     if lighting is not None and lighting.result.applied:
         problem = dataclasses.replace(problem, extra_light=lighting.extra_light)
@@ -176,10 +177,13 @@ def _clipped_patches(measurements: Measurements, environment: Environment) -> li
     return clipped
 
 
-def _problem(measurements: Measurements, environment: Environment, clipped: list[int]) -> QProblem:
-    """The post-correction problem: M = [SL]^-1, beta, w_avg, the target; clipped weigh 0."""
+def post_correction_problem(
+    measurements: Measurements, environment: Environment, clipped: Sequence[int] = ()
+) -> QProblem:
+    """The post-correction problem of ``environment`` as the solve poses it: M = [SL]^-1,
+    beta, w_avg, the target; the ``clipped`` patches weigh 0."""
     weights = np.ones(measurements.n_patches)
-    weights[clipped] = 0.0
+    weights[list(clipped)] = 0.0
     return QProblem(
         SL=measurements.SL,
         SRL=measurements.SRL,

@@ -43,19 +43,14 @@ def measurements_dict() -> dict:
 
 
 def measurement_problem(m, env):
-    """The Q problem of environment ``env`` of measurements ``m``, as the pipeline poses it."""
-    from ocio_vp.calibration.equations import solve_M
-    from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
-    from ocio_vp.correction.problem import QProblem
+    """The Q problem of environment ``env`` of measurements ``m``, as the pipeline poses it,
+    with a copy of the target (callers corrupt it in place)."""
+    import dataclasses
 
-    return QProblem(
-        SL=m.SL,
-        SRL=m.SRL,
-        beta=stage_beta(m),
-        M=solve_M(m.SL),
-        w_avg=environment_w_avg(m, env),
-        target=np.array(env.target_chart),  # a copy: callers corrupt it in place
-    )
+    from ocio_vp.pipeline import post_correction_problem
+
+    problem = post_correction_problem(m, env)
+    return dataclasses.replace(problem, target=np.array(problem.target))
 
 
 def paper_stage_problem(environment: str):

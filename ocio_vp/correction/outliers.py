@@ -244,6 +244,21 @@ class Inconsistency:
         )
 
 
+def _robust_sd(values: np.ndarray) -> float:
+    """1.4826 x the median: the standard deviation of normal values, not moved by outliers."""
+    return 1.4826 * float(np.median(values))
+
+
+def _normal_equations(X: np.ndarray, P: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, ...]:
+    """``G = sum w x x^T`` and ``B = sum w x p^T`` of the weighted 3x3 least squares."""
+    return np.einsum("j,jc,jd->cd", w, X, X), np.einsum("j,jc,jd->cd", w, X, P)
+
+
+def _outer(weight, a, b):
+    """(m, 3, 3) ``weight a b^T`` per row."""
+    return weight[:, None, None] * a[:, :, None] * b[:, None, :]
+
+
 def _robust_weights(X, P, w, scale, steps: int = 8) -> np.ndarray:
     """Weights of a Huber fit (iteratively reweighted least squares, threshold 2 robust
     standard deviations): several bad patches cannot drag the fit that judges them."""
@@ -252,7 +267,7 @@ def _robust_weights(X, P, w, scale, steps: int = 8) -> np.ndarray:
     for _ in range(steps):
         Q = fit_least_squares(X, P, weights)
         size = np.linalg.norm((X @ Q.T - P) / scale, axis=1)
-        spread = 1.4826 * float(np.median(size[active]))
+        spread = _robust_sd(size[active])
         if not spread > 0:
             break
         weights = np.where(
@@ -297,8 +312,7 @@ def patch_influence(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> 
     3
     """
     w = np.asarray(w, dtype=np.float64)
-    G = np.einsum("j,jc,jd->cd", w, X, X)
-    B = np.einsum("j,jc,jd->cd", w, X, P)
+    G, B = _normal_equations(X, P, w)
     fitted = X @ (np.linalg.pinv(G, hermitian=True) @ B)
     luminance = fitted @ default_camera_to_xyz()[1]
     influence = np.zeros(len(w))
@@ -307,8 +321,8 @@ def patch_influence(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> 
     judges, white_at = _judges(w, white, luminance)
     for start in range(0, len(w), _INFLUENCE_BLOCK):
         i = np.arange(start, min(start + _INFLUENCE_BLOCK, len(w)))
-        G_without = G[None] - w[i, None, None] * X[i, :, None] * X[i, None, :]
-        B_without = B[None] - w[i, None, None] * X[i, :, None] * P[i, None, :]
+        G_without = G[None] - _outer(w[i], X[i], X[i])
+        B_without = B[None] - _outer(w[i], X[i], P[i])
         without = X[judges][None] @ (np.linalg.pinv(G_without, hermitian=True) @ B_without)
         de = patch_delta_e(
             without, fitted[judges], white_patch=white_at, weights=w[judges]
@@ -345,8 +359,7 @@ def pair_residuals(
     w = np.asarray(w, dtype=np.float64)
     j = np.arange(len(w) - 1)
     k = j + 1
-    G = np.einsum("j,jc,jd->cd", w, X, X)
-    B = np.einsum("j,jc,jd->cd", w, X, P)
+    G, B = _normal_equations(X, P, w)
     G_without = G[None] - _outer(w[j], X[j], X[j]) - _outer(w[k], X[k], X[k])
     B_without = B[None] - _outer(w[j], X[j], P[j]) - _outer(w[k], X[k], P[k])
     Qt = np.linalg.pinv(G_without, hermitian=True) @ B_without  # (n - 1, 3, 3)
@@ -361,11 +374,6 @@ def pair_residuals(
     exchanged = norm(pred_j - Pk) + norm(pred_k - Pj)
     both = (w[j] > 0) & (w[k] > 0)
     return np.where(both, as_read, np.nan), np.where(both, exchanged, np.nan)
-
-
-def _outer(weight, a, b):
-    """(m, 3, 3) ``weight a b^T`` per row."""
-    return weight[:, None, None] * a[:, :, None] * b[:, None, :]
 
 
 def is_narrow(X: np.ndarray, P: np.ndarray, w: np.ndarray) -> bool:
@@ -400,7 +408,7 @@ def patch_scores(
     G = np.einsum("j,jc,jd->cd", robust, X, X)
     leverage = robust * np.einsum("jc,cd,jd->j", X, np.linalg.pinv(G, hermitian=True), X)
     size = np.linalg.norm(residual, axis=1) * np.sqrt(np.clip(1.0 - leverage, 0.0, 1.0))
-    spread = max(1.4826 * float(np.median(size[active])), 1e-12)
+    spread = max(_robust_sd(size[active]), 1e-12)
     z = size / spread
     magnitude = np.maximum(np.linalg.norm(held, axis=1), np.linalg.norm(P, axis=1))
     relative = np.linalg.norm(held - P, axis=1) / np.where(magnitude > 0, magnitude, 1.0)
@@ -413,7 +421,7 @@ def patch_scores(
     # values, has every patch influential and none of them an outlier), and the others do not
     # predict it (the white patch, the brightest, can drag an ill-determined sodium fit by
     # 3 ΔE2000 while predicted within 2 % of itself).
-    typical = max(1.4826 * float(np.median(influence[active])), 1e-12)
+    typical = max(_robust_sd(influence[active]), 1e-12)
     drag = np.minimum(influence / OUTLIER_INFLUENCE, influence / typical / OUTLIER_Z)
     drag = np.minimum(drag, relative / OUTLIER_RELATIVE)
     score = np.maximum(np.minimum(relative / limit, z / OUTLIER_Z), drag)
@@ -434,7 +442,7 @@ def patch_scores(
 def _swap_scores(as_read: np.ndarray, exchanged: np.ndarray) -> np.ndarray:
     """(n - 1,) > 1 for a pair that looks swapped (0 for a pair with an unfitted patch)."""
     fitted = np.isfinite(as_read)
-    typical = 1.4826 * float(np.median(as_read[fitted])) if fitted.any() else 0.0
+    typical = _robust_sd(as_read[fitted]) if fitted.any() else 0.0
     score = np.minimum(
         np.minimum(
             as_read / np.maximum(exchanged, 1e-12) / SWAP_RATIO, (as_read - exchanged) / SWAP_FLOOR

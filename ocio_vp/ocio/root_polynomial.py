@@ -24,8 +24,9 @@ zeros, never reached (the 1D LUT keeps ``s`` in the first cell). A cube is what 
 accept, so the file still holds 65^3 entries, but only 2 x 65^2 distinct ones are computed
 and formatted, and the zeros keep each file at about 2 MB (6.6 MB with every slice filled).
 The error is that of interpolating a smooth function of two log-ratios on a 65 x 65 grid.
-Measured (the bake error, in % of each colour's largest channel, six environments): mean 0.015-0.023 %, max <= 0.065 % for content in the target chart's gamut at
-any exposure, where the former per-channel log shaper had up to 0.75 %. Q^-1 is exact Newton
+Measured (the bake error, in % of each colour's largest channel, six environments): mean
+0.015-0.023 %, max <= 0.065 % for content in the target chart's gamut at any exposure, where
+the former per-channel log shaper had up to 0.75 %. Q^-1 is exact Newton
 (:func:`~ocio_vp.correction.invert_root_polynomial`); only the 65^2 directions are solved.
 
 Zeros and negatives: the log clamps non-positive values to float's smallest, so black gives
