@@ -124,17 +124,18 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _refuse_foreign(outputs: list[Path]) -> None:
-    """Before any work: an output name taken by a file ocio-vp did not write is an error."""
+    """Before any work: an output name taken by a file ocio-vp did not write is an error.
+
+    Each frame checks its own output again when it runs (a pool or Dask worker may run it much
+    later): that second read of one header guards against a file put there in between.
+    """
     from ocio_vp.errors import InputError
-    from ocio_vp.footage.sequences import MARK, foreign_outputs
+    from ocio_vp.footage.sequences import foreign_output_reason, foreign_outputs
 
     foreign = foreign_outputs(outputs)
     if foreign:
-        more = f" (and {len(foreign) - 1} more)" if len(foreign) > 1 else ""
         raise InputError(
-            f"exists and was not written by ocio-vp apply (no {MARK} in its header){more}: "
-            "move it away or choose another --out; nothing was written",
-            source=str(foreign[0]),
+            f"{foreign_output_reason(len(foreign))}; nothing was written", source=str(foreign[0])
         )
 
 

@@ -20,6 +20,7 @@ __all__ = [
     "MARK",
     "expand_frames",
     "foreign_output_error",
+    "foreign_output_reason",
     "foreign_outputs",
     "frame_pattern",
     "output_paths",
@@ -137,15 +138,19 @@ def output_paths(inputs: Sequence[Path], out_dir: Path) -> list[Path]:
     return outputs
 
 
+def foreign_output_reason(count: int = 1) -> str:
+    """Why an output name taken by another file is refused (``count`` such files), one line."""
+    more = f" (and {count - 1} more)" if count > 1 else ""
+    return (
+        f"exists and was not written by ocio-vp apply (no {MARK} in its header){more}: "
+        "move it away or choose another --out"
+    )
+
+
 def foreign_output_error(dst: str | Path) -> str | None:
     """None when ``dst`` does not exist or ``ocio-vp apply`` wrote it; else the one-line reason
     a frame must not be written there nor counted as done (see :func:`foreign_outputs`)."""
-    if not foreign_outputs([Path(dst)]):
-        return None
-    return (
-        f"{dst}: exists and was not written by ocio-vp apply (no {MARK} in its header): "
-        "move it or choose another --out"
-    )
+    return f"{dst}: {foreign_output_reason()}" if foreign_outputs([Path(dst)]) else None
 
 
 def foreign_outputs(outputs: Sequence[Path]) -> list[Path]:
