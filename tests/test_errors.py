@@ -662,7 +662,7 @@ def _without(files: dict, suffix: str) -> dict:
     return {k: v for k, v in files.items() if not k.endswith(suffix)}
 
 
-@pytest.mark.xfail(reason="the Nuke script names its config by absolute path", strict=False)
+@pytest.mark.xfail(reason="the Nuke script names its config by absolute path", strict=True)
 def test_nuke_script_has_no_absolute_path(reruns):
     root, _ = reruns
     script = (root / "x" / "env_0" / "nuke" / "env_0.nk").read_bytes()
