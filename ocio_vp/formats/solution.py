@@ -106,8 +106,10 @@ class Diagnostics(Mapping[str, Any]):
     excluded_patches
         The patches excluded as inconsistent: ``index``, ``name``, ``relative`` (how far off,
         relative to the patch itself), ``z`` (robust standard deviations), ``influence`` (mean
-        ΔE2000 by which it moves the fit's colours of the other patches) and ``residual`` (the
-        held-out prediction minus the target, per channel, relative to white); for two
+        ΔE2000 by which it moves the fit's colours of the other patches), ``deletion`` (how many
+        times better the other patches are predicted without it than without a typical patch)
+        and ``residual`` (the held-out prediction minus the target, per channel, relative to
+        white); for two
         neighbours that look swapped also ``swapped_with`` (the other's index),
         ``swapped_name`` and ``swap_residuals`` (the pair's held-out residuals as read and
         exchanged, fitted without both, relative to white; both patches are listed), otherwise
