@@ -451,15 +451,17 @@ def _lstsq(X, P, flagged=()):
 
 
 def _screened(X, P, white):
-    """(flagged set, least-squares Q without them) or ("refused", None)."""
+    """(flagged set, least-squares Q without them, the patches said to be ambiguous: the data
+    cannot tell which of two is bad) or ("refused", None, set())."""
     from ocio_vp.correction.outliers import inconsistent_patches
     from ocio_vp.errors import InputError
 
     try:
-        flagged = {f.index for f in inconsistent_patches(X, P, np.ones(len(P)), white)}
+        found = inconsistent_patches(X, P, np.ones(len(P)), white)
     except InputError:
-        return "refused", None
-    return flagged, _lstsq(X, P, flagged)
+        return "refused", None, set()
+    flagged = {f.index for f in found}
+    return flagged, _lstsq(X, P, flagged), {f.index for f in found if f.ambiguous_with is not None}
 
 
 @dataclass
@@ -478,6 +480,8 @@ class Corrupted:
     q_plain: float
     floor: float
     what: str = ""  # environment, patch and corruption, for reading the cases
+    ambiguous: set = field(default_factory=set)  # patches said to be one of an ambiguous pair
+    bad: set = field(default_factory=set)  # the corrupted patches
 
     def visible(self, which: str) -> bool:
         change = getattr(self, which)
@@ -497,7 +501,7 @@ class Corrupted:
 
 
 def _corrupted(view: ChartView, Q0, floor, Xc, Pc, bad, what="") -> Corrupted:
-    flagged, Q = _screened(Xc, Pc, view.white)
+    flagged, Q, ambiguous = _screened(Xc, Pc, view.white)
     plain = _lstsq(Xc, Pc)
     refused = flagged == "refused"
     return Corrupted(
@@ -510,6 +514,8 @@ def _corrupted(view: ChartView, Q0, floor, Xc, Pc, bad, what="") -> Corrupted:
         q_plain=_q_change(plain, Q0),
         floor=floor,
         what=what,
+        ambiguous=ambiguous,
+        bad=set(bad),
     )
 
 
@@ -648,11 +654,15 @@ def _corrupted_row(what, camera, light, values: list[Corrupted]) -> tuple:
     visible = np.mean([c.visible("screened") for c in values])
     oracle_visible = np.mean([c.visible("oracle") for c in values])
     harmful = sum(c.harmful_miss for c in values)
+    ambiguous = [c for c in values if c.ambiguous]
+    right = sum(bool(c.ambiguous & c.bad) for c in ambiguous)
     return (
         camera,
         light,
         f"{what} bad x {n}",
-        f"{100 * named:.0f}% named" + (f", {100 * refused:.0f}% refused" if refused else ""),
+        f"{100 * named:.0f}% named"
+        + (f", {100 * refused:.0f}% refused" if refused else "")
+        + (f", {len(ambiguous)} said ambiguous ({right} right)" if ambiguous else ""),
         _de([c.screened for c in values]),
         _de([c.plain for c in values]),
         _de([c.oracle for c in values]),
@@ -752,7 +762,10 @@ def outlier_report(out: dict, seeds: int, noise: float = 0.01) -> str:
             f"{VISIBLE_MARGIN:g} ΔE2000, the 95th percentile of that p95 over the re-photographed "
             "pairs of the same stage and environment; a **harmful miss** is a corrupted chart "
             "whose change is visible (with or without screening) and whose bad patch was not "
-            "named (a swap counts as named when both patches are). The Frobenius distance between "
+            "named (a swap counts as named when both patches are). When the data cannot tell "
+            "which of two patches is bad, both are excluded and the tool says so (*said "
+            "ambiguous*; *right* when a corrupted patch is one of the two). The Frobenius "
+            "distance between "
             "Q matrices is kept as a secondary column: under narrow light and on the Sigma camera "
             "Q is ill-determined along directions no colour under that light excites, so it moves "
             "a lot where the colours do not.",

@@ -38,7 +38,10 @@ from the data alone, so that every method fits without them and the engineer is 
    already misses; the pair is explicit about the cause. Both are excluded, each naming the
    other (``swapped_with``), before any single patch is.
 6. A suspect patch (any way, and off by at least :data:`OUTLIER_FLOOR` of white) is
-   inconsistent. The worst is excluded and the search repeats. Once a patch is gone, those of
+   inconsistent. The worst is excluded and the search repeats. When it was suspect only by
+   its influence or by explanation and another suspect patch explains the chart at least as
+   well, the data cannot tell which of the two is bad: both are excluded, each naming the
+   other (``ambiguous_with``). Once a patch is gone, those of
    a similar colour are predicted less well without being wrong, so a further patch must also
    have looked suspect on the whole chart (:data:`FIRST_PASS_SUPPORT`) and either drag the
    others visibly or miss clearly (:data:`LATER_INFLUENCE`, :data:`LATER_RELATIVE`), or be far
@@ -260,6 +263,11 @@ class Inconsistency:
     # how many times better the other patches are predicted without it than without a typical
     # patch (:func:`deletion_gain`)
     deletion: float = 1.0
+    # another patch that explains the chart at least as well, when the data cannot tell which
+    # of the two is bad (both are excluded)
+    ambiguous_with: int | None = None
+    ambiguous_name: str | None = None
+    ambiguous_deletion: float | None = None  # the other's deletion gain
 
     def describe(self) -> str:
         """One phrase for the terminal and solution.json."""
@@ -272,6 +280,15 @@ class Inconsistency:
                 f"({as_read / max(exchanged, 1e-12):.1f}x better); both are excluded"
             )
         off = ", ".join(f"{100 * v:+.1f}%" for v in self.residual)
+        if self.ambiguous_with is not None:
+            return (
+                f"{self.name} or {self.ambiguous_name}: one of the two is inconsistent with the "
+                f"rest and the data cannot tell which (without {self.name} the other patches "
+                f"are predicted {self.deletion:.2f}x better than without a typical patch, "
+                f"without {self.ambiguous_name} {self.ambiguous_deletion:.2f}x); {self.name} is "
+                f"off by {100 * self.relative:.0f}% of itself and moves the fit's colours of the "
+                f"other patches by {self.influence:.1f} ΔE2000; both are excluded"
+            )
         return (
             f"{self.name}: predicted from the other patches it is off by {off} of white "
             f"(R, G, B), {100 * self.relative:.0f}% of the patch itself, {self.z:.1f} robust "
@@ -517,12 +534,14 @@ def patch_scores(
     # noise in units of white, while predicted within a few percent of itself).
     deletion = deletion_gain(X, P, w, scale)
     explains = np.minimum(deletion / DELETION_GAIN, relative / OUTLIER_RELATIVE)
-    suspect = np.maximum(np.minimum(relative / limit, z / OUTLIER_Z), drag)
     off = active & (np.max(np.abs(residual), axis=1) > OUTLIER_FLOOR)
-    suspect, explains = np.where(off, suspect, 0.0), np.where(off, explains, 0.0)
+    misses = np.where(off, np.minimum(relative / limit, z / OUTLIER_Z), 0.0)
+    suspect = np.maximum(misses, np.where(off, drag, 0.0))
+    explains = np.where(off, explains, 0.0)
     score = np.maximum(suspect, explains)
     return {
         "score": score,
+        "misses": misses,
         "suspect": suspect,
         "explains": explains,
         "relative": relative,
@@ -565,6 +584,40 @@ def _next_patch(scores: dict, first: np.ndarray, after_exclusion: bool) -> int |
         score = score / np.where(supported, 1.0, UNSUPPORTED_SCORE)
     j = int(np.argmax(score))
     return j if score[j] > 1.0 else None
+
+
+def _rival(scores: dict, j: int) -> int | None:
+    """A patch the data cannot tell from ``j`` as the bad one, or None.
+
+    When ``j`` is excluded on soft evidence only (it drags the fit or its removal explains the
+    chart, while its own prediction does not mark it as wrong), another patch that looked
+    suspect too (:data:`FIRST_PASS_SUPPORT`) and whose removal leaves the rest at least as
+    consistent (:func:`deletion_gain`) is as likely the bad one. On the bad-patch study
+    (every stage, light and corruption) this happened twice, both times with ``j`` clean and
+    the other patch the corrupted one (high-pressure sodium, Nikon: patch 13 read 2.5x too
+    bright, alone and with a second bad patch).
+    """
+    if scores["misses"][j] > 1.0:
+        return None
+    score, deletion = scores["score"], scores["deletion"]
+    rivals = (score >= FIRST_PASS_SUPPORT) & (score <= 1.0) & (deletion >= deletion[j])
+    rivals[j] = False
+    return int(np.argmax(np.where(rivals, deletion, 0.0))) if rivals.any() else None
+
+
+def _ambiguous(scores: dict, j: int, k: int, n: int) -> list[Inconsistency]:
+    """Both patches of an ambiguous pair, each naming the other."""
+    return [
+        _inconsistency(
+            scores,
+            a,
+            n,
+            ambiguous_with=b,
+            ambiguous_name=patch_name(b, n),
+            ambiguous_deletion=float(scores["deletion"][b]),
+        )
+        for a, b in ((j, k), (k, j))
+    ]
 
 
 def _inconsistency(scores: dict, j: int, n: int, **swap) -> Inconsistency:
@@ -624,7 +677,8 @@ def inconsistent_patches(
             j = _next_patch(scores, first, bool(found))
             if j is None:
                 break
-            found.append(_inconsistency(scores, j, n))
+            k = _rival(scores, j)
+            found += [_inconsistency(scores, j, n)] if k is None else _ambiguous(scores, j, k, n)
         w[[f.index for f in found]] = 0.0
         if len(found) > limit:
             names = ", ".join(f.name for f in found[:6]) + (", ..." if len(found) > 6 else "")
