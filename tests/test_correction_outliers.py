@@ -519,3 +519,24 @@ def test_when_the_data_cannot_tell_two_patches_apart_both_are_excluded_and_named
     # by 0.22 and 0.29 from the clean chart's 7.14.
     assert q_change(both) < 0.85 < 1.05 < q_change(only_10)
     assert abs(held_out(both) - held_out(Q0)) < abs(held_out(only_10) - held_out(Q0))
+
+
+@pytest.mark.parametrize(
+    ("environment", "seed"), [("outdoor_shade", 31), ("indoor_daylight", 42), ("d65", 88)]
+)
+def test_a_colour_the_3x3_cannot_model_is_not_a_bad_patch(environment: str, seed: int) -> None:
+    # With the paper stage's 630/20 nm red LED, daylight's saturated red (patch 14) is missed
+    # by the 3x3 fitted on the other patches by ~28 % of itself, over the 30 % limit in 3-4 %
+    # of 1 %-noise draws (these three, among 300). The root-polynomial, the default's non-linear
+    # candidate, predicts it: a model limit, not a defect. A defect is missed by both.
+    m = noisy_measurements(
+        simulate_measurements([environment]), 0.01, np.random.default_rng([seed, 99])
+    )
+    X, P = _chart(m, m.environment(environment))
+    keep = np.arange(24) != 14
+    miss = np.linalg.norm(X[14] @ _lstsq(X, P, keep).T - P[14])  # oracle: numpy re-fit
+    assert miss / np.linalg.norm(P[14]) > 0.3
+    assert inconsistent_patches(X, P, np.ones(24), 18) == []
+    for kind in ("zero", "x2.5", "lit-zero"):
+        Xc, Pc = _corrupted(X, P, 14, kind)
+        assert [f.index for f in inconsistent_patches(Xc, Pc, np.ones(24), 18)] == [14], kind
