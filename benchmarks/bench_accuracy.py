@@ -549,12 +549,10 @@ def _pairs(out, label, views, Qs) -> list[float]:
 
 
 def _false_alarm(out, key, X, P, white, where: str) -> None:
-    """Screen one clean chart: any patch flagged (or the chart refused) is a false alarm."""
+    """Screen one clean chart: what was flagged (a false alarm), or "" when nothing was."""
     flagged = _screened(X, P, white)[0]
-    out[("clean", *key)].append(flagged != set())
-    if flagged != set():
-        which = flagged if isinstance(flagged, str) else f"patches {sorted(flagged)}"
-        out["alarms"].append(f"{key[0]}, {where}: {which}")
+    which = flagged if isinstance(flagged, str) else f"patches {sorted(flagged)}"
+    out[("clean", *key)].append(f"{where}: {which}" if flagged != set() else "")
 
 
 def _clean_charts(out, views, chart_views, key, leds: str = "") -> float:
@@ -699,15 +697,10 @@ def _corrupted_row(what, camera, light, values: list[Corrupted]) -> tuple:
     )
 
 
-def _studied(out: dict) -> dict:
-    """The study's (what, camera, light) entries, without the list of false alarms."""
-    return {k: v for k, v in out.items() if k != "alarms"}
-
-
 def _harmless_misses(out) -> list[str]:
     """One line per camera and light: misses that change nothing visible, and how little."""
     lines = []
-    for (what, camera, light), values in sorted(_studied(out).items()):
+    for (what, camera, light), values in sorted(out.items()):
         if what != "one":
             continue
         missed = [c for c in values if not (c.named or c.refused or c.harmful_miss)]
@@ -740,10 +733,11 @@ def outlier_rows(out) -> list[tuple]:
     order = {"clean": 0, "recalibrated": 1, "floor": 2, "left out": 3, "one": 4, "two": 5}
     rows = []
     for (what, camera, light), values in sorted(
-        _studied(out).items(), key=lambda kv: (order[kv[0][0]], kv[0][1:])
+        out.items(), key=lambda kv: (order[kv[0][0]], kv[0][1:])
     ):
         if what == "clean":
-            alarms = f"{100 * np.mean(values):.1f}% false alarms ({sum(values)})"
+            alarms = sum(map(bool, values))
+            alarms = f"{100 * alarms / len(values):.1f}% false alarms ({alarms})"
             rows.append((camera, light, f"clean x {len(values)}", alarms, *[""] * 7))
         elif what in ("recalibrated", "floor", "left out"):
             rows.append(_reference_row(what, camera, light, values))
@@ -753,6 +747,10 @@ def outlier_rows(out) -> list[tuple]:
 
 
 def outlier_report(out: dict, seeds: int, noise: float = 0.01, alarms: int = 0) -> str:
+    flagged = [
+        f"{camera}, {v}" for (what, camera, _), values in out.items() if what == "clean"
+        for v in values if v
+    ]  # fmt: skip
     header = [
         "camera",
         "light",
@@ -804,8 +802,7 @@ def outlier_report(out: dict, seeds: int, noise: float = 0.01, alarms: int = 0) 
             "",
             markdown_table(header, outlier_rows(out)),
             "",
-            "False alarms on clean charts: "
-            + ("; ".join(out["alarms"]) + "." if out.get("alarms") else "none."),
+            "False alarms on clean charts: " + ("; ".join(flagged) + "." if flagged else "none."),
             "",
             "Misses that change nothing a user can see (one bad patch not named, or a swap with "
             "only one of the pair named; counted by corruption):",

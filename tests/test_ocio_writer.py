@@ -94,6 +94,9 @@ def test_share_balances_the_bakes():
     assert (here, round(mine, 6)) == (3.0, 2.2)
 
 
-def test_no_pool_when_not_started():
-    with writer_pool(start=False) as pool:
+def test_no_pool_for_a_linear_method():
+    # least squares never bakes LUTs: a helper would only cost its start-up
+    with writer_pool("least-squares") as pool:
         assert pool is None
+    with writer_pool("root-polynomial") as pool:
+        assert pool is not None

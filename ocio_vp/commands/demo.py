@@ -33,7 +33,6 @@ def run(args: argparse.Namespace) -> int:
     import time
     from pathlib import Path
 
-    from ocio_vp.correction.registry import NON_LINEAR_METHODS
     from ocio_vp.errors import InputError
     from ocio_vp.ocio.writer import writer_pool
     from ocio_vp.simulator.data import PAPER_ENVIRONMENTS
@@ -48,9 +47,8 @@ def run(args: argparse.Namespace) -> int:
     for name in (*PAPER_ENVIRONMENTS, *(() if args.no_report else ("report",))):
         check_replaceable(out / name)
     check_file_replaceable(out / f"{SAMPLE_NAME}.yaml")
-    # The writing helper starts first: it imports while this process imports colour-science
-    # and simulates, and it is only worth it when some environment may bake LUTs.
-    with writer_pool(start=args.method in NON_LINEAR_METHODS) as pool:
+    # The writing helper starts first, so that its imports overlap loading and solving.
+    with writer_pool(args.method) as pool:
         stage, written = _simulate_and_write(out, args.method, pool)
     print(
         f"simulated stage: {stage.camera_name}, {stage.led_description}, {stage.chart_name}, "

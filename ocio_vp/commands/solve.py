@@ -130,7 +130,6 @@ def print_linearity(solutions: Sequence) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ocio_vp.correction.registry import NON_LINEAR_METHODS
     from ocio_vp.errors import InputError
     from ocio_vp.ocio.writer import writer_pool
 
@@ -141,9 +140,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"expected 0 < cd/m2 <= 10000, got {peak_nits:g}", key="--peak-nits")
     if args.hdri_width is not None and not args.hdri:
         warn("solve", "--hdri-width has no effect without --hdri")
-    # A helper that writes some environments beside this process, started before loading and
-    # solving so that it is ready; only worth it when a Q may be baked into 3D LUTs.
-    with writer_pool(start=args.method in NON_LINEAR_METHODS) as pool:
+    # The writing helper starts first, so that its imports overlap loading and solving.
+    with writer_pool(args.method) as pool:
         written = _solve_and_write(args, peak_nits, pool)
     print(summary_table(written))
     print_fixtures(written)

@@ -334,15 +334,19 @@ def _robust_weights(X, P, w, scale, steps: int = 8) -> np.ndarray:
     return weights
 
 
+def _spread(indices: np.ndarray) -> np.ndarray:
+    """``indices``, or :data:`INFLUENCE_JUDGES` of them spread evenly when there are more."""
+    if len(indices) <= INFLUENCE_JUDGES:
+        return indices
+    return indices[np.linspace(0, len(indices) - 1, INFLUENCE_JUDGES).round().astype(int)]
+
+
 def _judges(w: np.ndarray, white: int, luminance: np.ndarray) -> tuple[np.ndarray, int]:
     """Indices of the fitted patches whose colours judge a patch's influence (all of them, or
     :data:`INFLUENCE_JUDGES` spread evenly over a larger chart, always with the white) and the
     white's position among them (the patch ΔE is normalised on: :func:`normalising_white`)."""
-    active = np.flatnonzero(w > 0)
     white = normalising_white(luminance, white, w)
-    if len(active) > INFLUENCE_JUDGES:
-        active = active[np.linspace(0, len(active) - 1, INFLUENCE_JUDGES).round().astype(int)]
-    judges = np.union1d(active, [white])
+    judges = np.union1d(_spread(np.flatnonzero(w > 0)), [white])
     return judges, int(np.searchsorted(judges, white))
 
 
@@ -462,9 +466,7 @@ def deletion_gain(X: np.ndarray, P: np.ndarray, w: np.ndarray, scale: np.ndarray
     w = np.asarray(w, dtype=np.float64)
     G, B = _normal_equations(X, P, w)
     active = np.flatnonzero(w > 0)
-    judges = active
-    if len(active) > INFLUENCE_JUDGES:
-        judges = active[np.linspace(0, len(active) - 1, INFLUENCE_JUDGES).round().astype(int)]
+    judges = _spread(active)
     Xk, Pk, wk = X[judges], P[judges] / scale, w[judges]
     cost = np.zeros(len(w))
     for start in range(0, len(active), _INFLUENCE_BLOCK):
@@ -500,7 +502,8 @@ def patch_scores(
     pair_scale: np.ndarray | None = None,
 ) -> dict:
     """Per patch: ``relative`` and white-relative ``residual`` of the held-out least-squares
-    prediction, its robust ``z`` score, its ``influence`` (:func:`patch_influence`), its
+    prediction (``relative``: under broadband light the smaller of its miss and the held-out
+    root-polynomial's), its robust ``z`` score, its ``influence`` (:func:`patch_influence`), its
     ``deletion`` gain (:func:`deletion_gain`) and
     ``score`` (> 1: inconsistent; 0 for excluded). Per reading-order neighbour pair (j, j + 1):
     ``as_read`` and ``exchanged`` (:func:`pair_residuals`, on the robust weights) and ``swap``

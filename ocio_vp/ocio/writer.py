@@ -72,13 +72,18 @@ def _ready() -> bool:
 
 
 @contextlib.contextmanager
-def writer_pool(start: bool = True) -> Iterator[Executor | None]:
-    """One helper process for :func:`write_solutions`, started now (None when not ``start``).
+def writer_pool(method: str | None = None) -> Iterator[Executor | None]:
+    """One helper process for :func:`write_solutions` of solves by ``method``, started now;
+    None for a linear method (no environment bakes LUTs: the helper would cost more than it
+    saves). ``None``: any method.
 
     Start it before loading and solving, so its imports overlap that work. "spawn", as for
     footage: the parent has threads (OpenColorIO, OpenBLAS) and forking them can deadlock.
     """
-    if not start:
+    # Deferred: the helper imports this module and needs none of the solvers.
+    from ocio_vp.correction.registry import NON_LINEAR_METHODS
+
+    if method is not None and method not in NON_LINEAR_METHODS:
         yield None
         return
     context = multiprocessing.get_context("spawn")
