@@ -359,6 +359,9 @@ def _with_section(path: str, section: str) -> str:
 # colours a user sees through the corrected camera.
 
 CORRUPTIONS = ("zero", "x2.5", "swap", "lit-zero", "lit-x2.5", "lit-swap")
+#: Moderately wrong patches (a flare or reflection on the chart, a box over a patch edge), each
+#: patch in turn, counted in their own rows: read 1.3x or 0.7x, or its lit-chart row 1.3x.
+MODERATE = ("x1.3", "x0.7", "lit-x1.3")
 #: A change of the corrected colours is *visible* when its 95th percentile over the held-out
 #: colours exceeds the noise floor (the 95th percentile, over every pair of clean photographs of
 #: the same chart under the same wall, of that figure between them) by more than this many
@@ -432,16 +435,17 @@ def _q_change(Q, Q0):
 
 
 def _corrupt(X, P, j, kind):
-    """The chart with patch j corrupted: target (p) or lit-chart row (x) zeroed, x2.5 or swapped
-    with its neighbour (a swapped lit-chart row is the same as a swapped target: the pair moves)."""
+    """The chart with patch j corrupted: target (p) or lit-chart row (x) zeroed, scaled (``x2.5``:
+    2.5x) or swapped with its neighbour (a swapped lit-chart row is the same as a swapped target:
+    the pair moves)."""
     X, P = X.copy(), P.copy()
     k = j + 1 if j + 1 < len(P) else j - 1
     array = X if kind.startswith("lit-") else P
     how = kind.removeprefix("lit-")
     if how == "zero":
         array[j] = 0.0
-    elif how == "x2.5":
-        array[j] *= 2.5
+    elif how.startswith("x"):
+        array[j] *= float(how[1:])
     else:
         array[[j, k]] = array[[k, j]]
     return X, P, ({j, k} if how == "swap" else {j})
@@ -577,10 +581,11 @@ def _clean_charts(out, views, chart_views, key, leds: str = "") -> float:
 def _one_bad(out, view, key, floor):
     Q0 = _lstsq(view.X, view.P)
     for j in range(len(view.P)):
-        for kind in CORRUPTIONS:
-            Xc, Pc, bad = _corrupt(view.X, view.P, j, kind)
-            what = f"{view.environment} patch {j} {kind}"
-            out[("one", *key)].append(_corrupted(view, Q0, floor, Xc, Pc, bad, what))
+        for group, kinds in (("one", CORRUPTIONS), ("moderate", MODERATE)):
+            for kind in kinds:
+                Xc, Pc, bad = _corrupt(view.X, view.P, j, kind)
+                what = f"{view.environment} patch {j} {kind}"
+                out[(group, *key)].append(_corrupted(view, Q0, floor, Xc, Pc, bad, what))
 
 
 def _two_bad(out, view, key, floor, rng, pairs: int = 12):
@@ -671,6 +676,9 @@ def _reference_row(what, camera, light, values) -> tuple:
     return (camera, light, f"{label} x {len(values)}", "", _de(changes), *[""] * 4, _frob(q), "")
 
 
+_GROUPS = {"one": "one bad", "moderate": "one moderately bad", "two": "two bad"}
+
+
 def _corrupted_row(what, camera, light, values: list[Corrupted]) -> tuple:
     n = len(values)
     named = np.mean([c.named for c in values])
@@ -683,7 +691,7 @@ def _corrupted_row(what, camera, light, values: list[Corrupted]) -> tuple:
     return (
         camera,
         light,
-        f"{what} bad x {n}",
+        f"{_GROUPS[what]} x {n}",
         f"{100 * named:.0f}% named"
         + (f", {100 * refused:.0f}% refused" if refused else "")
         + (f", {len(ambiguous)} said ambiguous ({right} right)" if ambiguous else ""),
@@ -730,7 +738,8 @@ def _harmless_misses(out) -> list[str]:
 
 
 def outlier_rows(out) -> list[tuple]:
-    order = {"clean": 0, "recalibrated": 1, "floor": 2, "left out": 3, "one": 4, "two": 5}
+    kinds = ("clean", "recalibrated", "floor", "left out", "one", "moderate", "two")
+    order = {kind: i for i, kind in enumerate(kinds)}
     rows = []
     for (what, camera, light), values in sorted(
         out.items(), key=lambda kv: (order[kv[0][0]], kv[0][1:])
@@ -775,7 +784,9 @@ def outlier_report(out: dict, seeds: int, noise: float = 0.01, alarms: int = 0) 
             f"environment, and {alarms} more counted for false alarms only; a false alarm is any "
             "patch flagged (listed under the table). One bad patch: every patch of draw 0 "
             "read as zero, x2.5 or swapped with its neighbour, in the target chart or in the lit "
-            "chart (`lit-`). Two bad patches: 12 random pairs per chart. The lit chart is what the "
+            "chart (`lit-`). One moderately bad patch: every patch of draw 0 read 1.3x or 0.7x, "
+            "or its lit-chart row 1.3x (a flare or reflection on the chart, a box over a patch "
+            "edge). Two bad patches: 12 random pairs per chart. The lit chart is what the "
             "wall really emits (drive clipped at 0), as the product fits it.",
             "",
             "What users see: the **ΔE2000 change of the corrected colours** between the "

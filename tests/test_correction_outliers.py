@@ -19,6 +19,8 @@ from conftest import measurement_problem
 from ocio_vp.correction.outliers import (
     COLORCHECKER_NAMES,
     DELETION_GAIN,
+    EXPLAINS_RELATIVE,
+    OUTLIER_RELATIVE,
     SWAP_RATIO,
     deletion_gain,
     inconsistent_patches,
@@ -464,6 +466,50 @@ def test_under_high_pressure_sodium_a_patch_the_rest_cannot_explain_is_named(cle
     # Measured: 0.96 ΔE2000 worse on average without screening, 0.05 better after it.
     assert held_out(_lstsq(Xc, Pc)) - truth > 0.8
     assert abs(held_out(_lstsq(Xc, Pc, np.arange(24) != 1)) - truth) < 0.1
+
+
+@pytest.mark.parametrize("environment", ["direct_sun", "incandescent", "d65"])
+@pytest.mark.parametrize("where", ["target", "lit"])
+def test_a_white_patch_read_1_3x_too_bright_is_named(clean, environment, where) -> None:
+    """A flare on the white patch (its target value, or its lit-chart row, 1.3x too bright)
+    under broadband light: it misses its held-out prediction by only ~22 % of itself, under
+    OUTLIER_RELATIVE, but the rest of the chart is over DELETION_GAIN times more consistent
+    without it. Oracle: the simulator's held-out colours under the real light, and numpy's fit
+    with and without the patch."""
+    m = noisy_measurements(clean, 0.01, np.random.default_rng([0, 7]))
+    problem = measurement_problem(m, m.environment(environment))
+    X, P = problem.predicted, problem.target
+    Xc, Pc = X.copy(), P.copy()
+    (Pc if where == "target" else Xc)[18] *= 1.3
+    scores = patch_scores(Xc, Pc, np.ones(24), 18)
+    assert EXPLAINS_RELATIVE < scores["relative"][18] < OUTLIER_RELATIVE
+    assert scores["deletion"][18] > DELETION_GAIN
+    found = inconsistent_patches(Xc, Pc, np.ones(24), 18)
+    assert [f.index for f in found] == [18]
+
+    def held_out(Q):
+        return _held_out_delta_e(problem, environment, Q).mean()
+
+    truth = held_out(_lstsq(X, P))
+    # Measured: 0.5-1.1 ΔE2000 worse on average without screening, within 0.03 after it.
+    assert held_out(_lstsq(Xc, Pc)) - truth > 0.4
+    assert abs(held_out(_lstsq(Xc, Pc, np.arange(24) != 18)) - truth) < 0.1
+
+
+def test_a_yellow_patch_read_1_3x_too_bright_is_named(clean) -> None:
+    """The same for the yellow patch (the brightest colour) under daylight: 18 % of itself."""
+    m = noisy_measurements(clean, 0.01, np.random.default_rng([0, 7]))
+    problem = measurement_problem(m, m.environment("direct_sun"))
+    X, P = problem.predicted, problem.target
+    Pc = P.copy()
+    Pc[15] *= 1.3
+    scores = patch_scores(X, Pc, np.ones(24), 18)
+    assert EXPLAINS_RELATIVE < scores["relative"][15] < OUTLIER_RELATIVE
+    assert [f.index for f in inconsistent_patches(X, Pc, np.ones(24), 18)] == [15]
+    truth = _held_out_delta_e(problem, "direct_sun", _lstsq(X, P)).mean()
+    screened = _held_out_delta_e(problem, "direct_sun", _lstsq(X, Pc, np.arange(24) != 15))
+    plain = _held_out_delta_e(problem, "direct_sun", _lstsq(X, Pc))
+    assert plain.mean() - truth > 0.4 and abs(screened.mean() - truth) < 0.1
 
 
 def test_after_one_exclusion_a_lit_row_read_as_zero_is_still_named(clean) -> None:
