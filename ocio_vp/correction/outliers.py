@@ -158,8 +158,8 @@ DELETION_GAIN = 1.6
 #: or yellow patch read 1.3x too bright (a flare, a reflection) misses by only 17-25 % of
 #: itself while the rest of the chart is 1.8-6.4 times more consistent without it; under
 #: :data:`OUTLIER_RELATIVE` such a patch moved the corrected colours visibly (p95 ΔE2000 above
-#: the noise floor + 1) and was never named. On 1,300 clean broadband charts (2 cameras x 2 LED
-#: sets x 8 environments x 41 draws at 1 % noise) no patch reached a gain of 1.43, and no
+#: the noise floor + 1) and was never named. On 1,148 clean broadband charts (2 cameras x 2 LED
+#: sets x 7 environments x 41 draws at 1 % noise) no patch reached a gain of 1.43, and no
 #: neutral was missed by more than 7.1 % of itself.
 EXPLAINS_RELATIVE = 0.1
 #: Fitted patches whose colours judge each patch's influence on a large chart (all of them up
