@@ -28,10 +28,11 @@ from the data alone, so that every method fits without them and the engineer is 
    without it: removing it lowers the other patches' held-out residuals (root mean square,
    relative to white) :data:`DELETION_GAIN` times below a typical patch's removal
    (:func:`deletion_gain`), and its held-out prediction misses it by :data:`OUTLIER_RELATIVE`
-   of itself (:data:`EXPLAINS_RELATIVE` under broadband light). The ratio is the chart's own: under sodium light, where the 3x3 misses clean
-   patches by half their value, it stays as close to 1 on a clean chart as under daylight,
-   and it catches the patch read 2.5x too bright under high-pressure sodium that neither test
-   above can tell from the model's own misses.
+   of itself (:data:`EXPLAINS_RELATIVE` under broadband light). The ratio is the chart's own:
+   under sodium light, where the 3x3 misses clean patches by half their value, it stays as
+   close to 1 on a clean chart as under daylight, and it catches the patch read 2.5x too
+   bright under high-pressure sodium that neither test above can tell from the model's own
+   misses, and under daylight a white patch read 1.3x too bright (a flare).
 5. Two reading-order neighbours look **swapped** (the patch order mixed up, in the target or
    the lit chart) when the rest of the chart, fitted without both (:func:`pair_residuals`),
    predicts them far better exchanged than as read (:data:`SWAP_RATIO`, :data:`SWAP_FLOOR`)
@@ -154,7 +155,7 @@ OUTLIER_INFLUENCE = 3.0
 #: excluded after it (32 of 18,240 clean charts with one patch removed, 17 without this test).
 DELETION_GAIN = 1.6
 #: ... under broadband light the explaining patch need only miss by this fraction of itself:
-#: there the 3x3 predicts clean neutrals and bright patches within a few percent, and a white
+#: there the 3x3 predicts clean patches far better than under sodium light, and a white
 #: or yellow patch read 1.3x too bright (a flare, a reflection) misses by only 17-25 % of
 #: itself while the rest of the chart is 1.8-6.4 times more consistent without it; under
 #: :data:`OUTLIER_RELATIVE` such a patch moved the corrected colours visibly (p95 ΔE2000 above
