@@ -468,48 +468,36 @@ def test_under_high_pressure_sodium_a_patch_the_rest_cannot_explain_is_named(cle
     assert abs(held_out(_lstsq(Xc, Pc, np.arange(24) != 1)) - truth) < 0.1
 
 
-@pytest.mark.parametrize("environment", ["direct_sun", "incandescent", "d65"])
-@pytest.mark.parametrize("where", ["target", "lit"])
-def test_a_white_patch_read_1_3x_too_bright_is_named(clean, environment, where) -> None:
-    """A flare on the white patch (its target value, or its lit-chart row, 1.3x too bright)
-    under broadband light: it misses its held-out prediction by only ~22 % of itself, under
-    OUTLIER_RELATIVE, but the rest of the chart is over DELETION_GAIN times more consistent
-    without it. Oracle: the simulator's held-out colours under the real light, and numpy's fit
-    with and without the patch."""
+@pytest.mark.parametrize(
+    ("patch", "environment", "where"),
+    [(18, e, w) for e in ("direct_sun", "incandescent", "d65") for w in ("target", "lit")]
+    + [(15, "direct_sun", "target")],
+)
+def test_a_bright_patch_read_1_3x_too_bright_is_named(clean, patch, environment, where) -> None:
+    """A flare on the white patch (18; its target value or its lit-chart row 1.3x too bright),
+    or on the yellow (15), under broadband light: it misses its held-out prediction by only
+    18-25 % of itself, under OUTLIER_RELATIVE, but the rest of the chart is over DELETION_GAIN
+    times more consistent without it. Oracle: the simulator's held-out colours under the real
+    light, and numpy's fit with and without the patch."""
     m = noisy_measurements(clean, 0.01, np.random.default_rng([0, 7]))
     problem = measurement_problem(m, m.environment(environment))
     X, P = problem.predicted, problem.target
     Xc, Pc = X.copy(), P.copy()
-    (Pc if where == "target" else Xc)[18] *= 1.3
+    (Pc if where == "target" else Xc)[patch] *= 1.3
     scores = patch_scores(Xc, Pc, np.ones(24), 18)
-    assert EXPLAINS_RELATIVE < scores["relative"][18] < OUTLIER_RELATIVE
-    assert scores["deletion"][18] > DELETION_GAIN
+    assert EXPLAINS_RELATIVE < scores["relative"][patch] < OUTLIER_RELATIVE
+    assert scores["deletion"][patch] > DELETION_GAIN
     found = inconsistent_patches(Xc, Pc, np.ones(24), 18)
-    assert [f.index for f in found] == [18]
+    assert [f.index for f in found] == [patch]
 
     def held_out(Q):
         return _held_out_delta_e(problem, environment, Q).mean()
 
     truth = held_out(_lstsq(X, P))
-    # Measured: 0.5-1.1 ΔE2000 worse on average without screening, within 0.03 after it.
+    # Measured on these charts: 0.66-1.10 ΔE2000 worse on average without screening (white:
+    # 0.76-1.10, yellow 0.66), within 0.04 of the clean chart's after it.
     assert held_out(_lstsq(Xc, Pc)) - truth > 0.4
-    assert abs(held_out(_lstsq(Xc, Pc, np.arange(24) != 18)) - truth) < 0.1
-
-
-def test_a_yellow_patch_read_1_3x_too_bright_is_named(clean) -> None:
-    """The same for the yellow patch (the brightest colour) under daylight: 18 % of itself."""
-    m = noisy_measurements(clean, 0.01, np.random.default_rng([0, 7]))
-    problem = measurement_problem(m, m.environment("direct_sun"))
-    X, P = problem.predicted, problem.target
-    Pc = P.copy()
-    Pc[15] *= 1.3
-    scores = patch_scores(X, Pc, np.ones(24), 18)
-    assert EXPLAINS_RELATIVE < scores["relative"][15] < OUTLIER_RELATIVE
-    assert [f.index for f in inconsistent_patches(X, Pc, np.ones(24), 18)] == [15]
-    truth = _held_out_delta_e(problem, "direct_sun", _lstsq(X, P)).mean()
-    screened = _held_out_delta_e(problem, "direct_sun", _lstsq(X, Pc, np.arange(24) != 15))
-    plain = _held_out_delta_e(problem, "direct_sun", _lstsq(X, Pc))
-    assert plain.mean() - truth > 0.4 and abs(screened.mean() - truth) < 0.1
+    assert abs(held_out(_lstsq(Xc, Pc, np.arange(24) != patch)) - truth) < 0.1
 
 
 def test_after_one_exclusion_a_lit_row_read_as_zero_is_still_named(clean) -> None:

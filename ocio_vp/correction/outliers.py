@@ -22,8 +22,8 @@ from the data alone, so that every method fits without them and the engineer is 
    colours of the other patches by at least :data:`OUTLIER_INFLUENCE` mean ΔE2000, that
    influence stands :data:`OUTLIER_Z` robust standard deviations above the chart's others
    (:func:`patch_influence`), and its held-out prediction misses it by
-   :data:`OUTLIER_RELATIVE` of itself. This is what an engineer would see, and it catches, under sodium
-   light, a patch read 2.5x too bright that the residual test must let pass.
+   :data:`OUTLIER_RELATIVE` of itself. This is what an engineer would see, and it catches,
+   under sodium light, a patch read 2.5x too bright that the residual test must let pass.
 4. A patch is suspect by **explanation** when the rest of the chart is far more consistent
    without it: removing it lowers the other patches' held-out residuals (root mean square,
    relative to white) :data:`DELETION_GAIN` times below a typical patch's removal
@@ -44,11 +44,11 @@ from the data alone, so that every method fits without them and the engineer is 
    inconsistent. The worst is excluded and the search repeats. When it was suspect only by
    its influence or by explanation and another suspect patch explains the chart at least as
    well, the data cannot tell which of the two is bad: both are excluded, each naming the
-   other (``ambiguous_with``). Once a patch is gone, those of
-   a similar colour are predicted less well without being wrong, so a further patch must also
-   have looked suspect on the whole chart (:data:`FIRST_PASS_SUPPORT`) and either drag the
-   others visibly or miss clearly (:data:`LATER_INFLUENCE`, :data:`LATER_RELATIVE`), or be far
-   off (:data:`UNSUPPORTED_SCORE`); up to :data:`MAX_EXCLUDED_FRACTION` of the chart (and at
+   other (``ambiguous_with``). Once a patch is gone, those of a similar colour are predicted
+   less well without being wrong, so a further patch must also have looked suspect on the
+   whole chart (:data:`FIRST_PASS_SUPPORT`) and either drag the others visibly or miss clearly
+   (:data:`LATER_INFLUENCE`, :data:`LATER_RELATIVE`), or be far off
+   (:data:`UNSUPPORTED_SCORE`); up to :data:`MAX_EXCLUDED_FRACTION` of the chart (and at
    most :data:`MAX_EXCLUDED` patches), past that the chart is refused. On a chart of more than
    :data:`INFLUENCE_JUDGES` patches influence is judged on that many, so the work stays linear
    in the chart's size.
@@ -151,8 +151,9 @@ OUTLIER_INFLUENCE = 3.0
 #: low-pressure sodium. On the study's Nikon charts under line-spectrum light, 1.6 cuts the
 #: visible misses of one bad patch from 16 to 12 (left: 10 swaps, 2 patches read 2.5x too
 #: bright) and of two from 6 to 4; 1.5 would make that 3 but leave 7 % between the limit and
-#: the clean red; 1.75 gives 13 and 6. The price: once a clean patch is excluded, the red or white under sodium can be
-#: excluded after it (32 of 18,240 clean charts with one patch removed, 17 without this test).
+#: the clean red; 1.75 gives 13 and 6. The price: once a clean patch is excluded, the red or
+#: white under sodium can be excluded after it (32 of 18,240 clean charts with one patch
+#: removed, 17 without this test).
 DELETION_GAIN = 1.6
 #: ... under broadband light the explaining patch need only miss by this fraction of itself:
 #: there the 3x3 predicts clean patches far better than under sodium light, and a white

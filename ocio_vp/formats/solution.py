@@ -109,13 +109,13 @@ class Diagnostics(Mapping[str, Any]):
         ΔE2000 by which it moves the fit's colours of the other patches), ``deletion`` (how many
         times better the other patches are predicted without it than without a typical patch)
         and ``residual`` (the held-out prediction minus the target, per channel, relative to
-        white); for two
-        neighbours that look swapped also ``swapped_with`` (the other's index),
-        ``swapped_name`` and ``swap_residuals`` (the pair's held-out residuals as read and
-        exchanged, fitted without both, relative to white; both patches are listed), otherwise
-        those three are null; when the data cannot tell which of two patches is the bad one
-        (both excluded), ``ambiguous_with`` and ``ambiguous_name`` name the other and
-        ``ambiguous_deletion`` is its ``deletion``, otherwise null; see :mod:`ocio_vp.correction.outliers`.
+        white); for two neighbours that look swapped also ``swapped_with`` (the other's
+        index), ``swapped_name`` and ``swap_residuals`` (the pair's held-out residuals as read
+        and exchanged, fitted without both, relative to white; both patches are listed),
+        otherwise those three are null; when the data cannot tell which of two patches is the
+        bad one (both excluded), ``ambiguous_with`` and ``ambiguous_name`` name the other and
+        ``ambiguous_deletion`` is its ``deletion``, otherwise null; see
+        :mod:`ocio_vp.correction.outliers`.
     synthesized_target
         How a synthesized target chart was made (``ocio-vp target-chart``); only written for
         an environment whose chart was synthesized.
