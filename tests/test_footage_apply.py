@@ -17,6 +17,7 @@ import yaml
 from conftest import make_measurements_dict
 
 from ocio_vp.cli import main
+from ocio_vp.footage import stream
 from ocio_vp.footage.apply import (
     TRANSFORMS,
     FrameTask,
@@ -345,6 +346,53 @@ def test_pipeline_keeps_order_skips_failures_and_frames(tmp_path, solution_dir):
     assert (out / "p.3.exr").read_bytes() == b"already there"
     _, px = read_image(out / "p.4.exr")
     np.testing.assert_allclose(px[4, 3], _Q(solution_dir) @ np.full(3, 0.5), atol=1e-5)
+
+
+def test_pipeline_holds_a_bounded_number_of_frames(tmp_path, solution_dir, monkeypatch):
+    # Slow writes pile up behind a fast reader: the stream still holds at most HELD frames (one
+    # read, one transformed, WRITERS being written) and writes at most WRITERS at once.
+    import threading
+    import time
+
+    lock = threading.Lock()
+    live = {"frames": 0, "writes": 0, "max_frames": 0, "max_writes": 0}
+
+    def count(key, step):
+        with lock:
+            live[key] += step
+            live[f"max_{key}"] = max(live[f"max_{key}"], live[key])
+
+    real_load, real_store = stream.load_frame, stream.store_frame
+
+    def load(src):
+        parts = real_load(src)
+        count("frames", 1)
+        return parts
+
+    def store(dst, parts):
+        count("writes", 1)
+        time.sleep(0.05)
+        try:
+            real_store(dst, parts)
+        finally:
+            count("writes", -1)
+            count("frames", -1)
+
+    monkeypatch.setattr(stream, "load_frame", load)
+    monkeypatch.setattr(stream, "store_frame", store)
+    pc = load_post_correction(solution_dir)
+    tasks = []
+    for i in range(8):
+        write_image(tmp_path / f"p.{i}.exr", np.full((4, 5, 3), 0.1), "RGB")
+        tasks.append(
+            FrameTask(str(tmp_path / f"p.{i}.exr"), str(tmp_path / "out" / f"p.{i}.exr"), pc)
+        )
+    results = list(apply_frames(tasks, threads=1))
+    assert [i for i, _ in results] == list(range(8))
+    assert all(r.status == "done" for _, r in results)
+    assert live["frames"] == 0 and live["writes"] == 0
+    assert live["max_frames"] == stream.HELD == 2 + stream.WRITERS
+    assert live["max_writes"] == stream.WRITERS
 
 
 def test_pixel_transform_is_pluggable(tmp_path, solution_dir, monkeypatch):

@@ -1,16 +1,20 @@
 """A sequence of frames through one process: read ahead, transform, write behind.
 
 OpenEXR decodes and encodes a frame on all cores with its own threads, but each read and each
-write also has serial parts (opening the file, the header, the system calls, Python between
-them). Reading frame i+1 and writing frame i-1 while frame i is transformed fills those gaps
-with useful work, and a single process pays the imports and OCIO set-up once, where a pool of
-worker processes pays them per worker. At most three frames are held at any time (one being
-read, one transformed, one written), whatever the length of the sequence.
+write also has serial parts (opening the file, the header, writing the compressed chunks in
+order, the system calls, Python between them). Reading frame i+1 and writing frames i-1 and
+i-2 while frame i is transformed fills those gaps with useful work, and a single process pays
+the imports and OCIO set-up once, where a pool of worker processes pays them per worker. Two
+writes at once rather than one: a write's serial parts overlap the other's, and the last frames
+of a sequence are written side by side instead of one after the other, for one more frame in
+memory. At most :data:`HELD` frames are held at any time (one being read, one transformed, two
+being written), whatever the length of the sequence.
 """
 
 from __future__ import annotations
 
 import time
+from collections import deque
 from collections.abc import Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
@@ -26,7 +30,12 @@ from ocio_vp.footage.apply import (
     transform_frame,
 )
 
-__all__ = ["apply_frames"]
+__all__ = ["HELD", "WRITERS", "apply_frames"]
+
+#: Frames written at once.
+WRITERS = 2
+#: The most frames held in memory at once: one being read, one transformed, the writers'.
+HELD = 2 + WRITERS
 
 
 def _failure(task: FrameTask, exc: Exception) -> FrameResult:
@@ -66,9 +75,9 @@ def apply_frames(tasks: Sequence[FrameTask], *, threads: int) -> Iterator[tuple[
     if not tasks:
         return
     set_io_threads(threads)
-    with ThreadPoolExecutor(1) as reader, ThreadPoolExecutor(1) as writer:
+    with ThreadPoolExecutor(1) as reader, ThreadPoolExecutor(WRITERS) as writer:
         ahead = reader.submit(_load, tasks[0])
-        behind: tuple[int, Any] | None = None
+        behind: deque[tuple[int, Any]] = deque()  # frames being written, oldest first
         for i, task in enumerate(tasks):
             start, parts = ahead.result()
             if i + 1 < len(tasks):
@@ -81,9 +90,11 @@ def apply_frames(tasks: Sequence[FrameTask], *, threads: int) -> Iterator[tuple[
             except Exception as exc:  # no RGB in this frame...: reported, the others go on
                 yield i, _failure(task, exc)
                 continue
-            if behind is not None:
-                yield behind[0], behind[1].result()
-            behind = (i, writer.submit(_store, task, start, parts))
+            while len(behind) >= WRITERS:  # bounded memory: wait for the oldest write
+                j, written = behind.popleft()
+                yield j, written.result()
+            behind.append((i, writer.submit(_store, task, start, parts)))
             del parts  # the writer holds the frame now, and only it
-        if behind is not None:
-            yield behind[0], behind[1].result()
+        while behind:
+            j, written = behind.popleft()
+            yield j, written.result()
