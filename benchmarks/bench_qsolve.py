@@ -18,30 +18,18 @@ from benchmarks import fmt_ms, markdown_table, median_time
 
 
 def run(quick: bool = False) -> str:
-    from ocio_vp.calibration.equations import solve_M
-    from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
     from ocio_vp.correction.perceptual import make_q_perceptual
-    from ocio_vp.correction.problem import QProblem
     from ocio_vp.correction.registry import Q_SOLVE_METHODS
     from ocio_vp.metrics import camera_to_xyz_matrix, chart_errors
+    from ocio_vp.pipeline import post_correction_problem
     from ocio_vp.simulator.stage import paper_stage, paper_stage_measurements
 
     stage = paper_stage()
     measurements = paper_stage_measurements()
     matrix = camera_to_xyz_matrix(stage.camera)
-    M = solve_M(measurements.SL)
-    beta = stage_beta(measurements)
+    # The problem as the solve poses it (M = [SL]^-1, beta, w_avg, the target; no clipping).
     problems = {
-        env.name: QProblem(
-            SL=measurements.SL,
-            SRL=measurements.SRL,
-            beta=beta,
-            M=M,
-            w_avg=environment_w_avg(measurements, env),
-            target=env.target_chart,
-            white_patch=measurements.stage.white_patch,
-        )
-        for env in measurements.environments
+        env.name: post_correction_problem(measurements, env) for env in measurements.environments
     }
     methods = dict(Q_SOLVE_METHODS)
     methods["perceptual (ΔE ITP)"] = make_q_perceptual(metric="ITP")

@@ -47,37 +47,28 @@ def _charts(base_srl, base_target, n: int, rng) -> tuple[np.ndarray, np.ndarray]
 
 def run(quick: bool = False) -> str:
     """Markdown section: solve time per method and chart size, with held-out ΔE2000."""
-    from ocio_vp.calibration.equations import solve_M
-    from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
-    from ocio_vp.correction.problem import QProblem
     from ocio_vp.correction.registry import Q_SOLVE_METHODS
     from ocio_vp.correction.root_polynomial import post_correction
     from ocio_vp.metrics import camera_to_xyz_matrix, chart_errors
+    from ocio_vp.pipeline import post_correction_problem
     from ocio_vp.simulator.stage import paper_stage, paper_stage_measurements
 
     measurements = paper_stage_measurements(("incandescent",))
     env = measurements.environments[0]
     matrix = camera_to_xyz_matrix(paper_stage().camera)
-    M, beta = solve_M(measurements.SL), stage_beta(measurements)
-    w_avg = environment_w_avg(measurements, env)
-    base_srl, base_target = np.asarray(measurements.SRL), np.asarray(env.target_chart)
+    # The incandescent problem as the solve poses it; the charts below replace its patches.
+    base = post_correction_problem(measurements, env)
+    base_srl, base_target = np.asarray(base.SRL), np.asarray(base.target)
     rng = np.random.default_rng(7)
     held = _mixtures(rng, 200, len(base_target))
-    held_problem = QProblem(
-        SL=measurements.SL,
-        SRL=np.einsum("kj,jab->kab", held, base_srl),
-        beta=beta,
-        M=M,
-        w_avg=w_avg,
-        target=held @ base_target,
+    held_problem = _replace(
+        base, SRL=np.einsum("kj,jab->kab", held, base_srl), target=held @ base_target
     )
     sizes = QUICK_SIZES if quick else SIZES
     problems = {}
     for n in sizes:
         srl, target = _charts(base_srl, base_target, n, np.random.default_rng(n))
-        problems[n] = QProblem(
-            SL=measurements.SL, SRL=srl, beta=beta, M=M, w_avg=w_avg, target=target
-        )
+        problems[n] = _replace(base, SRL=srl, target=target)
     rows = []
     for name, solver in Q_SOLVE_METHODS.items():
         cells, last = [], 0.0
@@ -90,7 +81,7 @@ def run(quick: bool = False) -> str:
             start = time.perf_counter()
             fit = solver(problem)
             last = time.perf_counter() - start
-            lit = held_problem if fit.M is None else _with_M(held_problem, fit.M)
+            lit = held_problem if fit.M is None else _replace(held_problem, M=fit.M)
             corrected = post_correction(fit.Q, fit.notes)(lit.predicted)  # the model, not Q
             de = float(
                 chart_errors(corrected, lit.target, camera_to_xyz=matrix).delta_E_2000.mean()
@@ -128,10 +119,13 @@ def _screening_row(problems: dict) -> tuple[str, ...]:
     return ("screening (`inconsistent_patches`)", *cells)
 
 
-def _with_M(problem, M):
+def _replace(problem, **fields):
+    """``problem`` with ``fields`` replaced; the weights follow a new chart's size (all 1)."""
     import dataclasses
 
-    return dataclasses.replace(problem, M=M)
+    if "target" in fields:
+        fields["weights"] = None
+    return dataclasses.replace(problem, **fields)
 
 
 if __name__ == "__main__":
