@@ -25,9 +25,11 @@ __all__ = ["main"]
 # Verbs in the order ``--help`` lists them; each is a module in ocio_vp.commands.
 COMMANDS = (
     "demo",
-    "solve",
-    "simulate",
+    "patterns",
     "measure",
+    "solve",
+    "validate",
+    "simulate",
     "export",
     "apply",
     "report",

@@ -103,12 +103,12 @@ def test_the_import_graph_has_no_cycle():
 #: module of its own package or of a package on its row or below, never above.
 ROWS = {
     "metrics": 0, "spectra": 0, "errors": 0,
-    "formats": 1, "wall": 1, "staging": 1,
+    "formats": 1, "wall": 1, "staging": 1, "patterns": 1,
     "calibration": 2,
     "correction": 3, "ocio": 3, "plates": 3, "hdri": 3, "fixtures": 3,
     "pipeline": 4,
     "simulator": 5, "synthesis": 5,
-    "report": 6, "exports": 6, "footage": 6,
+    "report": 6, "exports": 6, "footage": 6, "validation": 6,
     "commands": 7, "cli": 7, "__main__": 7,
 }  # fmt: skip
 

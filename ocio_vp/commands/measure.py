@@ -55,13 +55,58 @@ def run(args: argparse.Namespace) -> int:
         from ocio_vp.plates.detection import detector
 
         detect = detector(source=capture.source)
+    take_bar = TakeProgress()
     with progress(total=measure_steps(capture), desc="measuring", unit="plate") as bar:
-        result = measure_capture(capture, detect=detect, on_step=lambda: bar.update(1))
+        try:
+            result = measure_capture(
+                capture, detect=detect, on_step=lambda: bar.update(1), on_take=take_bar
+            )
+        finally:
+            take_bar.close()
     folder = write_measure_outputs(result, args.out, overlays=args.overlays)
     if result.detected and not args.no_write_back:
         save_capture_document(with_corners(capture.document, result.detected), capture.source)
         print(f"wrote {len(result.detected)} detected chart corner set(s) to {capture.source}")
     for warning in result.warnings:
         print(f"warning: {warning}")
-    print(f"wrote {args.out} ({len(result.plates)} plates sampled); overlays in {folder}")
+    if result.take is not None:
+        print(take_summary(result.take))
+    kind = "" if result.measurements is not None else (
+        " (a part: " + ", ".join(k for k in result.document if k not in ("format", "version", "stage"))
+        + "; solve it with the other files, docs/measurements.md)"
+    )
+    sheet = " and take.png" if result.take is not None else ""
+    print(f"wrote {args.out}{kind} ({len(result.plates)} plates sampled); overlays{sheet} in {folder}")
     return 0
+
+
+class TakeProgress:
+    """``on_progress`` for :func:`ocio_vp.plates.take.measure_take`: one bar per pass."""
+
+    def __init__(self) -> None:
+        self.bar = None
+
+    def __call__(self, stage: str, frames: int) -> None:
+        if stage == "frame":
+            if self.bar is not None:
+                self.bar.update(frames)
+            return
+        self.close()
+        self.bar = progress(total=frames, desc=f"take: {stage}", unit="frame")
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+
+def take_summary(reading) -> str:
+    """One line: how the take was placed and measured."""
+    a = reading.alignment
+    kept = sum(len(p.frames) for p in reading.patches.values())
+    return (
+        f"take: {len(reading.numbers)} frames, wall region {list(reading.region)}"
+        f"{' (found)' if reading.region_found else ''}; {a.rate:.5f} camera frames per player "
+        f"frame, {len(a.marks_found)} of {a.marks_expected} sync marks, {a.changes_used} patch "
+        f"changes timed; {len(reading.patches)} patches from {kept} frames"
+    )

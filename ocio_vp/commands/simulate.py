@@ -42,8 +42,32 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         metavar="DIR",
         default=None,
         help="also render the plates into DIR: DIR/capture.yaml, DIR/*.exr (flat fields, "
-        "primaries, lit charts, target charts, black-level frames), DIR/footage/<env>.####.exr "
-        "(default: no plates)",
+        "lit charts, target charts, black-level frames), DIR/footage/<env>.####.exr, and "
+        "DIR/take/A001.####.exr: the wall playing the patterns filmed in one take (default: no "
+        "plates)",
+    )
+    parser.add_argument(
+        "--sequence",
+        metavar="SEQUENCE_YAML",
+        default=None,
+        help="with --plates: the patterns the take films, a sequence.yaml of `ocio-vp patterns` "
+        "(default: a small built-in one, 64x36 pixels, 8 frames a patch, in DIR/patterns/)",
+    )
+    parser.add_argument(
+        "--film",
+        metavar="SEQUENCE_YAML",
+        default=None,
+        help="film this sequence (e.g. `ocio-vp patterns --validate` output) on the simulated "
+        "stage, lit by the sequence's environment, into --take DIR (default: none)",
+    )
+    parser.add_argument(
+        "--take",
+        metavar="DIR",
+        default=None,
+        help="with --film: the folder the take's frames are written to (default: none)",
+    )
+    parser.add_argument(
+        "--take-fps", type=float, default=25.0, help="the simulated camera's frame rate for takes"
     )
     _add_plate_options(parser)
     parser.add_argument(
@@ -121,7 +145,8 @@ def run(args: argparse.Namespace) -> int:
     from ocio_vp.simulator.stage import simulate_measurements, spectral_stage
 
     options = stage_options_from_args(args)
-    if args.plates is None:
+    _check_take_options(args)
+    if args.plates is None and args.film is None:
         for name in ("vignetting", "noise", "seed"):
             if getattr(args, name) != _DEFAULTS[name]:
                 warn("simulate", f"--{name} has no effect without --plates")
@@ -129,6 +154,10 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("expected 0 <= value < 1", key="--vignetting/--noise")
     if args.plates is not None:
         _check_plates_folder(args.plates)
+        if args.sequence is not None:
+            from ocio_vp.staging import check_not_input
+
+            check_not_input([args.plates], [args.sequence])
     stage = spectral_stage(**options)
     measurements = simulate_measurements(environments_from_args(args.environment), stage=stage)
     if args.fixture:
@@ -142,7 +171,63 @@ def run(args: argparse.Namespace) -> int:
     if args.plates is not None:
         capture = _write_plates(measurements, args)
         print(f"wrote {capture} and its plates; next: ocio-vp measure {capture} --out FILE.yaml")
+    if args.film is not None:
+        pattern = _film(measurements, args)
+        print(f"wrote the take {pattern}")
     return 0
+
+
+def _check_take_options(args: argparse.Namespace) -> None:
+    from ocio_vp.errors import InputError
+
+    if (args.film is None) != (args.take is None):
+        raise InputError("give --film SEQUENCE and --take DIR together", key="--film/--take")
+    if args.sequence is not None and args.plates is None:
+        raise InputError("only with --plates (the take it films)", key="--sequence")
+    if args.take_fps != 25.0 and args.plates is None and args.film is None:
+        raise InputError("only with --plates or --film", key="--take-fps")
+    if not 1 <= args.take_fps <= 1000:
+        raise InputError(f"expected 1 <= fps <= 1000, got {args.take_fps:g}", key="--take-fps")
+    if args.take is not None:
+        from ocio_vp.staging import check_replaceable
+
+        check_replaceable(args.take)
+
+
+def _take_options(args: argparse.Namespace, bounce=None):
+    from ocio_vp.simulator.take import TakeOptions
+
+    return TakeOptions(fps=args.take_fps, noise=args.noise, seed=args.seed, bounce=bounce)
+
+
+def _film(measurements, args: argparse.Namespace) -> str:
+    """Film --film's sequence into --take, the stage lit by the sequence's environment."""
+    from pathlib import Path
+
+    from ocio_vp.errors import InputError
+    from ocio_vp.patterns.sequence import load_sequence
+    from ocio_vp.simulator.take import take_frame_count, write_take
+    from ocio_vp.staging import publish_dir, staged_dir
+
+    sequence = load_sequence(args.film)
+    bounce = None
+    if sequence.validation is not None:
+        name = sequence.validation.environment
+        names = [e.name for e in measurements.environments]
+        if name not in names:
+            raise InputError(
+                f"the sequence shows environment {name!r}, which this simulation does not have "
+                f"({', '.join(names)})",
+                source=args.film,
+            )
+        bounce = measurements.environment(name).black_level
+    options = _take_options(args, None if bounce is None else tuple(float(v) for v in bounce))
+    final = Path(args.take)
+    with staged_dir(final.resolve().parent) as stage:
+        with progress(total=take_frame_count(sequence, options), desc="take", unit="frame") as bar:
+            name = write_take(sequence, measurements.SL, stage / "take", options, on_frame=lambda: bar.update(1))
+        publish_dir(stage / "take", final, inputs=[args.film])
+    return str(final / name)
 
 
 _DEFAULTS = {"vignetting": 0.05, "noise": 0.01, "seed": 0}
@@ -163,11 +248,25 @@ def _write_plates(measurements, args: argparse.Namespace):
     from ocio_vp.simulator.plates import PlateOptions, plate_count, write_capture
     from ocio_vp.staging import publish_dir, staged_dir
 
+    import os
+
+    from ocio_vp.patterns.sequence import load_sequence
+
     final = Path(args.plates)
-    options = PlateOptions(vignetting=args.vignetting, noise=args.noise, seed=args.seed)
+    options = PlateOptions(
+        vignetting=args.vignetting, noise=args.noise, seed=args.seed, take=_take_options(args)
+    )
+    sequence = ref = None
+    inputs = []
+    if args.sequence is not None:
+        sequence = load_sequence(args.sequence)
+        ref = Path(os.path.relpath(os.path.abspath(args.sequence), os.path.abspath(final))).as_posix()
+        inputs = [args.sequence, str(Path(args.sequence).parent)]
     with staged_dir(final.resolve().parent) as stage:
-        bar = progress(total=plate_count(measurements, options), desc="plates", unit="plate")
-        with bar:
-            write_capture(measurements, stage / "plates", options, bar=bar)
-        publish_dir(stage / "plates", final)
+        total = plate_count(measurements, options, sequence)
+        with progress(total=total, desc="plates", unit="plate") as bar:
+            write_capture(
+                measurements, stage / "plates", options, bar=bar, sequence=sequence, sequence_ref=ref
+            )
+        publish_dir(stage / "plates", final, inputs=inputs)
     return final / "capture.yaml"

@@ -19,7 +19,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         description="Solve every environment of a measurements file and write "
         "DIR/<environment>/config.ocio and solution.json.",
     )
-    parser.add_argument("measurements", help="measurements file (.yaml/.yml/.json)")
+    parser.add_argument(
+        "measurements",
+        nargs="+",
+        help="measurements file(s) (.yaml/.yml/.json); several are merged, e.g. the wall from "
+        "one and the charts from another (docs/measurements.md)",
+    )
     parser.add_argument(
         "--out",
         required=True,
@@ -153,11 +158,11 @@ def run(args: argparse.Namespace) -> int:
 def _solve_and_write(args: argparse.Namespace, peak_nits: float, pool) -> list:
     """Load, solve every environment asked for, and write them to ``args.out``."""
     from ocio_vp.errors import InputError
-    from ocio_vp.formats.measurements import load_measurements
+    from ocio_vp.formats.merge import load_measurement_files
     from ocio_vp.ocio.writer import write_solutions
     from ocio_vp.wall.encoding import with_wall_encoding
 
-    measurements = load_measurements(args.measurements)
+    measurements = load_measurement_files(args.measurements)
     environments = measurements.environments
     if args.environment:
         environments = tuple(measurements.environment(name) for name in args.environment)
@@ -174,7 +179,7 @@ def _solve_and_write(args: argparse.Namespace, peak_nits: float, pool) -> list:
     solutions = _solve(measurements, environments, args)
     solutions = [with_wall_encoding(s, args.wall_encoding, peak_nits=peak_nits) for s in solutions]
     hdri_files = [spec.partition("=")[2] or spec for spec in args.hdri]
-    return write_solutions(solutions, args.out, inputs=[args.measurements, *hdri_files], pool=pool)
+    return write_solutions(solutions, args.out, inputs=[*args.measurements, *hdri_files], pool=pool)
 
 
 def _solve(measurements, environments, args: argparse.Namespace) -> list:

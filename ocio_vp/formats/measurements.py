@@ -32,13 +32,16 @@ __all__ = [
     "MIN_BETA",
     "MIN_SIGNAL",
     "PANEL_RANGE",
+    "REQUIRED_SECTIONS",
     "SAFE_NAME",
+    "SECTIONS",
     "VERSION",
     "Environment",
     "Measurements",
     "PanelGeometry",
     "Stage",
     "Validator",
+    "check_measurements_part",
     "check_safe_name",
     "load_measurements",
     "measurements_from_dict",
@@ -46,6 +49,7 @@ __all__ = [
     "parse_stage",
     "read_document",
     "save_measurements",
+    "save_measurements_document",
 ]
 
 FORMAT = "ocio-vp/measurements"
@@ -58,6 +62,10 @@ MAX_CAMERA_VALUE = 1e9
 #: A block of camera values (primaries, a chart) whose largest value is positive but below this
 #: is refused: it is not a photographed signal but data scaled by mistake.
 MIN_SIGNAL = 1e-12
+#: The sections of the file that hold measurements; :data:`REQUIRED_SECTIONS` are needed to
+#: solve (a file holding only some of them is merged with others, docs/measurements.md).
+SECTIONS = ("primaries", "lit_chart", "environments", "ramps", "fixtures")
+REQUIRED_SECTIONS = ("primaries", "lit_chart", "environments")
 #: Smallest form factor ``beta`` (a panel ~500x farther away than it is wide).
 MIN_BETA = 1e-6
 #: Calibration panel width, height and distance (and |offset|) in metres.
@@ -280,53 +288,73 @@ def measurements_from_dict(
     InputError
         Naming ``source``, the key path and the problem, for any deviation from the format.
     """
-    ctx = Validator(source)
-    top = ctx.mapping(
-        data,
-        (),
-        required=("format", "version", "stage", "primaries", "lit_chart", "environments"),
-        optional=("ramps", "fixtures"),
+    parsed = _parse_sections(Validator(source), data, partial=False)
+    return Measurements(
+        stage=parsed["stage"],
+        SL=parsed["SL"],
+        SRL=parsed["SRL"],
+        environments=parsed["environments"],
+        ramps=parsed.get("ramps"),
+        fixtures=parsed.get("fixtures", ()),
+        source=source,
+        sha256=sha256,
     )
+
+
+def check_measurements_part(data: Any, *, source: str = "<measurements>") -> tuple[str, ...]:
+    """Validate a measurements document that may hold only some sections: a wall file
+    (``primaries``, ``ramps``) or a charts file (``lit_chart``, ``environments``), which
+    ``ocio-vp solve`` merges (:mod:`ocio_vp.formats.merge`). Returns the sections it holds.
+
+    Raises
+    ------
+    InputError
+        As :func:`measurements_from_dict`, for every section present; or no section at all.
+    """
+    _parse_sections(Validator(source), data, partial=True)
+    return tuple(name for name in SECTIONS if name in data)
+
+
+def _parse_sections(ctx: Validator, data: Any, *, partial: bool) -> dict[str, Any]:
+    """Every section present, validated (all of :data:`REQUIRED_SECTIONS` unless ``partial``)."""
+    required = ("format", "version", "stage") + (() if partial else REQUIRED_SECTIONS)
+    optional = (REQUIRED_SECTIONS if partial else ()) + ("ramps", "fixtures")
+    top = ctx.mapping(data, (), required=required, optional=optional)
     if top["format"] != FORMAT:
         raise ctx.error(("format",), f"expected {FORMAT!r}, got {excerpt(top['format'])}")
     if top["version"] != VERSION or isinstance(top["version"], bool):
         raise ctx.error(
             ("version",), f"this ocio-vp reads version {VERSION}, got {excerpt(top['version'])}"
         )
-
-    stage = parse_stage(ctx, top["stage"])
-
-    primaries = ctx.mapping(top["primaries"], ("primaries",), required=CHANNELS)
-    SL = np.stack([ctx.rgb(primaries[c], ("primaries", c)) for c in CHANNELS], axis=1)
-    ctx.signal(SL, ("primaries",))
-
-    lit = ctx.mapping(top["lit_chart"], ("lit_chart",), required=CHANNELS)
-    red = ctx.chart(lit["red"], ("lit_chart", "red"), None)
-    n = len(red)
-    charts = [red] + [ctx.chart(lit[c], ("lit_chart", c), n) for c in CHANNELS[1:]]
-    SRL = ctx.signal(np.stack(charts, axis=2), ("lit_chart",))  # (n, camera ch., LED ch.)
-
-    if not 0 <= stage.white_patch < n:
-        raise ctx.error(
-            ("stage", "white_patch"),
-            f"index {excerpt(stage.white_patch)} is outside the {n} chart patches",
-        )
-
-    environments = _parse_environments(ctx, top["environments"], n)
-    ramps = None
+    if not any(name in top for name in SECTIONS):
+        raise ctx.error((), f"holds no measurements: give at least one of {', '.join(SECTIONS)}")
+    out: dict[str, Any] = {"stage": parse_stage(ctx, top["stage"])}
+    if "primaries" in top:
+        primaries = ctx.mapping(top["primaries"], ("primaries",), required=CHANNELS)
+        SL = np.stack([ctx.rgb(primaries[c], ("primaries", c)) for c in CHANNELS], axis=1)
+        out["SL"] = ctx.signal(SL, ("primaries",))
+    n = None
+    if "lit_chart" in top:
+        lit = ctx.mapping(top["lit_chart"], ("lit_chart",), required=CHANNELS)
+        red = ctx.chart(lit["red"], ("lit_chart", "red"), None)
+        n = len(red)
+        charts = [red] + [ctx.chart(lit[c], ("lit_chart", c), n) for c in CHANNELS[1:]]
+        out["SRL"] = ctx.signal(np.stack(charts, axis=2), ("lit_chart",))  # (n, camera, LED)
+        white_patch = out["stage"].white_patch
+        if not 0 <= white_patch < n:
+            raise ctx.error(
+                ("stage", "white_patch"),
+                f"index {excerpt(white_patch)} is outside the {n} chart patches",
+            )
+    if "environments" in top:
+        out["environments"] = _parse_environments(ctx, top["environments"], n)
     if "ramps" in top:
-        ramps = parse_ramps(top["ramps"], source=source)
-    fixtures = parse_fixtures(ctx, top["fixtures"], n) if "fixtures" in top else ()
-    return Measurements(
-        stage=stage,
-        SL=SL,
-        SRL=SRL,
-        environments=environments,
-        ramps=ramps,
-        fixtures=fixtures,
-        source=source,
-        sha256=sha256,
-    )
+        out["ramps"] = parse_ramps(top["ramps"], source=ctx.source)
+    if "fixtures" in top:
+        if n is None:
+            raise ctx.error(("fixtures",), "fixtures need lit_chart in the same file")
+        out["fixtures"] = parse_fixtures(ctx, top["fixtures"], n)
+    return out
 
 
 def parse_stage(ctx: Validator, value: Any) -> Stage:
@@ -411,7 +439,7 @@ def _check_colourspace(ctx: Validator, value: Any, key: tuple[str | int, ...]) -
     raise ctx.error(key, f"unknown colour space {excerpt(value)} (colour.RGB_COLOURSPACES){hint}")
 
 
-def _parse_environments(ctx: Validator, value: Any, n: int) -> tuple[Environment, ...]:
+def _parse_environments(ctx: Validator, value: Any, n: int | None) -> tuple[Environment, ...]:
     if not isinstance(value, list) or not value:
         raise ctx.error(("environments",), f"expected a non-empty list, got {_kind(value)}")
     seen: dict[str, int] = {}
@@ -526,13 +554,20 @@ def save_measurements(
     ``# Written by ocio-vp`` comment), it already holds the same bytes, or ``replace`` (the
     user asked for it, e.g. ``--force``).
     """
+    save_measurements_document(measurements_to_dict(measurements), path, replace=replace)
+
+
+def save_measurements_document(
+    data: Mapping[str, Any], path: str | Path, *, replace: bool = False
+) -> None:
+    """Write a measurements document (complete or a part, already validated) like
+    :func:`save_measurements`."""
     from ocio_vp.staging import FILE_SIGNATURE, write_output_file
 
-    data = measurements_to_dict(measurements)
     path = Path(path)
     if path.suffix.lower() == ".json":
         text = json.dumps(data, indent=2) + "\n"
     else:
         header = f"{FILE_SIGNATURE.decode()} ({FORMAT} v{VERSION}, docs/measurements.md)\n"
-        text = header + yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
+        text = header + yaml.safe_dump(dict(data), sort_keys=False, default_flow_style=None, width=100)
     write_output_file(path, text, replace=replace)

@@ -20,6 +20,7 @@ import yaml
 from ocio_vp.formats.measurements import CHANNELS, Validator, parse_stage, read_document
 from ocio_vp.plates.reader import canonical_encoding, plate_path
 from ocio_vp.plates.statistics import ROBUST_MEAN_METHODS
+from ocio_vp.plates.take import TakeRef
 
 __all__ = [
     "FORMAT",
@@ -91,7 +92,9 @@ class EnvironmentCapture:
 
 @dataclass(frozen=True)
 class Capture:
-    """A validated capture file."""
+    """A validated capture file. ``primaries`` (plates) or ``take`` gives the wall; sections
+    the file leaves out are empty (the measurements file written is then a part, merged at
+    solve time with the others, docs/measurements.md)."""
 
     stage: Mapping[str, Any]
     rows: int
@@ -104,16 +107,20 @@ class Capture:
     source: str
     document: Mapping[str, Any] = field(default_factory=dict)
     sha256: str | None = None
+    take: TakeRef | None = None
 
     def charts(self) -> list[ChartShot]:
         """Every chart shot, lit charts first."""
         return [*self.lit_chart.values(), *(e.target_chart for e in self.environments)]
 
     def plate_paths(self) -> list[Path]:
-        """Every file the capture reads: plates, their frames and flat fields."""
+        """Every file the capture reads: plates, their frames and flat fields, the take's
+        sequence file and the take's folder."""
         shots: list[ChartShot | RegionShot] = [*self.primaries.values(), *self.charts()]
         shots += [e.black_level for e in self.environments if e.black_level is not None]
         paths = [p for shot in shots for p in (*shot.plate.paths, *(shot.plate.flat_field or ()))]
+        if self.take is not None:
+            paths += [self.take.sequence, self.take.frames.parent]
         return sorted(set(paths))
 
 
@@ -238,14 +245,23 @@ def capture_from_dict(
     where = _Where(base)
     if top.get("flat_field") is not None:
         where = _Where(base, _paths(ctx, top["flat_field"], ("flat_field",), base))
-    prim = ctx.mapping(top["primaries"], ("primaries",), CHANNELS, _PLATE_KEYS)
-    shared = _plate(ctx, prim, ("primaries",), where, "primaries") if "plate" in prim else None
-    primaries = {
-        c: _region_shot(ctx, prim[c], ("primaries", c), where, f"primaries_{c}", shared)
-        for c in CHANNELS
-    }
-    lit = ctx.mapping(top["lit_chart"], ("lit_chart",), CHANNELS)
-    lit_chart = {c: _chart(ctx, lit[c], ("lit_chart", c), where, f"lit_{c}") for c in CHANNELS}
+    primaries: dict[str, RegionShot] = {}
+    if "primaries" in top:
+        prim = ctx.mapping(top["primaries"], ("primaries",), CHANNELS, _PLATE_KEYS)
+        shared = _plate(ctx, prim, ("primaries",), where, "primaries") if "plate" in prim else None
+        primaries = {
+            c: _region_shot(ctx, prim[c], ("primaries", c), where, f"primaries_{c}", shared)
+            for c in CHANNELS
+        }
+    lit_chart: dict[str, ChartShot] = {}
+    if "lit_chart" in top:
+        lit = ctx.mapping(top["lit_chart"], ("lit_chart",), CHANNELS)
+        lit_chart = {
+            c: _chart(ctx, lit[c], ("lit_chart", c), where, f"lit_{c}") for c in CHANNELS
+        }
+    environments = ()
+    if "environments" in top:
+        environments = _environments(ctx, top["environments"], where)
     return Capture(
         stage=dict(top["stage"]),
         rows=rows,
@@ -254,10 +270,42 @@ def capture_from_dict(
         sampling=sampling,
         primaries=primaries,
         lit_chart=lit_chart,
-        environments=_environments(ctx, top["environments"], where),
+        environments=environments,
         source=source,
         document=data,
         sha256=sha256,
+        take=_take(ctx, top["take"], base) if "take" in top else None,
+    )
+
+
+_TAKE_KEYS = ("region", "encoding", "layer", "clip_level")
+
+
+def _take(ctx: Validator, value: Any, base: Path) -> TakeRef:
+    """``take``: the frames of one continuous take, the sequence it filmed, and options."""
+    raw = ctx.mapping(value, ("take",), ("frames", "sequence"), _TAKE_KEYS)
+    for name in ("frames", "sequence"):
+        if not isinstance(raw[name], str) or not raw[name]:
+            raise ctx.error(("take", name), "expected a path relative to the capture file")
+    if raw["frames"].count("#") == 0:
+        raise ctx.error(("take", "frames"), "expected a frame pattern, e.g. take/A001.####.exr")
+    encoding = raw.get("encoding")
+    if encoding is not None:
+        encoding = canonical_encoding(encoding, source=ctx.source, key="take.encoding")
+    layer = raw.get("layer")
+    if layer is not None and not isinstance(layer, str):
+        raise ctx.error(("take", "layer"), f"expected a layer name, got {layer!r}")
+    clip = raw.get("clip_level")
+    if clip is not None:
+        clip = ctx.number(clip, ("take", "clip_level"), strict=True)
+    region = _region(ctx, raw["region"], ("take", "region")) if "region" in raw else None
+    return TakeRef(
+        frames=plate_path(base, raw["frames"]),
+        sequence=plate_path(base, raw["sequence"]),
+        region=region,
+        encoding=encoding,
+        layer=layer,
+        clip_level=clip,
     )
 
 
@@ -266,8 +314,16 @@ def _header(ctx: Validator, data: Any) -> Mapping[str, Any]:
     top = ctx.mapping(
         data,
         (),
-        required=("format", "version", "stage", "primaries", "lit_chart", "environments"),
-        optional=("chart", "sampling", "flat_field"),
+        required=("format", "version", "stage"),
+        optional=(
+            "chart",
+            "sampling",
+            "flat_field",
+            "primaries",
+            "take",
+            "lit_chart",
+            "environments",
+        ),
     )
     if top["format"] != FORMAT:
         raise ctx.error(("format",), f"expected {FORMAT!r}, got {top['format']!r}")
@@ -276,6 +332,10 @@ def _header(ctx: Validator, data: Any) -> Mapping[str, Any]:
             ("version",), f"this ocio-vp reads version {VERSION}, got {top['version']!r}"
         )
     parse_stage(ctx, top["stage"])  # same rules as the measurements file it is copied to
+    if "primaries" in top and "take" in top:
+        raise ctx.error(("take",), "give the wall as primaries plates or as a take, not both")
+    if not any(k in top for k in ("primaries", "take", "lit_chart", "environments")):
+        raise ctx.error((), "nothing to measure: give a take (or primaries), lit_chart or environments")
     return top
 
 

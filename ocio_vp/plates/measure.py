@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -21,13 +21,16 @@ from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import (
     CHANNELS,
     FORMAT,
+    REQUIRED_SECTIONS,
     VERSION,
     Measurements,
+    check_measurements_part,
     measurements_from_dict,
 )
 from ocio_vp.plates.capture import Capture, ChartShot, PlateRef, RegionShot
 from ocio_vp.plates.reader import PlateInfo, open_plate, read_region
 from ocio_vp.plates.sampling import ChartSamples, patch_labels, sample_chart, sample_region
+from ocio_vp.plates.take import TakeReading, measure_take
 
 __all__ = [
     "MeasureResult",
@@ -38,6 +41,8 @@ __all__ = [
 ]
 
 _OVERLAY_MARGIN = 16
+#: The take's contact sheet, in the overlay folder.
+TAKE_SHEET = "take.png"
 
 
 @dataclass(frozen=True)
@@ -58,12 +63,19 @@ class PlateSampling:
 
 @dataclass(frozen=True)
 class MeasureResult:
-    """The measurements plus everything needed for overlays and the user's report."""
+    """The measurements plus everything needed for overlays and the user's report.
 
-    measurements: Measurements
+    ``measurements`` is None when the capture holds only some sections (a wall-only take, or
+    charts only): ``document`` is then a valid part of a measurements file, merged with the
+    others at solve time. ``take``: the take's reading, when the capture has one.
+    """
+
+    measurements: Measurements | None
     plates: tuple[PlateSampling, ...]
     detected: Mapping[tuple[str | int, ...], np.ndarray]
     warnings: tuple[str, ...]
+    document: Mapping[str, Any] = field(default_factory=dict)
+    take: TakeReading | None = None
 
 
 def _open(ref: PlateRef) -> tuple[PlateInfo, ...]:
@@ -192,12 +204,37 @@ def _sample_regions(
 
 
 def measure_steps(capture: Capture) -> int:
-    """How many times :func:`measure_capture` calls ``on_step``."""
+    """How many times :func:`measure_capture` calls ``on_step`` (the take's frames count apart)."""
     blacks = sum(env.black_level is not None for env in capture.environments)
-    return 1 + len(CHANNELS) + len(capture.environments) + blacks
+    return bool(capture.primaries) + len(capture.lit_chart) + len(capture.environments) + blacks
 
 
-def measure_capture(capture: Capture, *, detect: Any = None, on_step: Any = None) -> MeasureResult:
+def take_sections(reading: TakeReading) -> dict[str, Any]:
+    """``primaries`` (black subtracted) and ``ramps`` (each step, black subtracted; the drive
+    of that channel as ``sequence.yaml`` gives it) from a measured take."""
+    sequence = reading.sequence
+    primaries = {p.channel: reading.net(p.name).tolist() for p in sequence.of_kind("primary")}
+    out: dict[str, Any] = {}
+    if set(primaries) == set(CHANNELS):
+        out["primaries"] = {c: primaries[c] for c in CHANNELS}
+    ramps: dict[str, Any] = {}
+    for k, channel in enumerate(CHANNELS):
+        steps = sorted(
+            (p for p in sequence.of_kind("ramp") if p.channel == channel), key=lambda p: p.step
+        )
+        if steps:
+            ramps[channel] = {
+                "drive": [float(p.drive[k]) for p in steps],
+                "camera": [reading.net(p.name).tolist() for p in steps],
+            }
+    if set(ramps) == set(CHANNELS):
+        out["ramps"] = ramps
+    return out
+
+
+def measure_capture(
+    capture: Capture, *, detect: Any = None, on_step: Any = None, on_take: Any = None
+) -> MeasureResult:
     """Sample every plate of ``capture`` and build the measurements.
 
     Parameters
@@ -210,6 +247,8 @@ def measure_capture(capture: Capture, *, detect: Any = None, on_step: Any = None
     on_step
         Called with no argument after each step (the primaries, each chart, each black level):
         :func:`measure_steps` of them in all, for a progress bar.
+    on_take
+        Passed to :func:`ocio_vp.plates.take.measure_take` as ``on_progress``.
 
     Raises
     ------
@@ -220,13 +259,20 @@ def measure_capture(capture: Capture, *, detect: Any = None, on_step: Any = None
     plates: list[PlateSampling] = []
     detected: dict[tuple[str | int, ...], np.ndarray] = {}
     step = on_step or (lambda: None)
-    primaries = _sample_regions(capture, capture.primaries, "primaries")
-    plates.extend(primaries)
-    step()
-    primary_means = {}
-    for sampling in primaries:
-        for label, mean in zip(sampling.labels, sampling.samples.means, strict=True):
-            primary_means[label] = mean
+    document: dict[str, Any] = {"format": FORMAT, "version": VERSION, "stage": dict(capture.stage)}
+    reading = None
+    if capture.take is not None:
+        reading = measure_take(capture.take, source=capture.source, on_progress=on_take)
+        document.update(take_sections(reading))
+    if capture.primaries:
+        primaries = _sample_regions(capture, capture.primaries, "primaries")
+        plates.extend(primaries)
+        step()
+        means = {}
+        for sampling in primaries:
+            for label, mean in zip(sampling.labels, sampling.samples.means, strict=True):
+                means[label] = mean
+        document["primaries"] = {c: means[c].tolist() for c in CHANNELS}
 
     def chart(shot: ChartShot) -> np.ndarray:
         sampling, found = _sample_chart(capture, shot, detect)
@@ -236,33 +282,35 @@ def measure_capture(capture: Capture, *, detect: Any = None, on_step: Any = None
         step()
         return sampling.samples.means
 
-    lit = {c: chart(capture.lit_chart[c]) for c in CHANNELS}
-    environments = []
-    for env in capture.environments:
-        entry: dict[str, Any] = {"name": env.name, "target_chart": chart(env.target_chart).tolist()}
-        if env.black_level is not None:
-            black = _sample_regions(capture, {"black_level": env.black_level}, env.name)
-            plates.extend(black)
-            step()
-            entry["black_level"] = black[0].samples.means[0].tolist()
-        if env.w_avg is not None:
-            entry["w_avg"] = env.w_avg.tolist()
-        environments.append(entry)
-    document = {
-        "format": FORMAT,
-        "version": VERSION,
-        "stage": dict(capture.stage),
-        "primaries": {c: primary_means[c].tolist() for c in CHANNELS},
-        "lit_chart": {c: lit[c].tolist() for c in CHANNELS},
-        "environments": environments,
-    }
-    measurements = measurements_from_dict(document, source=capture.source)
-    warnings = []
+    if capture.lit_chart:
+        document["lit_chart"] = {c: chart(capture.lit_chart[c]).tolist() for c in CHANNELS}
+    if capture.environments:
+        document["environments"] = [_environment(capture, env, chart, plates, step) for env in capture.environments]
+    if "ramps" in document:  # the file's key order: ramps after environments
+        document["ramps"] = document.pop("ramps")
+    measurements = None
+    if all(name in document for name in REQUIRED_SECTIONS):
+        measurements = measurements_from_dict(document, source=capture.source)
+    else:
+        check_measurements_part(document, source=capture.source)
+    warnings = [] if reading is None else list(reading.warnings)
     for sampling in plates:
         for index in np.flatnonzero(sampling.samples.flagged):
             flags = ", ".join(sampling.samples.flag_names(int(index)))
             warnings.append(f"{sampling.plate.label}: {sampling.labels[index]}: {flags}")
-    return MeasureResult(measurements, tuple(plates), detected, tuple(warnings))
+    return MeasureResult(measurements, tuple(plates), detected, tuple(warnings), document, reading)
+
+
+def _environment(capture: Capture, env, chart, plates: list, step) -> dict[str, Any]:
+    entry: dict[str, Any] = {"name": env.name, "target_chart": chart(env.target_chart).tolist()}
+    if env.black_level is not None:
+        black = _sample_regions(capture, {"black_level": env.black_level}, env.name)
+        plates.extend(black)
+        step()
+        entry["black_level"] = black[0].samples.means[0].tolist()
+    if env.w_avg is not None:
+        entry["w_avg"] = env.w_avg.tolist()
+    return entry
 
 
 def _overlay(sampling: PlateSampling) -> np.ndarray:
@@ -331,7 +379,41 @@ def samples_document(
                 ],
             }
         )
-    return {"format": "ocio-vp/samples", "version": 1, "plates": plates}
+    out: dict[str, Any] = {"format": "ocio-vp/samples", "version": 1, "plates": plates}
+    if result.take is not None:
+        out["take"] = take_document(result.take, where)
+    return out
+
+
+def take_document(reading: TakeReading, where: Any = str) -> dict[str, Any]:
+    """The take's alignment and every patch's frames and statistics (``samples.json``)."""
+    a = reading.alignment
+    return {
+        "frames": where(reading.take.frames),
+        "sequence": where(reading.take.sequence),
+        "contact_sheet": TAKE_SHEET,
+        "region": list(reading.region),
+        "region_found": reading.region_found,
+        "frame_count": len(reading.numbers),
+        "camera_frames_per_player_frame": a.rate,
+        "sync_marks_found": list(a.marks_found),
+        "sync_marks_expected": a.marks_expected,
+        "patch_changes_timed": a.changes_used,
+        "steps": [{"player_frame": T, "camera_frames": n} for T, n in a.steps],
+        "clip_level": reading.clip_level,
+        "patches": [
+            {
+                "name": p.name,
+                "kind": p.kind,
+                "mean": p.mean.tolist(),
+                "spread": p.spread.tolist(),
+                "frames": list(p.frames),
+                "rejected": list(p.rejected),
+                "pixels_per_frame": p.pixels,
+            }
+            for p in reading.patches.values()
+        ],
+    }
 
 
 def overlay_folder(out: str | Path, overlays: str | Path | None = None) -> Path:
@@ -348,7 +430,7 @@ def write_measure_outputs(
     Everything is rendered into a staging folder first; the measurements file is written
     atomically and the overlay folder published only when all of it succeeded.
     """
-    from ocio_vp.formats.measurements import save_measurements
+    from ocio_vp.formats.measurements import save_measurements, save_measurements_document
     from ocio_vp.plates.overlay import write_png
     from ocio_vp.staging import (
         check_file_replaceable,
@@ -365,8 +447,15 @@ def write_measure_outputs(
     with staged_dir(folder.parent) as staged:
         for sampling in result.plates:
             write_png(staged / f"{sampling.name}.png", _overlay(sampling))
+        if result.take is not None:
+            from ocio_vp.plates.contact_sheet import write_contact_sheet
+
+            write_contact_sheet(result.take, staged / TAKE_SHEET)
         text = json.dumps(samples_document(result, relative_to=folder), indent=2) + "\n"
         write_file_atomically(staged / "samples.json", text)
-        save_measurements(result.measurements, out)
+        if result.measurements is not None:
+            save_measurements(result.measurements, out)
+        else:
+            save_measurements_document(result.document, out)
         publish_dir(staged, folder)
     return folder

@@ -31,6 +31,7 @@ __all__ = [
     "homography",
     "plate_count",
     "render_chart",
+    "practice_sequence",
     "render_regions",
     "vignetting_gain",
     "write_capture",
@@ -202,7 +203,11 @@ def write_plate(
 
 @dataclass(frozen=True)
 class PlateOptions:
-    """How the simulated camera shoots: lens fall-off, noise, flat-field and footage frames."""
+    """How the simulated camera shoots: lens fall-off, noise, flat-field and footage frames.
+
+    ``take``: film the wall playing the patterns in one take (:mod:`ocio_vp.simulator.take`)
+    for [SL] and the ramps, instead of photographing each primary.
+    """
 
     vignetting: float = 0.05
     noise: float = 0.01
@@ -210,6 +215,7 @@ class PlateOptions:
     flat_frames: int = 4
     footage_frames: int = 3
     seed: int = 0
+    take: Any = None
 
 
 def _grid(patches: int) -> tuple[int, int]:
@@ -232,7 +238,9 @@ def _plates(measurements: Any, options: PlateOptions) -> Iterator[tuple[str, np.
         yield f"flat.{i + 1:04d}.exr", flat
     for k, channel in enumerate(("red", "green", "blue")):
         panel = {channel: (PANEL_REGION, measurements.SL[:, k])}
-        yield f"primary_{channel}.exr", render_regions(panel, seed=next(seed), **sensor)
+        image = render_regions(panel, seed=next(seed), **sensor)
+        if options.take is None:
+            yield f"primary_{channel}.exr", image
     for k, channel in enumerate(("red", "green", "blue")):
         values = measurements.SRL[:, :, k]
         chart = render_chart(values, rows=rows, columns=columns, seed=next(seed), **sensor)
@@ -256,7 +264,9 @@ def _plates(measurements: Any, options: PlateOptions) -> Iterator[tuple[str, np.
             yield f"footage/{env.name}.{frame:04d}.exr", image
 
 
-def _capture_document(measurements: Any, names: set[str], options: PlateOptions) -> dict:
+def _capture_document(
+    measurements: Any, names: set[str], options: PlateOptions, sequence_ref: str | None = None
+) -> dict:
     """The ``ocio-vp/capture`` document pointing at the plates (paths relative to it)."""
     from ocio_vp.formats.measurements import measurements_to_dict
 
@@ -271,10 +281,13 @@ def _capture_document(measurements: Any, names: set[str], options: PlateOptions)
     flats = sorted(n for n in names if n.startswith("flat."))
     if flats:
         document["flat_field"] = flats
-    document["primaries"] = {
-        c: {"plate": f"primary_{c}.exr", "region": list(PANEL_REGION)}
-        for c in ("red", "green", "blue")
-    }
+    if options.take is None:
+        document["primaries"] = {
+            c: {"plate": f"primary_{c}.exr", "region": list(PANEL_REGION)}
+            for c in ("red", "green", "blue")
+        }
+    else:
+        document["take"] = {"frames": f"{TAKE_FOLDER}/{TAKE_NAME}", "sequence": sequence_ref}
     document["lit_chart"] = {
         c: {"plate": f"lit_{c}.exr", "corners": CHART_CORNERS.tolist()}
         for c in ("red", "green", "blue")
@@ -295,12 +308,24 @@ def _capture_document(measurements: Any, names: set[str], options: PlateOptions)
 
 
 def write_capture(
-    measurements: Any, folder: str | Path, options: PlateOptions = PlateOptions(), *, bar=None
+    measurements: Any,
+    folder: str | Path,
+    options: PlateOptions = PlateOptions(),
+    *,
+    bar=None,
+    sequence: Any = None,
+    sequence_ref: str | None = None,
 ) -> Path:
     """Render every plate of ``measurements`` into ``folder`` and write ``folder/capture.yaml``.
 
     ``folder`` must be new or empty (callers stage it and rename it into place). ``bar``: an
-    optional progress bar (``update(1)`` per plate). Returns the capture file's path.
+    optional progress bar (``update(1)`` per plate and per take frame). Returns the capture
+    file's path.
+
+    With ``options.take``, the wall is filmed playing ``sequence`` (a
+    :class:`~ocio_vp.patterns.sequence.PatternSequence`, named in the capture file as
+    ``sequence_ref``, relative to it) into ``folder/take/``; without a sequence, the small
+    built-in one (:func:`practice_sequence`) is written to ``folder/patterns/`` and filmed.
 
     The values are those of ``measurements`` exactly, before lens and sensor: ``measure`` on
     these plates gives them back within the noise (the vignetting is removed by the flat
@@ -318,7 +343,9 @@ def write_capture(
             bar.update(1)
     if not options.footage_frames or not any(n.startswith("footage/") for n in names):
         (folder / "footage").rmdir()
-    document = _capture_document(measurements, names, options)
+    if options.take is not None:
+        sequence_ref = _film_patterns(measurements, folder, options, sequence, sequence_ref, bar)
+    document = _capture_document(measurements, names, options, sequence_ref)
     path = folder / "capture.yaml"
     header = (
         "# Simulated calibration plates (ocio-vp simulate --plates): `ocio-vp measure` reads\n"
@@ -331,10 +358,43 @@ def write_capture(
     return path
 
 
-def plate_count(measurements: Any, options: PlateOptions = PlateOptions()) -> int:
-    """How many plates :func:`write_capture` writes (for a progress bar)."""
+#: Where the take goes in the plates folder, and its frames' names.
+TAKE_FOLDER = "take"
+TAKE_NAME = "A001.####.exr"
+
+
+def practice_sequence() -> Any:
+    """The built-in sequence a simulated stage films when none is given: the calibration
+    sequence at 64x36 pixels, 8 frames a patch (about 30 s, ~750 camera frames at 25 fps)."""
+    from ocio_vp.patterns.design import PatternOptions, calibration_sequence
+
+    return calibration_sequence(PatternOptions(size=(64, 36), hold=8))
+
+
+def _film_patterns(measurements, folder: Path, options: PlateOptions, sequence, ref, bar) -> str:
+    """Write the take (and the built-in patterns when no sequence is given); return the
+    capture file's reference to the sequence."""
+    from ocio_vp.patterns.frames import write_sequence_folder
+    from ocio_vp.patterns.sequence import load_sequence
+    from ocio_vp.simulator.take import write_take
+
+    if sequence is None:
+        path = write_sequence_folder(practice_sequence(), folder / "patterns")
+        sequence, ref = load_sequence(path), "patterns/sequence.yaml"
+    on_frame = None if bar is None else (lambda: bar.update(1))
+    write_take(sequence, measurements.SL, folder / TAKE_FOLDER, options.take, on_frame=on_frame)
+    return ref
+
+
+def plate_count(measurements: Any, options: PlateOptions = PlateOptions(), sequence: Any = None) -> int:
+    """How many plates (and take frames) :func:`write_capture` writes (for a progress bar)."""
     per_env = sum(
         1 + (e.black_level is not None) + (options.footage_frames if e.w_avg is not None else 0)
         for e in measurements.environments
     )
-    return options.flat_frames + 6 + per_env
+    plates = options.flat_frames + 6 + per_env
+    if options.take is None:
+        return plates
+    from ocio_vp.simulator.take import take_frame_count
+
+    return plates - 3 + take_frame_count(sequence or practice_sequence(), options.take)

@@ -1,0 +1,139 @@
+"""Several measurements files, one solve: the wall from one file, the charts from others.
+
+The wall (``primaries``, ``ramps``) is measured once, from one take; the charts (``lit_chart``
+and each environment's ``target_chart``) on other days. ``ocio-vp solve wall.yaml charts.yaml``
+merges them here, before anything is solved:
+
+- each file is validated on its own first (:func:`~ocio_vp.formats.measurements.check_measurements_part`),
+  so an error names the file it is in;
+- ``stage`` is merged key by key; ``primaries``, ``lit_chart``, ``ramps`` are taken whole from
+  the one file that gives them; ``environments`` and ``fixtures`` are joined by name;
+- a key given in two files must have the same value there, else the merge is refused, naming
+  both files and the key;
+- the merged document is then validated as one file (its ``source`` names every file).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from ocio_vp.errors import InputError, excerpt
+from ocio_vp.formats.measurements import (
+    REQUIRED_SECTIONS,
+    Measurements,
+    check_measurements_part,
+    load_measurements,
+    measurements_from_dict,
+    read_document,
+)
+
+__all__ = ["load_measurement_files", "merge_measurement_documents"]
+
+_WHOLE = ("primaries", "lit_chart", "ramps")
+_BY_NAME = ("environments", "fixtures")
+
+
+def _conflict(key: str, first: str, second: str) -> InputError:
+    return InputError(
+        f"also given in {first} with a different value; give it in one file only (or the same "
+        "value in both)",
+        source=second,
+        key=key,
+    )
+
+
+def _merge_named(merged: dict[str, Any], owners: dict[str, str], section: str, items: Any, source: str) -> None:
+    """Join list ``section`` by ``name``: new names appended, repeated ones must be equal."""
+    entries = merged.setdefault(section, [])
+    index = {entry["name"]: i for i, entry in enumerate(entries)}
+    for item in items:
+        name = item["name"]
+        key = f"{section}[name={name}]"
+        if name not in index:
+            index[name] = len(entries)
+            entries.append(item)
+            owners[key] = source
+        elif entries[index[name]] != item:
+            raise _conflict(f"{section} {excerpt(name)}", owners[key], source)
+
+
+def merge_measurement_documents(documents: Sequence[tuple[Mapping[str, Any], str]]) -> dict[str, Any]:
+    """One measurements document from several (``(document, source)`` pairs, each valid on
+    its own as a part); see the module docstring.
+
+    Raises
+    ------
+    InputError
+        A key given twice with different values, naming the second file and both.
+    """
+    merged: dict[str, Any] = {}
+    owners: dict[str, str] = {}
+    for document, source in documents:
+        for key, value in document.items():
+            if key in ("format", "version"):
+                merged.setdefault(key, value)
+            elif key == "stage":
+                stage = merged.setdefault("stage", {})
+                for name, item in value.items():
+                    if name in stage and stage[name] != item:
+                        raise _conflict(f"stage.{name}", owners[f"stage.{name}"], source)
+                    stage.setdefault(name, item)
+                    owners.setdefault(f"stage.{name}", source)
+            elif key in _WHOLE:
+                if key in merged and merged[key] != value:
+                    raise _conflict(key, owners[key], source)
+                merged.setdefault(key, value)
+                owners.setdefault(key, source)
+            elif key in _BY_NAME:
+                _merge_named(merged, owners, key, value, source)
+    return merged
+
+
+def _combined_sha256(paths: Sequence[Path], digests: Sequence[str]) -> str:
+    text = "".join(f"{p.name}:{d}\n" for p, d in zip(paths, digests, strict=True))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def load_measurement_files(paths: Sequence[str | Path]) -> Measurements:
+    """Load one measurements file, or merge several (module docstring) into one.
+
+    The merged measurements' ``source`` is the files' names joined by `` + ``, their
+    ``sha256`` that of the lines ``<name>:<sha256 of the file>``, one per file in order.
+
+    Raises
+    ------
+    InputError
+        A file invalid on its own, a conflict between files, a section no file gives.
+    """
+    paths = [Path(p) for p in paths]
+    if len(set(paths)) != len(paths):
+        raise InputError("the same measurements file is given twice", source=paths[0])
+    documents, digests = [], []
+    held: dict[str, list[str]] = {}
+    for path in paths:
+        data, digest = read_document(path)
+        for section in check_measurements_part(data, source=str(path)):
+            held.setdefault(section, []).append(path.name)
+        documents.append((data, str(path)))
+        digests.append(digest)
+    missing = [s for s in REQUIRED_SECTIONS if s not in held]
+    if missing and len(paths) == 1:
+        raise InputError(
+            f"missing required key {missing[0]!r}; a file holding part of the measurements "
+            "(the wall, or the charts) is solved with the others: ocio-vp solve WALL.yaml "
+            "CHARTS.yaml",
+            source=paths[0],
+        )
+    if missing:
+        raise InputError(
+            f"no file gives {', '.join(missing)} (given: {', '.join(p.name for p in paths)})",
+            source=paths[-1],
+        )
+    if len(paths) == 1:
+        return load_measurements(paths[0])
+    merged = merge_measurement_documents(documents)
+    source = " + ".join(p.name for p in paths)
+    return measurements_from_dict(merged, source=source, sha256=_combined_sha256(paths, digests))

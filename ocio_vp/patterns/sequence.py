@@ -1,0 +1,394 @@
+"""The pattern sequence and its file, ``sequence.yaml`` (format ``ocio-vp/patterns``, version 1).
+
+``ocio-vp patterns`` writes the frames a wall plays for calibration (or validation) and, beside
+them, ``sequence.yaml``: which frames hold which patch, at what drive. ``measure`` (and
+``validate``) read it to find the patches in a camera take of the wall. Other tools may write
+such a file too, so it is validated like every file ocio-vp reads (unknown keys are errors;
+every error names the file and the key). ``docs/patterns.md`` documents every key.
+
+Frame numbers are the player's: frame ``f`` is shown during ``[f, f + 1)`` in units of
+``1 / fps`` seconds, from ``first_frame`` on. ``drive`` is the panel's linear drive, 1.0 = full
+drive (the level of the primaries); ``signal`` is the value written in the frames (for EXR the
+drive itself, for TIFF and DPX the wall's signal as a fraction of full code).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ocio_vp.errors import InputError
+from ocio_vp.formats.measurements import CHANNELS, Validator, read_document
+from ocio_vp.wall.encoding import WALL_ENCODINGS
+
+__all__ = [
+    "FILE_FORMATS",
+    "FORMAT",
+    "MEASURED_KINDS",
+    "PATCH_KINDS",
+    "VERSION",
+    "Patch",
+    "PatternSequence",
+    "Validation",
+    "load_sequence",
+    "sequence_from_dict",
+    "sequence_to_dict",
+]
+
+FORMAT = "ocio-vp/patterns"
+VERSION = 1
+#: ``lead``: black before and after the patterns (not measured); ``sync``: white flashes a
+#: take is aligned to; ``black``: the wall at drive 0; ``primary``: one channel at full drive;
+#: ``white``: every channel at full drive; ``ramp``: one channel stepped from 0 to full drive;
+#: ``chart``: a chart colour sent through a calibration's config (validation).
+PATCH_KINDS = ("lead", "sync", "black", "primary", "white", "ramp", "chart")
+#: The kinds a take is measured on (the others only place it in time).
+MEASURED_KINDS = ("black", "primary", "white", "ramp", "chart")
+#: Frame file formats and the bits per sample each is written with.
+FILE_FORMATS = {"exr": 16, "tiff": 16, "dpx": 10}
+_MAX_FRAMES = 1_000_000
+_ONE_FRAME_FIELD = re.compile(r"[^#]*#+[^#]*")
+
+
+@dataclass(frozen=True)
+class Patch:
+    """One patch of the sequence: frames ``first``..``last`` (inclusive) show ``drive``.
+
+    ``flashes`` (``sync`` patches): the inclusive frame ranges showing ``drive``, the frames
+    between them black. ``channel``/``step``: ramps (and primaries: ``channel``). ``index`` and
+    ``content``: a chart patch's position in the chart and the content colour sent through the
+    config (validation sequences).
+    """
+
+    name: str
+    kind: str
+    first: int
+    last: int
+    drive: tuple[float, float, float]
+    signal: tuple[float, float, float]
+    channel: str | None = None
+    step: int | None = None
+    flashes: tuple[tuple[int, int], ...] = ()
+    index: int | None = None
+    content: tuple[float, float, float] | None = None
+
+    @property
+    def frames(self) -> int:
+        return self.last - self.first + 1
+
+
+@dataclass(frozen=True)
+class Validation:
+    """What a validation sequence was made from: an environment's solve and its config."""
+
+    environment: str
+    stage: str
+    solution_sha256: str
+    in_frustum: str
+    reference: str
+    content_scale: float = 1.0
+
+
+@dataclass(frozen=True)
+class PatternSequence:
+    """A validated ``sequence.yaml``: the frames, their timing and every patch."""
+
+    frames: str
+    first_frame: int
+    fps: float
+    encoding: str
+    peak_nits: float | None
+    size: tuple[int, int]
+    file_format: str
+    hold: int
+    patches: tuple[Patch, ...]
+    validation: Validation | None = None
+    source: str | None = None
+    sha256: str | None = None
+
+    @property
+    def last_frame(self) -> int:
+        return self.patches[-1].last
+
+    @property
+    def duration(self) -> float:
+        """Seconds from the first frame's start to the last frame's end."""
+        return (self.last_frame - self.first_frame + 1) / self.fps
+
+    def of_kind(self, *kinds: str) -> tuple[Patch, ...]:
+        return tuple(p for p in self.patches if p.kind in kinds)
+
+    def patch(self, name: str) -> Patch:
+        for patch in self.patches:
+            if patch.name == name:
+                return patch
+        raise KeyError(name)
+
+    def frame_path(self, frame: int) -> Path:
+        """The file of player frame ``frame`` (``#`` runs replaced, zero-padded)."""
+        base = Path(self.source).parent if self.source else Path()
+        return base / expand_frame(self.frames, frame)
+
+    def drive_at(self, frames: np.ndarray) -> np.ndarray:
+        """(n, 3) linear drive the wall shows at player frames ``frames`` (black outside)."""
+        frames = np.asarray(frames, dtype=np.int64)
+        out = np.zeros((len(frames), 3))
+        starts = np.array([p.first for p in self.patches])
+        index = np.searchsorted(starts, frames, side="right") - 1
+        for i, (frame, k) in enumerate(zip(frames, index, strict=True)):
+            if k < 0 or frame > self.patches[k].last:
+                continue
+            patch = self.patches[k]
+            if patch.kind != "sync" or any(a <= frame <= b for a, b in patch.flashes):
+                out[i] = patch.drive
+        return out
+
+
+def expand_frame(pattern: str, frame: int) -> str:
+    """``patterns.####.exr`` with frame 7 -> ``patterns.0007.exr`` (one run of ``#``)."""
+    start = pattern.index("#")
+    end = start
+    while end < len(pattern) and pattern[end] == "#":
+        end += 1
+    return f"{pattern[:start]}{frame:0{end - start}d}{pattern[end:]}"
+
+
+# --------------------------------------------------------------------------------------------
+# Reading and validating.
+
+
+def _rgb(ctx: Validator, value: Any, key: tuple[str | int, ...], low: float) -> tuple:
+    return tuple(float(v) for v in ctx.rgb(value, key, minimum=low, maximum=1e4))
+
+
+def _integer(ctx: Validator, value: Any, key: tuple[str | int, ...], minimum: int = 0) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+        raise ctx.error(key, f"expected a whole number >= {minimum}, got {value!r}"[:120])
+    return int(value)
+
+
+_PATCH_KEYS = ("channel", "step", "flashes", "index", "content")
+
+
+def _patch(ctx: Validator, raw: Any, i: int, previous_last: int) -> Patch:
+    key: tuple[str | int, ...] = ("patches", i)
+    entry = ctx.mapping(raw, key, ("name", "kind", "first", "last", "drive", "signal"), _PATCH_KEYS)
+    name = ctx.name(entry["name"], (*key, "name"))
+    kind = entry["kind"]
+    if kind not in PATCH_KINDS:
+        raise ctx.error((*key, "kind"), f"unknown kind {kind!r}; expected one of {PATCH_KINDS}")
+    first = _integer(ctx, entry["first"], (*key, "first"), minimum=-_MAX_FRAMES)
+    last = _integer(ctx, entry["last"], (*key, "last"), minimum=-_MAX_FRAMES)
+    if first != previous_last + 1 or last < first:
+        raise ctx.error(
+            (*key, "first"),
+            f"frames {first}-{last} do not follow the previous patch (which ends at "
+            f"{previous_last}): patches must cover the frames in order, without gaps",
+        )
+    channel = entry.get("channel")
+    if kind in ("primary", "ramp") and channel not in CHANNELS:
+        raise ctx.error((*key, "channel"), f"expected one of {CHANNELS}, got {channel!r}")
+    step = entry.get("step")
+    if kind == "ramp":
+        step = _integer(ctx, step, (*key, "step"))
+    flashes: list[tuple[int, int]] = []
+    if kind == "sync":
+        raw_flashes = entry.get("flashes")
+        if not isinstance(raw_flashes, list) or not raw_flashes:
+            raise ctx.error((*key, "flashes"), "a sync patch lists its flashes [[first, last], ...]")
+        low = first
+        for j, pair in enumerate(raw_flashes):
+            if not isinstance(pair, list) or len(pair) != 2:
+                raise ctx.error((*key, "flashes", j), "expected [first, last]")
+            a, b = (_integer(ctx, v, (*key, "flashes", j), minimum=-_MAX_FRAMES) for v in pair)
+            if a < low or b < a or b > last:
+                raise ctx.error((*key, "flashes", j), "flashes must be in order, inside the patch")
+            flashes.append((a, b))
+            low = b + 2
+    index = entry.get("index")
+    content = None
+    if kind == "chart":
+        index = _integer(ctx, index, (*key, "index"))
+        content = _rgb(ctx, entry.get("content"), (*key, "content"), -1e4)
+    return Patch(
+        name=name,
+        kind=kind,
+        first=first,
+        last=last,
+        drive=_rgb(ctx, entry["drive"], (*key, "drive"), 0.0),
+        signal=_rgb(ctx, entry["signal"], (*key, "signal"), 0.0),
+        channel=channel if kind in ("primary", "ramp") else None,
+        step=step if kind == "ramp" else None,
+        flashes=tuple(flashes),
+        index=index if kind == "chart" else None,
+        content=content,
+    )
+
+
+def _validation(ctx: Validator, raw: Any) -> Validation:
+    keys = ("environment", "stage", "solution_sha256", "in_frustum", "reference")
+    entry = ctx.mapping(raw, ("validation",), keys, ("content_scale",))
+    for name in keys:
+        if not isinstance(entry[name], str) or not entry[name]:
+            raise ctx.error(("validation", name), "expected a non-empty text")
+    scale = ctx.number(entry.get("content_scale", 1.0), ("validation", "content_scale"), strict=True)
+    return Validation(**{name: entry[name] for name in keys}, content_scale=scale)
+
+
+def _checked_patches(ctx: Validator, raw: Any, first_frame: int) -> tuple[Patch, ...]:
+    if not isinstance(raw, list) or not raw:
+        raise ctx.error(("patches",), "expected a non-empty list of patches")
+    patches, names = [], set()
+    for i, entry in enumerate(raw):
+        patch = _patch(ctx, entry, i, patches[-1].last if patches else first_frame - 1)
+        if patch.name in names:
+            raise ctx.error(("patches", i, "name"), f"duplicate name {patch.name!r}")
+        names.add(patch.name)
+        patches.append(patch)
+    if patches[-1].last - first_frame + 1 > _MAX_FRAMES:
+        raise ctx.error(("patches",), f"more than {_MAX_FRAMES} frames")
+    ramps: dict[str, list[Patch]] = {}
+    for patch in patches:
+        if patch.kind == "ramp":
+            ramps.setdefault(patch.channel or "", []).append(patch)
+    for channel, steps in ramps.items():
+        drives = [p.drive[CHANNELS.index(channel)] for p in steps]
+        if any(b <= a for a, b in zip(drives, drives[1:], strict=False)) or drives[-1] != 1.0:
+            raise ctx.error(
+                ("patches",),
+                f"the {channel} ramp's drives must increase strictly and end at exactly 1.0",
+            )
+    return tuple(patches)
+
+
+def sequence_from_dict(
+    data: Any, *, source: str = "<sequence>", sha256: str | None = None
+) -> PatternSequence:
+    """Validate a parsed ``sequence.yaml`` document.
+
+    Raises
+    ------
+    InputError
+        Naming ``source``, the key path and the problem.
+    """
+    ctx = Validator(source)
+    required = ("format", "version", "frames", "first_frame", "fps", "encoding", "size", "patches")
+    optional = ("peak_nits", "file_format", "hold", "validation")
+    top = ctx.mapping(data, (), required, optional)
+    if top["format"] != FORMAT:
+        raise ctx.error(("format",), f"expected {FORMAT!r}, got {top['format']!r}"[:120])
+    if top["version"] != VERSION or isinstance(top["version"], bool):
+        raise ctx.error(("version",), f"this ocio-vp reads version {VERSION}")
+    frames = top["frames"]
+    if not isinstance(frames, str) or not _ONE_FRAME_FIELD.fullmatch(frames):
+        raise ctx.error(("frames",), "expected a file pattern with one run of '#', e.g. a.####.exr")
+    if Path(frames).is_absolute() or ".." in Path(frames).parts:
+        raise ctx.error(("frames",), "expected a path relative to the sequence file's folder")
+    first_frame = _integer(ctx, top["first_frame"], ("first_frame",), minimum=-_MAX_FRAMES)
+    fps = ctx.number(top["fps"], ("fps",), strict=True, maximum=1000.0)
+    encoding = top["encoding"]
+    if encoding not in WALL_ENCODINGS:
+        raise ctx.error(("encoding",), f"expected one of {WALL_ENCODINGS}, got {encoding!r}"[:120])
+    peak = top.get("peak_nits")
+    if encoding == "pq":
+        peak = ctx.number(peak, ("peak_nits",), strict=True, maximum=10000.0)
+    elif peak is not None:
+        raise ctx.error(("peak_nits",), f"only a pq sequence has a peak, this one is {encoding}")
+    size = top["size"]
+    if not isinstance(size, list) or len(size) != 2:
+        raise ctx.error(("size",), "expected [width, height]")
+    width, height = (_integer(ctx, v, ("size", i), minimum=1) for i, v in enumerate(size))
+    file_format = top.get("file_format", Path(frames).suffix.lstrip(".").lower())
+    if file_format == "tif":
+        file_format = "tiff"
+    if file_format not in FILE_FORMATS:
+        raise ctx.error(("file_format",), f"expected one of {tuple(FILE_FORMATS)}")
+    hold = _integer(ctx, top.get("hold", 1), ("hold",), minimum=1)
+    patches = _checked_patches(ctx, top["patches"], first_frame)
+    validation = _validation(ctx, top["validation"]) if "validation" in top else None
+    return PatternSequence(
+        frames=frames,
+        first_frame=first_frame,
+        fps=fps,
+        encoding=encoding,
+        peak_nits=None if peak is None else float(peak),
+        size=(width, height),
+        file_format=file_format,
+        hold=hold,
+        patches=patches,
+        validation=validation,
+        source=source,
+        sha256=sha256,
+    )
+
+
+def load_sequence(path: str | Path) -> PatternSequence:
+    """Load and validate a ``sequence.yaml`` (``ocio-vp/patterns`` v1)."""
+    data, sha256 = read_document(path)
+    return sequence_from_dict(data, source=str(path), sha256=sha256)
+
+
+def _plain(values: tuple[float, ...]) -> list[float]:
+    return [float(v) for v in values]
+
+
+def sequence_to_dict(sequence: PatternSequence) -> dict[str, Any]:
+    """The inverse of :func:`sequence_from_dict` (plain types, file key order)."""
+    patches = []
+    for p in sequence.patches:
+        entry: dict[str, Any] = {"name": p.name, "kind": p.kind}
+        if p.channel is not None:
+            entry["channel"] = p.channel
+        if p.step is not None:
+            entry["step"] = p.step
+        if p.index is not None:
+            entry["index"] = p.index
+        entry.update(first=p.first, last=p.last, drive=_plain(p.drive), signal=_plain(p.signal))
+        if p.content is not None:
+            entry["content"] = _plain(p.content)
+        if p.flashes:
+            entry["flashes"] = [[a, b] for a, b in p.flashes]
+        patches.append(entry)
+    fps = sequence.fps
+    data: dict[str, Any] = {
+        "format": FORMAT,
+        "version": VERSION,
+        "frames": sequence.frames,
+        "file_format": sequence.file_format,
+        "first_frame": sequence.first_frame,
+        "fps": int(fps) if float(fps).is_integer() else float(fps),
+        "hold": sequence.hold,
+        "encoding": sequence.encoding,
+        "peak_nits": sequence.peak_nits,
+        "size": list(sequence.size),
+    }
+    if sequence.validation is not None:
+        v = sequence.validation
+        data["validation"] = {
+            "environment": v.environment,
+            "stage": v.stage,
+            "solution_sha256": v.solution_sha256,
+            "in_frustum": v.in_frustum,
+            "reference": v.reference,
+            "content_scale": v.content_scale,
+        }
+    data["patches"] = patches
+    return data
+
+
+def check_fps(value: float, *, key: str = "--fps") -> float:
+    """A frame rate in (0, 1000] frames per second."""
+    if not (math.isfinite(value) and 0 < value <= 1000):
+        raise InputError(f"expected 0 < fps <= 1000, got {value!r}", key=key)
+    return float(value)
+
+
+def patch_table(sequence: PatternSequence) -> Mapping[str, Patch]:
+    """Name -> patch."""
+    return {p.name: p for p in sequence.patches}

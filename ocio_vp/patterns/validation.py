@@ -1,0 +1,138 @@
+"""The validation sequence: an environment's chart sent through its own config, in-frustum.
+
+``ocio-vp patterns --validate calib/<environment>`` takes the environment's target chart (the
+colours the location recorded, ``diagnostics.charts.target`` of ``solution.json``) as content,
+runs it through the environment's ``config.ocio`` from the reference colorspace to the
+in-frustum wall colorspace (OpenColorIO's CPU processor: N, the black-level offset, the
+linearity LUT and the wall's encoding, exactly what the wall is sent on set) and holds each
+colour full-field for ``hold`` frames. Filmed by the camera and post-corrected, every patch
+should read its content again (``ocio-vp validate``). Layout::
+
+    lead_in  sync_0  black  chart_00 ... chart_11  sync_1  chart_12 ... chart_23  sync_2  lead_out
+
+``black`` is content 0 through the config (the in-frustum offset, clipped at 0 by the wall).
+The chart is scaled (``content_scale``, recorded) so that its white patch asks the wall for
+:data:`WHITE_DRIVE` of full drive: a location's camera values have any exposure, the wall
+shows content at the DP's exposure, and a post-correction and N are linear in the content
+(the root-polynomial Q is exposure-invariant too). The wall's encoding and peak come from the
+solve (``linearity.wall_encoding``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+from pathlib import Path
+
+import numpy as np
+
+from ocio_vp.errors import InputError
+from ocio_vp.formats.solution import Solution, load_solution
+from ocio_vp.patterns.design import PatternOptions, SequenceBuilder
+from ocio_vp.patterns.sequence import PatternSequence, Validation
+from ocio_vp.wall.encoding import decode
+
+__all__ = ["WHITE_DRIVE", "content_scale", "validation_sequence", "wall_encoding_of", "wall_signal"]
+
+#: The chart's white patch is shown at this fraction of full drive (headroom for saturated
+#: patches whose drive exceeds the white's in one channel).
+WHITE_DRIVE = 0.7
+
+
+def wall_encoding_of(solution: Solution) -> tuple[str, float | None]:
+    """(encoding, peak_nits or None) the solve's config sends to the wall."""
+    block = (solution.linearity or {}).get("wall_encoding") or {"name": "linear"}
+    name = str(block.get("name", "linear"))
+    peak = block.get("peak_nits")
+    return name, (float(peak) if name == "pq" and peak is not None else None)
+
+
+def wall_signal(config_path: str | Path, solution: Solution, content: np.ndarray) -> np.ndarray:
+    """(n, 3) what the config sends the wall for ``content`` (n, 3) in its reference space:
+    the in-frustum colorspace's output (signal for an encoded wall, drive for a linear one)."""
+    import PyOpenColorIO as OCIO
+
+    reference, inner = solution.ocio.get("reference"), solution.ocio.get("in_frustum")
+    if not reference or not inner:
+        raise InputError("solution.json names no reference or in-frustum colorspace", key="ocio")
+    try:
+        config = OCIO.Config.CreateFromFile(str(config_path))
+        cpu = config.getProcessor(reference, inner).getDefaultCPUProcessor()
+    except OCIO.Exception as error:
+        raise InputError(f"OpenColorIO: {error}"[:200], source=config_path) from None
+    pixels = np.ascontiguousarray(np.asarray(content, dtype=np.float32).reshape(-1, 3))
+    cpu.applyRGB(pixels)
+    return pixels.astype(np.float64)
+
+
+def content_scale(solution: Solution, target: np.ndarray) -> float:
+    """The factor (4 significant digits) that puts the target's white patch at
+    :data:`WHITE_DRIVE` through the in-frustum matrix (N, or M where N was not solved)."""
+    white = int(solution.diagnostics.get("white_patch") or 18)
+    white = white if 0 <= white < len(target) else int(np.argmax(target.sum(axis=1)))
+    peak = float(np.max(solution.in_frustum_matrix @ target[white]))
+    if not peak > 0:
+        raise InputError("the chart's white patch asks the wall for no light", key="diagnostics")
+    return float(f"{WHITE_DRIVE / peak:.4g}")
+
+
+def validation_sequence(environment_dir: str | Path, options: PatternOptions) -> PatternSequence:
+    """The validation sequence of one solved environment (see the module docstring).
+
+    ``options`` give the timing, size and file format; its encoding and peak must be the
+    solve's (they are taken from it when ``options`` leave them at linear / none).
+
+    Raises
+    ------
+    InputError
+        No solve there, a solve without the target chart, an encoding other than the solve's,
+        or a config OpenColorIO cannot run.
+    """
+    folder = Path(environment_dir)
+    solution = load_solution(folder)
+    source = folder / "solution.json"
+    charts = solution.diagnostics.get("charts") or {}
+    target = np.asarray(charts.get("target") or [], dtype=np.float64)
+    if target.ndim != 2 or target.shape[1:] != (3,) or not np.all(np.isfinite(target)):
+        raise InputError("no target chart in diagnostics.charts.target", source=source)
+    encoding, peak = wall_encoding_of(solution)
+    asked = (options.encoding, options.peak_nits)
+    if asked != ("linear", None) and asked != (encoding, peak):
+        raise InputError(
+            f"this solve sends the wall {encoding}"
+            + (f" at {peak:g} cd/m2" if peak else "")
+            + "; leave --wall-encoding/--peak-nits out or give the same",
+            key="--wall-encoding",
+        )
+    options = dataclasses.replace(options, encoding=encoding, peak_nits=peak)
+    config = folder / (solution.ocio.get("config") or "config.ocio")
+    scale = content_scale(solution, target)
+    target = target * scale
+    signals = wall_signal(config, solution, np.vstack([np.zeros((1, 3)), target]))
+    drives = signals if encoding == "linear" else decode(signals, encoding, peak_nits=peak or 1e3)
+    if not np.all(np.isfinite(drives)):
+        raise InputError("the config sends a non-finite drive for the chart", source=config)
+    builder = SequenceBuilder(options)
+    builder.lead("lead_in")
+    builder.sync()
+    half = (len(target) + 1) // 2
+    for i, drive in enumerate(drives):
+        content = tuple(float(v) for v in ([0.0] * 3 if i == 0 else target[i - 1]))
+        if i == 0:
+            builder.add("black", "black", drive)
+            continue
+        builder.add(f"chart_{i - 1:02d}", "chart", drive, index=i - 1, content=content)
+        if i == half:
+            builder.sync()
+    builder.sync()
+    builder.lead("lead_out")
+    digest = hashlib.sha256(source.read_bytes()).hexdigest()
+    validation = Validation(
+        environment=solution.environment,
+        stage=solution.stage,
+        solution_sha256=digest,
+        in_frustum=solution.ocio["in_frustum"],
+        reference=solution.ocio["reference"],
+        content_scale=scale,
+    )
+    return builder.build(validation=validation)

@@ -1,0 +1,220 @@
+"""Validation: the chart shown on the wall through its config, filmed, against what it should be.
+
+The validation sequence (:mod:`ocio_vp.patterns.validation`) sends content ``c`` (the
+environment's target chart, scaled) through the config's in-frustum colorspace: the wall emits
+``N(c) + offset``, the camera records ``[SL](N(c) + offset) + b`` (``b`` the stage's light
+bounced off the panels), and the post-correction gives ``Q([SL] M Q^-1(c)) = c`` (eq. 7-8 of the
+paper, the offset cancelling ``b``, Section 3.4). So every patch, filmed and post-corrected,
+should read ``c`` again. Where N was not solved (the in-frustum colorspace is M) the footage is
+not post-corrected, and the camera should record ``c`` as it is.
+
+The difference is judged in CIE ΔE2000 through a camera-to-XYZ matrix (the solve's camera
+colour space, or a fit of the chart to the ColorChecker's published values, as the report
+does), with the intended white patch as the reference white (``ocio_vp.metrics``). Patches whose
+in-frustum light ``N(c) + offset`` falls outside ``[0, 1]`` per channel cannot be shown by the
+wall at that exposure; they are listed and left out of the verdict, each with the error the
+calibration itself expects there (:func:`expected_camera`: the light clipped by the wall, as
+[SL] films it).
+
+The verdict: **pass** when the 95th percentile of ΔE2000 over the shown patches is at most
+:data:`DEFAULT_THRESHOLD` (docs/validation.md says why 3).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from ocio_vp.errors import InputError
+from ocio_vp.formats.solution import Solution
+from ocio_vp.patterns.sequence import PatternSequence
+from ocio_vp.plates.take import TakeReading
+
+__all__ = [
+    "DEFAULT_THRESHOLD",
+    "GAMUT_TOLERANCE",
+    "PatchResult",
+    "ValidationResult",
+    "compare_take",
+    "expected_camera",
+    "in_frustum_light",
+    "post_correct",
+]
+
+#: Pass when the 95th percentile of ΔE2000 over the shown patches is at most this.
+DEFAULT_THRESHOLD = 3.0
+#: In-frustum light this far outside [0, 1] (fraction of full drive) counts as not shown.
+GAMUT_TOLERANCE = 1e-3
+
+
+def post_correct(solution: Solution) -> Callable[[np.ndarray], np.ndarray]:
+    """The post-correction the solve prescribes for footage, as a function of camera RGB.
+
+    The one place validation reads the post-correction from a solution.
+    """
+    from ocio_vp.correction.root_polynomial import post_correction
+
+    return post_correction(solution.Q, solution.diagnostics.get("method_notes"))
+
+
+def in_frustum_light(solution: Solution, content: np.ndarray) -> np.ndarray:
+    """(n, 3) the light (linear drive) the config asks the wall for: ``N(c) + offset``, with
+    the root-polynomial's exact ``N(c) = M Q^-1(c)`` where the solve has one."""
+    from ocio_vp.correction.root_polynomial import invert_root_polynomial
+
+    content = np.asarray(content, dtype=np.float64)
+    model = (solution.diagnostics.get("method_notes") or {}).get("root_polynomial")
+    if solution.N is not None and model is not None:
+        coefficients = np.asarray(model["coefficients"], dtype=np.float64)
+        light = invert_root_polynomial(coefficients, content) @ solution.M.T
+    else:
+        light = content @ solution.in_frustum_matrix.T
+    return light + solution.in_frustum_offset
+
+
+def expected_camera(solution: Solution, light: np.ndarray) -> np.ndarray:
+    """(n, 3) camera RGB the calibration itself predicts for in-frustum ``light``: the wall
+    clips it to [0, 1], [SL] films it, plus the bounce the offset was solved to cancel
+    (``b = -[SL] offset`` for the exact offset, ``-offset w_camera`` for the paper's)."""
+    SL = np.asarray(solution.SL, dtype=np.float64)
+    offset = solution.in_frustum_offset
+    if solution.black_level_method == "paper":
+        bounce = -offset * (SL @ np.ones(3))
+    else:
+        bounce = -(SL @ offset)
+    return np.clip(light, 0.0, 1.0) @ SL.T + bounce
+
+
+@dataclass(frozen=True)
+class PatchResult:
+    """One chart patch: intended and measured (post-corrected) camera RGB, and ΔE2000."""
+
+    index: int
+    name: str
+    intended: np.ndarray
+    measured: np.ndarray
+    corrected: np.ndarray
+    delta_e: float
+    shown: bool
+    frames: int
+    expected_delta_e: float
+
+
+@dataclass(frozen=True)
+class ValidationResult:
+    """The comparison over every chart patch, the statistics and the verdict."""
+
+    environment: str
+    stage: str
+    patches: tuple[PatchResult, ...]
+    threshold: float
+    post_corrected: bool
+    predicted_mean: float | None
+    xyz_description: str
+    display_matrix: np.ndarray
+
+    @property
+    def judged(self) -> tuple[PatchResult, ...]:
+        return tuple(p for p in self.patches if p.shown)
+
+    def _values(self) -> np.ndarray:
+        return np.array([p.delta_e for p in self.judged])
+
+    @property
+    def mean(self) -> float:
+        return float(np.mean(self._values()))
+
+    @property
+    def p95(self) -> float:
+        return float(np.percentile(self._values(), 95))
+
+    @property
+    def worst(self) -> PatchResult:
+        return max(self.judged, key=lambda p: p.delta_e)
+
+    @property
+    def passed(self) -> bool:
+        return self.p95 <= self.threshold
+
+
+def _names(n: int) -> list[str]:
+    from ocio_vp.correction.outliers import patch_name
+
+    return [patch_name(j, n) for j in range(n)]
+
+
+def _predicted_mean(solution: Solution, xyz: np.ndarray, white: int) -> float | None:
+    """Mean ΔE2000 the solve itself predicts for the chart shown in-frustum (its model)."""
+    from ocio_vp.metrics import chart_errors
+
+    charts = solution.diagnostics.get("charts") or {}
+    if "displayed_corrected" not in charts or "target" not in charts:
+        return None
+    shown = np.asarray(charts["displayed_corrected"], dtype=np.float64)
+    target = np.asarray(charts["target"], dtype=np.float64)
+    if shown.shape != target.shape:
+        return None
+    return float(np.mean(chart_errors(shown, target, camera_to_xyz=xyz, white_patch=white).delta_E_2000))
+
+
+def compare_take(
+    solution: Solution,
+    sequence: PatternSequence,
+    reading: TakeReading,
+    *,
+    threshold: float = DEFAULT_THRESHOLD,
+) -> ValidationResult:
+    """Compare a measured validation take with what the calibration intends (module docstring).
+
+    Raises
+    ------
+    InputError
+        When the sequence holds no chart, or every patch is outside the wall's range.
+    """
+    from ocio_vp.metrics import chart_errors
+    from ocio_vp.report.data import camera_to_display
+
+    charts = sorted(sequence.of_kind("chart"), key=lambda p: p.index or 0)
+    if not charts:
+        raise InputError("the sequence shows no chart: write it with ocio-vp patterns --validate", source=sequence.source)
+    intended = np.array([p.content for p in charts], dtype=np.float64)
+    measured = np.array([reading.patches[p.name].mean for p in charts])
+    corrected = post_correct(solution)(measured) if solution.N is not None else measured
+    white = int(solution.diagnostics.get("white_patch") or 18)
+    white = white if 0 <= white < len(charts) else int(np.argmax(intended.sum(axis=1)))
+    display = camera_to_display([solution], [intended])
+    errors = chart_errors(corrected, intended, camera_to_xyz=display.camera_to_xyz, white_patch=white)
+    light = in_frustum_light(solution, intended)
+    shown = np.all((light >= -GAMUT_TOLERANCE) & (light <= 1 + GAMUT_TOLERANCE), axis=1)
+    expected = expected_camera(solution, light)
+    expected = post_correct(solution)(expected) if solution.N is not None else expected
+    limit = chart_errors(expected, intended, camera_to_xyz=display.camera_to_xyz, white_patch=white)
+    if not np.any(shown):
+        raise InputError("no chart patch is within the wall's range at this exposure", source=sequence.source)
+    names = _names(len(charts))
+    patches = tuple(
+        PatchResult(
+            index=int(p.index or 0),
+            name=names[j],
+            intended=intended[j],
+            measured=measured[j],
+            corrected=corrected[j],
+            delta_e=float(errors.delta_E_2000[j]),
+            shown=bool(shown[j]),
+            frames=len(reading.patches[p.name].frames),
+            expected_delta_e=float(limit.delta_E_2000[j]),
+        )
+        for j, p in enumerate(charts)
+    )
+    return ValidationResult(
+        environment=solution.environment,
+        stage=solution.stage,
+        patches=patches,
+        threshold=float(threshold),
+        post_corrected=solution.N is not None,
+        predicted_mean=_predicted_mean(solution, display.camera_to_xyz, white),
+        xyz_description=display.description,
+        display_matrix=np.asarray(display.matrix, dtype=np.float64),
+    )
