@@ -11,7 +11,9 @@
    put on the wrong side of a change) are left out and named.
 5. Checks, each a one-line refusal: the take truncated (a patch the take does not reach), a
    patch without a stable frame, white or a primary clipped (how many stops to close), the wall
-   under-exposed (how many to open), a take that does not look like the sequence.
+   under-exposed (white within 20x the black's pixel noise, or, in a linear integer take, 5
+   stops or more under full code: how many to open), a take that does not look like the
+   sequence.
 
 The result, :class:`TakeReading`, holds each patch's mean camera RGB (black not subtracted);
 :mod:`ocio_vp.plates.measure` turns it into ``primaries`` and ``ramps``, ``ocio-vp validate``
@@ -54,9 +56,10 @@ __all__ = [
 BANDS = 8
 #: White or a primary is clipped when this fraction of its pixels reaches the clip level.
 CLIPPED_FRACTION = 1e-3
-#: White this many stops or more below the clip level is under-exposed (integer takes).
+#: White this many stops or more below full code is under-exposed in a linear integer take
+#: (16-bit linear: the ramps' darkest steps would fall under a few code values).
 UNDER_EXPOSED_STOPS = 5.0
-#: White less than this many times the black's pixel noise is under-exposed (float takes).
+#: White less than this many times the black's pixel noise is under-exposed (any take).
 MIN_WHITE_SNR = 20.0
 #: A frame straying from its patch's median by more than this (relative) and
 #: :data:`STRAY_SIGMAS` robust sigmas is not stable.
@@ -336,26 +339,25 @@ def _check_exposure(reading: TakeReading, by_index, kept, source) -> list[str]:
         )
     if reference == "white":
         _check_matches(reading, source)
-    if clip is not None:
+    if clip is not None and not reading.info.is_float and reading.info.encoding == "linear":
         stops = math.log2(clip / float(np.max(white + reading.black)))
         if stops >= UNDER_EXPOSED_STOPS:
             raise InputError(
-                f"under-exposed: {reference} is {stops:.1f} stops below the clip level; open up "
-                f"by about {math.floor((stops - 1) * 2) / 2:g} stops (white about 1 stop under "
-                "clip)",
+                f"under-exposed: {reference} is {stops:.1f} stops below full code of this linear "
+                f"integer take; open up by about {math.floor((stops - 1) * 2) / 2:g} stops "
+                "(white about 1 stop under clip)",
                 source=source,
                 key=key,
             )
-    else:
-        black_frames = [by_index[i] for i in kept["black"].tolist()]
-        noise = float(np.max(np.mean([s.std for s in black_frames], axis=0)))
-        if noise > 0 and float(np.max(white)) < MIN_WHITE_SNR * noise:
-            raise InputError(
-                f"under-exposed: {reference} is only {float(np.max(white)) / noise:.1f} times the "
-                "black's pixel noise; open up",
-                source=source,
-                key=key,
-            )
+    black_frames = [by_index[i] for i in kept["black"].tolist()]
+    noise = float(np.max(np.mean([s.std for s in black_frames], axis=0)))
+    if noise > 0 and float(np.max(white)) < MIN_WHITE_SNR * noise:
+        raise InputError(
+            f"under-exposed: {reference} is only {float(np.max(white)) / noise:.1f} times the "
+            f"black's pixel noise (at least {MIN_WHITE_SNR:g} needed); open up",
+            source=source,
+            key=key,
+        )
     return []
 
 
