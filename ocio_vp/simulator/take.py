@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ocio_vp.patterns.sequence import PatternSequence
+from ocio_vp.patterns.sequence import FILE_FORMATS, PatternSequence
 
 #: The rolling shutter is modelled in this many bands of rows.
 _ROW_BANDS = 64
@@ -137,6 +137,8 @@ def frame_drives(sequence: PatternSequence) -> Callable[[np.ndarray], np.ndarray
                 cache[key] = _read_centre(path)
             value = cache[key]
             if sequence.file_format != "exr":
+                full = 2 ** FILE_FORMATS[sequence.file_format] - 1
+                value = np.round(value * full) / full  # the code value, as the wall receives it
                 value = _wall_decode(value, sequence) / _wall_decode(
                     np.array([_top_signal(sequence)]), sequence
                 )[0]
