@@ -129,14 +129,13 @@ def test_the_wall_only_file_and_its_overlays(measured):
     assert (x1 - x0) * (y1 - y0) > 0.5 * (0.65 * 96) * (0.65 * 54)
 
 
+@pytest.mark.parametrize("measured", ["linear EXR"], indirect=True)  # one format is enough
 def test_the_wall_file_solves_with_a_charts_file(measured, tmp_path, other_stage):
     """Wall from the take, the charts from another file (same stage): solve merges them."""
     from ocio_vp.formats.measurements import measurements_to_dict, save_measurements_document
     from ocio_vp.simulator.stage import simulate_measurements
 
-    name, folder, _ = measured
-    if name != "linear EXR":
-        pytest.skip("one format is enough for the merge")
+    _, folder, _ = measured
     charts = measurements_to_dict(simulate_measurements(["direct_sun"], stage=other_stage))
     del charts["primaries"]
     charts["stage"] = {k: charts["stage"][k] for k in ("name", "calibration_panel")}

@@ -46,30 +46,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "DIR/take/A001.####.exr: the wall playing the patterns filmed in one take (default: no "
         "plates)",
     )
-    parser.add_argument(
-        "--sequence",
-        metavar="SEQUENCE_YAML",
-        default=None,
-        help="with --plates: the patterns the take films, a sequence.yaml of `ocio-vp patterns` "
-        "(default: a small built-in one, 64x36 pixels, 8 frames a patch, in DIR/patterns/)",
-    )
-    parser.add_argument(
-        "--film",
-        metavar="SEQUENCE_YAML",
-        default=None,
-        help="film this sequence (e.g. `ocio-vp patterns --validate` output) on the simulated "
-        "stage, lit by the sequence's environment, into --take DIR (default: none)",
-    )
-    parser.add_argument(
-        "--take",
-        metavar="DIR",
-        default=None,
-        help="with --film: the folder the take's frames are written to (default: none)",
-    )
-    parser.add_argument(
-        "--take-fps", type=float, default=25.0, help="the simulated camera's frame rate for takes"
-    )
     _add_plate_options(parser)
+    _add_take_options(parser)
     parser.add_argument(
         "--camera",
         default=None,
@@ -118,6 +96,33 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="list the known environments and exit (no --out needed)",
     )
     parser.set_defaults(func=run)
+
+
+def _add_take_options(parser: argparse.ArgumentParser) -> None:
+    """Options of the simulated camera takes (the wall playing a pattern sequence)."""
+    parser.add_argument(
+        "--sequence",
+        metavar="SEQUENCE_YAML",
+        default=None,
+        help="with --plates: the patterns the take films, a sequence.yaml of `ocio-vp patterns` "
+        "(default: a small built-in one, 64x36 pixels, 8 frames a patch, in DIR/patterns/)",
+    )
+    parser.add_argument(
+        "--film",
+        metavar="SEQUENCE_YAML",
+        default=None,
+        help="film this sequence (e.g. `ocio-vp patterns --validate` output) on the simulated "
+        "stage, lit by the sequence's environment, into --take DIR (default: none)",
+    )
+    parser.add_argument(
+        "--take",
+        metavar="DIR",
+        default=None,
+        help="with --film: the folder the take's frames are written to (default: none)",
+    )
+    parser.add_argument(
+        "--take-fps", type=float, default=25.0, help="the simulated camera's frame rate for takes"
+    )
 
 
 def _add_plate_options(parser: argparse.ArgumentParser) -> None:
