@@ -90,12 +90,16 @@ def _write_take(sequence, folder: Path, size: tuple[int, int]) -> int:
 
     from ocio_vp.simulator.take import TakeOptions, take_signal
 
-    options = TakeOptions(fps=CAMERA_FPS, noise=0.0, flicker=0.01, preroll=0.5, postroll=0.3, dropped=(40,))
+    options = TakeOptions(
+        fps=CAMERA_FPS, noise=0.0, flicker=0.01, preroll=0.5, postroll=0.3, dropped=(300,)
+    )
     _, colours = take_signal(sequence, SL, options)
     width, height = size
     x0, y0, x1, y1 = (int(0.2 * width), int(0.2 * height), int(0.8 * width), int(0.8 * height))
     rng = np.random.default_rng(0)
-    tiles = [1 + 0.005 * rng.standard_normal((y1 - y0, x1 - x0, 1)).astype(np.float32) for _ in range(3)]
+    tiles = [
+        1 + 0.005 * rng.standard_normal((y1 - y0, x1 - x0, 1)).astype(np.float32) for _ in range(3)
+    ]
     background = np.full((height, width, 3), 0.03, dtype=np.float32)
     folder.mkdir(parents=True, exist_ok=True)
     for k, colour in enumerate(colours):
@@ -133,7 +137,10 @@ def _default_kept_fraction() -> tuple[float, int]:
     sequence = calibration_sequence(PatternOptions(steps=115))
     numbers, signal = take_signal(sequence, SL, TakeOptions(fps=CAMERA_FPS))
     alignment = align_take(signal, numbers, sequence)
-    kept = sum(len(kept_frames(alignment, p, numbers)) for p in sequence.of_kind("black", "primary", "white", "ramp"))
+    kept = sum(
+        len(kept_frames(alignment, p, numbers))
+        for p in sequence.of_kind("black", "primary", "white", "ramp")
+    )
     return kept / len(numbers), len(numbers)
 
 

@@ -21,11 +21,28 @@ ENV = "direct_sun"
 def day(tmp_path_factory):
     root = tmp_path_factory.mktemp("day")
     truth, plates, stage = root / "truth.yaml", root / "plates", root / "stage.yaml"
-    assert main(["simulate", "--out", str(truth), "--plates", str(plates), "--environment", ENV]) == 0
+    assert (
+        main(["simulate", "--out", str(truth), "--plates", str(plates), "--environment", ENV]) == 0
+    )
     assert main(["measure", str(plates / "capture.yaml"), "--out", str(stage)]) == 0
-    assert main(["solve", str(stage), "--out", str(root / "calib"), "--method", "least-squares"]) == 0
+    assert (
+        main(["solve", str(stage), "--out", str(root / "calib"), "--method", "least-squares"]) == 0
+    )
     check = root / "check"
-    assert main(["patterns", "--out", str(check), "--validate", str(root / "calib" / ENV), "--size", "16x9"]) == 0
+    assert (
+        main(
+            [
+                "patterns",
+                "--out",
+                str(check),
+                "--validate",
+                str(root / "calib" / ENV),
+                "--size",
+                "16x9",
+            ]
+        )
+        == 0
+    )
     args = ["simulate", "--out", str(truth), "--environment", ENV]
     assert main([*args, "--film", str(check / "sequence.yaml"), "--take", str(root / "take")]) == 0
     return root
@@ -83,8 +100,15 @@ def test_patterns_of_another_solve_are_refused(day, tmp_path, capsys):
     capsys.readouterr()
     out = tmp_path / "v"
     code = main(
-        ["validate", str(other / ENV), str(day / "take" / "A001.####.exr"), "--sequence",
-         str(day / "check" / "sequence.yaml"), "--out", str(out)]
+        [
+            "validate",
+            str(other / ENV),
+            str(day / "take" / "A001.####.exr"),
+            "--sequence",
+            str(day / "check" / "sequence.yaml"),
+            "--out",
+            str(out),
+        ]
     )
     assert code == 2 and not out.exists()
     err = capsys.readouterr().err.strip()
@@ -94,8 +118,15 @@ def test_patterns_of_another_solve_are_refused(day, tmp_path, capsys):
 def test_a_calibration_sequence_is_not_a_validation_one(day, tmp_path, capsys):
     out = tmp_path / "v"
     code = main(
-        ["validate", str(day / "calib" / ENV), str(day / "take" / "A001.####.exr"), "--sequence",
-         str(day / "plates" / "patterns" / "sequence.yaml"), "--out", str(out)]
+        [
+            "validate",
+            str(day / "calib" / ENV),
+            str(day / "take" / "A001.####.exr"),
+            "--sequence",
+            str(day / "plates" / "patterns" / "sequence.yaml"),
+            "--out",
+            str(out),
+        ]
     )
     assert code == 2 and not out.exists()
     assert "a calibration sequence, not a validation one" in capsys.readouterr().err

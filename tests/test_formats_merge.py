@@ -7,8 +7,8 @@ import copy
 import numpy as np
 import pytest
 import yaml
-
 from conftest import make_measurements_dict
+
 from ocio_vp.cli import main
 from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import check_measurements_part, load_measurements
@@ -30,7 +30,9 @@ def test_wall_and_charts_files_give_the_same_measurements_as_one(tmp_path):
     data = make_measurements_dict()
     wall, charts = _split(data)
     whole = load_measurements(_write(tmp_path / "all.yaml", data))
-    merged = load_measurement_files([_write(tmp_path / "wall.yaml", wall), _write(tmp_path / "charts.yaml", charts)])
+    merged = load_measurement_files(
+        [_write(tmp_path / "wall.yaml", wall), _write(tmp_path / "charts.yaml", charts)]
+    )
     np.testing.assert_array_equal(merged.SL, whole.SL)
     np.testing.assert_array_equal(merged.SRL, whole.SRL)
     assert [e.name for e in merged.environments] == [e.name for e in whole.environments]
@@ -52,7 +54,10 @@ def test_a_solve_of_two_files_equals_the_solve_of_one(tmp_path, capsys):
     wall, charts = _split(data)
     paths = [_write(tmp_path / "wall.yaml", wall), _write(tmp_path / "charts.yaml", charts)]
     assert main(["solve", *map(str, paths), "--out", str(tmp_path / "two")]) == 0
-    assert main(["solve", str(_write(tmp_path / "one.yaml", data)), "--out", str(tmp_path / "one")]) == 0
+    assert (
+        main(["solve", str(_write(tmp_path / "one.yaml", data)), "--out", str(tmp_path / "one")])
+        == 0
+    )
     a = yaml.safe_load((tmp_path / "two" / "env_0" / "solution.json").read_text())
     b = yaml.safe_load((tmp_path / "one" / "env_0" / "solution.json").read_text())
     for key in ("M", "Q", "N", "black_level_offset"):
@@ -61,8 +66,14 @@ def test_a_solve_of_two_files_equals_the_solve_of_one(tmp_path, capsys):
 
 CONFLICTS = {
     "stage key": (lambda w, c: c["stage"].update(name="another-stage"), "stage.name"),
-    "section": (lambda w, c: c.update(primaries={k: [1.0, 0.1, 0.1] for k in ("red", "green", "blue")}), "primaries"),
-    "environment": (lambda w, c: w.update(environments=[dict(c["environments"][0], w_avg=[1, 1, 1])]), "environments 'env_0'"),
+    "section": (
+        lambda w, c: c.update(primaries={k: [1.0, 0.1, 0.1] for k in ("red", "green", "blue")}),
+        "primaries",
+    ),
+    "environment": (
+        lambda w, c: w.update(environments=[dict(c["environments"][0], w_avg=[1, 1, 1])]),
+        "environments 'env_0'",
+    ),
 }
 
 
@@ -91,6 +102,8 @@ def test_missing_sections_and_bad_parts_name_their_file(tmp_path, capsys):
     assert main(["solve", str(wall_path), str(bad), "--out", str(tmp_path / "o")]) == 2
     assert "charts.yaml: lit_chart.red[0][0]: expected a number >= 0" in capsys.readouterr().err
     with pytest.raises(InputError, match="holds no measurements"):
-        check_measurements_part({"format": "ocio-vp/measurements", "version": 1, "stage": wall["stage"]})
+        check_measurements_part(
+            {"format": "ocio-vp/measurements", "version": 1, "stage": wall["stage"]}
+        )
     with pytest.raises(InputError, match="given twice"):
         load_measurement_files([wall_path, wall_path])

@@ -46,7 +46,9 @@ class TestLayout:
     def test_drive_at_frames(self):
         s = calibration_sequence(PatternOptions(steps=5))
         red, mark = s.patch("red"), s.patch("sync_0")
-        frames = np.array([red.first, red.last, mark.first, mark.flashes[0][0], 0, s.last_frame + 5])
+        frames = np.array(
+            [red.first, red.last, mark.first, mark.flashes[0][0], 0, s.last_frame + 5]
+        )
         drive = s.drive_at(frames)
         np.testing.assert_array_equal(drive[:2], [[1, 0, 0], [1, 0, 0]])
         np.testing.assert_array_equal(drive[2:], [[0, 0, 0], [1, 1, 1], [0, 0, 0], [0, 0, 0]])
@@ -115,8 +117,14 @@ def test_quantise_rounds_to_code_values():
 
 
 def test_primaries_and_white_are_full_drive_in_every_format():
-    for fmt, enc, peak in [("exr", "linear", None), ("tiff", "pq", 4000.0), ("dpx", "gamma2.4", None)]:
-        s = calibration_sequence(PatternOptions(file_format=fmt, encoding=enc, peak_nits=peak, steps=5))
+    for fmt, enc, peak in [
+        ("exr", "linear", None),
+        ("tiff", "pq", 4000.0),
+        ("dpx", "gamma2.4", None),
+    ]:
+        s = calibration_sequence(
+            PatternOptions(file_format=fmt, encoding=enc, peak_nits=peak, steps=5)
+        )
         for k, c in enumerate(CHANNELS):
             assert s.patch(c).drive == tuple(float(i == k) for i in range(3))
         assert s.patch("white").drive == (1.0, 1.0, 1.0)

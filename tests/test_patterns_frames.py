@@ -56,7 +56,9 @@ def test_frames_hold_the_sequence(tmp_path, fmt, encoding, peak, dtype, full):
                 continue
             if fmt == "dpx":  # OIIO widens 10-bit codes to 16 bits: c * 65535 / 1023
                 value = np.round(value * 1023 / 65535)
-            np.testing.assert_array_equal(value, np.round(np.array(patch.signal if lit else (0,) * 3) * full))
+            np.testing.assert_array_equal(
+                value, np.round(np.array(patch.signal if lit else (0,) * 3) * full)
+            )
             signal = value / full
             if encoding == "pq":
                 light = colour.models.eotf_ST2084(signal)

@@ -29,15 +29,27 @@ def _ramp(data, channel="red", step=-1):
 BAD = {
     "unknown key": (lambda d: d.update(fps_=24), "fps_: unknown key (did you mean 'fps'?)"),
     "wrong format": (lambda d: d.update(format="ocio-vp/capture"), "format: expected"),
-    "two frame fields": (lambda d: d.update(frames="a.##.b.##.exr"), "frames: expected a file pattern"),
+    "two frame fields": (
+        lambda d: d.update(frames="a.##.b.##.exr"),
+        "frames: expected a file pattern",
+    ),
     "absolute frames": (lambda d: d.update(frames="/tmp/a.####.exr"), "relative to the sequence"),
-    "pq without peak": (lambda d: d.update(encoding="pq", peak_nits=None), "peak_nits: expected a number"),
+    "pq without peak": (
+        lambda d: d.update(encoding="pq", peak_nits=None),
+        "peak_nits: expected a number",
+    ),
     "peak without pq": (lambda d: d.update(peak_nits=1000), "only a pq sequence has a peak"),
     "gap": (lambda d: d["patches"][3].update(first=d["patches"][3]["first"] + 1), "do not follow"),
     "unknown kind": (lambda d: d["patches"][2].update(kind="grey"), "unknown kind 'grey'"),
     "ramp top": (lambda d: _ramp(d).update(drive=[0.99, 0, 0]), "end at exactly 1.0"),
-    "negative drive": (lambda d: d["patches"][2].update(drive=[-0.1, 0, 0]), "drive[0]: expected a number >= 0"),
-    "flash outside": (lambda d: d["patches"][1]["flashes"][0].__setitem__(0, 1), "inside the patch"),
+    "negative drive": (
+        lambda d: d["patches"][2].update(drive=[-0.1, 0, 0]),
+        "drive[0]: expected a number >= 0",
+    ),
+    "flash outside": (
+        lambda d: d["patches"][1]["flashes"][0].__setitem__(0, 1),
+        "inside the patch",
+    ),
     "duplicate name": (lambda d: d["patches"][3].update(name="black"), "duplicate name 'black'"),
     "bad fps": (lambda d: d.update(fps=0), "fps: expected a number > 0"),
 }

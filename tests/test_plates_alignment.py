@@ -137,6 +137,8 @@ def test_no_sequence_in_noise_or_in_another_sequence():
 
 
 def test_brightness_is_near_one_for_white_and_zero_for_black():
-    signal = np.array([[0.001, 0.001, 0.001]] * 10 + [[0.9, 1.0, 0.8]] * 2 + [[0.5, 0.05, 0.01]] * 5)
+    signal = np.array(
+        [[0.001, 0.001, 0.001]] * 10 + [[0.9, 1.0, 0.8]] * 2 + [[0.5, 0.05, 0.01]] * 5
+    )
     b = brightness(signal)
     assert np.all(b[:10] < 0.01) and np.all(b[10:12] > 0.99) and np.all(b[12:] < 0.02)

@@ -42,14 +42,27 @@ def stage_SL(other_stage):
     return other_stage.SL
 
 
-STAGE = {"name": "simulated-stage", "calibration_panel": {"width": 1.0, "height": 1.0, "distance": 1.0}}
+STAGE = {
+    "name": "simulated-stage",
+    "calibration_panel": {"width": 1.0, "height": 1.0, "distance": 1.0},
+}
 
 
-def film(folder: Path, SL, patterns: PatternOptions, take: TakeOptions = TAKE, *, fmt="exr",
-         encoding=None, region=None) -> Path:
+def film(
+    folder: Path,
+    SL,
+    patterns: PatternOptions,
+    take: TakeOptions = TAKE,
+    *,
+    fmt="exr",
+    encoding=None,
+    region=None,
+) -> Path:
     """Patterns, a take of them and a capture file holding only stage and take."""
     path = write_sequence_folder(calibration_sequence(patterns), folder / "patterns")
-    name = write_take(load_sequence(path), SL, folder / "take", take, file_format=fmt, encoding=encoding)
+    name = write_take(
+        load_sequence(path), SL, folder / "take", take, file_format=fmt, encoding=encoding
+    )
     entry = {"frames": f"take/{name}", "sequence": "patterns/sequence.yaml"}
     if encoding is not None:
         entry["encoding"] = encoding
@@ -192,7 +205,12 @@ def test_an_under_exposed_take_is_refused(tmp_path, stage_SL, capsys):
 
 
 def test_a_patch_too_short_for_the_camera_has_no_stable_frame(tmp_path, stage_SL, capsys):
-    capture = film(tmp_path, stage_SL, PatternOptions(size=(16, 9), steps=5, hold=3), TakeOptions(size=(48, 27)))
+    capture = film(
+        tmp_path,
+        stage_SL,
+        PatternOptions(size=(16, 9), steps=5, hold=3),
+        TakeOptions(size=(48, 27)),
+    )
     err = _measure_fails(capture, capsys)
     assert "has no stable frame" in err and "longer --hold" in err
 

@@ -15,7 +15,10 @@ def test_largest_rectangle_against_brute_force():
         assert mask[y0:y1, x0:x1].all()
         best = max(
             ((b - a) * (d - c))
-            for a in range(7) for b in range(a + 1, 8) for c in range(9) for d in range(c + 1, 10)
+            for a in range(7)
+            for b in range(a + 1, 8)
+            for c in range(9)
+            for d in range(c + 1, 10)
             if mask[a:b, c:d].all()
         )
         assert (x1 - x0) * (y1 - y0) == best

@@ -56,7 +56,7 @@ def test_flicker_is_multiplicative_and_periodic():
     quiet = dict(QUIET, flicker=0.05, flicker_hz=2.0)
     numbers, signal = take_signal(sequence, SL, TakeOptions(**quiet))
     white = sequence.patch("white")
-    inside = (numbers > 0)  # all frames: ratio to the unflickered value
+    inside = numbers > 0  # all frames: ratio to the unflickered value
     _, still = take_signal(sequence, SL, TakeOptions(**QUIET))
     ratio = signal[inside, 1] / np.where(still[inside, 1] > 0, still[inside, 1], np.nan)
     ratio = ratio[np.isfinite(ratio)]
@@ -65,11 +65,15 @@ def test_flicker_is_multiplicative_and_periodic():
 
 
 def test_the_simulated_wall_decodes_pq_frames_like_colour_science(tmp_path):
-    options = PatternOptions(size=(8, 8), steps=9, file_format="tiff", encoding="pq", peak_nits=1000.0)
+    options = PatternOptions(
+        size=(8, 8), steps=9, file_format="tiff", encoding="pq", peak_nits=1000.0
+    )
     sequence = load_sequence(write_sequence_folder(calibration_sequence(options), tmp_path / "p"))
     drives = frame_drives(sequence)
     for patch in sequence.of_kind("ramp", "primary", "white"):
-        np.testing.assert_allclose(drives(np.array([patch.first]))[0], patch.drive, rtol=1e-9, atol=1e-15)
+        np.testing.assert_allclose(
+            drives(np.array([patch.first]))[0], patch.drive, rtol=1e-9, atol=1e-15
+        )
 
 
 def test_panel_response_is_darker_near_black_and_exact_at_full_drive():

@@ -71,12 +71,19 @@ def run(args: argparse.Namespace) -> int:
         print(f"warning: {warning}")
     if result.take is not None:
         print(take_summary(result.take))
-    kind = "" if result.measurements is not None else (
-        " (a part: " + ", ".join(k for k in result.document if k not in ("format", "version", "stage"))
-        + "; solve it with the other files, docs/measurements.md)"
+    kind = (
+        ""
+        if result.measurements is not None
+        else (
+            " (a part: "
+            + ", ".join(k for k in result.document if k not in ("format", "version", "stage"))
+            + "; solve it with the other files, docs/measurements.md)"
+        )
     )
     sheet = " and take.png" if result.take is not None else ""
-    print(f"wrote {args.out}{kind} ({len(result.plates)} plates sampled); overlays{sheet} in {folder}")
+    print(
+        f"wrote {args.out}{kind} ({len(result.plates)} plates sampled); overlays{sheet} in {folder}"
+    )
     return 0
 
 

@@ -18,7 +18,9 @@ def parse_size(text: str) -> tuple[int, int]:
 
     m = re.fullmatch(r"\s*(\d{1,5})\s*[xX]\s*(\d{1,5})\s*", text)
     if not m:
-        raise InputError(f"expected WIDTHxHEIGHT, e.g. 1920x1080, got {excerpt(text)}", key="--size")
+        raise InputError(
+            f"expected WIDTHxHEIGHT, e.g. 1920x1080, got {excerpt(text)}", key="--size"
+        )
     return int(m.group(1)), int(m.group(2))
 
 
@@ -120,14 +122,15 @@ def _print_summary(sequence, final) -> None:
         kinds[patch.kind] = kinds.get(patch.kind, 0) + 1
     count = sequence.last_frame - sequence.first_frame + 1
     peak = f" at {sequence.peak_nits:g} cd/m2" if sequence.peak_nits else ""
-    content = "EXR: linear drive" if sequence.file_format == "exr" else (
-        f"{sequence.file_format.upper()}: {sequence.encoding} signal, full range"
+    content = (
+        "EXR: linear drive"
+        if sequence.file_format == "exr"
+        else (f"{sequence.file_format.upper()}: {sequence.encoding} signal, full range")
     )
     print(
         f"wrote {final}/: {count} frames ({sequence.duration:.1f} s at {sequence.fps:g} fps, "
         f"{sequence.size[0]}x{sequence.size[1]}, {content}); wall encoding "
-        f"{sequence.encoding}{peak}; "
-        + ", ".join(f"{n} {k}" for k, n in kinds.items())
+        f"{sequence.encoding}{peak}; " + ", ".join(f"{n} {k}" for k, n in kinds.items())
     )
     then = (
         f"then run ocio-vp validate ENVIRONMENT TAKE --sequence {final}/sequence.yaml"

@@ -230,7 +230,9 @@ def _film(measurements, args: argparse.Namespace) -> str:
     final = Path(args.take)
     with staged_dir(final.resolve().parent) as stage:
         with progress(total=take_frame_count(sequence, options), desc="take", unit="frame") as bar:
-            name = write_take(sequence, measurements.SL, stage / "take", options, on_frame=lambda: bar.update(1))
+            name = write_take(
+                sequence, measurements.SL, stage / "take", options, on_frame=lambda: bar.update(1)
+            )
         publish_dir(stage / "take", final, inputs=[args.film])
     return str(final / name)
 
@@ -248,14 +250,12 @@ def _check_plates_folder(folder: str) -> None:
 
 def _write_plates(measurements, args: argparse.Namespace):
     """Render the plates into a staging folder, then rename it to --plates (all or nothing)."""
+    import os
     from pathlib import Path
 
+    from ocio_vp.patterns.sequence import load_sequence
     from ocio_vp.simulator.plates import PlateOptions, plate_count, write_capture
     from ocio_vp.staging import publish_dir, staged_dir
-
-    import os
-
-    from ocio_vp.patterns.sequence import load_sequence
 
     final = Path(args.plates)
     options = PlateOptions(
@@ -265,13 +265,20 @@ def _write_plates(measurements, args: argparse.Namespace):
     inputs = []
     if args.sequence is not None:
         sequence = load_sequence(args.sequence)
-        ref = Path(os.path.relpath(os.path.abspath(args.sequence), os.path.abspath(final))).as_posix()
+        ref = Path(
+            os.path.relpath(os.path.abspath(args.sequence), os.path.abspath(final))
+        ).as_posix()
         inputs = [args.sequence, str(Path(args.sequence).parent)]
     with staged_dir(final.resolve().parent) as stage:
         total = plate_count(measurements, options, sequence)
         with progress(total=total, desc="plates", unit="plate") as bar:
             write_capture(
-                measurements, stage / "plates", options, bar=bar, sequence=sequence, sequence_ref=ref
+                measurements,
+                stage / "plates",
+                options,
+                bar=bar,
+                sequence=sequence,
+                sequence_ref=ref,
             )
         publish_dir(stage / "plates", final, inputs=inputs)
     return final / "capture.yaml"

@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import argparse
 
-from ocio_vp.commands.common import progress
-
 __all__ = ["FAILED_STATUS", "add_parser", "run"]
 
 #: Exit status of a validation that ran and failed its threshold (2 is a user mistake).
@@ -100,11 +98,17 @@ def run(args: argparse.Namespace) -> int:
     solution = load_solution(args.environment)
     sequence = load_sequence(args.sequence)
     _check_sequence(sequence, args.environment)
-    encoding = None if args.encoding is None else canonical_encoding(args.encoding, key="--encoding")
+    encoding = (
+        None if args.encoding is None else canonical_encoding(args.encoding, key="--encoding")
+    )
     region = None if args.region is None else tuple(args.region)
     if region is not None and not (region[2] > region[0] >= 0 and region[3] > region[1] >= 0):
-        raise InputError(f"expected x1 > x0 >= 0 and y1 > y0 >= 0, got {list(region)}", key="--region")
-    take = TakeRef(frames=Path(args.take), sequence=Path(args.sequence), region=region, encoding=encoding)
+        raise InputError(
+            f"expected x1 > x0 >= 0 and y1 > y0 >= 0, got {list(region)}", key="--region"
+        )
+    take = TakeRef(
+        frames=Path(args.take), sequence=Path(args.sequence), region=region, encoding=encoding
+    )
     bar = TakeProgress()
     try:
         reading = measure_take(take, source=args.take, on_progress=bar)

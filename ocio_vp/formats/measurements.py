@@ -569,5 +569,7 @@ def save_measurements_document(
         text = json.dumps(data, indent=2) + "\n"
     else:
         header = f"{FILE_SIGNATURE.decode()} ({FORMAT} v{VERSION}, docs/measurements.md)\n"
-        text = header + yaml.safe_dump(dict(data), sort_keys=False, default_flow_style=None, width=100)
+        text = header + yaml.safe_dump(
+            dict(data), sort_keys=False, default_flow_style=None, width=100
+        )
     write_output_file(path, text, replace=replace)

@@ -45,7 +45,9 @@ def _conflict(key: str, first: str, second: str) -> InputError:
     )
 
 
-def _merge_named(merged: dict[str, Any], owners: dict[str, str], section: str, items: Any, source: str) -> None:
+def _merge_named(
+    merged: dict[str, Any], owners: dict[str, str], section: str, items: Any, source: str
+) -> None:
     """Join list ``section`` by ``name``: new names appended, repeated ones must be equal."""
     entries = merged.setdefault(section, [])
     index = {entry["name"]: i for i, entry in enumerate(entries)}
@@ -60,7 +62,9 @@ def _merge_named(merged: dict[str, Any], owners: dict[str, str], section: str, i
             raise _conflict(f"{section} {excerpt(name)}", owners[key], source)
 
 
-def merge_measurement_documents(documents: Sequence[tuple[Mapping[str, Any], str]]) -> dict[str, Any]:
+def merge_measurement_documents(
+    documents: Sequence[tuple[Mapping[str, Any], str]],
+) -> dict[str, Any]:
     """One measurements document from several (``(document, source)`` pairs, each valid on
     its own as a part); see the module docstring.
 

@@ -85,7 +85,9 @@ class PatternOptions:
                 "give --peak-nits with --wall-encoding pq, and only then", key="--peak-nits"
             )
         if self.peak_nits is not None and not 0 < self.peak_nits <= 10000:
-            raise InputError(f"expected 0 < cd/m2 <= 10000, got {self.peak_nits:g}", key="--peak-nits")
+            raise InputError(
+                f"expected 0 < cd/m2 <= 10000, got {self.peak_nits:g}", key="--peak-nits"
+            )
         if self.file_format not in FILE_FORMATS:
             raise InputError(f"expected one of {tuple(FILE_FORMATS)}", key="--format")
         if not 0 < self.fps <= 1000:
@@ -244,8 +246,12 @@ class SequenceBuilder:
         f = flash_frames(self.options.fps)
         count = self.syncs + 2
         first = self.next_frame
-        flashes = tuple((first + 2 * f + 2 * f * k, first + 3 * f + 2 * f * k - 1) for k in range(count))
-        self.add(f"sync_{self.syncs}", "sync", (1.0, 1.0, 1.0), 3 * f + 2 * f * count, flashes=flashes)
+        flashes = tuple(
+            (first + 2 * f + 2 * f * k, first + 3 * f + 2 * f * k - 1) for k in range(count)
+        )
+        self.add(
+            f"sync_{self.syncs}", "sync", (1.0, 1.0, 1.0), 3 * f + 2 * f * count, flashes=flashes
+        )
         self.syncs += 1
 
     def build(self, **extra: Any) -> PatternSequence:

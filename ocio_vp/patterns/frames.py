@@ -21,7 +21,7 @@ import yaml
 
 from ocio_vp.patterns.sequence import FILE_FORMATS, PatternSequence, expand_frame, sequence_to_dict
 
-__all__ = ["SEQUENCE_FILE", "write_frame", "write_sequence_folder", "write_sequence_file"]
+__all__ = ["SEQUENCE_FILE", "write_frame", "write_sequence_file", "write_sequence_folder"]
 
 SEQUENCE_FILE = "sequence.yaml"
 _OIIO_TYPE = {"exr": "half", "tiff": "uint16", "dpx": "uint16"}
@@ -29,7 +29,9 @@ _COMPRESSION = {"exr": "zip", "tiff": "lzw"}
 _LINK_FAILURES = {errno.EXDEV, errno.EPERM, errno.EMLINK, errno.ENOTSUP, errno.EOPNOTSUPP}
 
 
-def write_frame(path: str | Path, rgb: tuple[float, float, float], sequence: PatternSequence) -> None:
+def write_frame(
+    path: str | Path, rgb: tuple[float, float, float], sequence: PatternSequence
+) -> None:
     """One flat frame of ``rgb`` (drive for EXR, signal fraction for TIFF/DPX) at the
     sequence's size and file format.
 
@@ -85,7 +87,9 @@ def _link_or_copy(source: Path, target: Path) -> None:
 def write_sequence_file(sequence: PatternSequence, path: str | Path, *, note: str = "") -> None:
     """``sequence.yaml``: the ocio-vp signature line, a comment, then the document."""
     header = f"# Written by ocio-vp patterns (ocio-vp/patterns v1, docs/patterns.md){note}\n"
-    text = yaml.safe_dump(sequence_to_dict(sequence), sort_keys=False, default_flow_style=None, width=100)
+    text = yaml.safe_dump(
+        sequence_to_dict(sequence), sort_keys=False, default_flow_style=None, width=100
+    )
     Path(path).write_text(header + text, encoding="utf-8")
 
 

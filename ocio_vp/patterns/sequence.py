@@ -14,16 +14,14 @@ drive itself, for TIFF and DPX the wall's signal as a fraction of full code).
 
 from __future__ import annotations
 
-import math
+import itertools
 import re
-from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import CHANNELS, Validator, read_document
 from ocio_vp.wall.encoding import WALL_ENCODINGS
 
@@ -201,7 +199,9 @@ def _patch(ctx: Validator, raw: Any, i: int, previous_last: int) -> Patch:
     if kind == "sync":
         raw_flashes = entry.get("flashes")
         if not isinstance(raw_flashes, list) or not raw_flashes:
-            raise ctx.error((*key, "flashes"), "a sync patch lists its flashes [[first, last], ...]")
+            raise ctx.error(
+                (*key, "flashes"), "a sync patch lists its flashes [[first, last], ...]"
+            )
         low = first
         for j, pair in enumerate(raw_flashes):
             if not isinstance(pair, list) or len(pair) != 2:
@@ -237,7 +237,9 @@ def _validation(ctx: Validator, raw: Any) -> Validation:
     for name in keys:
         if not isinstance(entry[name], str) or not entry[name]:
             raise ctx.error(("validation", name), "expected a non-empty text")
-    scale = ctx.number(entry.get("content_scale", 1.0), ("validation", "content_scale"), strict=True)
+    scale = ctx.number(
+        entry.get("content_scale", 1.0), ("validation", "content_scale"), strict=True
+    )
     return Validation(**{name: entry[name] for name in keys}, content_scale=scale)
 
 
@@ -259,7 +261,7 @@ def _checked_patches(ctx: Validator, raw: Any, first_frame: int) -> tuple[Patch,
             ramps.setdefault(patch.channel or "", []).append(patch)
     for channel, steps in ramps.items():
         drives = [p.drive[CHANNELS.index(channel)] for p in steps]
-        if any(b <= a for a, b in zip(drives, drives[1:], strict=False)) or drives[-1] != 1.0:
+        if any(b <= a for a, b in itertools.pairwise(drives)) or drives[-1] != 1.0:
             raise ctx.error(
                 ("patches",),
                 f"the {channel} ramp's drives must increase strictly and end at exactly 1.0",
@@ -380,15 +382,3 @@ def sequence_to_dict(sequence: PatternSequence) -> dict[str, Any]:
         }
     data["patches"] = patches
     return data
-
-
-def check_fps(value: float, *, key: str = "--fps") -> float:
-    """A frame rate in (0, 1000] frames per second."""
-    if not (math.isfinite(value) and 0 < value <= 1000):
-        raise InputError(f"expected 0 < fps <= 1000, got {value!r}", key=key)
-    return float(value)
-
-
-def patch_table(sequence: PatternSequence) -> Mapping[str, Patch]:
-    """Name -> patch."""
-    return {p.name: p for p in sequence.patches}

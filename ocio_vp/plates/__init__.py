@@ -2,6 +2,7 @@
 chart sampling and patch statistics, chart detection, overlays, and ``measure``.
 """
 
+from ocio_vp.plates.alignment import Alignment, align_take, kept_frames
 from ocio_vp.plates.capture import (
     FORMAT,
     VERSION,
@@ -56,6 +57,8 @@ from ocio_vp.plates.statistics import (
     clip_levels,
     patch_statistics,
 )
+from ocio_vp.plates.take import PatchReading, TakeReading, TakeRef, measure_take
+from ocio_vp.plates.wall_region import find_wall
 
 __all__ = [
     "DISPLAY_FORMATS",
@@ -64,27 +67,35 @@ __all__ = [
     "OUTLINE_COLOURS",
     "ROBUST_MEAN_METHODS",
     "VERSION",
+    "Alignment",
     "Capture",
     "ChartSamples",
     "ChartShot",
     "EnvironmentCapture",
     "MeasureResult",
+    "PatchReading",
     "PlateInfo",
     "PlateRef",
     "PlateSampling",
     "RegionShot",
+    "TakeReading",
+    "TakeRef",
+    "align_take",
     "canonical_encoding",
     "capture_from_dict",
     "chart_box",
     "clip_levels",
     "detect_chart_corners",
     "detector",
+    "find_wall",
     "flat_field_gain",
     "frames_pixels",
     "grid_homography",
+    "kept_frames",
     "linearise",
     "load_capture",
     "measure_capture",
+    "measure_take",
     "open_plate",
     "overlay_image",
     "patch_labels",

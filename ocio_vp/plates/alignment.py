@@ -228,9 +228,14 @@ def _place(marks: list, source: object) -> tuple[float, float, list[int]]:
         shifts = {k: _mark_shift(m, offset, rate) for k, m in enumerate(marks)}
         agree = [k for k, v in shifts.items() if v is not None]
         spread = float(
-            np.sqrt(np.mean(np.concatenate([
-                marks[k][2] - offset - rate * marks[k][1] - shifts[k] for k in agree
-            ]) ** 2))
+            np.sqrt(
+                np.mean(
+                    np.concatenate(
+                        [marks[k][2] - offset - rate * marks[k][1] - shifts[k] for k in agree]
+                    )
+                    ** 2
+                )
+            )
         )
         key = (len({marks[k][0] for k in agree}), -spread, len(level))
         if best is None or key > best[0]:
@@ -331,14 +336,17 @@ def _smooth(T: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, tuple[tuple[float
     gaps = _step_gaps(r)
     bounds = [0, *(j + 1 for j in gaps), len(r)]
     smooth = np.empty_like(r)
-    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+    for a, b in itertools.pairwise(bounds):
         if b - a >= 3:
             slope, intercept = np.polyfit(T[a:b], r[a:b], 1)
             smooth[a:b] = intercept + slope * T[a:b]
         else:
             smooth[a:b] = np.mean(r[a:b])
     steps = tuple(
-        (float(T[j + 1]), int(np.round(np.median(r[j + 1 : j + 5]) - np.median(r[max(0, j - 3) : j + 1]))))
+        (
+            float(T[j + 1]),
+            int(np.round(np.median(r[j + 1 : j + 5]) - np.median(r[max(0, j - 3) : j + 1]))),
+        )
         for j in gaps
     )
     return smooth, steps
@@ -386,7 +394,13 @@ def align_take(
     T_all, r_all = T_all[keep], r_all[keep]
     r_all, steps = _smooth(T_all, r_all)
     residual = max(
-        float(np.max(np.abs(marks[k][2] - offset - rate * marks[k][1] - np.interp(marks[k][1], T_all, r_all))))
+        float(
+            np.max(
+                np.abs(
+                    marks[k][2] - offset - rate * marks[k][1] - np.interp(marks[k][1], T_all, r_all)
+                )
+            )
+        )
         for k in agree
     )
     return Alignment(

@@ -256,9 +256,7 @@ def capture_from_dict(
     lit_chart: dict[str, ChartShot] = {}
     if "lit_chart" in top:
         lit = ctx.mapping(top["lit_chart"], ("lit_chart",), CHANNELS)
-        lit_chart = {
-            c: _chart(ctx, lit[c], ("lit_chart", c), where, f"lit_{c}") for c in CHANNELS
-        }
+        lit_chart = {c: _chart(ctx, lit[c], ("lit_chart", c), where, f"lit_{c}") for c in CHANNELS}
     environments = ()
     if "environments" in top:
         environments = _environments(ctx, top["environments"], where)
@@ -335,7 +333,9 @@ def _header(ctx: Validator, data: Any) -> Mapping[str, Any]:
     if "primaries" in top and "take" in top:
         raise ctx.error(("take",), "give the wall as primaries plates or as a take, not both")
     if not any(k in top for k in ("primaries", "take", "lit_chart", "environments")):
-        raise ctx.error((), "nothing to measure: give a take (or primaries), lit_chart or environments")
+        raise ctx.error(
+            (), "nothing to measure: give a take (or primaries), lit_chart or environments"
+        )
     return top
 
 

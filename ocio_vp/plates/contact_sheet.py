@@ -64,7 +64,12 @@ def _draw_frame(ax, reading: TakeReading) -> None:
     )
     chunk = chunk_rows(reading.paths[0])
     for ya, yb in band_rows(reading.info, reading.region, BANDS, chunk):
-        ax.plot([(x0 - ox) / step, (x1 - ox) / step], [(ya + yb) / 2 / step] * 2, color="#ffd000", lw=0.6)
+        ax.plot(
+            [(x0 - ox) / step, (x1 - ox) / step],
+            [(ya + yb) / 2 / step] * 2,
+            color="#ffd000",
+            lw=0.6,
+        )
     how = "found automatically" if reading.region_found else "given"
     ax.set_title(
         f"frame {frame}: wall region {list(reading.region)} ({how}); yellow: rows read", fontsize=8
@@ -81,7 +86,9 @@ def _draw_strip(ax, reading: TakeReading, lo: float, hi: float, floor: float) ->
     ax.set_xlim(lo, hi)
     ax.set_ylim(floor, float(np.max(signal)) * 2)
     for patch in reading.sequence.of_kind("sync"):
-        a, b = (float(v) for v in reading.alignment.to_camera(np.array([patch.first, patch.last + 1.0])))
+        a, b = (
+            float(v) for v in reading.alignment.to_camera(np.array([patch.first, patch.last + 1.0]))
+        )
         if b > lo and a < hi:
             ax.axvspan(a, b, color="#ffe680", alpha=0.5, lw=0)
     for k, reading_patch in enumerate(reading.patches.values()):
@@ -89,12 +96,24 @@ def _draw_strip(ax, reading: TakeReading, lo: float, hi: float, floor: float) ->
         if b < lo or a >= hi:
             continue
         ax.axvspan(a, b, color=("#d8d8d8", "#ececec")[k % 2], lw=0)
-        ax.text((a + b) / 2, floor * 1.5, reading_patch.name, rotation=90, fontsize=4.5, ha="center", va="bottom")
+        ax.text(
+            (a + b) / 2,
+            floor * 1.5,
+            reading_patch.name,
+            rotation=90,
+            fontsize=4.5,
+            ha="center",
+            va="bottom",
+        )
         kept = np.isin(numbers, reading_patch.frames)
-        ax.plot(numbers[kept], np.maximum(np.max(signal[kept], axis=1), floor), ".", ms=1.5, color="k")
+        ax.plot(
+            numbers[kept], np.maximum(np.max(signal[kept], axis=1), floor), ".", ms=1.5, color="k"
+        )
         bad = np.isin(numbers, reading_patch.rejected)
         if np.any(bad):
-            ax.plot(numbers[bad], np.maximum(np.max(signal[bad], axis=1), floor), "x", ms=3, color="r")
+            ax.plot(
+                numbers[bad], np.maximum(np.max(signal[bad], axis=1), floor), "x", ms=3, color="r"
+            )
     ax.tick_params(labelsize=6)
 
 
@@ -113,9 +132,17 @@ def write_contact_sheet(reading: TakeReading, path: str | Path) -> None:
     floor = 1e-4 * float(np.max(reading.signal))
     width = (last - first) / strips
     for k in range(strips):
-        _draw_strip(figure.add_subplot(grid[1 + k]), reading, first + k * width, first + (k + 1) * width, floor)
+        _draw_strip(
+            figure.add_subplot(grid[1 + k]),
+            reading,
+            first + k * width,
+            first + (k + 1) * width,
+            floor,
+        )
     a = reading.alignment
-    steps = "; ".join(f"{abs(n)} frame(s) {'dropped' if n < 0 else 'repeated'} near {T:g}" for T, n in a.steps)
+    steps = "; ".join(
+        f"{abs(n)} frame(s) {'dropped' if n < 0 else 'repeated'} near {T:g}" for T, n in a.steps
+    )
     figure.suptitle(
         f"{Path(str(reading.take.frames)).name}: {len(reading.numbers)} frames; "
         f"{a.rate:.5f} camera frames per player frame; sync marks {len(a.marks_found)} of "

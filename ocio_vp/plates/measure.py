@@ -285,7 +285,9 @@ def measure_capture(
     if capture.lit_chart:
         document["lit_chart"] = {c: chart(capture.lit_chart[c]).tolist() for c in CHANNELS}
     if capture.environments:
-        document["environments"] = [_environment(capture, env, chart, plates, step) for env in capture.environments]
+        document["environments"] = [
+            _environment(capture, env, chart, plates, step) for env in capture.environments
+        ]
     if "ramps" in document:  # the file's key order: ramps after environments
         document["ramps"] = document.pop("ramps")
     measurements = None

@@ -47,8 +47,8 @@ __all__ = [
     "CLIPPED_FRACTION",
     "UNDER_EXPOSED_STOPS",
     "PatchReading",
-    "TakeRef",
     "TakeReading",
+    "TakeRef",
     "measure_take",
 ]
 
@@ -178,6 +178,36 @@ def _reading(patch: Patch, numbers, kept, stats: list[FrameStats], floor, window
     )
 
 
+def _take_frames(take: TakeRef, source) -> tuple[np.ndarray, list[Path]]:
+    """The take's frame numbers (the time coordinate) and files; too few is a refusal."""
+    listed = list_take_frames(take.frames)
+    if len(listed) < 8:
+        raise InputError(
+            f"the take has {len(listed)} frames: too short to hold the sequence",
+            source=source,
+            key=take.key,
+        )
+    return np.array([n for n, _ in listed], dtype=np.float64), [p for _, p in listed]
+
+
+def _patch_frames(measured, alignment: Alignment, numbers: np.ndarray, source, key: str):
+    """Per measured patch, its window in camera frames and the frames kept (refusing a
+    truncated take and a patch too short for the camera)."""
+    windows, kept = {}, {}
+    for patch in measured:
+        windows[patch.name] = _window_check(numbers, alignment, patch, source, key)
+        kept[patch.name] = kept_frames(alignment, patch, numbers)
+        if len(kept[patch.name]) == 0:
+            raise InputError(
+                f"patch {patch.name!r} has no stable frame: it lasts "
+                f"{alignment.rate * patch.frames:.1f} camera frames and {GUARD:g} are left out "
+                "next to each change; play the patterns with a longer --hold",
+                source=source,
+                key=key,
+            )
+    return windows, kept
+
+
 def _signal_rows(info: PlateInfo, region: tuple[int, int, int, int], chunk: int):
     """The one band of rows at the region's middle the alignment reads."""
     rows = band_rows(info, region, 1, chunk)
@@ -204,11 +234,7 @@ def measure_take(
     from ocio_vp.plates.wall_region import find_wall
 
     sequence = load_sequence(take.sequence)
-    listed = list_take_frames(take.frames)
-    numbers = np.array([n for n, _ in listed], dtype=np.float64)
-    paths = [p for _, p in listed]
-    if len(paths) < 8:
-        raise InputError(f"the take has {len(paths)} frames: too short to hold the sequence", source=source, key=take.key)
+    numbers, paths = _take_frames(take, source)
     info = open_take(paths[0], encoding=take.encoding, layer=take.layer)
     region = take.region
     if region is None:
@@ -219,32 +245,32 @@ def measure_take(
     tick = (lambda: on_progress("frame", 1)) if on_progress else None
     if on_progress:
         on_progress("aligning", len(paths))
-    signal_stats = read_frame_stats(paths, info, region, _signal_rows(info, region, chunk), on_frame=tick)
+    signal_stats = read_frame_stats(
+        paths, info, region, _signal_rows(info, region, chunk), on_frame=tick
+    )
     signal = np.array([s.mean for s in signal_stats])
     alignment = align_take(signal, numbers, sequence, source=source)
     measured = [p for p in sequence.patches if p.kind in MEASURED_KINDS]
-    windows, kept = {}, {}
-    for patch in measured:
-        windows[patch.name] = _window_check(numbers, alignment, patch, source, take.key)
-        kept[patch.name] = kept_frames(alignment, patch, numbers)
-        if len(kept[patch.name]) == 0:
-            raise InputError(
-                f"patch {patch.name!r} has no stable frame: it lasts {alignment.rate * patch.frames:.1f} "
-                f"camera frames and {GUARD:g} are left out next to each change; play the patterns "
-                "with a longer --hold",
-                source=source,
-                key=take.key,
-            )
+    windows, kept = _patch_frames(measured, alignment, numbers, source, take.key)
     wanted = np.unique(np.concatenate(list(kept.values())))
     clip = _clip_level(info, take.clip_level)
     if on_progress:
         on_progress("measuring", len(wanted))
     rows = band_rows(info, region, BANDS, chunk)
-    stats = read_frame_stats([paths[i] for i in wanted], info, region, rows, clip=clip, on_frame=tick)
+    stats = read_frame_stats(
+        [paths[i] for i in wanted], info, region, rows, clip=clip, on_frame=tick
+    )
     by_index = dict(zip(wanted.tolist(), stats, strict=True))
     floor = 2e-3 * float(np.max(np.percentile(signal, 99.5, axis=0)))
     patches = {
-        p.name: _reading(p, numbers, kept[p.name], [by_index[i] for i in kept[p.name].tolist()], floor, windows[p.name])
+        p.name: _reading(
+            p,
+            numbers,
+            kept[p.name],
+            [by_index[i] for i in kept[p.name].tolist()],
+            floor,
+            windows[p.name],
+        )
         for p in measured
     }
     reading = TakeReading(
@@ -324,7 +350,9 @@ def _check_exposure(reading: TakeReading, by_index, kept, source) -> list[str]:
             predicted = reading.black + sum(reading.net(name) for name in primaries)
             stops = math.log2(max(float(np.max(predicted)) / level, 1.0)) + 1 / 3
             advice = f"close the iris by about {math.ceil(stops * 2) / 2:g} stop(s) and shoot again"
-        names = ", ".join(clipped[:4]) + (f" and {len(clipped) - 4} more" if len(clipped) > 4 else "")
+        names = ", ".join(clipped[:4]) + (
+            f" and {len(clipped) - 4} more" if len(clipped) > 4 else ""
+        )
         raise InputError(
             f"clipped in camera: {names} (pixels at the clip level {level:.6g}); {advice}",
             source=source,

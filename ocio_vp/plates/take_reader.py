@@ -166,7 +166,11 @@ def _stats(pixels: np.ndarray, clip: float | None) -> FrameStats:
 
 
 def _read_frame(
-    path: Path, info: PlateInfo, region: tuple[int, int, int, int], rows: Sequence[tuple[int, int]], clip: float | None
+    path: Path,
+    info: PlateInfo,
+    region: tuple[int, int, int, int],
+    rows: Sequence[tuple[int, int]],
+    clip: float | None,
 ) -> FrameStats:
     import OpenImageIO as oiio
 

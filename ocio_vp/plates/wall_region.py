@@ -93,7 +93,9 @@ def largest_rectangle(mask: np.ndarray) -> tuple[int, int, int, int] | None:
     return best
 
 
-def find_wall(paths: Sequence[Path], info: PlateInfo, *, source: object = None) -> tuple[int, int, int, int]:
+def find_wall(
+    paths: Sequence[Path], info: PlateInfo, *, source: object = None
+) -> tuple[int, int, int, int]:
     """The wall's region ``(x0, y0, x1, y1)`` in pixels (see the module docstring).
 
     Raises
@@ -111,12 +113,19 @@ def find_wall(paths: Sequence[Path], info: PlateInfo, *, source: object = None) 
     rect = largest_rectangle(mask)
     hint = "give the take's region: [x0, y0, x1, y1] in the capture file"
     if rect is None:
-        raise InputError(f"no part of the picture changes over the take: no wall found; {hint}", source=source)
+        raise InputError(
+            f"no part of the picture changes over the take: no wall found; {hint}", source=source
+        )
     x0, y0, x1, y1 = rect
     dx, dy = INSET * (x1 - x0), INSET * (y1 - y0)
     cx0, cy0 = int(np.ceil(x0 + dx)) + 1, int(np.ceil(y0 + dy)) + 1
     cx1, cy1 = int(np.floor(x1 - dx)) - 1, int(np.floor(y1 - dy)) - 1
-    region = (info.x + cx0 * factor, info.y + cy0 * factor, info.x + cx1 * factor, info.y + cy1 * factor)
+    region = (
+        info.x + cx0 * factor,
+        info.y + cy0 * factor,
+        info.x + cx1 * factor,
+        info.y + cy1 * factor,
+    )
     if region[2] - region[0] < MIN_SIZE or region[3] - region[1] < MIN_SIZE:
         raise InputError(
             f"the wall found is too small ({max(0, region[2] - region[0])}x"

@@ -1,6 +1,7 @@
 """The spectral stage simulator: colour-science datasets, the simulated stage and its
 measurements, the ground-truth prediction of what a solution does, evaluation, sample data,
-sample calibration photographs (plates), and the ground truth on colours the chart does not
+sample calibration photographs (plates), a camera take of the wall playing patterns, and the
+ground truth on colours the chart does not
 contain (:mod:`ocio_vp.simulator.truth`).
 """
 
@@ -61,6 +62,14 @@ from ocio_vp.simulator.stage import (
     spectral_stage,
     white_reflectance,
 )
+from ocio_vp.simulator.take import (
+    PanelResponse,
+    TakeOptions,
+    take_frame_count,
+    take_signal,
+    true_frame_times,
+    write_take,
+)
 from ocio_vp.simulator.truth import (
     CHART_DUPLICATE_TOLERANCE,
     HeldOutErrors,
@@ -85,9 +94,11 @@ __all__ = [
     "Evaluation",
     "HeldOutErrors",
     "NoiseStudy",
+    "PanelResponse",
     "PlateOptions",
     "SpectralStage",
     "StagePrediction",
+    "TakeOptions",
     "agreement_with_spectra",
     "align",
     "camera_rgb",
@@ -113,9 +124,13 @@ __all__ = [
     "simulate_measurements",
     "spectral_stage",
     "stage_options_from_args",
+    "take_frame_count",
+    "take_signal",
+    "true_frame_times",
     "wavelengths",
     "white_reflectance",
     "write_capture",
     "write_paper_samples",
     "write_plate",
+    "write_take",
 ]

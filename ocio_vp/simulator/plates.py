@@ -30,8 +30,8 @@ __all__ = [
     "PlateOptions",
     "homography",
     "plate_count",
-    "render_chart",
     "practice_sequence",
+    "render_chart",
     "render_regions",
     "vignetting_gain",
     "write_capture",
@@ -386,7 +386,9 @@ def _film_patterns(measurements, folder: Path, options: PlateOptions, sequence, 
     return ref
 
 
-def plate_count(measurements: Any, options: PlateOptions = PlateOptions(), sequence: Any = None) -> int:
+def plate_count(
+    measurements: Any, options: PlateOptions = PlateOptions(), sequence: Any = None
+) -> int:
     """How many plates (and take frames) :func:`write_capture` writes (for a progress bar)."""
     per_env = sum(
         1 + (e.black_level is not None) + (options.footage_frames if e.w_avg is not None else 0)

@@ -139,9 +139,10 @@ def frame_drives(sequence: PatternSequence) -> Callable[[np.ndarray], np.ndarray
             if sequence.file_format != "exr":
                 full = 2 ** FILE_FORMATS[sequence.file_format] - 1
                 value = np.round(value * full) / full  # the code value, as the wall receives it
-                value = _wall_decode(value, sequence) / _wall_decode(
-                    np.array([_top_signal(sequence)]), sequence
-                )[0]
+                value = (
+                    _wall_decode(value, sequence)
+                    / _wall_decode(np.array([_top_signal(sequence)]), sequence)[0]
+                )
             table[frame] = value
 
     def lookup(frames: np.ndarray) -> np.ndarray:

@@ -156,7 +156,9 @@ def _predicted_mean(solution: Solution, xyz: np.ndarray, white: int) -> float | 
     target = np.asarray(charts["target"], dtype=np.float64)
     if shown.shape != target.shape:
         return None
-    return float(np.mean(chart_errors(shown, target, camera_to_xyz=xyz, white_patch=white).delta_E_2000))
+    return float(
+        np.mean(chart_errors(shown, target, camera_to_xyz=xyz, white_patch=white).delta_E_2000)
+    )
 
 
 def compare_take(
@@ -178,21 +180,28 @@ def compare_take(
 
     charts = sorted(sequence.of_kind("chart"), key=lambda p: p.index or 0)
     if not charts:
-        raise InputError("the sequence shows no chart: write it with ocio-vp patterns --validate", source=sequence.source)
+        raise InputError(
+            "the sequence shows no chart: write it with ocio-vp patterns --validate",
+            source=sequence.source,
+        )
     intended = np.array([p.content for p in charts], dtype=np.float64)
     measured = np.array([reading.patches[p.name].mean for p in charts])
     corrected = post_correct(solution)(measured) if solution.N is not None else measured
     white = int(solution.diagnostics.get("white_patch") or 18)
     white = white if 0 <= white < len(charts) else int(np.argmax(intended.sum(axis=1)))
     display = camera_to_display([solution], [intended])
-    errors = chart_errors(corrected, intended, camera_to_xyz=display.camera_to_xyz, white_patch=white)
+    errors = chart_errors(
+        corrected, intended, camera_to_xyz=display.camera_to_xyz, white_patch=white
+    )
     light = in_frustum_light(solution, intended)
     shown = np.all((light >= -GAMUT_TOLERANCE) & (light <= 1 + GAMUT_TOLERANCE), axis=1)
     expected = expected_camera(solution, light)
     expected = post_correct(solution)(expected) if solution.N is not None else expected
     limit = chart_errors(expected, intended, camera_to_xyz=display.camera_to_xyz, white_patch=white)
     if not np.any(shown):
-        raise InputError("no chart patch is within the wall's range at this exposure", source=sequence.source)
+        raise InputError(
+            "no chart patch is within the wall's range at this exposure", source=sequence.source
+        )
     names = _names(len(charts))
     patches = tuple(
         PatchResult(

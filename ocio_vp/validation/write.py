@@ -58,7 +58,9 @@ def _rgb(values: np.ndarray) -> list[float]:
     return [float(v) for v in values]
 
 
-def validation_document(result: ValidationResult, reading: TakeReading, *, sources: dict[str, Any]) -> dict[str, Any]:
+def validation_document(
+    result: ValidationResult, reading: TakeReading, *, sources: dict[str, Any]
+) -> dict[str, Any]:
     """The ``validation.json`` document (plain types)."""
     worst = result.worst
     a = reading.alignment
@@ -123,7 +125,9 @@ def _swatches(result: ValidationResult) -> str:
         x, y = (k % columns) * (size + 10), (k // columns) * (size + 26)
         top = _srgb(matrix @ p.intended * scale)
         bottom = _srgb(matrix @ p.corrected * scale)
-        parts.append(f'<rect x="{x}" y="{y}" width="{size}" height="{size // 2}" fill="{hex_colour(top)}"/>')
+        parts.append(
+            f'<rect x="{x}" y="{y}" width="{size}" height="{size // 2}" fill="{hex_colour(top)}"/>'
+        )
         parts.append(
             f'<rect x="{x}" y="{y + size // 2}" width="{size}" height="{size // 2}" fill="{hex_colour(bottom)}"/>'
         )
@@ -171,7 +175,9 @@ def write_validation(
     folder.mkdir(parents=True, exist_ok=True)
     lines = summary_lines(result, reading)
     document = validation_document(result, reading, sources=sources)
-    (folder / "validation.json").write_text(json.dumps(document, indent=2, allow_nan=False) + "\n", "utf-8")
+    (folder / "validation.json").write_text(
+        json.dumps(document, indent=2, allow_nan=False) + "\n", "utf-8"
+    )
     write_contact_sheet(reading, folder / SHEET)
     (folder / "index.html").write_text(_html(result, reading, lines), "utf-8")
     return lines
