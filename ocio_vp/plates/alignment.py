@@ -242,6 +242,13 @@ def _place(marks: list, source: object) -> tuple[float, float, list[int]]:
             best = (key, offset, rate, agree)
     if best is None:
         found = len({g for g, _, _ in marks})
+        if found >= 2:
+            raise InputError(
+                f"the take does not match the sequence: {found} of its sync marks (white "
+                "flashes) are seen, but not at the times sequence.yaml puts them; is this the "
+                "sequence that was played (its --hold and --fps)?",
+                source=source,
+            )
         raise InputError(
             f"the pattern sequence was not found in the take: {found} of its sync marks "
             "(white flashes) seen where at least 2 are needed; is this a take of that sequence, "
