@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from ocio_vp.commands.common import warn
+
 __all__ = ["FAILED_STATUS", "add_parser", "run"]
 
 #: Exit status of a validation that ran and failed its threshold (2 is a user mistake).
@@ -124,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
         lines = write_validation(result, reading, stage / "out", sources=sources)
         publish_dir(stage / "out", final, inputs=[args.environment, args.sequence, take_folder])
     for warning in reading.warnings:
-        print(f"warning: {warning}")
+        warn("validate", warning)
     print("\n".join(lines))
     print(f"wrote {final}/validation.json, index.html and take.png")
     return 0 if result.passed else FAILED_STATUS

@@ -9,6 +9,7 @@ the sync marks in yellow. Drawn with matplotlib (Agg).
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -36,10 +37,8 @@ def _thumbnail(reading: TakeReading) -> tuple[np.ndarray, int, int]:
     rows = []
     for y in range(info.y, info.y + info.height, step * 64):
         y1 = min(y + step * 64, info.y + info.height)
-        band = read_region(
-            type(info)(**{**info.__dict__, "path": str(reading.paths[index])}),
-            (info.x, y, info.x + info.width, y1),
-        )
+        frame_info = dataclasses.replace(info, path=str(reading.paths[index]))
+        band = read_region(frame_info, (info.x, y, info.x + info.width, y1))
         rows.append(band[::step, ::step])
     image = np.concatenate(rows, axis=0)
     return tone_map(image, white=float(np.max(brightest.mean)) * 1.1), step, frame

@@ -206,7 +206,9 @@ def _sample_regions(
 def measure_steps(capture: Capture) -> int:
     """How many times :func:`measure_capture` calls ``on_step`` (the take's frames count apart)."""
     blacks = sum(env.black_level is not None for env in capture.environments)
-    return bool(capture.primaries) + len(capture.lit_chart) + len(capture.environments) + blacks
+    return (
+        int(bool(capture.primaries)) + len(capture.lit_chart) + len(capture.environments) + blacks
+    )
 
 
 def take_sections(reading: TakeReading) -> dict[str, Any]:

@@ -22,6 +22,7 @@ into the displayed chart.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -286,8 +287,8 @@ def measure_take(
         clip_level=clip,
         paths=tuple(paths),
     )
-    warnings = _check_exposure(reading, by_index, kept, source)
-    return TakeReading(**{**reading.__dict__, "warnings": (*_alignment_notes(reading), *warnings)})
+    _check_exposure(reading, by_index, kept, source)
+    return dataclasses.replace(reading, warnings=tuple(_alignment_notes(reading)))
 
 
 def _alignment_notes(reading: TakeReading) -> list[str]:
@@ -334,8 +335,8 @@ def _bright_patches(reading: TakeReading) -> tuple[str, list[str]]:
     return brightest, charts
 
 
-def _check_exposure(reading: TakeReading, by_index, kept, source) -> list[str]:
-    """Refuse clipping and under-exposure (module docstring, 5); return warnings."""
+def _check_exposure(reading: TakeReading, by_index, kept, source) -> None:
+    """Refuse clipping and under-exposure (module docstring, 5)."""
     key = reading.take.key
     clip = reading.clip_level
     reference, judged = _bright_patches(reading)
@@ -386,7 +387,6 @@ def _check_exposure(reading: TakeReading, by_index, kept, source) -> list[str]:
             source=source,
             key=key,
         )
-    return []
 
 
 def _check_matches(reading: TakeReading, source) -> None:

@@ -14,6 +14,7 @@ stays (nearly) the same, so the wall is where the picture changes most over the 
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -107,7 +108,7 @@ def find_wall(
     picks = np.unique(np.linspace(0, len(paths) - 1, min(SAMPLES, len(paths))).round().astype(int))
     frames = []
     for k in picks:
-        frame_info = info if k == 0 else PlateInfo(**{**info.__dict__, "path": str(paths[k])})
+        frame_info = info if k == 0 else dataclasses.replace(info, path=str(paths[k]))
         frames.append(_reduced(frame_info, factor))
     mask = wall_mask(np.stack(frames))
     rect = largest_rectangle(mask)
