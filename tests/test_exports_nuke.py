@@ -13,11 +13,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import oracle_correction
 from test_exports_unreal import run_tool, solve_to
 
 from ocio_vp.errors import InputError
 from ocio_vp.exports import export_solutions
 from ocio_vp.formats.solution import load_solution
+from ocio_vp.model import correction_to_dict
 
 NODE_CLASSES = ("Root", "Group", "Input", "OCIONamedTransform", "ColorMatrix", "Output")
 #: Every class the harness knows (a root-polynomial Q adds its CLF fallback node).
@@ -144,10 +146,18 @@ class TestNukeScript:
 def test_root_polynomial_q_has_its_clf_fallback(tmp_path):
     """A root-polynomial Q: the OCIO node reads the config's LUT bake; a disabled
     OCIOFileTransform reads the Q CLF sidecar (valid for ociochecklut, and the exact model
-    within the bake limit); the ColorMatrix is labelled as the 3x3 approximation."""
-    (folder,) = solve_to(tmp_path / "solved", environments=1, method="root-polynomial")
+    within the bake limit); the ColorMatrix is labelled as the 3x3 approximation. A simulated
+    stage: a root-polynomial fitted to the synthetic random chart of the other tests folds."""
+    from ocio_vp.ocio import write_solutions
+    from ocio_vp.pipeline import solve_environment
+    from ocio_vp.simulator.stage import paper_stage_measurements
+
+    m = paper_stage_measurements(("incandescent",))
+    solution = solve_environment(m, m.environments[0], method="root-polynomial")
+    write_solutions([solution], tmp_path / "solved")
+    folder = tmp_path / "solved" / "incandescent"
     export_solutions([folder], targets=["nuke"])
-    nodes = parse_nk(folder / "exports" / "nuke" / "env_0.nk", tmp_path)
+    nodes = parse_nk(folder / "exports" / "nuke" / "incandescent.nk", tmp_path)
     classes = [cls for cls, _ in nodes]
     assert classes == [*NODE_CLASSES[:4], "OCIOFileTransform", *NODE_CLASSES[4:], "end_group"]
     knobs = dict(nodes)
@@ -156,11 +166,9 @@ def test_root_polynomial_q_has_its_clf_fallback(tmp_path):
     assert knobs["OCIOFileTransform"]["disable"] == "true"
     assert "3x3 approximation" in knobs["ColorMatrix"]["label"]
     solution = load_solution(folder)
-    C = np.asarray(solution.diagnostics["method_notes"]["root_polynomial"]["coefficients"])
     rgb = np.array([0.3, 0.2, 0.1])
     result = run_tool("ociochecklut", str(lut), *map(str, rgb))
     assert result.returncode == 0, result.stdout + result.stderr
     got = np.array(result.stdout.split()[-3:], dtype=float)
-    terms = [rgb[0], rgb[1], rgb[2], *np.sqrt(rgb[[0, 1, 0]] * rgb[[1, 2, 2]])]
-    expected = C @ np.array(terms)
+    expected = oracle_correction(correction_to_dict(solution.correction), rgb)
     assert np.abs(got - expected).max() <= 1e-3 * np.abs(expected).max()

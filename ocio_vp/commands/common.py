@@ -37,15 +37,14 @@ class HelpFormatter(argparse.HelpFormatter):
 
 def add_method_argument(parser: argparse.ArgumentParser) -> None:
     """``--method``, its choices listed from the Q-solve registry, default the library's."""
-    from ocio_vp.correction.registry import Q_SOLVE_METHODS
-    from ocio_vp.pipeline import DEFAULT_METHOD
+    from ocio_vp.choices import DEFAULT_METHOD, Q_METHODS
 
     parser.add_argument(
         "--method",
-        choices=tuple(Q_SOLVE_METHODS),
+        choices=Q_METHODS,
         default=DEFAULT_METHOD,
         metavar="METHOD",
-        help="Q-solve method, one of: " + ", ".join(Q_SOLVE_METHODS) + ". "
+        help="Q-solve method, one of: " + ", ".join(Q_METHODS) + ". "
         f"'{DEFAULT_METHOD}' picks the simplest model the scene needs; 'least-squares' is the "
         f"paper's eq. 5 (default: {DEFAULT_METHOD})",
     )

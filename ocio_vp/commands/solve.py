@@ -5,11 +5,18 @@ from __future__ import annotations
 import argparse
 from collections.abc import Sequence
 
+from ocio_vp.choices import (
+    BLACK_LEVEL_METHODS,
+    DEFAULT_BLACK_LEVEL,
+    DEFAULT_PEAK_NITS,
+    DEFAULT_WALL_ENCODING,
+    WALL_ENCODINGS,
+)
 from ocio_vp.commands.common import add_method_argument, progress, summary_table, warn
 
 __all__ = ["add_parser", "print_fixtures", "print_linearity", "run"]
 
-PEAK_NITS_DEFAULT = 1000.0
+PEAK_NITS_DEFAULT = DEFAULT_PEAK_NITS
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -33,9 +40,17 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "(default: drive the fixtures with the wall, docs/fixtures.md)",
     )
     parser.add_argument(
+        "--protect-emitters",
+        action="store_true",
+        help="for scenes with practicals, screens or neon in frame: the post-correction fades to "
+        "the identity where no reflective surface lit by the wall can be (brighter than white in "
+        "an LED channel, or needing negative light); by default it fades to the 3x3 there "
+        "(docs/stability.md)",
+    )
+    parser.add_argument(
         "--black-level",
-        choices=("exact", "paper"),
-        default="exact",
+        choices=BLACK_LEVEL_METHODS,
+        default=DEFAULT_BLACK_LEVEL,
         help="in-frustum black-level offset: exact (-M b, default) or the paper's b/w_camera",
     )
     parser.add_argument(
@@ -71,10 +86,16 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         metavar="N",
         help="resolution the HDRI is integrated at (default 1024; see docs/performance.md)",
     )
+    _add_wall_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def _add_wall_arguments(parser: argparse.ArgumentParser) -> None:
+    """The wall's signal encoding and peak luminance."""
     parser.add_argument(
         "--wall-encoding",
-        choices=("linear", "gamma2.4", "srgb", "pq"),
-        default="linear",
+        choices=WALL_ENCODINGS,
+        default=DEFAULT_WALL_ENCODING,
         help="signal the wall colorspaces output (after M/N and the linearity LUT): linear "
         "drive (default), gamma 2.4, sRGB (IEC 61966-2-1) or SMPTE ST 2084 PQ "
         "(see docs/linearity.md)",
@@ -86,7 +107,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="with --wall-encoding pq only: luminance (cd/m2) of drive 1.0, the level of the "
         f"measured primaries (default: {PEAK_NITS_DEFAULT:g})",
     )
-    parser.set_defaults(func=run)
 
 
 def print_fixtures(solutions: Sequence) -> None:
@@ -179,29 +199,18 @@ def _solve_and_write(args: argparse.Namespace, peak_nits: float, pool) -> list:
 
 def _solve(measurements, environments, args: argparse.Namespace) -> list:
     """Every environment, on a Dask cluster or here (with a progress bar on a terminal)."""
-    from ocio_vp.pipeline import solve_environment
+    from ocio_vp.pipeline import SolveOptions, solve_environment
 
+    options = SolveOptions(
+        method=args.method,
+        black_level=args.black_level,
+        fixtures=not args.no_fixtures,
+        keep_all_patches=args.keep_all_patches,
+        protect_emitters=args.protect_emitters,
+    )
     if args.scheduler:
         from ocio_vp.footage.distributed import solve_environments
 
-        return solve_environments(
-            measurements,
-            environments,
-            scheduler=args.scheduler,
-            method=args.method,
-            black_level=args.black_level,
-            fixtures=not args.no_fixtures,
-            keep_all_patches=args.keep_all_patches,
-        )
+        return solve_environments(measurements, environments, options, scheduler=args.scheduler)
     bar = progress(environments, desc="solving", unit="environment")
-    return [
-        solve_environment(
-            measurements,
-            env,
-            method=args.method,
-            black_level=args.black_level,
-            fixtures=not args.no_fixtures,
-            keep_all_patches=args.keep_all_patches,
-        )
-        for env in bar
-    ]
+    return [solve_environment(measurements, env, options) for env in bar]

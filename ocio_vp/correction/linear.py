@@ -37,6 +37,7 @@ from ocio_vp.correction.perceptual import patch_delta_e
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import error_relative_to_white, white_scale
+from ocio_vp.model.correction import MatrixCorrection
 
 __all__ = [
     "AUTO_LADDER",
@@ -459,7 +460,7 @@ def _method(name: str, description: str) -> Callable[[QProblem], QFit]:
 
     def solve(problem: QProblem) -> QFit:
         X, P, w, white = problem_arrays(problem)
-        return QFit(Q=kernel(X, P, w, white), notes={"model": name, "description": description})
+        return QFit(MatrixCorrection(kernel(X, P, w, white)), name, description)
 
     solve.__name__ = "q_" + name.replace("-", "_")
     solve.__doc__ = f"Q by the {name!r} model: {description}."
@@ -480,13 +481,11 @@ def q_regularised(problem: QProblem) -> QFit:
     alpha = choose_shrinkage(X, P, w, white)
     Q = _fit_diagonal(X, P, w, white) if not np.isfinite(alpha) else _ridge(X, P, w, alpha)
     return QFit(
-        Q=Q,
-        notes={
-            "model": "regularised",
-            "description": "least squares + alpha*trace(X^T W X)/3*||Q - D||^2, D = white "
-            "balance, alpha with the lowest leave-one-patch-out ΔE2000",
-            "shrinkage": alpha,
-        },
+        MatrixCorrection(Q),
+        "regularised",
+        "least squares + alpha*trace(X^T W X)/3*||Q - D||^2, D = white balance, alpha with the "
+        "lowest leave-one-patch-out ΔE2000",
+        details={"shrinkage": alpha},
     )
 
 

@@ -3,10 +3,9 @@
 The colour maths is the solution's own OCIO config, ``Stage Footage`` -> reference (Q, the
 paper's post-correction, eq. 5, plus whatever that colorspace carries), run by OCIO's CPU
 processor in place (``apply(PackedImageDesc)``; ``applyRGB`` on a numpy array is ~10x slower)
-through the pluggable :class:`PixelTransform` (:data:`TRANSFORMS`). A root-polynomial Q is
-applied exactly instead (:class:`RootPolynomialTransform`: float64 maths, not the config's
-baked LUT), with the same sign-preserving roots as the fit: zeros give zero and negatives
-(noise around black) give finite values continuous with the positive side. Every other channel (alpha,
+through the pluggable :class:`PixelTransform` (:data:`TRANSFORMS`). A non-linear Q (a bounded
+root-polynomial, an emitter-protected one) is applied exactly instead (:class:`ModelTransform`:
+float64 maths of :mod:`ocio_vp.model`, not the config's baked LUT). Every other channel (alpha,
 depth, AOVs), every subimage, the metadata, data and display windows, tiling, pixel formats and
 compression of each input are kept.
 
@@ -29,6 +28,7 @@ from __future__ import annotations
 
 import functools
 import itertools
+import json
 import os
 import time
 from collections.abc import Callable
@@ -41,16 +41,17 @@ import numpy as np
 
 from ocio_vp.errors import InputError
 from ocio_vp.footage.sequences import MARK, foreign_output_error
+from ocio_vp.model.correction import correction_from_dict, correction_to_dict
 
 __all__ = [
     "OPTIMIZATIONS",
     "TRANSFORMS",
     "FrameResult",
     "FrameTask",
+    "ModelTransform",
     "OcioTransform",
     "PixelTransform",
     "PostCorrection",
-    "RootPolynomialTransform",
     "apply_file",
     "apply_in_place",
     "cpu_processor",
@@ -73,8 +74,9 @@ class PostCorrection:
     """Which OCIO conversion post-corrects footage: ``source`` -> ``target`` in ``config``.
 
     ``kind`` names the :data:`TRANSFORMS` factory that turns it into a :class:`PixelTransform`;
-    ``coefficients`` is a root-polynomial Q's (3, terms) model (kind ``root-polynomial``),
-    as nested tuples so that the post-correction stays hashable and picklable.
+    ``model`` is a non-linear post-correction's ``post_correction`` block as JSON text (kind
+    ``model``: :mod:`ocio_vp.model`, applied exactly), so that this stays hashable and
+    picklable.
     """
 
     config: str
@@ -82,7 +84,7 @@ class PostCorrection:
     target: str
     environment: str = ""
     kind: str = "ocio"
-    coefficients: tuple[tuple[float, ...], ...] = ()
+    model: str = ""
 
 
 def load_post_correction(solution_dir: str | Path) -> PostCorrection:
@@ -111,11 +113,10 @@ def load_post_correction(solution_dir: str | Path) -> PostCorrection:
         raise InputError(
             f"cannot build the post-correction: {exc}", source=str(config_path)
         ) from None
-    model = (solution.diagnostics.get("method_notes") or {}).get("root_polynomial")
-    if model is not None:  # the exact model, not the config's LUT bake of it
-        coefficients = tuple(tuple(float(v) for v in row) for row in model["coefficients"])
+    if not solution.correction.linear:  # the exact model, not the config's LUT bake of it
+        model = json.dumps(correction_to_dict(solution.correction), sort_keys=True)
         return PostCorrection(
-            str(config_path), source, target, solution.environment, "root-polynomial", coefficients
+            str(config_path), source, target, solution.environment, "model", model
         )
     return PostCorrection(str(config_path), source, target, solution.environment)
 
@@ -179,52 +180,40 @@ class OcioTransform:
 
 
 @dataclass(frozen=True)
-class RootPolynomialTransform:
-    """A :class:`PixelTransform` applying a root-polynomial Q exactly: ``C e(x)`` in float64.
+class ModelTransform:
+    """A :class:`PixelTransform` applying a non-linear post-correction exactly, in float64
+    (:meth:`ocio_vp.model.correction.RootPolynomialCorrection.apply` and the other kinds).
 
-    Pixels are converted to float64 in bands of :attr:`band` pixels (bounded memory, ~100 bytes
-    per pixel of the band for degree 2; 16384 pixels keep a band's temporaries in the CPU's
-    cache, several times faster than larger bands) and stored back in the buffer's own type (a
-    half result that overflows becomes inf, as OCIO's half output does). Roots are sign-preserving
-    (``sign(p)|p|^(1/k)``), as in the fit: 0 maps to 0, and a negative channel gives a finite
-    value continuous with the positive side (for degree 2 and a pixel (r, g, b) with r < 0 < g,
-    ``sqrt(rg)`` is ``-sqrt(|rg|)``).
+    Pixels are converted to float64 in bands of :attr:`band` pixels (bounded memory; 16384
+    pixels keep a band's temporaries in the CPU's cache, several times faster than larger
+    bands) and stored back in the buffer's own type (a half result that overflows becomes inf,
+    as OCIO's half output does). Roots are sign-preserving, as in the fit: 0 maps to 0, and a
+    negative channel gives a finite value continuous with the positive side.
     """
 
-    coefficients: np.ndarray
+    correction: Any
     band: int = 1 << 14
 
     def __call__(self, rgb: np.ndarray) -> None:
-        model = _exact_model()
         flat = rgb.reshape(-1, 3)  # a view when rgb is C-contiguous (the protocol), else a copy
         for start in range(0, len(flat), self.band):
             block = flat[start : start + self.band]
             with np.errstate(over="ignore"):  # half overflow: inf, documented above
-                block[...] = model(self.coefficients, block)
+                block[...] = self.correction.apply(block)
         if not np.shares_memory(flat, rgb):
             rgb[...] = flat.reshape(rgb.shape)
 
 
-def _exact_model() -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-    # Deferred: the correction package (its solvers, ~0.1 s of imports) is needed only by
-    # root-polynomial solutions; OCIO ones never load it.
-    from ocio_vp.correction.root_polynomial import apply_root_polynomial
-
-    return apply_root_polynomial
-
-
-def _root_polynomial(pc: PostCorrection) -> RootPolynomialTransform:
-    coefficients = np.asarray(pc.coefficients, dtype=np.float64)
-    _exact_model()(coefficients, np.ones((1, 3)))  # checks the shape, with a clear error
-    return RootPolynomialTransform(coefficients)
+def _model(pc: PostCorrection) -> ModelTransform:
+    return ModelTransform(correction_from_dict(json.loads(pc.model)))
 
 
 #: How to build the per-pixel transform of a :class:`PostCorrection`, by its ``kind``: an OCIO
-#: conversion in the solution's config, or the exact root-polynomial model (which the config
-#: can only carry as a LUT bake). Another kind registers its factory here.
+#: conversion in the solution's config, or the exact non-linear model (which the config can
+#: only carry as a LUT bake). Another kind registers its factory here.
 TRANSFORMS: dict[str, Callable[[PostCorrection], PixelTransform]] = {
     "ocio": lambda pc: OcioTransform(cpu_processor(pc), cpu_processor(pc, bit_depth="f16")),
-    "root-polynomial": _root_polynomial,
+    "model": _model,
 }
 
 

@@ -24,7 +24,7 @@ import numpy as np
 import PyOpenColorIO as OCIO
 
 from ocio_vp.calibration.diagnostics import is_identity, offset_is_negligible
-from ocio_vp.calibration.equations import MAX_CONDITION_Q_FOR_N
+from ocio_vp.calibration.equations import MAX_CONDITION_Q_FOR_N, condition_text
 from ocio_vp.formats.solution import Solution
 
 __all__ = [
@@ -72,20 +72,37 @@ def matrix_transform(
     offset: Sequence[float] | np.ndarray | None = None,
     direction: OCIO.TransformDirection = OCIO.TRANSFORM_DIR_FORWARD,
 ) -> OCIO.MatrixTransform:
-    """An OCIO MatrixTransform computing ``matrix @ rgb + offset`` (alpha untouched)."""
+    """An OCIO MatrixTransform computing ``matrix @ rgb + offset`` (alpha untouched).
+
+    Values are written to 12 significant digits, and an entry below 1e-12 of the largest as 0:
+    the digits beyond are rounding of the solve (they differ between machines), and 1e-12 is
+    far below any camera's precision.
+    """
     m44 = np.eye(4)
-    m44[:3, :3] = np.asarray(matrix, dtype=np.float64)
+    m44[:3, :3] = _significant(np.asarray(matrix, dtype=np.float64))
     off = np.zeros(4)
     if offset is not None:
-        off[:3] = np.asarray(offset, dtype=np.float64)
+        off[:3] = _significant(np.asarray(offset, dtype=np.float64))
     return OCIO.MatrixTransform(
         matrix=[float(v) for v in m44.ravel()], offset=[float(v) for v in off], direction=direction
     )
 
 
+def _significant(values: np.ndarray) -> np.ndarray:
+    """``values`` to 12 significant digits, entries below 1e-12 of the largest set to 0."""
+    top = float(np.max(np.abs(values), initial=0.0))
+    values = np.where(np.abs(values) <= 1e-12 * top, 0.0, values)
+    return np.array([float(f"{v:.12g}") for v in values.ravel()]).reshape(values.shape)
+
+
 def _fmt(matrix: np.ndarray | None) -> str:
+    """A matrix as descriptions print it: 6 digits; an entry below 1e-12 of the largest is
+    rounding (its digits differ between machines) and prints as 0."""
     if matrix is None:
         return "none"
+    matrix = np.asarray(matrix, dtype=np.float64)
+    floor = 1e-12 * float(np.max(np.abs(matrix), initial=0.0))
+    matrix = np.where(np.abs(matrix) <= floor, 0.0, matrix)
     return "[" + "; ".join(" ".join(f"{v:.6g}" for v in row) for row in matrix) + "]"
 
 
@@ -168,7 +185,7 @@ def post_correction_transforms(
     pinv = (Vt.T[:, keep] / sigma[keep]) @ U[:, keep].T
     note = (
         f"Q has rank {int(keep.sum())} at cond <= {MAX_CONDITION_Q_FOR_N:g} (cond(Q) "
-        f"{np.linalg.cond(Q):.3g}): it cannot be inverted, so the inverse direction (reference "
+        f"{condition_text(float(np.linalg.cond(Q)))}): it cannot be inverted, so the inverse direction (reference "
         f"-> Stage Footage, the inverse of the named transform) is Q's truncated pseudo-inverse "
         f"{_fmt(pinv)}, bounded, not a true inverse."
     )
@@ -213,7 +230,7 @@ def build_config(
     *,
     extra_wall_transforms: dict[str, list[OCIO.Transform]] | None = None,
     search_path: str | None = None,
-    q_files: tuple[str, str] | None = None,
+    q_files: tuple[str, str | None] | None = None,
 ) -> OCIO.Config:
     """Build and validate the OCIO config for one solved environment.
 
@@ -350,7 +367,7 @@ def _add_post_correction(
     config: OCIO.Config,
     solution: Solution,
     origin: str,
-    q_files: tuple[str, str] | None = None,
+    q_files: tuple[str, str | None] | None = None,
 ) -> None:
     """Q twice: the ``Stage Footage`` colorspace and the ``Post-Correction Q`` named transform.
 
@@ -383,9 +400,17 @@ def _add_post_correction(
         family="Camera",
     )
     forward, inverse, inverse_text = post_correction_transforms(solution)
-    if q_files is not None:  # a root-polynomial Q: its LUT sidecars (N is solved, Q inverts)
-        forward, inverse = OCIO.FileTransform(src=q_files[0]), OCIO.FileTransform(src=q_files[1])
-        inverse_text = f"The inverse direction is the baked Q^-1 ({q_files[1]})."
+    if q_files is not None:  # a non-linear Q: its LUT sidecars
+        forward = OCIO.FileTransform(src=q_files[0])
+        if q_files[1] is not None:
+            inverse = OCIO.FileTransform(src=q_files[1])
+            inverse_text = f"The inverse direction is the baked Q^-1 ({q_files[1]})."
+        elif inverse is None:  # a Q^-1 is not baked where N is not solved: its 3x3's inverse
+            inverse = matrix_transform(np.linalg.inv(solution.Q))
+            inverse_text = (
+                "The inverse direction is the inverse of Q's 3x3 (N is not solved here, so Q^-1 "
+                "is not baked): it undoes the matrix, not the non-linear model."
+            )
     if inverse is not None:
         q_text += " " + inverse_text
         footage.setDescription(footage.getDescription() + " " + inverse_text)

@@ -29,6 +29,7 @@ from ocio_vp.calibration.equations import condition_number
 from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import Solution
 from ocio_vp.formats.solution_inputs import solution_folders
+from ocio_vp.model.expansion import root_polynomial_terms
 from ocio_vp.report.data import (
     STAGE_CHARTS,
     EnvironmentData,
@@ -262,35 +263,36 @@ def _fixture_facts(solution: Any) -> list[tuple[str, str]]:
 
 
 def _method(solution: Any) -> str:
-    """The Q method, with the model an automatic method chose (from its notes)."""
-    notes = solution.diagnostics.get("method_notes") or {}
-    model = notes.get("model")
+    """The Q method, the model an automatic method chose, and the post-correction in words."""
+    model = solution.diagnostics.get("model")
     text = solution.method
     if isinstance(model, str) and model != solution.method:
         text = f"{solution.method} → {model}"
-    rp = notes.get("root_polynomial")
-    if isinstance(rp, dict):
-        terms = rp.get("terms") or []
-        text += f" (root-polynomial degree {rp.get('degree')}, {len(rp.get('coefficients', [[]])[0])} terms"
-        text += f": {', '.join(terms)})" if terms else ")"
-    return text
+    return f"{text} ({solution.correction.describe()})"
+
+
+def _polynomial(correction: Any) -> Any:
+    """The root-polynomial inside a correction (protected or not), else None."""
+    inner = correction.inner if correction.kind == "protected" else correction
+    return inner if inner.kind == "root-polynomial" else None
 
 
 def _q_rows(solution: Any) -> list[dict[str, Any]]:
     """Q's matrix; for a root-polynomial Q, its coefficients too (what the config's LUTs and
-    ``ocio-vp apply`` use) and the matrix named as the model's 3x3 approximation."""
-    rp = (solution.diagnostics.get("method_notes") or {}).get("root_polynomial")
-    if not isinstance(rp, dict):
+    ``ocio-vp apply`` use) and the matrix named as the model's 3x3 fallback."""
+    polynomial = _polynomial(solution.correction)
+    if polynomial is None:
         return [_matrix_rows("Q", solution.Q, "post-correction of the footage (eq. 5)")]
-    terms = rp.get("terms") or [f"term {i + 1}" for i in range(len(rp["coefficients"][0]))]
+    terms = root_polynomial_terms(polynomial.degree)
     model = _matrix_rows(
         "Q (root-polynomial)",
-        np.asarray(rp["coefficients"], dtype=np.float64),
-        f"Q(x) = C ({', '.join(terms)}): the footage's post-correction (config LUTs, apply)",
+        polynomial.coefficients,
+        f"Q(x) = C ({', '.join(terms)}) inside the chart's domain: the footage's "
+        "post-correction (config LUTs, apply)",
     )
     model["cond"] = None  # not square
-    approximation = "3x3 approximation of Q (solution.json, N = M Q^-1 there; matrix-only tools)"
-    return [model, _matrix_rows("Q (3x3)", solution.Q, approximation)]
+    fallback = "3x3 fallback of Q outside the chart's domain (solution.json's Q; N = M Q^-1 there)"
+    return [model, _matrix_rows("Q (3x3)", solution.Q, fallback)]
 
 
 def _short(value: Any) -> str:
