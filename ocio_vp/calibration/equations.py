@@ -19,6 +19,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ocio_vp.choices import BLACK_LEVEL_METHODS
 from ocio_vp.errors import InputError
 
 __all__ = [
@@ -45,8 +46,6 @@ MAX_CONDITION_SL = 1e10
 #: chart measurements into more than 100% of the in-frustum drive (as the paper found for
 #: low-pressure sodium, where Q has rank 1).
 MAX_CONDITION_Q_FOR_N = 1e3
-
-BLACK_LEVEL_METHODS = ("exact", "paper")
 
 
 def condition_number(matrix: ArrayLike) -> float:

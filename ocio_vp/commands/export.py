@@ -6,11 +6,12 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ocio_vp.choices import EXPORT_TARGETS
 from ocio_vp.commands.report import SOLUTIONS_HELP
 
 __all__ = ["add_parser", "run"]
 
-TARGETS = ("unreal", "nuke", "resolve", "lights")
+TARGETS = tuple(t for t in EXPORT_TARGETS if t != "all")
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -24,7 +25,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("solution_dirs", nargs="+", metavar="SOLUTION", help=SOLUTIONS_HELP)
     parser.add_argument(
         "--target",
-        choices=(*TARGETS, "all"),
+        choices=EXPORT_TARGETS,
         default="all",
         help="unreal: .ocioz + UNREAL.md + mapping JSON; nuke: .nk; resolve: CLF, DCTL, .cube; "
         "lights: fixture drives and DMX levels (solutions with fixtures); all: every target "

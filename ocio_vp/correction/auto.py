@@ -31,6 +31,7 @@ from ocio_vp.correction.linear import (
     AUTO_LADDER_NARROW,
     AUTO_SE_FACTOR,
     AUTO_TIE,
+    LINE_SPECTRUM_TOLERANCE,
     NARROW_TARGET,
     RANK_RELATIVE_TOLERANCE,
     ROOT_POLYNOMIAL_DEGREES,
@@ -98,9 +99,10 @@ def _auto_reduced_rank(X, P, w, white, rank: int, singular: np.ndarray, details:
     active = w > 0
     reason = (
         f"the target chart has rank {rank} (its singular values relative to the largest, over "
-        f"the lit chart's: {_singular_text(singular)}; below {RANK_RELATIVE_TOLERANCE:g} counts "
-        f"as absent): a near-monochromatic light, so Q is fitted with rank {rank} and cannot be "
-        "inverted; N is not solved"
+        f"the lit chart's: {_singular_text(singular)}; a second one below "
+        f"{LINE_SPECTRUM_TOLERANCE:g} is measurement noise, a third below "
+        f"{RANK_RELATIVE_TOLERANCE:g} counts as absent): a near-monochromatic light, so Q is "
+        f"fitted with rank {rank} and cannot be inverted; N is not solved"
     )
     details["cv_delta_e"] = {name: float(np.mean(patch_errors(held, P, w, white)[0][active]))}
     return QFit(

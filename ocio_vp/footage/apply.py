@@ -39,6 +39,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from ocio_vp.choices import OPTIMIZATIONS  # OCIO optimisation levels (bench_ocio_optim)
 from ocio_vp.errors import InputError
 from ocio_vp.footage.sequences import MARK, foreign_output_error
 from ocio_vp.model.correction import correction_from_dict, correction_to_dict
@@ -64,9 +65,6 @@ __all__ = [
     "store_frame",
     "transform_frame",
 ]
-
-#: OCIO optimisation levels by name (``benchmarks/bench_ocio_optim.py`` measures them).
-OPTIMIZATIONS = ("lossless", "default", "good", "draft")
 
 
 @dataclass(frozen=True)

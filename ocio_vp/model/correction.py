@@ -630,6 +630,11 @@ def correction_from_dict(data: Mapping[str, Any]) -> PostCorrection:
                 tuple(parameters["bright"]),
                 tuple(parameters["negative"]),
             )
+    except InputError as error:
+        key = error.key or ""
+        if not key.startswith("post_correction"):
+            key = f"post_correction.parameters.{key}".rstrip(".")
+        raise InputError(error.problem, key=key) from None
     except (KeyError, TypeError, ValueError) as error:
         raise InputError(f"malformed {kind} parameters ({error})", key="post_correction") from None
     raise InputError(
