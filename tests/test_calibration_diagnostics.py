@@ -175,7 +175,7 @@ def test_solution_json_and_table_carry_the_diagnostics(tmp_path, capsys) -> None
     path.write_text(yaml.safe_dump(make_measurements_dict(environments=1)))
     assert main(["solve", str(path), "--out", str(tmp_path / "out")]) == 0
     table = capsys.readouterr().out
-    for column in ("method", "cond[SL]", "CV M+Q", "drive<0", "clipped"):
+    for column in ("model", "cond[SL]", "CV", "LEDs in frame", "drive<0", "clipped"):
         assert column in table
     solution = json.loads((tmp_path / "out" / "env_0" / "solution.json").read_text())
     d = solution["diagnostics"]

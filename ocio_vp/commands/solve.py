@@ -12,7 +12,8 @@ from ocio_vp.choices import (
     DEFAULT_WALL_ENCODING,
     WALL_ENCODINGS,
 )
-from ocio_vp.commands.common import add_method_argument, progress, summary_table, warn
+from ocio_vp.commands.common import add_method_argument, progress
+from ocio_vp.commands.summary import print_summary
 
 __all__ = ["add_parser", "print_fixtures", "print_linearity", "run"]
 
@@ -95,6 +96,7 @@ def _add_wall_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--wall-encoding",
         choices=WALL_ENCODINGS,
+        type=str.lower,
         default=DEFAULT_WALL_ENCODING,
         help="signal the wall colorspaces output (after M/N and the linearity LUT): linear "
         "drive (default), gamma 2.4, sRGB (IEC 61966-2-1) or SMPTE ST 2084 PQ "
@@ -153,17 +155,21 @@ def run(args: argparse.Namespace) -> int:
     from ocio_vp.errors import InputError
     from ocio_vp.ocio.writer import writer_pool
 
+    # An option that would be ignored is a mistake: said at once, nothing written.
     if args.peak_nits is not None and args.wall_encoding != "pq":
-        warn("solve", f"--peak-nits has no effect with --wall-encoding {args.wall_encoding}")
+        raise InputError(
+            f"applies only to a PQ wall (--wall-encoding pq), not {args.wall_encoding}",
+            key="--peak-nits",
+        )
     peak_nits = PEAK_NITS_DEFAULT if args.peak_nits is None else args.peak_nits
     if not 0 < peak_nits <= 10000:
         raise InputError(f"expected 0 < cd/m2 <= 10000, got {peak_nits:g}", key="--peak-nits")
     if args.hdri_width is not None and not args.hdri:
-        warn("solve", "--hdri-width has no effect without --hdri")
+        raise InputError("applies only with --hdri", key="--hdri-width")
     # The writing helper starts first, so that its imports overlap loading and solving.
-    with writer_pool(args.method) as pool:
+    with writer_pool(args.method, protect_emitters=args.protect_emitters) as pool:
         written = _solve_and_write(args, peak_nits, pool)
-    print(summary_table(written))
+    print_summary(written)
     print_fixtures(written)
     print_linearity(written)
     print(f"wrote {len(written)} environment(s) to {args.out}")

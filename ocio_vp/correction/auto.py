@@ -65,29 +65,35 @@ def _label(name: str) -> str:
     return _NAMES.get(name, name)
 
 
+def _g(value: float, digits: int = 3, sign: str = "") -> str:
+    """A ΔE figure as the reason prints it; below 1e-9 it is rounding, printed as 0."""
+    return f"{value:{sign}.{digits}g}" if abs(value) >= 1e-9 else "0"
+
+
 def _auto_reason(chosen: str, table: dict, factor: float, reference: str, unit: str) -> str:
     row = table[chosen]
     rest = ", ".join(
-        f"{_label(k)} {v['mean']:.3g} ({v['difference']:+.2g} ± {v['standard_error']:.2g})"
+        f"{_label(k)} {_g(v['mean'])} ({_g(v['difference'], 2, '+')} ± "
+        f"{_g(v['standard_error'], 2)})"
         for k, v in table.items()
         if k not in (chosen, reference)
     )
     if chosen == reference:
         head = (
             f"{reference} (the paper's eq. 5): leave-one-patch-out mean {unit} "
-            f"{row['mean']:.3g}; no other model is better by more than {factor:g} standard "
+            f"{_g(row['mean'])}; no other model is better by more than {factor:g} standard "
             "error of the paired per-patch differences"
         )
     elif abs(row["difference"]) <= AUTO_TIE:
         head = (
-            f"{_label(chosen)}: leave-one-patch-out mean {unit} {row['mean']:.3g}, the same "
+            f"{_label(chosen)}: leave-one-patch-out mean {unit} {_g(row['mean'])}, the same "
             f"as {reference}'s: the simplest model that fits as well"
         )
     else:
         head = (
-            f"{_label(chosen)}: leave-one-patch-out mean {unit} {row['mean']:.3g}, better than "
-            f"{reference}'s {table[reference]['mean']:.3g} by {-row['difference']:.2g} ± "
-            f"{row['standard_error']:.2g} (more than {factor:g} standard error of the paired "
+            f"{_label(chosen)}: leave-one-patch-out mean {unit} {_g(row['mean'])}, better than "
+            f"{reference}'s {_g(table[reference]['mean'])} by {_g(-row['difference'], 2)} ± "
+            f"{_g(row['standard_error'], 2)} (more than {factor:g} standard error of the paired "
             "per-patch differences)"
         )
     return f"{head}; others (difference from {reference}): {rest}; {DEGREE_3_EXCLUDED}"

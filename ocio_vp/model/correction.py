@@ -501,11 +501,14 @@ class ProtectedCorrection:
         return newton_inverse(self.apply, rgb, self.inner.matrix, homogeneous=False)
 
     def describe(self) -> str:
+        return f"{self.inner.describe()}; emitters protected: {self.protection()}"
+
+    def protection(self) -> str:
+        """Where the identity takes over, in words."""
         return (
-            f"{self.inner.describe()}; emitters protected: the identity above "
-            f"{self.bright[1]:g}x white in any LED channel (fading from {self.bright[0]:g}x) "
-            f"and beyond {self.negative[1]:.0%} negative drive (fading from "
-            f"{self.negative[0]:.0%})"
+            f"the identity above {self.bright[1]:g}x white in any LED channel (fading from "
+            f"{self.bright[0]:g}x) and beyond {self.negative[1]:.0%} negative drive (fading "
+            f"from {self.negative[0]:.0%})"
         )
 
     def parameters(self) -> dict[str, Any]:
