@@ -193,6 +193,8 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
     facts = [
         ("stage", s.stage),
         ("Q method", _method(s)),
+        ("why this model", d.get("model_reason") or "the method asked for"),
+        ("beyond the chart", _beyond_the_chart(s)),
         ("beta (panel form factor)", f"{s.beta:.5f}"),
         ("w_avg (camera RGB)", ", ".join(f"{v:.5g}" for v in s.w_avg)),
         ("out-of-frustum drive M w_avg", _triple(d.get("out_of_frustum_drive"))),
@@ -269,6 +271,30 @@ def _method(solution: Any) -> str:
     if isinstance(model, str) and model != solution.method:
         text = f"{solution.method} → {model}"
     return f"{text} ({solution.correction.describe()})"
+
+
+def _share(value: Any, sign: str = "") -> str:
+    """A share in %; JSON keeps an infinite one as text ("-inf")."""
+    number = float(value)
+    return f"{number:{sign}.0%}" if np.isfinite(number) else f"{number:{sign}}"
+
+
+def _beyond_the_chart(solution: Any) -> str:
+    """The extrapolation figures (docs/stability.md, *Beyond the chart*) and the emitter guard."""
+    figures = solution.diagnostics.get("extrapolation")
+    text = "not measured (a solution written before these figures)"
+    if figures:
+        folds = figures.get("folds")
+        text = (
+            f"the wall's LEDs seen in frame: p95 ΔE2000 {float(figures['led_damage']):.3g} "
+            f"(least squares {float(figures['led_damage_least_squares']):.3g}); bright saturated "
+            f"inputs keep >= {_share(figures['kept'])} of their channel, lowest channel "
+            f"{_share(figures['negative'], '+')} of it; "
+            + ("no inverse" if folds is None else f"folds in {folds:.1%} of reflective colours")
+        )
+    if solution.correction.kind == "protected":
+        text += f"; emitter guard: {solution.correction.protection()}"
+    return text
 
 
 def _polynomial(correction: Any) -> Any:
