@@ -10,6 +10,7 @@ from __future__ import annotations
 
 __all__ = [
     "BLACK_LEVEL_METHODS",
+    "DEFAULT_BASE_CONFIG",
     "DEFAULT_BLACK_LEVEL",
     "DEFAULT_METHOD",
     "DEFAULT_PEAK_NITS",
@@ -50,8 +51,11 @@ DEFAULT_WALL_ENCODING = "linear"
 #: Luminance (cd/m2) of drive 1.0 on a PQ wall when none is given.
 DEFAULT_PEAK_NITS = 1000.0
 
-#: ``ocio-vp export --target`` values.
-EXPORT_TARGETS = ("unreal", "nuke", "resolve", "lights", "all")
+#: ``ocio-vp export --target`` values: per environment, then ``all`` of those, then ``show`` (one
+#: config for every given environment, on a base config).
+EXPORT_TARGETS = ("unreal", "nuke", "resolve", "lights", "all", "show")
+#: The show config's default base: OCIO's built-in ACES CG config (every OCIO from 2.2 on).
+DEFAULT_BASE_CONFIG = "ocio://cg-config-v1.0.0_aces-v1.3_ocio-v2.1"
 
 #: OCIO optimisation levels ``apply`` accepts.
 OPTIMIZATIONS = ("lossless", "default", "good", "draft")

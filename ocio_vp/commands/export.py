@@ -6,12 +6,13 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ocio_vp.choices import EXPORT_TARGETS
+from ocio_vp.choices import DEFAULT_BASE_CONFIG, EXPORT_TARGETS
 from ocio_vp.commands.report import SOLUTIONS_HELP
 
 __all__ = ["add_parser", "run"]
 
-TARGETS = tuple(t for t in EXPORT_TARGETS if t != "all")
+#: The per-environment targets ``all`` stands for.
+TARGETS = EXPORT_TARGETS[: EXPORT_TARGETS.index("all")]
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -29,7 +30,16 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         default="all",
         help="unreal: .ocioz + UNREAL.md + mapping JSON; nuke: .nk; resolve: CLF, DCTL, .cube; "
         "lights: fixture drives and DMX levels (solutions with fixtures); all: every target "
-        "that applies (default: all)",
+        "above that applies (default: all); show: OUT/show/config.ocio, one config for all the "
+        "given environments on --base-config, the environment chosen by the context variable "
+        "VP_ENVIRONMENT (needs --out)",
+    )
+    parser.add_argument(
+        "--base-config",
+        metavar="PATH|URI",
+        default=DEFAULT_BASE_CONFIG,
+        help=f"base of --target show: a config file or ocio:// URI (default {DEFAULT_BASE_CONFIG}, "
+        "OCIO's built-in ACES CG config; written out whole)",
     )
     parser.add_argument(
         "--out", default=None, help="output folder (default: exports/ inside each environment)"
@@ -62,6 +72,7 @@ def run(args: argparse.Namespace) -> int:
         out=args.out,
         cube_size=args.cube_size,
         cube_range=tuple(args.cube_range),
+        base_config=args.base_config,
     )
     for result in results:
         print(f"{result.environment}: {result.target} -> {result.folder}")

@@ -58,6 +58,8 @@ def generated_kind(path: Path) -> str | None:
             return "an export folder"
         if path.name.endswith(".overlays"):
             return "an overlay folder"
+        if path.name == "show" and (path / "config.ocio").is_file():
+            return "a show config folder"
         return None
     if path.is_file() and path.suffix.lower() in (".yaml", ".yml", ".json"):
         try:

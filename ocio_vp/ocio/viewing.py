@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import PyOpenColorIO as OCIO
 
+from ocio_vp.choices import DEFAULT_BASE_CONFIG
 from ocio_vp.ocio.camera_log import LogCurve, camera_log_for, log_transform
 from ocio_vp.ocio.matrix import matrix_transform
 
@@ -42,7 +43,7 @@ __all__ = [
 ]
 
 #: OCIO's built-in ACES CG config that every OCIO from 2.2 on has (profile 2.1).
-ACES_CG_CONFIG = "ocio://cg-config-v1.0.0_aces-v1.3_ocio-v2.1"
+ACES_CG_CONFIG = DEFAULT_BASE_CONFIG
 ACESCCT = "ACEScct"
 POST_CORRECTION_LOOK = "Post-Correction Q Look"
 FOOTAGE_VIEW_SUFFIX = " - Stage Footage after Q"
