@@ -221,7 +221,9 @@ def _overlay(base: OCIO.Config, environments: Sequence[ShowEnvironment]) -> OCIO
     aces = base.getRoleColorSpace(AP0_ROLE)
     overlay.addColorSpace(copy.deepcopy(base.getColorSpace(aces)))
     overlay.setRole(AP0_ROLE, aces)
-    overlay.setRole(OCIO.ROLE_DEFAULT, aces)
+    rules = overlay.getFileRules()
+    rules.setDefaultRuleColorSpace(aces)
+    overlay.setFileRules(rules)
     aces_to_base = _base_to_reference(base)
     shared: dict[str, OCIO.ColorSpace] | None = None
     for env in environments:
@@ -297,6 +299,9 @@ def merge_by_api(base: OCIO.Config, overlay: OCIO.Config) -> OCIO.Config:
     for cs in overlay.getColorSpaces(*all_spaces):
         if merged.getColorSpace(cs.getName()) is None:
             merged.addColorSpace(copy.deepcopy(cs))
+    for role, space in overlay.getRoles():
+        if not merged.hasRole(role):
+            merged.setRole(role, space)
     for name in overlay.getNamedTransformNames(OCIO.NAMEDTRANSFORM_ALL):
         if merged.getNamedTransform(name) is None:
             merged.addNamedTransform(copy.deepcopy(overlay.getNamedTransform(name)))
