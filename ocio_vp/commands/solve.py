@@ -15,7 +15,7 @@ from ocio_vp.choices import (
 from ocio_vp.commands.common import add_method_argument, progress
 from ocio_vp.commands.summary import print_summary
 
-__all__ = ["add_parser", "print_fixtures", "print_linearity", "run"]
+__all__ = ["add_parser", "print_camera_gamut", "print_fixtures", "print_linearity", "run"]
 
 PEAK_NITS_DEFAULT = DEFAULT_PEAK_NITS
 
@@ -87,6 +87,16 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         metavar="N",
         help="resolution the HDRI is integrated at (default 1024; see docs/performance.md)",
     )
+    parser.add_argument(
+        "--camera-colorspace",
+        metavar="NAME",
+        default=None,
+        help="the camera's gamut, a colour.RGB_COLOURSPACES name such as 'ARRI Wide Gamut 4' "
+        "(default: stage.camera_colorspace of the measurements or capture file). With it the "
+        "configs carry ACES2065-1, ACEScg, Linear Rec.709 and ACEScct, the interchange and log "
+        "roles, the camera's log footage and ACES monitor views, and content can be rendered "
+        "in a working space; without it content must be in the camera's native linear RGB",
+    )
     _add_wall_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -151,6 +161,17 @@ def print_linearity(solutions: Sequence) -> None:
         return
 
 
+def print_camera_gamut(solutions: Sequence) -> None:
+    """Say once what a config without a camera gamut lacks (and how to state it)."""
+    if solutions and not solutions[0].camera_colorspace:
+        print(
+            "note: the camera gamut is not stated (stage.camera_colorspace, or solve "
+            "--camera-colorspace NAME): the configs have no working spaces (ACEScg, ACES2065-1), "
+            "no interchange or log roles and no camera log footage, monitors show camera RGB as "
+            "Rec.709, and content for the wall must be rendered in the camera's native linear RGB"
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     from ocio_vp.errors import InputError
     from ocio_vp.ocio.writer import writer_pool
@@ -172,6 +193,7 @@ def run(args: argparse.Namespace) -> int:
     print_summary(written)
     print_fixtures(written)
     print_linearity(written)
+    print_camera_gamut(written)
     print(f"wrote {len(written)} environment(s) to {args.out}")
     return 0
 
@@ -179,11 +201,15 @@ def run(args: argparse.Namespace) -> int:
 def _solve_and_write(args: argparse.Namespace, peak_nits: float, pool) -> list:
     """Load, solve every environment asked for, and write them to ``args.out``."""
     from ocio_vp.errors import InputError
-    from ocio_vp.formats.measurements import load_measurements
+    from ocio_vp.formats.measurements import load_measurements, with_camera_colorspace
     from ocio_vp.ocio.writer import write_solutions
     from ocio_vp.wall.encoding import with_wall_encoding
 
     measurements = load_measurements(args.measurements)
+    if args.camera_colorspace is not None:
+        measurements = with_camera_colorspace(
+            measurements, args.camera_colorspace, key="--camera-colorspace"
+        )
     environments = measurements.environments
     if args.environment:
         environments = tuple(measurements.environment(name) for name in args.environment)
