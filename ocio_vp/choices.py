@@ -12,6 +12,7 @@ __all__ = [
     "BLACK_LEVEL_METHODS",
     "DEFAULT_BASE_CONFIG",
     "DEFAULT_BLACK_LEVEL",
+    "DEFAULT_FOOTAGE_ENCODING",
     "DEFAULT_METHOD",
     "DEFAULT_PEAK_NITS",
     "DEFAULT_WALL_ENCODING",
@@ -56,6 +57,10 @@ DEFAULT_PEAK_NITS = 1000.0
 EXPORT_TARGETS = ("unreal", "nuke", "resolve", "lights", "all", "show")
 #: The show config's default base: OCIO's built-in ACES CG config (every OCIO from 2.2 on).
 DEFAULT_BASE_CONFIG = "ocio://cg-config-v1.0.0_aces-v1.3_ocio-v2.1"
+
+#: ``ocio-vp apply --footage-encoding``: linear, or any colour-science decoding name
+#: (``colour.CCTF_DECODINGS``, as the capture file's ``encoding:``), checked when it runs.
+DEFAULT_FOOTAGE_ENCODING = "linear"
 
 #: OCIO optimisation levels ``apply`` accepts.
 OPTIMIZATIONS = ("lossless", "default", "good", "draft")

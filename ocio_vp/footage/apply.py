@@ -27,6 +27,7 @@ https://doi.org/10.1145/3543664.3543699
 from __future__ import annotations
 
 import functools
+import hashlib
 import itertools
 import json
 import os
@@ -41,12 +42,13 @@ import numpy as np
 
 from ocio_vp.choices import OPTIMIZATIONS  # OCIO optimisation levels (bench_ocio_optim)
 from ocio_vp.errors import InputError
-from ocio_vp.footage.sequences import MARK, foreign_output_error
+from ocio_vp.footage.sequences import MARK, SOLUTION_MARK, foreign_output_error, output_solution
 from ocio_vp.model.correction import correction_from_dict, correction_to_dict
 
 __all__ = [
     "OPTIMIZATIONS",
     "TRANSFORMS",
+    "EncodedTransform",
     "FrameResult",
     "FrameTask",
     "ModelTransform",
@@ -59,9 +61,11 @@ __all__ = [
     "existing_output",
     "load_frame",
     "load_post_correction",
+    "other_solution_reason",
     "pixel_transform",
     "run_task",
     "set_io_threads",
+    "solution_identity",
     "store_frame",
     "transform_frame",
 ]
@@ -74,7 +78,9 @@ class PostCorrection:
     ``kind`` names the :data:`TRANSFORMS` factory that turns it into a :class:`PixelTransform`;
     ``model`` is a non-linear post-correction's ``post_correction`` block as JSON text (kind
     ``model``: :mod:`ocio_vp.model`, applied exactly), so that this stays hashable and
-    picklable.
+    picklable. ``encoding`` is the footage's encoding (kind ``encoded``: decoded, corrected
+    and encoded again; a colour-science decoding name), ``solution`` the text that identifies
+    the post-correction in every frame written (:data:`SOLUTION_MARK`).
     """
 
     config: str
@@ -83,10 +89,17 @@ class PostCorrection:
     environment: str = ""
     kind: str = "ocio"
     model: str = ""
+    encoding: str = ""
+    solution: str = ""
 
 
-def load_post_correction(solution_dir: str | Path) -> PostCorrection:
-    """Read ``solution.json`` and its config; check that the named colorspaces exist."""
+def load_post_correction(solution_dir: str | Path, encoding: str = "") -> PostCorrection:
+    """Read ``solution.json`` and its config; check that the named colorspaces exist.
+
+    ``encoding``: the footage's encoding (a colour-science decoding name, ``linear`` or ``""``
+    for linear footage)."""
+    if encoding == "linear":
+        encoding = ""
     import PyOpenColorIO as OCIO
 
     from ocio_vp.formats.solution import load_solution
@@ -111,12 +124,32 @@ def load_post_correction(solution_dir: str | Path) -> PostCorrection:
         raise InputError(
             f"cannot build the post-correction: {exc}", source=str(config_path)
         ) from None
-    if not solution.correction.linear:  # the exact model, not the config's LUT bake of it
-        model = json.dumps(correction_to_dict(solution.correction), sort_keys=True)
+    model = json.dumps(correction_to_dict(solution.correction), sort_keys=True)
+    identity = solution_identity(solution.stage, solution.environment, model, encoding)
+    if encoding:  # decode, the exact post-correction, encode
         return PostCorrection(
-            str(config_path), source, target, solution.environment, "model", model
+            str(config_path),
+            f"{source} ({encoding})",
+            f"{target} ({encoding})",
+            solution.environment,
+            "encoded",
+            model,
+            encoding,
+            identity,
         )
-    return PostCorrection(str(config_path), source, target, solution.environment)
+    if not solution.correction.linear:  # the exact model, not the config's LUT bake of it
+        return PostCorrection(
+            str(config_path), source, target, solution.environment, "model", model, "", identity
+        )
+    return PostCorrection(str(config_path), source, target, solution.environment, solution=identity)
+
+
+def solution_identity(stage: str, environment: str, model: str, encoding: str = "") -> str:
+    """The text stored in each frame (:data:`SOLUTION_MARK`): which stage, environment and
+    post-correction (sha256 of its ``post_correction`` block) made it, and the encoding."""
+    digest = hashlib.sha256(model.encode("utf-8")).hexdigest()[:16]
+    text = f"{stage}/{environment} post-correction sha256:{digest}"
+    return f"{text}, footage {encoding}" if encoding else text
 
 
 _LEVELS = {
@@ -206,12 +239,54 @@ def _model(pc: PostCorrection) -> ModelTransform:
     return ModelTransform(correction_from_dict(json.loads(pc.model)))
 
 
+@dataclass(frozen=True)
+class EncodedTransform:
+    """A :class:`PixelTransform` for encoded (log) footage: colour-science's decoding of
+    ``encoding``, the post-correction exactly (float64), and the encoding again.
+
+    Where a curve has no negative part (a power law), a negative corrected value is encoded
+    mirrored, ``-f(-x)``, so that valid footage never becomes NaN.
+    """
+
+    correction: Any
+    encoding: str
+    band: int = 1 << 14
+
+    def _encode(self, linear: np.ndarray) -> np.ndarray:
+        import colour
+
+        encoded = colour.cctf_encoding(linear, function=self.encoding)
+        bad = ~np.isfinite(encoded) & np.isfinite(linear)
+        if np.any(bad):
+            mirrored = -colour.cctf_encoding(-linear[bad], function=self.encoding)
+            encoded = np.where(bad, 0.0, encoded)
+            encoded[bad] = mirrored
+        return encoded
+
+    def __call__(self, rgb: np.ndarray) -> None:
+        import colour
+
+        flat = rgb.reshape(-1, 3)
+        for start in range(0, len(flat), self.band):
+            block = flat[start : start + self.band]
+            with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+                linear = colour.cctf_decoding(block.astype(np.float64), function=self.encoding)
+                block[...] = self._encode(self.correction.apply(linear))
+        if not np.shares_memory(flat, rgb):
+            rgb[...] = flat.reshape(rgb.shape)
+
+
+def _encoded(pc: PostCorrection) -> EncodedTransform:
+    return EncodedTransform(correction_from_dict(json.loads(pc.model)), pc.encoding)
+
+
 #: How to build the per-pixel transform of a :class:`PostCorrection`, by its ``kind``: an OCIO
 #: conversion in the solution's config, or the exact non-linear model (which the config can
 #: only carry as a LUT bake). Another kind registers its factory here.
 TRANSFORMS: dict[str, Callable[[PostCorrection], PixelTransform]] = {
     "ocio": lambda pc: OcioTransform(cpu_processor(pc), cpu_processor(pc, bit_depth="f16")),
     "model": _model,
+    "encoded": _encoded,
 }
 
 
@@ -339,6 +414,8 @@ def transform_frame(
             apply_in_place(transform, pixels, rgb=rgb, threads=threads)
             exact = "" if pc.kind == "ocio" else f", {pc.kind} applied exactly"
             spec.attribute(MARK, f"{pc.source} -> {pc.target} ({pc.environment}{exact})")
+            if pc.solution:
+                spec.attribute(SOLUTION_MARK, pc.solution)
             done += 1
     if done == 0:
         raise InputError("no R, G, B channels to post-correct", source=source or None)
@@ -432,9 +509,21 @@ def existing_output(task: FrameTask) -> FrameResult | None:
     foreign = foreign_output_error(task.dst)
     if foreign is not None:
         return FrameResult(task.src, task.dst, "input-error", foreign)
-    if not task.overwrite:
-        return FrameResult(task.src, task.dst, "skipped", "already written")
-    return None
+    if task.overwrite:
+        return None
+    made_by = output_solution(task.dst)
+    wanted = task.post_correction.solution
+    if wanted and made_by != wanted:
+        return FrameResult(
+            task.src, task.dst, "input-error", other_solution_reason(task.dst, made_by, wanted)
+        )
+    return FrameResult(task.src, task.dst, "skipped", "already written")
+
+
+def other_solution_reason(dst: str | Path, made_by: str | None, wanted: str) -> str:
+    """One line: ``dst`` was corrected with another post-correction than ``wanted``."""
+    by = made_by or "an ocio-vp that did not record its solution"
+    return f"{dst}: made with {by}, not {wanted}; --overwrite redoes it"
 
 
 def run_task(task: FrameTask) -> FrameResult:
