@@ -195,6 +195,10 @@ def run(args: argparse.Namespace) -> int:
     print_linearity(written)
     print_camera_gamut(written)
     print(f"wrote {len(written)} environment(s) to {args.out}")
+    from ocio_vp.formats.provenance import stale_outputs
+
+    for line in stale_outputs(args.out, [s.environment for s in written]):
+        print(line)
     return 0
 
 

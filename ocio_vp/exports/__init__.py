@@ -26,6 +26,7 @@ from ocio_vp.exports.resolve import DEFAULT_CUBE_RANGE, DEFAULT_CUBE_SIZE, write
 from ocio_vp.exports.show import SHOW_FOLDER, write_show
 from ocio_vp.exports.source import ExportSource, load_export_source
 from ocio_vp.exports.unreal import write_unreal
+from ocio_vp.formats.provenance import SOURCE_FILE, source_record
 from ocio_vp.staging import publish_dirs, staged_dir
 
 __all__ = ["EXPORT_TARGETS", "ExportFailure", "ExportReport", "ExportResult", "export_solutions"]
@@ -204,6 +205,12 @@ def _export_show(sources, report: ExportReport, out, base_config) -> ExportResul
     )
 
 
+def _source_text(source: ExportSource) -> str:
+    solution = source.solution
+    model = solution.diagnostics.get("model") or solution.method
+    return source_record(source.directory, solution.environment, str(model))
+
+
 def _export_environment(
     source: ExportSource, jobs, *, cube_size: int, cube_range: tuple[float, float]
 ) -> list[ExportResult]:
@@ -227,6 +234,7 @@ def _export_environment(
                 summary = EXPORT_TARGETS[target](
                     source, folder, final_folder=final, cube_size=cube_size, cube_range=cube_range
                 )
+                (folder / SOURCE_FILE).write_text(_source_text(source), encoding="utf-8")
                 staged.append((folder, final))
                 results.append(ExportResult(source.solution.environment, target, final, summary))
             publish_dirs(staged)  # every destination checked before any is replaced

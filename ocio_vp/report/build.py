@@ -27,6 +27,7 @@ import numpy as np
 
 from ocio_vp.calibration.equations import condition_number
 from ocio_vp.errors import InputError
+from ocio_vp.formats.provenance import solution_sha256
 from ocio_vp.formats.solution import Solution
 from ocio_vp.formats.solution_inputs import solution_folders
 from ocio_vp.model.expansion import root_polynomial_terms
@@ -384,6 +385,10 @@ def _manifest(environments: Sequence[EnvironmentData], out_dir: Path) -> dict[st
         "version": 1,
         "environments": [data.solution.environment for data in environments],
         "solutions": [relative(data.path) for data in environments],
+        # which solution each environment's figures come from (a re-solve flags the report)
+        "solution_sha256": {
+            data.solution.environment: solution_sha256(data.path.parent) for data in environments
+        },
     }
 
 
