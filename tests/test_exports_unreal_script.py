@@ -108,7 +108,9 @@ def _stand_in(version: tuple[int, int], calls: list) -> types.ModuleType:
     unreal.DisplayClusterConfigurationViewportLightcardOCIOMode = types.SimpleNamespace(
         N_DISPLAY="N_DISPLAY"
     )
-    unreal.SystemLibrary = types.SimpleNamespace(get_engine_version=lambda: "%d.%d.0-x" % version)
+    unreal.SystemLibrary = types.SimpleNamespace(
+        get_engine_version=lambda: f"{version[0]}.{version[1]}.0-x"
+    )
     assets = types.SimpleNamespace(
         does_asset_exist=lambda path: False,
         load_asset=lambda path: unreal.OpenColorIOConfiguration(),
