@@ -347,6 +347,17 @@ def _fixtures(data: dict[str, Any], source: str) -> dict[str, Any] | None:
             )
         if not all(isinstance(v, (int, float)) and np.isfinite(v) for v in drive.values()):
             raise InputError("expected finite drives", source=source, key=f"fixtures.{name}")
+        dmx = entry.get("dmx")
+        if dmx is not None and not (
+            isinstance(dmx, dict)
+            and all(type(dmx.get(k)) is int for k in ("universe", "address"))
+            and dmx.get("mode") in ("8-bit", "16-bit")
+        ):
+            raise InputError(
+                "expected universe, address (integers) and mode (8-bit or 16-bit)",
+                source=source,
+                key=f"fixtures.{name}.dmx",
+            )
     return block
 
 
