@@ -15,7 +15,14 @@ from ocio_vp.choices import (
 from ocio_vp.commands.common import add_method_argument, progress
 from ocio_vp.commands.summary import print_summary
 
-__all__ = ["add_parser", "print_camera_gamut", "print_fixtures", "print_linearity", "run"]
+__all__ = [
+    "add_parser",
+    "print_camera_gamut",
+    "print_content_scale",
+    "print_fixtures",
+    "print_linearity",
+    "run",
+]
 
 PEAK_NITS_DEFAULT = DEFAULT_PEAK_NITS
 
@@ -161,6 +168,15 @@ def print_linearity(solutions: Sequence) -> None:
         return
 
 
+def print_content_scale(solutions: Sequence) -> None:
+    """Per environment: what content white needs of the wall, and a warning where it clips."""
+    from ocio_vp.calibration.headroom import content_scale
+
+    for solution in solutions:
+        for line in content_scale(solution).lines():
+            print(line)
+
+
 def print_camera_gamut(solutions: Sequence) -> None:
     """Say once what a config without a camera gamut lacks (and how to state it)."""
     if solutions and not solutions[0].camera_colorspace:
@@ -194,6 +210,7 @@ def run(args: argparse.Namespace) -> int:
     print_fixtures(written)
     print_linearity(written)
     print_camera_gamut(written)
+    print_content_scale(written)
     print(f"wrote {len(written)} environment(s) to {args.out}")
     from ocio_vp.formats.provenance import stale_outputs
 

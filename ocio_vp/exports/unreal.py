@@ -24,6 +24,7 @@ from typing import Any
 
 import PyOpenColorIO as OCIO
 
+from ocio_vp.calibration.headroom import content_scale
 from ocio_vp.errors import InputError
 from ocio_vp.exports.source import ExportSource, copy_config
 from ocio_vp.exports.templating import render_template
@@ -164,6 +165,7 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> dict[str
         ],
         "post_correction": names["post_correction"],
         "N_solved": solution.N is not None,
+        "content_scale": content_scale(solution).to_dict(),
     }
 
 
@@ -206,6 +208,7 @@ def write_unreal(source: ExportSource, folder: Path, **_: Any) -> dict[str, Any]
         source_note=note,
         n_solved=solution.N is not None,
         n_reason=solution.diagnostics.get("N_reason") or "Q is not invertible",
+        content_scale=content_scale(solution).lines(),
     )
     (folder / "UNREAL.md").write_text(text, encoding="utf-8")
     script = render_unreal_script(
