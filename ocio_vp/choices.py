@@ -54,7 +54,7 @@ DEFAULT_PEAK_NITS = 1000.0
 
 #: ``ocio-vp export --target`` values: per environment, then ``all`` of those, then ``show`` (one
 #: config for every given environment, on a base config).
-EXPORT_TARGETS = ("unreal", "nuke", "resolve", "lights", "all", "show")
+EXPORT_TARGETS = ("unreal", "nuke", "resolve", "lights", "dit", "all", "show")
 #: The show config's default base: OCIO's built-in ACES CG config (every OCIO from 2.2 on).
 DEFAULT_BASE_CONFIG = "ocio://cg-config-v1.0.0_aces-v1.3_ocio-v2.1"
 

@@ -29,7 +29,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         choices=EXPORT_TARGETS,
         default="all",
         help="unreal: .ocioz + UNREAL.md + mapping JSON; nuke: .nk; resolve: CLF, DCTL, .cube; "
-        "lights: fixture drives and DMX levels (solutions with fixtures); all: every target "
+        "lights: fixture drives and DMX levels (solutions with fixtures); dit: a log-in log-out "
+        ".cube of the post-correction for the DIT cart (solutions with a camera gamut, where it "
+        "meets the cube accuracy limit); all: every target "
         "above that applies (default: all); show: OUT/show/config.ocio, one config for all the "
         "given environments on --base-config, the environment chosen by the context variable "
         "VP_ENVIRONMENT (needs --out)",

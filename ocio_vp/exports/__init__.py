@@ -19,6 +19,7 @@ from typing import Any
 import PyOpenColorIO as OCIO
 
 from ocio_vp.errors import InputError
+from ocio_vp.exports.dit import has_camera_log, write_dit
 from ocio_vp.exports.escape import inside
 from ocio_vp.exports.lights import write_lights
 from ocio_vp.exports.nuke import write_nuke
@@ -37,6 +38,7 @@ EXPORT_TARGETS: dict[str, Callable[..., dict[str, Any]]] = {
     "nuke": write_nuke,
     "resolve": write_resolve,
     "lights": write_lights,
+    "dit": write_dit,
 }
 
 #: Targets written once for all the given environments (``OUT/<target>/``), not per environment.
@@ -119,6 +121,8 @@ def _plan(sources, targets, out_path) -> list[tuple[ExportSource, list[tuple[str
         for target in dict.fromkeys(targets):
             if target == "lights" and not source.solution.fixtures:
                 continue  # nothing for the lighting desk without fixtures
+            if target == "dit" and not has_camera_log(source):
+                continue  # no log footage without a camera gamut
             final = _final_folder(source, target, out_path)
             key = final.resolve()
             if key in seen:
@@ -174,7 +178,13 @@ def export_solutions(
     for source, jobs in plan:
         if not jobs:
             reason = (
-                f"{source.directory}: no fixtures in this solution, nothing for --target lights"
+                f"{source.directory}: nothing for --target {'/'.join(targets)}"
+                + (": no fixtures in this solution" if "lights" in targets else "")
+                + (
+                    ": no camera log encoding (solve with --camera-colorspace)"
+                    if "dit" in targets
+                    else ""
+                )
             )
             report.failures.append(ExportFailure(str(source.directory), reason))
             continue
