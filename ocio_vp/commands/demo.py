@@ -12,6 +12,7 @@ import argparse
 
 from ocio_vp.commands.common import add_method_argument, progress
 from ocio_vp.commands.summary import print_summary
+from ocio_vp.commands.solve import print_content_scale
 
 __all__ = ["add_parser", "run"]
 
@@ -57,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
     )
     print_summary(written)
     print(spectral_check(stage, written))
+    print_content_scale(written)
     if not args.no_report:
         from ocio_vp.metrics import camera_to_xyz_matrix
         from ocio_vp.report.build import build_report
