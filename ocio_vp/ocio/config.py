@@ -26,7 +26,12 @@ from ocio_vp.calibration.diagnostics import is_identity, offset_is_negligible
 from ocio_vp.calibration.equations import MAX_CONDITION_Q_FOR_N, condition_text
 from ocio_vp.formats.solution import Solution
 from ocio_vp.ocio.matrix import matrix_transform
-from ocio_vp.ocio.viewing import add_acescct, add_camera_log_spaces, add_monitor_displays
+from ocio_vp.ocio.viewing import (
+    add_acescct,
+    add_camera_log_spaces,
+    add_monitor_displays,
+    set_categories,
+)
 
 __all__ = [
     "DISPLAY",
@@ -236,6 +241,7 @@ def build_config(
     _add_post_correction(config, solution, origin, q_files)
     camera_to_aces = _set_roles(config, solution.camera_colorspace)
     _add_displays(config, camera_to_aces)
+    set_categories(config)
     config.validate()
     return config
 

@@ -198,6 +198,8 @@ def _switched_space(name: str, template: OCIO.ColorSpace, aces: str, aces_to_bas
         description=f"{name} of the environment ${CONTEXT_VARIABLE} names (context variable; "
         f"default in this config's environment section): {name} [<environment>].",
     )
+    for category in template.getCategories():
+        cs.addCategory(category)
     cs.setTransform(
         OCIO.GroupTransform(
             [OCIO.ColorSpaceTransform(src=switched, dst=aces), copy.deepcopy(aces_to_base)]
@@ -243,6 +245,7 @@ def _overlay(base: OCIO.Config, environments: Sequence[ShowEnvironment]) -> OCIO
             description=f"The post-correction Q of the environment ${CONTEXT_VARIABLE} names: "
             f"{POST_CORRECTION_COLORSPACE} -> {REFERENCE} of that environment.",
             forwardTransform=q,
+            categories=["file-io"],
         )
     )
     overlay.addLook(

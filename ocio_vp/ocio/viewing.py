@@ -38,6 +38,7 @@ __all__ = [
     "Monitor",
     "add_camera_log_spaces",
     "add_monitor_displays",
+    "set_categories",
     "camera_log_names",
     "footage_to_reference",
 ]
@@ -123,6 +124,33 @@ def add_camera_log_spaces(
         stage.setTransform(group, OCIO.COLORSPACE_DIR_FROM_REFERENCE)
     config.addColorSpace(stage)
     return [native_name, footage_name]
+
+
+#: OCIO 2.1 categories (what application menus filter on) by family, after ``ocio-vp/``.
+CATEGORIES = {
+    "Camera": ("file-io", "working-space"),
+    "Working": ("file-io", "working-space"),
+    "LED Wall": ("file-io",),
+    "Utility": ("file-io",),
+}
+
+
+def set_categories(config: OCIO.Config) -> None:
+    """Categories for every scene colour space that has none (by its family), and for the
+    named transforms: so hosts that filter menus by category list them (and ociocheck is
+    content)."""
+    for cs in config.getColorSpaces(OCIO.SEARCH_REFERENCE_SPACE_SCENE, OCIO.COLORSPACE_ALL):
+        if list(cs.getCategories()):
+            continue
+        family = cs.getFamily().split("/")[1] if "/" in cs.getFamily() else ""
+        for category in CATEGORIES.get(family, ("file-io",)):
+            cs.addCategory(category)
+        config.addColorSpace(cs)  # replaces the one of that name
+    for name in config.getNamedTransformNames(OCIO.NAMEDTRANSFORM_ALL):
+        named = config.getNamedTransform(name)
+        if not list(named.getCategories()):
+            named.addCategory("file-io")
+            config.addNamedTransform(named)
 
 
 def add_acescct(config: OCIO.Config, aces_to_camera: np.ndarray) -> str:
