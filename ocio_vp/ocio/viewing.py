@@ -38,9 +38,9 @@ __all__ = [
     "Monitor",
     "add_camera_log_spaces",
     "add_monitor_displays",
-    "set_categories",
     "camera_log_names",
     "footage_to_reference",
+    "set_categories",
 ]
 
 #: OCIO's built-in ACES CG config that every OCIO from 2.2 on has (profile 2.1).
