@@ -10,7 +10,7 @@ import colour
 import numpy as np
 from conftest import make_measurements_dict
 
-from ocio_vp.calibration.headroom import content_scale
+from ocio_vp.calibration.headroom import content_scale, content_scale_lines
 from ocio_vp.formats.measurements import measurements_from_dict
 from ocio_vp.pipeline import solve_measurements
 
@@ -41,8 +41,10 @@ def test_a_clipping_solve_warns_and_pq_states_the_nits():
     pq = {"wall_encoding": {"name": "pq", "peak_nits": 600.0}}
     scale = content_scale(dataclasses.replace(solution, M=M, linearity=pq))
     lines = scale.lines()
-    assert scale.clips and lines[1].startswith("warning:")
-    assert f"above {scale.peak_content:.3g} clips" in lines[1]
+    out, err = content_scale_lines([scale])
+    assert out == lines and scale.clips and len(err) == 1 and err[0].startswith("warning:")
+    assert f"peak at content {scale.peak_content:.3g}" in lines[1]
+    assert f"content white {scale.white_nits:.0f} nits" in lines[1]
     # content white: Rec.709 (1, 1, 1) in the camera gamut; its luminance relative to the wall's
     # white (SL 1) on colour-science's AWG4 -> XYZ
     awg4 = colour.RGB_COLOURSPACES["ARRI Wide Gamut 4"]

@@ -24,11 +24,12 @@ def test_a_resolve_names_exactly_the_stale_outputs(tmp_path, capsys):
     capsys.readouterr()
     # the same solve again: the same solution, nothing stale
     assert main(["solve", str(stage), "--out", str(calib), "--method", "least-squares"]) == 0
-    assert "stale" not in capsys.readouterr().out
+    assert "stale" not in "".join(capsys.readouterr())
     # another method for env_1 only: its export and both reports showing it are named
     args = ["--method", "white-preserving", "--environment", "env_1"]
     assert main(["solve", str(stage), "--out", str(calib), *args]) == 0
-    stale = [line for line in capsys.readouterr().out.splitlines() if line.startswith("stale")]
+    err = capsys.readouterr().err.splitlines()
+    stale = [line for line in err if line.startswith("warning: stale")]
     assert len(stale) == 2, stale
     assert (
         f"{calib / 'env_1' / 'exports' / 'unreal'}" in stale[0] and "white-preserving" in stale[0]

@@ -20,7 +20,7 @@ import numpy as np
 
 from ocio_vp.formats.solution import Solution
 
-__all__ = ["ContentScale", "content_scale"]
+__all__ = ["ContentScale", "content_scale", "content_scale_lines"]
 
 CHANNELS = ("red", "green", "blue")
 #: Unreal's working space, the content source of the Unreal export when the gamut is known.
@@ -72,36 +72,55 @@ class ContentScale:
             "content_white_nits": self.white_nits,
         }
 
-    def lines(self) -> list[str]:
-        """The terminal's lines: the mapping, the drives and headroom, a warning if it clips."""
-
-        def drives(drive: np.ndarray) -> str:
-            stops = self.headroom_stops(drive)
-            return ", ".join(
-                f"{c[0].upper()} {100 * d:.0f}% ({s:+.2f} stops)"
-                for c, d, s in zip(CHANNELS, drive, stops, strict=True)
-            )
-
-        head = (
-            f"content scale, {self.environment}: content white (1.0 in {self.content_space}) "
-            f"needs drive {drives(self.outer_drive)} of the measured peak outside the frustum, "
-            f"{drives(self.inner_drive)} inside"
+    def row(self) -> str:
+        """One terminal line: the drive content white needs per channel, outside / inside the
+        frustum in % of the measured peak, the content value that reaches the peak and the
+        worst channel's headroom; on a PQ wall the nits of drive 1.0 and of content white."""
+        pairs = " ".join(
+            f"{c[0].upper()} {100 * o:.0f}/{100 * i:.0f}"
+            for c, o, i in zip(CHANNELS, self.outer_drive, self.inner_drive, strict=True)
         )
-        if self.peak_nits is not None:
-            head += (
-                f"; drive 1.0 = {self.peak_nits:g} nits, content white = "
-                f"{self.white_nits:.0f} nits{self.luminance_note}"
-            )
-        out = [head]
-        if self.clips:
-            channel = _worst_channel(self)
-            out.append(
-                f"warning: {self.environment}: content white needs {100 * self.worst_drive:.0f}% "
-                f"of the panel's peak in {channel}: content above {self.peak_content:.3g} clips "
-                f"there; scale the content by {self.peak_content:.3g} or less (or light brighter "
-                "panels)"
-            )
-        return out
+        stops = -math.log2(self.worst_drive) if self.worst_drive > 0 else math.inf
+        text = (
+            f"{self.environment}: {pairs}; peak at content {self.peak_content:.3g} "
+            f"({stops:+.2f} stops in {_worst_channel(self)})"
+        )
+        if self.white_nits is not None:
+            text += f"; content white {self.white_nits:.0f} nits{self.luminance_note}"
+        return text
+
+    def lines(self) -> list[str]:
+        """The header and :meth:`row` (as :func:`content_scale_lines` prints one)."""
+        return [header(self.content_space, self.peak_nits), "  " + self.row()]
+
+
+def header(content_space: str, peak_nits: float | None = None) -> str:
+    """What the content-scale rows mean (on a PQ wall, with the nits of drive 1.0)."""
+    nits = "" if peak_nits is None else f"; drive 1.0 = {peak_nits:g} nits"
+    return (
+        f"content scale: content white = 1.0 in {content_space}; the drive it needs in % of the "
+        f"measured peak, outside/inside the frustum, and the content value that reaches the "
+        f"peak{nits}:"
+    )
+
+
+def content_scale_lines(scales: list[ContentScale]) -> tuple[list[str], list[str]]:
+    """(stdout lines, stderr lines): a header, one row per environment, and one warning naming
+    the environments where content white needs more drive than the panel has."""
+    if not scales:
+        return [], []
+    out = [header(scales[0].content_space, scales[0].peak_nits), *("  " + s.row() for s in scales)]
+    clipping = [s for s in scales if s.clips]
+    if not clipping:
+        return out, []
+    worst = max(clipping, key=lambda s: s.worst_drive)
+    names = ", ".join(s.environment for s in clipping)
+    warning = (
+        f"warning: {names}: content white needs more drive than the panel has (worst "
+        f"{worst.environment}: {100 * worst.worst_drive:.0f}% in {_worst_channel(worst)}): content "
+        "above each row's peak clips there; scale the content down to it"
+    )
+    return out, [warning]
 
 
 def _worst_channel(scale: ContentScale) -> str:

@@ -11,8 +11,8 @@ from __future__ import annotations
 import argparse
 
 from ocio_vp.commands.common import add_method_argument, progress
-from ocio_vp.commands.summary import print_summary
 from ocio_vp.commands.solve import print_content_scale
+from ocio_vp.commands.summary import print_summary
 
 __all__ = ["add_parser", "run"]
 

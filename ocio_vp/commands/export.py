@@ -39,7 +39,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--base-config",
         metavar="PATH|URI",
-        default=DEFAULT_BASE_CONFIG,
+        default=None,
         help=f"base of --target show: a config file or ocio:// URI (default {DEFAULT_BASE_CONFIG}, "
         "OCIO's built-in ACES CG config; written out whole)",
     )
@@ -64,6 +64,10 @@ def run(args: argparse.Namespace) -> int:
     from ocio_vp.exports import export_solutions
     from ocio_vp.formats.solution_inputs import solution_folders
 
+    if args.base_config is not None and args.target != "show":
+        from ocio_vp.errors import InputError
+
+        raise InputError("applies only to --target show", key="--base-config")
     targets = TARGETS if args.target == "all" else (args.target,)
     chosen = solution_folders(args.solution_dirs)
     for note in chosen.notes():

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from collections.abc import Sequence
 
 from ocio_vp.choices import (
@@ -169,12 +170,17 @@ def print_linearity(solutions: Sequence) -> None:
 
 
 def print_content_scale(solutions: Sequence) -> None:
-    """Per environment: what content white needs of the wall, and a warning where it clips."""
-    from ocio_vp.calibration.headroom import content_scale
+    """Per environment what content white needs of the wall (stdout); one warning naming the
+    environments where it clips (stderr)."""
+    import sys
 
-    for solution in solutions:
-        for line in content_scale(solution).lines():
-            print(line)
+    from ocio_vp.calibration.headroom import content_scale, content_scale_lines
+
+    out, err = content_scale_lines([content_scale(s) for s in solutions])
+    for line in out:
+        print(line)
+    for line in err:
+        print(line, file=sys.stderr)
 
 
 def print_camera_gamut(solutions: Sequence) -> None:
@@ -215,7 +221,7 @@ def run(args: argparse.Namespace) -> int:
     from ocio_vp.formats.provenance import stale_outputs
 
     for line in stale_outputs(args.out, [s.environment for s in written]):
-        print(line)
+        print(f"warning: {line}", file=sys.stderr)
     return 0
 
 
