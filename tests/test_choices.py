@@ -5,7 +5,7 @@ from __future__ import annotations
 from ocio_vp import choices
 from ocio_vp.calibration.equations import BLACK_LEVEL_METHODS
 from ocio_vp.correction.registry import Q_SOLVE_METHODS
-from ocio_vp.exports import EXPORT_TARGETS
+from ocio_vp.exports import EXPORT_TARGETS, SHOW_TARGETS
 from ocio_vp.footage.apply import OPTIMIZATIONS
 from ocio_vp.ocio.config import WALL_SIGNAL_ENCODINGS
 
@@ -16,8 +16,17 @@ def test_every_choice_is_the_librarys():
     assert choices.DEFAULT_METHOD in choices.Q_METHODS
     assert tuple(BLACK_LEVEL_METHODS) == choices.BLACK_LEVEL_METHODS
     assert tuple(WALL_SIGNAL_ENCODINGS) == choices.WALL_ENCODINGS
-    assert (*EXPORT_TARGETS, "all") == choices.EXPORT_TARGETS
+    assert (*EXPORT_TARGETS, "all", *SHOW_TARGETS) == choices.EXPORT_TARGETS
     assert tuple(OPTIMIZATIONS) == choices.OPTIMIZATIONS
+
+
+def test_the_default_base_config_is_the_show_configs_and_loads():
+    import PyOpenColorIO as OCIO
+
+    from ocio_vp.ocio.show import DEFAULT_BASE_CONFIG
+
+    assert choices.DEFAULT_BASE_CONFIG == DEFAULT_BASE_CONFIG
+    OCIO.Config.CreateFromFile(choices.DEFAULT_BASE_CONFIG).validate()
 
 
 def test_the_module_needs_no_numpy():

@@ -280,15 +280,3 @@ def test_wall_cubes_are_not_written_and_the_manifest_says_why(exported):
         assert "over the limit" in reason and f"use {stem}.clf (exact)" in reason
     accuracy = manifest["files"]["post_correction_Q_17.cube"]["accuracy"]
     assert accuracy["max_error"] <= accuracy["limit"]
-
-
-def test_export_targets_in_choices_are_the_writers():
-    """The CLI's targets (ocio_vp.choices) are exactly the writers, then all, then show."""
-    from ocio_vp import choices
-    from ocio_vp.ocio.show import DEFAULT_BASE_CONFIG
-
-    per_environment = choices.EXPORT_TARGETS[: choices.EXPORT_TARGETS.index("all")]
-    assert per_environment == tuple(exports.EXPORT_TARGETS)
-    assert choices.EXPORT_TARGETS[len(per_environment) + 1 :] == exports.SHOW_TARGETS
-    assert choices.DEFAULT_BASE_CONFIG == DEFAULT_BASE_CONFIG
-    OCIO.Config.CreateFromFile(choices.DEFAULT_BASE_CONFIG).validate()

@@ -30,7 +30,14 @@ from ocio_vp.exports.unreal import write_unreal
 from ocio_vp.formats.provenance import SOURCE_FILE, source_record
 from ocio_vp.staging import publish_dirs, staged_dir
 
-__all__ = ["EXPORT_TARGETS", "ExportFailure", "ExportReport", "ExportResult", "export_solutions"]
+__all__ = [
+    "EXPORT_TARGETS",
+    "SHOW_TARGETS",
+    "ExportFailure",
+    "ExportReport",
+    "ExportResult",
+    "export_solutions",
+]
 
 #: Target name -> writer(source, folder, *, final_folder, cube_size, cube_range) -> summary.
 EXPORT_TARGETS: dict[str, Callable[..., dict[str, Any]]] = {
