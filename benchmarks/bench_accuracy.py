@@ -81,7 +81,6 @@ def config(quick: bool, methods=None) -> Config:
 
 
 def _solve_and_judge(results, stage, measurements, env, noise, method, held_out):
-    from ocio_vp.correction.root_polynomial import post_correction
     from ocio_vp.errors import InputError
     from ocio_vp.pipeline import solve_environment
     from ocio_vp.simulator.truth import held_out_errors
@@ -103,7 +102,7 @@ def _solve_and_judge(results, stage, measurements, env, noise, method, held_out)
             w_avg=solution.w_avg,
             Q=solution.Q,
             reflectances=reflectances,
-            correct=post_correction(solution.Q, solution.diagnostics.get("method_notes")),
+            correct=solution.correction.apply,
         )
         if name in GENERAL_SETS:
             results.de2000[key].append(errors.delta_E_2000)

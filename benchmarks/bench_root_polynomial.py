@@ -43,32 +43,24 @@ def _solutions(names):
     return [solve_environment(m, env, method="root-polynomial") for env in m.environments]
 
 
-def _model(solution) -> np.ndarray:
-    notes = solution.diagnostics["method_notes"]["root_polynomial"]
-    return np.asarray(notes["coefficients"], dtype=np.float64)
-
-
 def _bakes(solution, size: int):
     """(Q, Q^-1) baked at ``size``, as the writer does."""
-    from ocio_vp.correction import apply_root_polynomial, invert_root_polynomial
     from ocio_vp.ocio import root_polynomial as rp
 
-    C = _model(solution)
+    correction = solution.correction
     chart = np.asarray(solution.diagnostics["charts"]["target"], dtype=np.float64)
     mixes = np.random.default_rng(5).dirichlet(np.full(len(chart), 0.3), 2000) @ chart
     content = np.vstack([chart, mixes / mixes.max(axis=1, keepdims=True)])
-    camera = rp.content_box(invert_root_polynomial(C, content), rp.CAMERA_MIX)
-    q = rp.baked_transform(
-        lambda x: apply_root_polynomial(C, x), camera, rp.CAMERA_MIX, rp.CONTENT_MIX, size
-    )
+    camera = rp.content_box(correction.inverse(content), rp.CAMERA_MIX)
+    q = rp.baked_transform(correction.apply, camera, rp.CAMERA_MIX, rp.CONTENT_MIX, size)
     q_inverse = rp.baked_transform(
-        lambda c: invert_root_polynomial(C, c),
+        correction.inverse,
         rp.content_box(chart, rp.CONTENT_MIX),
         rp.CONTENT_MIX,
         rp.CAMERA_MIX,
         size,
     )
-    return C, chart, q, q_inverse
+    return correction, chart, q, q_inverse
 
 
 def _pct(block: dict, key: str) -> str:
@@ -128,9 +120,9 @@ def sizes(quick: bool) -> str:
     rows = []
     for size in (17, 33, 49, 65):
         start = time.perf_counter()
-        C, chart, q, q_inverse = _bakes(solution, size)
+        correction, chart, q, q_inverse = _bakes(solution, size)
         bake = time.perf_counter() - start
-        errors = bake_errors(C, q, q_inverse, chart, n=2000 if quick else 5000)
+        errors = bake_errors(correction, q, q_inverse, chart, n=2000 if quick else 5000)
         g = errors["in_gamut"]
         rows.append(
             (
@@ -152,7 +144,6 @@ def sizes(quick: bool) -> str:
 def round_trip(quick: bool) -> str:
     import PyOpenColorIO as OCIO
 
-    from ocio_vp.correction import apply_root_polynomial
     from ocio_vp.ocio import IN_FRUSTUM, REFERENCE
     from ocio_vp.ocio.writer import write_solutions
 
@@ -171,7 +162,7 @@ def round_trip(quick: bool) -> str:
             drive = np.ascontiguousarray(c, dtype=np.float32)
             cpu.applyRGB(drive)
             wall = (drive - solution.in_frustum_offset) @ np.asarray(solution.SL).T
-            error = np.abs(apply_root_polynomial(_model(solution), wall) - c).max(axis=1)
+            error = np.abs(solution.correction.apply(wall) - c).max(axis=1)
             error /= c.max(axis=1)
             rows.append(
                 (solution.environment, f"{100 * error.mean():.3f} %", f"{100 * error.max():.3f} %")
@@ -201,12 +192,11 @@ def _ocio_cpu(transform):
 
 
 def apply_speed(quick: bool) -> str:
-    from ocio_vp.correction import apply_root_polynomial, invert_root_polynomial
-    from ocio_vp.footage.apply import RootPolynomialTransform, apply_in_place
+    from ocio_vp.footage.apply import ModelTransform, apply_in_place
     from ocio_vp.ocio.config import matrix_transform
 
     (solution,) = _solutions(("incandescent",))
-    C, chart, q_lut, _ = _bakes(solution, 65)
+    correction, chart, q_lut, _ = _bakes(solution, 65)
     height, width = (1080, 2048) if quick else (2160, 4096)
     repeats = 3 if quick else 5
     # Footage whose corrected colours are inside the chart's gamut (exact preimages of random
@@ -214,12 +204,12 @@ def apply_speed(quick: bool) -> str:
     rng = np.random.default_rng(0)
     content = rng.dirichlet(np.full(len(chart), 0.3), 1 << 16) @ chart
     content *= np.exp2(rng.uniform(-6, 2, (len(content), 1))) / content.max()
-    tile = invert_root_polynomial(C, content).astype(np.float32)
+    tile = correction.inverse(content).astype(np.float32)
     src = np.resize(tile, (height, width, 3))
-    reference = apply_root_polynomial(C, src.reshape(-1, 3)).reshape(src.shape)
+    reference = correction.apply(src.reshape(-1, 3)).reshape(src.shape)
     candidates = {
         "3x3 Q (OCIO CPU processor)": _ocio_cpu(matrix_transform(solution.Q, np.zeros(3))),
-        "root-polynomial, exact (float64 in 16K-pixel bands)": RootPolynomialTransform(C),
+        "root-polynomial, exact (float64 in 16K-pixel bands)": ModelTransform(correction),
         "root-polynomial, the config's 65^3 LUT (OCIO)": _ocio_cpu(q_lut),
     }
     rows, times = [], {}

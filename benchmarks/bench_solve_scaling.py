@@ -48,7 +48,6 @@ def _charts(base_srl, base_target, n: int, rng) -> tuple[np.ndarray, np.ndarray]
 def run(quick: bool = False) -> str:
     """Markdown section: solve time per method and chart size, with held-out ΔE2000."""
     from ocio_vp.correction.registry import Q_SOLVE_METHODS
-    from ocio_vp.correction.root_polynomial import post_correction
     from ocio_vp.metrics import camera_to_xyz_matrix, chart_errors
     from ocio_vp.pipeline import post_correction_problem
     from ocio_vp.simulator.stage import paper_stage, paper_stage_measurements
@@ -82,7 +81,7 @@ def run(quick: bool = False) -> str:
             fit = solver(problem)
             last = time.perf_counter() - start
             lit = held_problem if fit.M is None else _replace(held_problem, M=fit.M)
-            corrected = post_correction(fit.Q, fit.notes)(lit.predicted)  # the model, not Q
+            corrected = fit.correction.apply(lit.predicted)  # the model, not Q
             de = float(
                 chart_errors(corrected, lit.target, camera_to_xyz=matrix).delta_E_2000.mean()
             )

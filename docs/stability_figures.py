@@ -13,7 +13,6 @@ from collections import Counter
 import numpy as np
 
 from ocio_vp.calibration.equations import condition_number, predict_lit_chart, solve_M, solve_N
-from ocio_vp.correction.root_polynomial import post_correction
 from ocio_vp.metrics import error_relative_to_white
 from ocio_vp.pipeline import solve_environment
 from ocio_vp.simulator.data import ENVIRONMENTS
@@ -62,7 +61,7 @@ def noise_table(m) -> str:
                 Ns.append(s.in_frustum_matrix)
                 models[s.diagnostics["model"]] += 1
                 # The solve from noisy plates, played on the true stage (eq. 3 with true [SRL]).
-                correct = post_correction(s.Q, s.diagnostics.get("method_notes"))
+                correct = s.correction.apply
                 lit = correct(predict_lit_chart(m.SRL, s.beta, s.M, s.w_avg))
                 errors.append(np.mean(error_relative_to_white(lit, env.target_chart)))
             Ns = np.array(Ns)

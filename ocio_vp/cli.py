@@ -39,11 +39,47 @@ COMMANDS = (
 
 
 class OneLineParser(argparse.ArgumentParser):
-    """An argument parser whose errors are one line (``--help`` still shows the usage)."""
+    """An argument parser whose errors are one line (``--help`` still shows the usage), with a
+    did-you-mean for a mistyped option, command or choice."""
 
     def error(self, message: str) -> NoReturn:
-        problem = f"{message} (see {self.prog} --help)"
+        problem = f"{message}{did_you_mean(self, message)} (see {self.prog} --help)"
         self.exit(2, f"{self.prog}: error: {InputError(problem)}\n")
+
+
+def _option_strings(parser: argparse.ArgumentParser) -> list[str]:
+    """Every option of ``parser`` and of its subcommands."""
+    names = list(parser._option_string_actions)
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                names += list(sub._option_string_actions)
+    return names
+
+
+def did_you_mean(parser: argparse.ArgumentParser, message: str) -> str:
+    """``" (did you mean '--wall-encoding'?)"`` for an argparse error, or ``""``.
+
+    >>> did_you_mean(build_parser(), "unrecognized arguments: --wall-encodng pq")
+    " (did you mean '--wall-encoding'?)"
+    >>> did_you_mean(build_parser(), "argument COMMAND: invalid choice: 'solv' (choose from "
+    ...              "'demo', 'solve')")
+    " (did you mean 'solve'?)"
+    """
+    import difflib
+    import re
+
+    choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+    if choice:
+        wrong, valid = choice.group(1), re.findall(r"'([^']*)'", choice.group(2))
+    elif message.startswith("unrecognized arguments:"):
+        words = message.split(":", 1)[1].split()
+        wrong, valid = next((w for w in words if w.startswith("-")), ""), _option_strings(parser)
+        wrong = wrong.split("=", 1)[0]
+    else:
+        return ""
+    close = difflib.get_close_matches(wrong, valid, n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close and wrong else ""
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -27,11 +29,13 @@ from ocio_vp.calibration.equations import (
     solve_N,
 )
 from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
+from ocio_vp.choices import DEFAULT_BLACK_LEVEL, DEFAULT_METHOD
+from ocio_vp.correction.extrapolation import Extrapolation, extrapolation
 from ocio_vp.correction.guards import check_problem, singular_q_cause
 from ocio_vp.correction.outliers import Inconsistency, inconsistent_patches
 from ocio_vp.correction.perceptual import default_camera_to_xyz
+from ocio_vp.correction.problem import fit_least_squares
 from ocio_vp.correction.registry import QFit, QProblem, solve_post_correction
-from ocio_vp.correction.root_polynomial import invert_root_polynomial, post_correction
 from ocio_vp.correction.validation import CLOSED_FORM_METHODS, cross_validated_error
 from ocio_vp.errors import InputError
 from ocio_vp.fixtures.lighting import (
@@ -44,78 +48,93 @@ from ocio_vp.formats.measurements import Environment, Measurements
 from ocio_vp.formats.solution import Diagnostics, Solution
 from ocio_vp.formats.synthesis import synthesis_to_dict, synthesis_warnings
 from ocio_vp.metrics import error_relative_to_white
+from ocio_vp.model.correction import PostCorrection, ProtectedCorrection
 
-__all__ = ["DEFAULT_METHOD", "post_correction_problem", "solve_environment", "solve_measurements"]
+__all__ = [
+    "DEFAULT_METHOD",
+    "SolveOptions",
+    "post_correction_problem",
+    "solve_environment",
+    "solve_measurements",
+]
 
-#: The simplest Q model the scene needs (ocio_vp.correction.auto.q_auto); "least-squares" is the paper.
-DEFAULT_METHOD = "auto"
+
+@dataclass(frozen=True)
+class SolveOptions:
+    """How an environment is solved: the options of ``solve``, ``demo`` and the library.
+
+    ``method``: a name of :data:`ocio_vp.correction.registry.Q_SOLVE_METHODS`;
+    ``black_level``: ``"exact"`` (``-M b_camera`` in drive space) or ``"paper"``
+    (``b / w_camera``); ``max_condition_q``: N is not solved when cond(Q) is above it;
+    ``fixtures``: drive the measurements' practical fixtures with the wall
+    (:mod:`ocio_vp.fixtures`; no effect without a ``fixtures`` section); ``keep_all_patches``:
+    fit every unclipped patch, even those inconsistent with the rest of the chart
+    (:func:`ocio_vp.correction.outliers.inconsistent_patches`; otherwise excluded and named);
+    ``protect_emitters``: the post-correction fades to the identity where no reflective surface
+    lit by the stage can be (:class:`ocio_vp.model.ProtectedCorrection`).
+    """
+
+    method: str = DEFAULT_METHOD
+    black_level: str = DEFAULT_BLACK_LEVEL
+    max_condition_q: float = MAX_CONDITION_Q_FOR_N
+    fixtures: bool = True
+    keep_all_patches: bool = False
+    protect_emitters: bool = False
+
+    def __post_init__(self) -> None:
+        if self.black_level not in BLACK_LEVEL_METHODS:
+            raise ValueError(
+                f"black_level must be one of {BLACK_LEVEL_METHODS}, got {self.black_level!r}"
+            )
 
 
 def solve_environment(
     measurements: Measurements,
     environment: Environment,
-    *,
-    method: str = DEFAULT_METHOD,
-    black_level: str = "exact",
-    max_condition_q: float = MAX_CONDITION_Q_FOR_N,
-    fixtures: bool = True,
-    keep_all_patches: bool = False,
+    options: SolveOptions | None = None,
+    **changes: Any,
 ) -> Solution:
     """Solve M, Q, N and the black-level offset for one environment.
 
-    Parameters
-    ----------
-    measurements
-        The validated measurements.
-    environment
-        One of ``measurements.environments``.
-    method
-        A name from :data:`ocio_vp.correction.registry.Q_SOLVE_METHODS`.
-    black_level
-        ``"exact"`` (``-M b_camera`` in drive space) or ``"paper"`` (``b / w_camera``).
-    max_condition_q
-        N is not solved when cond(Q) is above this.
-    fixtures
-        Drive the measurements' practical fixtures with the wall (:mod:`ocio_vp.fixtures`);
-        False lights with the wall alone. No effect without a ``fixtures`` section.
-    keep_all_patches
-        Fit every unclipped patch, even those inconsistent with the rest of the chart
-        (:func:`ocio_vp.correction.outliers.inconsistent_patches`; otherwise excluded and named).
+    ``options`` (default :class:`SolveOptions`) with ``changes`` applied: the same names as its
+    fields (``solve_environment(m, env, method="least-squares")``); any other name is a
+    TypeError.
     """
-    if black_level not in BLACK_LEVEL_METHODS:
-        raise ValueError(f"black_level must be one of {BLACK_LEVEL_METHODS}, got {black_level!r}")
+    options = dataclasses.replace(options or SolveOptions(), **changes)
     clipped = _clipped_patches(measurements, environment)
     problem = post_correction_problem(measurements, environment, clipped)
-    lighting = _lighting(measurements, problem, method) if fixtures else None
+    lighting = _lighting(measurements, problem, options.method) if options.fixtures else None
     if lighting is not None and lighting.result.applied:
         problem = dataclasses.replace(problem, extra_light=lighting.extra_light)
-    problem, excluded = _screen(problem, measurements, environment, keep_all_patches)
-    fit = _fit(problem, method, measurements, environment)
+    problem, excluded = _screen(problem, measurements, environment, options.keep_all_patches)
+    fit = _fit(problem, options.method, measurements, environment)
+    correction = fit.correction
+    if options.protect_emitters:
+        correction = ProtectedCorrection(correction, problem.domain, problem.M)
     SL, M_calibrated = problem.SL, problem.M
     M = M_calibrated if fit.M is None else np.asarray(fit.M, dtype=np.float64)
     if lighting is not None:
         M = lighting.M
-    Q = np.asarray(fit.Q, dtype=np.float64)
+    Q = correction.matrix
     # N inverts Q for the calibrated wall (paper eq. 7: Q [SL] N = I), whatever M lights with.
-    N, n_reason = solve_N(M_calibrated, Q, max_condition=max_condition_q, SL=SL)
+    N, n_reason = solve_N(M_calibrated, Q, max_condition=options.max_condition_q, SL=SL)
     if n_reason:
-        n_reason = f"{singular_q_cause(problem, dict(fit.notes))}; {n_reason}"
+        n_reason = f"{singular_q_cause(problem, fit.model)}; {n_reason}"
     offset = None
     if environment.black_level is not None:
         offset = black_level_offset(
-            environment.black_level, M=M_calibrated, SL=SL, method=black_level
+            environment.black_level, M=M_calibrated, SL=SL, method=options.black_level
         )
-    charts = _charts(problem, fit, M=M, Q=Q, N=N, offset=offset, environment=environment)
+    charts = _charts(problem, fit, correction, M=M, N=N, offset=offset, environment=environment)
     diagnostics = _diagnostics(
-        problem, fit, charts, method=method, M=M, Q=Q, N=N, n_reason=n_reason,
-        max_condition_q=max_condition_q, offset=offset, environment=environment, clipped=clipped,
-        lighting=lighting,
-        excluded=None if keep_all_patches else excluded,
+        problem, fit, correction, charts, options=options, M=M, N=N, n_reason=n_reason,
+        offset=offset, environment=environment, clipped=clipped, lighting=lighting,
+        excluded=None if options.keep_all_patches else excluded,
     )  # fmt: skip
     return Solution(
         stage=measurements.stage.name,
         environment=environment.name,
-        method=method,
+        method=options.method,
         beta=problem.beta,
         w_avg=problem.w_avg,
         SL=SL,
@@ -123,13 +142,14 @@ def solve_environment(
         Q=Q,
         N=N,
         black_level_offset=offset,
-        black_level_method=None if offset is None else black_level,
+        black_level_method=None if offset is None else options.black_level,
         diagnostics=diagnostics,
         measurements_file=Path(measurements.source).name if measurements.source else None,
         measurements_sha256=measurements.sha256,
         camera_colorspace=measurements.stage.camera_colorspace,
         linearity=_panel_linearity(measurements),
         fixtures=None if lighting is None else fixtures_block(lighting),
+        post_correction=correction,
     )
 
 
@@ -193,6 +213,7 @@ def post_correction_problem(
         target=environment.target_chart,
         white_patch=measurements.stage.white_patch,
         weights=weights,
+        white_reflectance=measurements.stage.white_reflectance,
     )
 
 
@@ -247,9 +268,9 @@ def _fit(
 def _charts(
     problem: QProblem,
     fit: QFit,
+    correction: PostCorrection,
     *,
     M: np.ndarray,
-    Q: np.ndarray,
     N: np.ndarray | None,
     offset: np.ndarray | None,
     environment: Environment,
@@ -258,16 +279,13 @@ def _charts(
 
     The target p_j, the lit chart under M alone (baseline) and after Q, and the chart shown
     in-frustum as the camera records it (baseline: through M, no Q; ours: through N and the
-    offset, then Q).
+    offset, then Q). A non-linear Q shows content through ``M Q^-1(c)``, as the config does.
     """
     baseline = problem.predicted
-    correct = post_correction(Q, fit.notes)  # Q, or the non-linear model Q approximates
     lit = baseline if fit.M is None else dataclasses.replace(problem, M=M).predicted
     content, matrix = environment.target_chart, problem.M if N is None else N
-    model = fit.notes.get("root_polynomial")
-    if N is not None and model is not None:  # N(c) = M Q^-1(c), as the config's LUT carries it
-        content = invert_root_polynomial(np.asarray(model["coefficients"]), content)
-        matrix = problem.M
+    if N is not None and not correction.linear:
+        content, matrix = correction.inverse(content), problem.M
     displayed = predict_displayed_chart(
         content,
         SL=problem.SL,
@@ -284,23 +302,37 @@ def _charts(
     return {
         "target": environment.target_chart,
         "lit_baseline": baseline,
-        "lit_corrected": correct(lit),
+        "lit_corrected": correction.apply(lit),
         "displayed_baseline": displayed_baseline,
-        "displayed_corrected": displayed if N is None else correct(displayed),
+        "displayed_corrected": displayed if N is None else correction.apply(displayed),
     }
+
+
+def _extrapolation(problem: QProblem, correction: PostCorrection) -> Extrapolation:
+    """How the post-correction behaves beyond the chart (:mod:`ocio_vp.correction.extrapolation`),
+    against the paper's least squares on the same patches."""
+    X, P, w = problem.predicted, np.asarray(problem.target, dtype=np.float64), problem.fit_weights
+    return extrapolation(
+        correction,
+        fit_least_squares(X, P, w),
+        SL=problem.SL,
+        white=P[problem.white_patch],
+        lit_white=X[problem.white_patch],
+        camera_to_xyz=default_camera_to_xyz(),
+        domain=problem.domain,
+    )
 
 
 def _diagnostics(
     problem: QProblem,
     fit: QFit,
+    correction: PostCorrection,
     charts: dict[str, np.ndarray],
     *,
-    method: str,
+    options: SolveOptions,
     M: np.ndarray,
-    Q: np.ndarray,
     N: np.ndarray | None,
     n_reason: str | None,
-    max_condition_q: float,
     offset: np.ndarray | None,
     environment: Environment,
     clipped: list[int],
@@ -309,6 +341,7 @@ def _diagnostics(
 ) -> Diagnostics:
     """Errors, conditioning, warnings and the stability block (calibration.diagnostics)."""
     target, white, weights = problem.target, problem.white_patch, problem.weights
+    Q = correction.matrix
 
     def error(chart: str) -> np.ndarray:
         return error_relative_to_white(charts[chart], target, white, weights)
@@ -325,6 +358,7 @@ def _diagnostics(
             "the out-of-frustum drive M w_avg has a negative channel: this light is outside the "
             "LED gamut and the wall will clip it"
         )
+    method = options.method
     stability, stability_warnings = stability_diagnostics(
         problem,
         fit,
@@ -337,7 +371,7 @@ def _diagnostics(
         corrected=charts["lit_corrected"],
         clipped=clipped,
         cross_validated=cross_validated_error(problem, method)
-        if "cross_validated_error" not in fit.notes and method in CLOSED_FORM_METHODS
+        if fit.cross_validated_error is None and method in CLOSED_FORM_METHODS
         else None,
     )
     # A target chart synthesized by ``ocio-vp target-chart`` is recorded, with its warnings.
@@ -350,14 +384,14 @@ def _diagnostics(
         rank_Q=int(np.linalg.matrix_rank(Q)),
         N_solved=N is not None,
         N_reason=n_reason,
-        max_condition_q_for_N=max_condition_q,
+        max_condition_q_for_N=options.max_condition_q,
         lit_chart_error_baseline=error("lit_baseline"),
         lit_chart_error=error("lit_corrected"),
         residual_rms=float(np.sqrt(np.mean((charts["lit_corrected"] - target) ** 2))),
         displayed_chart_error_baseline=error("displayed_baseline"),
         displayed_chart_error=error("displayed_corrected"),
         out_of_frustum_drive=drive,
-        method_notes=dict(fit.notes),
+        method_notes=fit.notes,
         warnings=warnings + stability_warnings + synthesized_warnings,
         charts=charts,
         **stability,
@@ -365,6 +399,8 @@ def _diagnostics(
         fixtures=None if lighting is None else fixtures_diagnostics(lighting),
         patch_screening=excluded is not None,
         excluded_patches=[dataclasses.asdict(f) for f in excluded or []],
+        model_description=correction.describe(),
+        extrapolation=dataclasses.asdict(_extrapolation(problem, correction)),
     )
 
 
@@ -378,20 +414,8 @@ def _panel_linearity(measurements: Measurements) -> dict | None:
 
 
 def solve_measurements(
-    measurements: Measurements,
-    *,
-    method: str = DEFAULT_METHOD,
-    black_level: str = "exact",
-    keep_all_patches: bool = False,
+    measurements: Measurements, options: SolveOptions | None = None, **changes: Any
 ) -> list[Solution]:
     """:func:`solve_environment` for every environment, in file order."""
-    return [
-        solve_environment(
-            measurements,
-            env,
-            method=method,
-            black_level=black_level,
-            keep_all_patches=keep_all_patches,
-        )
-        for env in measurements.environments
-    ]
+    options = dataclasses.replace(options or SolveOptions(), **changes)
+    return [solve_environment(measurements, env, options) for env in measurements.environments]

@@ -259,7 +259,40 @@ def publish_dirs(
         check_replaceable(final)
     for staged, final in pairs:
         _write_marker(Path(staged))
-        _replace_dir(Path(staged), Path(final))
+        _replace_keeping_nested(Path(staged), Path(final))
+
+
+def _nested_folders(final: Path) -> list[str]:
+    """Top-most output folders published inside ``final`` after it (``exports/unreal``,
+    ``report``: each has its own :data:`MARKER`)."""
+    if not final.is_dir() or final.is_symlink():
+        return []
+    found: list[str] = []
+    for marker in sorted(final.rglob(MARKER)):
+        folder = marker.parent.relative_to(final).as_posix()
+        if folder != "." and not any(folder.startswith(f + "/") for f in found):
+            found.append(folder)
+    return found
+
+
+def _replace_keeping_nested(staged: Path, final: Path) -> None:
+    """Replace ``final`` by ``staged``, carrying over the nested output folders of ``final``
+    that ``staged`` does not have (an environment's exports and report survive a re-solve:
+    :mod:`ocio_vp.formats.provenance` names the stale ones)."""
+    moved = []
+    try:
+        for folder in _nested_folders(final):
+            if not os.path.lexists(staged / folder):
+                (staged / folder).parent.mkdir(parents=True, exist_ok=True)
+                os.replace(final / folder, staged / folder)
+                moved.append(folder)
+        _replace_dir(staged, final)
+    except BaseException:
+        for folder in moved:  # put them back where they were
+            with contextlib.suppress(OSError):
+                (final / folder).parent.mkdir(parents=True, exist_ok=True)
+                os.replace(staged / folder, final / folder)
+        raise
 
 
 def publish_dir(

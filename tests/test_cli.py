@@ -65,18 +65,38 @@ def test_unknown_method_is_a_usage_error(capsys):
     with pytest.raises(SystemExit) as info:
         main(["solve", "x.yaml", "--out", "o", "--method", "least-square"])
     assert info.value.code == 2
-    assert "invalid choice: 'least-square'" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "invalid choice: 'least-square'" in err and "did you mean 'least-squares'?" in err
 
 
-def test_options_without_effect_warn(tmp_path, capsys):
+@pytest.mark.parametrize(
+    ("argv", "suggestion"),
+    [
+        (["solv", "x.yaml"], "'solve'"),
+        (["solve", "x.yaml", "--out", "o", "--wall-encodng", "pq"], "'--wall-encoding'"),
+        (["solve", "x.yaml", "--out", "o", "--wall-encoding", "gama2.4"], "'gamma2.4'"),
+        (["export", "d", "--target", "unrael"], "'unreal'"),
+    ],
+)
+def test_a_mistyped_command_option_or_choice_gets_a_did_you_mean(argv, suggestion, capsys):
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    err = capsys.readouterr().err
+    assert info.value.code == 2 and f"did you mean {suggestion}?" in err
+    assert err.count("\n") == 1
+
+
+def test_options_without_effect_are_refused_and_encodings_ignore_case(tmp_path, capsys):
     from ocio_vp.formats.measurements import save_measurements
     from ocio_vp.simulator.stage import simulate_measurements
 
     stage = tmp_path / "stage.yaml"
     save_measurements(simulate_measurements(["direct_sun"]), stage)
-    assert main(["solve", str(stage), "--out", str(tmp_path / "a"), "--peak-nits", "600"]) == 0
+    assert main(["solve", str(stage), "--out", str(tmp_path / "a"), "--peak-nits", "600"]) == 2
     err = capsys.readouterr().err
-    assert err.count("--peak-nits has no effect with --wall-encoding linear") == 1
-    args = ["solve", str(stage), "--out", str(tmp_path / "b"), "--wall-encoding", "pq"]
+    assert "--peak-nits: applies only to a PQ wall" in err and err.count("\n") == 1
+    assert not (tmp_path / "a").exists()
+    args = ["solve", str(stage), "--out", str(tmp_path / "b"), "--wall-encoding", "PQ"]
     assert main([*args, "--peak-nits", "600"]) == 0
-    assert "no effect" not in capsys.readouterr().err
+    out = capsys.readouterr().out
+    assert "wall signal: PQ (SMPTE ST 2084), drive 1.0 = 600 cd/m2" in out

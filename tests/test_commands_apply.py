@@ -106,3 +106,59 @@ def test_a_non_image_under_an_output_name_is_foreign(calib, frames, tmp_path, ca
     assert _apply(calib / "direct_sun", frames / "A001.####.exr", "--out", out) == 2
     assert "was not written by ocio-vp apply" in capsys.readouterr().err
     assert (out / "A001.0001.exr").read_text() == "notes, not a frame"
+
+
+def test_frames_of_another_solution_are_never_kept_as_done(calib, frames, tmp_path, capsys):
+    """A rerun with another solution refuses on one line (nothing written); --overwrite redoes
+    them, and the header then names the new solution."""
+    from ocio_vp.footage.sequences import SOLUTION_MARK, output_solution
+
+    out = tmp_path / "o"
+    assert _apply(calib / "direct_sun", frames / "A001.####.exr", "--out", out) == 0
+    first = output_solution(out / "A001.0001.exr")
+    assert first.startswith("paper-stage/direct_sun post-correction sha256:")
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    capsys.readouterr()
+    args = (calib / "sodium_vapour", frames / "A001.####.exr", "--out", out)
+    assert _apply(*args) == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]  # after sodium's own warnings
+    assert err.startswith("ocio-vp apply: error: ") and len(err) < 300 + len(str(out)), err
+    assert "direct_sun" in err and "sodium_vapour" in err, err
+    assert "--overwrite" in err and "2 frames" in err
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert _apply(*args, "--overwrite") == 0
+    assert "sodium_vapour" in output_solution(out / "A001.0001.exr")
+    assert SOLUTION_MARK == "ocio_vp:solution"
+
+
+def test_log_footage_is_decoded_corrected_and_encoded(calib, tmp_path):
+    """--footage-encoding "ARRI LogC4": encode(Q decode(x)) within 1e-4 (colour-science's
+    curves and the solution's Q, computed here)."""
+    import json
+
+    import colour
+    import OpenImageIO as oiio
+
+    folder = tmp_path / "log"
+    folder.mkdir()
+    log = np.random.default_rng(0).uniform(0.05, 0.95, (8, 10, 3))
+    write_plate(folder / "B001.0001.exr", log, dtype="float")
+    out = tmp_path / "o"
+    assert _apply(calib / "direct_sun", folder / "B001.0001.exr", "--out", out,
+                  "--footage-encoding", "ARRI LogC4") == 0  # fmt: skip
+    got = oiio.ImageBuf(str(out / "B001.0001.exr")).get_pixels(oiio.FLOAT)[..., :3]
+    Q = np.array(json.loads((calib / "direct_sun" / "solution.json").read_text())["Q"])
+    stored = log.astype(np.float32).astype(np.float64)
+    with np.errstate(invalid="ignore"):
+        want = colour.log_encoding(
+            colour.log_decoding(stored, function="ARRI LogC4") @ Q.T, function="ARRI LogC4"
+        )
+    np.testing.assert_allclose(got, want, atol=1e-4)
+    assert np.abs(got - stored).max() > 1e-3  # it did change the footage
+
+
+def test_unknown_footage_encoding_is_one_line(calib, frames, tmp_path, capsys):
+    args = (calib / "direct_sun", frames / "A001.####.exr", "--out", tmp_path / "o")
+    assert _apply(*args, "--footage-encoding", "LogC5") == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--footage-encoding" in err and "LogC5" in err

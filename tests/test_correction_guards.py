@@ -109,5 +109,5 @@ def test_n_reason_names_the_real_cause(measurements) -> None:
         SL=measurements.SL, SRL=measurements.SRL, beta=0.24, M=np.linalg.inv(measurements.SL),
         w_avg=np.ones(3), target=measurements.environments[0].target_chart,
     )  # fmt: skip
-    text = singular_q_cause(problem, {"model": "least-squares"})
+    text = singular_q_cause(problem, "least-squares")
     assert "sodium" not in text and "least-squares" in text

@@ -69,7 +69,7 @@ def chromaticity_delta_e(light, baseline, camera_to_xyz):
 
 
 def test_registered():
-    assert Q_SOLVE_METHODS["joint"] is q_joint
+    assert Q_SOLVE_METHODS["joint"].fit is q_joint
 
 
 @pytest.mark.parametrize("name", BROADBAND)

@@ -27,7 +27,6 @@ from ocio_vp.correction.perceptual import default_camera_to_xyz
 from ocio_vp.correction.registry import Q_SOLVE_METHODS, QProblem, solve_post_correction
 from ocio_vp.correction.root_polynomial import (
     fit_root_polynomial,
-    post_correction,
     root_polynomial_expansion,
 )
 from ocio_vp.errors import InputError
@@ -209,9 +208,8 @@ class TestAutoOnTheSimulator:
         # judge the choice: auto's root-polynomial renders them better than least squares.
         env = simulated.environment("direct_sun")
         s = solve_environment(simulated, env, method="auto")
-        notes = s.diagnostics["method_notes"]
         assert s.diagnostics["model"] == "root-polynomial"
-        assert notes["root_polynomial"]["degree"] == 2
+        assert s.correction.kind == "root-polynomial" and s.correction.degree == 2
         assert "degree 3 is not a candidate" in s.diagnostics["model_reason"]
         ls = solve_environment(simulated, env, method="least-squares")
         stage = spectral_stage()
@@ -219,7 +217,7 @@ class TestAutoOnTheSimulator:
         errors = [
             held_out_errors(
                 stage, "direct_sun", M=x.M, w_avg=x.w_avg, Q=x.Q, reflectances=samples,
-                correct=post_correction(x.Q, x.diagnostics["method_notes"]),
+                correct=x.correction.apply,
             ).delta_E_2000.mean()
             for x in (s, ls)
         ]  # fmt: skip
@@ -265,7 +263,7 @@ class TestAutoOnTheSimulator:
         notes = s.diagnostics["method_notes"]
         problem = QProblem(
             SL=simulated.SL, SRL=simulated.SRL, beta=s.beta, M=s.M, w_avg=s.w_avg,
-            target=env.target_chart,
+            target=env.target_chart, white_reflectance=simulated.stage.white_reflectance,
         )  # fmt: skip
         X, P = problem.predicted, problem.target
         alpha = choose_shrinkage(X, P, np.ones(24), 18)
@@ -283,8 +281,10 @@ class TestAutoOnTheSimulator:
                     fit = solve_post_correction(
                         dataclasses.replace(problem, weights=w), method=name
                     )
-                    Q = post_correction(fit.Q, fit.notes)  # the root-polynomial's own model
-                held[j] = Q(X[j]) if callable(Q) else Q @ X[j]
+                    Q = fit.correction  # the bounded root-polynomial's own model
+                    if Q.kind == "root-polynomial":  # at the fade chosen on all patches
+                        Q = dataclasses.replace(Q, fade=s.correction.fade)
+                held[j] = Q.apply(X[j]) if hasattr(Q, "apply") else Q @ X[j]
             de = chart_errors(held, P, camera_to_xyz=default_camera_to_xyz()).delta_E_2000
             np.testing.assert_allclose(notes["cv_delta_e"][name], de.mean(), rtol=1e-9)
         assert s.diagnostics["model"] in AUTO_LADDER

@@ -209,13 +209,13 @@ def test_cli_names_the_patch_and_keep_all_patches_opts_out(clean, tmp_path, caps
     # least squares: the screening runs before any method (auto would also bake LUTs here).
     fast = ["--environment", "direct_sun", "--method", "least-squares"]
     assert main(["solve", str(path), "--out", str(tmp_path / "a"), *fast]) == 0
-    out = capsys.readouterr().out
+    out = capsys.readouterr().err  # warnings go to stderr
     assert "patch 13 (green)" in out
     solution = json.loads((tmp_path / "a" / "direct_sun" / "solution.json").read_text())
     assert solution["diagnostics"]["excluded_patches"][0]["index"] == 13
     args = ["solve", str(path), "--out", str(tmp_path / "b"), *fast]
     assert main([*args, "--keep-all-patches"]) == 0
-    assert "patch 13 (green)" not in capsys.readouterr().out
+    assert "patch 13 (green)" not in capsys.readouterr().err
 
 
 def _delta_e_2000(rgb, reference_rgb, white_rgb):

@@ -116,7 +116,7 @@ def test_registered_for_solve(tmp_path):
     from ocio_vp.formats.measurements import save_measurements
     from ocio_vp.simulator.stage import paper_stage_measurements
 
-    assert Q_SOLVE_METHODS["perceptual"] is q_perceptual
+    assert Q_SOLVE_METHODS["perceptual"].fit is q_perceptual
     path = tmp_path / "stage.json"
     save_measurements(paper_stage_measurements(("incandescent",)), path)
     out = tmp_path / "calib"

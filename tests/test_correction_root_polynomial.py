@@ -26,7 +26,6 @@ from ocio_vp.correction import (
     fit_least_squares,
     fit_root_polynomial,
     invert_root_polynomial,
-    post_correction,
     root_polynomial_expansion,
     root_polynomial_jacobian,
     root_polynomial_loo_predictions,
@@ -72,15 +71,21 @@ def test_registry_method_keeps_a_3x3_and_carries_the_model(problem):
     fit = solve_post_correction(problem, method="root-polynomial")
     X, P, w = problem.predicted, problem.target, problem.fit_weights
     np.testing.assert_allclose(fit.Q, fit_least_squares(X, P, w), rtol=1e-12)
-    model = fit.notes["root_polynomial"]
-    assert model["degree"] == 2 and np.shape(model["coefficients"]) == (3, 6)
-    assert any("3x3 approximation" in w for w in fit.notes["warnings"])
-    assert np.all(np.isfinite(fit.notes["cross_validated_error"]))
-    correct = post_correction(fit.Q, fit.notes)
-    np.testing.assert_allclose(correct(X), apply_root_polynomial(model["coefficients"], X))
+    model = fit.correction
+    assert model.kind == "root-polynomial" and model.degree == 2
+    np.testing.assert_allclose(
+        model.coefficients, matrix_colour_correction_Finlayson2015(X, P, 2), rtol=1e-7, atol=1e-9
+    )
+    assert np.all(np.isfinite(fit.cross_validated_error))
+    # Inside the chart's domain (weight 1: the greys at least) it is the polynomial itself.
+    inside = model.weight(X) == 1.0
+    assert inside[18:].all() and np.all(model.weight(X) > 0)
+    np.testing.assert_allclose(
+        model.apply(X[inside]), apply_root_polynomial(model.coefficients, X[inside])
+    )
     assert "root-polynomial-3" in Q_SOLVE_METHODS
     # The non-linear model fits the chart at least as well as its own 3x3 part can.
-    assert np.sum((correct(X) - P) ** 2) < np.sum((X @ fit.Q.T - P) ** 2)
+    assert np.sum((model.apply(X) - P) ** 2) < np.sum((X @ fit.Q.T - P) ** 2)
 
 
 @pytest.mark.parametrize("scale", [1e-4, 1e-2, 1e2, 1e4])
@@ -90,8 +95,8 @@ def test_exposure_invariance(problem, scale):
     scaled = dataclasses.replace(problem, target=problem.target * scale, SRL=problem.SRL * scale)
     fit_s = solve_post_correction(scaled, method="root-polynomial")
     X = problem.predicted
-    a = post_correction(fit.Q, fit.notes)(X)
-    b = post_correction(fit_s.Q, fit_s.notes)(X * scale)
+    a = fit.correction.apply(X)
+    b = fit_s.correction.apply(X * scale)
     np.testing.assert_allclose(b / scale, a, rtol=1e-9, atol=1e-12 * np.abs(a).max())
 
 

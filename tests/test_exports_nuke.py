@@ -13,11 +13,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import oracle_correction
 from test_exports_unreal import run_tool, solve_to
 
-from ocio_vp.errors import InputError
 from ocio_vp.exports import export_solutions
 from ocio_vp.formats.solution import load_solution
+from ocio_vp.model import correction_to_dict
 
 NODE_CLASSES = ("Root", "Group", "Input", "OCIONamedTransform", "ColorMatrix", "Output")
 #: Every class the harness knows (a root-polynomial Q adds its CLF fallback node).
@@ -71,6 +72,24 @@ def parse_nk(path: Path, tmp_path: Path) -> list[tuple[str, dict[str, str]]]:
     return nodes
 
 
+# Nuke evaluates a file knob's Tcl when it reads it; `value root.name` is the script's path.
+TCL_KNOB = r"""
+proc value {name} { return [lindex $::argv 1] }
+puts [subst [lindex $argv 0]]
+"""
+
+
+def nuke_path(knob: str, script: Path, tmp_path: Path) -> Path:
+    """The file a path knob names when Nuke opens ``script`` (tclsh evaluates the knob)."""
+    harness = tmp_path / "knob.tcl"
+    harness.write_text(TCL_KNOB)
+    result = subprocess.run(
+        ["tclsh", str(harness), knob, str(script)], capture_output=True, text=True, timeout=30
+    )
+    assert result.returncode == 0, result.stderr
+    return Path(result.stdout.strip())
+
+
 def tcl_matrix(text: str) -> np.ndarray:
     rows = re.findall(r"\{([^{}]*)\}", text)
     return np.array([[float(v) for v in row.split()] for row in rows])
@@ -91,8 +110,12 @@ class TestNukeScript:
         classes = [cls for cls, _ in nodes]
         assert classes == [*NODE_CLASSES, "end_group"]
         knobs = dict(nodes)
-        config = (folder / "config" / "config.ocio").resolve()
-        assert knobs["Root"]["customOCIOConfigPath"] == config.as_posix()
+        config = folder / "config" / "config.ocio"
+        knob = knobs["Root"]["customOCIOConfigPath"]
+        assert knob == "[file dirname [value root.name]]/config/config.ocio"
+        assert nuke_path(knob, folder / f"env_{index}.nk", tmp_path) == config
+        assert knobs["OCIONamedTransform"]["key1"] == "VP_ENVIRONMENT"
+        assert knobs["OCIONamedTransform"]["value1"] == f"env_{index}"
         assert knobs["Root"]["OCIO_config"] == "custom"
         assert knobs["Root"]["colorManagement"] == "OCIO"
         solution = load_solution(exported[index])
@@ -108,8 +131,9 @@ class TestNukeScript:
         """The named transform the script uses, from the config the Root points at, is Q."""
         import PyOpenColorIO as OCIO
 
-        knobs = dict(parse_nk(exported[0] / "exports" / "nuke" / "env_0.nk", tmp_path))
-        config_path = knobs["Root"]["customOCIOConfigPath"]
+        script = exported[0] / "exports" / "nuke" / "env_0.nk"
+        knobs = dict(parse_nk(script, tmp_path))
+        config_path = str(nuke_path(knobs["Root"]["customOCIOConfigPath"], script, tmp_path))
         result = run_tool("ociocheck", "--iconfig", config_path)
         assert result.returncode == 0, result.stdout + result.stderr
         config = OCIO.Config.CreateFromFile(config_path)
@@ -121,12 +145,19 @@ class TestNukeScript:
         expected = rgb.astype(np.float64) @ load_solution(exported[0]).Q.T
         np.testing.assert_allclose(out, expected, atol=1e-6)
 
-    def test_hostile_output_path_is_refused(self, exported, tmp_path):
-        """Nuke evaluates [..] in path knobs at run time: such a path is refused, not written."""
+    def test_a_hostile_output_path_never_reaches_the_script(self, exported, tmp_path):
+        """Nuke evaluates [..] in path knobs: the script holds no output path at all, so an
+        output folder named like Tcl is harmless, and the script opens from a moved folder."""
         out = tmp_path / "[pwned]"
-        with pytest.raises(InputError, match="Tcl"):
-            export_solutions(exported[:1], targets=["nuke"], out=out)
-        assert not out.exists()
+        export_solutions(exported[:1], targets=["nuke"], out=out)
+        script = out / "env_0" / "nuke" / "env_0.nk"
+        assert str(tmp_path).encode() not in script.read_bytes()
+        moved = tmp_path / "moved"
+        shutil.move(out / "env_0" / "nuke", moved)
+        knobs = dict(parse_nk(moved / "env_0.nk", tmp_path))
+        config = nuke_path(knobs["Root"]["customOCIOConfigPath"], moved / "env_0.nk", tmp_path)
+        assert config == moved / "config" / "config.ocio" and config.is_file()
+        assert "PWNED" not in knobs
 
     def test_out_folder_layout(self, exported, tmp_path):
         results = export_solutions(exported, targets=["nuke"], out=tmp_path / "o")
@@ -135,32 +166,40 @@ class TestNukeScript:
             tmp_path / "o" / "env_1" / "nuke",
         ]
         json.dumps([r.summary for r in results])  # summaries are plain data
-        knobs = dict(parse_nk(tmp_path / "o" / "env_1" / "nuke" / "env_1.nk", tmp_path))
-        expected = (tmp_path / "o" / "env_1" / "nuke" / "config" / "config.ocio").resolve()
-        assert knobs["Root"]["customOCIOConfigPath"] == expected.as_posix()
-        assert Path(knobs["Root"]["customOCIOConfigPath"]).is_file()
+        script = tmp_path / "o" / "env_1" / "nuke" / "env_1.nk"
+        knobs = dict(parse_nk(script, tmp_path))
+        expected = tmp_path / "o" / "env_1" / "nuke" / "config" / "config.ocio"
+        assert nuke_path(knobs["Root"]["customOCIOConfigPath"], script, tmp_path) == expected
+        assert expected.is_file()
 
 
 def test_root_polynomial_q_has_its_clf_fallback(tmp_path):
     """A root-polynomial Q: the OCIO node reads the config's LUT bake; a disabled
     OCIOFileTransform reads the Q CLF sidecar (valid for ociochecklut, and the exact model
-    within the bake limit); the ColorMatrix is labelled as the 3x3 approximation."""
-    (folder,) = solve_to(tmp_path / "solved", environments=1, method="root-polynomial")
+    within the bake limit); the ColorMatrix is labelled as the 3x3 approximation. A simulated
+    stage: a root-polynomial fitted to the synthetic random chart of the other tests folds."""
+    from ocio_vp.ocio import write_solutions
+    from ocio_vp.pipeline import solve_environment
+    from ocio_vp.simulator.stage import paper_stage_measurements
+
+    m = paper_stage_measurements(("incandescent",))
+    solution = solve_environment(m, m.environments[0], method="root-polynomial")
+    write_solutions([solution], tmp_path / "solved")
+    folder = tmp_path / "solved" / "incandescent"
     export_solutions([folder], targets=["nuke"])
-    nodes = parse_nk(folder / "exports" / "nuke" / "env_0.nk", tmp_path)
+    nodes = parse_nk(folder / "exports" / "nuke" / "incandescent.nk", tmp_path)
     classes = [cls for cls, _ in nodes]
     assert classes == [*NODE_CLASSES[:4], "OCIOFileTransform", *NODE_CLASSES[4:], "end_group"]
     knobs = dict(nodes)
-    lut = Path(knobs["OCIOFileTransform"]["file"])
+    script = folder / "exports" / "nuke" / "incandescent.nk"
+    lut = nuke_path(knobs["OCIOFileTransform"]["file"], script, tmp_path)
     assert lut.is_file() and lut.suffix == ".clf" and lut.parent.parent.name == "config"
     assert knobs["OCIOFileTransform"]["disable"] == "true"
     assert "3x3 approximation" in knobs["ColorMatrix"]["label"]
     solution = load_solution(folder)
-    C = np.asarray(solution.diagnostics["method_notes"]["root_polynomial"]["coefficients"])
     rgb = np.array([0.3, 0.2, 0.1])
     result = run_tool("ociochecklut", str(lut), *map(str, rgb))
     assert result.returncode == 0, result.stdout + result.stderr
     got = np.array(result.stdout.split()[-3:], dtype=float)
-    terms = [rgb[0], rgb[1], rgb[2], *np.sqrt(rgb[[0, 1, 0]] * rgb[[1, 2, 2]])]
-    expected = C @ np.array(terms)
+    expected = oracle_correction(correction_to_dict(solution.correction), rgb)
     assert np.abs(got - expected).max() <= 1e-3 * np.abs(expected).max()

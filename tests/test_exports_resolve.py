@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import oracle_correction
 from test_exports_unreal import run_tool, solve_to
 
 from ocio_vp.cli import main
@@ -169,7 +170,10 @@ int main(int argc, char **argv) {
 
 
 #: DCTL's math functions, as C99's (the root-polynomial DCTL uses _powf).
-MATH_HARNESS = "#include <math.h>\n#define _powf powf\n" + HARNESS
+MATH_HARNESS = (
+    "#include <math.h>\n#define _powf powf\n#define _fminf fminf\n#define _fmaxf fmaxf\n"
+    "#define _log2f log2f\n" + HARNESS
+)
 
 
 def compile_dctl(dctl: Path, tmp_path: Path, harness: str = HARNESS) -> Path:
@@ -240,20 +244,16 @@ def test_root_polynomial_dctl_is_the_model(tmp_path):
     """A root-polynomial Q: the DCTL computes the model itself (gcc-compiled, float32), equal
     to colour-science's expansion @ C^T, black to black, negatives finite; the manifest says
     what the DCTL holds and, for the cube, either its measured accuracy or why it is absent."""
-    from colour.characterisation import polynomial_expansion_Finlayson2015
-
     (folder,) = solve_to(tmp_path / "solved", environments=1, method="root-polynomial")
     export_solutions([folder], targets=["resolve"], cube_size=17)
     resolve = folder / "exports" / "resolve"
-    C = np.asarray(
-        load_solution(folder).diagnostics["method_notes"]["root_polynomial"]["coefficients"]
-    )
+    block = json.loads((folder / "solution.json").read_text())["post_correction"]
     colours = np.vstack([COLOURS, [[-0.01, 0.02, 0.0], [1e-8, 2e-8, 0.0], [-1.0, -1.0, -1.0]]])
     got = run_dctl(
         compile_dctl(resolve / "post_correction_Q.dctl", tmp_path, MATH_HARNESS), colours
     )
     x = colours.astype(np.float32).astype(np.float64)
-    expected = polynomial_expansion_Finlayson2015(x, 2, root_polynomial_expansion=True) @ C.T
+    expected = oracle_correction(block, x)
     scale = np.abs(expected).max(axis=1, keepdims=True)
     assert np.all(np.isfinite(got))
     assert np.all(np.abs(got - expected) <= 1e-5 * scale)

@@ -63,9 +63,11 @@ class TestUnrealFiles:
         folder = exported[0] / "exports" / "unreal"
         assert sorted(p.name for p in folder.iterdir()) == [
             ".ocio-vp-output",  # lets a later export replace the folder
+            ".ocio-vp-source.json",  # the solution it was made from (a re-solve names it stale)
             "UNREAL.md",
             "config",
             "env_0.ocioz",
+            "ocio_vp_setup.py",
             "unreal_ocio.json",
         ]
 

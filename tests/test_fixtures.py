@@ -27,7 +27,7 @@ from ocio_vp.fixtures import (
     irreducible_error,
     solve_fixture_drives,
 )
-from ocio_vp.formats.fixtures import Fixture
+from ocio_vp.formats.fixtures import DmxPatch, Fixture
 from ocio_vp.formats.measurements import save_measurements
 from ocio_vp.formats.solution import load_solution, solution_to_json
 from ocio_vp.pipeline import solve_environment
@@ -184,6 +184,10 @@ def test_content_matrix_maps_the_average_light_to_the_drives():
 
 def test_cli_solve_and_export_lights(tmp_path, stage, capsys):
     m = with_simulated_fixtures(simulate_measurements(["d65"], stage=stage), stage, ["rgbacl"])
+    patch = DmxPatch(universe=3, address=101, mode="16-bit")
+    m = dataclasses.replace(
+        m, fixtures=tuple(dataclasses.replace(f, dmx=patch) for f in m.fixtures)
+    )
     path = tmp_path / "stage.yaml"
     save_measurements(m, path)
     assert (
@@ -202,6 +206,15 @@ def test_cli_solve_and_export_lights(tmp_path, stage, capsys):
         assert row["drive"] == pytest.approx(solution.fixtures["rgbacl"]["drive"][row["channel"]])
     csv_lines = (folder / "lights.csv").read_text().splitlines()
     assert len(csv_lines) == 1 + len(channels)
+    # the patch: universe, mode and two slots per channel from the start address
+    assert document["fixtures"][0]["dmx"] == {"universe": 3, "address": 101, "mode": "16-bit"}
+    assert csv_lines[0].startswith(
+        "fixture,channel_index,channel,universe,mode,address,fine_address"
+    )
+    assert [row["address"] for row in channels] == [101 + 2 * i for i in range(len(channels))]
+    assert all(
+        row["fine_address"] == row["address"] + 1 and row["universe"] == 3 for row in channels
+    )
     assert main(["report", str(tmp_path / "calib" / "d65")]) == 0
     html = next((tmp_path / "calib").rglob("index.html")).read_text()
     assert "fixture rgbacl" in html and "error Q cannot remove" in html

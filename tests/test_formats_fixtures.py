@@ -68,7 +68,31 @@ CASES = [
         "fixtures[0].lit_chart.white",
         "black",
     ),
+    (
+        lambda f: f.update(dmx={"universe": 1, "address": 506, "mode": "16-bit"}),
+        "fixtures[0].dmx.address",
+        "end at 513, past 512",
+    ),
+    (
+        lambda f: f.update(dmx={"universe": 1, "address": 0, "mode": "8-bit"}),
+        "fixtures[0].dmx.address",
+        "1..512",
+    ),
+    (
+        lambda f: f.update(dmx={"universe": 1, "address": 1, "mode": "RGBW"}),
+        "fixtures[0].dmx.mode",
+        "8-bit",
+    ),
+    (lambda f: f.update(dmx={"universe": 1, "address": 1}), "fixtures[0].dmx", "'mode'"),
 ]
+
+
+def test_dmx_patch_round_trips(document):
+    data = copy.deepcopy(document)
+    data["fixtures"][0]["dmx"] = {"universe": 0, "address": 505, "mode": "16-bit"}  # ends at 512
+    m = measurements_from_dict(data)
+    assert m.fixtures[0].dmx.address == 505
+    assert measurements_to_dict(m)["fixtures"][0]["dmx"] == data["fixtures"][0]["dmx"]
 
 
 @pytest.mark.parametrize(("edit", "key", "problem"), CASES)

@@ -13,8 +13,9 @@ import subprocess
 import numpy as np
 import PyOpenColorIO as OCIO
 import pytest
+from conftest import oracle_correction
 
-from ocio_vp.correction import apply_root_polynomial
+from ocio_vp.model import correction_to_dict
 from ocio_vp.ocio import IN_FRUSTUM, POST_CORRECTION_COLORSPACE, REFERENCE, write_solutions
 from ocio_vp.pipeline import solve_environment
 
@@ -28,6 +29,12 @@ def written(tmp_path_factory):
     out = tmp_path_factory.mktemp("rp") / "out"
     (written_solution,) = write_solutions([solution], out)
     return written_solution, out / "incandescent" / "config.ocio"
+
+
+def _model(solution):
+    """The solution's post-correction, applied by the tests' independent implementation."""
+    block = correction_to_dict(solution.correction)
+    return lambda rgb: oracle_correction(block, rgb)
 
 
 def _apply(config, src, dst, rgb):
@@ -51,17 +58,17 @@ LIMIT = 0.001
 def test_in_frustum_round_trip_through_the_config(written):
     solution, path = written
     config = OCIO.Config.CreateFromFile(str(path))
-    C = solution.diagnostics["method_notes"]["root_polynomial"]["coefficients"]
+    model = _model(solution)
     rng = np.random.default_rng(7)
     # Down to 1e-4 of white: below, OCIO's float32 sum of the drive and the black-level offset
     # (~0.08) and its subtraction here lose more than the bake (5e-9 of 1e-6 is 0.5 %).
     c = np.vstack([_content(solution, 4000, rng), _content(solution, 1000, rng, (1e-4, 1e-2))])
     drive = _apply(config, REFERENCE, IN_FRUSTUM, c) - solution.in_frustum_offset
-    seen = apply_root_polynomial(C, drive @ np.asarray(solution.SL).T)
+    seen = model(drive @ np.asarray(solution.SL).T)
     error = np.abs(seen - c).max(axis=1) / c.max(axis=1)
     assert error.max() < LIMIT
     # The 3x3 approximation the config used before is clearly worse.
-    seen_3x3 = apply_root_polynomial(C, (c @ np.asarray(solution.N).T) @ np.asarray(solution.SL).T)
+    seen_3x3 = model((c @ np.asarray(solution.N).T) @ np.asarray(solution.SL).T)
     assert np.abs(seen_3x3 - c).max(axis=1).mean() > 3 * np.abs(seen - c).max(axis=1).mean()
     block = solution.diagnostics["root_polynomial_ocio"]
     assert block["bake_error"]["finite_on_minus1_to_16"]
@@ -70,12 +77,12 @@ def test_in_frustum_round_trip_through_the_config(written):
 def test_footage_q_and_finite_everywhere(written):
     solution, path = written
     config = OCIO.Config.CreateFromFile(str(path))
-    C = solution.diagnostics["method_notes"]["root_polynomial"]["coefficients"]
+    model = _model(solution)
     rng = np.random.default_rng(8)
     x = np.linalg.solve(np.asarray(solution.Q), _content(solution, 2000, rng).T).T
     x = x[np.all(x >= 0, axis=1)]
     got = _apply(config, POST_CORRECTION_COLORSPACE, REFERENCE, x)
-    ref = apply_root_polynomial(C, x)
+    ref = model(x)
     assert (np.abs(got - ref).max(axis=1) / ref.max(axis=1)).max() < LIMIT
     probe = rng.uniform(-1.0, 16.0, (20000, 3))
     for src, dst in ((POST_CORRECTION_COLORSPACE, REFERENCE), (REFERENCE, IN_FRUSTUM)):
@@ -84,16 +91,16 @@ def test_footage_q_and_finite_everywhere(written):
 
 def test_reference_to_footage_is_the_exact_inverse(written):
     """The other direction (a host converting reference -> Stage Footage, or applying the
-    named transform inversely) is the baked Q^-1, checked against the exact inverse model
-    (Newton on colour-science's expansion): OCIO is never left to invert the Q LUT itself."""
-    from ocio_vp.correction import invert_root_polynomial
+    named transform inversely) is the baked Q^-1, checked against the model's own inverse, which
+    the independent forward model maps back to the content: OCIO is never left to invert the Q
+    LUT itself."""
     from ocio_vp.ocio import POST_CORRECTION
 
     solution, path = written
     config = OCIO.Config.CreateFromFile(str(path))
-    C = solution.diagnostics["method_notes"]["root_polynomial"]["coefficients"]
     c = _content(solution, 2000, np.random.default_rng(10))
-    ref = invert_root_polynomial(C, c)
+    ref = solution.correction.inverse(c)
+    np.testing.assert_allclose(_model(solution)(ref), c, rtol=1e-9, atol=1e-12)
     ref_max = np.abs(ref).max(axis=1)
     got = _apply(config, REFERENCE, POST_CORRECTION_COLORSPACE, c)
     assert (np.abs(got - ref).max(axis=1) / ref_max).max() < LIMIT
@@ -116,7 +123,7 @@ def test_ociochecklut_reads_the_q_sidecar(written):
     """OCIO's own LUT checker evaluates the written Q file on a few colours: the exact model's
     values within the stated limit, and black stays (effectively) black."""
     solution, path = written
-    C = solution.diagnostics["method_notes"]["root_polynomial"]["coefficients"]
+    model = _model(solution)
     sidecar = path.parent / solution.diagnostics["root_polynomial_ocio"]["files"][0]
     x = np.linalg.solve(np.asarray(solution.Q), _content(solution, 4, np.random.default_rng(9)).T).T
     for rgb in [*x, x[0] * 1e-5, x[1] * 12]:
@@ -127,7 +134,7 @@ def test_ociochecklut_reads_the_q_sidecar(written):
             check=True,
         )
         got = np.array(result.stdout.split()[-3:], dtype=float)
-        ref = apply_root_polynomial(C, rgb)
+        ref = model(rgb)
         assert np.abs(got - ref).max() <= LIMIT * np.abs(ref).max()
     black = subprocess.run(
         ["ociochecklut", str(sidecar), "0", "0", "0"], capture_output=True, text=True, check=True

@@ -61,14 +61,14 @@ def test_a_helper_that_dies_is_replaced_by_this_process(solutions, alone, tmp_pa
 
 
 def test_an_input_error_in_the_helper_is_reported_and_nothing_is_written(solutions, tmp_path):
-    # A root-polynomial Q with all-zero coefficients is not invertible: an InputError in
-    # write_environment. It is the second root-polynomial environment: the helper's share.
-    model = dict(solutions[1].diagnostics["method_notes"]["root_polynomial"])
-    model["coefficients"] = np.zeros_like(np.asarray(model["coefficients"])).tolist()
-    notes = {**solutions[1].diagnostics["method_notes"], "root_polynomial": model}
-    bad = dataclasses.replace(
-        solutions[1], diagnostics={**solutions[1].diagnostics, "method_notes": notes}
+    # A root-polynomial Q that is all zeros has no inverse, yet the solution keeps its N: an
+    # InputError in write_environment. It is the second root-polynomial environment: the
+    # helper's share.
+    model = solutions[1].correction
+    zero = dataclasses.replace(
+        model, coefficients=np.zeros_like(model.coefficients), fallback=np.zeros((3, 3))
     )
+    bad = dataclasses.replace(solutions[1], post_correction=zero)
     broken = [solutions[0], bad, solutions[2]]
     assert _share(broken) == {1}
     with pytest.raises(InputError) as here:
@@ -76,18 +76,18 @@ def test_an_input_error_in_the_helper_is_reported_and_nothing_is_written(solutio
     with writer_pool() as pool, pytest.raises(InputError) as helper:
         write_solutions(broken, tmp_path / "helper", pool=pool)
     assert str(helper.value) == str(here.value)
-    assert "not invertible" in str(helper.value)
+    assert "no inverse" in str(helper.value)
     for out in ("here", "helper"):  # all or nothing: no environment folder, no staging left
         assert not (tmp_path / out).exists() or not any((tmp_path / out).iterdir())
 
 
 def test_share_balances_the_bakes():
     # five root-polynomial environments (cost 1) and two 3x3 ones (cost 0.1), in any order
-    costly = {"method_notes": {"root_polynomial": {"coefficients": []}}}
-    kinds = [costly, {}, costly, costly, {}, costly, costly]
-    fake = [dataclasses.make_dataclass("S", ["diagnostics"])(d) for d in kinds]
+    kinds = [False, True, False, False, True, False, False]  # linear or not
+    correction = dataclasses.make_dataclass("Correction", ["linear"])
+    fake = [dataclasses.make_dataclass("S", ["correction"])(correction(k)) for k in kinds]
     helper = _share(fake)
-    cost = [1.0 if d else 0.1 for d in kinds]
+    cost = [0.1 if k else 1.0 for k in kinds]
     mine = sum(cost[i] for i in helper)
     here = sum(cost) - mine
     # this process takes three bakes, the helper two and both cheap ones: 3.0 vs 2.2

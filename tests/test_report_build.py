@@ -121,11 +121,12 @@ def test_report_shows_the_root_polynomial_model(tmp_path):
     write_solutions([solve_environment(m, m.environments[0], method="root-polynomial")], tmp_path)
     report = build_report([tmp_path], tmp_path / "report", dpi=20)
     text = html.unescape(report.index.read_text(encoding="utf-8"))
-    model = json.loads((tmp_path / "indoor_daylight" / "solution.json").read_text())["diagnostics"][
-        "method_notes"
-    ]["root_polynomial"]
+    model = json.loads((tmp_path / "indoor_daylight" / "solution.json").read_text())[
+        "post_correction"
+    ]["parameters"]
     assert model["terms"] == ["r", "g", "b", "√(rg)", "√(gb)", "√(rb)"]
-    assert "root-polynomial degree 2, 6 terms: r, g, b, √(rg), √(gb), √(rb)" in text
-    assert "Q (root-polynomial)" in text and "3x3 approximation of Q" in text
+    assert "root-polynomial degree 2, inside the chart's domain" in text
+    assert "Q(x) = C (r, g, b, √(rg), √(gb), √(rb))" in text
+    assert "Q (root-polynomial)" in text and "3x3 fallback of Q" in text
     for value in np.ravel(model["coefficients"]):
         assert f"{value:+.5f}" in text

@@ -174,11 +174,10 @@ def stability_diagnostics(
     ``in_frustum_drive_range``, ``black_level_bounce``, ``clipped_patches``,
     ``N_equals_M`` and ``identity_check``.
     """
-    notes = dict(fit.notes)
     target = np.asarray(problem.target, dtype=np.float64)
     white, weights = problem.white_patch, problem.fit_weights
-    warnings: list[str] = [str(w) for w in notes.get("warnings", ())]  # the method's own
-    cv = notes.get("cross_validated_error", cross_validated)
+    warnings: list[str] = [str(w) for w in fit.warnings]  # the method's own
+    cv = cross_validated if fit.cross_validated_error is None else fit.cross_validated_error
     drive = out_of_frustum_drive(M, problem.w_avg)
     in_matrix = M if N is None else N
     in_range = in_frustum_drive_range(
@@ -206,9 +205,9 @@ def stability_diagnostics(
             "outside the LED gamut"
         )
     block = {
-        "model": notes.get("model", method),
-        "model_reason": notes.get("reason"),
-        "rank_target": notes.get("target_rank"),
+        "model": fit.model or method,
+        "model_reason": fit.reason,
+        "rank_target": fit.target_rank,
         # None for an iterative method that does not report its own leave-one-out error:
         # re-solving it once per patch would multiply the solve time by n.
         "cross_validated_error": None if cv is None else np.asarray(cv, dtype=np.float64),

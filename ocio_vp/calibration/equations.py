@@ -19,14 +19,17 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ocio_vp.choices import BLACK_LEVEL_METHODS
 from ocio_vp.errors import InputError
 
 __all__ = [
     "BLACK_LEVEL_METHODS",
     "MAX_CONDITION_Q_FOR_N",
     "MAX_CONDITION_SL",
+    "SINGULAR_CONDITION",
     "black_level_offset",
     "condition_number",
+    "condition_text",
     "in_frustum_drive",
     "predict_displayed_chart",
     "predict_lit_chart",
@@ -43,8 +46,6 @@ MAX_CONDITION_SL = 1e10
 #: chart measurements into more than 100% of the in-frustum drive (as the paper found for
 #: low-pressure sodium, where Q has rank 1).
 MAX_CONDITION_Q_FOR_N = 1e3
-
-BLACK_LEVEL_METHODS = ("exact", "paper")
 
 
 def condition_number(matrix: ArrayLike) -> float:
@@ -122,6 +123,20 @@ def predict_lit_chart(SRL: ArrayLike, beta: float, M: ArrayLike, w_avg: ArrayLik
     return SRL @ drive / float(beta)
 
 
+#: cond() above this is a singular matrix: the figure itself is rounding (1e16 on one machine,
+#: 4e18 on another), so texts print it as a bound.
+SINGULAR_CONDITION = 1e12
+
+
+def condition_text(cond: float) -> str:
+    """A condition number as texts print it: 3 digits, or ``> 1e+12`` for a singular matrix.
+
+    >>> condition_text(12.345), condition_text(4.1e18), condition_text(float("inf"))
+    ('12.3', '> 1e+12', '> 1e+12')
+    """
+    return f"{cond:.3g}" if cond <= SINGULAR_CONDITION else f"> {SINGULAR_CONDITION:.0e}"
+
+
 def solve_N(
     M: ArrayLike,
     Q: ArrayLike,
@@ -148,7 +163,7 @@ def solve_N(
     if not cond <= max_condition:
         rank = int(np.linalg.matrix_rank(Q)) if np.all(np.isfinite(Q)) else 0
         return None, (
-            f"Q is rank {rank} / cond {cond:.3g} > {max_condition:.0e}: its inverse would "
+            f"Q is rank {rank} / cond {condition_text(cond)} > {max_condition:.0e}: its inverse would "
             "amplify measurement noise into the in-frustum drive; in-frustum content uses M, "
             "so do not apply Q to shots with the wall in frame"
         )

@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from ocio_vp.choices import DEFAULT_FOOTAGE_ENCODING
 from ocio_vp.commands.common import warn
 from ocio_vp.commands.report import SOLUTIONS_HELP
 
@@ -39,7 +40,20 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         metavar="FIRST-LAST",
         help="frame range for patterns (default: the frames that exist); missing ones are errors",
     )
-    parser.add_argument("--overwrite", action="store_true", help="redo frames already in --out")
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="redo frames already in --out (without it, frames there made with another "
+        "solution are refused: their header names the solution)",
+    )
+    parser.add_argument(
+        "--footage-encoding",
+        metavar="NAME",
+        default=DEFAULT_FOOTAGE_ENCODING,
+        help="the frames' encoding: linear (default) or a colour-science decoding name such as "
+        "'ARRI LogC4', 'S-Log3', 'Log3G10' (as the capture file's encoding:); encoded frames "
+        "are decoded, post-corrected exactly and encoded again",
+    )
     parser.add_argument(
         "--workers",
         type=int,
@@ -97,6 +111,7 @@ def run(args: argparse.Namespace) -> int:
     from ocio_vp.footage.sequences import expand_frames, output_paths, parse_frame_range
     from ocio_vp.formats.solution import load_solution
     from ocio_vp.formats.solution_inputs import solution_folders
+    from ocio_vp.plates.reader import canonical_encoding
 
     solutions, frames = split_inputs(args.inputs)
     if not solutions:
@@ -104,6 +119,7 @@ def run(args: argparse.Namespace) -> int:
     if not frames:
         raise InputError("no frames given after the solution(s)", key="FRAMES")
     chosen = solution_folders(solutions, key="SOLUTION")
+    encoding = canonical_encoding(args.footage_encoding, key="--footage-encoding")
     frame_range = parse_frame_range(args.frame_range) if args.frame_range else None
     inputs = expand_frames(frames, frames=frame_range)
     workers = 1 if args.workers is None else args.workers
@@ -113,14 +129,38 @@ def run(args: argparse.Namespace) -> int:
     for folder in chosen.folders:
         for caveat in post_correction_caveats(load_solution(folder)):
             warn("apply", f"{folder.name}: {caveat}")
-        post = load_post_correction(folder)
+        post = load_post_correction(folder, encoding)
         out = Path(args.out) if len(chosen.folders) == 1 else Path(args.out) / folder.name
         tasks += [
             FrameTask(str(s), str(d), post, overwrite=args.overwrite, threads=threads)
             for s, d in zip(inputs, output_paths(inputs, out), strict=True)
         ]
     _refuse_foreign([Path(task.dst) for task in tasks])
+    if not args.overwrite:
+        _refuse_other_solutions(tasks)
     return _run_tasks(tasks, args, workers)
+
+
+def _refuse_other_solutions(tasks: list) -> None:
+    """Before any work: frames in --out made with another post-correction are never kept as
+    done; without --overwrite the run stops on one line naming the first and how many."""
+    import os
+
+    from ocio_vp.errors import InputError
+    from ocio_vp.footage.apply import other_solution_reason
+    from ocio_vp.footage.sequences import output_solution
+
+    other = []
+    for task in tasks:
+        if os.path.lexists(task.dst):
+            made_by = output_solution(task.dst)
+            if made_by != task.post_correction.solution:
+                other.append((task, made_by))
+    if other:
+        task, made_by = other[0]
+        more = f" ({len(other)} frames in all)" if len(other) > 1 else ""
+        reason = other_solution_reason(task.dst, made_by, task.post_correction.solution)
+        raise InputError(f"{reason}{more}; nothing was written")
 
 
 def _refuse_foreign(outputs: list[Path]) -> None:

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import argparse
 
-from ocio_vp.commands.common import add_method_argument, progress, summary_table
+from ocio_vp.commands.common import add_method_argument, progress
+from ocio_vp.commands.solve import print_content_scale
+from ocio_vp.commands.summary import print_summary
 
 __all__ = ["add_parser", "run"]
 
@@ -54,8 +56,9 @@ def run(args: argparse.Namespace) -> int:
         f"simulated stage: {stage.camera_name}, {stage.led_description}, {stage.chart_name}, "
         f"beta {stage.beta:.5f}, panel albedo {stage.panel_albedo}"
     )
-    print(summary_table(written))
+    print_summary(written)
     print(spectral_check(stage, written))
+    print_content_scale(written)
     if not args.no_report:
         from ocio_vp.metrics import camera_to_xyz_matrix
         from ocio_vp.report.build import build_report
@@ -104,7 +107,9 @@ def spectral_check(stage, solutions) -> str:
     from ocio_vp.simulator.evaluate import agreement_with_spectra
 
     worst, where = agreement_with_spectra(stage, solutions)
+    # Below 1e-9 the gap is rounding (its digits differ between machines): printed as a bound.
+    gap = f"{100 * worst:.2g}" if worst >= 1e-11 else "1e-9"
     return (
-        f"checked on the simulated spectra: the table's figures agree within "
-        f"{100 * worst:.2g} percentage points (largest: {where})"
+        f"checked on the simulated spectra: the table's figures agree within {gap} "
+        f"percentage points (largest: {where})"
     )

@@ -6,11 +6,13 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ocio_vp.choices import DEFAULT_BASE_CONFIG, EXPORT_TARGETS
 from ocio_vp.commands.report import SOLUTIONS_HELP
 
 __all__ = ["add_parser", "run"]
 
-TARGETS = ("unreal", "nuke", "resolve", "lights")
+#: The per-environment targets ``all`` stands for.
+TARGETS = EXPORT_TARGETS[: EXPORT_TARGETS.index("all")]
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -24,11 +26,22 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("solution_dirs", nargs="+", metavar="SOLUTION", help=SOLUTIONS_HELP)
     parser.add_argument(
         "--target",
-        choices=(*TARGETS, "all"),
+        choices=EXPORT_TARGETS,
         default="all",
         help="unreal: .ocioz + UNREAL.md + mapping JSON; nuke: .nk; resolve: CLF, DCTL, .cube; "
-        "lights: fixture drives and DMX levels (solutions with fixtures); all: every target "
-        "that applies (default: all)",
+        "lights: fixture drives and DMX levels (solutions with fixtures); dit: a log-in log-out "
+        ".cube of the post-correction for the DIT cart (solutions with a camera gamut, where it "
+        "meets the cube accuracy limit); all: every target "
+        "above that applies (default: all); show: OUT/show/config.ocio, one config for all the "
+        "given environments on --base-config, the environment chosen by the context variable "
+        "VP_ENVIRONMENT (needs --out)",
+    )
+    parser.add_argument(
+        "--base-config",
+        metavar="PATH|URI",
+        default=None,
+        help=f"base of --target show: a config file or ocio:// URI (default {DEFAULT_BASE_CONFIG}, "
+        "OCIO's built-in ACES CG config; written out whole)",
     )
     parser.add_argument(
         "--out", default=None, help="output folder (default: exports/ inside each environment)"
@@ -51,6 +64,10 @@ def run(args: argparse.Namespace) -> int:
     from ocio_vp.exports import export_solutions
     from ocio_vp.formats.solution_inputs import solution_folders
 
+    if args.base_config is not None and args.target != "show":
+        from ocio_vp.errors import InputError
+
+        raise InputError("applies only to --target show", key="--base-config")
     targets = TARGETS if args.target == "all" else (args.target,)
     chosen = solution_folders(args.solution_dirs)
     for note in chosen.notes():
@@ -61,6 +78,7 @@ def run(args: argparse.Namespace) -> int:
         out=args.out,
         cube_size=args.cube_size,
         cube_range=tuple(args.cube_range),
+        base_config=args.base_config,
     )
     for result in results:
         print(f"{result.environment}: {result.target} -> {result.folder}")

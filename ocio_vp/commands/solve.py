@@ -3,13 +3,29 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from collections.abc import Sequence
 
-from ocio_vp.commands.common import add_method_argument, progress, summary_table, warn
+from ocio_vp.choices import (
+    BLACK_LEVEL_METHODS,
+    DEFAULT_BLACK_LEVEL,
+    DEFAULT_PEAK_NITS,
+    DEFAULT_WALL_ENCODING,
+    WALL_ENCODINGS,
+)
+from ocio_vp.commands.common import add_method_argument, progress
+from ocio_vp.commands.summary import print_summary
 
-__all__ = ["add_parser", "print_fixtures", "print_linearity", "run"]
+__all__ = [
+    "add_parser",
+    "print_camera_gamut",
+    "print_content_scale",
+    "print_fixtures",
+    "print_linearity",
+    "run",
+]
 
-PEAK_NITS_DEFAULT = 1000.0
+PEAK_NITS_DEFAULT = DEFAULT_PEAK_NITS
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -38,9 +54,17 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "(default: drive the fixtures with the wall, docs/fixtures.md)",
     )
     parser.add_argument(
+        "--protect-emitters",
+        action="store_true",
+        help="for scenes with practicals, screens or neon in frame: the post-correction fades to "
+        "the identity where no reflective surface lit by the wall can be (brighter than white in "
+        "an LED channel, or needing negative light); by default it fades to the 3x3 there "
+        "(docs/stability.md)",
+    )
+    parser.add_argument(
         "--black-level",
-        choices=("exact", "paper"),
-        default="exact",
+        choices=BLACK_LEVEL_METHODS,
+        default=DEFAULT_BLACK_LEVEL,
         help="in-frustum black-level offset: exact (-M b, default) or the paper's b/w_camera",
     )
     parser.add_argument(
@@ -55,6 +79,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         metavar="NAME",
         help="solve only this environment (repeatable; default: all)",
     )
+    _add_light_arguments(parser)
+    _add_wall_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def _add_light_arguments(parser: argparse.ArgumentParser) -> None:
+    """Where the light comes from (HDRIs), where the solve runs, the camera's gamut."""
     parser.add_argument(
         "--hdri",
         action="append",
@@ -77,9 +108,24 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="resolution the HDRI is integrated at (default 1024; see docs/performance.md)",
     )
     parser.add_argument(
+        "--camera-colorspace",
+        metavar="NAME",
+        default=None,
+        help="the camera's gamut, a colour.RGB_COLOURSPACES name such as 'ARRI Wide Gamut 4' "
+        "(default: stage.camera_colorspace of the measurements or capture file). With it the "
+        "configs carry ACES2065-1, ACEScg, Linear Rec.709 and ACEScct, the interchange and log "
+        "roles, the camera's log footage and ACES monitor views, and content can be rendered "
+        "in a working space; without it content must be in the camera's native linear RGB",
+    )
+
+
+def _add_wall_arguments(parser: argparse.ArgumentParser) -> None:
+    """The wall's signal encoding and peak luminance."""
+    parser.add_argument(
         "--wall-encoding",
-        choices=("linear", "gamma2.4", "srgb", "pq"),
-        default="linear",
+        choices=WALL_ENCODINGS,
+        type=str.lower,
+        default=DEFAULT_WALL_ENCODING,
         help="signal the wall colorspaces output (after M/N and the linearity LUT): linear "
         "drive (default), gamma 2.4, sRGB (IEC 61966-2-1) or SMPTE ST 2084 PQ "
         "(see docs/linearity.md)",
@@ -91,7 +137,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="with --wall-encoding pq only: luminance (cd/m2) of drive 1.0, the level of the "
         f"measured primaries (default: {PEAK_NITS_DEFAULT:g})",
     )
-    parser.set_defaults(func=run)
 
 
 def print_fixtures(solutions: Sequence) -> None:
@@ -134,35 +179,75 @@ def print_linearity(solutions: Sequence) -> None:
         return
 
 
+def print_content_scale(solutions: Sequence) -> None:
+    """Per environment what content white needs of the wall (stdout); one warning naming the
+    environments where it clips (stderr)."""
+    import sys
+
+    from ocio_vp.calibration.headroom import content_scale, content_scale_lines
+
+    out, err = content_scale_lines([content_scale(s) for s in solutions])
+    for line in out:
+        print(line)
+    for line in err:
+        print(line, file=sys.stderr)
+
+
+def print_camera_gamut(solutions: Sequence) -> None:
+    """Say once what a config without a camera gamut lacks (and how to state it)."""
+    if solutions and not solutions[0].camera_colorspace:
+        print(
+            "note: the camera gamut is not stated (stage.camera_colorspace, or solve "
+            "--camera-colorspace NAME): the configs have no working spaces (ACEScg, ACES2065-1), "
+            "no interchange or log roles and no camera log footage, monitors show camera RGB as "
+            "Rec.709, and content for the wall must be rendered in the camera's native linear RGB"
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     from ocio_vp.errors import InputError
     from ocio_vp.ocio.writer import writer_pool
 
+    # An option that would be ignored is a mistake: said at once, nothing written.
     if args.peak_nits is not None and args.wall_encoding != "pq":
-        warn("solve", f"--peak-nits has no effect with --wall-encoding {args.wall_encoding}")
+        raise InputError(
+            f"applies only to a PQ wall (--wall-encoding pq), not {args.wall_encoding}",
+            key="--peak-nits",
+        )
     peak_nits = PEAK_NITS_DEFAULT if args.peak_nits is None else args.peak_nits
     if not 0 < peak_nits <= 10000:
         raise InputError(f"expected 0 < cd/m2 <= 10000, got {peak_nits:g}", key="--peak-nits")
     if args.hdri_width is not None and not args.hdri:
-        warn("solve", "--hdri-width has no effect without --hdri")
+        raise InputError("applies only with --hdri", key="--hdri-width")
     # The writing helper starts first, so that its imports overlap loading and solving.
-    with writer_pool(args.method) as pool:
+    with writer_pool(args.method, protect_emitters=args.protect_emitters) as pool:
         written = _solve_and_write(args, peak_nits, pool)
-    print(summary_table(written))
+    print_summary(written)
     print_fixtures(written)
     print_linearity(written)
+    print_camera_gamut(written)
+    print_content_scale(written)
     print(f"wrote {len(written)} environment(s) to {args.out}")
+    from ocio_vp.formats.provenance import stale_outputs
+
+    for line in stale_outputs(args.out, [s.environment for s in written]):
+        print(f"warning: {line}", file=sys.stderr)
     return 0
 
 
 def _solve_and_write(args: argparse.Namespace, peak_nits: float, pool) -> list:
     """Load, solve every environment asked for, and write them to ``args.out``."""
     from ocio_vp.errors import InputError
+    from ocio_vp.formats.measurements import with_camera_colorspace
     from ocio_vp.formats.merge import load_measurement_files
     from ocio_vp.ocio.writer import write_solutions
     from ocio_vp.wall.encoding import with_wall_encoding
 
     measurements = load_measurement_files(args.measurements)
+    if args.camera_colorspace is not None:
+        measurements = with_camera_colorspace(
+            measurements, args.camera_colorspace, key="--camera-colorspace"
+        )
     environments = measurements.environments
     if args.environment:
         environments = tuple(measurements.environment(name) for name in args.environment)
@@ -184,29 +269,18 @@ def _solve_and_write(args: argparse.Namespace, peak_nits: float, pool) -> list:
 
 def _solve(measurements, environments, args: argparse.Namespace) -> list:
     """Every environment, on a Dask cluster or here (with a progress bar on a terminal)."""
-    from ocio_vp.pipeline import solve_environment
+    from ocio_vp.pipeline import SolveOptions, solve_environment
 
+    options = SolveOptions(
+        method=args.method,
+        black_level=args.black_level,
+        fixtures=not args.no_fixtures,
+        keep_all_patches=args.keep_all_patches,
+        protect_emitters=args.protect_emitters,
+    )
     if args.scheduler:
         from ocio_vp.footage.distributed import solve_environments
 
-        return solve_environments(
-            measurements,
-            environments,
-            scheduler=args.scheduler,
-            method=args.method,
-            black_level=args.black_level,
-            fixtures=not args.no_fixtures,
-            keep_all_patches=args.keep_all_patches,
-        )
+        return solve_environments(measurements, environments, options, scheduler=args.scheduler)
     bar = progress(environments, desc="solving", unit="environment")
-    return [
-        solve_environment(
-            measurements,
-            env,
-            method=args.method,
-            black_level=args.black_level,
-            fixtures=not args.no_fixtures,
-            keep_all_patches=args.keep_all_patches,
-        )
-        for env in bar
-    ]
+    return [solve_environment(measurements, env, options) for env in bar]

@@ -1,10 +1,19 @@
-"""Post-correction Q: the problem dataclass, the registry of methods (``Q_SOLVE_METHODS``) and
+"""Post-correction Q (the solvers; the post-correction they return is :mod:`ocio_vp.model`): the problem dataclass, the registry of methods (``Q_SOLVE_METHODS``) and
 the methods themselves (the linear family, ``auto``, ``perceptual``, ``joint``), their
 leave-one-patch-out validation, the checks every method relies on (``guards``) and the screening
 of patches inconsistent with the rest of the chart (``outliers``).
 """
 
 from ocio_vp.correction.auto import DEGREE_3_EXCLUDED, q_auto
+from ocio_vp.correction.extrapolation import (
+    FADES,
+    Extrapolation,
+    choose_fade,
+    extrapolation,
+    fold_fraction,
+    in_frame_led_damage,
+    saturation_probe,
+)
 from ocio_vp.correction.guards import (
     MAX_DYNAMIC_RANGE,
     MIN_LIT_DIRECTION,
@@ -45,44 +54,23 @@ from ocio_vp.correction.linear import (
     q_white_preserving,
     target_rank,
 )
-from ocio_vp.correction.outliers import (
-    COLORCHECKER_NAMES,
-    MAX_EXCLUDED,
-    MAX_EXCLUDED_FRACTION,
-    OUTLIER_FLOOR,
-    OUTLIER_RELATIVE,
-    OUTLIER_RELATIVE_NARROW,
-    OUTLIER_Z,
-    Inconsistency,
-    inconsistent_patches,
-    patch_name,
-    patch_scores,
-)
-from ocio_vp.correction.perceptual import (
-    PERCEPTUAL_METRICS,
-    default_camera_to_xyz,
-    make_q_perceptual,
-    mean_delta_e,
-    normalising_white,
-    patch_delta_e,
-    q_perceptual,
-)
 from ocio_vp.correction.problem import (
     QFit,
     QProblem,
 )
 from ocio_vp.correction.registry import (
     Q_SOLVE_METHODS,
+    QMethod,
     q_least_squares,
     solve_post_correction,
 )
 from ocio_vp.correction.root_polynomial import (
     ROOT_POLYNOMIAL_TERMS,
     apply_root_polynomial,
+    bounded_loo_predictions,
     fit_root_polynomial,
     invert_root_polynomial,
     make_q_root_polynomial,
-    post_correction,
     q_root_polynomial,
     root_polynomial_expansion,
     root_polynomial_jacobian,
@@ -106,6 +94,7 @@ __all__ = [
     "DEFAULT_MAX_CONDITION",
     "DEFAULT_MAX_DELTA_E",
     "DEGREE_3_EXCLUDED",
+    "FADES",
     "LOO_KERNELS",
     "MAX_DYNAMIC_RANGE",
     "MAX_EXCLUDED",
@@ -123,20 +112,27 @@ __all__ = [
     "REGULARISATION_GRID",
     "ROOT_POLYNOMIAL_DEGREES",
     "ROOT_POLYNOMIAL_TERMS",
+    "Extrapolation",
     "Inconsistency",
     "QFit",
+    "QMethod",
     "QProblem",
     "apply_root_polynomial",
+    "bounded_loo_predictions",
     "check_problem",
+    "choose_fade",
     "choose_model",
     "choose_shrinkage",
     "colour_spread",
     "cross_validated_error",
     "default_camera_to_xyz",
+    "extrapolation",
     "fit_least_squares",
     "fit_model",
     "fit_root_polynomial",
+    "fold_fraction",
     "held_out_predictions",
+    "in_frame_led_damage",
     "inconsistent_patches",
     "invert_root_polynomial",
     "joint_matrix",
@@ -151,7 +147,6 @@ __all__ = [
     "patch_delta_e",
     "patch_name",
     "patch_scores",
-    "post_correction",
     "problem_arrays",
     "q_auto",
     "q_diagonal",
@@ -167,6 +162,7 @@ __all__ = [
     "root_polynomial_loo_predictions",
     "root_polynomial_term_powers",
     "root_polynomial_terms",
+    "saturation_probe",
     "singular_q_cause",
     "solve_post_correction",
     "target_rank",

@@ -24,11 +24,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from ocio_vp.correction.extrapolation import MIN_NEGATIVE, MIN_RETAINED, saturation_probe
+from ocio_vp.correction.guards import relative_figure
 from ocio_vp.correction.linear import (
     AUTO_LADDER,
     AUTO_LADDER_NARROW,
     AUTO_SE_FACTOR,
     AUTO_TIE,
+    LINE_SPECTRUM_TOLERANCE,
     NARROW_TARGET,
     RANK_RELATIVE_TOLERANCE,
     ROOT_POLYNOMIAL_DEGREES,
@@ -42,9 +45,10 @@ from ocio_vp.correction.linear import (
     target_rank,
 )
 from ocio_vp.correction.problem import QFit, QProblem
-from ocio_vp.correction.root_polynomial import make_q_root_polynomial
+from ocio_vp.correction.root_polynomial import bounded_loo_predictions, make_q_root_polynomial
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import error_relative_to_white
+from ocio_vp.model.correction import MatrixCorrection
 
 __all__ = ["DEGREE_3_EXCLUDED", "q_auto"]
 
@@ -54,88 +58,120 @@ DEGREE_3_EXCLUDED = (
     "chart"
 )
 
-_NAMES = {"root-polynomial": "root-polynomial (degree 2)"}
+_NAMES = {"root-polynomial": "root-polynomial (degree 2, bounded)"}
 
 
 def _label(name: str) -> str:
     return _NAMES.get(name, name)
 
 
+def _g(value: float, digits: int = 3, sign: str = "") -> str:
+    """A ΔE figure as the reason prints it; below 1e-9 it is rounding, printed as 0."""
+    return f"{value:{sign}.{digits}g}" if abs(value) >= 1e-9 else "0"
+
+
 def _auto_reason(chosen: str, table: dict, factor: float, reference: str, unit: str) -> str:
     row = table[chosen]
     rest = ", ".join(
-        f"{_label(k)} {v['mean']:.3g} ({v['difference']:+.2g} ± {v['standard_error']:.2g})"
+        f"{_label(k)} {_g(v['mean'])} ({_g(v['difference'], 2, '+')} ± "
+        f"{_g(v['standard_error'], 2)})"
         for k, v in table.items()
         if k not in (chosen, reference)
     )
     if chosen == reference:
         head = (
             f"{reference} (the paper's eq. 5): leave-one-patch-out mean {unit} "
-            f"{row['mean']:.3g}; no other model is better by more than {factor:g} standard "
+            f"{_g(row['mean'])}; no other model is better by more than {factor:g} standard "
             "error of the paired per-patch differences"
         )
     elif abs(row["difference"]) <= AUTO_TIE:
         head = (
-            f"{_label(chosen)}: leave-one-patch-out mean {unit} {row['mean']:.3g}, the same "
+            f"{_label(chosen)}: leave-one-patch-out mean {unit} {_g(row['mean'])}, the same "
             f"as {reference}'s: the simplest model that fits as well"
         )
     else:
         head = (
-            f"{_label(chosen)}: leave-one-patch-out mean {unit} {row['mean']:.3g}, better than "
-            f"{reference}'s {table[reference]['mean']:.3g} by {-row['difference']:.2g} ± "
-            f"{row['standard_error']:.2g} (more than {factor:g} standard error of the paired "
+            f"{_label(chosen)}: leave-one-patch-out mean {unit} {_g(row['mean'])}, better than "
+            f"{reference}'s {_g(table[reference]['mean'])} by {_g(-row['difference'], 2)} ± "
+            f"{_g(row['standard_error'], 2)} (more than {factor:g} standard error of the paired "
             "per-patch differences)"
         )
     return f"{head}; others (difference from {reference}): {rest}; {DEGREE_3_EXCLUDED}"
 
 
-def _auto_reduced_rank(X, P, w, white, rank: int, singular: np.ndarray, notes: dict) -> QFit:
+def _auto_reduced_rank(X, P, w, white, rank: int, singular: np.ndarray, details: dict) -> QFit:
     name = f"rank-{rank}"
     held = loo_predictions(name, X, P, w, white)
     active = w > 0
-    notes |= {
-        "model": name,
-        "reason": (
-            f"the target chart has rank {rank} (its singular values relative to the largest, "
-            "over the lit chart's: "
-            f"{', '.join(f'{v:.2g}' for v in singular)}; below {RANK_RELATIVE_TOLERANCE:g} "
-            "counts as absent): a near-monochromatic light, so Q is fitted with rank "
-            f"{rank} and cannot be inverted; N is not solved"
-        ),
-        "cv_delta_e": {name: float(np.mean(patch_errors(held, P, w, white)[0][active]))},
-        "cross_validated_error": error_relative_to_white(held, P, white, w),
-    }
-    return QFit(Q=fit_model(name, X, P, w, white), notes=notes)
+    reason = (
+        f"the target chart has rank {rank} (its singular values relative to the largest, over "
+        f"the lit chart's: {_singular_text(singular)}; a second one below "
+        f"{LINE_SPECTRUM_TOLERANCE:g} is measurement noise, a third below "
+        f"{RANK_RELATIVE_TOLERANCE:g} counts as absent): a near-monochromatic light, so Q is "
+        f"fitted with rank {rank} and cannot be inverted; N is not solved"
+    )
+    details["cv_delta_e"] = {name: float(np.mean(patch_errors(held, P, w, white)[0][active]))}
+    return QFit(
+        MatrixCorrection(fit_model(name, X, P, w, white)),
+        name,
+        f"reduced-rank least squares (rank {rank})",
+        reason=reason,
+        cross_validated_error=error_relative_to_white(held, P, white, w),
+        target_rank=rank,
+        details=details,
+    )
 
 
-def _root_polynomial_fit(problem: QProblem, name: str) -> QFit | None:
-    """The root-polynomial method's own fit; None when it refuses the chart (too few or
-    dependent patches for its terms)."""
+def _singular_text(singular: np.ndarray) -> str:
+    return ", ".join(relative_figure(v) for v in singular)
+
+
+def _bounded_candidate(problem: QProblem, name: str) -> tuple[QFit | None, str | None]:
+    """The bounded root-polynomial fit and its held-out predictions' source; (None, why) when it
+    is not a candidate: the chart does not constrain its terms, it folds among reflective
+    colours whatever its fade, or it flips or collapses a bright saturated input."""
     try:
-        return make_q_root_polynomial(ROOT_POLYNOMIAL_DEGREES[name])(problem)
-    except InputError:
-        return None
+        fit = make_q_root_polynomial(ROOT_POLYNOMIAL_DEGREES[name])(problem)
+    except InputError as error:
+        return None, f"{_label(name)} refused: {error.problem}"
+    if fit.warnings:
+        return None, f"{_label(name)} is not a candidate: {fit.warnings[0]}"
+    white = problem.predicted[problem.white_patch]
+    kept, negative = saturation_probe(fit.correction, white)
+    if kept < MIN_RETAINED or negative < MIN_NEGATIVE:
+        return None, (
+            f"{_label(name)} is not a candidate: a bright saturated input keeps {kept:.0%} of "
+            f"its channel, lowest channel {negative:+.0%} of it"
+        )
+    return fit, None
 
 
-def _chosen_fit(chosen: str, X, P, w, white, alpha: float, notes: dict, model: QFit | None):
-    """The chosen model's QFit: a root-polynomial one as its own method fitted it (``model``:
-    the model in ``notes["root_polynomial"]``, Q its 3x3 approximation), auto's notes on top."""
+def _chosen_fit(chosen: str, X, P, w, white, alpha: float, model: QFit | None, **typed) -> QFit:
+    """The chosen model's QFit: a root-polynomial one as its own method fitted it (``model``),
+    auto's reason and figures on top."""
     if model is not None:
-        return QFit(Q=model.Q, notes={**model.notes, **notes})
+        details = {**typed.pop("details"), **model.details}
+        return QFit(model.correction, chosen, model.description, details=details, **typed)
     if chosen == "regularised":
-        notes["shrinkage"] = alpha
-    return QFit(Q=fit_model(chosen, X, P, w, white, alpha), notes=notes)
+        typed["details"]["shrinkage"] = alpha
+    description = {"identity": "Q = I, no post-correction", "diagonal": "white balance"}
+    return QFit(
+        MatrixCorrection(fit_model(chosen, X, P, w, white, alpha)),
+        chosen,
+        description.get(chosen, f"{chosen} (chosen by auto)"),
+        **typed,
+    )
 
 
 def q_auto(problem: QProblem) -> QFit:
     """The simplest model the scene needs, judged in leave-one-out ΔE2000 (module docstring).
 
-    The notes say which model was chosen (``model``), why (``reason``, in ΔE2000), every
+    The fit says which model was chosen (``model``), why (``reason``, in ΔE2000, with every
+    candidate left out and why), the target chart's rank and the chosen model's leave-one-out
+    error per channel relative to white (``cross_validated_error``); its ``details`` hold every
     candidate's leave-one-out mean ΔE2000 (``cv_delta_e``) with its difference from least
-    squares and that difference's standard error (``cv_comparison``), the rule's factor, the
-    target chart's rank, and the chosen model's leave-one-out error per channel relative to
-    white (``cross_validated_error``). A root-polynomial choice also carries that method's
-    notes (``root_polynomial``: degree and coefficients; ``warnings``).
+    squares and that difference's standard error (``cv_comparison``). A root-polynomial choice
+    is that method's bounded model (:class:`~ocio_vp.model.correction.RootPolynomialCorrection`).
 
     Examples
     --------
@@ -146,42 +182,58 @@ def q_auto(problem: QProblem) -> QFit:
     >>> SRL = 0.25 * rho * SL
     >>> problem = QProblem(SL=SL, SRL=SRL, beta=0.25, M=np.linalg.inv(SL),
     ...                    w_avg=SL.sum(axis=1), target=SRL.sum(axis=2) / 0.25)
-    >>> q_auto(problem).notes["model"]
+    >>> q_auto(problem).model
     'identity'
     """
     X, P, w, white = problem_arrays(problem)
     rank, singular = target_rank(P, w, X)
-    notes: dict = {
-        "target_rank": rank,
+    details: dict = {
         "target_singular_values": singular,
         "rank_relative_tolerance": RANK_RELATIVE_TOLERANCE,
         "se_factor": AUTO_SE_FACTOR,
         "metric": "leave-one-patch-out ΔE2000",
     }
     if rank < 3:
-        return _auto_reduced_rank(X, P, w, white, rank, singular, notes)
+        return _auto_reduced_rank(X, P, w, white, rank, singular, details)
     active = w > 0
     narrow = colour_spread(P[active]) < NARROW_TARGET * colour_spread(X[active])
-    held, alpha = ladder_predictions(AUTO_LADDER_NARROW if narrow else AUTO_LADDER, X, P, w, white)
+    ladder = AUTO_LADDER_NARROW if narrow else AUTO_LADDER
+    held, alpha = ladder_predictions(
+        [m for m in ladder if m not in ROOT_POLYNOMIAL_DEGREES], X, P, w, white
+    )
+    models, excluded = {}, []
+    for name in (m for m in ladder if m in ROOT_POLYNOMIAL_DEGREES):
+        if int(np.count_nonzero(active)) <= {2: 6, 3: 13}[ROOT_POLYNOMIAL_DEGREES[name]]:
+            continue
+        models[name], why = _bounded_candidate(problem, name)
+        if why:
+            excluded.append(why)
+        else:
+            held[name] = bounded_loo_predictions(problem, models[name].correction)
     stacked, unit = patch_errors(np.stack(list(held.values())), P, w, white)
     scores = {name: e[active] for name, e in zip(held, stacked, strict=True)}
     chosen, table = choose_model(scores, AUTO_SE_FACTOR)
-    model = None
-    if chosen in ROOT_POLYNOMIAL_DEGREES:
-        model = _root_polynomial_fit(problem, chosen)
-        if model is None:  # a design the patches do not constrain: not a candidate
-            del scores[chosen], held[chosen]
-            chosen, table = choose_model(scores, AUTO_SE_FACTOR)
-    notes |= {
-        "model": chosen,
-        "reason": _auto_reason(chosen, table, AUTO_SE_FACTOR, "least-squares", unit),
+    reason = _auto_reason(chosen, table, AUTO_SE_FACTOR, "least-squares", unit)
+    details |= {
         "metric": f"leave-one-patch-out {unit}",
         "cv_delta_e": {k: v["mean"] for k, v in table.items()},
         "cv_comparison": table,
         "cv_error": {
             k: float(np.mean(error_relative_to_white(h, P, white, w))) for k, h in held.items()
         },
-        "cross_validated_error": error_relative_to_white(held[chosen], P, white, w),
         "narrow_target": narrow,
+        "excluded_candidates": excluded,
     }
-    return _chosen_fit(chosen, X, P, w, white, alpha, notes, model)
+    return _chosen_fit(
+        chosen,
+        X,
+        P,
+        w,
+        white,
+        alpha,
+        models.get(chosen),
+        reason="; ".join([reason, *excluded]),
+        cross_validated_error=error_relative_to_white(held[chosen], P, white, w),
+        target_rank=rank,
+        details=details,
+    )

@@ -15,7 +15,13 @@ import numpy as np
 
 from ocio_vp.errors import InputError
 
-__all__ = ["MAX_DYNAMIC_RANGE", "MIN_LIT_DIRECTION", "check_problem", "singular_q_cause"]
+__all__ = [
+    "MAX_DYNAMIC_RANGE",
+    "MIN_LIT_DIRECTION",
+    "check_problem",
+    "relative_figure",
+    "singular_q_cause",
+]
 
 #: A chart value more than this many times the chart's median magnitude is not a camera value
 #: (a typo, an unscaled integer, 1e300): no camera's linear signal spans 1e9 within one chart.
@@ -25,6 +31,19 @@ MAX_DYNAMIC_RANGE = 1e9
 MIN_LIT_DIRECTION = 1e-6
 
 _CHANNELS = ("red", "green", "blue")
+#: A relative singular value below this is rounding, not colour: printed as "< 1e-6" so that
+#: texts do not depend on the machine's arithmetic (it varies by 10x there).
+NOISE_FLOOR = 1e-6
+
+
+def relative_figure(value: float) -> str:
+    """A relative singular value as the terminal and configs print it (2 digits; rounding-level
+    values as ``< 1e-6``).
+
+    >>> relative_figure(0.37), relative_figure(3.7e-17)
+    ('0.37', '< 1e-06')
+    """
+    return f"{value:.2g}" if value >= NOISE_FLOOR else f"< {NOISE_FLOOR:.0e}"
 
 
 def _check_range(values: np.ndarray, active: np.ndarray, key: str, what: str) -> None:
@@ -96,9 +115,9 @@ def _check_directions(X: np.ndarray) -> None:
         )
 
 
-def singular_q_cause(problem: Any, notes: dict) -> str:
-    """Why a fitted Q is singular, in the terms of the measurements (for ``N_reason``)."""
-    model = str(notes.get("model", ""))
+def singular_q_cause(problem: Any, model: str) -> str:
+    """Why a fitted Q is singular, in the terms of the measurements (for ``N_reason``);
+    ``model`` is the fitted model's name (``rank-1`` for a reduced-rank fit)."""
     if model.startswith("rank-"):
         return (
             f"the target chart has rank {model.removeprefix('rank-')}: a near-monochromatic "
@@ -110,10 +129,10 @@ def singular_q_cause(problem: Any, notes: dict) -> str:
     if s[0] > 0 and s[-1] < 1e-2 * s[0]:
         return (
             f"the target chart has almost no colour in one direction (singular values "
-            f"{', '.join(f'{v / s[0]:.2g}' for v in s)} of the largest): a near-monochromatic "
+            f"{', '.join(relative_figure(v / s[0]) for v in s)} of the largest): a near-monochromatic "
             "light such as sodium vapour, or a dark channel in the target plate"
         )
     return (
-        f"the {notes.get('model', 'fitted')} model gave a singular Q on this chart (its "
+        f"the {model or 'fitted'} model gave a singular Q on this chart (its "
         "patches do not constrain every colour direction)"
     )

@@ -51,6 +51,7 @@ from numpy.typing import ArrayLike
 from ocio_vp.calibration.equations import condition_number
 from ocio_vp.correction.linear import fit_least_squares
 from ocio_vp.correction.problem import QFit, QProblem
+from ocio_vp.model.correction import MatrixCorrection
 
 __all__ = [
     "DEFAULT_MAX_CONDITION",
@@ -66,6 +67,16 @@ DEFAULT_MAX_DELTA_E = 2.0
 #: Default bound on cond(Q) (N = [SL]^-1 Q^-1 amplifies errors by at most this).
 DEFAULT_MAX_CONDITION = 100.0
 
+#: Why there is no joint solve without a visible baseline light.
+NO_BASELINE = (
+    "the baseline stage light M w_avg has no luminance or no positive drive: the white-point "
+    "and drive limits are undefined"
+)
+#: What every joint fit is.
+JOINT_DESCRIPTION = (
+    "out-of-frustum matrix and Q jointly minimising eq. 5 under white-point, drive and cond(Q) "
+    "limits (paper, Future Work)"
+)
 _TOL = 1e-6  # relative slack when checking a limit / calling it active
 
 
@@ -281,18 +292,7 @@ def _solve_joint(joint: _JointProblem, max_iterations: int, camera: str) -> QFit
     # The sequential Q as every method fits it: the chart lit by the drive the wall can emit.
     Q0 = fit_least_squares(joint.A @ np.clip(joint.d0, 0.0, None), joint.P, joint.w)
     if not (joint.y0 > 0 and joint.top > 0):  # no visible baseline light: no white point to keep
-        return QFit(
-            Q=Q0,
-            notes={
-                "model": "joint",
-                "joint_applied": False,
-                "limits_met": False,
-                "reason": "the baseline stage light M w_avg has no luminance or no "
-                "positive drive: the white-point and drive limits are undefined",
-                "lit_chart_error_reduction": 0.0,
-                "active_limits": [],
-            },
-        )
+        return _not_applied(Q0, NO_BASELINE, {"limits_met": False})
     top, scale = joint.top, joint.scale
     z0 = np.concatenate([joint.d0 / scale, Q0.ravel()])
     start_error = joint.objective(z0)[0]
@@ -324,17 +324,8 @@ def _solve_joint(joint: _JointProblem, max_iterations: int, camera: str) -> QFit
             if start_ok
             else "no solution within the limits was found"
         )
-        notes.update(
-            {
-                "joint_applied": False,
-                "reason": reason,
-                "limits_met": start_ok,
-                "lit_chart_error_eq5": start_error,
-                "lit_chart_error_reduction": 0.0,
-                "active_limits": [],
-            }
-        )
-        return QFit(Q=Q0, M=None, notes=notes)
+        notes.update({"limits_met": start_ok, "lit_chart_error_eq5": start_error})
+        return _not_applied(Q0, reason, notes)
     notes.update(
         {
             "joint_applied": True,
@@ -348,7 +339,25 @@ def _solve_joint(joint: _JointProblem, max_iterations: int, camera: str) -> QFit
             **final_limits,
         }
     )
-    return QFit(Q=Q, M=joint_matrix(joint.M, joint.w_avg, d), notes=notes)
+    return QFit(
+        MatrixCorrection(Q),
+        "joint",
+        JOINT_DESCRIPTION,
+        M=joint_matrix(joint.M, joint.w_avg, d),
+        details=notes,
+    )
+
+
+def _not_applied(Q0: np.ndarray, reason: str, notes: dict) -> QFit:
+    """The sequential solution, with why the joint one was not taken."""
+    details = {"joint_applied": False, **notes, "lit_chart_error_reduction": 0.0}
+    return QFit(
+        MatrixCorrection(Q0),
+        "joint",
+        JOINT_DESCRIPTION,
+        reason=reason,
+        details=details | {"active_limits": []},
+    )
 
 
 def _joint_notes(
@@ -356,9 +365,6 @@ def _joint_notes(
 ) -> dict:
     """What every joint fit reports: the limits, the convention, the sequential start, SLSQP."""
     return {
-        "model": "joint",
-        "description": "out-of-frustum matrix and Q jointly minimising eq. 5 under "
-        "white-point, drive and cond(Q) limits (paper, Future Work)",
         "limits": {
             "max_white_point_delta_e2000": joint.max_delta_e,
             "drive_range": [0.0, joint.top],

@@ -37,12 +37,14 @@ from ocio_vp.correction.perceptual import patch_delta_e
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import error_relative_to_white, white_scale
+from ocio_vp.model.correction import MatrixCorrection
 
 __all__ = [
     "AUTO_LADDER",
     "AUTO_LADDER_NARROW",
     "AUTO_SE_FACTOR",
     "AUTO_TIE",
+    "LINE_SPECTRUM_TOLERANCE",
     "LOO_KERNELS",
     "MODEL_KERNELS",
     "NARROW_TARGET",
@@ -79,6 +81,14 @@ AUTO_TIE = 1e-6
 #: singular value, relative to the lit chart's (:func:`target_rank`), is treated as absent
 #: (low-pressure sodium: ~1e-15; high-pressure sodium: 0.4; daylight and tungsten: 0.7-1).
 RANK_RELATIVE_TOLERANCE = 1e-3
+#: A target chart whose *second* relative singular value is below this has one colour: a line
+#: spectrum whose other directions carry only measurement noise. Under low-pressure sodium
+#: that noise reaches 0.03-0.07 at 1-2 % noise on every value (0.12 on the Sigma camera,
+#: whose lit chart has small minor singular values that the ratio divides by), against
+#: 0.38-0.46 for high-pressure sodium, the narrowest broadband light simulated: halfway, on a
+#: log scale, is 0.2. The rank then does not depend on how noisy the plates are (a noise-free
+#: simulation and its plates give the same model).
+LINE_SPECTRUM_TOLERANCE = 0.2
 
 #: A target chart whose colours spread less than this fraction of the lit chart's
 #: (:func:`colour_spread`: a line-spectrum light the wall cannot reproduce, e.g. sodium lamps
@@ -419,7 +429,9 @@ def target_rank(
     With the lit chart ``X``, each relative singular value of the target is compared with the
     lit chart's (``(s_P[i] / s_P[0]) / (s_X[i] / s_X[0])``, at most 1): a camera whose channels
     overlap strongly sees *every* chart with small minor singular values, and only a light with
-    much less colour than the wall shows (a line spectrum) should count as rank-deficient.
+    much less colour than the wall shows (a line spectrum) should count as rank-deficient. A
+    second relative singular value below :data:`LINE_SPECTRUM_TOLERANCE` makes the rank 1,
+    whatever the third (noise there is amplified by the lit chart's small minor values).
 
     Raises
     ------
@@ -437,6 +449,8 @@ def target_rank(
             lit = t / t[0]
             relative = np.minimum(relative / np.where(lit > 0, lit, np.inf), 1.0)
             relative[0] = 1.0
+    if relative[1] < LINE_SPECTRUM_TOLERANCE:
+        return 1, relative
     return int(np.sum(relative >= RANK_RELATIVE_TOLERANCE)), relative
 
 
@@ -459,7 +473,7 @@ def _method(name: str, description: str) -> Callable[[QProblem], QFit]:
 
     def solve(problem: QProblem) -> QFit:
         X, P, w, white = problem_arrays(problem)
-        return QFit(Q=kernel(X, P, w, white), notes={"model": name, "description": description})
+        return QFit(MatrixCorrection(kernel(X, P, w, white)), name, description)
 
     solve.__name__ = "q_" + name.replace("-", "_")
     solve.__doc__ = f"Q by the {name!r} model: {description}."
@@ -480,13 +494,11 @@ def q_regularised(problem: QProblem) -> QFit:
     alpha = choose_shrinkage(X, P, w, white)
     Q = _fit_diagonal(X, P, w, white) if not np.isfinite(alpha) else _ridge(X, P, w, alpha)
     return QFit(
-        Q=Q,
-        notes={
-            "model": "regularised",
-            "description": "least squares + alpha*trace(X^T W X)/3*||Q - D||^2, D = white "
-            "balance, alpha with the lowest leave-one-patch-out ΔE2000",
-            "shrinkage": alpha,
-        },
+        MatrixCorrection(Q),
+        "regularised",
+        "least squares + alpha*trace(X^T W X)/3*||Q - D||^2, D = white balance, alpha with the "
+        "lowest leave-one-patch-out ΔE2000",
+        details={"shrinkage": alpha},
     )
 
 

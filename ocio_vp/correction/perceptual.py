@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
+from ocio_vp.model.correction import MatrixCorrection
 
 __all__ = [
     "PERCEPTUAL_METRICS",
@@ -193,10 +194,10 @@ def make_q_perceptual(
         if not (np.isfinite(final) and final <= first and np.all(np.isfinite(Q))):
             Q, final = start, first  # never worse than the paper's solve
         return QFit(
-            Q=Q,
-            notes={
-                "model": "perceptual",
-                "description": f"minimum mean ΔE {metric} from the least-squares start (eq. 5)",
+            MatrixCorrection(Q),
+            "perceptual",
+            f"minimum mean ΔE {metric} from the least-squares start (eq. 5)",
+            details={
                 "metric": metric,
                 "mean_delta_e_start": first,
                 "mean_delta_e": final,

@@ -15,11 +15,15 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ocio_vp.calibration.equations import predict_lit_chart
+from ocio_vp.model.correction import FitDomain, fit_domain
+
+if TYPE_CHECKING:
+    from ocio_vp.model.correction import PostCorrection
 
 __all__ = ["QFit", "QProblem", "fit_least_squares"]
 
@@ -43,6 +47,9 @@ class QProblem:
     #: (n, 3) light on the chart beyond eq. 3's (practical fixtures, a changed wall drive:
     #: :mod:`ocio_vp.fixtures.lighting`); None for the wall alone.
     extra_light: np.ndarray | None = None
+    #: Reflectance of the white patch (sets the drive of a perfect white diffuser, the top of
+    #: the reflective domain: :func:`ocio_vp.model.correction.fit_domain`).
+    white_reflectance: float = 0.9
 
     @property
     def predicted(self) -> np.ndarray:
@@ -59,6 +66,18 @@ class QProblem:
         return lit if self.extra_light is None else lit + self.extra_light
 
     @property
+    def domain(self) -> FitDomain:
+        """Where the post-correction is fitted (:func:`ocio_vp.model.correction.fit_domain`):
+        the lit chart as the wall really lights it, the calibrated M, the fitted patches."""
+        return fit_domain(
+            self.predicted,
+            M=self.M,
+            white_patch=self.white_patch,
+            white_reflectance=self.white_reflectance,
+            weights=self.fit_weights,
+        )
+
+    @property
     def fit_weights(self) -> np.ndarray:
         n = self.target.shape[0]
         return np.ones(n) if self.weights is None else np.asarray(self.weights, dtype=np.float64)
@@ -66,11 +85,45 @@ class QProblem:
 
 @dataclass(frozen=True)
 class QFit:
-    """A solved post-correction; ``M`` set only by methods that also change the lighting."""
+    """A solved post-correction and what the method says about it.
 
-    Q: np.ndarray
+    ``correction`` is the post-correction itself (:mod:`ocio_vp.model.correction`); ``Q`` its
+    3x3 (the matrix, or a non-linear model's fallback). ``M`` is set only by methods that also
+    change the lighting. ``model`` names what was fitted (``auto`` names the model it chose),
+    ``reason`` why, ``cross_validated_error`` (3,) the method's own leave-one-patch-out error
+    (white-relative), ``target_rank`` the chart's rank as a rank-aware method saw it.
+    ``details`` holds the method's own figures for people (written to solution.json's
+    ``diagnostics.method_notes``); no module reads a model from them.
+    """
+
+    correction: PostCorrection
+    model: str
+    description: str = ""
     M: np.ndarray | None = None
-    notes: Mapping[str, Any] = field(default_factory=dict)
+    reason: str | None = None
+    cross_validated_error: np.ndarray | None = None
+    target_rank: int | None = None
+    warnings: tuple[str, ...] = ()
+    details: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def Q(self) -> np.ndarray:
+        """(3, 3) the correction's matrix (its fallback for a non-linear model)."""
+        return self.correction.matrix
+
+    @property
+    def notes(self) -> dict[str, Any]:
+        """Everything the method reported, as solution.json's ``diagnostics.method_notes``."""
+        notes: dict[str, Any] = {"model": self.model, "description": self.description}
+        if self.reason is not None:
+            notes["reason"] = self.reason
+        if self.target_rank is not None:
+            notes["target_rank"] = self.target_rank
+        if self.cross_validated_error is not None:
+            notes["cross_validated_error"] = self.cross_validated_error
+        if self.warnings:
+            notes["warnings"] = list(self.warnings)
+        return notes | dict(self.details)
 
 
 # Eq. 5's kernel lives with the problem: the linear family, perceptual (its start) and joint all

@@ -1,29 +1,19 @@
-"""Root-polynomial post-correction (Finlayson, Mackiewicz & Hurlbert 2015) and its exact inverse.
+"""Root-polynomial post-correction (Finlayson, Mackiewicz & Hurlbert 2015): the fit, bounded
+to the chart's domain, and the exact inverse of the polynomial.
 
-A root-polynomial Q maps camera RGB ``x`` to ``C e(x)``, where ``e`` is the root-polynomial
-expansion of degree d (degree 2: ``r, g, b, sqrt(rg), sqrt(gb), sqrt(rb)``; degree 3 adds the
-cube roots of ``r^2 g`` etc. and ``rgb``: 13 terms) and ``C`` is (3, terms). Every term is
-homogeneous of degree 1, so ``Q(k x) = k Q(x)`` for ``k > 0``: exposure-invariant like a matrix.
-The expansion is the one of colour-science's
-:func:`colour.characterisation.polynomial_expansion_Finlayson2015` (same terms, same order,
-tested against it), written here as one numpy expression per term so that baking a LUT or
-post-correcting a frame does not pay colour-science's per-call overhead. Its roots are
-sign-preserving (``sign(t) |t|^(1/k)``), so negative inputs (noise around black) give finite,
-continuous values and zero maps to zero.
+A root-polynomial Q maps camera RGB ``x`` to ``C e(x)`` (:mod:`ocio_vp.model.expansion`:
+every term homogeneous of degree 1, so ``Q(k x) = k Q(x)``). Fitted on 24 patches it renders
+reflective colours better than a 3x3 (docs/accuracy.md), but beyond the chart it only
+extrapolates: bright saturated inputs and emitters lose or flip channels. So the method returns
+a :class:`~ocio_vp.model.correction.RootPolynomialCorrection`: the polynomial inside the chart's
+domain, fading to the least-squares 3x3 on the same patches outside it, with the fade chosen by
+:func:`ocio_vp.correction.extrapolation.choose_fade` (the widest that folds nowhere among
+reflective colours). Its leave-one-out error is the bounded model's: each patch is predicted by
+the polynomial and the 3x3 fitted without it, blended by its place in the domain of the others.
 
-How it travels through the pipeline: ``QFit.Q`` stays a 3x3 — the weighted least-squares 3x3 on
-the same patches, the best linear approximation — because M, N, the reports and the exports are
-built on a matrix. The non-linear model itself is in ``QFit.notes["root_polynomial"]``
-(``{"degree": d, "coefficients": (3, terms) list}``), which ``solution.json`` carries in
-``diagnostics.method_notes``; :func:`post_correction` turns a matrix and those notes back into
-the function to apply. The OCIO config carries the model itself as LUTs
-(:mod:`ocio_vp.ocio.root_polynomial`), ``ocio-vp apply`` and the Resolve DCTL compute it
-exactly, and the fit's ``warnings`` note says where the 3x3 approximation remains.
-
-The inverse (:func:`invert_root_polynomial`) is solved on each colour's direction (the colour
-divided by its largest absolute channel, then scaled back: homogeneity), by damped Newton
-iterations started from the 3x3 approximation's inverse, all colours at once (batched 3x3
-solves with the analytic Jacobian, :func:`root_polynomial_jacobian`).
+The inverse of the polynomial itself (:func:`invert_root_polynomial`) is solved on each
+colour's direction (homogeneity) by damped Newton iterations with the analytic Jacobian
+(:func:`~ocio_vp.model.expansion.root_polynomial_jacobian`), all colours at once.
 
 References
 ----------
@@ -34,23 +24,36 @@ https://doi.org/10.1109/TIP.2015.2405336
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
-from typing import Any
+from collections.abc import Callable
 
 import numpy as np
 
-from ocio_vp.correction.linear import loo_root_polynomial
+from ocio_vp.correction.extrapolation import FADES, choose_fade
+from ocio_vp.correction.linear import LOO_KERNELS, loo_root_polynomial
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import error_relative_to_white
+from ocio_vp.model.correction import (
+    FitDomain,
+    RootPolynomialCorrection,
+    fit_domain,
+)
+from ocio_vp.model.expansion import (
+    ROOT_POLYNOMIAL_TERMS,
+    apply_root_polynomial,
+    root_polynomial_expansion,
+    root_polynomial_jacobian,
+    root_polynomial_term_powers,
+    root_polynomial_terms,
+)
 
 __all__ = [
     "ROOT_POLYNOMIAL_TERMS",
     "apply_root_polynomial",
+    "bounded_loo_predictions",
     "fit_root_polynomial",
     "invert_root_polynomial",
     "make_q_root_polynomial",
-    "post_correction",
     "q_root_polynomial",
     "root_polynomial_expansion",
     "root_polynomial_jacobian",
@@ -59,133 +62,9 @@ __all__ = [
     "root_polynomial_terms",
 ]
 
-#: Number of root-polynomial terms per degree (colour-science supports degrees 1-4).
-ROOT_POLYNOMIAL_TERMS = {1: 3, 2: 6, 3: 13, 4: 22}
-
 #: A fit whose design matrix has a singular value below this fraction of its largest is
 #: rank-deficient: the patches do not constrain every term.
 RANK_RELATIVE_TOLERANCE = 1e-10
-
-#: The warning a root-polynomial fit carries: where the model travels as a matrix.
-CONFIG_APPROXIMATION_WARNING = (
-    "root-polynomial Q: Q and N in solution.json are its best 3x3 approximation (the model is "
-    "in diagnostics.method_notes.root_polynomial); the OCIO config carries the model as baked "
-    "LUTs when N is solved (else the 3x3 too), apply and the Resolve DCTL compute it exactly, "
-    "and only Nuke's disabled ColorMatrix fallback is the 3x3"
-)
-
-
-#: Each term of the expansion as (exponents of r, g, b; root): the term is
-#: ``sign(p) |p|^(1/root)`` with ``p = r^a g^b b^c``, in colour-science's order.
-_TERMS = (
-    ((1, 0, 0), 1), ((0, 1, 0), 1), ((0, 0, 1), 1),
-    ((1, 1, 0), 2), ((0, 1, 1), 2), ((1, 0, 1), 2),
-    ((1, 2, 0), 3), ((0, 1, 2), 3), ((1, 0, 2), 3),
-    ((2, 1, 0), 3), ((0, 2, 1), 3), ((2, 0, 1), 3), ((1, 1, 1), 3),
-    ((3, 1, 0), 4), ((3, 0, 1), 4), ((1, 3, 0), 4),
-    ((0, 3, 1), 4), ((1, 0, 3), 4), ((0, 1, 3), 4),
-    ((2, 1, 1), 4), ((1, 2, 1), 4), ((1, 1, 2), 4),
-)  # fmt: skip
-
-
-_ROOT_SIGNS = {1: "", 2: "√", 3: "∛", 4: "∜"}
-
-
-def root_polynomial_term_powers(degree: int) -> list[tuple[tuple[int, int, int], int]]:
-    """Each term as ((a, b, c), k): ``sign(p) |p|^(1/k)`` with ``p = r^a g^b b^c``.
-
-    >>> root_polynomial_term_powers(2)[3]
-    ((1, 1, 0), 2)
-    """
-    return list(_TERMS[: ROOT_POLYNOMIAL_TERMS[degree]])
-
-
-def root_polynomial_terms(degree: int) -> list[str]:
-    """The expansion's terms, as a person reads them.
-
-    >>> root_polynomial_terms(2)
-    ['r', 'g', 'b', '√(rg)', '√(gb)', '√(rb)']
-    >>> root_polynomial_terms(3)[6:8]
-    ['∛(rg²)', '∛(gb²)']
-    """
-    names = []
-    for powers, root in _TERMS[: ROOT_POLYNOMIAL_TERMS[degree]]:
-        product = "".join(
-            c + {1: "", 2: "²", 3: "³"}[p] for c, p in zip("rgb", powers, strict=True) if p
-        )
-        names.append(product if root == 1 else f"{_ROOT_SIGNS[root]}({product})")
-    return names
-
-
-def _signed_root(p: np.ndarray, root: int) -> np.ndarray:
-    if root == 1:
-        return p
-    if root == 2:
-        return np.copysign(np.sqrt(np.abs(p)), p)
-    if root == 3:
-        return np.cbrt(p)
-    return np.copysign(np.abs(p) ** (1.0 / root), p)
-
-
-def root_polynomial_expansion(rgb: np.ndarray, degree: int) -> np.ndarray:
-    """(..., terms) root-polynomial expansion of (..., 3) ``rgb``, float64.
-
-    >>> root_polynomial_expansion(np.array([4.0, 1.0, 9.0]), 2).tolist()
-    [4.0, 1.0, 9.0, 2.0, 3.0, 6.0]
-    >>> root_polynomial_expansion(np.array([-4.0, 1.0, 0.0]), 2).tolist()
-    [-4.0, 1.0, 0.0, -2.0, 0.0, -0.0]
-    """
-    if degree not in ROOT_POLYNOMIAL_TERMS:
-        raise ValueError(f"root-polynomial degree must be 1-4, got {degree}")
-    rgb = np.asarray(rgb, dtype=np.float64)
-    channels = (rgb[..., 0], rgb[..., 1], rgb[..., 2])
-    out = np.empty((*rgb.shape[:-1], ROOT_POLYNOMIAL_TERMS[degree]))
-    for index, (powers, root) in enumerate(_TERMS[: ROOT_POLYNOMIAL_TERMS[degree]]):
-        p = None
-        for channel, power in zip(channels, powers, strict=True):
-            for _ in range(power):
-                p = channel if p is None else p * channel
-        out[..., index] = _signed_root(p, root)
-    return out
-
-
-def root_polynomial_jacobian(coefficients: np.ndarray, rgb: np.ndarray) -> np.ndarray:
-    """(n, 3, 3) Jacobian of Q = C e(x) at (n, 3) ``rgb`` (row: output channel, column: d/dx_k).
-
-    Each term ``t = sign(p)|p|^(1/k)`` has ``dt/dx_c = (a_c / k) t / x_c``; where a channel the
-    term uses is 0 the derivative is infinite (the square root's slope) and is returned as is
-    (callers fall back to another step there).
-    """
-    C = np.asarray(coefficients, dtype=np.float64)
-    x = np.asarray(rgb, dtype=np.float64).reshape(-1, 3)
-    terms = root_polynomial_expansion(x, _degree_of(C))
-    dterms = np.zeros((*terms.shape, 3))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        for index, (powers, root) in enumerate(_TERMS[: C.shape[1]]):
-            for channel, power in enumerate(powers):
-                if power and root == 1:
-                    dterms[:, index, channel] = 1.0
-                elif power:
-                    dterms[:, index, channel] = power / root * terms[:, index] / x[:, channel]
-    return np.matmul(C, dterms)  # (3, t) @ (n, t, 3)
-
-
-def _degree_of(coefficients: np.ndarray) -> int:
-    terms = coefficients.shape[-1]
-    for degree, n in ROOT_POLYNOMIAL_TERMS.items():
-        if n == terms and coefficients.shape == (3, n):
-            return degree
-    raise InputError(
-        f"root-polynomial coefficients must be (3, terms) with terms in "
-        f"{sorted(ROOT_POLYNOMIAL_TERMS.values())}, got shape {coefficients.shape}",
-        key="root_polynomial.coefficients",
-    )
-
-
-def apply_root_polynomial(coefficients: np.ndarray, rgb: np.ndarray) -> np.ndarray:
-    """Q(rgb) = C e(rgb) for (..., 3) ``rgb``; the degree follows from C's shape (3, terms)."""
-    C = np.asarray(coefficients, dtype=np.float64)
-    return root_polynomial_expansion(rgb, _degree_of(C)) @ C.T
 
 
 def fit_root_polynomial(X: np.ndarray, P: np.ndarray, w: np.ndarray, degree: int = 2) -> np.ndarray:
@@ -228,27 +107,31 @@ def fit_root_polynomial(X: np.ndarray, P: np.ndarray, w: np.ndarray, degree: int
 
 
 def make_q_root_polynomial(degree: int = 2) -> Callable[[QProblem], QFit]:
-    """A registry method fitting a root-polynomial Q of ``degree`` (see the module docstring)."""
+    """A registry method fitting a bounded root-polynomial Q of ``degree`` (module docstring)."""
 
     def q_root_polynomial_method(problem: QProblem) -> QFit:
         X, P, w = problem.predicted, problem.target, problem.fit_weights
         C = fit_root_polynomial(X, P, w, degree)
-        Q = fit_least_squares(X, P, w)
-        cv = _loo_error(X, P, w, degree, problem.white_patch)
+        A = fit_least_squares(X, P, w)
+        domain = problem.domain
+        fade, tried = choose_fade(C, A, domain)
+        warnings = []
+        if fade is None:
+            fade = FADES[-1]
+            warnings.append(
+                f"the root-polynomial Q folds (maps two reflective colours to one) in "
+                f"{min(tried.values()):.1%} of the reflective solid whatever its fade: "
+                "prefer a 3x3 method for this environment"
+            )
+        correction = RootPolynomialCorrection(C, A, domain, fade)
         return QFit(
-            Q=Q,
-            notes={
-                "model": f"root-polynomial-{degree}",
-                "description": f"root-polynomial regression of degree {degree} "
-                "(Finlayson et al. 2015); Q is its best 3x3 approximation",
-                "root_polynomial": {
-                    "degree": degree,
-                    "terms": root_polynomial_terms(degree),
-                    "coefficients": C.tolist(),
-                },
-                "warnings": [CONFIG_APPROXIMATION_WARNING],
-                **({} if cv is None else {"cross_validated_error": cv}),
-            },
+            correction,
+            f"root-polynomial-{degree}",
+            f"root-polynomial regression of degree {degree} (Finlayson et al. 2015), bounded "
+            "to the chart's domain; Q is its 3x3 fallback",
+            cross_validated_error=_loo_error(problem, correction),
+            warnings=tuple(warnings),
+            details={"folds_by_fade": tried},
         )
 
     q_root_polynomial_method.__name__ = f"q_root_polynomial_{degree}"
@@ -280,33 +163,51 @@ def root_polynomial_loo_predictions(
     )
 
 
-def _loo_error(X, P, w, degree: int, white: int) -> np.ndarray | None:
-    """(3,) leave-one-patch-out error (white-relative); None with no patch to spare."""
-    if int(np.count_nonzero(np.asarray(w) > 0)) <= ROOT_POLYNOMIAL_TERMS[degree]:
+def bounded_loo_predictions(problem: QProblem, correction: RootPolynomialCorrection) -> np.ndarray:
+    """(n, 3) leave-one-patch-out predictions of a bounded root-polynomial Q, in closed form.
+
+    Patch j: the polynomial and the least-squares 3x3 fitted without it (hat-matrix identities,
+    :func:`~ocio_vp.correction.linear.loo_root_polynomial`), blended by the weight of x_j in the
+    domain of the other fitted patches, at the correction's fade.
+    """
+    X, P, w = problem.predicted, np.asarray(problem.target, dtype=np.float64), problem.fit_weights
+    polynomial = loo_root_polynomial(X, P, w, correction.degree)
+    linear = LOO_KERNELS["least-squares"](X, P, w, int(problem.white_patch))
+    weights = np.zeros(len(X))
+    for j in np.flatnonzero(w > 0):
+        others = w.copy()
+        others[j] = 0.0
+        bounded = RootPolynomialCorrection(
+            correction.coefficients, correction.fallback, _domain(problem, others), correction.fade
+        )
+        weights[j] = bounded.weight(X[j])
+    return linear + weights[:, None] * (polynomial - linear)
+
+
+def _domain(problem: QProblem, weights: np.ndarray) -> FitDomain:
+    return fit_domain(
+        problem.predicted,
+        M=problem.M,
+        white_patch=problem.white_patch,
+        white_reflectance=problem.white_reflectance,
+        weights=weights,
+    )
+
+
+def _loo_error(problem: QProblem, correction: RootPolynomialCorrection) -> np.ndarray | None:
+    """(3,) the bounded model's leave-one-patch-out error (white-relative); None with no patch
+    to spare."""
+    w = problem.fit_weights
+    if int(np.count_nonzero(w > 0)) <= ROOT_POLYNOMIAL_TERMS[correction.degree]:
         return None
-    held = root_polynomial_loo_predictions(X, P, w, degree)
+    held = bounded_loo_predictions(problem, correction)
     if not np.all(np.isfinite(held)):
         return None
-    return error_relative_to_white(held, P, white, w)
+    return error_relative_to_white(held, problem.target, problem.white_patch, w)
 
 
 #: The registry's ``root-polynomial`` method: degree 2 (6 terms).
 q_root_polynomial = make_q_root_polynomial(2)
-
-
-def post_correction(
-    Q: np.ndarray, notes: Mapping[str, Any] | None
-) -> Callable[[np.ndarray], np.ndarray]:
-    """The post-correction a solve describes: root-polynomial when ``notes`` carry one, else Q.
-
-    ``notes`` is ``QFit.notes`` or ``solution.json``'s ``diagnostics.method_notes``.
-    """
-    model = (notes or {}).get("root_polynomial")
-    if model is not None:
-        C = np.asarray(model["coefficients"], dtype=np.float64)
-        return lambda rgb: apply_root_polynomial(C, rgb)
-    matrix = np.asarray(Q, dtype=np.float64)
-    return lambda rgb: np.asarray(rgb, dtype=np.float64) @ matrix.T
 
 
 def _linear_approximation(C: np.ndarray) -> np.ndarray:

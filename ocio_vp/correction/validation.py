@@ -7,15 +7,15 @@ from typing import Any
 
 import numpy as np
 
-from ocio_vp.correction.linear import LOO_KERNELS, loo_predictions
-from ocio_vp.correction.registry import solve_post_correction
+from ocio_vp.correction.linear import loo_predictions
+from ocio_vp.correction.registry import Q_SOLVE_METHODS, solve_post_correction
 from ocio_vp.metrics import error_relative_to_white
 
 __all__ = ["CLOSED_FORM_METHODS", "cross_validated_error", "held_out_predictions"]
 
 #: Methods cheap enough (closed forms) to cross-validate on every solve.
 CLOSED_FORM_METHODS = frozenset(
-    {"least-squares", "white-preserving", "regularised", "diagonal", "identity", "auto"}
+    name for name, record in Q_SOLVE_METHODS.items() if record.held_out is not None
 )
 
 
@@ -28,9 +28,10 @@ def held_out_predictions(problem: Any, method: str) -> np.ndarray:
     """
     weights = problem.fit_weights
     target = np.asarray(problem.target, dtype=np.float64)
-    if method in LOO_KERNELS:
+    kernel = Q_SOLVE_METHODS[method].held_out
+    if kernel is not None:
         X = problem.predicted
-        return loo_predictions(method, X, target, weights, int(problem.white_patch))
+        return loo_predictions(kernel, X, target, weights, int(problem.white_patch))
     held = target.copy()
     for j in np.flatnonzero(weights > 0):
         w = weights.copy()

@@ -19,15 +19,25 @@ from typing import Any
 import PyOpenColorIO as OCIO
 
 from ocio_vp.errors import InputError
+from ocio_vp.exports.dit import has_camera_log, write_dit
 from ocio_vp.exports.escape import inside
 from ocio_vp.exports.lights import write_lights
 from ocio_vp.exports.nuke import write_nuke
 from ocio_vp.exports.resolve import DEFAULT_CUBE_RANGE, DEFAULT_CUBE_SIZE, write_resolve
+from ocio_vp.exports.show import SHOW_FOLDER, write_show
 from ocio_vp.exports.source import ExportSource, load_export_source
 from ocio_vp.exports.unreal import write_unreal
+from ocio_vp.formats.provenance import SOURCE_FILE, source_record
 from ocio_vp.staging import publish_dirs, staged_dir
 
-__all__ = ["EXPORT_TARGETS", "ExportFailure", "ExportReport", "ExportResult", "export_solutions"]
+__all__ = [
+    "EXPORT_TARGETS",
+    "SHOW_TARGETS",
+    "ExportFailure",
+    "ExportReport",
+    "ExportResult",
+    "export_solutions",
+]
 
 #: Target name -> writer(source, folder, *, final_folder, cube_size, cube_range) -> summary.
 EXPORT_TARGETS: dict[str, Callable[..., dict[str, Any]]] = {
@@ -35,7 +45,11 @@ EXPORT_TARGETS: dict[str, Callable[..., dict[str, Any]]] = {
     "nuke": write_nuke,
     "resolve": write_resolve,
     "lights": write_lights,
+    "dit": write_dit,
 }
+
+#: Targets written once for all the given environments (``OUT/<target>/``), not per environment.
+SHOW_TARGETS = ("show",)
 
 MAX_CUBE_SIZE = 129
 
@@ -87,10 +101,11 @@ def _final_folder(source: ExportSource, target: str, out: Path | None) -> Path:
 
 
 def _check_options(targets, cube_size, cube_range) -> tuple[float, float]:
-    unknown = [t for t in targets if t not in EXPORT_TARGETS]
+    unknown = [t for t in targets if t not in EXPORT_TARGETS and t not in SHOW_TARGETS]
     if unknown or not targets:
         raise InputError(
-            f"unknown target(s) {unknown}; choose from {sorted(EXPORT_TARGETS)}", key="--target"
+            f"unknown target(s) {unknown}; choose from {sorted([*EXPORT_TARGETS, *SHOW_TARGETS])}",
+            key="--target",
         )
     if not 2 <= int(cube_size) <= MAX_CUBE_SIZE:
         raise InputError(f"expected 2..{MAX_CUBE_SIZE}, got {cube_size}", key="--cube-size")
@@ -113,6 +128,8 @@ def _plan(sources, targets, out_path) -> list[tuple[ExportSource, list[tuple[str
         for target in dict.fromkeys(targets):
             if target == "lights" and not source.solution.fixtures:
                 continue  # nothing for the lighting desk without fixtures
+            if target == "dit" and not has_camera_log(source):
+                continue  # no log footage without a camera gamut
             final = _final_folder(source, target, out_path)
             key = final.resolve()
             if key in seen:
@@ -133,8 +150,12 @@ def export_solutions(
     out: str | Path | None = None,
     cube_size: int = DEFAULT_CUBE_SIZE,
     cube_range: tuple[float, float] = DEFAULT_CUBE_RANGE,
+    base_config: str | None = None,
 ) -> ExportReport:
     """Export every solved environment to every target; each environment all or nothing.
+
+    The ``show`` target is one config for all of them (``OUT/show/``, ``out`` required, on
+    ``base_config``: :mod:`ocio_vp.exports.show`); it needs every given folder to load.
 
     Output goes to ``SOLUTION_DIR/exports/<target>/``, or ``OUT/<environment>/<target>/``
     when ``out`` is given; an existing folder of that name is replaced. An environment that
@@ -155,11 +176,22 @@ def export_solutions(
             sources.append(load_export_source(directory))
         except InputError as error:
             report.failures.append(ExportFailure(str(directory), str(error)))
+    if "show" in targets:
+        report.results.append(_export_show(sources, report, out, base_config))
+    targets = [t for t in targets if t not in SHOW_TARGETS]
+    if not targets:
+        return report
     plan = _plan(sources, targets, None if out is None else Path(out))
     for source, jobs in plan:
         if not jobs:
             reason = (
-                f"{source.directory}: no fixtures in this solution, nothing for --target lights"
+                f"{source.directory}: nothing for --target {'/'.join(targets)}"
+                + (": no fixtures in this solution" if "lights" in targets else "")
+                + (
+                    ": no camera log encoding (solve with --camera-colorspace)"
+                    if "dit" in targets
+                    else ""
+                )
             )
             report.failures.append(ExportFailure(str(source.directory), reason))
             continue
@@ -173,6 +205,27 @@ def export_solutions(
     if not report.results:
         raise InputError("nothing exported: " + "; ".join(f.reason for f in report.failures))
     return report
+
+
+def _export_show(sources, report: ExportReport, out, base_config) -> ExportResult:
+    """The show config of every loaded source (refused when one could not be loaded)."""
+    if out is None:
+        raise InputError("--target show writes OUT/show/: give --out OUT", key="--out")
+    if report.failures:
+        raise InputError(
+            "a show config needs every environment given: " + report.failures[0].reason,
+            key="SOLUTION",
+        )
+    summary = write_show(sources, Path(out), base_config=base_config)
+    return ExportResult(
+        ", ".join(summary["environments"]), "show", Path(out) / SHOW_FOLDER, summary
+    )
+
+
+def _source_text(source: ExportSource) -> str:
+    solution = source.solution
+    model = solution.diagnostics.get("model") or solution.method
+    return source_record(source.directory, solution.environment, str(model))
 
 
 def _export_environment(
@@ -198,6 +251,7 @@ def _export_environment(
                 summary = EXPORT_TARGETS[target](
                     source, folder, final_folder=final, cube_size=cube_size, cube_range=cube_range
                 )
+                (folder / SOURCE_FILE).write_text(_source_text(source), encoding="utf-8")
                 staged.append((folder, final))
                 results.append(ExportResult(source.solution.environment, target, final, summary))
             publish_dirs(staged)  # every destination checked before any is replaced

@@ -1,9 +1,11 @@
 """``lights``: the fixture drives of one environment for the people who run the lights.
 
 ``lights.json`` and ``lights.csv`` list, per fixture and in its channel order, each channel's
-drive (units of its ``reference_drive``), its level in [0, 1] of ``max_drive``, and the 8- and
-16-bit DMX values of that level (:mod:`ocio_vp.fixtures.dmx`); ``lights.json`` adds, for a
-pixel-mapped fixture, the k x 3 matrix from content RGB to channel drives and its gamut limit.
+DMX universe, fixture mode and address (from the fixture's ``dmx`` patch in the measurements
+file; empty when it has none), drive (units of its ``reference_drive``), its level in [0, 1] of
+``max_drive``, and the 8- and 16-bit DMX values of that level (:mod:`ocio_vp.fixtures.dmx`);
+``lights.json`` adds, for a pixel-mapped fixture, the k x 3 matrix from content RGB to channel
+drives and its gamut limit.
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ def write_lights(source: ExportSource, folder: Path, **_: Any) -> dict:
     for name, block in solution.fixtures.items():
         channel_rows = dmx_rows(name, block)
         rows += channel_rows
-        entry: dict[str, Any] = {"name": name, "channels": channel_rows}
+        entry: dict[str, Any] = {"name": name, "dmx": block.get("dmx"), "channels": channel_rows}
         if block.get("pixel_mapped"):
             drives = [block["drive"][c] for c in block["channels"]]
             entry["content_matrix"] = content_matrix(drives, solution.w_avg, block["max_drive"])

@@ -9,6 +9,14 @@ eq. 5), applied to camera-native linear footage.
 A root-polynomial Q is non-linear: the named transform carries it (the config's LUT bake), and
 a disabled ``OCIOFileTransform`` reading its CLF sidecar is the fallback that works under any
 Root config; the ColorMatrix then holds only the model's 3x3 approximation, the last resort.
+
+Paths are relative to the script: Nuke evaluates Tcl in file knobs when it reads them, so
+``[file dirname [value root.name]]/config/config.ocio`` names the config beside the script
+wherever the folder is moved (a bare relative path would be taken relative to Nuke's working
+directory). The OCIO node's context knob (``key1`` / ``value1``) sets ``VP_ENVIRONMENT`` to the
+environment, so the same node picks it from a show config (``export --target show``) when the
+Root points there. The config's default display and view, which Nuke's viewer starts on, are
+a monitor's (``sRGB - Display``), not the wall's drive.
 """
 
 from __future__ import annotations
@@ -25,20 +33,19 @@ from ocio_vp.formats.measurements import check_safe_name
 
 __all__ = ["render_nuke_script", "write_nuke"]
 
-# Nuke evaluates [...] and $... inside path and label knobs at run time (a second level of Tcl
-# after the file is parsed), so a path carrying them is refused rather than escaped twice.
-_NUKE_SAFE_PATH = re.compile(r"^[^\[\]{}$\\\"\x00-\x1f\x7f]+$")
+#: Nuke evaluates this in a file knob when it reads it: the folder the script is in.
+SCRIPT_FOLDER = "[file dirname [value root.name]]"
+#: Nuke's OCIO nodes' first context variable (the Context tab's key1 / value1).
+CONTEXT_VARIABLE = "VP_ENVIRONMENT"
+# Only the names the script writes itself go into path knobs (no user path): safe for Tcl.
+_SAFE_RELATIVE = re.compile(r"\A[A-Za-z0-9._/-]+\Z")
 
 
-def _check_nuke_path(path: str) -> str:
-    if not _NUKE_SAFE_PATH.match(path):
-        raise InputError(
-            'Nuke would evaluate the characters [ ] { } $ \\ " or control characters in '
-            "this path as Tcl; export to a folder whose path has none of them",
-            source=path,
-            key="--out",
-        )
-    return path
+def _relative(path: str) -> str:
+    """``path`` (relative to the script's folder) as a file knob that Nuke resolves."""
+    if not _SAFE_RELATIVE.match(path) or ".." in path.split("/"):
+        raise InputError(f"unexpected file name {path!r} for a Nuke path", key="nuke export")
+    return f"{SCRIPT_FOLDER}/{path}"
 
 
 _MATRIX_LABEL = (
@@ -60,38 +67,35 @@ def render_nuke_script(
 ) -> str:
     """The ``.nk`` text for one environment (see the module docstring for its nodes).
 
-    ``q_lut`` is the absolute path of a root-polynomial Q's CLF (None for a matrix Q). Names
-    are validated here too (not only on input): Nuke labels evaluate Tcl.
+    ``config_path`` and ``q_lut`` (a root-polynomial Q's CLF; None for a matrix Q) are relative
+    to the script's folder. Names are validated here too (not only on input): Nuke labels
+    evaluate Tcl.
     """
     check_safe_name(environment, source="nuke export", key="environment")
     check_safe_name(stage, source="nuke export", key="stage")
-    _check_nuke_path(config_path)
-    if q_lut is not None:
-        _check_nuke_path(q_lut)
     return render_template(
         "nuke_environment.nk.j2",
-        config_path=config_path,
+        config_path=_relative(config_path),
+        context_key=CONTEXT_VARIABLE,
+        environment=environment,
         reference=names["reference"],
         named_transform=names["post_correction"],
         group_name=nuke_identifier(environment, prefix="ocio_vp_"),
         label=f"ocio-vp Q: {stage} / {environment}",
         Q=[[float(v) for v in row] for row in Q],
-        q_lut=q_lut,
+        q_lut=None if q_lut is None else _relative(q_lut),
         matrix_label=_MATRIX_LABEL if q_lut is None else _APPROXIMATION_LABEL,
     )
 
 
-def write_nuke(source: ExportSource, folder: Path, *, final_folder: Path, **_: Any) -> dict:
-    """Write ``<environment>.nk`` and ``config/`` into ``folder``.
-
-    ``final_folder`` is where ``folder`` will be renamed to: the Root's config path is absolute
-    (Nuke resolves a relative one against its working directory, not the script).
-    """
+def write_nuke(source: ExportSource, folder: Path, **_: Any) -> dict:
+    """Write ``<environment>.nk`` and ``config/`` into ``folder`` (paths relative to the
+    script, so the folder can be moved)."""
     solution = source.solution
     copy_config(source, folder / "config")
-    config_path = (final_folder / "config" / source.config_path.name).resolve().as_posix()
+    config_path = f"config/{source.config_path.name}"
     q_files = (solution.diagnostics.get("root_polynomial_ocio") or {}).get("files") or []
-    q_lut = (final_folder / "config" / q_files[0]).resolve().as_posix() if q_files else None
+    q_lut = f"config/{q_files[0]}" if q_files else None
     text = render_nuke_script(
         stage=solution.stage,
         environment=solution.environment,
@@ -102,4 +106,4 @@ def write_nuke(source: ExportSource, folder: Path, *, final_folder: Path, **_: A
     )
     script = folder / f"{solution.environment}.nk"
     script.write_text(text, encoding="utf-8")
-    return {"script": script.name, "config": f"config/{source.config_path.name}"}
+    return {"script": script.name, "config": config_path}

@@ -36,7 +36,7 @@ __all__ = [
     "DEFAULT_CUBE_SIZE",
     "MANIFEST",
     "render_dctl",
-    "render_root_polynomial_dctl",
+    "render_model_dctl",
     "resolve_transforms",
     "write_clf",
     "write_resolve",
@@ -110,40 +110,67 @@ def _term_expression(powers: Sequence[int], root: int) -> str:
     return product if root == 1 else f"signed_root({product}, {root}.0f)"
 
 
-def render_root_polynomial_dctl(
-    *, title: str, stage: str, environment: str, description: str, model: dict[str, Any]
+def _model_context(correction: Any) -> dict[str, Any]:
+    """The template's values for a correction (:mod:`ocio_vp.model`): its 3x3, and the
+    polynomial, domain and emitter protection it has."""
+    protect = None
+    if correction.kind == "protected":
+        low, high = correction.bright
+        protect = {
+            "to_drive": correction.domain.to_drive.tolist(),
+            "drive_matrix": correction.drive_matrix.tolist(),
+            "bright": [low, high],
+            "bright_span": float(np.log2(high / low)),
+            "negative": list(correction.negative),
+        }
+        correction = correction.inner
+    context: dict[str, Any] = {
+        "matrix": correction.matrix.tolist(),
+        "terms": [],
+        "edges": [],
+        "protect": protect,
+    }
+    if correction.kind == "root-polynomial":
+        context["terms"] = [
+            _term_expression(p, k) for p, k in root_polynomial_term_powers(correction.degree)
+        ]
+        context["coefficients"] = correction.coefficients.tolist()
+        context["fade"] = list(correction.fade)
+        if correction.domain is not None:
+            context["gauge_drive"] = correction.domain.to_drive.tolist()
+            context["centre"] = correction.domain.centre.tolist()
+            context["edges"] = correction.domain.edge_normals.tolist()
+    return context
+
+
+def render_model_dctl(
+    *, title: str, stage: str, environment: str, description: str, correction: Any
 ) -> str:
-    """DCTL text computing a root-polynomial Q exactly: ``C . terms(rgb)`` (``model`` is
-    solution.json's ``diagnostics.method_notes.root_polynomial``)."""
-    degree = int(model["degree"])
-    coefficients = np.asarray(model["coefficients"], dtype=np.float64)
-    terms = [_term_expression(p, k) for p, k in root_polynomial_term_powers(degree)]
-    if coefficients.shape != (3, len(terms)):
-        raise ValueError(f"root-polynomial degree {degree} needs (3, {len(terms)}) coefficients")
+    """DCTL text computing a non-linear post-correction exactly (:mod:`ocio_vp.model`): the
+    bounded root-polynomial and the emitter protection, as ``ocio-vp apply`` does."""
     return render_template(
-        "resolve_root_polynomial.dctl.j2",
+        "resolve_model.dctl.j2",
         title=title,
         stage=stage,
         environment=environment,
         description=description,
-        degree=degree,
-        terms=terms,
-        coefficients=coefficients.tolist(),
+        model_text=correction.describe(),
+        **_model_context(correction),
     )
 
 
 def _q_dctl(solution: Any) -> tuple[str, str]:
-    """(DCTL text, accuracy note) for Q: the root-polynomial model when the solve has one."""
+    """(DCTL text, accuracy note) for Q: the model itself for a non-linear Q."""
     common = {
         "title": "post-correction Q",
         "stage": solution.stage,
         "environment": solution.environment,
         "description": "Footage shot on the stage (camera linear) -> corrected camera linear.",
     }
-    model = (solution.diagnostics.get("method_notes") or {}).get("root_polynomial")
-    if model is not None:
-        text = render_root_polynomial_dctl(**common, model=model)
-        return text, "root-polynomial Q (the model, not its 3x3), float32 arithmetic"
+    correction = solution.correction
+    if not correction.linear:
+        text = render_model_dctl(**common, correction=correction)
+        return text, f"{correction.kind} Q (the model, not its 3x3), float32 arithmetic"
     return render_dctl(**common, matrix=solution.Q), "Q as float32 literals"
 
 

@@ -24,9 +24,11 @@ from typing import Any
 
 import PyOpenColorIO as OCIO
 
+from ocio_vp.calibration.headroom import content_scale
 from ocio_vp.errors import InputError
 from ocio_vp.exports.source import ExportSource, copy_config
 from ocio_vp.exports.templating import render_template
+from ocio_vp.exports.unreal_script import SCRIPT_FILE, render_unreal_script
 from ocio_vp.ocio.config import WORKING_SPACE_NAMES
 
 __all__ = ["MAPPING_FILE", "unreal_mapping", "write_ocioz", "write_unreal"]
@@ -163,6 +165,7 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> dict[str
         ],
         "post_correction": names["post_correction"],
         "N_solved": solution.N is not None,
+        "content_scale": content_scale(solution).to_dict(),
     }
 
 
@@ -205,6 +208,19 @@ def write_unreal(source: ExportSource, folder: Path, **_: Any) -> dict[str, Any]
         source_note=note,
         n_solved=solution.N is not None,
         n_reason=solution.diagnostics.get("N_reason") or "Q is not invertible",
+        content_scale=content_scale(solution).lines(),
     )
     (folder / "UNREAL.md").write_text(text, encoding="utf-8")
-    return {"files": [config_rel, ocioz.name, "UNREAL.md", MAPPING_FILE], "mapping": mapping}
+    script = render_unreal_script(
+        source.config,
+        stage=solution.stage,
+        environment=solution.environment,
+        config_name=copied.name,
+        source=mapping["content_working_space"],
+        out_of_frustum=names["out_of_frustum"],
+        in_frustum=names["in_frustum"],
+        context={"VP_ENVIRONMENT": solution.environment},
+    )
+    (folder / SCRIPT_FILE).write_text(script, encoding="utf-8")
+    files = [config_rel, ocioz.name, "UNREAL.md", MAPPING_FILE, SCRIPT_FILE]
+    return {"files": files, "mapping": mapping}

@@ -3,10 +3,9 @@
 The colour maths is the solution's own OCIO config, ``Stage Footage`` -> reference (Q, the
 paper's post-correction, eq. 5, plus whatever that colorspace carries), run by OCIO's CPU
 processor in place (``apply(PackedImageDesc)``; ``applyRGB`` on a numpy array is ~10x slower)
-through the pluggable :class:`PixelTransform` (:data:`TRANSFORMS`). A root-polynomial Q is
-applied exactly instead (:class:`RootPolynomialTransform`: float64 maths, not the config's
-baked LUT), with the same sign-preserving roots as the fit: zeros give zero and negatives
-(noise around black) give finite values continuous with the positive side. Every other channel (alpha,
+through the pluggable :class:`PixelTransform` (:data:`TRANSFORMS`). A non-linear Q (a bounded
+root-polynomial, an emitter-protected one) is applied exactly instead (:class:`ModelTransform`:
+float64 maths of :mod:`ocio_vp.model`, not the config's baked LUT). Every other channel (alpha,
 depth, AOVs), every subimage, the metadata, data and display windows, tiling, pixel formats and
 compression of each input are kept.
 
@@ -28,7 +27,9 @@ https://doi.org/10.1145/3543664.3543699
 from __future__ import annotations
 
 import functools
+import hashlib
 import itertools
+import json
 import os
 import time
 from collections.abc import Callable
@@ -39,33 +40,35 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from ocio_vp.choices import OPTIMIZATIONS  # OCIO optimisation levels (bench_ocio_optim)
 from ocio_vp.errors import InputError
-from ocio_vp.footage.sequences import MARK, foreign_output_error
+from ocio_vp.footage.sequences import MARK, SOLUTION_MARK, foreign_output_error, output_solution
+from ocio_vp.model.correction import correction_from_dict, correction_to_dict
 
 __all__ = [
     "OPTIMIZATIONS",
     "TRANSFORMS",
+    "EncodedTransform",
     "FrameResult",
     "FrameTask",
+    "ModelTransform",
     "OcioTransform",
     "PixelTransform",
     "PostCorrection",
-    "RootPolynomialTransform",
     "apply_file",
     "apply_in_place",
     "cpu_processor",
     "existing_output",
     "load_frame",
     "load_post_correction",
+    "other_solution_reason",
     "pixel_transform",
     "run_task",
     "set_io_threads",
+    "solution_identity",
     "store_frame",
     "transform_frame",
 ]
-
-#: OCIO optimisation levels by name (``benchmarks/bench_ocio_optim.py`` measures them).
-OPTIMIZATIONS = ("lossless", "default", "good", "draft")
 
 
 @dataclass(frozen=True)
@@ -73,8 +76,11 @@ class PostCorrection:
     """Which OCIO conversion post-corrects footage: ``source`` -> ``target`` in ``config``.
 
     ``kind`` names the :data:`TRANSFORMS` factory that turns it into a :class:`PixelTransform`;
-    ``coefficients`` is a root-polynomial Q's (3, terms) model (kind ``root-polynomial``),
-    as nested tuples so that the post-correction stays hashable and picklable.
+    ``model`` is a non-linear post-correction's ``post_correction`` block as JSON text (kind
+    ``model``: :mod:`ocio_vp.model`, applied exactly), so that this stays hashable and
+    picklable. ``encoding`` is the footage's encoding (kind ``encoded``: decoded, corrected
+    and encoded again; a colour-science decoding name), ``solution`` the text that identifies
+    the post-correction in every frame written (:data:`SOLUTION_MARK`).
     """
 
     config: str
@@ -82,11 +88,18 @@ class PostCorrection:
     target: str
     environment: str = ""
     kind: str = "ocio"
-    coefficients: tuple[tuple[float, ...], ...] = ()
+    model: str = ""
+    encoding: str = ""
+    solution: str = ""
 
 
-def load_post_correction(solution_dir: str | Path) -> PostCorrection:
-    """Read ``solution.json`` and its config; check that the named colorspaces exist."""
+def load_post_correction(solution_dir: str | Path, encoding: str = "") -> PostCorrection:
+    """Read ``solution.json`` and its config; check that the named colorspaces exist.
+
+    ``encoding``: the footage's encoding (a colour-science decoding name, ``linear`` or ``""``
+    for linear footage)."""
+    if encoding == "linear":
+        encoding = ""
     import PyOpenColorIO as OCIO
 
     from ocio_vp.formats.solution import load_solution
@@ -111,13 +124,32 @@ def load_post_correction(solution_dir: str | Path) -> PostCorrection:
         raise InputError(
             f"cannot build the post-correction: {exc}", source=str(config_path)
         ) from None
-    model = (solution.diagnostics.get("method_notes") or {}).get("root_polynomial")
-    if model is not None:  # the exact model, not the config's LUT bake of it
-        coefficients = tuple(tuple(float(v) for v in row) for row in model["coefficients"])
+    model = json.dumps(correction_to_dict(solution.correction), sort_keys=True)
+    identity = solution_identity(solution.stage, solution.environment, model, encoding)
+    if encoding:  # decode, the exact post-correction, encode
         return PostCorrection(
-            str(config_path), source, target, solution.environment, "root-polynomial", coefficients
+            str(config_path),
+            f"{source} ({encoding})",
+            f"{target} ({encoding})",
+            solution.environment,
+            "encoded",
+            model,
+            encoding,
+            identity,
         )
-    return PostCorrection(str(config_path), source, target, solution.environment)
+    if not solution.correction.linear:  # the exact model, not the config's LUT bake of it
+        return PostCorrection(
+            str(config_path), source, target, solution.environment, "model", model, "", identity
+        )
+    return PostCorrection(str(config_path), source, target, solution.environment, solution=identity)
+
+
+def solution_identity(stage: str, environment: str, model: str, encoding: str = "") -> str:
+    """The text stored in each frame (:data:`SOLUTION_MARK`): which stage, environment and
+    post-correction (sha256 of its ``post_correction`` block) made it, and the encoding."""
+    digest = hashlib.sha256(model.encode("utf-8")).hexdigest()[:16]
+    text = f"{stage}/{environment} post-correction sha256:{digest}"
+    return f"{text}, footage {encoding}" if encoding else text
 
 
 _LEVELS = {
@@ -179,52 +211,82 @@ class OcioTransform:
 
 
 @dataclass(frozen=True)
-class RootPolynomialTransform:
-    """A :class:`PixelTransform` applying a root-polynomial Q exactly: ``C e(x)`` in float64.
+class ModelTransform:
+    """A :class:`PixelTransform` applying a non-linear post-correction exactly, in float64
+    (:meth:`ocio_vp.model.correction.RootPolynomialCorrection.apply` and the other kinds).
 
-    Pixels are converted to float64 in bands of :attr:`band` pixels (bounded memory, ~100 bytes
-    per pixel of the band for degree 2; 16384 pixels keep a band's temporaries in the CPU's
-    cache, several times faster than larger bands) and stored back in the buffer's own type (a
-    half result that overflows becomes inf, as OCIO's half output does). Roots are sign-preserving
-    (``sign(p)|p|^(1/k)``), as in the fit: 0 maps to 0, and a negative channel gives a finite
-    value continuous with the positive side (for degree 2 and a pixel (r, g, b) with r < 0 < g,
-    ``sqrt(rg)`` is ``-sqrt(|rg|)``).
+    Pixels are converted to float64 in bands of :attr:`band` pixels (bounded memory; 16384
+    pixels keep a band's temporaries in the CPU's cache, several times faster than larger
+    bands) and stored back in the buffer's own type (a half result that overflows becomes inf,
+    as OCIO's half output does). Roots are sign-preserving, as in the fit: 0 maps to 0, and a
+    negative channel gives a finite value continuous with the positive side.
     """
 
-    coefficients: np.ndarray
+    correction: Any
     band: int = 1 << 14
 
     def __call__(self, rgb: np.ndarray) -> None:
-        model = _exact_model()
         flat = rgb.reshape(-1, 3)  # a view when rgb is C-contiguous (the protocol), else a copy
         for start in range(0, len(flat), self.band):
             block = flat[start : start + self.band]
             with np.errstate(over="ignore"):  # half overflow: inf, documented above
-                block[...] = model(self.coefficients, block)
+                block[...] = self.correction.apply(block)
         if not np.shares_memory(flat, rgb):
             rgb[...] = flat.reshape(rgb.shape)
 
 
-def _exact_model() -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-    # Deferred: the correction package (its solvers, ~0.1 s of imports) is needed only by
-    # root-polynomial solutions; OCIO ones never load it.
-    from ocio_vp.correction.root_polynomial import apply_root_polynomial
-
-    return apply_root_polynomial
+def _model(pc: PostCorrection) -> ModelTransform:
+    return ModelTransform(correction_from_dict(json.loads(pc.model)))
 
 
-def _root_polynomial(pc: PostCorrection) -> RootPolynomialTransform:
-    coefficients = np.asarray(pc.coefficients, dtype=np.float64)
-    _exact_model()(coefficients, np.ones((1, 3)))  # checks the shape, with a clear error
-    return RootPolynomialTransform(coefficients)
+@dataclass(frozen=True)
+class EncodedTransform:
+    """A :class:`PixelTransform` for encoded (log) footage: colour-science's decoding of
+    ``encoding``, the post-correction exactly (float64), and the encoding again.
+
+    Where a curve has no negative part (a power law), a negative corrected value is encoded
+    mirrored, ``-f(-x)``, so that valid footage never becomes NaN.
+    """
+
+    correction: Any
+    encoding: str
+    band: int = 1 << 14
+
+    def _encode(self, linear: np.ndarray) -> np.ndarray:
+        import colour
+
+        encoded = colour.cctf_encoding(linear, function=self.encoding)
+        bad = ~np.isfinite(encoded) & np.isfinite(linear)
+        if np.any(bad):
+            mirrored = -colour.cctf_encoding(-linear[bad], function=self.encoding)
+            encoded = np.where(bad, 0.0, encoded)
+            encoded[bad] = mirrored
+        return encoded
+
+    def __call__(self, rgb: np.ndarray) -> None:
+        import colour
+
+        flat = rgb.reshape(-1, 3)
+        for start in range(0, len(flat), self.band):
+            block = flat[start : start + self.band]
+            with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+                linear = colour.cctf_decoding(block.astype(np.float64), function=self.encoding)
+                block[...] = self._encode(self.correction.apply(linear))
+        if not np.shares_memory(flat, rgb):
+            rgb[...] = flat.reshape(rgb.shape)
+
+
+def _encoded(pc: PostCorrection) -> EncodedTransform:
+    return EncodedTransform(correction_from_dict(json.loads(pc.model)), pc.encoding)
 
 
 #: How to build the per-pixel transform of a :class:`PostCorrection`, by its ``kind``: an OCIO
-#: conversion in the solution's config, or the exact root-polynomial model (which the config
-#: can only carry as a LUT bake). Another kind registers its factory here.
+#: conversion in the solution's config, or the exact non-linear model (which the config can
+#: only carry as a LUT bake). Another kind registers its factory here.
 TRANSFORMS: dict[str, Callable[[PostCorrection], PixelTransform]] = {
     "ocio": lambda pc: OcioTransform(cpu_processor(pc), cpu_processor(pc, bit_depth="f16")),
-    "root-polynomial": _root_polynomial,
+    "model": _model,
+    "encoded": _encoded,
 }
 
 
@@ -352,6 +414,8 @@ def transform_frame(
             apply_in_place(transform, pixels, rgb=rgb, threads=threads)
             exact = "" if pc.kind == "ocio" else f", {pc.kind} applied exactly"
             spec.attribute(MARK, f"{pc.source} -> {pc.target} ({pc.environment}{exact})")
+            if pc.solution:
+                spec.attribute(SOLUTION_MARK, pc.solution)
             done += 1
     if done == 0:
         raise InputError("no R, G, B channels to post-correct", source=source or None)
@@ -445,9 +509,21 @@ def existing_output(task: FrameTask) -> FrameResult | None:
     foreign = foreign_output_error(task.dst)
     if foreign is not None:
         return FrameResult(task.src, task.dst, "input-error", foreign)
-    if not task.overwrite:
-        return FrameResult(task.src, task.dst, "skipped", "already written")
-    return None
+    if task.overwrite:
+        return None
+    made_by = output_solution(task.dst)
+    wanted = task.post_correction.solution
+    if wanted and made_by != wanted:
+        return FrameResult(
+            task.src, task.dst, "input-error", other_solution_reason(task.dst, made_by, wanted)
+        )
+    return FrameResult(task.src, task.dst, "skipped", "already written")
+
+
+def other_solution_reason(dst: str | Path, made_by: str | None, wanted: str) -> str:
+    """One line: ``dst`` was corrected with another post-correction than ``wanted``."""
+    by = made_by or "an ocio-vp that did not record its solution"
+    return f"{dst}: made with {by}, not {wanted}; --overwrite redoes it"
 
 
 def run_task(task: FrameTask) -> FrameResult:

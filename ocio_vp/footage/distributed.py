@@ -129,19 +129,20 @@ def _solve_one(payload: tuple) -> Any:
     from ocio_vp.pipeline import solve_environment
 
     measurements, environment, options = payload
-    return solve_environment(measurements, environment, **options)
+    return solve_environment(measurements, environment, options)
 
 
 def solve_environments(
     measurements: Any,
     environments: Sequence[Any],
+    options: Any = None,
     *,
     scheduler: str | None = None,
     workers: int | None = 1,
-    **options: Any,
 ) -> list[Any]:
-    """:func:`ocio_vp.pipeline.solve_environment` for each environment, in their order, on a
-    local pool or a Dask cluster (``scheduler``); the first failure is raised."""
+    """:func:`ocio_vp.pipeline.solve_environment` for each environment with ``options`` (a
+    :class:`ocio_vp.pipeline.SolveOptions`, None for the defaults), in their order, on a local
+    pool or a Dask cluster (``scheduler``); the first failure is raised."""
     results: list[Any] = [None] * len(environments)
     payloads = [(measurements, env, options) for env in environments]
     for i, result in map_unordered(_solve_one, payloads, workers=workers, scheduler=scheduler):

@@ -18,12 +18,14 @@ from ocio_vp.errors import InputError, excerpt
 
 __all__ = [
     "MARK",
+    "SOLUTION_MARK",
     "expand_frames",
     "foreign_output_error",
     "foreign_output_reason",
     "foreign_outputs",
     "frame_pattern",
     "output_paths",
+    "output_solution",
     "parse_frame_range",
 ]
 
@@ -34,6 +36,9 @@ MAX_PADDING = 16
 #: The header attribute ``ocio-vp apply`` puts in every frame it writes (in each post-corrected
 #: subimage): what tells its own earlier output from a file it must not replace.
 MARK = "ocio_vp:postCorrection"
+#: Header attribute naming the post-correction a frame was made with (stage, environment,
+#: sha256 of its model, footage encoding): a rerun skips only frames made with the same one.
+SOLUTION_MARK = "ocio_vp:solution"
 
 
 def frame_pattern(text: str) -> tuple[str, str, int] | None:
@@ -151,6 +156,21 @@ def foreign_output_error(dst: str | Path) -> str | None:
     """None when ``dst`` does not exist or ``ocio-vp apply`` wrote it; else the one-line reason
     a frame must not be written there nor counted as done (see :func:`foreign_outputs`)."""
     return f"{dst}: {foreign_output_reason()}" if foreign_outputs([Path(dst)]) else None
+
+
+def output_solution(path: str | Path) -> str | None:
+    """The :data:`SOLUTION_MARK` of a frame ``ocio-vp apply`` wrote (None when it has none)."""
+    import OpenImageIO as oiio
+
+    inp = oiio.ImageInput.open(str(path))
+    if inp is None:
+        oiio.geterror()
+        return None
+    try:
+        value = inp.spec().getattribute(SOLUTION_MARK)
+    finally:
+        inp.close()
+    return None if value is None else str(value)
 
 
 def foreign_outputs(outputs: Sequence[Path]) -> list[Path]:

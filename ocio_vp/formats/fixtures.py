@@ -14,6 +14,10 @@ described by what the camera saw of it, like the wall's ``lit_chart``::
           ...
         direct:                       # optional: camera RGB of each channel seen directly
           red: [r, g, b]
+        dmx:                          # optional: where the desk sends it
+          universe: 1                 # 0..63999 (Art-Net counts from 0, sACN from 1)
+          address: 101                # start address of the fixture, 1..512
+          mode: 16-bit                # 8-bit (one slot per channel) or 16-bit (coarse, fine)
 
 The solver assumes each channel's light is proportional to its drive (set the fixture's dimming
 curve to linear), so the chart lit by channel c at drive u is ``u / reference_drive`` times
@@ -27,7 +31,23 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Fixture", "fixtures_to_dict", "parse_fixtures"]
+__all__ = ["DMX_MODES", "DmxPatch", "Fixture", "fixtures_to_dict", "parse_fixtures"]
+
+#: Fixture modes: DMX slots per channel.
+DMX_MODES = {"8-bit": 1, "16-bit": 2}
+MAX_UNIVERSE = 63999
+
+
+@dataclass(frozen=True)
+class DmxPatch:
+    """Where a fixture is patched: universe, start address (1-512) and mode (:data:`DMX_MODES`)."""
+
+    universe: int
+    address: int
+    mode: str
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"universe": self.universe, "address": self.address, "mode": self.mode}
 
 
 @dataclass(frozen=True)
@@ -41,6 +61,7 @@ class Fixture:
     max_drive: float = 1.0
     pixel_mapped: bool = False
     direct: np.ndarray | None = None  # (k, 3) or None
+    dmx: DmxPatch | None = None
 
     @property
     def per_unit_drive(self) -> np.ndarray:
@@ -53,7 +74,7 @@ def _parse_one(ctx: Any, value: Any, key: tuple, n: int) -> Fixture:
         value,
         key,
         required=("name", "channels", "reference_drive", "lit_chart"),
-        optional=("max_drive", "pixel_mapped", "direct"),
+        optional=("max_drive", "pixel_mapped", "direct", "dmx"),
     )
     name = ctx.name(entry["name"], (*key, "name"))
     channels = entry["channels"]
@@ -78,7 +99,30 @@ def _parse_one(ctx: Any, value: Any, key: tuple, n: int) -> Fixture:
     if "direct" in entry:
         seen = ctx.mapping(entry["direct"], (*key, "direct"), required=channels)
         direct = np.stack([ctx.rgb(seen[c], (*key, "direct", c)) for c in channels])
-    return Fixture(name, channels, reference, chart, max_drive, pixel_mapped, direct)
+    dmx = _parse_dmx(ctx, entry["dmx"], (*key, "dmx"), len(channels)) if "dmx" in entry else None
+    return Fixture(name, channels, reference, chart, max_drive, pixel_mapped, direct, dmx)
+
+
+def _integer(ctx: Any, value: Any, key: tuple, low: int, high: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise ctx.error(key, f"expected an integer {low}..{high}, got {value!r}"[:200])
+    return value
+
+
+def _parse_dmx(ctx: Any, value: Any, key: tuple, channels: int) -> DmxPatch:
+    entry = ctx.mapping(value, key, required=("universe", "address", "mode"))
+    universe = _integer(ctx, entry["universe"], (*key, "universe"), 0, MAX_UNIVERSE)
+    address = _integer(ctx, entry["address"], (*key, "address"), 1, 512)
+    mode = entry["mode"]
+    if mode not in DMX_MODES:
+        raise ctx.error((*key, "mode"), f"expected one of {list(DMX_MODES)}, got {mode!r}"[:200])
+    last = address + channels * DMX_MODES[mode] - 1
+    if last > 512:
+        raise ctx.error(
+            (*key, "address"),
+            f"{channels} channels in {mode} mode from address {address} end at {last}, past 512",
+        )
+    return DmxPatch(universe, address, mode)
 
 
 def parse_fixtures(ctx: Any, value: Any, n: int) -> tuple[Fixture, ...]:
@@ -114,5 +158,7 @@ def fixtures_to_dict(fixtures: tuple[Fixture, ...]) -> list[dict[str, Any]]:
         }
         if f.direct is not None:
             entry["direct"] = {c: [float(v) for v in f.direct[k]] for k, c in enumerate(f.channels)}
+        if f.dmx is not None:
+            entry["dmx"] = f.dmx.to_dict()
         out.append(entry)
     return out

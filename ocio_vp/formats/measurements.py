@@ -7,6 +7,7 @@ error names the file, the key path and the problem.
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import json
 import math
@@ -50,6 +51,7 @@ __all__ = [
     "read_document",
     "save_measurements",
     "save_measurements_document",
+    "with_camera_colorspace",
 ]
 
 FORMAT = "ocio-vp/measurements"
@@ -428,15 +430,33 @@ def parse_stage(ctx: Validator, value: Any) -> Stage:
     )
 
 
-def _check_colourspace(ctx: Validator, value: Any, key: tuple[str | int, ...]) -> str:
+def _colourspace_problem(value: Any) -> tuple[str | None, str]:
+    """(colour-science's name of ``value``, or None and what is wrong with it)."""
     import colour
 
     names = sorted(colour.RGB_COLOURSPACES.keys())
     if isinstance(value, str) and value in colour.RGB_COLOURSPACES:
-        return colour.RGB_COLOURSPACES[value].name
+        return colour.RGB_COLOURSPACES[value].name, ""
     close = difflib.get_close_matches(str(value)[:100], names, n=3, cutoff=0.5)
     hint = f"; close matches: {', '.join(close)}" if close else ""
-    raise ctx.error(key, f"unknown colour space {excerpt(value)} (colour.RGB_COLOURSPACES){hint}")
+    return None, f"unknown colour space {excerpt(value)} (colour.RGB_COLOURSPACES){hint}"
+
+
+def _check_colourspace(ctx: Validator, value: Any, key: tuple[str | int, ...]) -> str:
+    name, problem = _colourspace_problem(value)
+    if name is None:
+        raise ctx.error(key, problem)
+    return name
+
+
+def with_camera_colorspace(measurements: Measurements, value: str, *, key: str) -> Measurements:
+    """``measurements`` with ``stage.camera_colorspace`` set to ``value`` (a
+    ``colour.RGB_COLOURSPACES`` name; an unknown one raises, listing close matches)."""
+    name, problem = _colourspace_problem(value)
+    if name is None:
+        raise InputError(problem, key=key)
+    stage = dataclasses.replace(measurements.stage, camera_colorspace=name)
+    return dataclasses.replace(measurements, stage=stage)
 
 
 def _parse_environments(ctx: Validator, value: Any, n: int | None) -> tuple[Environment, ...]:

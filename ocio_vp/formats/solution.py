@@ -20,6 +20,13 @@ import numpy as np
 from ocio_vp.errors import InputError, excerpt
 from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.measurements import check_safe_name
+from ocio_vp.model.correction import (
+    MatrixCorrection,
+    PostCorrection,
+    RootPolynomialCorrection,
+    correction_from_dict,
+    correction_to_dict,
+)
 
 __all__ = ["SOLUTION_FORMAT", "Diagnostics", "Solution", "load_solution", "solution_to_json"]
 
@@ -60,7 +67,8 @@ class Diagnostics(Mapping[str, Any]):
     out_of_frustum_drive
         (3,) the lighting drive M w_avg.
     method_notes
-        What the Q method reported about itself (free-form, method specific).
+        What the Q method reported about itself, for people (method specific). The model
+        itself is the solution's ``post_correction``; no module reads it from here.
     warnings
         Sentences for the stage engineer (also printed by ``ocio-vp solve``).
     charts
@@ -116,6 +124,15 @@ class Diagnostics(Mapping[str, Any]):
         bad one (both excluded), ``ambiguous_with`` and ``ambiguous_name`` name the other and
         ``ambiguous_deletion`` is its ``deletion``, otherwise null; see
         :mod:`ocio_vp.correction.outliers`.
+    model_description
+        The post-correction in words (kind, bounds, protection).
+    extrapolation
+        How the post-correction behaves beyond the chart
+        (:class:`ocio_vp.correction.extrapolation.Extrapolation`): ``led_damage`` and
+        ``led_damage_least_squares`` (p95 ΔE2000 of the wall's own LEDs in frame, through it
+        and through least squares), ``kept`` and ``negative`` (bright saturated inputs: least
+        share of the dominant channel kept, lowest channel relative to it), ``folds`` (share of
+        the reflective solid where it maps two colours to one).
     synthesized_target
         How a synthesized target chart was made (``ocio-vp target-chart``); only written for
         an environment whose chart was synthesized.
@@ -155,6 +172,8 @@ class Diagnostics(Mapping[str, Any]):
     identity_check: dict[str, float] | None = None
     patch_screening: bool | None = None
     excluded_patches: list[dict[str, Any]] | None = None
+    model_description: str | None = None
+    extrapolation: dict[str, float] | None = None
     synthesized_target: dict[str, Any] | None = None
     fixtures: dict[str, Any] | None = None
     extra: dict[str, Any] = field(default_factory=dict)
@@ -202,6 +221,10 @@ class Solution:
     ``fixtures`` maps each practical fixture to its ``channels`` and ``drive`` per channel (units
     of its ``reference_drive``), ``None`` without a ``fixtures`` section; ``M`` is then the
     matrix to light with while the fixtures are on.
+
+    ``post_correction`` is the post-correction itself (:mod:`ocio_vp.model`), which every
+    consumer applies; ``Q`` is its 3x3 (the matrix, or a non-linear model's 3x3 fallback, for
+    readers that want one). Left out, it is ``Q`` as a matrix.
     """
 
     stage: str
@@ -222,6 +245,17 @@ class Solution:
     ocio: dict[str, str] = field(default_factory=dict)
     linearity: dict[str, Any] | None = None
     fixtures: dict[str, Any] | None = None
+    post_correction: PostCorrection | None = None
+
+    def __post_init__(self) -> None:
+        if self.post_correction is None:
+            object.__setattr__(self, "post_correction", MatrixCorrection(self.Q))
+
+    @property
+    def correction(self) -> PostCorrection:
+        """The post-correction (never None; :attr:`post_correction` typed for checkers)."""
+        assert self.post_correction is not None
+        return self.post_correction
 
     @property
     def in_frustum_matrix(self) -> np.ndarray:
@@ -271,6 +305,7 @@ def solution_to_dict(solution: Solution) -> dict[str, Any]:
             "SL": solution.SL,
             "M": solution.M,
             "Q": solution.Q,
+            "post_correction": correction_to_dict(solution.correction),
             "N": solution.N,
             "black_level_offset": solution.black_level_offset,
             "black_level_method": solution.black_level_method,
@@ -312,6 +347,17 @@ def _fixtures(data: dict[str, Any], source: str) -> dict[str, Any] | None:
             )
         if not all(isinstance(v, (int, float)) and np.isfinite(v) for v in drive.values()):
             raise InputError("expected finite drives", source=source, key=f"fixtures.{name}")
+        dmx = entry.get("dmx")
+        if dmx is not None and not (
+            isinstance(dmx, dict)
+            and all(type(dmx.get(k)) is int for k in ("universe", "address"))
+            and dmx.get("mode") in ("8-bit", "16-bit")
+        ):
+            raise InputError(
+                "expected universe, address (integers) and mode (8-bit or 16-bit)",
+                source=source,
+                key=f"fixtures.{name}.dmx",
+            )
     return block
 
 
@@ -401,6 +447,8 @@ def load_solution(path: str | Path) -> Solution:
     ocio = _mapping(data, "ocio", source)
     if not all(isinstance(k, str) and isinstance(v, str) for k, v in ocio.items()):
         raise InputError("expected names (text) only", source=source, key="ocio")
+    Q = _matrix(data, "Q", source)
+    diagnostics = Diagnostics.from_dict(_mapping(data, "diagnostics", source))
     return Solution(
         stage=_text(data, "stage", source, name=True),
         environment=_text(data, "environment", source, name=True),
@@ -409,15 +457,40 @@ def load_solution(path: str | Path) -> Solution:
         w_avg=_rgb(data, "w_avg", source),
         SL=_matrix(data, "SL", source),
         M=_matrix(data, "M", source),
-        Q=_matrix(data, "Q", source),
+        Q=Q,
         N=_matrix(data, "N", source, optional=True),
         black_level_offset=_rgb(data, "black_level_offset", source, optional=True),
         black_level_method=_text(data, "black_level_method", source),
-        diagnostics=Diagnostics.from_dict(_mapping(data, "diagnostics", source)),
+        diagnostics=diagnostics,
         measurements_file=_text(measurements, "file", source),
         measurements_sha256=_text(measurements, "sha256", source),
         camera_colorspace=_text(data, "camera_colorspace", source),
         ocio=ocio,
         linearity=linearity,
         fixtures=_fixtures(data, source),
+        post_correction=_post_correction(data, Q, diagnostics, source),
     )
+
+
+def _post_correction(
+    data: dict[str, Any], Q: np.ndarray, diagnostics: Diagnostics, source: str
+) -> PostCorrection:
+    """The ``post_correction`` block; a file written before it existed gets its model back from
+    where those versions kept it (a root-polynomial's coefficients in
+    ``diagnostics.method_notes``, applied unbounded as they were), otherwise Q as a matrix."""
+    block = data.get("post_correction")
+    try:
+        if block is not None:
+            return correction_from_dict(block)
+        old = (diagnostics.get("method_notes") or {}).get("root_polynomial")
+        if old is None:
+            return MatrixCorrection(Q)
+        return RootPolynomialCorrection(old["coefficients"], Q)
+    except InputError as error:
+        raise InputError(error.problem, source=source, key=error.key) from None
+    except (KeyError, TypeError, ValueError) as error:
+        raise InputError(
+            f"malformed root-polynomial model ({error})",
+            source=source,
+            key="diagnostics.method_notes.root_polynomial",
+        ) from None

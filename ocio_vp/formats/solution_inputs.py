@@ -21,7 +21,7 @@ __all__ = ["SolutionFolders", "generated_kind", "solution_folders"]
 SOLUTION_FILE = "solution.json"
 #: File formats of ours that may sit in a solve output folder (the demo writes one there).
 _OUR_FORMATS = {"ocio-vp/measurements": "a measurements file", "ocio-vp/capture": "a capture file"}
-_EXPORT_TARGETS = ("unreal", "nuke", "resolve")
+_EXPORT_TARGETS = ("unreal", "nuke", "resolve", "lights", "dit")
 
 
 @dataclass(frozen=True)
@@ -58,6 +58,8 @@ def generated_kind(path: Path) -> str | None:
             return "an export folder"
         if path.name.endswith(".overlays"):
             return "an overlay folder"
+        if path.name == "show" and (path / "config.ocio").is_file():
+            return "a show config folder"
         return None
     if path.is_file() and path.suffix.lower() in (".yaml", ".yml", ".json"):
         try:

@@ -17,15 +17,21 @@ Layout (names are module constants so other tools can rely on them):
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 import PyOpenColorIO as OCIO
 
 from ocio_vp.calibration.diagnostics import is_identity, offset_is_negligible
-from ocio_vp.calibration.equations import MAX_CONDITION_Q_FOR_N
+from ocio_vp.calibration.equations import MAX_CONDITION_Q_FOR_N, condition_text
 from ocio_vp.formats.solution import Solution
+from ocio_vp.ocio.matrix import matrix_transform
+from ocio_vp.ocio.viewing import (
+    add_acescct,
+    add_camera_log_spaces,
+    add_monitor_displays,
+    set_categories,
+)
 
 __all__ = [
     "DISPLAY",
@@ -67,25 +73,14 @@ WORKING_SPACE_NAMES = {
 }
 
 
-def matrix_transform(
-    matrix: np.ndarray,
-    offset: Sequence[float] | np.ndarray | None = None,
-    direction: OCIO.TransformDirection = OCIO.TRANSFORM_DIR_FORWARD,
-) -> OCIO.MatrixTransform:
-    """An OCIO MatrixTransform computing ``matrix @ rgb + offset`` (alpha untouched)."""
-    m44 = np.eye(4)
-    m44[:3, :3] = np.asarray(matrix, dtype=np.float64)
-    off = np.zeros(4)
-    if offset is not None:
-        off[:3] = np.asarray(offset, dtype=np.float64)
-    return OCIO.MatrixTransform(
-        matrix=[float(v) for v in m44.ravel()], offset=[float(v) for v in off], direction=direction
-    )
-
-
 def _fmt(matrix: np.ndarray | None) -> str:
+    """A matrix as descriptions print it: 6 digits; an entry below 1e-12 of the largest is
+    rounding (its digits differ between machines) and prints as 0."""
     if matrix is None:
         return "none"
+    matrix = np.asarray(matrix, dtype=np.float64)
+    floor = 1e-12 * float(np.max(np.abs(matrix), initial=0.0))
+    matrix = np.where(np.abs(matrix) <= floor, 0.0, matrix)
     return "[" + "; ".join(" ".join(f"{v:.6g}" for v in row) for row in matrix) + "]"
 
 
@@ -168,7 +163,7 @@ def post_correction_transforms(
     pinv = (Vt.T[:, keep] / sigma[keep]) @ U[:, keep].T
     note = (
         f"Q has rank {int(keep.sum())} at cond <= {MAX_CONDITION_Q_FOR_N:g} (cond(Q) "
-        f"{np.linalg.cond(Q):.3g}): it cannot be inverted, so the inverse direction (reference "
+        f"{condition_text(float(np.linalg.cond(Q)))}): it cannot be inverted, so the inverse direction (reference "
         f"-> Stage Footage, the inverse of the named transform) is Q's truncated pseudo-inverse "
         f"{_fmt(pinv)}, bounded, not a true inverse."
     )
@@ -213,7 +208,7 @@ def build_config(
     *,
     extra_wall_transforms: dict[str, list[OCIO.Transform]] | None = None,
     search_path: str | None = None,
-    q_files: tuple[str, str] | None = None,
+    q_files: tuple[str, str | None] | None = None,
 ) -> OCIO.Config:
     """Build and validate the OCIO config for one solved environment.
 
@@ -244,14 +239,25 @@ def build_config(
     config.addColorSpace(_out_of_frustum_space(solution, chains[OUT_OF_FRUSTUM], origin))
     config.addColorSpace(_in_frustum_space(solution, chains[IN_FRUSTUM], origin))
     _add_post_correction(config, solution, origin, q_files)
-    _set_roles(config, solution.camera_colorspace)
+    camera_to_aces = _set_roles(config, solution.camera_colorspace)
+    _add_displays(config, camera_to_aces)
+    set_categories(config)
+    config.validate()
+    return config
+
+
+def _add_displays(config: OCIO.Config, camera_to_aces: np.ndarray | None) -> None:
+    """Monitor displays first (the viewer's default is a monitor view), then ``LED Wall``."""
+    monitors = add_monitor_displays(
+        config, camera_to_aces, reference=REFERENCE, footage=POST_CORRECTION_COLORSPACE
+    )
     config.addDisplayView(DISPLAY, VIEW_OUTER, OUT_OF_FRUSTUM)
     config.addDisplayView(DISPLAY, VIEW_INNER, IN_FRUSTUM)
     config.addDisplayView(DISPLAY, "Raw", RAW)
-    config.setActiveDisplays(DISPLAY)
-    config.setActiveViews(f"{VIEW_INNER}, {VIEW_OUTER}, Raw")
-    config.validate()
-    return config
+    displays = [*dict.fromkeys(m.display for m in monitors), DISPLAY]
+    config.setActiveDisplays(", ".join(displays))
+    views = [v for d in displays[:-1] for v in config.getViews(d)]
+    config.setActiveViews(", ".join([*dict.fromkeys(views), VIEW_INNER, VIEW_OUTER, "Raw"]))
 
 
 def _origin(solution: Solution) -> str:
@@ -350,7 +356,7 @@ def _add_post_correction(
     config: OCIO.Config,
     solution: Solution,
     origin: str,
-    q_files: tuple[str, str] | None = None,
+    q_files: tuple[str, str | None] | None = None,
 ) -> None:
     """Q twice: the ``Stage Footage`` colorspace and the ``Post-Correction Q`` named transform.
 
@@ -383,9 +389,17 @@ def _add_post_correction(
         family="Camera",
     )
     forward, inverse, inverse_text = post_correction_transforms(solution)
-    if q_files is not None:  # a root-polynomial Q: its LUT sidecars (N is solved, Q inverts)
-        forward, inverse = OCIO.FileTransform(src=q_files[0]), OCIO.FileTransform(src=q_files[1])
-        inverse_text = f"The inverse direction is the baked Q^-1 ({q_files[1]})."
+    if q_files is not None:  # a non-linear Q: its LUT sidecars
+        forward = OCIO.FileTransform(src=q_files[0])
+        if q_files[1] is not None:
+            inverse = OCIO.FileTransform(src=q_files[1])
+            inverse_text = f"The inverse direction is the baked Q^-1 ({q_files[1]})."
+        elif inverse is None:  # a Q^-1 is not baked where N is not solved: its 3x3's inverse
+            inverse = matrix_transform(np.linalg.inv(solution.Q))
+            inverse_text = (
+                "The inverse direction is the inverse of Q's 3x3 (N is not solved here, so Q^-1 "
+                "is not baked): it undoes the matrix, not the non-linear model."
+            )
     if inverse is not None:
         q_text += " " + inverse_text
         footage.setDescription(footage.getDescription() + " " + inverse_text)
@@ -405,34 +419,53 @@ def _add_post_correction(
     config.addNamedTransform(named)
 
 
-def _set_roles(config: OCIO.Config, camera: str | None) -> None:
-    """Every role on the reference (or on a working space when the camera gamut is known)."""
+def _set_roles(config: OCIO.Config, camera: str | None) -> np.ndarray | None:
+    """Every role on the reference, or on a working space when the camera gamut is known:
+    then also the interchange roles, ACEScct as ``compositing_log`` and ``color_timing``
+    (as in the ACES configs) and the camera's log spaces. Without a camera gamut there is no
+    log space to name, so ``compositing_log`` and ``color_timing`` are left out (a linear
+    space there would break the tools that grade or key in log).
+
+    Returns the reference -> ACES2065-1 matrix (None when the camera gamut is unknown)."""
     roles = {
         OCIO.ROLE_SCENE_LINEAR: REFERENCE,
         OCIO.ROLE_REFERENCE: REFERENCE,
         OCIO.ROLE_DEFAULT: REFERENCE,
         OCIO.ROLE_DATA: RAW,
         OCIO.ROLE_COLOR_PICKING: REFERENCE,
-        OCIO.ROLE_COMPOSITING_LOG: REFERENCE,
-        OCIO.ROLE_COLOR_TIMING: REFERENCE,
         OCIO.ROLE_TEXTURE_PAINT: REFERENCE,
         OCIO.ROLE_MATTE_PAINT: REFERENCE,
     }
+    camera_to_aces = None
     if camera:
-        roles.update(_add_working_spaces(config, camera))
+        working, aces_to_camera = _add_working_spaces(config, camera)
+        roles.update(working)
+        log = add_acescct(config, aces_to_camera)
+        roles[OCIO.ROLE_COMPOSITING_LOG] = log
+        roles[OCIO.ROLE_COLOR_TIMING] = log
+        add_camera_log_spaces(
+            config, camera, reference=REFERENCE, footage=POST_CORRECTION_COLORSPACE, family=FAMILY
+        )
+        camera_to_aces = np.linalg.inv(aces_to_camera)
     for role, space in roles.items():
         config.setRole(role, space)
+    return camera_to_aces
 
 
-def _add_working_spaces(config: OCIO.Config, camera: str) -> dict[str, str]:
-    """Add ACES2065-1, ACEScg and linear Rec.709, converted to the camera gamut (CAT02)."""
+def _add_working_spaces(config: OCIO.Config, camera: str) -> tuple[dict[str, str], np.ndarray]:
+    """Add ACES2065-1, ACEScg and linear Rec.709, converted to the camera gamut (CAT02).
+
+    Returns their roles and the ACES2065-1 -> camera matrix."""
     import colour
 
     target = colour.RGB_COLOURSPACES[camera]
     roles = {}
+    aces_to_camera = np.eye(3)
     for key, role in WORKING_SPACES.items():
         source = colour.RGB_COLOURSPACES[key]
         to_camera = colour.matrix_RGB_to_RGB(source, target, chromatic_adaptation_transform="CAT02")
+        if key == "ACES2065-1":
+            aces_to_camera = np.asarray(to_camera, dtype=np.float64)
         name = WORKING_SPACE_NAMES[key]
         cs = _colorspace(
             name,
@@ -461,7 +494,7 @@ def _add_working_spaces(config: OCIO.Config, camera: str) -> dict[str, str]:
     xyz.setTransform(matrix_transform(to_xyz), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
     config.addColorSpace(xyz)
     roles["cie_xyz_d65_interchange"] = "CIE-XYZ-D65"
-    return roles
+    return roles, aces_to_camera
 
 
 def ocio_names(config_filename: str = CONFIG_FILENAME) -> dict[str, str]:

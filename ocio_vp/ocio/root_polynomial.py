@@ -45,8 +45,9 @@ from typing import Any
 import numpy as np
 import PyOpenColorIO as OCIO
 
-from ocio_vp.correction.root_polynomial import apply_root_polynomial, invert_root_polynomial
+from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import Solution
+from ocio_vp.model.correction import PostCorrection
 from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
 from ocio_vp.ocio.wall import sidecar_name
 from ocio_vp.wall.encoding import LUT_DIR
@@ -227,7 +228,9 @@ def _in_gamut(chart: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray
     return content / content.max(axis=1, keepdims=True)
 
 
-def bake_errors(C, q, q_inverse, target_chart, n: int = 5000) -> dict[str, Any]:
+def bake_errors(
+    correction: PostCorrection, q, q_inverse, target_chart, n: int = 5000
+) -> dict[str, Any]:
     """Bake errors of the Q and Q^-1 LUTs, in % of each colour's largest channel.
 
     ``in_gamut``: content inside the target chart's gamut (random positive mixtures of its
@@ -240,16 +243,28 @@ def bake_errors(C, q, q_inverse, target_chart, n: int = 5000) -> dict[str, Any]:
     exposure = np.exp2(rng.uniform(-6, 4, (n, 1)))
     content = _in_gamut(chart, n, rng) * exposure
     x = rng.uniform(0.0, 1.0, (n, 3)) * exposure
-    q, q_inverse, out = _cpu(q), _cpu(q_inverse), {}
-    for name, c in (("in_gamut", content), ("whole_cube", apply_root_polynomial(C, x))):
-        pre, residual = invert_root_polynomial(C, c, return_residual=True)
+    q_cpu = _cpu(q)
+    q_inverse_cpu = None if q_inverse is None else _cpu(q_inverse)
+    out: dict[str, Any] = {}
+    for name, c in (("in_gamut", content), ("whole_cube", correction.apply(x))):
+        if q_inverse_cpu is None:
+            pre = x if name == "whole_cube" else None
+            if pre is not None:
+                out[name] = {"Q": _stats(_apply(q_cpu, pre), correction.apply(pre))}
+            continue
+        pre = correction.inverse(c)
+        residual = np.max(np.abs(correction.apply(pre) - c), axis=1) / np.max(np.abs(c), axis=1)
         keep = np.all((c >= 0) & (pre >= 0), axis=1) & (residual < 1e-9)
-        c, pre = apply_root_polynomial(C, pre[keep]), pre[keep]
-        out[name] = {"Q": _stats(_apply(q, pre), c), "Q_inverse": _stats(_apply(q_inverse, c), pre)}
+        c, pre = correction.apply(pre[keep]), pre[keep]
+        out[name] = {
+            "Q": _stats(_apply(q_cpu, pre), c),
+            "Q_inverse": _stats(_apply(q_inverse_cpu, c), pre),
+        }
     probe = np.random.default_rng(1).uniform(-1.0, 16.0, (4096, 3))
-    out["finite_on_minus1_to_16"] = bool(
-        np.all(np.isfinite(_apply(q, probe))) and np.all(np.isfinite(_apply(q_inverse, probe)))
-    )
+    finite = np.all(np.isfinite(_apply(q_cpu, probe)))
+    if q_inverse_cpu is not None:
+        finite = finite and np.all(np.isfinite(_apply(q_inverse_cpu, probe)))
+    out["finite_on_minus1_to_16"] = bool(finite)
     return out
 
 
@@ -258,7 +273,7 @@ class RootPolynomialOutputs:
     """Sidecar files (relative path -> CLF text), their names, and the measured bake errors."""
 
     q_file: str
-    q_inverse_file: str
+    q_inverse_file: str | None
     files: dict[str, str] = field(default_factory=dict)
     block: dict[str, Any] = field(default_factory=dict)
 
@@ -303,35 +318,48 @@ def _clf(group: OCIO.GroupTransform, description: str) -> str:
 
 
 def root_polynomial_outputs(solution: Solution) -> RootPolynomialOutputs | None:
-    """Q and Q^-1 sidecars for a root-polynomial solve (None for a 3x3 Q or an unsolved N)."""
-    notes = solution.diagnostics.get("method_notes") or {}
-    model = notes.get("root_polynomial")
-    if model is None or solution.N is None:
+    """Q and Q^-1 sidecars of a non-linear post-correction (None for a 3x3 Q). Q^-1 is baked
+    only where N is solved (the in-frustum drive is then ``M Q^-1(c)``)."""
+    correction = solution.correction
+    if correction.linear:
         return None
-    C = np.asarray(model["coefficients"], dtype=np.float64)
+    if solution.N is not None and not correction.invertible:
+        raise InputError(
+            f"the {correction.kind} post-correction has no inverse, yet N is given: N = M Q^-1 "
+            "needs one (re-solve, or set N to null)",
+            key="post_correction",
+        )
     chart = np.asarray(solution.diagnostics["charts"]["target"], dtype=np.float64)
+    invertible = solution.N is not None and correction.invertible
     content = np.vstack([chart, _in_gamut(chart, 2000, np.random.default_rng(5))])
-    camera_box = content_box(invert_root_polynomial(C, content), CAMERA_MIX)
-    content_box_ = content_box(chart, CONTENT_MIX)  # positive mixtures stay inside its ratios
-    q = baked_transform(lambda x: apply_root_polynomial(C, x), camera_box, CAMERA_MIX, CONTENT_MIX)
-    q_inverse = baked_transform(
-        lambda c: invert_root_polynomial(C, c), content_box_, CONTENT_MIX, CAMERA_MIX
+    camera_side = (
+        correction.inverse(content)
+        if invertible
+        else solution.diagnostics["charts"]["lit_baseline"]
     )
-    errors = bake_errors(C, q, q_inverse, chart)
+    camera_box = content_box(np.asarray(camera_side, dtype=np.float64), CAMERA_MIX)
+    content_box_ = content_box(chart, CONTENT_MIX)  # positive mixtures stay inside its ratios
+    q = baked_transform(correction.apply, camera_box, CAMERA_MIX, CONTENT_MIX)
+    q_inverse = (
+        baked_transform(correction.inverse, content_box_, CONTENT_MIX, CAMERA_MIX)
+        if invertible
+        else None
+    )
+    errors = bake_errors(correction, q, q_inverse, chart)
     domain = (
         f"scale x direction: log2, a {LUT_SIZE}^3 tetrahedral 3D LUT on (scale, log2 r/g, "
         f"log2 b/g), exposures 2^{SCALE_RANGE[0]:g}..2^{SCALE_RANGE[1]:g}, "
         f"log-ratios +-{RATIO_RANGE:g} stops"
     )
     files, names = {}, []
-    for stem, group, what in (
-        ("post_correction_q", q, "Q"),
-        ("post_correction_q_inverse", q_inverse, "Q^-1"),
-    ):
+    groups = [("post_correction_q", q, "Q")]
+    if q_inverse is not None:
+        groups.append(("post_correction_q_inverse", q_inverse, "Q^-1"))
+    for stem, group, what in groups:
         text = _clf(
             group,
-            f"ocio_vp root-polynomial {what} (degree {model['degree']}) for "
-            f"stage {solution.stage}, environment {solution.environment}: {domain}.",
+            f"ocio_vp {correction.kind} {what} ({correction.describe()}) for stage "
+            f"{solution.stage}, environment {solution.environment}: {domain}.",
         )
         name = sidecar_name(f"{solution.stage}_{solution.environment}_{stem}", text)
         files[f"{LUT_DIR}/{name}"] = text
@@ -343,4 +371,9 @@ def root_polynomial_outputs(solution: Solution) -> RootPolynomialOutputs | None:
         "content_log_ratios": {"camera": camera_box.tolist(), "content": content_box_.tolist()},
         "bake_error": errors,
     }
-    return RootPolynomialOutputs(q_file=names[0], q_inverse_file=names[1], files=files, block=block)
+    return RootPolynomialOutputs(
+        q_file=names[0],
+        q_inverse_file=names[1] if len(names) > 1 else None,
+        files=files,
+        block=block,
+    )

@@ -72,10 +72,12 @@ def _ready() -> bool:
 
 
 @contextlib.contextmanager
-def writer_pool(method: str | None = None) -> Iterator[Executor | None]:
+def writer_pool(
+    method: str | None = None, *, protect_emitters: bool = False
+) -> Iterator[Executor | None]:
     """One helper process for :func:`write_solutions` of solves by ``method``, started now;
-    None for a linear method (no environment bakes LUTs: the helper would cost more than it
-    saves). ``None``: any method.
+    None for a linear method without ``protect_emitters`` (no environment bakes LUTs: the
+    helper would cost more than it saves). ``None``: any method.
 
     Start it before loading and solving, so its imports overlap that work. "spawn", as for
     footage: the parent has threads (OpenColorIO, OpenBLAS) and forking them can deadlock.
@@ -83,7 +85,7 @@ def writer_pool(method: str | None = None) -> Iterator[Executor | None]:
     # Deferred: the helper imports this module and needs none of the solvers.
     from ocio_vp.correction.registry import NON_LINEAR_METHODS
 
-    if method is not None and method not in NON_LINEAR_METHODS:
+    if method is not None and method not in NON_LINEAR_METHODS and not protect_emitters:
         yield None
         return
     context = multiprocessing.get_context("spawn")
@@ -96,9 +98,8 @@ def writer_pool(method: str | None = None) -> Iterator[Executor | None]:
 
 
 def _cost(solution: Solution) -> float:
-    """Relative cost of writing ``solution`` (a root-polynomial Q bakes two 3D LUTs)."""
-    notes = solution.diagnostics.get("method_notes") or {}
-    return 1.0 if notes.get("root_polynomial") is not None else 0.1
+    """Relative cost of writing ``solution`` (a non-linear Q bakes 3D LUTs)."""
+    return 0.1 if solution.correction.linear else 1.0
 
 
 def _share(solutions: Sequence[Solution]) -> set[int]:

@@ -27,8 +27,10 @@ import numpy as np
 
 from ocio_vp.calibration.equations import condition_number
 from ocio_vp.errors import InputError
+from ocio_vp.formats.provenance import solution_sha256
 from ocio_vp.formats.solution import Solution
 from ocio_vp.formats.solution_inputs import solution_folders
+from ocio_vp.model.expansion import root_polynomial_terms
 from ocio_vp.report.data import (
     STAGE_CHARTS,
     EnvironmentData,
@@ -192,6 +194,8 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
     facts = [
         ("stage", s.stage),
         ("Q method", _method(s)),
+        ("why this model", d.get("model_reason") or "the method asked for"),
+        ("beyond the chart", _beyond_the_chart(s)),
         ("beta (panel form factor)", f"{s.beta:.5f}"),
         ("w_avg (camera RGB)", ", ".join(f"{v:.5g}" for v in s.w_avg)),
         ("out-of-frustum drive M w_avg", _triple(d.get("out_of_frustum_drive"))),
@@ -262,35 +266,60 @@ def _fixture_facts(solution: Any) -> list[tuple[str, str]]:
 
 
 def _method(solution: Any) -> str:
-    """The Q method, with the model an automatic method chose (from its notes)."""
-    notes = solution.diagnostics.get("method_notes") or {}
-    model = notes.get("model")
+    """The Q method, the model an automatic method chose, and the post-correction in words."""
+    model = solution.diagnostics.get("model")
     text = solution.method
     if isinstance(model, str) and model != solution.method:
         text = f"{solution.method} → {model}"
-    rp = notes.get("root_polynomial")
-    if isinstance(rp, dict):
-        terms = rp.get("terms") or []
-        text += f" (root-polynomial degree {rp.get('degree')}, {len(rp.get('coefficients', [[]])[0])} terms"
-        text += f": {', '.join(terms)})" if terms else ")"
+    return f"{text} ({solution.correction.describe()})"
+
+
+def _share(value: Any, sign: str = "") -> str:
+    """A share in %; JSON keeps an infinite one as text ("-inf")."""
+    number = float(value)
+    return f"{number:{sign}.0%}" if np.isfinite(number) else f"{number:{sign}}"
+
+
+def _beyond_the_chart(solution: Any) -> str:
+    """The extrapolation figures (docs/stability.md, *Beyond the chart*) and the emitter guard."""
+    figures = solution.diagnostics.get("extrapolation")
+    text = "not measured (a solution written before these figures)"
+    if figures:
+        folds = figures.get("folds")
+        text = (
+            f"the wall's LEDs seen in frame: p95 ΔE2000 {float(figures['led_damage']):.3g} "
+            f"(least squares {float(figures['led_damage_least_squares']):.3g}); bright saturated "
+            f"inputs keep >= {_share(figures['kept'])} of their channel, lowest channel "
+            f"{_share(figures['negative'], '+')} of it; "
+            + ("no inverse" if folds is None else f"folds in {folds:.1%} of reflective colours")
+        )
+    if solution.correction.kind == "protected":
+        text += f"; emitter guard: {solution.correction.protection()}"
     return text
+
+
+def _polynomial(correction: Any) -> Any:
+    """The root-polynomial inside a correction (protected or not), else None."""
+    inner = correction.inner if correction.kind == "protected" else correction
+    return inner if inner.kind == "root-polynomial" else None
 
 
 def _q_rows(solution: Any) -> list[dict[str, Any]]:
     """Q's matrix; for a root-polynomial Q, its coefficients too (what the config's LUTs and
-    ``ocio-vp apply`` use) and the matrix named as the model's 3x3 approximation."""
-    rp = (solution.diagnostics.get("method_notes") or {}).get("root_polynomial")
-    if not isinstance(rp, dict):
+    ``ocio-vp apply`` use) and the matrix named as the model's 3x3 fallback."""
+    polynomial = _polynomial(solution.correction)
+    if polynomial is None:
         return [_matrix_rows("Q", solution.Q, "post-correction of the footage (eq. 5)")]
-    terms = rp.get("terms") or [f"term {i + 1}" for i in range(len(rp["coefficients"][0]))]
+    terms = root_polynomial_terms(polynomial.degree)
     model = _matrix_rows(
         "Q (root-polynomial)",
-        np.asarray(rp["coefficients"], dtype=np.float64),
-        f"Q(x) = C ({', '.join(terms)}): the footage's post-correction (config LUTs, apply)",
+        polynomial.coefficients,
+        f"Q(x) = C ({', '.join(terms)}) inside the chart's domain: the footage's "
+        "post-correction (config LUTs, apply)",
     )
     model["cond"] = None  # not square
-    approximation = "3x3 approximation of Q (solution.json, N = M Q^-1 there; matrix-only tools)"
-    return [model, _matrix_rows("Q (3x3)", solution.Q, approximation)]
+    fallback = "3x3 fallback of Q outside the chart's domain (solution.json's Q; N = M Q^-1 there)"
+    return [model, _matrix_rows("Q (3x3)", solution.Q, fallback)]
 
 
 def _short(value: Any) -> str:
@@ -356,6 +385,10 @@ def _manifest(environments: Sequence[EnvironmentData], out_dir: Path) -> dict[st
         "version": 1,
         "environments": [data.solution.environment for data in environments],
         "solutions": [relative(data.path) for data in environments],
+        # which solution each environment's figures come from (a re-solve flags the report)
+        "solution_sha256": {
+            data.solution.environment: solution_sha256(data.path.parent) for data in environments
+        },
     }
 
 

@@ -59,7 +59,7 @@ def evaluate_solution(stage: SpectralStage, solution, environment=None) -> Evalu
     baseline = predict_stage(stage, env, M=solution.M)
     white = stage.white_patch
     spec = ENVIRONMENTS.get(solution.environment) if isinstance(env, str) else None
-    model = solution.diagnostics.get("method_notes", {}).get("model")
+    model = solution.diagnostics.get("model")
     method = solution.method if model in (None, solution.method) else f"{solution.method}: {model}"
     return Evaluation(
         environment=solution.environment,

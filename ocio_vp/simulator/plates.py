@@ -350,6 +350,9 @@ def write_capture(
     header = (
         "# Simulated calibration plates (ocio-vp simulate --plates): `ocio-vp measure` reads\n"
         "# this file; the format is described in docs/capture.md.\n"
+        "# On a real stage, name the camera's gamut under stage: (camera_colorspace: ARRI Wide\n"
+        "# Gamut 4, or solve --camera-colorspace NAME) so the configs carry working spaces, log\n"
+        "# footage and ACES monitor views; the simulated camera has no named gamut.\n"
     )
     path.write_text(
         header + yaml.safe_dump(document, sort_keys=False, default_flow_style=None),

@@ -14,7 +14,6 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.calibration.equations import in_frustum_drive, predict_displayed_chart, solve_M
-from ocio_vp.correction.root_polynomial import apply_root_polynomial, invert_root_polynomial
 from ocio_vp.simulator.stage import (
     SpectralStage,
     black_level_reading,
@@ -98,26 +97,25 @@ def predict_stage(
 def predict_solution(stage: SpectralStage, environment: Any, solution: Any) -> StagePrediction:
     """:func:`predict_stage` for a solved :class:`~ocio_vp.formats.solution.Solution`.
 
-    Uses its M (lighting), Q, in-frustum matrix (N, or M where N was not solved, in which
-    case Q is *not* applied to the displayed chart: the wall stays as M shows it) and offset.
-    A root-polynomial Q (``method_notes.root_polynomial``) is applied as the model itself, and
-    in-frustum content goes through ``N(c) = M Q^-1(c)`` exactly, as the config's LUTs carry
-    them (``solution.Q`` and ``solution.N`` are only their 3x3 approximations).
+    Uses its M (lighting), post-correction, in-frustum matrix (N, or M where N was not solved,
+    in which case Q is *not* applied to the displayed chart: the wall stays as M shows it) and
+    offset. A non-linear post-correction (``solution.correction``) is applied as the model
+    itself, and in-frustum content goes through ``N(c) = M Q^-1(c)`` exactly, as the config's
+    LUTs carry them (``solution.Q`` and ``solution.N`` are only their 3x3s).
     """
     args = {"M": solution.M, "Q": solution.Q, "offset": solution.in_frustum_offset}
     prediction = predict_stage(stage, environment, N=solution.in_frustum_matrix, **args)
-    model = (solution.diagnostics.get("method_notes") or {}).get("root_polynomial")
-    if model is not None:
-        C = np.asarray(model["coefficients"], dtype=np.float64)
+    correction = solution.correction
+    if not correction.linear:
         if solution.N is not None:
-            content = invert_root_polynomial(C, prediction.target)
+            content = correction.inverse(prediction.target)
             prediction = predict_stage(
                 stage, environment, N=solve_M(solution.SL), content=content, **args
             )
         prediction = replace(
             prediction,
-            lit_corrected=apply_root_polynomial(C, prediction.lit),
-            displayed_corrected=apply_root_polynomial(C, prediction.displayed),
+            lit_corrected=correction.apply(prediction.lit),
+            displayed_corrected=correction.apply(prediction.displayed),
         )
     if solution.N is None:
         prediction = replace(prediction, displayed_corrected=prediction.displayed)

@@ -50,25 +50,18 @@ GAMUT_TOLERANCE = 1e-3
 
 
 def post_correct(solution: Solution) -> Callable[[np.ndarray], np.ndarray]:
-    """The post-correction the solve prescribes for footage, as a function of camera RGB.
-
-    The one place validation reads the post-correction from a solution.
-    """
-    from ocio_vp.correction.root_polynomial import post_correction
-
-    return post_correction(solution.Q, solution.diagnostics.get("method_notes"))
+    """The post-correction the solve prescribes for footage, as a function of camera RGB
+    (``solution.correction``: the typed model, :mod:`ocio_vp.model`)."""
+    return solution.correction.apply
 
 
 def in_frustum_light(solution: Solution, content: np.ndarray) -> np.ndarray:
     """(n, 3) the light (linear drive) the config asks the wall for: ``N(c) + offset``, with
-    the root-polynomial's exact ``N(c) = M Q^-1(c)`` where the solve has one."""
-    from ocio_vp.correction.root_polynomial import invert_root_polynomial
-
+    a non-linear post-correction's exact ``N(c) = M Q^-1(c)`` where N is solved."""
     content = np.asarray(content, dtype=np.float64)
-    model = (solution.diagnostics.get("method_notes") or {}).get("root_polynomial")
-    if solution.N is not None and model is not None:
-        coefficients = np.asarray(model["coefficients"], dtype=np.float64)
-        light = invert_root_polynomial(coefficients, content) @ solution.M.T
+    correction = solution.correction
+    if solution.N is not None and not correction.linear:
+        light = correction.inverse(content) @ solution.M.T
     else:
         light = content @ solution.in_frustum_matrix.T
     return light + solution.in_frustum_offset

@@ -1,0 +1,168 @@
+"""Content scale and headroom: what scene-linear content 1.0 asks of the wall.
+
+Drive 1.0 is the level at which the primaries were measured (the panel's peak as calibrated).
+Content white, (1, 1, 1) in the content's working space (Unreal's ``Linear Rec.709 (sRGB)``
+when the camera gamut is known, else the camera's native RGB), is the camera RGB ``c``; the
+wall drives it with ``M c`` outside the frustum and ``N c + offset`` inside (LeGendre et al.
+2022, eqs. 2 and 8). Each channel's headroom is ``-log2(drive)`` stops: negative headroom means
+content white already needs more than the panel has in that channel, and content brighter
+than ``1 / max(drive)`` clips there. On a PQ wall drive 1.0 is ``peak_nits`` cd/m2 and content
+white is ``peak_nits * Y(c) / Y(SL 1)`` (the camera gamut's luminance row; without a gamut the
+camera's green stands in for luminance, and the text says so).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ocio_vp.formats.solution import Solution
+
+__all__ = ["ContentScale", "content_scale", "content_scale_lines"]
+
+CHANNELS = ("red", "green", "blue")
+#: Unreal's working space, the content source of the Unreal export when the gamut is known.
+CONTENT_SPACE = "ITU-R BT.709"
+CONTENT_SPACE_NAME = "Linear Rec.709 (sRGB)"
+
+
+@dataclass(frozen=True)
+class ContentScale:
+    """What content white needs of the wall (see the module docstring)."""
+
+    environment: str
+    content_space: str
+    white_camera: np.ndarray
+    outer_drive: np.ndarray
+    inner_drive: np.ndarray
+    peak_nits: float | None = None
+    white_nits: float | None = None
+    luminance_note: str = ""
+
+    @property
+    def worst_drive(self) -> float:
+        return float(max(self.outer_drive.max(), self.inner_drive.max()))
+
+    @property
+    def clips(self) -> bool:
+        """Whether content white needs more drive than the panel has."""
+        return self.worst_drive > 1.0
+
+    @property
+    def peak_content(self) -> float:
+        """The content value (grey) whose drive first reaches 1.0 in some channel."""
+        return 1.0 / self.worst_drive if self.worst_drive > 0 else math.inf
+
+    def headroom_stops(self, drive: np.ndarray) -> list[float]:
+        return [-math.log2(d) if d > 0 else math.inf for d in drive]
+
+    def to_dict(self) -> dict:
+        return {
+            "content_space": self.content_space,
+            "content_white_camera_rgb": self.white_camera.tolist(),
+            "outer_drive": self.outer_drive.tolist(),
+            "inner_drive": self.inner_drive.tolist(),
+            "outer_headroom_stops": self.headroom_stops(self.outer_drive),
+            "inner_headroom_stops": self.headroom_stops(self.inner_drive),
+            "peak_content": self.peak_content,
+            "clips": self.clips,
+            "drive_1_nits": self.peak_nits,
+            "content_white_nits": self.white_nits,
+        }
+
+    def row(self) -> str:
+        """One terminal line: the drive content white needs per channel, outside / inside the
+        frustum in % of the measured peak, the content value that reaches the peak and the
+        worst channel's headroom; on a PQ wall the nits of drive 1.0 and of content white."""
+        pairs = " ".join(
+            f"{c[0].upper()} {100 * o:.0f}/{100 * i:.0f}"
+            for c, o, i in zip(CHANNELS, self.outer_drive, self.inner_drive, strict=True)
+        )
+        stops = -math.log2(self.worst_drive) if self.worst_drive > 0 else math.inf
+        text = (
+            f"{self.environment}: {pairs}; peak at content {self.peak_content:.3g} "
+            f"({stops:+.2f} stops in {_worst_channel(self)})"
+        )
+        if self.white_nits is not None:
+            text += f"; content white {self.white_nits:.0f} nits{self.luminance_note}"
+        return text
+
+    def lines(self) -> list[str]:
+        """The header and :meth:`row` (as :func:`content_scale_lines` prints one)."""
+        return [header(self.content_space, self.peak_nits), "  " + self.row()]
+
+
+def header(content_space: str, peak_nits: float | None = None) -> str:
+    """What the content-scale rows mean (on a PQ wall, with the nits of drive 1.0)."""
+    nits = "" if peak_nits is None else f"; drive 1.0 = {peak_nits:g} nits"
+    return (
+        f"content scale: content white = 1.0 in {content_space}; the drive it needs in % of the "
+        f"measured peak, outside/inside the frustum, and the content value that reaches the "
+        f"peak{nits}:"
+    )
+
+
+def content_scale_lines(scales: list[ContentScale]) -> tuple[list[str], list[str]]:
+    """(stdout lines, stderr lines): a header, one row per environment, and one warning naming
+    the environments where content white needs more drive than the panel has."""
+    if not scales:
+        return [], []
+    out = [header(scales[0].content_space, scales[0].peak_nits), *("  " + s.row() for s in scales)]
+    clipping = [s for s in scales if s.clips]
+    if not clipping:
+        return out, []
+    worst = max(clipping, key=lambda s: s.worst_drive)
+    names = ", ".join(s.environment for s in clipping)
+    warning = (
+        f"warning: {names}: content white needs more drive than the panel has (worst "
+        f"{worst.environment}: {100 * worst.worst_drive:.0f}% in {_worst_channel(worst)}): content "
+        "above each row's peak clips there; scale the content down to it"
+    )
+    return out, [warning]
+
+
+def _worst_channel(scale: ContentScale) -> str:
+    both = np.maximum(scale.outer_drive, scale.inner_drive)
+    return CHANNELS[int(np.argmax(both))]
+
+
+def _white_camera(camera: str | None) -> tuple[np.ndarray, str, np.ndarray | None]:
+    """(camera RGB of content white, the content space's name, the camera's Y row or None)."""
+    if not camera:
+        return np.ones(3), "camera native RGB", None
+    import colour
+
+    target = colour.RGB_COLOURSPACES[camera]
+    to_camera = colour.matrix_RGB_to_RGB(
+        colour.RGB_COLOURSPACES[CONTENT_SPACE], target, chromatic_adaptation_transform="CAT02"
+    )
+    return to_camera @ np.ones(3), CONTENT_SPACE_NAME, np.asarray(target.matrix_RGB_to_XYZ)[1]
+
+
+def content_scale(solution: Solution) -> ContentScale:
+    """The :class:`ContentScale` of a solved environment."""
+    c, space, y_row = _white_camera(solution.camera_colorspace)
+    M = np.asarray(solution.M, dtype=np.float64)
+    inner = M if solution.N is None else np.asarray(solution.N, dtype=np.float64)
+    offset = (
+        np.zeros(3)
+        if solution.black_level_offset is None
+        else np.asarray(solution.black_level_offset)
+    )
+    encoding = ((solution.linearity or {}).get("wall_encoding")) or {}
+    peak = white = None
+    note = ""
+    if encoding.get("name") == "pq":
+        peak = float(encoding.get("peak_nits", 1000.0))
+        SL = np.asarray(solution.SL, dtype=np.float64)
+        if y_row is None:
+            y_row, note = (
+                np.array([0.0, 1.0, 0.0]),
+                " (camera green as luminance: gamut not stated)",
+            )
+        white = peak * float(y_row @ c) / float(y_row @ (SL @ np.ones(3)))
+    return ContentScale(
+        solution.environment, space, c, M @ c, inner @ c + offset, peak, white, note
+    )

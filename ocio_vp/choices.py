@@ -1,0 +1,66 @@
+"""The choices the command line and the library share, in one numpy-free module.
+
+The ``ocio-vp`` parser imports this module to list choices and defaults without loading numpy
+or the solvers (``ocio-vp --help`` stays fast); the library checks its own tables against these
+names (``tests/test_choices.py``), so a method, encoding or target added in one place and not
+the other fails the suite.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "BLACK_LEVEL_METHODS",
+    "DEFAULT_BASE_CONFIG",
+    "DEFAULT_BLACK_LEVEL",
+    "DEFAULT_FOOTAGE_ENCODING",
+    "DEFAULT_METHOD",
+    "DEFAULT_PEAK_NITS",
+    "DEFAULT_WALL_ENCODING",
+    "EXPORT_TARGETS",
+    "LINEAR_METHODS",
+    "OPTIMIZATIONS",
+    "Q_METHODS",
+    "WALL_ENCODINGS",
+]
+
+#: Post-correction (Q) methods, in the order ``--help`` lists them (the registry's records:
+#: :data:`ocio_vp.correction.registry.Q_SOLVE_METHODS`).
+Q_METHODS = (
+    "least-squares",
+    "white-preserving",
+    "regularised",
+    "diagonal",
+    "identity",
+    "auto",
+    "perceptual",
+    "joint",
+    "root-polynomial",
+    "root-polynomial-3",
+)
+#: Methods whose post-correction is always a 3x3 matrix (the others may be non-linear).
+LINEAR_METHODS = frozenset(Q_METHODS) - {"auto", "root-polynomial", "root-polynomial-3"}
+#: The simplest model the scene needs (``auto``); ``least-squares`` is the paper's eq. 5.
+DEFAULT_METHOD = "auto"
+
+#: In-frustum black-level offset: ``exact`` (``-M b``) or the paper's ``b / w_camera``.
+BLACK_LEVEL_METHODS = ("exact", "paper")
+DEFAULT_BLACK_LEVEL = "exact"
+
+#: The wall's signal encodings (docs/linearity.md).
+WALL_ENCODINGS = ("linear", "gamma2.4", "srgb", "pq")
+DEFAULT_WALL_ENCODING = "linear"
+#: Luminance (cd/m2) of drive 1.0 on a PQ wall when none is given.
+DEFAULT_PEAK_NITS = 1000.0
+
+#: ``ocio-vp export --target`` values: per environment, then ``all`` of those, then ``show`` (one
+#: config for every given environment, on a base config).
+EXPORT_TARGETS = ("unreal", "nuke", "resolve", "lights", "dit", "all", "show")
+#: The show config's default base: OCIO's built-in ACES CG config (every OCIO from 2.2 on).
+DEFAULT_BASE_CONFIG = "ocio://cg-config-v1.0.0_aces-v1.3_ocio-v2.1"
+
+#: ``ocio-vp apply --footage-encoding``: linear, or any colour-science decoding name
+#: (``colour.CCTF_DECODINGS``, as the capture file's ``encoding:``), checked when it runs.
+DEFAULT_FOOTAGE_ENCODING = "linear"
+
+#: OCIO optimisation levels ``apply`` accepts.
+OPTIMIZATIONS = ("lossless", "default", "good", "draft")

@@ -1,0 +1,172 @@
+"""What ``solve`` and ``demo`` print: one screen a stage engineer reads between takes.
+
+- the stage and the wall's signal, once (cond[SL] is the stage's, the encoding and peak the
+  wall's: they do not vary by environment);
+- one line of figures per environment, the model in a few words (the reasons are in
+  ``solution.json``'s ``diagnostics.model_reason`` and the report);
+- each distinct note once;
+- every warning on stderr, one line each, the same warning of several environments once with
+  their names (``2>log`` catches them all).
+
+The figures come from :func:`ocio_vp.calibration.diagnostics.summary_errors`, as the report's
+do: one environment shows one set of numbers everywhere. Kept light (no numpy at import).
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+from typing import Any, TextIO
+
+__all__ = ["SUMMARY_COLUMNS", "model_words", "print_summary", "summary_lines", "summary_row"]
+
+#: Column headers of the one terminal table.
+SUMMARY_COLUMNS = (
+    "environment",
+    "model",
+    "cond(Q)",
+    "N",
+    "lit M>M+Q",
+    "shown M>N+Q",
+    "CV",
+    "LEDs in frame",
+    "drive<0",
+    "clipped",
+)
+
+LEGEND = (
+    "errors in % of the target white (mean |camera RGB - target| over R, G, B): lit = the chart "
+    "lit by the wall, through M then after Q;\n  shown = the background in camera, through M "
+    "then N + offset and Q; CV = leave-one-patch-out after Q ('-': not given by the method);\n"
+    "  LEDs in frame = p95 ΔE2000 of the wall's own LEDs seen in frame (emitters: Q should "
+    "leave them alone), least squares in brackets."
+)
+
+#: The model in a few words, by the correction's kind.
+_KIND_WORDS = {"root-polynomial": "root-polynomial, bounded", "rank-deficient": "no inverse"}
+
+
+def model_words(solution: Any) -> str:
+    """The model in a few words: ``auto: root-polynomial, bounded + emitter guard``."""
+    correction = solution.correction
+    protected = correction.kind == "protected"
+    inner = correction.inner if protected else correction
+    model = str(solution.diagnostics.get("model") or solution.method)
+    words = _KIND_WORDS.get(inner.kind)
+    if words is None or model.startswith("rank-"):
+        text = model
+    elif model.startswith(inner.kind):
+        text = words
+    else:
+        text = f"{model}, {words}"
+    if solution.method != model and not model.startswith(solution.method):
+        text = f"{solution.method}: {text}"
+    return text + (" + emitter guard" if protected else "")
+
+
+def _percent(per_channel) -> str:
+    if per_channel is None:
+        return "-"
+    return f"{100 * float(sum(per_channel)) / len(per_channel):.2f}%"
+
+
+def _condition(value: Any) -> str:
+    from ocio_vp.calibration.equations import condition_text
+
+    return condition_text(float(value)) if value is not None else "-"
+
+
+def _n_state(solution: Any) -> str:
+    if solution.N is None:
+        return "not solved"
+    return "= M" if solution.diagnostics.get("N_equals_M") else "solved"
+
+
+def _delta_e(value: float) -> str:
+    """A ΔE2000 figure; below 1e-6 it is rounding (machine-dependent digits), printed as 0."""
+    return f"{value:.3g}" if value >= 1e-6 else "0"
+
+
+def _leds(diagnostics: Any) -> str:
+    figures = diagnostics.get("extrapolation") or {}
+    if "led_damage" not in figures:
+        return "-"
+    return f"{_delta_e(figures['led_damage'])} ({_delta_e(figures['led_damage_least_squares'])})"
+
+
+def summary_row(solution: Any) -> tuple[str, ...]:
+    """One environment's row (:func:`ocio_vp.calibration.diagnostics.summary_errors`)."""
+    from ocio_vp.calibration.diagnostics import summary_errors
+
+    d = solution.diagnostics
+    errors = summary_errors(d)
+    return (
+        solution.environment,
+        model_words(solution),
+        _condition(d.get("cond_Q")),
+        _n_state(solution),
+        f"{_percent(errors['lit_baseline'])}>{_percent(errors['lit'])}",
+        f"{_percent(errors['shown_baseline'])}>{_percent(errors['shown'])}",
+        _percent(errors["cross_validated"]),
+        _leds(d),
+        ",".join("RGB"[c] for c in d.get("out_of_frustum_negative_channels") or []) or "-",
+        str(len(d.get("clipped_patches") or [])),
+    )
+
+
+def _wall_line(solutions: Sequence[Any]) -> str:
+    """The stage's cond[SL] and the wall's signal, once."""
+    first = solutions[0]
+    encoding = (first.linearity or {}).get("wall_encoding") or {"name": "linear"}
+    name = encoding.get("name", "linear")
+    if name == "pq":
+        signal = f"PQ (SMPTE ST 2084), drive 1.0 = {encoding['peak_nits']:g} cd/m2"
+    elif name == "linear":
+        signal = "linear drive (1.0 = the measured primaries' full drive)"
+    else:
+        signal = f"{name} signal of the linear drive (1.0 = the measured primaries' full drive)"
+    return (
+        f"stage {first.stage}: cond[SL] {_condition(first.diagnostics.get('cond_SL'))}; "
+        f"wall signal: {signal}"
+    )
+
+
+def _grouped(solutions: Sequence[Any]) -> list[str]:
+    """Every warning once, with the environments it concerns."""
+    where: dict[str, list[str]] = {}
+    for s in solutions:
+        for warning in s.diagnostics.get("warnings") or []:
+            where.setdefault(str(warning), []).append(s.environment)
+    lines = []
+    for text, names in where.items():
+        scope = names[0] if len(names) == 1 else ", ".join(names)
+        lines.append(f"warning: {scope}: {text}")
+    return lines
+
+
+def summary_lines(solutions: Sequence[Any]) -> tuple[list[str], list[str]]:
+    """(stdout lines, stderr lines) of the summary (module docstring)."""
+    if not solutions:
+        return [], []
+    rows = [SUMMARY_COLUMNS, *(summary_row(s) for s in solutions)]
+    widths = [max(len(r[i]) for r in rows) for i in range(len(SUMMARY_COLUMNS))]
+    out = [_wall_line(solutions), LEGEND]
+    out += ["  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)).rstrip() for r in rows]
+    guarded = [s for s in solutions if s.correction.kind == "protected"]
+    if guarded:
+        out.append(f"emitter guard: {guarded[0].correction.protection()}")
+    out.append(
+        "why each model: solution.json (diagnostics.model_reason) and the report; "
+        "`ocio-vp report DIR` draws them"
+    )
+    return out, _grouped(solutions)
+
+
+def print_summary(
+    solutions: Sequence[Any], *, out: TextIO | None = None, err: TextIO | None = None
+) -> None:
+    """Print :func:`summary_lines`: the table on ``out`` (stdout), warnings on ``err``."""
+    lines, warnings = summary_lines(solutions)
+    print("\n".join(lines), file=out or sys.stdout)
+    for line in warnings:
+        print(line, file=err or sys.stderr)

@@ -1,0 +1,224 @@
+"""How a post-correction behaves beyond the chart, measured on every solve, and the bound on it.
+
+A chart holds 24 reflective colours; footage holds more: saturated surfaces at the edge of the
+reflective gamut, emitters (practicals, screens, neon, the wall's own LEDs in frame) and
+highlights above white. What a fit does there is extrapolation, and it is measured here from
+the calibration data alone:
+
+- :func:`fold_fraction`: the share of the reflective solid (drive-relative ``u`` in [0, 1]^3,
+  :class:`~ocio_vp.model.correction.FitDomain`) where the correction's Jacobian determinant has
+  the other sign than its matrix's: two reflective colours that the correction maps to one
+  (it folds), so neither is corrected right and no inverse exists there.
+- :func:`choose_fade`: the first fade of :data:`FADES` (the root-polynomial's transition to its
+  fallback matrix, widest gain first) under which the bounded model folds nowhere in the
+  reflective solid; None when none does (the model is then unsafe: ``auto`` does not take it).
+- :func:`saturation_probe`: bright saturated inputs (each camera channel dominant, the others
+  at 1 %, from 1x to 16x the white patch): the least share of its dominant channel an output
+  keeps (a *collapse* below :data:`MIN_RETAINED`) and the most negative output channel relative
+  to the dominant one (a *flip* below :data:`MIN_NEGATIVE`).
+- :func:`in_frame_led_damage`: the wall's own LEDs seen in frame (its primaries and their
+  pairwise mixes at 1/4, 1 and 4 times the white patch's luminance) are emitters whose camera
+  RGB the calibration measured: recorded alike on stage and on location, so the right
+  correction leaves them alone. The p95 ΔE2000 between Q(x) and x over them is the emitter
+  damage a solve can measure without spectra (the benchmark measures it on narrow-band
+  emitters from 420 to 680 nm: docs/accuracy.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ocio_vp.model.correction import (
+    FitDomain,
+    MatrixCorrection,
+    PostCorrection,
+    RootPolynomialCorrection,
+)
+
+__all__ = [
+    "FADES",
+    "MIN_NEGATIVE",
+    "MIN_RETAINED",
+    "Extrapolation",
+    "choose_fade",
+    "extrapolation",
+    "fold_fraction",
+    "in_frame_led_damage",
+    "saturation_probe",
+]
+
+#: Fades tried for a root-polynomial Q (start, end gauge), the one keeping most of the
+#: polynomial first; the first that folds nowhere in the reflective solid is taken.
+FADES = ((1.0, 1.5), (0.75, 1.5), (0.5, 1.5))
+#: Points of the reflective solid the fold check samples (a fixed quasi-random set).
+FOLD_SAMPLES = 4096
+#: A bright saturated input whose output keeps less than this share of its dominant channel
+#: has collapsed; one whose output has a channel below this times its dominant one has flipped.
+MIN_RETAINED = 0.25
+MIN_NEGATIVE = -0.5
+#: Brightness of the in-frame LEDs, relative to the white patch's luminance.
+LED_LEVELS = (0.25, 1.0, 4.0)
+
+
+def _halton(n: int, base: int) -> np.ndarray:
+    """The first ``n`` points of the van der Corput sequence in ``base`` (deterministic)."""
+    out = np.zeros(n)
+    for i in range(n):
+        f, k, value = 1.0, i + 1, 0.0
+        while k:
+            f /= base
+            value += f * (k % base)
+            k //= base
+        out[i] = value
+    return out
+
+
+_REFLECTIVE = np.stack([_halton(FOLD_SAMPLES, b) for b in (2, 3, 5)], axis=-1)
+
+
+def fold_fraction(correction: PostCorrection, domain: FitDomain) -> float:
+    """Share of the reflective solid where the correction folds (see the module docstring)."""
+    x = _REFLECTIVE @ np.linalg.inv(domain.to_drive).T
+    h = 1e-7 * np.max(np.abs(x))
+    columns = []
+    for k in range(3):
+        step = np.zeros(3)
+        step[k] = h
+        columns.append((correction.apply(x + step) - correction.apply(x - step)) / (2 * h))
+    det = np.linalg.det(np.stack(columns, axis=-1))
+    reference = np.sign(np.linalg.det(correction.matrix)) or 1.0
+    return float(np.mean(np.sign(det) != reference))
+
+
+def choose_fade(
+    coefficients: np.ndarray, fallback: np.ndarray, domain: FitDomain
+) -> tuple[tuple[float, float] | None, dict[str, float]]:
+    """The first of :data:`FADES` whose bounded root-polynomial folds nowhere in the reflective
+    solid (None when every one folds), and each tried fade's fold fraction."""
+    tried: dict[str, float] = {}
+    for fade in FADES:
+        folds = fold_fraction(
+            RootPolynomialCorrection(coefficients, fallback, domain, fade), domain
+        )
+        tried[f"{fade[0]:g}-{fade[1]:g}"] = folds
+        if folds == 0.0:
+            return fade, tried
+    return None, tried
+
+
+def saturation_probe(correction: PostCorrection, white: np.ndarray) -> tuple[float, float]:
+    """(least share of the dominant channel kept, most negative channel relative to the
+    dominant output) over bright saturated inputs: each channel dominant, the others at 1 %,
+    at 1, 2, 4, 8 and 16 times the largest channel of ``white`` (the lit white patch)."""
+    top = float(np.max(np.abs(white)))
+    probes = []
+    for k in range(3):
+        x = np.full(3, 0.01)
+        x[k] = 1.0
+        probes += [top * level * x for level in (1.0, 2.0, 4.0, 8.0, 16.0)]
+    x = np.asarray(probes)
+    y = correction.apply(x)
+    dominant = np.argmax(x, axis=1)
+    rows = np.arange(len(x))
+    kept = y[rows, dominant] / x[rows, dominant]
+    relative = y.min(axis=1) / np.maximum(np.abs(y[rows, dominant]), 1e-300)
+    relative = np.where(y[rows, dominant] > 0, relative, -np.inf)
+    return float(kept.min()), float(relative.min())
+
+
+def _led_colours(SL: np.ndarray, white: np.ndarray, camera_to_xyz: np.ndarray) -> np.ndarray:
+    """The wall's primaries and pairwise mixes as camera RGB, at :data:`LED_LEVELS` of the
+    white patch's luminance."""
+    SL = np.asarray(SL, dtype=np.float64)
+    mixes = [SL[:, k] for k in range(3)]
+    mixes += [SL[:, a] + SL[:, b] for a, b in ((0, 1), (1, 2), (0, 2))]
+    colours = np.asarray(mixes)
+    luminance = colours @ camera_to_xyz[1]
+    white_y = float(white @ camera_to_xyz[1])
+    keep = luminance > 0
+    unit = colours[keep] / luminance[keep, None] * white_y
+    return np.vstack([unit * level for level in LED_LEVELS])
+
+
+def in_frame_led_damage(
+    correction: PostCorrection,
+    SL: np.ndarray,
+    white: np.ndarray,
+    camera_to_xyz: np.ndarray,
+) -> float:
+    """p95 ΔE2000 between Q(x) and x over the wall's own LEDs in frame (module docstring);
+    ``white`` is the target white patch (camera RGB), the reference white of the ΔE."""
+    # Deferred: colour-science is heavy and only this figure needs it here.
+    import colour
+
+    x = _led_colours(SL, white, camera_to_xyz)
+    if len(x) == 0:
+        return 0.0
+    scale = 1.0 / float(white @ camera_to_xyz[1])
+    white_xy = colour.XYZ_to_xy(white @ camera_to_xyz.T * scale)
+    lab_x = colour.XYZ_to_Lab(x @ camera_to_xyz.T * scale, white_xy)
+    lab_q = colour.XYZ_to_Lab(correction.apply(x) @ camera_to_xyz.T * scale, white_xy)
+    return float(np.percentile(colour.delta_E(lab_x, lab_q, method="CIE 2000"), 95))
+
+
+@dataclass(frozen=True)
+class Extrapolation:
+    """What a solve measured of its post-correction beyond the chart (module docstring).
+
+    ``led_damage`` and ``led_damage_least_squares``: p95 ΔE2000 of the in-frame LEDs through
+    this correction and through the paper's least squares; ``kept`` and ``negative``: the
+    saturation probe; ``folds``: the fold fraction in the reflective solid.
+    """
+
+    led_damage: float
+    led_damage_least_squares: float
+    kept: float
+    negative: float
+    folds: float | None
+
+    @property
+    def flips_or_collapses(self) -> bool:
+        return self.kept < MIN_RETAINED or self.negative < MIN_NEGATIVE
+
+    def describe(self) -> str:
+        return (
+            f"in-frame LEDs p95 ΔE2000 {self.led_damage:.3g} (least squares "
+            f"{self.led_damage_least_squares:.3g}); bright saturated inputs keep >= "
+            f"{self.kept:.0%} of their channel, lowest channel {self.negative:+.0%} of it; "
+            + ("rank-deficient" if self.folds is None else f"folds in {self.folds:.1%}")
+            + " of the reflective solid"
+        )
+
+
+def extrapolation(
+    correction: PostCorrection,
+    least_squares: np.ndarray,
+    *,
+    SL: np.ndarray,
+    white: np.ndarray,
+    lit_white: np.ndarray,
+    camera_to_xyz: np.ndarray,
+    domain: FitDomain,
+) -> Extrapolation:
+    """:class:`Extrapolation` of ``correction`` against the least-squares matrix; ``white`` is
+    the target white patch (the ΔE's reference), ``lit_white`` the lit one (the probes' scale)."""
+    kept, negative = saturation_probe(correction, lit_white)
+    return Extrapolation(
+        led_damage=in_frame_led_damage(correction, SL, white, camera_to_xyz),
+        led_damage_least_squares=in_frame_led_damage(
+            MatrixCorrection(least_squares), SL, white, camera_to_xyz
+        ),
+        kept=kept,
+        negative=negative,
+        folds=_folds(correction, domain),
+    )
+
+
+def _folds(correction: PostCorrection, domain: FitDomain) -> float | None:
+    """The fold fraction; 0 for an invertible matrix, None where Q's matrix is singular (its
+    Jacobian's sign is rounding there, not a property of the correction)."""
+    if not correction.invertible:
+        return None
+    return 0.0 if correction.linear else fold_fraction(correction, domain)

@@ -1,0 +1,80 @@
+"""``dit``: a 3D LUT for the DIT cart, log in and log out (footage recorded on the stage in the
+camera's log encoding -> the same footage post-corrected, in the same encoding).
+
+The cube is baked from the environment's config (``Stage Footage (LogC4)`` -> ``Camera Native
+(LogC4)``: decode, the post-correction exactly as the config carries it, encode) over the log
+signal's range [0, 1], and kept only where it meets the cube accuracy limit
+(:data:`~ocio_vp.exports.cube.CUBE_LIMIT`, measured with both interpolations by OCIO's own
+``.cube`` reader, :func:`~ocio_vp.exports.cube.fit_cube`); otherwise ``dit.json`` says why and
+names the colour spaces to use instead. Only for environments whose camera gamut is known (the
+log curve follows from it: :mod:`ocio_vp.ocio.camera_log`).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from ocio_vp.errors import InputError
+from ocio_vp.exports.cube import CUBE_LIMIT, fit_cube
+from ocio_vp.exports.source import ExportSource
+from ocio_vp.ocio.camera_log import camera_log_for
+from ocio_vp.ocio.viewing import camera_log_names
+
+__all__ = ["DIT_MANIFEST", "has_camera_log", "write_dit"]
+
+DIT_MANIFEST = "dit.json"
+#: The log signal's range (a log encoding maps scene-linear footage into [0, 1]).
+LOG_RANGE = (0.0, 1.0)
+
+
+def has_camera_log(source: ExportSource) -> bool:
+    """Whether the environment's config carries its camera's log footage spaces."""
+    curve = camera_log_for(source.solution.camera_colorspace)
+    return curve is not None and source.config.getColorSpace(camera_log_names(curve)[1]) is not None
+
+
+def write_dit(source: ExportSource, folder: Path, *, cube_size: int = 33, **_: Any) -> dict:
+    """Write the log-in log-out cube (where it meets the limit) and ``dit.json``."""
+    solution = source.solution
+    curve = camera_log_for(solution.camera_colorspace)
+    if curve is None or not has_camera_log(source):
+        raise InputError(
+            "no camera log encoding in this solution (solve with --camera-colorspace NAME)",
+            source=str(source.directory),
+        )
+    native, footage = camera_log_names(curve)
+    name = f"{solution.environment}_{curve.short}_post_correction_{cube_size}.cube"
+    result = fit_cube(
+        source.config.getProcessor(footage, native),
+        folder / name,
+        size=cube_size,
+        input_range=LOG_RANGE,
+        title=f"ocio-vp DIT {solution.environment}: {footage} -> {native}",
+    )
+    manifest = {
+        "format": "ocio-vp/dit-export",
+        "version": 1,
+        "stage": solution.stage,
+        "environment": solution.environment,
+        "encoding": curve.name,
+        "from": footage,
+        "to": native,
+        "cube_limit": CUBE_LIMIT,
+        "cube": name if result.path is not None else None,
+        "accuracy": result.errors if result.path is not None else None,
+        "not_written": None
+        if result.path is not None
+        else f"{result.reason}; use the config's {footage!r} -> {native!r} (exact)",
+    }
+    (folder / DIT_MANIFEST).write_text(
+        json.dumps(manifest, indent=2, allow_nan=False) + "\n", encoding="utf-8"
+    )
+    summary: dict[str, Any] = {"files": [DIT_MANIFEST]}
+    if result.path is not None:
+        summary["files"].append(name)
+        summary["cubes"] = {name: result.errors}
+    else:
+        summary["not_written"] = {name: manifest["not_written"]}
+    return summary

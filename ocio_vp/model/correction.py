@@ -1,0 +1,646 @@
+"""The post-correction Q as a typed object: what it is, where it was fitted, how it applies.
+
+Every consumer (the OCIO config, ``ocio-vp apply``, the Nuke, Resolve and Unreal exports, the
+report, the simulator, the benchmarks) is built from one :data:`PostCorrection`:
+
+==================  =============================================================  =========
+kind                what it computes                                               inverse
+==================  =============================================================  =========
+``matrix``          ``Q x`` (eq. 5 and every linear method)                        ``Q^-1 y``
+``rank-deficient``  ``Q x`` with Q too ill-conditioned to invert (sodium light)    none
+``root-polynomial`` ``C e(x)`` inside the chart's domain, fading to the matrix     Newton
+                    ``fallback`` outside it (Finlayson et al. 2015, bounded)
+``protected``       another kind, fading to the identity where no reflective       Newton
+                    surface lit by the stage can be (``solve --protect-emitters``)
+==================  =============================================================  =========
+
+``matrix`` is always a 3x3: Q itself for the linear kinds, the least-squares 3x3 on the same
+patches (the best linear approximation) for the others. solution.json writes it as ``Q`` for
+readers that want one; the ``post_correction`` block holds the object itself
+(:func:`correction_to_dict`, :func:`correction_from_dict`).
+
+The domain
+----------
+Under the wall's RGB LEDs a reflectance reflects each LED channel by some fraction in [0, 1],
+so a reflective surface on stage, mapped to drive space by ``M = [SL]^-1`` and divided per
+channel by the drive of a perfect white diffuser, lies in the unit cube (``u = U x`` with
+``U = D^-1 M``; :class:`FitDomain`). Outside that solid a pixel is an emitter or a highlight:
+brighter than white in some LED channel, or needing negative light. Its chromaticity plane
+(``u`` divided by its sum) holds the chart's colours in a convex polygon, the **hull**: the
+directions the fit has seen. A root-polynomial Q is used inside the hull and fades to its
+fallback matrix (least squares on the same patches) by :data:`DEFAULT_FADE` times the hull's
+size around white (a gauge, so the fade is exposure-invariant). Outside the hull the
+polynomial only extrapolates: on saturated colours and emitters it flips and collapses
+channels that a matrix keeps (docs/stability.md).
+
+References
+----------
+LeGendre, C., Lepicovsky, L., Debevec, P. (2022). Jointly Optimizing Color Rendition and
+In-Camera Backgrounds in an RGB Virtual Production Stage. DigiPro '22, eq. 5.
+https://doi.org/10.1145/3543664.3543699
+
+Finlayson, G. D., Mackiewicz, M., Hurlbert, A. (2015). Color Correction Using Root-Polynomial
+Regression. IEEE Transactions on Image Processing 24(5), 1460-1470.
+https://doi.org/10.1109/TIP.2015.2405336
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ocio_vp.errors import InputError
+from ocio_vp.model.expansion import (
+    ROOT_POLYNOMIAL_TERMS,
+    apply_root_polynomial,
+    root_polynomial_terms,
+)
+
+__all__ = [
+    "DEFAULT_BRIGHT",
+    "DEFAULT_FADE",
+    "DEFAULT_NEGATIVE",
+    "DRIVE_FLOOR",
+    "HULL_MIN_RADIUS",
+    "MAX_CONDITION_INVERSE",
+    "FitDomain",
+    "MatrixCorrection",
+    "PostCorrection",
+    "ProtectedCorrection",
+    "RootPolynomialCorrection",
+    "correction_from_dict",
+    "correction_to_dict",
+    "fit_domain",
+    "newton_inverse",
+    "smoothstep",
+]
+
+#: A root-polynomial Q starts fading to its fallback matrix at the first gauge and has faded
+#: out at the second (1 = the chart's hull).
+DEFAULT_FADE = (1.0, 1.5)
+#: ``--protect-emitters``: the brightness (largest drive-relative channel, 1 = a perfect white
+#: diffuser) where the fade to the identity starts and where it ends.
+DEFAULT_BRIGHT = (1.1, 2.0)
+#: ``--protect-emitters``: the negative drive (most negative drive channel over the largest)
+#: where the fade to the identity starts and where it ends.
+DEFAULT_NEGATIVE = (0.05, 0.25)
+#: A lighting drive channel below this fraction of the largest counts as this fraction (a light
+#: the wall cannot emit in that channel: reflectances there are noise and crosstalk).
+DRIVE_FLOOR = 0.05
+#: The hull always holds a disc of this radius (chromaticity units) around white, so that a
+#: chart whose colours lie on a line (sodium light) still has a domain around white.
+HULL_MIN_RADIUS = 0.02
+#: Q with a condition number above this (the limit for N) has no inverse (``rank-deficient``).
+MAX_CONDITION_INVERSE = 1e3
+
+_CHANNEL_NAMES = ("red", "green", "blue")
+
+
+def smoothstep(t: ArrayLike) -> np.ndarray:
+    """``3t^2 - 2t^3`` on [0, 1], clamped outside: 0 -> 0, 1 -> 1, zero slope at both ends.
+
+    >>> smoothstep([-1.0, 0.0, 0.5, 1.0, 2.0]).tolist()
+    [0.0, 0.0, 0.5, 1.0, 1.0]
+    """
+    t = np.clip(np.asarray(t, dtype=np.float64), 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+def _fade_out(t: np.ndarray) -> np.ndarray:
+    return 1.0 - smoothstep(t)
+
+
+def _matrix(value: Any, key: str) -> np.ndarray:
+    array = np.asarray(value, dtype=np.float64)
+    if array.shape != (3, 3) or not np.all(np.isfinite(array)):
+        raise InputError(f"expected a finite 3x3 matrix, got shape {array.shape}", key=key)
+    return array
+
+
+def _pair(value: Any, key: str) -> tuple[float, float]:
+    low, high = (float(v) for v in np.asarray(value, dtype=np.float64).reshape(2))
+    if not (np.isfinite(low) and np.isfinite(high) and 0.0 <= low < high):
+        raise InputError(f"expected [start, end] with 0 <= start < end, got {value!r}", key=key)
+    return low, high
+
+
+# ---------------------------------------------------------------------------------------------
+# The domain
+
+
+@dataclass(frozen=True)
+class FitDomain:
+    """Where the post-correction was fitted: reflective colours as the stage lights them.
+
+    ``to_drive`` (3, 3) is ``U = D^-1 M``: camera RGB to LED drive, each channel divided by the
+    drive that lights a perfect white diffuser (floored at :data:`DRIVE_FLOOR` of the largest),
+    so reflective colours lie in [0, 1]^3 (the white patch at its reflectance). ``hull`` (k, 2)
+    are the vertices, counter-clockwise, of the convex polygon holding the chart's fitted
+    patches in the chromaticity plane ``(u_r, u_b) / sum(u)`` (and a disc of
+    :data:`HULL_MIN_RADIUS` around white); ``centre`` (2,) is white's chromaticity.
+    """
+
+    to_drive: np.ndarray
+    hull: np.ndarray
+    centre: np.ndarray
+
+    def __post_init__(self) -> None:
+        hull = np.asarray(self.hull, dtype=np.float64)
+        centre = np.asarray(self.centre, dtype=np.float64).reshape(2)
+        if hull.ndim != 2 or hull.shape[1] != 2 or len(hull) < 3 or not np.all(np.isfinite(hull)):
+            raise InputError("expected at least 3 finite [r, b] vertices", key="domain.hull")
+        object.__setattr__(self, "to_drive", _matrix(self.to_drive, "domain.to_drive"))
+        object.__setattr__(self, "hull", hull)
+        object.__setattr__(self, "centre", centre)
+        normals, reach = _edges(hull, centre)
+        if not np.all(reach > 0):
+            raise InputError("the hull must contain its centre", key="domain.hull")
+        object.__setattr__(self, "_normals", normals / reach[:, None])
+
+    @property
+    def edge_normals(self) -> np.ndarray:
+        """(k, 2) each hull edge's outward normal divided by the edge's distance from the
+        centre: the gauge is ``max_i n_i . (c - centre)``."""
+        return self._normals  # type: ignore[attr-defined]
+
+    def drive(self, rgb: ArrayLike) -> np.ndarray:
+        """(..., 3) ``u = U x``: drive relative to a perfect white diffuser, per LED channel."""
+        return np.asarray(rgb, dtype=np.float64) @ self.to_drive.T
+
+    def gauge(self, rgb: ArrayLike) -> np.ndarray:
+        """(...,) how far ``rgb``'s chromaticity lies from white, in units of the hull: <= 1
+        inside, 1 on its edge, 2 at twice its size; ``inf`` where ``sum(u) <= 0``.
+
+        Homogeneous of degree 0 (``gauge(k x) = gauge(x)`` for ``k > 0``).
+        """
+        u = self.drive(rgb)
+        total = u.sum(axis=-1)
+        valid = total > 0
+        c = u[..., [0, 2]] / np.where(valid, total, 1.0)[..., None]
+        rho = np.max((c - self.centre) @ self._normals.T, axis=-1)  # type: ignore[attr-defined]
+        return np.where(valid, rho, np.inf)
+
+    def brightness(self, rgb: ArrayLike) -> np.ndarray:
+        """(...,) the largest drive-relative channel ``max_k u_k`` (1: a perfect white)."""
+        return np.max(self.drive(rgb), axis=-1)
+
+    def negativity(self, rgb: ArrayLike, drive_matrix: np.ndarray) -> np.ndarray:
+        """(...,) ``-min_k (M x)_k / max_k (M x)_k``: the negative light a colour needs,
+        relative to its largest drive (``inf`` when no drive channel is positive)."""
+        d = np.asarray(rgb, dtype=np.float64) @ np.asarray(drive_matrix).T
+        top = d.max(axis=-1)
+        return np.where(top > 0, -d.min(axis=-1) / np.where(top > 0, top, 1.0), np.inf)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "to_drive": self.to_drive.tolist(),
+            "hull": self.hull.tolist(),
+            "centre": self.centre.tolist(),
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> FitDomain:
+        try:
+            return cls(data["to_drive"], data["hull"], data["centre"])
+        except (KeyError, TypeError, ValueError) as error:
+            raise InputError(f"malformed domain ({error})", key="post_correction.domain") from None
+
+
+def _edges(hull: np.ndarray, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Outward normals of the polygon's edges and each edge's distance along it from centre."""
+    following = np.roll(hull, -1, axis=0)
+    edge = following - hull
+    normals = np.stack([edge[:, 1], -edge[:, 0]], axis=-1)  # outward for counter-clockwise
+    return normals, np.einsum("ij,ij->i", normals, hull - centre)
+
+
+def _convex_hull(points: np.ndarray) -> np.ndarray:
+    """Counter-clockwise hull vertices (Andrew's monotone chain; collinear points dropped)."""
+    pts = sorted(set(map(tuple, np.round(points, 15))))
+    if len(pts) < 3:
+        return np.asarray(pts, dtype=np.float64)
+
+    def half(sequence):
+        chain: list[tuple[float, float]] = []
+        for p in sequence:
+            while len(chain) >= 2:
+                (ax, ay), (bx, by) = chain[-2], chain[-1]
+                if (bx - ax) * (p[1] - ay) - (by - ay) * (p[0] - ax) > 1e-15:
+                    break
+                chain.pop()
+            chain.append(p)
+        return chain
+
+    lower, upper = half(pts), half(reversed(pts))
+    return np.asarray(lower[:-1] + upper[:-1], dtype=np.float64)
+
+
+def fit_domain(
+    lit_chart: ArrayLike,
+    *,
+    M: ArrayLike,
+    white_patch: int,
+    white_reflectance: float,
+    weights: ArrayLike | None = None,
+) -> FitDomain:
+    """The :class:`FitDomain` of a chart as the stage lights it (``lit_chart``: eq. 3, (n, 3)).
+
+    The drive of a perfect white is the lit white patch's drive over its reflectance; the hull
+    holds the fitted patches (``weights > 0``) and a disc of :data:`HULL_MIN_RADIUS` around
+    white (12 points), so white is always strictly inside.
+
+    Examples
+    --------
+    >>> SL = np.array([[0.9, 0.1, 0.0], [0.2, 0.8, 0.1], [0.0, 0.1, 0.9]])
+    >>> rho = np.random.default_rng(0).uniform(0.05, 0.9, (24, 3))
+    >>> rho[18] = 0.9
+    >>> domain = fit_domain(rho @ SL.T, M=np.linalg.inv(SL), white_patch=18,
+    ...                     white_reflectance=0.9)
+    >>> np.round(domain.drive((0.9 * SL.sum(axis=1))), 12).tolist()
+    [0.9, 0.9, 0.9]
+    >>> bool(domain.gauge(rho[:5] @ SL.T).max() <= 1 + 1e-12)
+    True
+    """
+    X = np.asarray(lit_chart, dtype=np.float64)
+    M = np.asarray(M, dtype=np.float64)
+    w = np.ones(len(X)) if weights is None else np.asarray(weights, dtype=np.float64)
+    white = np.clip(M @ X[white_patch], 0.0, None) / float(white_reflectance)
+    if not white.max() > 0:
+        raise InputError("the lit white patch has no positive drive", key="lit_chart")
+    white = np.maximum(white, DRIVE_FLOOR * white.max())
+    to_drive = M / white[:, None]
+    u = X[w > 0] @ to_drive.T
+    total = u.sum(axis=-1)
+    chroma = u[total > 0][:, [0, 2]] / total[total > 0, None]
+    centre_u = X[white_patch] @ to_drive.T
+    centre = centre_u[[0, 2]] / centre_u.sum()
+    angles = np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False)
+    disc = centre + HULL_MIN_RADIUS * np.stack([np.cos(angles), np.sin(angles)], axis=-1)
+    return FitDomain(to_drive, _convex_hull(np.vstack([chroma, disc])), centre)
+
+
+# ---------------------------------------------------------------------------------------------
+# The kinds
+
+
+@dataclass(frozen=True)
+class MatrixCorrection:
+    """``Q x``: every linear method (the paper's eq. 5 among them)."""
+
+    Q: np.ndarray
+    domain: FitDomain | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "Q", _matrix(self.Q, "Q"))
+
+    @property
+    def kind(self) -> str:
+        return "matrix" if self.invertible else "rank-deficient"
+
+    @property
+    def matrix(self) -> np.ndarray:
+        return self.Q
+
+    @property
+    def linear(self) -> bool:
+        return True
+
+    @property
+    def invertible(self) -> bool:
+        s = np.linalg.svd(self.Q, compute_uv=False)
+        return bool(s[-1] > 0 and s[0] / s[-1] <= MAX_CONDITION_INVERSE)
+
+    @property
+    def homogeneous(self) -> bool:
+        return True
+
+    def apply(self, rgb: ArrayLike) -> np.ndarray:
+        """(..., 3) ``Q rgb``."""
+        return np.asarray(rgb, dtype=np.float64) @ self.Q.T
+
+    def inverse(self, rgb: ArrayLike) -> np.ndarray:
+        """(..., 3) ``Q^-1 rgb``; an InputError for a ``rank-deficient`` Q."""
+        if not self.invertible:
+            raise InputError("Q is rank-deficient: it has no inverse", key="post_correction")
+        return np.asarray(rgb, dtype=np.float64) @ np.linalg.inv(self.Q).T
+
+    def describe(self) -> str:
+        rank = "" if self.invertible else ", rank-deficient: no inverse"
+        return f"3x3 matrix{rank}"
+
+    def parameters(self) -> dict[str, Any]:
+        return {"Q": self.Q.tolist()}
+
+
+@dataclass(frozen=True)
+class RootPolynomialCorrection:
+    """``C e(x)`` inside the fit's domain, fading to the ``fallback`` matrix outside it.
+
+    ``weight(x) = 1 - smoothstep((gauge(x) - 1) / (fade - 1))``; ``Q(x) = A x + weight (C e(x)
+    - A x)`` with ``A`` the fallback. Homogeneous of degree 1 (the gauge is of degree 0), so
+    exposure-invariant like a matrix. ``domain=None`` (a solution.json written before the domain
+    existed) is the unbounded polynomial, as those files were applied.
+    """
+
+    coefficients: np.ndarray
+    fallback: np.ndarray
+    domain: FitDomain | None = None
+    fade: tuple[float, float] = DEFAULT_FADE
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "fade", _pair(self.fade, "post_correction.parameters.fade"))
+        C = np.asarray(self.coefficients, dtype=np.float64)
+        if C.ndim != 2 or C.shape[0] != 3 or C.shape[1] not in ROOT_POLYNOMIAL_TERMS.values():
+            raise InputError(
+                f"root-polynomial coefficients must be (3, terms), got shape {C.shape}",
+                key="post_correction.parameters.coefficients",
+            )
+        if not np.all(np.isfinite(C)):
+            raise InputError("non-finite coefficients", key="post_correction.parameters")
+        object.__setattr__(self, "coefficients", C)
+        object.__setattr__(self, "fallback", _matrix(self.fallback, "fallback"))
+
+    @property
+    def kind(self) -> str:
+        return "root-polynomial"
+
+    @property
+    def degree(self) -> int:
+        return next(d for d, n in ROOT_POLYNOMIAL_TERMS.items() if n == self.coefficients.shape[1])
+
+    @property
+    def matrix(self) -> np.ndarray:
+        return self.fallback
+
+    @property
+    def linear(self) -> bool:
+        return False
+
+    @property
+    def invertible(self) -> bool:
+        return MatrixCorrection(self.fallback).invertible
+
+    @property
+    def homogeneous(self) -> bool:
+        return True
+
+    def weight(self, rgb: ArrayLike) -> np.ndarray:
+        """(...,) 1 where the polynomial applies, 0 where the fallback does."""
+        if self.domain is None:
+            return np.ones(np.shape(rgb)[:-1])
+        start, end = self.fade
+        return _fade_out((self.domain.gauge(rgb) - start) / (end - start))
+
+    def apply(self, rgb: ArrayLike) -> np.ndarray:
+        """(..., 3) the correction of ``rgb`` (float64)."""
+        x = np.asarray(rgb, dtype=np.float64)
+        linear = x @ self.fallback.T
+        if self.domain is None:
+            return apply_root_polynomial(self.coefficients, x)
+        g = self.weight(x)[..., None]
+        out = linear.copy()
+        inside = g[..., 0] > 0
+        if np.any(inside):
+            poly = apply_root_polynomial(self.coefficients, x[inside])
+            out[inside] += g[inside] * (poly - linear[inside])
+        return out
+
+    def inverse(self, rgb: ArrayLike) -> np.ndarray:
+        return newton_inverse(self.apply, rgb, self.fallback, homogeneous=True)
+
+    def describe(self) -> str:
+        bound = (
+            "unbounded (a file from before the domain)"
+            if self.domain is None
+            else f"inside the chart's domain, fading to the 3x3 fallback from {self.fade[0]:g}x to "
+            f"{self.fade[1]:g}x its size"
+        )
+        return f"root-polynomial degree {self.degree}, {bound}"
+
+    def parameters(self) -> dict[str, Any]:
+        return {
+            "degree": self.degree,
+            "terms": root_polynomial_terms(self.degree),
+            "coefficients": self.coefficients.tolist(),
+            "fallback": self.fallback.tolist(),
+            "fade": list(self.fade),
+        }
+
+
+@dataclass(frozen=True)
+class ProtectedCorrection:
+    """``inner`` where a reflective surface lit by the stage can be, the identity elsewhere.
+
+    ``weight = fade(brightness; bright) * fade(negativity; negative)``: brightness is the
+    largest drive-relative channel (:meth:`FitDomain.brightness`, 1 = a perfect white),
+    negativity the negative light the colour needs (:meth:`FitDomain.negativity`); each fades
+    out between its (start, end). ``Q(x) = x + weight (inner(x) - x)``. Brightness depends on
+    exposure: the domain is the calibration's, so footage exposed brighter than the chart's
+    plates should be scaled to it first (docs/stability.md).
+    """
+
+    inner: MatrixCorrection | RootPolynomialCorrection
+    domain: FitDomain
+    drive_matrix: np.ndarray
+    bright: tuple[float, float] = DEFAULT_BRIGHT
+    negative: tuple[float, float] = DEFAULT_NEGATIVE
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "drive_matrix", _matrix(self.drive_matrix, "drive_matrix"))
+        object.__setattr__(self, "bright", _pair(self.bright, "post_correction.bright"))
+        object.__setattr__(self, "negative", _pair(self.negative, "post_correction.negative"))
+        if self.bright[0] <= 0:
+            raise InputError("the brightness fade must start above 0", key="post_correction")
+
+    @property
+    def kind(self) -> str:
+        return "protected"
+
+    @property
+    def matrix(self) -> np.ndarray:
+        return self.inner.matrix
+
+    @property
+    def linear(self) -> bool:
+        return False
+
+    @property
+    def invertible(self) -> bool:
+        return self.inner.invertible
+
+    @property
+    def homogeneous(self) -> bool:
+        return False
+
+    def weight(self, rgb: ArrayLike) -> np.ndarray:
+        """(...,) 1 where ``inner`` applies, 0 where the identity does."""
+        v = self.domain.brightness(rgb)
+        low, high = self.bright
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.log2(np.maximum(v, 1e-300) / low) / np.log2(high / low)
+        g_bright = np.where(v > 0, _fade_out(t), 0.0)
+        n = self.domain.negativity(rgb, self.drive_matrix)
+        start, end = self.negative
+        g_negative = np.where(np.isfinite(n), _fade_out((n - start) / (end - start)), 0.0)
+        return g_bright * g_negative
+
+    def apply(self, rgb: ArrayLike) -> np.ndarray:
+        x = np.asarray(rgb, dtype=np.float64)
+        g = self.weight(x)[..., None]
+        out = x.copy()
+        inside = g[..., 0] > 0
+        if np.any(inside):
+            out[inside] += g[inside] * (self.inner.apply(x[inside]) - x[inside])
+        return out
+
+    def inverse(self, rgb: ArrayLike) -> np.ndarray:
+        return newton_inverse(self.apply, rgb, self.inner.matrix, homogeneous=False)
+
+    def describe(self) -> str:
+        return f"{self.inner.describe()}; emitters protected: {self.protection()}"
+
+    def protection(self) -> str:
+        """Where the identity takes over, in words."""
+        return (
+            f"the identity above {self.bright[1]:g}x white in any LED channel (fading from "
+            f"{self.bright[0]:g}x) and beyond {self.negative[1]:.0%} negative drive (fading "
+            f"from {self.negative[0]:.0%})"
+        )
+
+    def parameters(self) -> dict[str, Any]:
+        return {
+            "inner": correction_to_dict(self.inner),
+            "drive_matrix": self.drive_matrix.tolist(),
+            "bright": list(self.bright),
+            "negative": list(self.negative),
+        }
+
+
+#: Every kind of post-correction.
+PostCorrection = MatrixCorrection | RootPolynomialCorrection | ProtectedCorrection
+
+
+# ---------------------------------------------------------------------------------------------
+# The inverse
+
+
+def newton_inverse(
+    function: Callable[[np.ndarray], np.ndarray],
+    rgb: ArrayLike,
+    start_matrix: np.ndarray,
+    *,
+    homogeneous: bool,
+    tolerance: float = 1e-12,
+    max_iterations: int = 50,
+) -> np.ndarray:
+    """x with ``function(x) = rgb`` for (..., 3) ``rgb``: damped Newton with a finite-difference
+    Jacobian, started from ``start_matrix^-1 rgb``; every colour at once.
+
+    A ``homogeneous`` function is solved on each colour's direction (divided by its largest
+    absolute channel, then scaled back) and maps black to black. A colour whose iteration does
+    not reach ``tolerance`` (relative to its size; the function folds there) keeps its best
+    iterate, which is always finite.
+    """
+    y = np.asarray(rgb, dtype=np.float64)
+    flat = y.reshape(-1, 3)
+    scale = np.max(np.abs(flat), axis=1) if homogeneous else np.ones(len(flat))
+    live = np.all(np.isfinite(flat), axis=1) & (scale > 0)
+    target = np.zeros_like(flat)
+    target[live] = flat[live] / scale[live, None]
+    size = np.maximum(np.max(np.abs(target), axis=1), 1e-300)
+    x = target @ np.linalg.inv(start_matrix).T
+    residual = function(x) - target
+    norm = np.max(np.abs(residual), axis=1) / size
+    active = live.copy()
+    for _ in range(max_iterations):
+        todo = np.flatnonzero(active & (norm > tolerance))
+        if len(todo) == 0:
+            break
+        step = _newton_step(function, x[todo], residual[todo], start_matrix)
+        for alpha in 2.0 ** -np.arange(0, 16):
+            trial = x[todo] + alpha * step
+            r = function(trial) - target[todo]
+            n = np.max(np.abs(r), axis=1) / size[todo]
+            better = np.isfinite(n) & (n < norm[todo])
+            done = todo[better]
+            x[done], residual[done], norm[done] = trial[better], r[better], n[better]
+            todo, step = todo[~better], step[~better]
+            if len(todo) == 0:
+                break
+        active[todo] = False  # no step lowers the residual: keep the best iterate
+    out = x * scale[:, None] if homogeneous else x
+    out[~live] = 0.0
+    return out.reshape(y.shape)
+
+
+def _newton_step(function, x: np.ndarray, residual: np.ndarray, fallback: np.ndarray) -> np.ndarray:
+    """``-J^-1 r`` with a central-difference Jacobian; the fallback matrix where J is singular."""
+    h = 1e-6 * np.maximum(np.max(np.abs(x), axis=1, keepdims=True), 1e-12)
+    J = np.empty((len(x), 3, 3))
+    for k in range(3):
+        e = np.zeros(3)
+        e[k] = 1.0
+        J[:, :, k] = (function(x + h * e) - function(x - h * e)) / (2 * h)
+    det = np.linalg.det(J)
+    bad = ~np.isfinite(det) | (np.abs(det) < 1e-12 * abs(np.linalg.det(fallback)))
+    J[bad] = fallback
+    return -np.linalg.solve(J, residual[..., None])[..., 0]
+
+
+# ---------------------------------------------------------------------------------------------
+# solution.json
+
+
+def correction_to_dict(correction: PostCorrection) -> dict[str, Any]:
+    """The ``post_correction`` block: ``kind``, ``parameters`` and ``domain``."""
+    domain = getattr(correction, "domain", None)
+    return {
+        "kind": correction.kind,
+        "parameters": correction.parameters(),
+        "domain": None if domain is None else domain.to_dict(),
+    }
+
+
+def correction_from_dict(data: Mapping[str, Any]) -> PostCorrection:
+    """A :data:`PostCorrection` from its ``post_correction`` block (InputError when malformed)."""
+    if not isinstance(data, Mapping):
+        raise InputError("expected a mapping", key="post_correction")
+    kind, parameters = data.get("kind"), data.get("parameters")
+    if not isinstance(parameters, Mapping):
+        raise InputError("expected a parameters mapping", key="post_correction.parameters")
+    domain = None if data.get("domain") is None else FitDomain.from_dict(data["domain"])
+    try:
+        if kind in ("matrix", "rank-deficient"):
+            return MatrixCorrection(parameters["Q"], domain)
+        if kind == "root-polynomial":
+            return RootPolynomialCorrection(
+                parameters["coefficients"],
+                parameters["fallback"],
+                domain,
+                tuple(parameters.get("fade", DEFAULT_FADE)),
+            )
+        if kind == "protected":
+            if domain is None:
+                raise InputError("a protected correction needs its domain", key="post_correction")
+            return ProtectedCorrection(
+                correction_from_dict({**parameters["inner"], "domain": data.get("domain")}),
+                domain,
+                parameters["drive_matrix"],
+                tuple(parameters["bright"]),
+                tuple(parameters["negative"]),
+            )
+    except InputError as error:
+        key = error.key or ""
+        if not key.startswith("post_correction"):
+            key = f"post_correction.parameters.{key}".rstrip(".")
+        raise InputError(error.problem, key=key) from None
+    except (KeyError, TypeError, ValueError) as error:
+        raise InputError(f"malformed {kind} parameters ({error})", key="post_correction") from None
+    raise InputError(
+        f"unknown kind {kind!r}; expected matrix, rank-deficient, root-polynomial or protected",
+        key="post_correction.kind",
+    )

@@ -1,0 +1,38 @@
+"""OCIO MatrixTransforms written so that the same solve gives the same file on every machine."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import PyOpenColorIO as OCIO
+
+__all__ = ["matrix_transform"]
+
+
+def matrix_transform(
+    matrix: np.ndarray,
+    offset: Sequence[float] | np.ndarray | None = None,
+    direction: OCIO.TransformDirection = OCIO.TRANSFORM_DIR_FORWARD,
+) -> OCIO.MatrixTransform:
+    """An OCIO MatrixTransform computing ``matrix @ rgb + offset`` (alpha untouched).
+
+    Values are written to 12 significant digits, and an entry below 1e-12 of the largest as 0:
+    the digits beyond are rounding of the solve (they differ between machines), and 1e-12 is
+    far below any camera's precision.
+    """
+    m44 = np.eye(4)
+    m44[:3, :3] = _significant(np.asarray(matrix, dtype=np.float64))
+    off = np.zeros(4)
+    if offset is not None:
+        off[:3] = _significant(np.asarray(offset, dtype=np.float64))
+    return OCIO.MatrixTransform(
+        matrix=[float(v) for v in m44.ravel()], offset=[float(v) for v in off], direction=direction
+    )
+
+
+def _significant(values: np.ndarray) -> np.ndarray:
+    """``values`` to 12 significant digits, entries below 1e-12 of the largest set to 0."""
+    top = float(np.max(np.abs(values), initial=0.0))
+    values = np.where(np.abs(values) <= 1e-12 * top, 0.0, values)
+    return np.array([float(f"{v:.12g}") for v in values.ravel()]).reshape(values.shape)

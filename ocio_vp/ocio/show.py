@@ -1,0 +1,423 @@
+"""One config for a whole show: every environment's wall and footage spaces on a base config.
+
+``ocio-vp export SOLUTIONS... --target show`` puts every given environment into one config
+built on a base config (default: OCIO's built-in ACES CG config,
+:data:`~ocio_vp.ocio.viewing.ACES_CG_CONFIG`, written out so the file loads on its own). The
+base keeps its colour spaces, roles, displays and views; this adds
+
+- per environment, every colour space of its own config in the families that belong to the
+  calibration (:data:`ENVIRONMENT_FAMILIES`: the wall spaces, whatever panel types there are,
+  ``Camera Native Linear``, ``Stage Footage`` and the camera's log spaces) as
+  ``<name> [<environment>]``, their transforms copied as they are (the post-correction and the
+  wall's LUT sidecars exactly as the environment's config carries them) after the conversion
+  from the base's reference to that environment's camera gamut (the environment config's own
+  ``aces_interchange`` conversion);
+- under the names the per-environment configs use (``LED Wall - Inner Frustum``, ``Stage
+  Footage``, ...), colour spaces that pick the environment from the context variable
+  :data:`CONTEXT_VARIABLE` (``VP_ENVIRONMENT``; default, in the config's ``environment``
+  section, the first environment): a ``ColorSpaceTransform`` to ``<name> [$VP_ENVIRONMENT]``;
+- the named transform ``Post-Correction Q``, the look ``Post-Correction Q Look`` and, on every
+  base display that has a view, a view of footage after Q; the ``LED Wall`` display.
+
+The base and this overlay are merged by OCIO's own config merging
+(``ConfigMergingHelpers.MergeConfigs``, OCIO 2.5+; the base is preferred wherever both define
+something) where the installed OCIO has it, and by the API otherwise (:func:`merge_by_api`,
+which gives the same config: ``tests/test_ocio_show.py``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import copy
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+
+import PyOpenColorIO as OCIO
+
+from ocio_vp.errors import InputError
+from ocio_vp.ocio.config import (
+    DISPLAY,
+    FAMILY,
+    POST_CORRECTION,
+    POST_CORRECTION_COLORSPACE,
+    REFERENCE,
+)
+from ocio_vp.ocio.viewing import (
+    ACES_CG_CONFIG,
+    FOOTAGE_VIEW_SUFFIX,
+    POST_CORRECTION_LOOK,
+)
+
+__all__ = [
+    "CONTEXT_VARIABLE",
+    "DEFAULT_BASE_CONFIG",
+    "ENVIRONMENT_FAMILIES",
+    "ShowEnvironment",
+    "build_show_config",
+    "environment_space",
+    "has_config_merger",
+    "load_base_config",
+    "merge_by_api",
+]
+
+CONTEXT_VARIABLE = "VP_ENVIRONMENT"
+DEFAULT_BASE_CONFIG = ACES_CG_CONFIG
+#: Families (after ``ocio-vp/``) of an environment config's own colour spaces.
+ENVIRONMENT_FAMILIES = ("LED Wall", "Camera")
+AP0_ROLE = "aces_interchange"
+
+
+@dataclass(frozen=True)
+class ShowEnvironment:
+    """One environment's standalone config (as its folder holds it) under its name."""
+
+    name: str
+    config: OCIO.Config
+
+
+def environment_space(name: str, environment: str) -> str:
+    """The show config's name of an environment's own colour space ``name``."""
+    return f"{name} [{environment}]"
+
+
+def has_config_merger() -> bool:
+    """Whether the installed OCIO merges configs itself (2.5+)."""
+    return hasattr(OCIO, "ConfigMergingHelpers")
+
+
+def load_base_config(base: str) -> OCIO.Config:
+    """The base config from a path or an ``ocio://`` URI; it must name ``aces_interchange``."""
+    try:
+        with _quiet(OCIO.LOGGING_LEVEL_WARNING):  # OCIO's info lines on the base's own names
+            config = OCIO.Config.CreateFromFile(base)
+            config.validate()
+    except OCIO.Exception as error:
+        raise InputError(f"cannot load the base config: {error}", key="--base-config") from None
+    if not config.hasRole(AP0_ROLE):
+        raise InputError(
+            f"the base config {base!r} has no {AP0_ROLE} role: the environments' camera gamuts "
+            "cannot be placed in it",
+            key="--base-config",
+        )
+    return config
+
+
+def _own_spaces(config: OCIO.Config) -> list[OCIO.ColorSpace]:
+    families = tuple(f"{FAMILY}/{family}" for family in ENVIRONMENT_FAMILIES)
+    return [
+        cs
+        for cs in config.getColorSpaces(OCIO.SEARCH_REFERENCE_SPACE_SCENE, OCIO.COLORSPACE_ALL)
+        if cs.getFamily() in families or cs.getFamily().startswith(tuple(f + "/" for f in families))
+    ]
+
+
+def _base_to_reference(base: OCIO.Config) -> OCIO.GroupTransform:
+    """The base's ``aces_interchange`` space -> the base's reference (empty when equal)."""
+    aces = base.getColorSpace(base.getRoleColorSpace(AP0_ROLE))
+    to_ref = aces.getTransform(OCIO.COLORSPACE_DIR_TO_REFERENCE)
+    if to_ref is not None:
+        return OCIO.GroupTransform([copy.deepcopy(to_ref)])
+    from_ref = aces.getTransform(OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+    if from_ref is None:
+        return OCIO.GroupTransform()
+    group = OCIO.GroupTransform([copy.deepcopy(from_ref)])
+    group.setDirection(OCIO.TRANSFORM_DIR_INVERSE)
+    return group
+
+
+def _camera_to_reference(env: ShowEnvironment, aces_to_base: OCIO.GroupTransform):
+    """The environment's reference (its camera gamut) -> the base's reference."""
+    config = env.config
+    if not config.hasRole(AP0_ROLE):
+        raise InputError(
+            f"environment {env.name!r}: its config has no {AP0_ROLE} role (the camera gamut was "
+            "not stated), so it cannot join a show config; solve again with "
+            "--camera-colorspace NAME",
+            key="SOLUTION",
+        )
+    link = config.getProcessor(REFERENCE, config.getRoleColorSpace(AP0_ROLE))
+    return OCIO.GroupTransform([link.createGroupTransform(), copy.deepcopy(aces_to_base)])
+
+
+def _inverse(transform: OCIO.Transform) -> OCIO.Transform:
+    inverse = copy.deepcopy(transform)
+    forward = inverse.getDirection() == OCIO.TRANSFORM_DIR_FORWARD
+    inverse.setDirection(OCIO.TRANSFORM_DIR_INVERSE if forward else OCIO.TRANSFORM_DIR_FORWARD)
+    return inverse
+
+
+def _renamed(transform: OCIO.Transform, names: dict[str, str]) -> OCIO.Transform:
+    """A copy of ``transform`` whose ColorSpaceTransforms name the environment's spaces."""
+    transform = copy.deepcopy(transform)
+    stack = [transform]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, OCIO.GroupTransform):
+            stack.extend(node)
+        elif isinstance(node, OCIO.ColorSpaceTransform):
+            node.setSrc(names.get(node.getSrc(), node.getSrc()))
+            node.setDst(names.get(node.getDst(), node.getDst()))
+    return transform
+
+
+def _environment_spaces(env: ShowEnvironment, aces_to_base) -> list[OCIO.ColorSpace]:
+    """The environment's own colour spaces, converted from the base's reference."""
+    to_base = _camera_to_reference(env, aces_to_base)
+    own = _own_spaces(env.config)
+    names = {cs.getName(): environment_space(cs.getName(), env.name) for cs in own}
+    spaces = []
+    for cs in own:
+        new = copy.deepcopy(cs)
+        new.setName(names[cs.getName()])
+        new.setFamily(f"{FAMILY}/Environments/{env.name}")
+        new.setDescription(f"[{env.name}] {cs.getDescription()}")
+        for alias in list(new.getAliases()):
+            new.removeAlias(alias)
+        to_ref = cs.getTransform(OCIO.COLORSPACE_DIR_TO_REFERENCE)
+        from_ref = cs.getTransform(OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+        if to_ref is None and from_ref is None:  # the environment's reference itself
+            new.setTransform(copy.deepcopy(to_base), OCIO.COLORSPACE_DIR_TO_REFERENCE)
+        if to_ref is not None:
+            group = OCIO.GroupTransform([_renamed(to_ref, names), copy.deepcopy(to_base)])
+            new.setTransform(group, OCIO.COLORSPACE_DIR_TO_REFERENCE)
+        if from_ref is not None:
+            group = OCIO.GroupTransform([_inverse(to_base), _renamed(from_ref, names)])
+            new.setTransform(group, OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+        spaces.append(new)
+    return spaces
+
+
+def _switched_space(name: str, template: OCIO.ColorSpace, aces: str, aces_to_base):
+    """``name``, converting to ``<name> [$VP_ENVIRONMENT]`` through the base's ACES space."""
+    switched = environment_space(name, f"${CONTEXT_VARIABLE}")
+    cs = OCIO.ColorSpace(
+        referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
+        name=name,
+        family=template.getFamily(),
+        encoding=template.getEncoding(),
+        description=f"{name} of the environment ${CONTEXT_VARIABLE} names (context variable; "
+        f"default in this config's environment section): {name} [<environment>].",
+    )
+    for category in template.getCategories():
+        cs.addCategory(category)
+    cs.setTransform(
+        OCIO.GroupTransform(
+            [OCIO.ColorSpaceTransform(src=switched, dst=aces), copy.deepcopy(aces_to_base)]
+        ),
+        OCIO.COLORSPACE_DIR_TO_REFERENCE,
+    )
+    cs.setTransform(
+        OCIO.GroupTransform(
+            [_inverse(aces_to_base), OCIO.ColorSpaceTransform(src=aces, dst=switched)]
+        ),
+        OCIO.COLORSPACE_DIR_FROM_REFERENCE,
+    )
+    return cs
+
+
+def _overlay(base: OCIO.Config, environments: Sequence[ShowEnvironment]) -> OCIO.Config:
+    """The config of everything the show adds to the base (merged into it afterwards)."""
+    overlay = OCIO.Config()
+    overlay.setMajorVersion(2)
+    overlay.setMinorVersion(1)
+    aces = base.getRoleColorSpace(AP0_ROLE)
+    overlay.addColorSpace(copy.deepcopy(base.getColorSpace(aces)))
+    overlay.setRole(AP0_ROLE, aces)
+    rules = overlay.getFileRules()
+    rules.setDefaultRuleColorSpace(aces)
+    overlay.setFileRules(rules)
+    aces_to_base = _base_to_reference(base)
+    shared: dict[str, OCIO.ColorSpace] | None = None
+    for env in environments:
+        own = {cs.getName(): cs for cs in _own_spaces(env.config)}
+        shared = own if shared is None else {k: v for k, v in shared.items() if k in own}
+        for cs in _environment_spaces(env, aces_to_base):
+            overlay.addColorSpace(cs)
+    for name, template in (shared or {}).items():
+        overlay.addColorSpace(_switched_space(name, template, aces, aces_to_base))
+    overlay.addEnvironmentVar(CONTEXT_VARIABLE, environments[0].name)
+    overlay.setSearchPath("luts")
+    q = OCIO.ColorSpaceTransform(src=POST_CORRECTION_COLORSPACE, dst=REFERENCE)
+    overlay.addNamedTransform(
+        OCIO.NamedTransform(
+            name=POST_CORRECTION,
+            family=f"{FAMILY}/Post",
+            description=f"The post-correction Q of the environment ${CONTEXT_VARIABLE} names: "
+            f"{POST_CORRECTION_COLORSPACE} -> {REFERENCE} of that environment.",
+            forwardTransform=q,
+            categories=["file-io"],
+        )
+    )
+    overlay.addLook(
+        OCIO.Look(
+            name=POST_CORRECTION_LOOK,
+            processSpace=REFERENCE,
+            transform=copy.deepcopy(q),
+            description=f"The post-correction Q of the environment ${CONTEXT_VARIABLE} names, "
+            "for monitor views of footage recorded on the stage.",
+        )
+    )
+    first = environments[0].config
+    for view in first.getViews(DISPLAY):
+        overlay.addDisplayView(DISPLAY, view, first.getDisplayViewColorSpaceName(DISPLAY, view))
+    return overlay
+
+
+@contextlib.contextmanager
+def _quiet(level: OCIO.LoggingLevel = OCIO.LOGGING_LEVEL_NONE) -> Iterator[None]:
+    """OCIO logging at most at ``level`` meanwhile (the merger logs every base-over-input
+    choice as a warning: expected here)."""
+    before = OCIO.GetLoggingLevel()
+    OCIO.SetLoggingLevel(min(level, before, key=int))
+    try:
+        yield
+    finally:
+        OCIO.SetLoggingLevel(before)
+
+
+def merge_by_ocio(base: OCIO.Config, overlay: OCIO.Config) -> OCIO.Config:
+    """OCIO's own merging (2.5+): the base wins wherever both define something."""
+    params = OCIO.ConfigMergingParameters.Create()
+    params.setDefaultStrategy(OCIO.ConfigMergingParameters.STRATEGY_PREFER_BASE)
+    for setter in (
+        "setRoles",
+        "setFileRules",
+        "setDisplayViews",
+        "setViewTransforms",
+        "setLooks",
+        "setColorspaces",
+        "setNamedTransforms",
+    ):
+        getattr(params, setter)(OCIO.ConfigMergingParameters.STRATEGY_PREFER_BASE)
+    params.setAdjustInputReferenceSpace(False)  # the overlay is already on the base's reference
+    params.setInputFirst(False)
+    with _quiet():
+        return OCIO.ConfigMergingHelpers.MergeConfigs(params, base, overlay)
+
+
+def merge_by_api(base: OCIO.Config, overlay: OCIO.Config) -> OCIO.Config:
+    """What :func:`merge_by_ocio` does for this overlay, by the API (any OCIO 2.2+)."""
+    merged = OCIO.Config.CreateFromStream(base.serialize())
+    all_spaces = (OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ALL)
+    for cs in overlay.getColorSpaces(*all_spaces):
+        if merged.getColorSpace(cs.getName()) is None:
+            merged.addColorSpace(copy.deepcopy(cs))
+    for role, space in overlay.getRoles():
+        if not merged.hasRole(role):
+            merged.setRole(role, space)
+    for name in overlay.getNamedTransformNames(OCIO.NAMEDTRANSFORM_ALL):
+        if merged.getNamedTransform(name) is None:
+            merged.addNamedTransform(copy.deepcopy(overlay.getNamedTransform(name)))
+    for name in overlay.getLookNames():
+        if merged.getLook(name) is None:
+            merged.addLook(copy.deepcopy(overlay.getLook(name)))
+    for name in overlay.getEnvironmentVarNames():
+        if name not in list(merged.getEnvironmentVarNames()):
+            merged.addEnvironmentVar(name, overlay.getEnvironmentVarDefault(name))
+    paths = list(merged.getSearchPaths())
+    for path in overlay.getSearchPaths():
+        if path not in paths:
+            merged.addSearchPath(path)
+    for display in overlay.getDisplaysAll():
+        for view in overlay.getViews(OCIO.VIEW_DISPLAY_DEFINED, display):
+            if view not in merged.getViews(OCIO.VIEW_DISPLAY_DEFINED, display):
+                merged.addDisplayView(
+                    display, view, overlay.getDisplayViewColorSpaceName(display, view)
+                )
+    return merged
+
+
+def _names(value) -> list[str]:
+    """A name list as OCIO returns it (a comma-separated string in 2.2, an iterator later)."""
+    if isinstance(value, str):
+        return [v.strip() for v in value.split(",") if v.strip()]
+    return list(value)
+
+
+def _view_target(config: OCIO.Config, display: str, view: str) -> tuple[str, str]:
+    """(view transform, display colour space) of a view, shared views resolved."""
+    space = config.getDisplayViewColorSpaceName(display, view)
+    if space == OCIO.OCIO_VIEW_USE_DISPLAY_NAME:
+        space = display
+    return config.getDisplayViewTransformName(display, view), space
+
+
+def _footage_views(config: OCIO.Config, displays: Sequence[str]) -> list[str]:
+    """On every base display, each view's footage twin: the same view after the Q look."""
+    added = []
+    for display in displays:
+        views = [
+            *config.getViews(OCIO.VIEW_DISPLAY_DEFINED, display),
+            *config.getViews(OCIO.VIEW_SHARED, display),
+        ]
+        for view in views:
+            view_transform, space = _view_target(config, display, view)
+            cs = config.getColorSpace(space)
+            if not view_transform or cs is None or cs.isData():
+                continue  # Raw and plain colour space views: nothing to post-correct for
+            name = view + FOOTAGE_VIEW_SUFFIX
+            config.addDisplayView(
+                display, name, view_transform, space, POST_CORRECTION_LOOK, "", ""
+            )
+            added.append(name)
+    return added
+
+
+def _check_environments(environments: Sequence[ShowEnvironment]) -> None:
+    if not environments:
+        raise InputError("no environment to put in the show config", key="SOLUTION")
+    seen: set[str] = set()
+    for env in environments:
+        if env.name in seen:
+            raise InputError(
+                f"two solutions of environment {env.name!r}: a show config holds each "
+                "environment once (export them into separate show configs)",
+                key="SOLUTION",
+            )
+        seen.add(env.name)
+
+
+def build_show_config(
+    environments: Sequence[ShowEnvironment],
+    base: str = DEFAULT_BASE_CONFIG,
+    *,
+    use_merger: bool | None = None,
+) -> OCIO.Config:
+    """The show config of ``environments`` on ``base`` (see the module docstring).
+
+    ``use_merger``: True for OCIO's own merging, False for :func:`merge_by_api`, None for
+    OCIO's where the installed OCIO has it.
+
+    Raises
+    ------
+    InputError
+        No environment, an environment twice, a base config that does not load or has no
+        ``aces_interchange`` role, an environment whose camera gamut is not stated.
+    """
+    _check_environments(environments)
+    base_config = load_base_config(base)
+    overlay = _overlay(base_config, environments)
+    merge = has_config_merger() if use_merger is None else use_merger
+    merged = merge_by_ocio(base_config, overlay) if merge else merge_by_api(base_config, overlay)
+    names = ", ".join(env.name for env in environments)
+    merged.setName(
+        f"ocio-vp_show_{environments[0].name}" if len(environments) == 1 else "ocio-vp_show"
+    )
+    merged.setDescription(
+        f"ocio_vp show config: the environments {names} on {base} ({base_config.getName()}). "
+        f"The context variable {CONTEXT_VARIABLE} picks the environment (default "
+        f"{environments[0].name}); each also has its own colour spaces, '<name> [<environment>]'."
+    )
+    displays = _names(base_config.getActiveDisplays()) or list(base_config.getDisplaysAll())
+    footage = _footage_views(merged, [d for d in displays if d != DISPLAY])
+    active_views = _names(base_config.getActiveViews())
+    if active_views:
+        led = [v for v in overlay.getViews(DISPLAY) if v not in active_views]
+        merged.setActiveViews(", ".join([*active_views, *dict.fromkeys(footage), *led]))
+    if _names(base_config.getActiveDisplays()):
+        merged.setActiveDisplays(", ".join([*displays, DISPLAY]))
+    # the base may list inactive names it does not define (OCIO logs each one on every load)
+    inactive = _names(merged.getInactiveColorSpaces())
+    merged.setInactiveColorSpaces(", ".join(n for n in inactive if merged.getColorSpace(n)))
+    merged.validate()
+    return merged

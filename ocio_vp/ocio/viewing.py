@@ -1,0 +1,259 @@
+"""What a pipeline needs around the wall colour spaces: log spaces, roles and monitor displays.
+
+A per-environment config carries, beside the wall colour spaces and ``Stage Footage``:
+
+- with the camera gamut known: ``ACEScct`` (the ``compositing_log`` and ``color_timing`` role,
+  as in the ACES configs), and the camera's log encoding (:mod:`ocio_vp.ocio.camera_log`) twice:
+  ``Camera Native (LogC4)`` (the reference, log-encoded: corrected footage as the camera's log)
+  and ``Stage Footage (LogC4)`` (footage as the camera recorded it on the stage, in log:
+  converting it to the reference decodes it and applies Q);
+- the look ``Post-Correction Q Look`` (Q, as ``Stage Footage`` carries it), so a monitor can
+  show footage after Q;
+- monitor displays taken from OCIO's built-in ACES CG config (``sRGB - Display``,
+  ``Rec.1886 Rec.709 - Display``, ``ST2084-P3-D65 - Display``: the names, display colour spaces
+  and ACES output transforms of that config), each with a view for content and a view for
+  footage after Q, beside the ``LED Wall`` display. Without a camera gamut no ACES output
+  transform applies: the views then show camera RGB un-tone-mapped as if it were Rec.709 and
+  say so.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+
+import numpy as np
+import PyOpenColorIO as OCIO
+
+from ocio_vp.choices import DEFAULT_BASE_CONFIG
+from ocio_vp.ocio.camera_log import LogCurve, camera_log_for, log_transform
+from ocio_vp.ocio.matrix import matrix_transform
+
+__all__ = [
+    "ACESCCT",
+    "ACES_CG_CONFIG",
+    "FOOTAGE_VIEW_SUFFIX",
+    "MONITORS",
+    "POST_CORRECTION_LOOK",
+    "Monitor",
+    "add_camera_log_spaces",
+    "add_monitor_displays",
+    "camera_log_names",
+    "footage_to_reference",
+    "set_categories",
+]
+
+#: OCIO's built-in ACES CG config that every OCIO from 2.2 on has (profile 2.1).
+ACES_CG_CONFIG = DEFAULT_BASE_CONFIG
+ACESCCT = "ACEScct"
+POST_CORRECTION_LOOK = "Post-Correction Q Look"
+FOOTAGE_VIEW_SUFFIX = " - Stage Footage after Q"
+#: View used without a camera gamut (no ACES output transform can apply).
+UNTONEMAPPED_VIEW = "Un-tone-mapped (camera RGB as Rec.709)"
+
+
+@dataclass(frozen=True)
+class Monitor:
+    """A monitor display of the ACES CG config and the ACES view its content is seen through."""
+
+    display: str
+    view: str
+
+
+MONITORS = (
+    Monitor("sRGB - Display", "ACES 1.0 - SDR Video"),
+    Monitor("Rec.1886 Rec.709 - Display", "ACES 1.0 - SDR Video"),
+    Monitor("ST2084-P3-D65 - Display", "ACES 1.1 - HDR Video (1000 nits & P3 lim)"),
+)
+
+
+def _aces_config() -> OCIO.Config:
+    return OCIO.Config.CreateFromFile(ACES_CG_CONFIG)
+
+
+def camera_log_names(curve: LogCurve) -> tuple[str, str]:
+    """(corrected footage in the camera's log, stage footage in it): the colour space names."""
+    return f"Camera Native ({curve.short})", f"Stage Footage ({curve.short})"
+
+
+def footage_to_reference(footage: OCIO.ColorSpace) -> tuple[OCIO.Transform, OCIO.Transform | None]:
+    """``footage``'s conversion to the reference and its explicit inverse (None: OCIO's own),
+    as copies: the post-correction exactly as that colour space carries it."""
+    to_ref = footage.getTransform(OCIO.COLORSPACE_DIR_TO_REFERENCE)
+    from_ref = footage.getTransform(OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+    if to_ref is None and from_ref is not None:  # only the other direction: OCIO inverts it
+        to_ref = copy.deepcopy(from_ref)
+        to_ref.setDirection(OCIO.TRANSFORM_DIR_INVERSE)
+        from_ref = None
+    forward = OCIO.GroupTransform() if to_ref is None else copy.deepcopy(to_ref)
+    return forward, None if from_ref is None else copy.deepcopy(from_ref)
+
+
+def add_camera_log_spaces(
+    config: OCIO.Config, camera: str | None, *, reference: str, footage: str, family: str
+) -> list[str]:
+    """Add ``Camera Native (LogC4)`` and ``Stage Footage (LogC4)`` (for ``camera``'s log curve)
+    and ACEScct; returns the names added (none without a known camera gamut)."""
+    curve = camera_log_for(camera)
+    if curve is None:
+        return []
+    native_name, footage_name = camera_log_names(curve)
+    native = OCIO.ColorSpace(
+        referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
+        name=native_name,
+        family=f"{family}/Camera",
+        encoding="log",
+        description=f"{reference} encoded as {curve.name} ({camera}): footage after Q, in "
+        "the camera's own log encoding (the DIT cart's log out).",
+    )
+    native.setTransform(log_transform(curve), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+    config.addColorSpace(native)
+    forward, inverse = footage_to_reference(config.getColorSpace(footage))
+    decode = log_transform(curve, OCIO.TRANSFORM_DIR_INVERSE)
+    stage = OCIO.ColorSpace(
+        referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
+        name=footage_name,
+        family=f"{family}/Camera",
+        encoding="log",
+        description=f"Footage recorded on the stage in {curve.name} ({camera}): converting it to "
+        f"{reference} decodes it and applies the post-correction, exactly as {footage!r}.",
+    )
+    stage.setTransform(OCIO.GroupTransform([decode, forward]), OCIO.COLORSPACE_DIR_TO_REFERENCE)
+    if inverse is not None:
+        group = OCIO.GroupTransform([inverse, log_transform(curve)])
+        stage.setTransform(group, OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+    config.addColorSpace(stage)
+    return [native_name, footage_name]
+
+
+#: OCIO 2.1 categories (what application menus filter on) by family, after ``ocio-vp/``.
+CATEGORIES = {
+    "Camera": ("file-io", "working-space"),
+    "Working": ("file-io", "working-space"),
+    "LED Wall": ("file-io",),
+    "Utility": ("file-io",),
+}
+
+
+def set_categories(config: OCIO.Config) -> None:
+    """Categories for every scene colour space that has none (by its family), and for the
+    named transforms: so hosts that filter menus by category list them (and ociocheck is
+    content)."""
+    for cs in config.getColorSpaces(OCIO.SEARCH_REFERENCE_SPACE_SCENE, OCIO.COLORSPACE_ALL):
+        if list(cs.getCategories()):
+            continue
+        family = cs.getFamily().split("/")[1] if "/" in cs.getFamily() else ""
+        for category in CATEGORIES.get(family, ("file-io",)):
+            cs.addCategory(category)
+        config.addColorSpace(cs)  # replaces the one of that name
+    for name in config.getNamedTransformNames(OCIO.NAMEDTRANSFORM_ALL):
+        named = config.getNamedTransform(name)
+        if not list(named.getCategories()):
+            named.addCategory("file-io")
+            config.addNamedTransform(named)
+
+
+def add_acescct(config: OCIO.Config, aces_to_camera: np.ndarray) -> str:
+    """ACEScct (OCIO's builtin curve and AP1 -> AP0) then ACES2065-1 -> the camera gamut."""
+    aces = _aces_config()
+    source = aces.getColorSpace(ACESCCT)
+    cs = OCIO.ColorSpace(
+        referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
+        name=ACESCCT,
+        family="ocio-vp/Working",
+        encoding="log",
+        description="ACEScct (ACES log for grading and compositing), as in OCIO's built-in ACES "
+        "CG config, then ACES2065-1 to the camera gamut.",
+    )
+    to_ref = source.getTransform(OCIO.COLORSPACE_DIR_TO_REFERENCE)
+    cs.setTransform(
+        OCIO.GroupTransform([copy.deepcopy(to_ref), matrix_transform(aces_to_camera)]),
+        OCIO.COLORSPACE_DIR_TO_REFERENCE,
+    )
+    config.addColorSpace(cs)
+    return ACESCCT
+
+
+def _add_look(config: OCIO.Config, *, reference: str, footage: str) -> None:
+    forward, inverse = footage_to_reference(config.getColorSpace(footage))
+    look = OCIO.Look(
+        name=POST_CORRECTION_LOOK,
+        processSpace=reference,
+        transform=forward,
+        description=f"The post-correction Q, exactly as {footage!r} -> {reference!r}: for "
+        "monitor views of footage recorded on the stage (tagged as the reference).",
+    )
+    if inverse is not None:
+        look.setInverseTransform(inverse)
+    config.addLook(look)
+
+
+def add_monitor_displays(
+    config: OCIO.Config,
+    camera_to_aces: np.ndarray | None,
+    *,
+    reference: str,
+    footage: str,
+) -> list[Monitor]:
+    """Add the :data:`MONITORS` displays, their view transforms and the Q look.
+
+    ``camera_to_aces`` (the reference -> ACES2065-1 matrix) puts the ACES output transforms
+    after it; None (camera gamut unknown) shows the reference as Rec.709, un-tone-mapped.
+    """
+    aces = _aces_config()
+    _add_look(config, reference=reference, footage=footage)
+    added = set()
+    for monitor in MONITORS:
+        display = aces.getColorSpace(monitor.display)
+        if config.getColorSpace(monitor.display) is None:
+            config.addColorSpace(copy.deepcopy(display))
+        view = monitor.view if camera_to_aces is not None else UNTONEMAPPED_VIEW
+        if view not in added:
+            config.addViewTransform(_view_transform(aces, view, camera_to_aces))
+            added.add(view)
+        config.addDisplayView(monitor.display, view, view, monitor.display, "", "", "")
+        config.addDisplayView(
+            monitor.display,
+            view + FOOTAGE_VIEW_SUFFIX,
+            view,
+            monitor.display,
+            POST_CORRECTION_LOOK,
+            "",
+            "",
+        )
+    return list(MONITORS)
+
+
+def _view_transform(aces, name: str, camera_to_aces) -> OCIO.ViewTransform:
+    if camera_to_aces is None:
+        import colour
+
+        rec709 = colour.RGB_COLOURSPACES["ITU-R BT.709"]
+        vt = OCIO.ViewTransform(
+            referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
+            name=name,
+            description="The camera gamut is not stated (set stage.camera_colorspace or solve "
+            "--camera-colorspace): camera RGB is shown as if it were linear Rec.709, "
+            "un-tone-mapped. Colours are only indicative.",
+        )
+        # clamped to [0, 100] (10000 nits on the PQ monitor): there is no tone curve to bound it
+        clamp = OCIO.RangeTransform(
+            minInValue=0.0, maxInValue=100.0, minOutValue=0.0, maxOutValue=100.0
+        )
+        vt.setTransform(
+            OCIO.GroupTransform([matrix_transform(rec709.matrix_RGB_to_XYZ), clamp]),
+            OCIO.VIEWTRANSFORM_DIR_FROM_REFERENCE,
+        )
+        return vt
+    source = aces.getViewTransform(name)
+    vt = OCIO.ViewTransform(
+        referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
+        name=name,
+        description=f"{source.getDescription().strip()}\n(after the camera gamut -> ACES2065-1)",
+    )
+    builtin = source.getTransform(OCIO.VIEWTRANSFORM_DIR_FROM_REFERENCE)
+    vt.setTransform(
+        OCIO.GroupTransform([matrix_transform(camera_to_aces), copy.deepcopy(builtin)]),
+        OCIO.VIEWTRANSFORM_DIR_FROM_REFERENCE,
+    )
+    return vt

@@ -1,0 +1,56 @@
+"""Content scale and headroom against closed forms: M c, N c + offset, and on a PQ wall the
+luminance of content white from colour-science's RGB -> XYZ."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import colour
+import numpy as np
+from conftest import make_measurements_dict
+
+from ocio_vp.calibration.headroom import content_scale, content_scale_lines
+from ocio_vp.formats.measurements import measurements_from_dict
+from ocio_vp.pipeline import solve_measurements
+
+
+def _solution(camera=None):
+    data = make_measurements_dict(seed=2, environments=1)
+    if camera:
+        data["stage"]["camera_colorspace"] = camera
+    (solution,) = solve_measurements(measurements_from_dict(data), method="least-squares")
+    return solution
+
+
+def test_camera_native_white_is_m_times_ones():
+    solution = _solution()
+    scale = content_scale(solution)
+    np.testing.assert_allclose(scale.outer_drive, solution.M @ np.ones(3), rtol=1e-12)
+    inner = solution.N @ np.ones(3) + solution.black_level_offset
+    np.testing.assert_allclose(scale.inner_drive, inner, rtol=1e-12)
+    stops = scale.to_dict()["outer_headroom_stops"]
+    assert stops == [-math.log2(d) for d in scale.outer_drive]
+    assert scale.peak_content == 1.0 / max(scale.outer_drive.max(), scale.inner_drive.max())
+    assert scale.white_nits is None
+
+
+def test_a_clipping_solve_warns_and_pq_states_the_nits():
+    solution = _solution("ARRI Wide Gamut 4")
+    M = solution.M * 2.0  # a dimmer panel: content white needs twice the drive
+    pq = {"wall_encoding": {"name": "pq", "peak_nits": 600.0}}
+    scale = content_scale(dataclasses.replace(solution, M=M, linearity=pq))
+    lines = scale.lines()
+    out, err = content_scale_lines([scale])
+    assert out == lines and scale.clips and len(err) == 1 and err[0].startswith("warning:")
+    assert f"peak at content {scale.peak_content:.3g}" in lines[1]
+    assert f"content white {scale.white_nits:.0f} nits" in lines[1]
+    # content white: Rec.709 (1, 1, 1) in the camera gamut; its luminance relative to the wall's
+    # white (SL 1) on colour-science's AWG4 -> XYZ
+    awg4 = colour.RGB_COLOURSPACES["ARRI Wide Gamut 4"]
+    white = colour.RGB_to_RGB(np.ones(3), colour.RGB_COLOURSPACES["ITU-R BT.709"], awg4,
+                              chromatic_adaptation_transform="CAT02")  # fmt: skip
+    y = lambda rgb: colour.RGB_to_XYZ(rgb, awg4)[1]  # noqa: E731
+    want = 600.0 * y(white) / y(solution.SL @ np.ones(3))
+    assert abs(scale.white_nits - want) < 1e-9 * want
+    assert "drive 1.0 = 600 nits" in lines[0]

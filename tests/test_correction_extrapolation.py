@@ -1,0 +1,81 @@
+"""What a post-correction does beyond the chart (``ocio_vp.correction.extrapolation``).
+
+Independent checks: closed forms (a matrix folds nowhere; the identity keeps every channel and
+damages no emitter; a map with a known fold region), and a finite-difference Jacobian computed
+here for the fold count.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import paper_stage_problem
+
+from ocio_vp.correction.extrapolation import (
+    FADES,
+    choose_fade,
+    fold_fraction,
+    in_frame_led_damage,
+    saturation_probe,
+)
+from ocio_vp.correction.perceptual import default_camera_to_xyz
+from ocio_vp.model import MatrixCorrection, RootPolynomialCorrection
+
+
+@pytest.fixture(scope="module")
+def problem():
+    return paper_stage_problem("incandescent")
+
+
+class _Folding:
+    """u -> (u_r^2 - u_r / 2, u_g, u_b) in drive space: its Jacobian is negative for u_r < 1/4
+    (a quarter of the reflective solid's red axis), positive above."""
+
+    kind, linear, invertible = "test", False, True
+
+    def __init__(self, domain):
+        self.domain = domain
+        self.matrix = np.eye(3)
+
+    def apply(self, rgb):
+        u = self.domain.drive(rgb)
+        u = np.stack([u[..., 0] ** 2 - u[..., 0] / 2, u[..., 1], u[..., 2]], -1)
+        return u @ np.linalg.inv(self.domain.to_drive).T
+
+
+def test_fold_fraction_of_closed_forms(problem):
+    domain = problem.domain
+    assert fold_fraction(MatrixCorrection(np.diag([1.2, 0.9, 1.1])), domain) == 0.0
+    # the quasi-random sample of the solid estimates the folded quarter closely
+    assert fold_fraction(_Folding(domain), domain) == pytest.approx(0.25, abs=0.01)
+
+
+def test_saturation_probe_of_the_identity_and_a_flipping_matrix(problem):
+    white = problem.predicted[problem.white_patch]
+    kept, negative = saturation_probe(MatrixCorrection(np.eye(3)), white)
+    assert kept == pytest.approx(1.0) and negative == pytest.approx(0.01)
+    flip = np.array([[1.0, 0.0, 0.0], [-3.0, 1.0, 0.0], [0.0, 0.0, 1.0]])  # green -= 3 red
+    kept, negative = saturation_probe(MatrixCorrection(flip), white)
+    # a red input (1, 0.01, 0.01) gives green 0.01 - 3: -2.99 of its red
+    assert negative == pytest.approx(-2.99)
+
+
+def test_the_identity_damages_no_in_frame_led(problem):
+    xyz = default_camera_to_xyz()
+    white = problem.target[problem.white_patch]
+    assert in_frame_led_damage(MatrixCorrection(np.eye(3)), problem.SL, white, xyz) == 0.0
+    gain = in_frame_led_damage(MatrixCorrection(np.diag([1.3, 1.0, 1.0])), problem.SL, white, xyz)
+    assert gain > 1.0
+
+
+def test_choose_fade_takes_the_first_that_folds_nowhere(problem):
+    from ocio_vp.correction.problem import fit_least_squares
+    from ocio_vp.correction.root_polynomial import fit_root_polynomial
+
+    X, P, w = problem.predicted, problem.target, problem.fit_weights
+    C, A = fit_root_polynomial(X, P, w, 2), fit_least_squares(X, P, w)
+    fade, tried = choose_fade(C, A, problem.domain)
+    assert fade in FADES
+    chosen = list(tried).index(f"{fade[0]:g}-{fade[1]:g}")
+    assert all(v > 0 for v in list(tried.values())[:chosen]) and tried[list(tried)[chosen]] == 0
+    assert fold_fraction(RootPolynomialCorrection(C, A, problem.domain, fade), problem.domain) == 0

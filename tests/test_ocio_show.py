@@ -1,0 +1,184 @@
+"""The show config: every environment on the ACES CG config, picked by ``VP_ENVIRONMENT``,
+checked by meaning against each environment's own config (OCIO's processors on both)."""
+
+from __future__ import annotations
+
+import copy
+import shutil
+from pathlib import Path
+
+import numpy as np
+import PyOpenColorIO as OCIO
+import pytest
+import yaml
+from conftest import make_measurements_dict
+
+from ocio_vp.cli import main
+from ocio_vp.errors import InputError
+from ocio_vp.ocio import show
+
+RNG = np.random.default_rng(3)
+LINEAR = np.concatenate([RNG.uniform(0, 1, (400, 3)), RNG.uniform(-0.2, 8, (200, 3))])
+LOG = RNG.uniform(0, 1, (400, 3))
+#: The pairs the issue names (content -> wall, footage -> working space), linear and log.
+PAIRS = (
+    ("ACEScg", "LED Wall - Inner Frustum", LINEAR),
+    ("ACEScg", "LED Wall - Outer Frustum", LINEAR),
+    ("Stage Footage", "ACEScg", LINEAR),
+    ("Stage Footage (LogC4)", "ACEScg", LOG),
+)
+TOLERANCE = 1e-4
+
+
+def _run(config, context, src, dst, rgb) -> np.ndarray:
+    out = np.ascontiguousarray(rgb, dtype=np.float32).copy()
+    config.getProcessor(context, src, dst).getDefaultCPUProcessor().applyRGB(out)
+    return out.astype(np.float64)
+
+
+def _context(config: OCIO.Config, environment: str | None) -> OCIO.Context:
+    context = copy.deepcopy(config.getCurrentContext())
+    if environment is not None:
+        context[show.CONTEXT_VARIABLE] = environment
+    return context
+
+
+@pytest.fixture(scope="module")
+def solved(tmp_path_factory) -> Path:
+    """Two environments with a camera gamut: one least-squares, one root-polynomial (LUTs)."""
+    root = tmp_path_factory.mktemp("show")
+    document = make_measurements_dict(seed=4)
+    document["stage"]["camera_colorspace"] = "ARRI Wide Gamut 4"
+    (root / "stage.yaml").write_text(yaml.safe_dump(document))
+    assert (
+        main(
+            [
+                "solve",
+                str(root / "stage.yaml"),
+                "--out",
+                str(root / "ls"),
+                "--method",
+                "least-squares",
+            ]
+        )
+        == 0
+    )
+    assert (
+        main(
+            [
+                "solve",
+                str(root / "stage.yaml"),
+                "--out",
+                str(root / "rp"),
+                "--method",
+                "root-polynomial",
+            ]
+        )
+        == 0
+    )
+    # one calibration folder holding both kinds: env_0 least squares, env_1 root-polynomial
+    (root / "calib").mkdir()
+    shutil.copytree(root / "ls" / "env_0", root / "calib" / "env_0")
+    shutil.copytree(root / "rp" / "env_1", root / "calib" / "env_1")
+    assert main(["export", str(root / "calib"), "--target", "show", "--out", str(root / "x")]) == 0
+    return root
+
+
+def _environments(calib: Path) -> list[show.ShowEnvironment]:
+    return [
+        show.ShowEnvironment(p.name, OCIO.Config.CreateFromFile(str(p / "config.ocio")))
+        for p in sorted(calib.iterdir())
+    ]
+
+
+def test_show_config_has_what_a_pipeline_needs(solved):
+    config = OCIO.Config.CreateFromFile(str(solved / "x" / "show" / "config.ocio"))
+    config.validate()
+    for name in ("ACEScg", "ACES2065-1", "LED Wall - Inner Frustum", "Stage Footage (LogC4)"):
+        assert config.getColorSpace(name) is not None, name
+    assert config.getRoleColorSpace("aces_interchange") == "ACES2065-1"
+    assert config.getRoleColorSpace("cie_xyz_d65_interchange") == "CIE-XYZ-D65"
+    log = config.getColorSpace(config.getRoleColorSpace("compositing_log"))
+    assert log.getName() == "ACEScct" and log.getEncoding() == "log"
+    views = list(config.getViews("sRGB - Display"))
+    assert "ACES 1.0 - SDR Video" in views
+    assert "ACES 1.0 - SDR Video" + show.FOOTAGE_VIEW_SUFFIX in views
+    assert set(config.getViews("LED Wall")) == {"Outer Frustum", "Inner Frustum", "Raw"}
+    assert config.getEnvironmentVarDefault(show.CONTEXT_VARIABLE) == "env_0"
+    for env in ("env_0", "env_1"):
+        assert config.getColorSpace(f"LED Wall - Inner Frustum [{env}]") is not None
+
+
+def test_each_environment_equals_its_own_config(solved):
+    """VP_ENVIRONMENT picks the environment; every pair within 1e-4 of its standalone config
+    (relative above 1), the root-polynomial's LUT sidecars included."""
+    config = OCIO.Config.CreateFromFile(str(solved / "x" / "show" / "config.ocio"))
+    for env in ("env_0", "env_1"):
+        own = OCIO.Config.CreateFromFile(str(solved / "calib" / env / "config.ocio"))
+        for src, dst, rgb in PAIRS:
+            want = _run(own, own.getCurrentContext(), src, dst, rgb)
+            got = _run(config, _context(config, env), src, dst, rgb)
+            error = np.abs(got - want) / np.maximum(1.0, np.abs(want))
+            assert error.max() < TOLERANCE, (env, src, dst, error.max())
+    # the default is the first environment
+    own = OCIO.Config.CreateFromFile(str(solved / "calib" / "env_0" / "config.ocio"))
+    want = _run(own, own.getCurrentContext(), "ACEScg", "LED Wall - Inner Frustum", LINEAR)
+    got = _run(config, _context(config, None), "ACEScg", "LED Wall - Inner Frustum", LINEAR)
+    np.testing.assert_allclose(got, want, rtol=TOLERANCE, atol=TOLERANCE)
+
+
+@pytest.mark.skipif(not show.has_config_merger(), reason="this OCIO has no config merging")
+def test_ocio_merging_and_the_api_give_the_same_config(solved):
+    environments = _environments(solved / "rp")
+    by_ocio = show.build_show_config(environments, use_merger=True)
+    by_api = show.build_show_config(environments, use_merger=False)
+    all_spaces = (OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ALL)
+    names = [cs.getName() for cs in by_ocio.getColorSpaces(*all_spaces)]
+    assert names == [cs.getName() for cs in by_api.getColorSpaces(*all_spaces)]
+    assert list(by_ocio.getDisplaysAll()) == list(by_api.getDisplaysAll())
+    for display in by_ocio.getDisplaysAll():
+        assert list(by_ocio.getViews(display)) == list(by_api.getViews(display))
+    assert dict(by_ocio.getRoles()) == dict(by_api.getRoles())
+    for config in (by_ocio, by_api):
+        config.setSearchPath(str(solved / "rp" / "env_1" / "luts"))
+        config.addSearchPath(str(solved / "rp" / "env_0" / "luts"))
+    for env in ("env_0", "env_1"):
+        for src, dst, rgb in PAIRS:
+            a = _run(by_ocio, _context(by_ocio, env), src, dst, rgb)
+            b = _run(by_api, _context(by_api, env), src, dst, rgb)
+            np.testing.assert_array_equal(a, b)
+
+
+def test_show_folder_loads_after_a_move(solved, tmp_path):
+    moved = tmp_path / "elsewhere"
+    shutil.copytree(solved / "x" / "show", moved)
+    config = OCIO.Config.CreateFromFile(str(moved / "config.ocio"))
+    got = _run(config, _context(config, "env_1"), "ACEScg", "LED Wall - Inner Frustum", LINEAR)
+    assert np.all(np.isfinite(got))
+
+
+def test_environment_without_a_camera_gamut_is_refused(tmp_path, capsys):
+    (tmp_path / "stage.yaml").write_text(yaml.safe_dump(make_measurements_dict()))
+    assert main(["solve", str(tmp_path / "stage.yaml"), "--out", str(tmp_path / "c")]) == 0
+    capsys.readouterr()
+    args = ["export", str(tmp_path / "c"), "--target", "show", "--out", str(tmp_path / "x")]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--camera-colorspace" in err
+    assert not (tmp_path / "x" / "show").exists()
+
+
+def test_show_needs_out_and_a_base_with_aces(solved, tmp_path, capsys):
+    capsys.readouterr()
+    assert main(["export", str(solved / "calib"), "--target", "show"]) == 2
+    assert "--out" in capsys.readouterr().err
+    raw = tmp_path / "raw.ocio"
+    raw.write_text(OCIO.Config.CreateRaw().serialize())
+    with pytest.raises(InputError, match="aces_interchange"):
+        show.load_base_config(str(raw))
+
+
+def test_two_solutions_of_one_environment_are_refused(solved):
+    environments = _environments(solved / "ls")[:1] * 2
+    with pytest.raises(InputError, match="env_0"):
+        show.build_show_config(environments)
