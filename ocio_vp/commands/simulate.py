@@ -81,6 +81,22 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--name", default=None, help="stage name (default simulated-stage)")
     parser.add_argument(
+        "--ceiling-leds",
+        default=None,
+        metavar="LEDS",
+        help="add a ceiling of another panel model (a measurements file with panels: wall and "
+        "ceiling, docs/panels.md): its R,G,B LEDs as for --leds, e.g. 618/24,538/40,470/26; "
+        "environments then default to scenes lit from above and the sides (overcast, "
+        "clear_sky, golden_hour, interior, night_street); default: no ceiling",
+    )
+    parser.add_argument(
+        "--ceiling-gain",
+        type=float,
+        default=None,
+        help="with --ceiling-leds: the ceiling's brightness at the wall's drive (default 1.0: "
+        "its processor matched to the wall's white)",
+    )
+    parser.add_argument(
         "--fixture",
         action="append",
         metavar="KIND",
@@ -130,7 +146,13 @@ def run(args: argparse.Namespace) -> int:
     if args.plates is not None:
         _check_plates_folder(args.plates)
     stage = spectral_stage(**options)
-    measurements = simulate_measurements(environments_from_args(args.environment), stage=stage)
+    if args.ceiling_leds is not None:
+        measurements = _panel_measurements(stage, args)
+    elif args.ceiling_gain is not None:
+        raise InputError("only with --ceiling-leds", key="--ceiling-gain")
+    else:
+        environments = environments_from_args(args.environment)
+        measurements = simulate_measurements(environments, stage=stage)
     if args.fixture:
         measurements = with_simulated_fixtures(measurements, stage, args.fixture)
     try:
@@ -146,6 +168,24 @@ def run(args: argparse.Namespace) -> int:
 
 
 _DEFAULTS = {"vignetting": 0.05, "noise": 0.01, "seed": 0}
+
+
+def _panel_measurements(wall, args: argparse.Namespace):
+    """The wall and a ceiling of ``--ceiling-leds`` (ocio_vp.simulator.panels)."""
+    from ocio_vp.simulator.options import ceiling_leds_from_arg, environments_from_args
+    from ocio_vp.simulator.panels import (
+        DEFAULT_CEILING_GAIN,
+        SCENES,
+        panel_stage,
+        simulate_panel_measurements,
+    )
+
+    gain = DEFAULT_CEILING_GAIN if args.ceiling_gain is None else args.ceiling_gain
+    stage = panel_stage(wall, ceiling_leds=ceiling_leds_from_arg(args.ceiling_leds), gain=gain)
+    environments = {name: name for name in SCENES}
+    if args.environment:
+        environments = environments_from_args(args.environment)
+    return simulate_panel_measurements(stage, environments)
 
 
 def _check_plates_folder(folder: str) -> None:

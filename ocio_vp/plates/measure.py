@@ -194,7 +194,9 @@ def _sample_regions(
 def measure_steps(capture: Capture) -> int:
     """How many times :func:`measure_capture` calls ``on_step``."""
     blacks = sum(env.black_level is not None for env in capture.environments)
-    return 1 + len(CHANNELS) + len(capture.environments) + blacks
+    blacks += sum(len(env.panel_black_level or {}) for env in capture.environments)
+    walls = max(len(capture.panels), 1)
+    return walls * (1 + len(CHANNELS)) + len(capture.environments) + blacks
 
 
 def measure_capture(capture: Capture, *, detect: Any = None, on_step: Any = None) -> MeasureResult:
@@ -220,13 +222,6 @@ def measure_capture(capture: Capture, *, detect: Any = None, on_step: Any = None
     plates: list[PlateSampling] = []
     detected: dict[tuple[str | int, ...], np.ndarray] = {}
     step = on_step or (lambda: None)
-    primaries = _sample_regions(capture, capture.primaries, "primaries")
-    plates.extend(primaries)
-    step()
-    primary_means = {}
-    for sampling in primaries:
-        for label, mean in zip(sampling.labels, sampling.samples.means, strict=True):
-            primary_means[label] = mean
 
     def chart(shot: ChartShot) -> np.ndarray:
         sampling, found = _sample_chart(capture, shot, detect)
@@ -236,26 +231,40 @@ def measure_capture(capture: Capture, *, detect: Any = None, on_step: Any = None
         step()
         return sampling.samples.means
 
-    lit = {c: chart(capture.lit_chart[c]) for c in CHANNELS}
+    def black_level(shot: RegionShot, name: str) -> list[float]:
+        black = _sample_regions(capture, {"black_level": shot}, name)
+        plates.extend(black)
+        step()
+        return black[0].samples.means[0].tolist()
+
+    document: dict[str, Any] = {"format": FORMAT, "version": VERSION, "stage": dict(capture.stage)}
+    if capture.panels:
+        document["panels"] = [
+            {
+                "name": p.name,
+                **p.settings,
+                **_wall_values(capture, p.primaries, p.lit_chart, chart, plates, step),
+            }
+            for p in capture.panels
+        ]
+    else:
+        document |= _wall_values(capture, capture.primaries, capture.lit_chart, chart, plates, step)
     environments = []
     for env in capture.environments:
         entry: dict[str, Any] = {"name": env.name, "target_chart": chart(env.target_chart).tolist()}
         if env.black_level is not None:
-            black = _sample_regions(capture, {"black_level": env.black_level}, env.name)
-            plates.extend(black)
-            step()
-            entry["black_level"] = black[0].samples.means[0].tolist()
+            entry["black_level"] = black_level(env.black_level, env.name)
+        if env.panel_black_level:
+            entry["black_level"] = {
+                name: black_level(shot, f"{env.name}_{name}")
+                for name, shot in env.panel_black_level.items()
+            }
         if env.w_avg is not None:
             entry["w_avg"] = env.w_avg.tolist()
+        if env.panel_w_avg is not None:
+            entry["w_avg"] = dict(env.panel_w_avg)
         environments.append(entry)
-    document = {
-        "format": FORMAT,
-        "version": VERSION,
-        "stage": dict(capture.stage),
-        "primaries": {c: primary_means[c].tolist() for c in CHANNELS},
-        "lit_chart": {c: lit[c].tolist() for c in CHANNELS},
-        "environments": environments,
-    }
+    document["environments"] = environments
     measurements = measurements_from_dict(document, source=capture.source)
     warnings = []
     for sampling in plates:
@@ -263,6 +272,29 @@ def measure_capture(capture: Capture, *, detect: Any = None, on_step: Any = None
             flags = ", ".join(sampling.samples.flag_names(int(index)))
             warnings.append(f"{sampling.plate.label}: {sampling.labels[index]}: {flags}")
     return MeasureResult(measurements, tuple(plates), detected, tuple(warnings))
+
+
+def _wall_values(
+    capture: Capture,
+    primaries: Mapping[str, RegionShot],
+    lit_chart: Mapping[str, ChartShot],
+    chart: Any,
+    plates: list[PlateSampling],
+    step: Any,
+) -> dict[str, Any]:
+    """``primaries`` and ``lit_chart`` of the wall (or of one panel type), sampled."""
+    sampled = _sample_regions(capture, primaries, "primaries")
+    plates.extend(sampled)
+    step()
+    means = {}
+    for sampling in sampled:
+        for label, mean in zip(sampling.labels, sampling.samples.means, strict=True):
+            means[label] = mean
+    lit = {c: chart(lit_chart[c]) for c in CHANNELS}
+    return {
+        "primaries": {c: means[c].tolist() for c in CHANNELS},
+        "lit_chart": {c: lit[c].tolist() for c in CHANNELS},
+    }
 
 
 def _overlay(sampling: PlateSampling) -> np.ndarray:

@@ -209,9 +209,10 @@ def scene_light(stage: SpectralStage, environment: Any) -> dict[str, np.ndarray]
     """``{"wall": (W,), "ceiling": (W,)}``: the light from the sides and from above, summing to
     the environment as :func:`environment_spectrum` scales it (white diffuser green = 1).
 
-    ``environment``: a name of :data:`SCENES` or of
-    :data:`~ocio_vp.simulator.data.ENVIRONMENTS` (uniform: :data:`DEFAULT_CEILING_SHARE` of it
-    from above), or a mapping ``{"wall": spectrum, "ceiling": spectrum}``.
+    ``environment``: a name of :data:`SCENES`, a name of
+    :data:`~ocio_vp.simulator.data.ENVIRONMENTS` or a (W,) spectrum (the same light everywhere:
+    :data:`DEFAULT_CEILING_SHARE` of it from above), or a mapping
+    ``{"wall": spectrum, "ceiling": spectrum}``.
     """
     if isinstance(environment, Mapping):
         parts = {k: np.asarray(environment[k], dtype=np.float64) for k in ("wall", "ceiling")}
@@ -223,7 +224,7 @@ def scene_light(stage: SpectralStage, environment: Any) -> dict[str, np.ndarray]
             "ceiling": above / green[0] * scene.share,
             "wall": sides / green[1] * (1 - scene.share),
         }
-    elif environment in ENVIRONMENTS:
+    elif not isinstance(environment, str) or environment in ENVIRONMENTS:
         total = environment_spectrum(stage, environment)
         parts = {
             "ceiling": DEFAULT_CEILING_SHARE * total,
