@@ -3,14 +3,12 @@ and the gain of one calibration per panel type over a calibration of the wall al
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 import yaml
 
 from ocio_vp.cli import main
-from ocio_vp.formats.measurements import Environment, Measurements, load_measurements
+from ocio_vp.formats.measurements import load_measurements
 from ocio_vp.pipeline import solve_environment
 from ocio_vp.simulator.panels import (
     SCENES,
@@ -18,6 +16,7 @@ from ocio_vp.simulator.panels import (
     panel_stage,
     scene_light,
     simulate_panel_measurements,
+    wall_only_measurements,
 )
 from ocio_vp.simulator.stage import camera_rgb, paper_stage, spectral_stage
 from ocio_vp.simulator.truth import held_out_reflectances
@@ -51,26 +50,13 @@ def test_the_ceiling_is_matched_to_the_walls_white(white):
     assert not np.allclose(stage.ceiling.SL, stage.wall.SL, rtol=0.05)  # another panel model
 
 
-def wall_only(m: Measurements) -> Measurements:
-    """The calibration a stage engineer makes of the wall alone: the wall's primaries and lit
-    chart, the whole environment's w_avg, no panels (its M then drives the ceiling too)."""
-    wall = m.panels[0]
-    envs = tuple(
-        Environment(e.name, e.target_chart, w_avg=sum(e.panel_w_avg.values()),
-                    black_level=e.panel_black_level["wall"])
-        for e in m.environments
-    )  # fmt: skip
-    stage = dataclasses.replace(m.stage, panel=wall.panel, beta=wall.beta)
-    return Measurements(stage=stage, SL=wall.SL, SRL=wall.SRL, environments=envs)
-
-
 def test_one_calibration_per_panel_type_renders_held_out_colours_better():
     """Sigma camera, the wider LEDs on the wall, a third LED set on the ceiling (a stage the
     other tests do not use), 60 held-out reflectances, the default method."""
     wall = spectral_stage(camera="Sigma SDMerill (NPL)", leds=((620, 30), (530, 45), (465, 25)))
     stage = panel_stage(wall, ceiling_leds=((628, 18), (520, 32), (455, 20)))
     m = simulate_panel_measurements(stage, ("overcast", "golden_hour"))
-    baseline = wall_only(m)
+    baseline = wall_only_measurements(m)
     reflectances = held_out_reflectances()["rawtoaces"][::3]
     for env, flat in zip(m.environments, baseline.environments, strict=True):
         ours = solve_environment(m, env)

@@ -20,6 +20,10 @@ class ListEnvironments(argparse.Action):
 
         for spec in ENVIRONMENTS.values():
             print(f"{spec.name:22s} {spec.description}")
+        from ocio_vp.simulator.panels import SCENES
+
+        for scene in SCENES.values():
+            print(f"{scene.name:22s} with --ceiling-leds: {scene.description}")
         parser.exit()
 
 
@@ -80,6 +84,25 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="in-frustum panel albedo for the black level (default 0.04; 0 for none)",
     )
     parser.add_argument("--name", default=None, help="stage name (default simulated-stage)")
+    _add_ceiling_options(parser)
+    parser.add_argument(
+        "--fixture",
+        action="append",
+        metavar="KIND",
+        choices=("rgbw", "rgbww", "rgbacl", "rgbw-fluorescent"),
+        help="add a simulated practical fixture (repeatable): rgbw (warm phosphor white), "
+        "rgbww, rgbacl (amber, cyan, lime), rgbw-fluorescent; default: none",
+    )
+    parser.add_argument(
+        "--list-environments",
+        action=ListEnvironments,
+        help="list the known environments and exit (no --out needed)",
+    )
+    parser.set_defaults(func=run)
+
+
+def _add_ceiling_options(parser: argparse.ArgumentParser) -> None:
+    """A second panel type: the ceiling (docs/panels.md)."""
     parser.add_argument(
         "--ceiling-leds",
         default=None,
@@ -96,20 +119,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="with --ceiling-leds: the ceiling's brightness at the wall's drive (default 1.0: "
         "its processor matched to the wall's white)",
     )
-    parser.add_argument(
-        "--fixture",
-        action="append",
-        metavar="KIND",
-        choices=("rgbw", "rgbww", "rgbacl", "rgbw-fluorescent"),
-        help="add a simulated practical fixture (repeatable): rgbw (warm phosphor white), "
-        "rgbww, rgbacl (amber, cyan, lime), rgbw-fluorescent; default: none",
-    )
-    parser.add_argument(
-        "--list-environments",
-        action=ListEnvironments,
-        help="list the known environments and exit (no --out needed)",
-    )
-    parser.set_defaults(func=run)
 
 
 def _add_plate_options(parser: argparse.ArgumentParser) -> None:

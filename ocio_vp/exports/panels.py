@@ -23,7 +23,7 @@ from typing import Any
 
 from ocio_vp.formats.solution import Solution
 
-__all__ = ["PANEL_VERSIONS", "panel_assignments", "panel_notes"]
+__all__ = ["PANEL_VERSIONS", "panel_assignments", "panel_notes", "with_panel_assignments"]
 
 ROOT_CONFIG = "ADisplayClusterRootActor config data (UDisplayClusterConfigurationData)"
 CAMERA = "UDisplayClusterICVFXCameraComponent"
@@ -97,6 +97,19 @@ def panel_assignments(solution: Solution, source: str) -> dict[str, Any]:
                 )
             )
     return {"color_spaces": spaces, "display_views": views, "assignments": assignments}
+
+
+def with_panel_assignments(mapping: dict[str, Any], solution: Solution, source: str) -> dict:
+    """``unreal_ocio.json``'s mapping with the other panel types' colour spaces, views and
+    profiles added (unchanged for a stage of one panel type)."""
+    panels = panel_assignments(solution, source)
+    if panels["assignments"]:
+        asset = mapping["configuration_asset"]
+        asset["desired_color_spaces"] += panels["color_spaces"]
+        asset["desired_display_views"] += panels["display_views"]
+        mapping["assignments"] += panels["assignments"]
+        mapping["panel_types_checked"] = PANEL_VERSIONS
+    return mapping
 
 
 def panel_notes(solution: Solution) -> list[str]:

@@ -26,7 +26,7 @@ import PyOpenColorIO as OCIO
 
 from ocio_vp.calibration.headroom import content_scale
 from ocio_vp.errors import InputError
-from ocio_vp.exports.panels import PANEL_VERSIONS, panel_assignments, panel_notes
+from ocio_vp.exports.panels import panel_notes, with_panel_assignments
 from ocio_vp.exports.source import ExportSource, copy_config
 from ocio_vp.exports.templating import render_template
 from ocio_vp.exports.unreal_script import SCRIPT_FILE, render_unreal_script
@@ -114,7 +114,6 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> dict[str
             "role": role,
         }
 
-    panels = panel_assignments(solution, content)  # a stage's other panel types (or none)
     mapping = {
         "format": "ocio-vp/unreal-ocio",
         "version": 2,
@@ -169,13 +168,7 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> dict[str
         "N_solved": solution.N is not None,
         "content_scale": content_scale(solution).to_dict(),
     }
-    if panels["assignments"]:
-        asset = mapping["configuration_asset"]
-        asset["desired_color_spaces"] += panels["color_spaces"]
-        asset["desired_display_views"] += panels["display_views"]
-        mapping["assignments"] += panels["assignments"]
-        mapping["panel_types_checked"] = PANEL_VERSIONS
-    return mapping
+    return with_panel_assignments(mapping, solution, content)  # a stage's other panel types
 
 
 def write_unreal(source: ExportSource, folder: Path, **_: Any) -> dict[str, Any]:

@@ -58,6 +58,7 @@ __all__ = [
     "panel_stage",
     "scene_light",
     "simulate_panel_measurements",
+    "wall_only_measurements",
 ]
 
 #: The ceiling's LEDs: another panel model than the wall's (peak/FWHM nm, red, green, blue).
@@ -346,4 +347,30 @@ def panel_held_out_errors(
         reflectances=reflectances,
         extra_emission=emitted,
         correct=correct,
+    )
+
+
+def wall_only_measurements(measurements: Measurements) -> Measurements:
+    """What a calibration of the first in-frustum type alone sees: its primaries and lit
+    chart, the whole environment's w_avg (every type's summed) and its black level, no
+    ``panels``. Its M then drives every type (the baseline the per-type solve is judged
+    against)."""
+    first = next(p for p in measurements.panels if p.in_frustum)
+    environments = tuple(
+        Environment(
+            name=e.name,
+            target_chart=e.target_chart,
+            w_avg=None if e.panel_w_avg is None else sum(e.panel_w_avg.values()),
+            black_level=(e.panel_black_level or {}).get(first.name),
+        )
+        for e in measurements.environments
+    )
+    stage = dataclasses.replace(measurements.stage, panel=first.panel, beta=first.beta)
+    return Measurements(
+        stage=stage,
+        SL=first.SL,
+        SRL=first.SRL,
+        environments=environments,
+        ramps=first.ramps,
+        source=measurements.source,
     )
