@@ -161,6 +161,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("only with --ceiling-leds", key="--ceiling-gain")
     else:
         environments = environments_from_args(args.environment)
+        _check_no_scene(environments)
         measurements = simulate_measurements(environments, stage=stage)
     if args.fixture:
         measurements = with_simulated_fixtures(measurements, stage, args.fixture)
@@ -177,6 +178,19 @@ def run(args: argparse.Namespace) -> int:
 
 
 _DEFAULTS = {"vignetting": 0.05, "noise": 0.01, "seed": 0}
+
+
+def _check_no_scene(environments) -> None:
+    """A scene (light from above and the sides) needs the ceiling that gives its light above."""
+    from ocio_vp.errors import InputError
+    from ocio_vp.simulator.panels import SCENES
+
+    for name, value in environments.items():
+        if isinstance(value, str) and value in SCENES:
+            raise InputError(
+                f"{name!r} is a scene lit from above and from the sides: only with --ceiling-leds",
+                key="--environment",
+            )
 
 
 def _panel_measurements(wall, args: argparse.Namespace):
