@@ -4,7 +4,6 @@ undo it) and colour-science's PQ."""
 
 from __future__ import annotations
 
-import dataclasses
 import shutil
 import subprocess
 
@@ -12,44 +11,14 @@ import numpy as np
 import PyOpenColorIO as OCIO
 import pytest
 
+from benchmarks.panel_solves import ceiling_response, three_types
 from ocio_vp.formats.solution import load_solution
 from ocio_vp.ocio.panels import panel_labels
 from ocio_vp.ocio.writer import write_environment
 from ocio_vp.pipeline import solve_environment
 from ocio_vp.wall.encoding import with_wall_encoding
-from ocio_vp.wall.linearity import parse_ramps
 
 REFERENCE = "Camera Native Linear"
-DARK = (0.3, 0.15, 0.35)
-
-
-def response(d, k):
-    """The ceiling's measured (non-linear) response to drive d in channel k."""
-    d = np.asarray(d, dtype=np.float64)
-    return d * (1 - DARK[k] * np.exp(-d / 0.05)) / (1 - DARK[k] * np.exp(-1 / 0.05))
-
-
-def three_types(m):
-    """wall (in frustum), floor (in frustum, the second model's LEDs), ceiling (out of frustum,
-    with ramps and a PQ signal of its own)."""
-    wall, other = m.panels
-    drive = np.linspace(0.0, 1.0, 33)
-    ramps = parse_ramps(
-        {
-            c: {"drive": drive.tolist(),
-                "camera": np.outer(response(drive, k), other.SL[:, k]).tolist()}
-            for k, c in enumerate(("red", "green", "blue"))
-        }
-    )  # fmt: skip
-    ceiling = dataclasses.replace(other, ramps=ramps, encoding="pq", peak_nits=1500.0, regions=())
-    floor = dataclasses.replace(other, name="floor", in_frustum=True, regions=())
-    envs = []
-    for e in m.environments:
-        w = dict(e.panel_w_avg)
-        w["floor"] = 0.1 * w["wall"]
-        black = {"wall": e.panel_black_level["wall"], "floor": e.panel_black_level["wall"]}
-        envs.append(dataclasses.replace(e, panel_w_avg=w, panel_black_level=black))
-    return dataclasses.replace(m, panels=(wall, floor, ceiling), environments=tuple(envs))
 
 
 @pytest.fixture(scope="module")
@@ -145,7 +114,7 @@ def test_the_ceiling_gets_its_own_m_linearity_lut_and_pq_signal(written):
     signal = apply(written["least-squares"], REFERENCE, "LED Ceiling - Outer Frustum", COLOURS)
     # Decode PQ (colour-science), then the ceiling's own response: the linear drive M c.
     pre = colour.models.eotf_ST2084(signal) / 1500.0
-    seen = np.stack([response(pre[:, k], k) for k in range(3)], axis=1)
+    seen = np.stack([ceiling_response(pre[:, k], k) for k in range(3)], axis=1)
     drive = np.clip(COLOURS @ ceiling.M.T, 0.0, None)  # the wall's tail: negative drive is black
     assert np.allclose(seen, drive, rtol=5e-3, atol=5e-4)
 

@@ -81,7 +81,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         default=[],
         metavar="ENV=FILE",
         help="take ENV's w_avg from its equirectangular HDRI (camera linear RGB) instead of the "
-        "white patch (repeatable; a bare FILE when solving one environment; default: none)",
+        "white patch; with panels, each panel type's from the directions of its region "
+        "(repeatable; a bare FILE when solving one environment; default: none)",
     )
     parser.add_argument(
         "--scheduler",
