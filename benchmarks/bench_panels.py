@@ -25,9 +25,8 @@ white patch before Q, per channel relative to the target's (largest channel), fr
 The **held-out** stage is one no test and no default uses: the Sigma SDMerill camera, the wider
 LED set of the accuracy benchmark on the wall, a third LED set on the ceiling.
 
-Run alone: ``python -m benchmarks.bench_panels [--quick] [--out docs/panels_benchmark.md]``
-(about 4 minutes on 2 cores); ``python -m benchmarks.run`` writes ``docs/panels_benchmark.md``
-too.
+Run alone: ``python -m benchmarks.bench_panels [--quick] [--out docs/panels_benchmark.md]``;
+``python -m benchmarks.run`` writes ``docs/panels_benchmark.md`` too.
 """
 
 from __future__ import annotations

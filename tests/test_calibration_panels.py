@@ -206,3 +206,18 @@ def test_fixtures_light_with_the_other_panel_types(panel_stage_and_measurements)
     expected = residual / (24 * np.sum(env.target_chart[18] ** 2))
     assert notes["error_wall_only"] == pytest.approx(expected, rel=1e-9)
     assert notes["applied"] and notes["error_with_fixtures"] < notes["error_wall_only"]
+
+
+def test_one_panel_type_without_w_avg_takes_it_from_the_white_patch(panel_stage_and_measurements):
+    from ocio_vp.errors import InputError
+
+    _, m = panel_stage_and_measurements
+    m = dataclasses.replace(m, panels=m.panels[:1])
+    env = dataclasses.replace(m.environments[0], panel_w_avg=None, panel_black_level=None)
+    solution = solve_environment(dataclasses.replace(m, environments=(env,)), env)
+    assert np.allclose(solution.w_avg, env.target_chart[18] / m.stage.white_reflectance)
+    target = env.target_chart.copy()
+    target[18] = 0.0
+    black = dataclasses.replace(env, target_chart=target)
+    with pytest.raises(InputError, match=r"environments\[0\]\.target_chart: white patch 18"):
+        solve_environment(dataclasses.replace(m, environments=(black,)), black)

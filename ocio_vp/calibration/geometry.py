@@ -180,7 +180,7 @@ def environment_panel_w_avg(
         return {n: np.asarray(v, dtype=np.float64) for n, v in environment.panel_w_avg.items()}
     if len(measurements.panels) == 1:
         return {measurements.panels[0].name: environment_w_avg(measurements, environment)}
-    index = [e.name for e in measurements.environments].index(environment.name)
+    index = _index(measurements, environment)
     raise InputError(
         "with several panel types, give w_avg per panel type ({"
         + ", ".join(f"{p.name}: [r, g, b]" for p in measurements.panels)
@@ -191,4 +191,6 @@ def environment_panel_w_avg(
 
 
 def _index(measurements: Measurements, environment: Environment) -> int:
-    return next(i for i, e in enumerate(measurements.environments) if e is environment)
+    """Where ``environment`` is in the file, by name (the solve may hold a changed copy: an
+    HDRI's w_avg, a panel type's view of it)."""
+    return [e.name for e in measurements.environments].index(environment.name)
