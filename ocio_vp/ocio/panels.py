@@ -39,6 +39,7 @@ from ocio_vp.ocio.config import (
     wall_signal_tail,
     wall_transforms,
 )
+from ocio_vp.ocio.viewing import set_categories
 from ocio_vp.ocio.wall import wall_outputs
 
 __all__ = ["PanelOutputs", "add_panel_spaces", "panel_labels", "panel_outputs"]
@@ -173,12 +174,15 @@ def panel_outputs(solution: Solution, q_inverse_file: str | None = None) -> Pane
 
 
 def add_panel_spaces(config: OCIO.Config, outputs: PanelOutputs) -> None:
-    """Add the colour spaces and their views on the ``LED Wall`` display, then validate."""
+    """Add the colour spaces and their views on the ``LED Wall`` display (and the categories
+    every colour space of the config has), then validate."""
     for space in outputs.colorspaces:
         config.addColorSpace(space)
     for view, space in outputs.views:
         config.addDisplayView(DISPLAY, view, space)
     views = config.getActiveViews()  # a string before OCIO 2.5, an iterator since
     active = [v.strip() for v in (views.split(",") if isinstance(views, str) else views)]
-    config.setActiveViews(", ".join([*active, *(view for view, _ in outputs.views)]))
+    if active:  # none listed: every view is active
+        config.setActiveViews(", ".join([*active, *(view for view, _ in outputs.views)]))
+    set_categories(config)  # as the wall's: menus that filter by category list them
     config.validate()
