@@ -28,7 +28,17 @@ from ocio_vp.calibration.equations import (
     solve_M,
     solve_N,
 )
-from ocio_vp.calibration.geometry import environment_w_avg, stage_beta
+from ocio_vp.calibration.geometry import environment_panel_w_avg, environment_w_avg, stage_beta
+from ocio_vp.calibration.panels import (
+    InFrustumDrive,
+    in_frustum_drive_for,
+    in_frustum_match,
+    light_shares,
+    lit_white_errors,
+    other_panels_light,
+    panel_lights,
+    panel_solutions,
+)
 from ocio_vp.choices import DEFAULT_BLACK_LEVEL, DEFAULT_METHOD
 from ocio_vp.correction.extrapolation import Extrapolation, extrapolation
 from ocio_vp.correction.guards import check_problem, singular_q_cause
@@ -45,6 +55,8 @@ from ocio_vp.fixtures.lighting import (
     light_with_fixtures,
 )
 from ocio_vp.formats.measurements import Environment, Measurements
+from ocio_vp.formats.panel_solution import PanelSolution
+from ocio_vp.formats.panels import primary_panel
 from ocio_vp.formats.solution import Diagnostics, Solution
 from ocio_vp.formats.synthesis import synthesis_to_dict, synthesis_warnings
 from ocio_vp.metrics import error_relative_to_white
@@ -101,6 +113,7 @@ def solve_environment(
     TypeError.
     """
     options = dataclasses.replace(options or SolveOptions(), **changes)
+    environment = _primary_environment(measurements, environment)
     clipped = _clipped_patches(measurements, environment)
     problem = post_correction_problem(measurements, environment, clipped)
     lighting = _lighting(measurements, problem, options.method) if options.fixtures else None
@@ -131,6 +144,14 @@ def solve_environment(
         offset=offset, environment=environment, clipped=clipped, lighting=lighting,
         excluded=None if options.keep_all_patches else excluded,
     )  # fmt: skip
+    linearity, panels = _panel_linearity(measurements), None
+    if measurements.panels:
+        panels, block, notes = _solve_panels(
+            measurements, environment, correction, options, M=M, N=N, n_reason=n_reason,
+            offset=offset, linearity=linearity,
+        )  # fmt: skip
+        warnings = [*(diagnostics.warnings or []), *notes]
+        diagnostics = dataclasses.replace(diagnostics, panels=block, warnings=warnings)
     return Solution(
         stage=measurements.stage.name,
         environment=environment.name,
@@ -147,9 +168,10 @@ def solve_environment(
         measurements_file=Path(measurements.source).name if measurements.source else None,
         measurements_sha256=measurements.sha256,
         camera_colorspace=measurements.stage.camera_colorspace,
-        linearity=_panel_linearity(measurements),
+        linearity=linearity,
         fixtures=None if lighting is None else fixtures_block(lighting),
         post_correction=correction,
+        panels=panels,
     )
 
 
@@ -177,17 +199,23 @@ def _environment_key(measurements: Measurements, environment: Environment, key: 
 
 def _clipped_patches(measurements: Measurements, environment: Environment) -> list[int]:
     """The chart patches at the clip level; an error when a primary or needed white clips."""
-    source, SL = measurements.source, measurements.SL
+    source = measurements.source
     white = measurements.stage.white_patch
     clip_level = measurements.stage.clip_level
-    if clip_level is not None and np.any(SL >= clip_level):
-        raise InputError(
-            f"a primary is clipped (>= clip_level {clip_level:g}): [SL] and M would be wrong; "
-            "re-shoot the primaries with less exposure",
-            source=source,
-            key="primaries",
-        )
-    clipped = clipped_patches(measurements.SRL, environment.target_chart, clip_level)
+    types = [("", measurements.SL, measurements.SRL)]
+    if measurements.panels:
+        types = [(f"panels[{i}].", p.SL, p.SRL) for i, p in enumerate(measurements.panels)]
+    clipped: list[int] = []
+    for where, SL, SRL in types:
+        if clip_level is not None and np.any(SL >= clip_level):
+            raise InputError(
+                f"a primary is clipped (>= clip_level {clip_level:g}): [SL] and M would be "
+                "wrong; re-shoot the primaries with less exposure",
+                source=source,
+                key=f"{where}primaries",
+            )
+        found = clipped_patches(SRL, environment.target_chart, clip_level)
+        clipped = sorted(set(clipped) | set(found)) if measurements.panels else found
     if white in clipped and environment.w_avg is None:
         raise InputError(
             f"the white patch {white} is clipped, so w_avg cannot come from it: give w_avg",
@@ -204,6 +232,8 @@ def post_correction_problem(
     beta, w_avg, the target; the ``clipped`` patches weigh 0."""
     weights = np.ones(measurements.n_patches)
     weights[list(clipped)] = 0.0
+    if measurements.panels:
+        return _panels_problem(measurements, environment, weights)
     return QProblem(
         SL=measurements.SL,
         SRL=measurements.SRL,
@@ -215,6 +245,115 @@ def post_correction_problem(
         weights=weights,
         white_reflectance=measurements.stage.white_reflectance,
     )
+
+
+def _primary_environment(measurements: Measurements, environment: Environment) -> Environment:
+    """With ``panels``: the environment as its first in-frustum type sees it (that type's
+    w_avg and black level as the environment's), so the solve's single-wall steps apply."""
+    if not measurements.panels:
+        return environment
+    primary = primary_panel(measurements.panels).name
+    w_avg = None if environment.panel_w_avg is None else environment.panel_w_avg[primary]
+    black = (environment.panel_black_level or {}).get(primary)
+    return dataclasses.replace(environment, w_avg=w_avg, black_level=black)
+
+
+def _panels_problem(
+    measurements: Measurements, environment: Environment, weights: np.ndarray
+) -> QProblem:
+    """Eq. 5 on a stage of several panel types: the first in-frustum type's eq. 3, plus every
+    other type's light (:mod:`ocio_vp.calibration.panels`) as ``extra_light``."""
+    lights = panel_lights(measurements, environment_panel_w_avg(measurements, environment))
+    primary = next(light for light in lights if light.panel.in_frustum)
+    return QProblem(
+        SL=primary.panel.SL,
+        SRL=primary.panel.SRL,
+        beta=primary.beta,
+        M=primary.M,
+        w_avg=primary.w_avg,
+        target=environment.target_chart,
+        white_patch=measurements.stage.white_patch,
+        weights=weights,
+        white_reflectance=measurements.stage.white_reflectance,
+        extra_light=other_panels_light(lights, primary.name),
+    )
+
+
+def _solve_panels(
+    measurements: Measurements,
+    environment: Environment,
+    correction: PostCorrection,
+    options: SolveOptions,
+    *,
+    M: np.ndarray,
+    N: np.ndarray | None,
+    n_reason: str | None,
+    offset: np.ndarray | None,
+    linearity: dict | None,
+) -> tuple[dict[str, PanelSolution], dict[str, Any], list[str]]:
+    """solution.json's ``panels`` block, the diagnostics' and the warnings: every type's M,
+    N and offset for the in-frustum ones (the first one's are the top-level ones), each
+    type's share of the light, and how the in-frustum types match in camera."""
+    primary = primary_panel(measurements.panels).name
+    lights = panel_lights(measurements, environment_panel_w_avg(measurements, environment))
+    blacks = dict(environment.panel_black_level or {})
+    white, camera = measurements.stage.white_patch, default_camera_to_xyz()
+    drives: dict[str, InFrustumDrive] = {primary: InFrustumDrive(N, n_reason, offset)}
+    for light in lights:
+        if light.panel.in_frustum and light.name != primary:
+            drives[light.name] = in_frustum_drive_for(
+                light, correction.matrix, black_level=blacks.get(light.name),
+                method=options.black_level, max_condition=options.max_condition_q,
+            )  # fmt: skip
+    match, warnings = in_frustum_match(
+        lights, drives, primary=primary, target=environment.target_chart,
+        correction=correction, black_levels=blacks, white_patch=white, camera_to_xyz=camera,
+    )  # fmt: skip
+    shares = light_shares(lights, white, camera)
+    fitted = {
+        p.name: linearity if p.name == primary else _type_linearity(measurements, i)
+        for i, p in enumerate(measurements.panels)
+    }
+    panels = panel_solutions(lights, drives, shares, fitted)
+    first = panels[primary]
+    panels[primary] = dataclasses.replace(first, M=M, drive=M @ first.w_avg)
+    for light in lights:
+        if light.name != primary and np.any(light.drive < 0):
+            warnings.append(
+                f"panel type {light.name}: its drive M w_avg has a negative channel: this light "
+                "is outside its LED gamut and the panels clip it"
+            )
+    errors = lit_white_errors(lights, environment.target_chart, white, primary)
+    block = {
+        "primary": primary,
+        "shares": shares,
+        "lit_white_error": errors["per_panel"],
+        "lit_white_error_primary_M": errors["primary_M"],
+        "in_frustum_match": match,
+    }
+    return panels, block, warnings
+
+
+def _type_linearity(measurements: Measurements, index: int) -> dict | None:
+    """A panel type's ``linearity`` block from its own ramps (None without ramps and without
+    an ``encoding`` of its own, which it records as ``wall_encoding``)."""
+    from ocio_vp.wall.linearity import fit_linearity
+
+    panel = measurements.panels[index]
+    linearity = None
+    if panel.ramps is not None:
+        try:
+            linearity = fit_linearity(panel.ramps, panel.SL, source=measurements.source)
+        except InputError as error:
+            key = f"panels[{index}].{error.key}" if error.key else f"panels[{index}].ramps"
+            raise InputError(error.problem, source=error.source, key=key) from None
+    if panel.encoding is None:
+        return linearity
+    linearity = dict(linearity or {"measured": False, "model": "linear (assumed)"})
+    linearity["wall_encoding"] = {"name": panel.encoding}
+    if panel.encoding == "pq" and panel.peak_nits is not None:
+        linearity["wall_encoding"]["peak_nits"] = float(panel.peak_nits)
+    return linearity
 
 
 def _located(error: InputError, measurements: Measurements, environment: Environment):
@@ -406,6 +545,9 @@ def _diagnostics(
 
 def _panel_linearity(measurements: Measurements) -> dict | None:
     """The ``linearity`` block from the ``ramps`` section (None when there is none)."""
+    if measurements.panels:
+        first = primary_panel(measurements.panels)
+        return _type_linearity(measurements, measurements.panels.index(first))
     if measurements.ramps is None:
         return None
     from ocio_vp.wall.linearity import fit_linearity

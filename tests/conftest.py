@@ -115,3 +115,18 @@ def oracle_correction(block: dict, rgb) -> np.ndarray:
     start, end = p["fade"]
     w = np.where(total > 0, _fade_out((gauge - start) / (end - start)), 0.0)[:, None]
     return (linear + w * (polynomial - linear)).reshape(np.shape(rgb))
+
+
+def panel_stage_measurements(environments=("overcast", "interior"), **options):
+    """A simulated stage of two panel types (paper-like wall, a ceiling of another panel
+    model: ocio_vp.simulator.panels) and its exact measurements."""
+    from ocio_vp.simulator.panels import panel_stage, simulate_panel_measurements
+    from ocio_vp.simulator.stage import paper_stage
+
+    stage = panel_stage(paper_stage(), **options)
+    return stage, simulate_panel_measurements(stage, environments)
+
+
+@pytest.fixture(scope="session")
+def panel_stage_and_measurements():
+    return panel_stage_measurements()

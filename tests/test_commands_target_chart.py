@@ -248,3 +248,25 @@ def test_output_rules(stage_file, tmp_path, capsys):
         capsys, stage_file, "--environment", "bad name", *args[2:], "--out", tmp_path / "o.yaml"
     )
     assert code == 2 and "unsafe name" in err
+
+
+def test_a_stage_of_several_panel_types_takes_each_types_w_avg_from_solve_hdri(tmp_path, capsys):
+    from conftest import panel_stage_measurements
+
+    _, m = panel_stage_measurements(("overcast",))
+    stage = tmp_path / "panels.yaml"
+    save_measurements(m, stage)
+    sky = tmp_path / "sky.exr"
+    write_exr(sky, np.ones((90, 180, 3)) * [0.6, 0.7, 0.8])
+    out = tmp_path / "cg.yaml"
+    args = ["target-chart", str(stage), "--environment", "overcast", "--hdri", str(sky)]
+    assert main([*args, "--camera", NIKON, "--out", str(out)]) == 0
+    assert "w_avg per panel type: from `solve --hdri`" in capsys.readouterr().out
+    env = load_measurements(out).environment("overcast")
+    assert env.synthesized is not None and env.panel_w_avg is None
+    assert env.panel_black_level.keys() == {"wall"}  # measured on the stage: kept
+    calib = tmp_path / "calib"
+    assert main(["solve", str(out), "--out", str(calib), "--hdri", f"overcast={sky}"]) == 0
+    panels = json.loads((calib / "overcast" / "solution.json").read_text())["panels"]
+    total = np.add(panels["wall"]["w_avg"], panels["ceiling"]["w_avg"])
+    np.testing.assert_allclose(total, [0.6, 0.7, 0.8], rtol=2e-3)  # a uniform sky: its radiance

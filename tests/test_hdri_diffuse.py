@@ -10,6 +10,8 @@ transfer text):
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from exr_helpers import write_exr
@@ -179,3 +181,91 @@ class TestSolveOption:
         assert "nowhere" in capsys.readouterr().err
         assert main([*base, "--environment", "env_1", "--hdri", str(hdri)]) == 0
         assert not (tmp_path / "o" / "env_0").exists()
+
+
+def _band(e0: float, e1: float) -> float:
+    """Closed form: (1/pi) integral of max(0, n.w) over the elevation band [e0, e1] (radians)
+    of a unit-radiance sky, all azimuths, n horizontal: (2/pi) [e/2 + sin(2e)/4]."""
+    f = lambda e: e / 2 + np.sin(2 * e) / 4  # noqa: E731
+    return 2.0 / np.pi * (f(e1) - f(e0))
+
+
+class TestPanelRegions:
+    """Each panel type's part of w_avg: the diffuse integral over its directions only."""
+
+    def test_bands_of_a_two_colour_sky_match_the_closed_form(self):
+        from ocio_vp.formats.panels import PanelRegion, PanelType
+        from ocio_vp.hdri.diffuse import panel_w_avg
+
+        height, width = 360, 720  # half a degree per row: 40 degrees is a row edge
+        sky, ground = np.array([0.3, 0.5, 0.9]), np.array([0.6, 0.5, 0.3])
+        elevation = 90.0 - (np.arange(height) + 0.5) * 180.0 / height
+        image = np.where((elevation >= 40.0)[:, None, None], sky, ground) * np.ones((1, width, 3))
+        dummy = np.eye(3)
+        panels = [
+            PanelType("wall", True, dummy, dummy[None], beta=0.2,
+                      regions=(PanelRegion(elevation=(-90.0, 40.0)),)),
+            PanelType("ceiling", False, dummy, dummy[None], beta=0.2,
+                      regions=(PanelRegion(elevation=(40.0, 90.0)),)),
+        ]  # fmt: skip
+        parts, uncovered = panel_w_avg(image, panels)
+        top = _band(np.radians(40.0), np.pi / 2)
+        np.testing.assert_allclose(parts["ceiling"], top * sky, rtol=2e-3)
+        np.testing.assert_allclose(parts["wall"], (1 - top) * ground, rtol=2e-3)
+        assert uncovered < 1e-12
+        # A wall in front only (azimuth -90..90): what lies behind the chart gives it no light.
+        front = dataclasses.replace(
+            panels[0], regions=(PanelRegion(elevation=(-90.0, 40.0), azimuth=(-90.0, 90.0)),)
+        )
+        parts, _ = panel_w_avg(image, [front, panels[1]])
+        np.testing.assert_allclose(parts["wall"], (1 - top) * ground, rtol=2e-3)
+        # A wall above the horizon only: the light from below is named as no type's.
+        high = dataclasses.replace(panels[0], regions=(PanelRegion(elevation=(0.0, 40.0)),))
+        parts, uncovered = panel_w_avg(image, [high, panels[1]])
+        below = 0.5 * ground[1]  # the lower hemisphere's band: (2/pi) (pi/4) = 1/2
+        assert uncovered == pytest.approx(below / (top * sky[1] + (1 - top) * ground[1]), rel=3e-3)
+
+    def test_solve_takes_each_types_w_avg_from_the_hdri(self, tmp_path, capsys):
+        import json
+
+        import yaml
+        from conftest import panel_stage_measurements
+
+        from ocio_vp.cli import main
+        from ocio_vp.formats.measurements import measurements_to_dict
+
+        _, m = panel_stage_measurements(("overcast",))
+        document = measurements_to_dict(m)
+        del document["environments"][0]["w_avg"]
+        stage = tmp_path / "stage.yaml"
+        stage.write_text(yaml.safe_dump(document))
+        height = 90  # two degrees per row: 40 degrees is a row edge
+        elevation = 90.0 - (np.arange(height) + 0.5) * 180.0 / height
+        sky = np.where((elevation >= 40.0)[:, None, None], 0.8, 0.4) * np.ones((1, 180, 3))
+        hdri = tmp_path / "sky.exr"
+        write_exr(hdri, sky)
+        out = tmp_path / "calib"
+        assert main(["solve", str(stage), "--out", str(out), "--hdri", f"overcast={hdri}"]) == 0
+        assert "overcast: w_avg per panel type from" in capsys.readouterr().out
+        panels = json.loads((out / "overcast" / "solution.json").read_text())["panels"]
+        top = _band(np.radians(40.0), np.pi / 2)
+        np.testing.assert_allclose(panels["ceiling"]["w_avg"], 0.8 * top, rtol=2e-3)
+        np.testing.assert_allclose(panels["wall"]["w_avg"], 0.4 * (1 - top), rtol=2e-3)
+
+    def test_a_panel_type_without_region_is_refused_in_one_line(self, tmp_path, capsys):
+        import yaml
+        from conftest import panel_stage_measurements
+
+        from ocio_vp.cli import main
+        from ocio_vp.formats.measurements import measurements_to_dict
+
+        _, m = panel_stage_measurements(("overcast",))
+        document = measurements_to_dict(m)
+        del document["panels"][1]["region"]
+        stage = tmp_path / "stage.yaml"
+        stage.write_text(yaml.safe_dump(document))
+        hdri = tmp_path / "sky.exr"
+        write_exr(hdri, np.ones((16, 32, 3)))
+        assert main(["solve", str(stage), "--out", str(tmp_path / "o"), "--hdri", str(hdri)]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "panels[1].region: no region" in err

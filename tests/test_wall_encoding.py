@@ -149,3 +149,21 @@ class TestLutAccuracy:
             model(lut_drive(lut_table(block, "linear"), np.repeat(x[:, None], 3, 1))[:, 0]) / x - 1
         ).max()
         assert even > 0.01 and spaced < 1e-4
+
+
+def test_panel_types_keep_their_own_encoding_and_take_the_stages_otherwise(
+    panel_stage_and_measurements,
+):
+    import dataclasses
+
+    from ocio_vp.pipeline import solve_environment
+    from ocio_vp.wall.encoding import with_wall_encoding
+
+    _, m = panel_stage_and_measurements
+    wall, ceiling = m.panels
+    m = dataclasses.replace(m, panels=(wall, dataclasses.replace(ceiling, encoding="gamma2.4")))
+    solution = with_wall_encoding(solve_environment(m, m.environments[0]), "pq", peak_nits=1200)
+    assert solution.panels["ceiling"].linearity["wall_encoding"] == {"name": "gamma2.4"}
+    pq = {"name": "pq", "peak_nits": 1200.0}
+    assert solution.panels["wall"].linearity["wall_encoding"] == pq
+    assert solution.linearity["wall_encoding"] == pq  # the top level is the wall's

@@ -142,6 +142,8 @@ def clipped_drive_lit(problem: Any, Q: ArrayLike, drive: dict[str, Any]) -> dict
     if not drive["negative_channels"]:
         return out
     lit = predict_lit_chart(problem.SRL, problem.beta, np.eye(3), drive["clipped_drive"])
+    if getattr(problem, "extra_light", None) is not None:  # the stage's other panel types
+        lit = lit + problem.extra_light
     charts = {"lit_baseline": lit, "lit_corrected": lit @ np.asarray(Q, dtype=np.float64).T}
     args = (problem.target, problem.white_patch, problem.fit_weights)
     out["charts_clipped_drive"] = charts

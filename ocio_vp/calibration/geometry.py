@@ -17,12 +17,15 @@ from numpy.typing import ArrayLike
 
 from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import Environment, Measurements, PanelGeometry
+from ocio_vp.formats.panels import PanelType, primary_panel
 
 __all__ = [
+    "environment_panel_w_avg",
     "environment_w_avg",
     "form_factor_numerical",
     "form_factor_parallel_rectangle",
     "panel_beta",
+    "panel_type_beta",
     "stage_beta",
     "w_avg_from_white_patch",
 ]
@@ -112,8 +115,18 @@ def panel_beta(panel: PanelGeometry) -> float:
     )
 
 
+def panel_type_beta(panel: PanelType) -> float:
+    """beta of one panel type of a file with ``panels``: its ``beta`` wins over its geometry."""
+    if panel.beta is not None:
+        return float(panel.beta)
+    return panel_beta(panel.panel)
+
+
 def stage_beta(measurements: Measurements) -> float:
-    """beta for a stage: an explicit ``beta`` in the file wins over the panel geometry."""
+    """beta for a stage: an explicit ``beta`` in the file wins over the panel geometry (with
+    ``panels``: the first in-frustum type's, whose [SRL] the measurements' ``SRL`` is)."""
+    if measurements.panels:
+        return panel_type_beta(primary_panel(measurements.panels))
     stage = measurements.stage
     if stage.beta is not None:
         return float(stage.beta)
@@ -150,5 +163,34 @@ def environment_w_avg(measurements: Measurements, environment: Environment) -> n
     return w_avg
 
 
+def environment_panel_w_avg(
+    measurements: Measurements, environment: Environment
+) -> dict[str, np.ndarray]:
+    """With ``panels``: the diffuse light each panel type must deliver, ``{name: (3,)}``.
+
+    The file's (or an HDRI's, :func:`ocio_vp.hdri.environments_with_hdri`) per-panel w_avg;
+    a stage of one panel type may take it from the white patch like a file without panels.
+
+    Raises
+    ------
+    InputError
+        When the environment has none and the stage has several panel types.
+    """
+    if environment.panel_w_avg is not None:
+        return {n: np.asarray(v, dtype=np.float64) for n, v in environment.panel_w_avg.items()}
+    if len(measurements.panels) == 1:
+        return {measurements.panels[0].name: environment_w_avg(measurements, environment)}
+    index = _index(measurements, environment)
+    raise InputError(
+        "with several panel types, give w_avg per panel type ({"
+        + ", ".join(f"{p.name}: [r, g, b]" for p in measurements.panels)
+        + "}), or an HDRI (--hdri ENV=FILE) and a region for every panel type",
+        source=measurements.source,
+        key=f"environments[{index}].w_avg",
+    )
+
+
 def _index(measurements: Measurements, environment: Environment) -> int:
-    return next(i for i, e in enumerate(measurements.environments) if e is environment)
+    """Where ``environment`` is in the file, by name (the solve may hold a changed copy: an
+    HDRI's w_avg, a panel type's view of it)."""
+    return [e.name for e in measurements.environments].index(environment.name)

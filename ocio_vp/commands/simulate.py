@@ -20,6 +20,10 @@ class ListEnvironments(argparse.Action):
 
         for spec in ENVIRONMENTS.values():
             print(f"{spec.name:22s} {spec.description}")
+        from ocio_vp.simulator.panels import SCENES
+
+        for scene in SCENES.values():
+            print(f"{scene.name:22s} with --ceiling-leds: {scene.description}")
         parser.exit()
 
 
@@ -82,6 +86,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="in-frustum panel albedo for the black level (default 0.04; 0 for none)",
     )
     parser.add_argument("--name", default=None, help="stage name (default simulated-stage)")
+    _add_ceiling_options(parser)
     parser.add_argument(
         "--fixture",
         action="append",
@@ -125,6 +130,26 @@ def _add_take_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_ceiling_options(parser: argparse.ArgumentParser) -> None:
+    """A second panel type: the ceiling (docs/panels.md)."""
+    parser.add_argument(
+        "--ceiling-leds",
+        default=None,
+        metavar="LEDS",
+        help="add a ceiling of another panel model (a measurements file with panels: wall and "
+        "ceiling, docs/panels.md): its R,G,B LEDs as for --leds, e.g. 618/24,538/40,470/26; "
+        "environments then default to scenes lit from above and the sides (overcast, "
+        "clear_sky, golden_hour, interior, night_street); default: no ceiling",
+    )
+    parser.add_argument(
+        "--ceiling-gain",
+        type=float,
+        default=None,
+        help="with --ceiling-leds: the ceiling's brightness at the wall's drive (default 1.0: "
+        "its processor matched to the wall's white)",
+    )
+
+
 def _add_plate_options(parser: argparse.ArgumentParser) -> None:
     """Options that only matter with --plates."""
     parser.add_argument(
@@ -164,7 +189,14 @@ def run(args: argparse.Namespace) -> int:
 
             check_not_input([args.plates], [args.sequence])
     stage = spectral_stage(**options)
-    measurements = simulate_measurements(environments_from_args(args.environment), stage=stage)
+    if args.ceiling_leds is not None:
+        measurements = _panel_measurements(stage, args)
+    elif args.ceiling_gain is not None:
+        raise InputError("only with --ceiling-leds", key="--ceiling-gain")
+    else:
+        environments = environments_from_args(args.environment)
+        _check_no_scene(environments)
+        measurements = simulate_measurements(environments, stage=stage)
     if args.fixture:
         measurements = with_simulated_fixtures(measurements, stage, args.fixture)
     try:
@@ -238,6 +270,37 @@ def _film(measurements, args: argparse.Namespace) -> str:
 
 
 _DEFAULTS = {"vignetting": 0.05, "noise": 0.01, "seed": 0}
+
+
+def _check_no_scene(environments) -> None:
+    """A scene (light from above and the sides) needs the ceiling that gives its light above."""
+    from ocio_vp.errors import InputError
+    from ocio_vp.simulator.panels import SCENES
+
+    for name, value in environments.items():
+        if isinstance(value, str) and value in SCENES:
+            raise InputError(
+                f"{name!r} is a scene lit from above and from the sides: only with --ceiling-leds",
+                key="--environment",
+            )
+
+
+def _panel_measurements(wall, args: argparse.Namespace):
+    """The wall and a ceiling of ``--ceiling-leds`` (ocio_vp.simulator.panels)."""
+    from ocio_vp.simulator.options import ceiling_leds_from_arg, environments_from_args
+    from ocio_vp.simulator.panels import (
+        DEFAULT_CEILING_GAIN,
+        SCENES,
+        panel_stage,
+        simulate_panel_measurements,
+    )
+
+    gain = DEFAULT_CEILING_GAIN if args.ceiling_gain is None else args.ceiling_gain
+    stage = panel_stage(wall, ceiling_leds=ceiling_leds_from_arg(args.ceiling_leds), gain=gain)
+    environments = {name: name for name in SCENES}
+    if args.environment:
+        environments = environments_from_args(args.environment)
+    return simulate_panel_measurements(stage, environments)
 
 
 def _check_plates_folder(folder: str) -> None:

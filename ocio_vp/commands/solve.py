@@ -22,6 +22,7 @@ __all__ = [
     "print_content_scale",
     "print_fixtures",
     "print_linearity",
+    "print_panels",
     "run",
 ]
 
@@ -92,7 +93,8 @@ def _add_light_arguments(parser: argparse.ArgumentParser) -> None:
         default=[],
         metavar="ENV=FILE",
         help="take ENV's w_avg from its equirectangular HDRI (camera linear RGB) instead of the "
-        "white patch (repeatable; a bare FILE when solving one environment; default: none)",
+        "white patch; with panels, each panel type's from the directions of its region "
+        "(repeatable; a bare FILE when solving one environment; default: none)",
     )
     parser.add_argument(
         "--scheduler",
@@ -157,6 +159,33 @@ def print_fixtures(solutions: Sequence) -> None:
             f"fixtures, {solution.environment}: {drives} (error Q cannot remove "
             f"{100 * notes['error_reduction']:.0f}% lower; active limits: {limits})"
         )
+
+
+def print_panels(solutions: Sequence) -> None:
+    """One line per environment of a stage of several panel types: each type's share of the
+    light, the lit white with each type's own M and with the first type's M everywhere, and
+    how the in-frustum types match in camera."""
+
+    def percent(values) -> str:
+        return "/".join(f"{100 * v:.1f}" for v in values) + "%"
+
+    for solution in solutions:
+        notes = solution.diagnostics.get("panels") if solution.panels else None
+        if not notes:
+            continue
+        shares = " + ".join(f"{name} {100 * v:.0f}%" for name, v in notes["shares"].items())
+        line = (
+            f"panels, {solution.environment}: {shares} of the light; lit white before Q "
+            f"{percent(notes['lit_white_error'])} off per channel ("
+            f"{percent(notes['lit_white_error_primary_M'])} with {notes['primary']}'s M for all)"
+        )
+        match = notes.get("in_frustum_match") or {}
+        for name, block in (match.get("types") or {}).items():
+            line += (
+                f"; in camera {name} vs {match['reference']}: mean ΔE2000 "
+                f"{block['delta_E_2000_mean']:.2f} (max {block['delta_E_2000_max']:.2f})"
+            )
+        print(line)
 
 
 def print_linearity(solutions: Sequence) -> None:
@@ -224,6 +253,7 @@ def run(args: argparse.Namespace) -> int:
         written = _solve_and_write(args, peak_nits, pool)
     print_summary(written)
     print_fixtures(written)
+    print_panels(written)
     print_linearity(written)
     print_camera_gamut(written)
     print_content_scale(written)

@@ -207,9 +207,14 @@ def run(args: argparse.Namespace) -> int:
 
 def _summary(args: argparse.Namespace, environment, synth) -> None:
     record = environment.synthesized
+    w_avg = environment.w_avg
+    if w_avg is None:  # a stage of several panel types: each one's w_avg from solve --hdri
+        w_avg_text = "w_avg per panel type: from `solve --hdri` and the panel types' regions"
+    else:
+        w_avg_text = f"w_avg {w_avg.round(6).tolist()} camera RGB"
     print(
         f"wrote {args.out}: environment {environment.name} with a synthesized target chart "
-        f"(w_avg {environment.w_avg.round(6).tolist()} camera RGB)"
+        f"({w_avg_text})"
     )
     print(f"  light: {record.illuminant}, CCT {record.cct:.0f} K, Duv {record.duv:+.4f}")
     print(f"  camera: {record.camera}; chart: {record.chart} (x{synth.chart_scale:.4f})")

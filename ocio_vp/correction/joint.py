@@ -195,6 +195,8 @@ class _JointProblem:
         self.M = np.asarray(problem.M, dtype=np.float64)
         self.w_avg = np.asarray(problem.w_avg, dtype=np.float64)
         self.A = np.asarray(problem.SRL, dtype=np.float64) / float(problem.beta)  # x_j = A_j d
+        # Light no drive here changes (the stage's other panel types), or None.
+        self.fixed = None if problem.extra_light is None else np.asarray(problem.extra_light)
         self.P = np.asarray(problem.target, dtype=np.float64)
         self.w = problem.fit_weights
         self.d0 = self.M @ self.w_avg
@@ -205,6 +207,10 @@ class _JointProblem:
         self.scale = max(float(np.max(np.abs(self.d0))), 1e-12)
         self.norm = float(np.sum(self.w) * np.sum(self.P[problem.white_patch] ** 2))
 
+    def lit(self, d: np.ndarray) -> np.ndarray:
+        """(n, 3) the lit chart for drive d: eq. 3, plus the fixed light where there is one."""
+        return self.A @ d if self.fixed is None else self.A @ d + self.fixed
+
     def unpack(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return z[:3] * self.scale, z[3:].reshape(3, 3)
 
@@ -212,7 +218,7 @@ class _JointProblem:
         """Eq. 5 normalised by the white patch, and its exact gradient in z."""
         d, Q = self.unpack(z)
         A, w, norm = self.A, self.w, self.norm
-        X = A @ d  # (n, 3)
+        X = self.lit(d)  # (n, 3)
         R = X @ Q.T - self.P
         value = float(np.sum(w[:, None] * R * R)) / norm
         gQ = 2.0 * (R * w[:, None]).T @ X / norm
@@ -290,7 +296,7 @@ def _solve_joint(joint: _JointProblem, max_iterations: int, camera: str) -> QFit
     from scipy.optimize import minimize
 
     # The sequential Q as every method fits it: the chart lit by the drive the wall can emit.
-    Q0 = fit_least_squares(joint.A @ np.clip(joint.d0, 0.0, None), joint.P, joint.w)
+    Q0 = fit_least_squares(joint.lit(np.clip(joint.d0, 0.0, None)), joint.P, joint.w)
     if not (joint.y0 > 0 and joint.top > 0):  # no visible baseline light: no white point to keep
         return _not_applied(Q0, NO_BASELINE, {"limits_met": False})
     top, scale = joint.top, joint.scale

@@ -26,6 +26,7 @@ import PyOpenColorIO as OCIO
 
 from ocio_vp.calibration.headroom import content_scale
 from ocio_vp.errors import InputError
+from ocio_vp.exports.panels import panel_notes, with_panel_assignments
 from ocio_vp.exports.source import ExportSource, copy_config
 from ocio_vp.exports.templating import render_template
 from ocio_vp.exports.unreal_script import SCRIPT_FILE, render_unreal_script
@@ -113,7 +114,7 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> dict[str
             "role": role,
         }
 
-    return {
+    mapping = {
         "format": "ocio-vp/unreal-ocio",
         "version": 2,
         "stage": solution.stage,
@@ -167,6 +168,7 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> dict[str
         "N_solved": solution.N is not None,
         "content_scale": content_scale(solution).to_dict(),
     }
+    return with_panel_assignments(mapping, solution, content)  # a stage's other panel types
 
 
 def write_unreal(source: ExportSource, folder: Path, **_: Any) -> dict[str, Any]:
@@ -209,6 +211,7 @@ def write_unreal(source: ExportSource, folder: Path, **_: Any) -> dict[str, Any]
         n_solved=solution.N is not None,
         n_reason=solution.diagnostics.get("N_reason") or "Q is not invertible",
         content_scale=content_scale(solution).lines(),
+        panel_notes=panel_notes(solution),
     )
     (folder / "UNREAL.md").write_text(text, encoding="utf-8")
     script = render_unreal_script(

@@ -23,6 +23,14 @@ import yaml
 from ocio_vp.errors import InputError, excerpt, format_key_path
 from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.fixtures import Fixture, fixtures_to_dict, parse_fixtures
+from ocio_vp.formats.panels import (
+    PanelType,
+    panel_values_to_dict,
+    panels_to_dict,
+    parse_panel_values,
+    parse_panels,
+    primary_panel,
+)
 from ocio_vp.formats.synthesis import SynthesisRecord, parse_synthesis, synthesis_to_dict
 from ocio_vp.wall.linearity import CHANNELS, parse_ramps, ramps_to_dict
 
@@ -40,6 +48,7 @@ __all__ = [
     "Environment",
     "Measurements",
     "PanelGeometry",
+    "PanelType",
     "Stage",
     "Validator",
     "check_measurements_part",
@@ -116,6 +125,10 @@ class Environment:
     black_level: np.ndarray | None = None  # (3,) b_camera
     #: Set when the target chart was computed (``ocio-vp target-chart``), not photographed.
     synthesized: SynthesisRecord | None = None
+    #: With ``panels``: the diffuse light each panel type delivers, ``{name: (3,)}`` (None: not
+    #: given, e.g. to come from an HDRI), and each in-frustum type's b_camera.
+    panel_w_avg: Mapping[str, np.ndarray] | None = None
+    panel_black_level: Mapping[str, np.ndarray] | None = None
 
 
 @dataclass(frozen=True)
@@ -126,6 +139,11 @@ class Measurements:
     columns: column k is the camera RGB of primary k). ``SRL`` has shape (n, 3, 3): ``SRL[j]`` is
     [SRL]_j, column k the camera RGB of patch j lit by LED channel k from the calibration panel,
     *as photographed* (not yet divided by beta).
+
+    ``panels`` holds every panel type of a file with a ``panels`` section
+    (:mod:`ocio_vp.formats.panels`), empty otherwise; ``SL``, ``SRL`` and ``ramps`` are then
+    the first in-frustum type's (:func:`~ocio_vp.formats.panels.primary_panel`), the one whose
+    M and N are solution.json's top-level ones.
     """
 
     stage: Stage
@@ -134,6 +152,7 @@ class Measurements:
     environments: tuple[Environment, ...]
     ramps: Mapping[str, Any] | None = None
     fixtures: tuple[Fixture, ...] = ()
+    panels: tuple[PanelType, ...] = ()
     source: str | None = None
     sha256: str | None = None
     extra: Mapping[str, Any] = field(default_factory=dict)
@@ -192,6 +211,39 @@ class Validator:
             if name not in value:
                 raise self.error(key, f"missing required key {excerpt(name)}")
         return value
+
+    def calibration(
+        self, value: Mapping[str, Any], key: tuple[str | int, ...]
+    ) -> tuple[PanelGeometry | None, float | None]:
+        """``calibration_panel`` and/or ``beta`` of a mapping (the stage, or a panel type):
+        the lit-chart setup that gives beta; one of them is required."""
+        panel = None
+        if "calibration_panel" in value:
+            pkey = (*key, "calibration_panel")
+            raw = self.mapping(
+                value["calibration_panel"],
+                pkey,
+                required=("width", "height", "distance"),
+                optional=("offset_x", "offset_y"),
+            )
+            low, high = PANEL_RANGE  # metres: a panel from a millimetre to a kilometre
+            sizes = {
+                name: self.number(raw[name], (*pkey, name), minimum=low, maximum=high)
+                for name in ("width", "height", "distance")
+            }
+            offsets = {
+                name: self.number(raw.get(name, 0.0), (*pkey, name), minimum=-high, maximum=high)
+                for name in ("offset_x", "offset_y")
+            }
+            panel = PanelGeometry(**sizes, **offsets)
+        beta = None
+        if "beta" in value:
+            beta = self.number(value["beta"], (*key, "beta"), minimum=MIN_BETA)
+            if beta > 1.0:
+                raise self.error((*key, "beta"), f"a form factor is at most 1, got {beta:.6g}")
+        if panel is None and beta is None:
+            raise self.error(key, "give either calibration_panel {width, height, distance} or beta")
+        return panel, beta
 
     def number(
         self,
@@ -290,7 +342,10 @@ def measurements_from_dict(
     InputError
         Naming ``source``, the key path and the problem, for any deviation from the format.
     """
-    parsed = _parse_sections(Validator(source), data, partial=False)
+    ctx = Validator(source)
+    if isinstance(data, Mapping) and "panels" in data:
+        return _measurements_with_panels(ctx, data, sha256)
+    parsed = _parse_sections(ctx, data, partial=False)
     return Measurements(
         stage=parsed["stage"],
         SL=parsed["SL"],
@@ -313,6 +368,10 @@ def check_measurements_part(data: Any, *, source: str = "<measurements>") -> tup
     InputError
         As :func:`measurements_from_dict`, for every section present; or no section at all.
     """
+    if isinstance(data, Mapping) and "panels" in data:
+        # A stage of several panel types comes whole: its panels replace primaries and lit_chart.
+        measurements_from_dict(data, source=source)
+        return (*(name for name in SECTIONS if name in data), "primaries", "lit_chart")
     _parse_sections(Validator(source), data, partial=True)
     return tuple(name for name in SECTIONS if name in data)
 
@@ -322,12 +381,7 @@ def _parse_sections(ctx: Validator, data: Any, *, partial: bool) -> dict[str, An
     required = ("format", "version", "stage") + (() if partial else REQUIRED_SECTIONS)
     optional = (REQUIRED_SECTIONS if partial else ()) + ("ramps", "fixtures")
     top = ctx.mapping(data, (), required=required, optional=optional)
-    if top["format"] != FORMAT:
-        raise ctx.error(("format",), f"expected {FORMAT!r}, got {excerpt(top['format'])}")
-    if top["version"] != VERSION or isinstance(top["version"], bool):
-        raise ctx.error(
-            ("version",), f"this ocio-vp reads version {VERSION}, got {excerpt(top['version'])}"
-        )
+    _check_header(ctx, top)
     if not any(name in top for name in SECTIONS):
         raise ctx.error((), f"holds no measurements: give at least one of {', '.join(SECTIONS)}")
     out: dict[str, Any] = {"stage": parse_stage(ctx, top["stage"])}
@@ -342,12 +396,7 @@ def _parse_sections(ctx: Validator, data: Any, *, partial: bool) -> dict[str, An
         n = len(red)
         charts = [red] + [ctx.chart(lit[c], ("lit_chart", c), n) for c in CHANNELS[1:]]
         out["SRL"] = ctx.signal(np.stack(charts, axis=2), ("lit_chart",))  # (n, camera, LED)
-        white_patch = out["stage"].white_patch
-        if not 0 <= white_patch < n:
-            raise ctx.error(
-                ("stage", "white_patch"),
-                f"index {excerpt(white_patch)} is outside the {n} chart patches",
-            )
+        _check_white_patch(ctx, out["stage"], n)
     if "environments" in top:
         out["environments"] = _parse_environments(ctx, top["environments"], n)
     if "ramps" in top:
@@ -359,8 +408,65 @@ def _parse_sections(ctx: Validator, data: Any, *, partial: bool) -> dict[str, An
     return out
 
 
-def parse_stage(ctx: Validator, value: Any) -> Stage:
-    """Validate a ``stage`` section (also used by the capture file, which copies it)."""
+def _check_header(ctx: Validator, top: Mapping[str, Any]) -> None:
+    if top["format"] != FORMAT:
+        raise ctx.error(("format",), f"expected {FORMAT!r}, got {excerpt(top['format'])}")
+    if top["version"] != VERSION or isinstance(top["version"], bool):
+        raise ctx.error(
+            ("version",), f"this ocio-vp reads version {VERSION}, got {excerpt(top['version'])}"
+        )
+
+
+def _check_white_patch(ctx: Validator, stage: Stage, n: int) -> None:
+    if not 0 <= stage.white_patch < n:
+        raise ctx.error(
+            ("stage", "white_patch"),
+            f"index {excerpt(stage.white_patch)} is outside the {n} chart patches",
+        )
+
+
+def _measurements_with_panels(
+    ctx: Validator, data: Mapping[str, Any], sha256: str | None
+) -> Measurements:
+    """A file with ``panels`` (:mod:`ocio_vp.formats.panels`): several panel types."""
+    top = ctx.mapping(
+        data,
+        (),
+        required=("format", "version", "stage", "panels", "environments"),
+        optional=("primaries", "lit_chart", "ramps", "fixtures"),
+    )
+    _check_header(ctx, top)
+    for key in ("primaries", "lit_chart", "ramps"):
+        if key in top:
+            raise ctx.error(
+                (key,),
+                "a file with panels gives each panel type its own primaries, lit_chart and "
+                "ramps: remove the top-level one (or the panels section)",
+            )
+    stage = parse_stage(ctx, top["stage"], calibration=False)
+    panels = parse_panels(ctx, top["panels"])
+    primary = primary_panel(panels)
+    n = primary.SRL.shape[0]
+    _check_white_patch(ctx, stage, n)
+    return Measurements(
+        stage=stage,
+        SL=primary.SL,
+        SRL=primary.SRL,
+        environments=_parse_environments(ctx, top["environments"], n, panels),
+        ramps=primary.ramps,
+        fixtures=parse_fixtures(ctx, top["fixtures"], n) if "fixtures" in top else (),
+        panels=panels,
+        source=ctx.source,
+        sha256=sha256,
+    )
+
+
+def parse_stage(ctx: Validator, value: Any, *, calibration: bool = True) -> Stage:
+    """Validate a ``stage`` section (also used by the capture file, which copies it).
+
+    ``calibration=False`` (a file with ``panels``): the stage gives no ``calibration_panel`` or
+    ``beta``, each panel type does.
+    """
     key: tuple[str | int, ...] = ("stage",)
     stage = ctx.mapping(
         value,
@@ -376,32 +482,16 @@ def parse_stage(ctx: Validator, value: Any) -> Stage:
         ),
     )
     name = ctx.name(stage["name"], (*key, "name"))
-    panel = None
-    if "calibration_panel" in stage:
-        pkey = (*key, "calibration_panel")
-        raw = ctx.mapping(
-            stage["calibration_panel"],
-            pkey,
-            required=("width", "height", "distance"),
-            optional=("offset_x", "offset_y"),
-        )
-        low, high = PANEL_RANGE  # metres: a panel from a millimetre to a kilometre
-        sizes = {
-            name: ctx.number(raw[name], (*pkey, name), minimum=low, maximum=high)
-            for name in ("width", "height", "distance")
-        }
-        offsets = {
-            name: ctx.number(raw.get(name, 0.0), (*pkey, name), minimum=-high, maximum=high)
-            for name in ("offset_x", "offset_y")
-        }
-        panel = PanelGeometry(**sizes, **offsets)
-    beta = None
-    if "beta" in stage:
-        beta = ctx.number(stage["beta"], (*key, "beta"), minimum=MIN_BETA)
-        if beta > 1.0:
-            raise ctx.error((*key, "beta"), f"a form factor is at most 1, got {beta:.6g}")
-    if panel is None and beta is None:
-        raise ctx.error(key, "give either calibration_panel {width, height, distance} or beta")
+    panel, beta = None, None
+    if calibration:
+        panel, beta = ctx.calibration(stage, key)
+    else:
+        for field_name in ("calibration_panel", "beta"):
+            if field_name in stage:
+                raise ctx.error(
+                    (*key, field_name),
+                    "with panels, each panel type gives its own calibration_panel or beta",
+                )
     white_patch = stage.get("white_patch", 18)
     if isinstance(white_patch, bool) or not isinstance(white_patch, int):
         raise ctx.error((*key, "white_patch"), f"expected a patch index, got {_kind(white_patch)}")
@@ -459,7 +549,9 @@ def with_camera_colorspace(measurements: Measurements, value: str, *, key: str) 
     return dataclasses.replace(measurements, stage=stage)
 
 
-def _parse_environments(ctx: Validator, value: Any, n: int | None) -> tuple[Environment, ...]:
+def _parse_environments(
+    ctx: Validator, value: Any, n: int | None, panels: tuple[PanelType, ...] = ()
+) -> tuple[Environment, ...]:
     if not isinstance(value, list) or not value:
         raise ctx.error(("environments",), f"expected a non-empty list, got {_kind(value)}")
     seen: dict[str, int] = {}
@@ -481,6 +573,9 @@ def _parse_environments(ctx: Validator, value: Any, n: int | None) -> tuple[Envi
         target = ctx.signal(
             ctx.chart(env["target_chart"], (*key, "target_chart"), n), (*key, "target_chart")
         )
+        if panels:
+            environments.append(_panel_environment(ctx, env, key, name, target, panels))
+            continue
         w_avg = ctx.rgb(env["w_avg"], (*key, "w_avg")) if "w_avg" in env else None
         if w_avg is not None and not np.any(w_avg > 0):
             raise ctx.error((*key, "w_avg"), "is black: the environment gives no light")
@@ -498,6 +593,34 @@ def _parse_environments(ctx: Validator, value: Any, n: int | None) -> tuple[Envi
             )
         )
     return tuple(environments)
+
+
+def _panel_environment(
+    ctx: Validator,
+    env: Mapping[str, Any],
+    key: tuple[str | int, ...],
+    name: str,
+    target: np.ndarray,
+    panels: tuple[PanelType, ...],
+) -> Environment:
+    """An environment of a file with ``panels``: ``w_avg`` and ``black_level`` per panel type."""
+    w_avg = None
+    if "w_avg" in env:
+        w_avg = parse_panel_values(ctx, env["w_avg"], (*key, "w_avg"), panels)
+    black = None
+    if "black_level" in env:
+        black_key = (*key, "black_level")
+        black = parse_panel_values(ctx, env["black_level"], black_key, panels, in_frustum_only=True)
+    synthesized = None
+    if "synthesized" in env:
+        synthesized = parse_synthesis(ctx, env["synthesized"], (*key, "synthesized"))
+    return Environment(
+        name=name,
+        target_chart=target,
+        synthesized=synthesized,
+        panel_w_avg=w_avg,
+        panel_black_level=black,
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -541,24 +664,27 @@ def measurements_to_dict(measurements: Measurements) -> dict[str, Any]:
     def rows(array: np.ndarray) -> list[list[float]]:
         return [[float(v) for v in row] for row in np.asarray(array, dtype=np.float64)]
 
-    data: dict[str, Any] = {
-        "format": FORMAT,
-        "version": VERSION,
-        "stage": stage_dict,
-        "primaries": {c: rows(measurements.SL.T)[k] for k, c in enumerate(CHANNELS)},
-        "lit_chart": {c: rows(measurements.SRL[:, :, k]) for k, c in enumerate(CHANNELS)},
-        "environments": [],
-    }
+    data: dict[str, Any] = {"format": FORMAT, "version": VERSION, "stage": stage_dict}
+    if measurements.panels:
+        data["panels"] = panels_to_dict(measurements.panels)
+    else:
+        data["primaries"] = {c: rows(measurements.SL.T)[k] for k, c in enumerate(CHANNELS)}
+        data["lit_chart"] = {c: rows(measurements.SRL[:, :, k]) for k, c in enumerate(CHANNELS)}
+    data["environments"] = []
     for env in measurements.environments:
         entry: dict[str, Any] = {"name": env.name, "target_chart": rows(env.target_chart)}
         if env.w_avg is not None:
             entry["w_avg"] = rows(env.w_avg[None])[0]
+        if env.panel_w_avg is not None:
+            entry["w_avg"] = panel_values_to_dict(env.panel_w_avg)
         if env.black_level is not None:
             entry["black_level"] = rows(env.black_level[None])[0]
+        if env.panel_black_level:
+            entry["black_level"] = panel_values_to_dict(env.panel_black_level)
         if env.synthesized is not None:
             entry["synthesized"] = synthesis_to_dict(env.synthesized)
         data["environments"].append(entry)
-    if measurements.ramps is not None:
+    if measurements.ramps is not None and not measurements.panels:
         data["ramps"] = ramps_to_dict(measurements.ramps)
     if measurements.fixtures:
         data["fixtures"] = fixtures_to_dict(measurements.fixtures)

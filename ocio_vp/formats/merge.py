@@ -119,6 +119,13 @@ def load_measurement_files(paths: Sequence[str | Path]) -> Measurements:
     held: dict[str, list[str]] = {}
     for path in paths:
         data, digest = read_document(path)
+        if len(paths) > 1 and isinstance(data, dict) and "panels" in data:
+            raise InputError(
+                "a measurements file with panels holds the whole stage (every panel type's "
+                "wall and charts): solve it alone",
+                source=path,
+                key="panels",
+            )
         for section in check_measurements_part(data, source=str(path)):
             held.setdefault(section, []).append(path.name)
         documents.append((data, str(path)))

@@ -20,6 +20,11 @@ import numpy as np
 from ocio_vp.errors import InputError, excerpt
 from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.measurements import check_safe_name
+from ocio_vp.formats.panel_solution import (
+    PanelSolution,
+    panel_solutions_from_dict,
+    panel_solutions_to_dict,
+)
 from ocio_vp.model.correction import (
     MatrixCorrection,
     PostCorrection,
@@ -136,6 +141,15 @@ class Diagnostics(Mapping[str, Any]):
     synthesized_target
         How a synthesized target chart was made (``ocio-vp target-chart``); only written for
         an environment whose chart was synthesized.
+    panels
+        Only for a stage of several panel types (``panels`` in the measurements file):
+        ``primary`` (the first in-frustum type, whose M and N are the top-level ones),
+        ``shares`` (each type's part of the light on the white patch, by luminance),
+        ``lit_white_error`` (3,) (the lit white against the target's, per channel relative to
+        it, before Q) and ``lit_white_error_primary_M`` (the same with every type driven by
+        the primary's M, as a calibration of that type alone would), and
+        ``in_frustum_match`` (how the in-frustum types match in camera on the chart:
+        :func:`ocio_vp.calibration.panels.in_frustum_match`, None for one in-frustum type).
     extra
         Keys of a loaded file that this version does not know, kept so they round-trip.
     """
@@ -176,6 +190,7 @@ class Diagnostics(Mapping[str, Any]):
     extrapolation: dict[str, float] | None = None
     synthesized_target: dict[str, Any] | None = None
     fixtures: dict[str, Any] | None = None
+    panels: dict[str, Any] | None = None
     extra: dict[str, Any] = field(default_factory=dict)
     #: The keys a loaded file had (None: every field, as after a solve).
     present: tuple[str, ...] | None = field(default=None, repr=False, compare=False)
@@ -189,7 +204,7 @@ class Diagnostics(Mapping[str, Any]):
         return cls(**values, extra=extra, present=tuple(data))
 
     #: Fields written only when set.
-    OPTIONAL: ClassVar[tuple[str, ...]] = ("synthesized_target", "fixtures")
+    OPTIONAL: ClassVar[tuple[str, ...]] = ("synthesized_target", "fixtures", "panels")
 
     def _keys(self) -> tuple[str, ...]:
         if self.present is not None:
@@ -225,6 +240,10 @@ class Solution:
     ``post_correction`` is the post-correction itself (:mod:`ocio_vp.model`), which every
     consumer applies; ``Q`` is its 3x3 (the matrix, or a non-linear model's 3x3 fallback, for
     readers that want one). Left out, it is ``Q`` as a matrix.
+
+    ``panels`` (a stage of several panel types: :mod:`ocio_vp.formats.panel_solution`) holds
+    every type's solve by name, None otherwise; the top-level ``SL``, ``M``, ``N``, ``beta``,
+    ``w_avg``, ``black_level_offset`` and ``linearity`` are then the first in-frustum type's.
     """
 
     stage: str
@@ -246,6 +265,7 @@ class Solution:
     linearity: dict[str, Any] | None = None
     fixtures: dict[str, Any] | None = None
     post_correction: PostCorrection | None = None
+    panels: Mapping[str, PanelSolution] | None = None
 
     def __post_init__(self) -> None:
         if self.post_correction is None:
@@ -314,6 +334,7 @@ def solution_to_dict(solution: Solution) -> dict[str, Any]:
             "ocio": solution.ocio,
         }
         | ({} if solution.fixtures is None else {"fixtures": solution.fixtures})
+        | ({} if solution.panels is None else {"panels": panel_solutions_to_dict(solution.panels)})
     )
 
 
@@ -469,6 +490,7 @@ def load_solution(path: str | Path) -> Solution:
         linearity=linearity,
         fixtures=_fixtures(data, source),
         post_correction=_post_correction(data, Q, diagnostics, source),
+        panels=panel_solutions_from_dict(data.get("panels"), source),
     )
 
 

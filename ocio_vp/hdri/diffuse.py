@@ -17,7 +17,10 @@ Public functions (other modules build on these; names are stable):
 - ``w_avg_from_hdri(path, *, width=DEFAULT_HDRI_WIDTH, normal=FRONT) -> (3,)``: the paper's
   w_avg from an HDRI file.
 - ``environments_with_hdri(measurements, environments, ["ENV=FILE", ...], width=)``: what
-  ``ocio-vp solve --hdri ENV=FILE`` does (w_avg of those environments from their HDRI).
+  ``ocio-vp solve --hdri ENV=FILE`` does (w_avg of those environments from their HDRI; on a
+  stage of several panel types, each type's w_avg from the directions it covers).
+- ``region_mask(height, width, regions)`` and ``panel_w_avg(image, panels, normal=FRONT)``:
+  the pixels of a panel type's place in the volume, and each type's part of w_avg.
 
 Convention: y is up; row 0 is the zenith, the last row the nadir; the centre of the image
 (u = 0.5, v = 0.5) looks along +z (:data:`FRONT`), and u increasing turns towards +x. A pixel
@@ -57,8 +60,10 @@ __all__ = [
     "environments_with_hdri",
     "equirect_directions",
     "equirect_solid_angles",
+    "panel_w_avg",
     "pixel_angles",
     "read_equirect",
+    "region_mask",
     "w_avg_from_hdri",
 ]
 
@@ -270,6 +275,60 @@ def w_avg_from_hdri(
     return diffuse_integral(read_equirect(path, width=width), normal=normal)
 
 
+def region_mask(height: int, width: int, regions) -> np.ndarray:
+    """(height, width) bool: the pixels whose centre lies in any of ``regions``
+    (:class:`ocio_vp.formats.panels.PanelRegion`, degrees: elevation from the horizon,
+    azimuth from the image centre towards +x). Intervals are half-open, closed at +90 and
+    +180, so boxes that share an edge share no pixel.
+
+    Examples
+    --------
+    >>> from ocio_vp.formats.panels import PanelRegion
+    >>> int(region_mask(4, 8, [PanelRegion(elevation=(0.0, 90.0))]).sum())  # the upper half
+    16
+    """
+    theta, phi = pixel_angles(np.arange(height), np.arange(width), height, width)
+    elevation = 90.0 - np.degrees(theta)[:, None]
+    azimuth = np.degrees(phi)[None, :]
+    mask = np.zeros((height, width), dtype=bool)
+    for region in regions:
+        (e0, e1), (a0, a1) = region.elevation, region.azimuth
+        rows = (elevation >= e0) & ((elevation < e1) | (e1 >= 90.0))
+        cols = (azimuth >= a0) & ((azimuth < a1) | (a1 >= 180.0))
+        mask |= rows & cols
+    return mask
+
+
+def panel_w_avg(
+    image: ArrayLike, panels, *, normal: ArrayLike = FRONT
+) -> tuple[dict[str, np.ndarray], float]:
+    """Each panel type's part of w_avg: :func:`diffuse_integral` over the directions of its
+    regions only, and the share (0-1, green channel) of the whole diffuse integral that comes
+    from directions no panel type covers (light the stage cannot give back).
+
+    Raises
+    ------
+    InputError
+        When a panel type has no region (``panels[i].region``).
+    """
+    img = np.asarray(image)
+    height, width = img.shape[:2]
+    parts = {}
+    for i, panel in enumerate(panels):
+        if not panel.regions:
+            raise InputError(
+                "no region: the HDRI's light cannot be split between the panel types without "
+                "each one's place in the volume ({elevation: [min, max], azimuth: [min, max]})",
+                key=f"panels[{i}].region",
+            )
+        mask = region_mask(height, width, panel.regions)
+        parts[panel.name] = diffuse_integral(img * mask[..., None], normal=normal)
+    total = diffuse_integral(img, normal=normal)
+    covered = sum(parts.values())
+    uncovered = (total[1] - covered[1]) / total[1] if total[1] > 0 else 0.0
+    return parts, float(max(uncovered, 0.0))
+
+
 def environments_with_hdri(
     measurements, environments, hdri: Sequence[str], *, width: int | None = DEFAULT_HDRI_WIDTH
 ) -> tuple[tuple, list[str]]:
@@ -309,7 +368,10 @@ def environments_with_hdri(
     notes = []
     out = []
     for env in environments:
-        if env.name in chosen:
+        if env.name in chosen and measurements.panels:
+            env, note = _panels_from_hdri(measurements, env, chosen[env.name], width)
+            notes.append(note)
+        elif env.name in chosen:
             w_avg = w_avg_from_hdri(chosen[env.name], width=width)
             stage = measurements.stage
             patch = w_avg_from_white_patch(
@@ -322,3 +384,21 @@ def environments_with_hdri(
             env = dataclasses.replace(env, w_avg=w_avg)
         out.append(env)
     return tuple(out), notes
+
+
+def _panels_from_hdri(measurements, env, path: str, width: int | None) -> tuple:
+    """An environment of a stage of several panel types with each type's w_avg from ``path``."""
+    try:
+        parts, uncovered = panel_w_avg(read_equirect(path, width=width), measurements.panels)
+    except InputError as error:
+        raise InputError(error.problem, source=measurements.source, key=error.key) from None
+    if not any(np.any(v > 0) for v in parts.values()):
+        raise InputError("no light in any panel type's region", source=path, key="--hdri")
+    values = ", ".join(f"{name} {np.round(v, 5).tolist()}" for name, v in parts.items())
+    note = f"{env.name}: w_avg per panel type from {path}: {values}"
+    if uncovered > 0.005:
+        note += (
+            f"; {100 * uncovered:.0f}% of the diffuse light comes from directions no panel type "
+            "covers (the stage cannot give it back)"
+        )
+    return dataclasses.replace(env, panel_w_avg=parts), note

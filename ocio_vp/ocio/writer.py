@@ -26,6 +26,7 @@ from pathlib import Path
 from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import Solution, solution_to_json
 from ocio_vp.ocio.config import build_config, ocio_names, write_config
+from ocio_vp.ocio.panels import add_panel_spaces, panel_outputs
 from ocio_vp.ocio.root_polynomial import root_polynomial_outputs
 from ocio_vp.ocio.wall import wall_outputs
 from ocio_vp.staging import publish_dirs, staged_dir
@@ -48,12 +49,20 @@ def write_environment(solution: Solution, directory: Path) -> Solution:
         search_path, q_files = LUT_DIR, (q_luts.q_file, q_luts.q_inverse_file)
         diagnostics = {**solution.diagnostics, "root_polynomial_ocio": q_luts.block}
         solution = dataclasses.replace(solution, diagnostics=diagnostics)
+    # A stage's other panel types: their own colour spaces, LUTs and encodings (ocio/panels.py).
+    panels = panel_outputs(solution, None if q_files is None else q_files[1])
+    if panels is not None:
+        files.update(panels.files)
+        search_path = LUT_DIR if files else search_path
+        solution = dataclasses.replace(solution, panels=panels.panels)
     config = build_config(
         solution,
         extra_wall_transforms=wall.extra_wall_transforms,
         search_path=search_path,
         q_files=q_files,
     )
+    if panels is not None:
+        add_panel_spaces(config, panels)
     for relative, text in files.items():
         (directory / relative).parent.mkdir(parents=True, exist_ok=True)
         (directory / relative).write_text(text, encoding="utf-8")

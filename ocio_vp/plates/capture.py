@@ -28,6 +28,7 @@ __all__ = [
     "Capture",
     "ChartShot",
     "EnvironmentCapture",
+    "PanelCapture",
     "PlateRef",
     "RegionShot",
     "capture_from_dict",
@@ -82,12 +83,30 @@ class RegionShot:
 
 @dataclass(frozen=True)
 class EnvironmentCapture:
-    """One environment: its target chart photo, optional black-level region and w_avg."""
+    """One environment: its target chart photo, optional black-level region and w_avg.
+
+    On a stage of several panel types (``panels``): ``panel_black_level`` per in-frustum type
+    and ``panel_w_avg`` per type (as the measurements file's, checked there).
+    """
 
     name: str
     target_chart: ChartShot
     black_level: RegionShot | None = None
     w_avg: np.ndarray | None = None
+    panel_black_level: Mapping[str, RegionShot] | None = None
+    panel_w_avg: Mapping[str, Any] | None = None
+
+
+@dataclass(frozen=True)
+class PanelCapture:
+    """One panel type of a capture file with ``panels``: its primaries' and lit charts' plates
+    and ``settings``, its other keys (``in_frustum``, ``calibration_panel``/``beta``,
+    ``region``, ``encoding``, ``peak_nits``), copied to the measurements file as they are."""
+
+    name: str
+    settings: Mapping[str, Any]
+    primaries: Mapping[str, RegionShot]
+    lit_chart: Mapping[str, ChartShot]
 
 
 @dataclass(frozen=True)
@@ -108,16 +127,22 @@ class Capture:
     document: Mapping[str, Any] = field(default_factory=dict)
     sha256: str | None = None
     take: TakeRef | None = None
+    #: The panel types of a capture file with ``panels`` (``primaries`` and ``lit_chart`` are
+    #: then empty); empty otherwise.
+    panels: tuple[PanelCapture, ...] = ()
 
     def charts(self) -> list[ChartShot]:
         """Every chart shot, lit charts first."""
-        return [*self.lit_chart.values(), *(e.target_chart for e in self.environments)]
+        lit = [*self.lit_chart.values(), *(c for p in self.panels for c in p.lit_chart.values())]
+        return [*lit, *(e.target_chart for e in self.environments)]
 
     def plate_paths(self) -> list[Path]:
         """Every file the capture reads: plates, their frames and flat fields, the take's
         sequence file and the take's folder."""
         shots: list[ChartShot | RegionShot] = [*self.primaries.values(), *self.charts()]
+        shots += [r for p in self.panels for r in p.primaries.values()]
         shots += [e.black_level for e in self.environments if e.black_level is not None]
+        shots += [r for e in self.environments for r in (e.panel_black_level or {}).values()]
         paths = [p for shot in shots for p in (*shot.plate.paths, *(shot.plate.flat_field or ()))]
         if self.take is not None:
             paths += [self.take.sequence, self.take.frames.parent]
@@ -245,21 +270,29 @@ def capture_from_dict(
     where = _Where(base)
     if top.get("flat_field") is not None:
         where = _Where(base, _paths(ctx, top["flat_field"], ("flat_field",), base))
+    panels: tuple[PanelCapture, ...] = ()
     primaries: dict[str, RegionShot] = {}
-    if "primaries" in top:
-        prim = ctx.mapping(top["primaries"], ("primaries",), CHANNELS, _PLATE_KEYS)
-        shared = _plate(ctx, prim, ("primaries",), where, "primaries") if "plate" in prim else None
-        primaries = {
-            c: _region_shot(ctx, prim[c], ("primaries", c), where, f"primaries_{c}", shared)
-            for c in CHANNELS
-        }
     lit_chart: dict[str, ChartShot] = {}
-    if "lit_chart" in top:
-        lit = ctx.mapping(top["lit_chart"], ("lit_chart",), CHANNELS)
-        lit_chart = {c: _chart(ctx, lit[c], ("lit_chart", c), where, f"lit_{c}") for c in CHANNELS}
+    if "panels" in top:
+        panels = _panels(ctx, top["panels"], where)
+    else:
+        if "primaries" in top:
+            prim = ctx.mapping(top["primaries"], ("primaries",), CHANNELS, _PLATE_KEYS)
+            shared = None
+            if "plate" in prim:
+                shared = _plate(ctx, prim, ("primaries",), where, "primaries")
+            primaries = {
+                c: _region_shot(ctx, prim[c], ("primaries", c), where, f"primaries_{c}", shared)
+                for c in CHANNELS
+            }
+        if "lit_chart" in top:
+            lit = ctx.mapping(top["lit_chart"], ("lit_chart",), CHANNELS)
+            lit_chart = {
+                c: _chart(ctx, lit[c], ("lit_chart", c), where, f"lit_{c}") for c in CHANNELS
+            }
     environments = ()
     if "environments" in top:
-        environments = _environments(ctx, top["environments"], where)
+        environments = _environments(ctx, top["environments"], where, panels)
     return Capture(
         stage=dict(top["stage"]),
         rows=rows,
@@ -273,6 +306,7 @@ def capture_from_dict(
         document=data,
         sha256=sha256,
         take=_take(ctx, top["take"], base) if "take" in top else None,
+        panels=panels,
     )
 
 
@@ -307,32 +341,85 @@ def _take(ctx: Validator, value: Any, base: Path) -> TakeRef:
     )
 
 
+def _wall_shots(
+    ctx: Validator, top: Mapping[str, Any], key: tuple[str | int, ...], where: _Where, stem: str
+) -> tuple[dict[str, RegionShot], dict[str, ChartShot]]:
+    """The primaries' regions and the lit charts of the wall (or of one panel type, under
+    ``key`` with plate names starting ``stem``)."""
+    prim_key = (*key, "primaries")
+    prim = ctx.mapping(top["primaries"], prim_key, CHANNELS, _PLATE_KEYS)
+    shared = None
+    if "plate" in prim:
+        shared = _plate(ctx, prim, prim_key, where, f"{stem}primaries")
+    primaries = {
+        c: _region_shot(ctx, prim[c], (*prim_key, c), where, f"{stem}primaries_{c}", shared)
+        for c in CHANNELS
+    }
+    lit_key = (*key, "lit_chart")
+    lit = ctx.mapping(top["lit_chart"], lit_key, CHANNELS)
+    lit_chart = {c: _chart(ctx, lit[c], (*lit_key, c), where, f"{stem}lit_{c}") for c in CHANNELS}
+    return primaries, lit_chart
+
+
+#: Keys of a panel type in a capture file beside its plates: copied to the measurements file.
+_PANEL_SETTINGS = ("in_frustum", "calibration_panel", "beta", "region", "encoding", "peak_nits")
+
+
+def _panels(ctx: Validator, value: Any, where: _Where) -> tuple[PanelCapture, ...]:
+    """``panels``: each type's name, settings and plates (the settings are checked when the
+    measurements file is built from them, under the same key paths)."""
+    if not isinstance(value, list) or not value:
+        raise ctx.error(("panels",), "expected a non-empty list of panel types")
+    panels = []
+    for i, raw in enumerate(value):
+        key: tuple[str | int, ...] = ("panels", i)
+        entry = ctx.mapping(raw, key, ("name", "in_frustum", "primaries", "lit_chart"),
+                            _PANEL_SETTINGS[1:])  # fmt: skip
+        name = ctx.name(entry["name"], (*key, "name"))
+        if any(p.name == name for p in panels):
+            raise ctx.error((*key, "name"), f"duplicate name {name!r}")
+        primaries, lit_chart = _wall_shots(ctx, entry, key, where, f"{name}_")
+        settings = {k: entry[k] for k in _PANEL_SETTINGS if k in entry}
+        panels.append(PanelCapture(name, settings, primaries, lit_chart))
+    return tuple(panels)
+
+
 def _header(ctx: Validator, data: Any) -> Mapping[str, Any]:
     """The top-level mapping, its format and version checked, its stage validated."""
+    panels = isinstance(data, Mapping) and "panels" in data
+    wall = ("panels", "environments") if panels else ()
     top = ctx.mapping(
         data,
         (),
-        required=("format", "version", "stage"),
+        required=("format", "version", "stage", *wall),
         optional=(
             "chart",
             "sampling",
             "flat_field",
-            "primaries",
             "take",
-            "lit_chart",
-            "environments",
+            *(() if panels else ("primaries", "lit_chart", "environments")),
         ),
     )
+    for key in ("primaries", "lit_chart") if panels else ():
+        if key in top:
+            raise ctx.error(
+                (key,), "a capture file with panels gives each panel type its own: remove it"
+            )
     if top["format"] != FORMAT:
         raise ctx.error(("format",), f"expected {FORMAT!r}, got {top['format']!r}")
     if top["version"] != VERSION or isinstance(top["version"], bool):
         raise ctx.error(
             ("version",), f"this ocio-vp reads version {VERSION}, got {top['version']!r}"
         )
-    parse_stage(ctx, top["stage"])  # same rules as the measurements file it is copied to
+    # Same rules as the measurements file it is copied to.
+    parse_stage(ctx, top["stage"], calibration=not panels)
+    if panels and "take" in top:
+        raise ctx.error(
+            ("take",), "a take measures one wall: with panels give each panel type its plates"
+        )
     if "primaries" in top and "take" in top:
         raise ctx.error(("take",), "give the wall as primaries plates or as a take, not both")
-    if not any(k in top for k in ("primaries", "take", "lit_chart", "environments")):
+    if not any(k in top for k in ("panels", "primaries", "take", "lit_chart", "environments")):
         raise ctx.error(
             (), "nothing to measure: give a take (or primaries), lit_chart or environments"
         )
@@ -369,8 +456,11 @@ def _sampling(ctx: Validator, value: Any) -> dict[str, Any]:
     return sampling
 
 
-def _environments(ctx: Validator, envs: Any, where: _Where) -> tuple[EnvironmentCapture, ...]:
-    """``environments``: a non-empty list, unique names, each with its target chart."""
+def _environments(
+    ctx: Validator, envs: Any, where: _Where, panels: tuple[PanelCapture, ...] = ()
+) -> tuple[EnvironmentCapture, ...]:
+    """``environments``: a non-empty list, unique names, each with its target chart (with
+    ``panels``: ``black_level`` a region per in-frustum type, ``w_avg`` per type)."""
     if not isinstance(envs, list) or not envs:
         raise ctx.error(("environments",), "expected a non-empty list")
     environments = []
@@ -383,6 +473,9 @@ def _environments(ctx: Validator, envs: Any, where: _Where) -> tuple[Environment
             raise ctx.error((*key, "name"), f"duplicate name {name!r}")
         seen.add(name)
         target = _chart(ctx, env["target_chart"], (*key, "target_chart"), where, f"{name}_target")
+        if panels:
+            environments.append(_panel_environment(ctx, env, key, where, name, target))
+            continue
         black = None
         if "black_level" in env:
             black = _region_shot(
@@ -391,6 +484,34 @@ def _environments(ctx: Validator, envs: Any, where: _Where) -> tuple[Environment
         w_avg = ctx.rgb(env["w_avg"], (*key, "w_avg")) if "w_avg" in env else None
         environments.append(EnvironmentCapture(name, target, black, w_avg))
     return tuple(environments)
+
+
+def _panel_environment(
+    ctx: Validator,
+    env: Mapping[str, Any],
+    key: tuple[str | int, ...],
+    where: _Where,
+    name: str,
+    target: ChartShot,
+) -> EnvironmentCapture:
+    black = None
+    if "black_level" in env:
+        raw = env["black_level"]
+        if not isinstance(raw, Mapping):
+            raise ctx.error((*key, "black_level"), "with panels, expected a region per panel type")
+        for panel in raw:  # a name becomes part of an overlay's file name
+            ctx.name(panel, (*key, "black_level", str(panel)[:60]))
+        black = {
+            panel: _region_shot(ctx, shot, (*key, "black_level", panel), where,
+                                f"{name}_{panel}_black", None)
+            for panel, shot in raw.items()
+        }  # fmt: skip
+    w_avg = env.get("w_avg")
+    if w_avg is not None and not isinstance(w_avg, Mapping):
+        raise ctx.error(
+            (*key, "w_avg"), "with panels, expected a mapping of panel type -> [r, g, b]"
+        )
+    return EnvironmentCapture(name, target, panel_black_level=black, panel_w_avg=w_avg)
 
 
 def load_capture(path: str | Path) -> Capture:

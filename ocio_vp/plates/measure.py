@@ -206,9 +206,12 @@ def _sample_regions(
 def measure_steps(capture: Capture) -> int:
     """How many times :func:`measure_capture` calls ``on_step`` (the take's frames count apart)."""
     blacks = sum(env.black_level is not None for env in capture.environments)
-    return (
-        int(bool(capture.primaries)) + len(capture.lit_chart) + len(capture.environments) + blacks
-    )
+    blacks += sum(len(env.panel_black_level or {}) for env in capture.environments)
+    if capture.panels:
+        walls = len(capture.panels) * (1 + len(CHANNELS))
+    else:
+        walls = int(bool(capture.primaries)) + len(capture.lit_chart)
+    return walls + len(capture.environments) + blacks
 
 
 def take_sections(reading: TakeReading) -> dict[str, Any]:
@@ -266,15 +269,6 @@ def measure_capture(
     if capture.take is not None:
         reading = measure_take(capture.take, source=capture.source, on_progress=on_take)
         document.update(take_sections(reading))
-    if capture.primaries:
-        primaries = _sample_regions(capture, capture.primaries, "primaries")
-        plates.extend(primaries)
-        step()
-        means = {}
-        for sampling in primaries:
-            for label, mean in zip(sampling.labels, sampling.samples.means, strict=True):
-                means[label] = mean
-        document["primaries"] = {c: means[c].tolist() for c in CHANNELS}
 
     def chart(shot: ChartShot) -> np.ndarray:
         sampling, found = _sample_chart(capture, shot, detect)
@@ -284,16 +278,31 @@ def measure_capture(
         step()
         return sampling.samples.means
 
-    if capture.lit_chart:
-        document["lit_chart"] = {c: chart(capture.lit_chart[c]).tolist() for c in CHANNELS}
+    def black_level(shot: RegionShot, name: str) -> list[float]:
+        black = _sample_regions(capture, {"black_level": shot}, name)
+        plates.extend(black)
+        step()
+        return black[0].samples.means[0].tolist()
+
+    if capture.panels:
+        document["panels"] = [
+            {
+                "name": p.name,
+                **p.settings,
+                **_wall_values(capture, p.primaries, p.lit_chart, chart, plates, step),
+            }
+            for p in capture.panels
+        ]
+    else:
+        document |= _wall_part(capture, chart, plates, step)
     if capture.environments:
         document["environments"] = [
-            _environment(capture, env, chart, plates, step) for env in capture.environments
+            _environment(env, chart, black_level) for env in capture.environments
         ]
     if "ramps" in document:  # the file's key order: ramps after environments
         document["ramps"] = document.pop("ramps")
     measurements = None
-    if all(name in document for name in REQUIRED_SECTIONS):
+    if capture.panels or all(name in document for name in REQUIRED_SECTIONS):
         measurements = measurements_from_dict(document, source=capture.source)
     else:
         check_measurements_part(document, source=capture.source)
@@ -305,16 +314,62 @@ def measure_capture(
     return MeasureResult(measurements, tuple(plates), detected, tuple(warnings), document, reading)
 
 
-def _environment(capture: Capture, env, chart, plates: list, step) -> dict[str, Any]:
+def _environment(env, chart, black_level) -> dict[str, Any]:
+    """One environment's entry: its target chart, black level(s) and w_avg as given."""
     entry: dict[str, Any] = {"name": env.name, "target_chart": chart(env.target_chart).tolist()}
     if env.black_level is not None:
-        black = _sample_regions(capture, {"black_level": env.black_level}, env.name)
-        plates.extend(black)
-        step()
-        entry["black_level"] = black[0].samples.means[0].tolist()
+        entry["black_level"] = black_level(env.black_level, env.name)
+    if env.panel_black_level:
+        entry["black_level"] = {
+            name: black_level(shot, f"{env.name}_{name}")
+            for name, shot in env.panel_black_level.items()
+        }
     if env.w_avg is not None:
         entry["w_avg"] = env.w_avg.tolist()
+    if env.panel_w_avg is not None:
+        entry["w_avg"] = dict(env.panel_w_avg)
     return entry
+
+
+def _wall_part(capture: Capture, chart: Any, plates: list, step: Any) -> dict[str, Any]:
+    """``primaries`` and ``lit_chart`` of a single-wall capture, each where it is given (a
+    wall file from a take has no lit chart; a charts file no primaries)."""
+    out: dict[str, Any] = {}
+    if capture.primaries:
+        sampled = _sample_regions(capture, capture.primaries, "primaries")
+        plates.extend(sampled)
+        step()
+        means = {}
+        for sampling in sampled:
+            for label, mean in zip(sampling.labels, sampling.samples.means, strict=True):
+                means[label] = mean
+        out["primaries"] = {c: means[c].tolist() for c in CHANNELS}
+    if capture.lit_chart:
+        out["lit_chart"] = {c: chart(capture.lit_chart[c]).tolist() for c in CHANNELS}
+    return out
+
+
+def _wall_values(
+    capture: Capture,
+    primaries: Mapping[str, RegionShot],
+    lit_chart: Mapping[str, ChartShot],
+    chart: Any,
+    plates: list[PlateSampling],
+    step: Any,
+) -> dict[str, Any]:
+    """``primaries`` and ``lit_chart`` of the wall (or of one panel type), sampled."""
+    sampled = _sample_regions(capture, primaries, "primaries")
+    plates.extend(sampled)
+    step()
+    means = {}
+    for sampling in sampled:
+        for label, mean in zip(sampling.labels, sampling.samples.means, strict=True):
+            means[label] = mean
+    lit = {c: chart(lit_chart[c]) for c in CHANNELS}
+    return {
+        "primaries": {c: means[c].tolist() for c in CHANNELS},
+        "lit_chart": {c: lit[c].tolist() for c in CHANNELS},
+    }
 
 
 def _overlay(sampling: PlateSampling) -> np.ndarray:

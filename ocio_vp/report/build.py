@@ -36,6 +36,7 @@ from ocio_vp.report.data import (
     EnvironmentData,
     environment_data,
 )
+from ocio_vp.report.panels import panel_facts
 from ocio_vp.report.plots import (
     ChartPlot,
     DeltaEPlot,
@@ -215,6 +216,7 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
     panel = panel_description(s, data.path)
     facts.insert(3, ("calibration panel", panel or "not recorded in solution.json (beta only)"))
     facts += _fixture_facts(s)
+    facts += panel_facts(s)  # a stage of several panel types
     notes = d.get("method_notes") or {}
     rows = []
     for chart in STAGE_CHARTS:

@@ -16,7 +16,12 @@ from ocio_vp.formats.documents import read_bounded
 from ocio_vp.formats.measurements import PANEL_RANGE, PanelGeometry
 from ocio_vp.simulator.data import PAPER_ENVIRONMENTS, wavelengths
 
-__all__ = ["environments_from_args", "read_spectra_csv", "stage_options_from_args"]
+__all__ = [
+    "ceiling_leds_from_arg",
+    "environments_from_args",
+    "read_spectra_csv",
+    "stage_options_from_args",
+]
 
 
 def read_spectra_csv(path: str | Path, *, columns: int) -> np.ndarray:
@@ -70,7 +75,7 @@ def read_spectra_csv(path: str | Path, *, columns: int) -> np.ndarray:
     )
 
 
-def _leds(value: str) -> Any:
+def _leds(value: str, key: str = "--leds") -> Any:
     if value.lower().endswith(".csv"):
         return read_spectra_csv(value, columns=3)
     try:
@@ -79,10 +84,15 @@ def _leds(value: str) -> Any:
         pairs = []
     if len(pairs) != 3 or any(len(p) != 2 for p in pairs):
         raise InputError(
-            f"expected PEAK/FWHM,PEAK/FWHM,PEAK/FWHM (nm) or a .csv file, got {value!r}",
-            key="--leds",
+            f"expected PEAK/FWHM,PEAK/FWHM,PEAK/FWHM (nm) or a .csv file, got {excerpt(value)}",
+            key=key,
         )
     return pairs
+
+
+def ceiling_leds_from_arg(value: str) -> Any:
+    """``--ceiling-leds``: three PEAK/FWHM pairs or a CSV of measured spectra, as ``--leds``."""
+    return _leds(value, "--ceiling-leds")
 
 
 def _panel(value: str) -> PanelGeometry:
@@ -119,7 +129,8 @@ def stage_options_from_args(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def environments_from_args(values: list[str] | None) -> dict[str, Any]:
-    """``NAME`` or ``NAME=FILE.csv`` items -> the simulator's environments mapping."""
+    """``NAME`` or ``NAME=FILE.csv`` items -> the simulator's environments mapping (a bare
+    ``NAME`` is checked when the stage is simulated)."""
     if not values:
         return {name: name for name in PAPER_ENVIRONMENTS}
     environments: dict[str, Any] = {}

@@ -228,6 +228,9 @@ def _plates(measurements: Any, options: PlateOptions) -> Iterator[tuple[str, np.
     from ocio_vp.calibration.equations import predict_lit_chart, solve_M
     from ocio_vp.calibration.geometry import stage_beta
 
+    if measurements.panels:
+        yield from _panel_plates(measurements, options)
+        return
     rows, columns = _grid(measurements.SRL.shape[0])
     sensor = {"vignetting": options.vignetting, "noise": options.noise}
     sensor["read_noise"] = options.read_noise
@@ -264,6 +267,85 @@ def _plates(measurements: Any, options: PlateOptions) -> Iterator[tuple[str, np.
             yield f"footage/{env.name}.{frame:04d}.exr", image
 
 
+def _panel_plates(measurements: Any, options: PlateOptions) -> Iterator[tuple[str, np.ndarray]]:
+    """:func:`_plates` of a stage of several panel types: each type's primaries and lit
+    charts (``<type>_primary_<channel>.exr``, ``<type>_lit_<channel>.exr``), each in-frustum
+    type's black level per environment, and footage lit by every type through its own M."""
+    from ocio_vp.calibration.geometry import environment_panel_w_avg
+    from ocio_vp.calibration.panels import panel_lights
+
+    rows, columns = _grid(measurements.SRL.shape[0])
+    sensor = {"vignetting": options.vignetting, "noise": options.noise}
+    sensor["read_noise"] = options.read_noise
+    seed = iter(range(options.seed * 1000, options.seed * 1000 + 1000))
+    white = {"flat": ((0, 0, *PLATE_SIZE), (0.5, 0.5, 0.5))}
+    for i in range(options.flat_frames):
+        flat = render_regions(white, vignetting=options.vignetting, noise=0.003, seed=next(seed))
+        yield f"flat.{i + 1:04d}.exr", flat
+    for panel in measurements.panels:
+        for k, channel in enumerate(("red", "green", "blue")):
+            region = {channel: (PANEL_REGION, panel.SL[:, k])}
+            yield (
+                f"{panel.name}_primary_{channel}.exr",
+                render_regions(region, seed=next(seed), **sensor),
+            )
+        for k, channel in enumerate(("red", "green", "blue")):
+            values = panel.SRL[:, :, k]
+            chart = render_chart(values, rows=rows, columns=columns, seed=next(seed), **sensor)
+            yield f"{panel.name}_lit_{channel}.exr", chart
+    for env in measurements.environments:
+        chart = render_chart(
+            env.target_chart, rows=rows, columns=columns, seed=next(seed), **sensor
+        )
+        yield f"{env.name}.exr", chart
+        for name, black in (env.panel_black_level or {}).items():
+            dark = {"panel": (PANEL_REGION, black)}
+            yield f"{env.name}_{name}_black.exr", render_regions(dark, seed=next(seed), **sensor)
+        if env.panel_w_avg is None or not options.footage_frames:
+            continue
+        # Footage: the chart lit by every panel type through its own M (what Q post-corrects).
+        lights = panel_lights(measurements, environment_panel_w_avg(measurements, env))
+        lit = sum(light.lit() for light in lights)
+        for frame in range(1, options.footage_frames + 1):
+            image = render_chart(lit, rows=rows, columns=columns, seed=next(seed), **sensor)
+            yield f"footage/{env.name}.{frame:04d}.exr", image
+
+
+def _panel_capture(measurements: Any, names: set[str]) -> dict:
+    """The ``panels`` list and ``environments`` of a capture document (paths relative)."""
+    from ocio_vp.formats.panels import panel_values_to_dict, panels_to_dict
+
+    panels = []
+    for entry in panels_to_dict(measurements.panels):
+        name = entry["name"]
+        entry["primaries"] = {
+            c: {"plate": f"{name}_primary_{c}.exr", "region": list(PANEL_REGION)}
+            for c in ("red", "green", "blue")
+        }
+        entry["lit_chart"] = {
+            c: {"plate": f"{name}_lit_{c}.exr", "corners": CHART_CORNERS.tolist()}
+            for c in ("red", "green", "blue")
+        }
+        panels.append(entry)
+    environments = []
+    for env in measurements.environments:
+        entry = {
+            "name": env.name,
+            "target_chart": {"plate": f"{env.name}.exr", "corners": CHART_CORNERS.tolist()},
+        }
+        black = {
+            name: {"plate": f"{env.name}_{name}_black.exr", "region": list(PANEL_REGION)}
+            for name in (env.panel_black_level or {})
+            if f"{env.name}_{name}_black.exr" in names
+        }
+        if black:
+            entry["black_level"] = black
+        if env.panel_w_avg is not None:
+            entry["w_avg"] = panel_values_to_dict(env.panel_w_avg)
+        environments.append(entry)
+    return {"panels": panels, "environments": environments}
+
+
 def _capture_document(
     measurements: Any, names: set[str], options: PlateOptions, sequence_ref: str | None = None
 ) -> dict:
@@ -281,6 +363,8 @@ def _capture_document(
     flats = sorted(n for n in names if n.startswith("flat."))
     if flats:
         document["flat_field"] = flats
+    if measurements.panels:
+        return document | _panel_capture(measurements, names)
     if options.take is None:
         document["primaries"] = {
             c: {"plate": f"primary_{c}.exr", "region": list(PANEL_REGION)}
@@ -343,7 +427,7 @@ def write_capture(
             bar.update(1)
     if not options.footage_frames or not any(n.startswith("footage/") for n in names):
         (folder / "footage").rmdir()
-    if options.take is not None:
+    if options.take is not None and not measurements.panels:  # a take films one wall
         sequence_ref = _film_patterns(measurements, folder, options, sequence, sequence_ref, bar)
     document = _capture_document(measurements, names, options, sequence_ref)
     path = folder / "capture.yaml"
@@ -393,6 +477,14 @@ def plate_count(
     measurements: Any, options: PlateOptions = PlateOptions(), sequence: Any = None
 ) -> int:
     """How many plates (and take frames) :func:`write_capture` writes (for a progress bar)."""
+    if measurements.panels:
+        per_env = sum(
+            1
+            + len(e.panel_black_level or {})
+            + (options.footage_frames if e.panel_w_avg is not None else 0)
+            for e in measurements.environments
+        )
+        return options.flat_frames + 6 * len(measurements.panels) + per_env
     per_env = sum(
         1 + (e.black_level is not None) + (options.footage_frames if e.w_avg is not None else 0)
         for e in measurements.environments

@@ -83,7 +83,8 @@ def noisy_measurements(
     """``measurements`` with every photographed value times ``1 + noise * gauss`` (independent).
 
     Primaries [SL], the lit chart [SRL]_j, every target chart, w_avg, black level and every
-    fixture channel's lit chart.
+    fixture channel's lit chart; on a stage of several panel types, every type's primaries and
+    lit chart and each environment's per-type w_avg and black level.
     """
 
     def jitter(a):
@@ -104,12 +105,36 @@ def noisy_measurements(
     fixtures = tuple(
         dataclasses.replace(f, lit_chart=jitter(f.lit_chart)) for f in measurements.fixtures
     )
-    return dataclasses.replace(
+    noisy = dataclasses.replace(
         measurements,
         SL=jitter(measurements.SL),
         SRL=jitter(measurements.SRL),
         environments=environments,
         fixtures=fixtures,
+    )
+    return _noisy_panels(noisy, jitter) if measurements.panels else noisy
+
+
+def _noisy_panels(measurements: Measurements, jitter) -> Measurements:
+    """Every panel type's primaries and lit chart, and each environment's per-type w_avg and
+    black level, jittered too (after the rest, so files without panels draw the same noise);
+    the top-level arrays stay the first in-frustum type's."""
+    panels = tuple(
+        dataclasses.replace(p, SL=jitter(p.SL), SRL=jitter(p.SRL)) for p in measurements.panels
+    )
+
+    def each(values):
+        return None if values is None else {k: jitter(v) for k, v in values.items()}
+
+    environments = tuple(
+        dataclasses.replace(
+            e, panel_w_avg=each(e.panel_w_avg), panel_black_level=each(e.panel_black_level)
+        )
+        for e in measurements.environments
+    )
+    first = next(p for p in panels if p.in_frustum)
+    return dataclasses.replace(
+        measurements, SL=first.SL, SRL=first.SRL, panels=panels, environments=environments
     )
 
 

@@ -218,7 +218,9 @@ def synthesize_environment(
     """An environment with a synthesized target chart, w_avg and the ``synthesized`` record.
 
     A ``black_level`` of an environment of that name already in ``measurements`` is kept (it is
-    measured on the stage, not in the location).
+    measured on the stage, not in the location). On a stage of several panel types the
+    environment gets no w_avg: each type's part of it comes from ``solve --hdri`` and the types'
+    regions (docs/panels.md).
     """
     stage = measurements.stage
     reflectances = chart_spectra(chart)
@@ -265,6 +267,12 @@ def synthesize_environment(
         black_level=None if previous is None else previous.black_level,
         synthesized=record,
     )
+    if measurements.panels:  # each panel type's share of w_avg comes from `solve --hdri`
+        environment = dataclasses.replace(
+            environment,
+            w_avg=None,
+            panel_black_level=None if previous is None else previous.panel_black_level,
+        )
     return environment, synth
 
 

@@ -257,8 +257,15 @@ def lut_accuracy(linearity: Mapping[str, Any], lut: LinearityLut) -> dict[str, A
 def with_wall_encoding(
     solution: Solution, encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS
 ) -> Solution:
-    """A copy of ``solution`` whose ``linearity`` block records the wall signal encoding."""
+    """A copy of ``solution`` whose ``linearity`` block records the wall signal encoding.
+
+    On a stage of several panel types (``solution.panels``), a type whose measurements gave it
+    an ``encoding`` of its own keeps it (the first in-frustum type's is the top-level one);
+    every other type gets ``encoding``.
+    """
     check_encoding(encoding, peak_nits)
+    if solution.panels:
+        return _with_panel_encodings(solution, encoding, peak_nits)
     if encoding == "linear" and solution.linearity is None:
         return solution
     linearity = dict(solution.linearity or {"measured": False, "model": "linear (assumed)"})
@@ -266,3 +273,19 @@ def with_wall_encoding(
     if encoding == "pq":
         linearity["wall_encoding"]["peak_nits"] = float(peak_nits)
     return dataclasses.replace(solution, linearity=linearity)
+
+
+def _with_panel_encodings(solution: Solution, encoding: str, peak_nits: float) -> Solution:
+    """:func:`with_wall_encoding` for every panel type without an encoding of its own."""
+
+    def encoded(linearity: dict | None) -> dict | None:
+        if linearity is not None and "wall_encoding" in linearity:
+            return linearity  # the panel type's own, from the measurements
+        single = dataclasses.replace(solution, linearity=linearity, panels=None)
+        return with_wall_encoding(single, encoding, peak_nits=peak_nits).linearity
+
+    panels = {
+        name: dataclasses.replace(panel, linearity=encoded(panel.linearity))
+        for name, panel in solution.panels.items()
+    }
+    return dataclasses.replace(solution, linearity=encoded(solution.linearity), panels=panels)

@@ -1,0 +1,136 @@
+"""Unreal nDisplay for a stage of several panel types: each type's colour space on its viewports.
+
+The wall (the first in-frustum type) keeps the stage-wide slots of :mod:`ocio_vp.exports.unreal`
+(all viewports -> its outer frustum, the ICVFX camera's inner frustum on every node). Every
+other type overrides them where it is, with nDisplay's per-viewport and per-node OCIO profiles
+(Epic's ``FDisplayClusterConfigurationOCIOProfile``: ``bIsEnabled``, ``ApplyOCIOToObjects``,
+``ColorConfiguration``; checked in Epic's API reference for UE 5.4 to 5.7):
+
+- its outer frustum on its viewports: the root actor's
+  ``StageSettings.ViewportOCIO.PerViewportOCIOProfiles`` (UI "Per-Viewport OCIO Overrides");
+  light cards set to *Use nDisplay Viewport OCIO* follow it;
+- an in-frustum type's inner frustum on the cluster nodes that drive it: the ICVFX camera
+  component's ``CameraSettings.CameraOCIO.PerNodeOCIOProfiles`` (UI "Per-Node OCIO
+  Overrides").
+
+ocio-vp does not know the nDisplay configuration's viewport and node names: each profile's
+``ApplyOCIOToObjects`` is left empty for the stage engineer to fill (UNREAL.md says which).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ocio_vp.formats.solution import Solution
+
+__all__ = ["PANEL_VERSIONS", "panel_assignments", "panel_notes", "with_panel_assignments"]
+
+ROOT_CONFIG = "ADisplayClusterRootActor config data (UDisplayClusterConfigurationData)"
+CAMERA = "UDisplayClusterICVFXCameraComponent"
+#: Where the per-viewport and per-node profiles were checked.
+PANEL_VERSIONS = (
+    "FDisplayClusterConfigurationICVFX_ViewportOCIO.PerViewportOCIOProfiles and "
+    "FDisplayClusterConfigurationICVFX_CameraOCIO.PerNodeOCIOProfiles, arrays of "
+    "FDisplayClusterConfigurationOCIOProfile (bIsEnabled, ApplyOCIOToObjects, ColorConfiguration) "
+    "in Epic's API reference pages for UE 5.4 to 5.7 (the conversion is ColorConfiguration; "
+    "UE 5.0's Python names it ocio_configuration)."
+)
+
+
+def _profile(ui: str, owner: str, prop: str, source: str, destination: str, role: str) -> dict:
+    return {
+        "ui": ui,
+        "owner": owner,
+        "property": prop,
+        "append": {
+            "bIsEnabled": True,
+            "ApplyOCIOToObjects": [],
+            "ColorConfiguration.SourceColorSpace": source,
+            "ColorConfiguration.DestinationColorSpace": destination,
+        },
+        "source": source,
+        "destination": destination,
+        "role": role,
+    }
+
+
+def panel_assignments(solution: Solution, source: str) -> dict[str, Any]:
+    """The other panel types' part of ``unreal_ocio.json``: colour spaces and display views
+    the configuration asset must offer, and one per-viewport (and, in frustum, per-node)
+    profile per type. Empty lists for a stage of one panel type."""
+    spaces: list[str] = []
+    views: list[dict[str, str]] = []
+    assignments: list[dict[str, Any]] = []
+    panels = solution.panels or {}
+    primary = next((p.name for p in panels.values() if p.in_frustum), None)
+    display = solution.ocio.get("display")
+    for name, panel in panels.items():
+        if name == primary or not panel.ocio:
+            continue
+        roles = [("out_of_frustum", "view_out_of_frustum")]
+        roles += [("in_frustum", "view_in_frustum")] if panel.in_frustum else []
+        for role, view in roles:
+            spaces.append(panel.ocio[role])
+            if display and view in panel.ocio:
+                views.append({"display": display, "view": panel.ocio[view]})
+        assignments.append(
+            _profile(
+                f"nDisplay root actor > ICVFX > OCIO > Per-Viewport OCIO Overrides: the {name} "
+                "viewports",
+                ROOT_CONFIG,
+                "StageSettings.ViewportOCIO.PerViewportOCIOProfiles",
+                source,
+                panel.ocio["out_of_frustum"],
+                f"{name}.out_of_frustum",
+            )
+        )
+        if panel.in_frustum:
+            assignments.append(
+                _profile(
+                    f"ICVFX camera component > OCIO > Per-Node OCIO Overrides: the nodes "
+                    f"driving the {name}",
+                    CAMERA,
+                    "CameraSettings.CameraOCIO.PerNodeOCIOProfiles",
+                    source,
+                    panel.ocio["in_frustum"],
+                    f"{name}.in_frustum",
+                )
+            )
+    return {"color_spaces": spaces, "display_views": views, "assignments": assignments}
+
+
+def with_panel_assignments(mapping: dict[str, Any], solution: Solution, source: str) -> dict:
+    """``unreal_ocio.json``'s mapping with the other panel types' colour spaces, views and
+    profiles added (unchanged for a stage of one panel type)."""
+    panels = panel_assignments(solution, source)
+    if panels["assignments"]:
+        asset = mapping["configuration_asset"]
+        asset["desired_color_spaces"] += panels["color_spaces"]
+        asset["desired_display_views"] += panels["display_views"]
+        mapping["assignments"] += panels["assignments"]
+        mapping["panel_types_checked"] = PANEL_VERSIONS
+    return mapping
+
+
+def panel_notes(solution: Solution) -> list[str]:
+    """One UNREAL.md step per other panel type (none for a stage of one panel type)."""
+    notes = []
+    panels = solution.panels or {}
+    primary = next((p.name for p in panels.values() if p.in_frustum), None)
+    for name, panel in panels.items():
+        if name == primary or not panel.ocio:
+            continue
+        text = (
+            f"Panel type `{name}`: on the nDisplay root actor, **OCIO > Per-Viewport OCIO "
+            f"Overrides**, add a profile for the viewports of the {name} (list them in *Apply "
+            f"OCIO To Objects*) with *Destination* = `{panel.ocio['out_of_frustum']}` (its own "
+            "M: driving it with the wall's gets the actors' light wrong)."
+        )
+        if panel.in_frustum:
+            text += (
+                f" On each ICVFX camera component, **OCIO > Per-Node OCIO Overrides**: a "
+                f"profile for the cluster nodes that drive the {name}, *Destination* = "
+                f"`{panel.ocio['in_frustum']}` (its own N)."
+            )
+        notes.append(text)
+    return notes

@@ -1,0 +1,157 @@
+"""solution.json's ``panels`` block: what was solved for each panel type of a stage.
+
+Written only for a measurements file with ``panels`` (:mod:`ocio_vp.formats.panels`)::
+
+    "panels": {
+      "wall":    {"in_frustum": true,  "SL": ..., "M": ..., "beta": ..., "w_avg": ...,
+                  "drive": ..., "share": 0.58, "N": ..., "N_reason": null,
+                  "black_level_offset": ..., "linearity": ..., "ocio": {...}},
+      "ceiling": {"in_frustum": false, "SL": ..., "M": ..., "beta": ..., "w_avg": ...,
+                  "drive": ..., "share": 0.42, "linearity": null, "ocio": {...}}
+    }
+
+The top-level ``M``, ``N``, ``SL``, ``beta``, ``w_avg``, ``black_level_offset`` and
+``linearity`` stay the first in-frustum type's, so readers of files without panels read a
+panels file's main wall unchanged. An out-of-frustum type (a ceiling) has M and no N.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ocio_vp.errors import InputError, excerpt
+from ocio_vp.formats.measurements import check_safe_name
+
+__all__ = ["PanelSolution", "panel_solutions_from_dict", "panel_solutions_to_dict"]
+
+#: Largest magnitude of a number read back (as solution.json's other numbers).
+_MAX_VALUE = 1e30
+
+
+@dataclass(frozen=True)
+class PanelSolution:
+    """One panel type's solve in one environment (float64 arrays).
+
+    ``M = [SL]^-1`` of this type; ``w_avg`` the diffuse light it delivers and ``drive`` its
+    lighting drive ``M w_avg``; ``share`` its part of the light on the chart's white patch
+    (luminance, 0-1). In-frustum types only: ``N`` (None with ``N_reason`` where Q cannot be
+    inverted) and ``black_level_offset``. ``ocio`` names its colour spaces in the config
+    (filled in when the config is written).
+    """
+
+    name: str
+    in_frustum: bool
+    SL: np.ndarray
+    M: np.ndarray
+    beta: float
+    w_avg: np.ndarray
+    drive: np.ndarray
+    share: float
+    N: np.ndarray | None = None
+    N_reason: str | None = None
+    black_level_offset: np.ndarray | None = None
+    linearity: dict[str, Any] | None = None
+    ocio: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def in_frustum_matrix(self) -> np.ndarray:
+        """N where it was solved, else M (as :attr:`Solution.in_frustum_matrix`)."""
+        return self.M if self.N is None else self.N
+
+
+def _list(value: Any) -> Any:
+    return value.tolist() if isinstance(value, np.ndarray) else value
+
+
+def panel_solutions_to_dict(panels: Mapping[str, PanelSolution]) -> dict[str, Any]:
+    """The ``panels`` block (numpy arrays left for solution.json's own conversion)."""
+    out = {}
+    for name, p in panels.items():
+        entry: dict[str, Any] = {
+            "in_frustum": p.in_frustum,
+            "SL": p.SL,
+            "M": p.M,
+            "beta": p.beta,
+            "w_avg": p.w_avg,
+            "drive": p.drive,
+            "share": p.share,
+        }
+        if p.in_frustum:
+            entry.update(N=p.N, N_reason=p.N_reason, black_level_offset=p.black_level_offset)
+        entry.update(linearity=p.linearity, ocio=dict(p.ocio))
+        out[name] = entry
+    return out
+
+
+def _array(entry: Mapping[str, Any], key: str, shape: tuple[int, ...], where: str, source: str):
+    value = entry.get(key)
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        array = np.zeros(0)
+    if array.shape != shape or not np.all(np.isfinite(array)) or np.any(abs(array) > _MAX_VALUE):
+        raise InputError(f"expected finite numbers of shape {shape}", source=source, key=where)
+    return array
+
+
+def _one(name: str, entry: Any, source: str) -> PanelSolution:
+    key = f"panels.{name}"
+    if not isinstance(entry, Mapping) or not isinstance(entry.get("in_frustum"), bool):
+        raise InputError("expected a mapping with in_frustum true or false", source=source, key=key)
+    in_frustum = entry["in_frustum"]
+
+    def array(field_name: str, shape: tuple[int, ...], optional: bool = False):
+        if optional and entry.get(field_name) is None:
+            return None
+        return _array(entry, field_name, shape, f"{key}.{field_name}", source)
+
+    beta, share = entry.get("beta"), entry.get("share")
+    for field_name, number in (("beta", beta), ("share", share)):
+        where = f"{key}.{field_name}"
+        if isinstance(number, bool) or not isinstance(number, (int, float)):
+            raise InputError(f"expected a number, got {excerpt(number)}", source=source, key=where)
+        if not 0 <= number <= 1:
+            raise InputError(
+                f"expected a number in [0, 1], got {number!r}", source=source, key=where
+            )
+    linearity, ocio, reason = entry.get("linearity"), entry.get("ocio") or {}, entry.get("N_reason")
+    if linearity is not None and not isinstance(linearity, dict):
+        raise InputError("expected a mapping", source=source, key=f"{key}.linearity")
+    if not isinstance(ocio, dict) or not all(isinstance(v, str) for v in ocio.values()):
+        raise InputError("expected names (text) only", source=source, key=f"{key}.ocio")
+    if reason is not None and not isinstance(reason, str):
+        raise InputError("expected text", source=source, key=f"{key}.N_reason")
+    return PanelSolution(
+        name=name,
+        in_frustum=in_frustum,
+        SL=array("SL", (3, 3)),
+        M=array("M", (3, 3)),
+        beta=float(beta),
+        w_avg=array("w_avg", (3,)),
+        drive=array("drive", (3,)),
+        share=float(share),
+        N=array("N", (3, 3), optional=True) if in_frustum else None,
+        N_reason=reason if in_frustum else None,
+        black_level_offset=array("black_level_offset", (3,), optional=True) if in_frustum else None,
+        linearity=linearity,
+        ocio=dict(ocio),
+    )
+
+
+def panel_solutions_from_dict(block: Any, source: str) -> dict[str, PanelSolution] | None:
+    """The ``panels`` block of a loaded solution.json (None when absent)."""
+    if block is None:
+        return None
+    if not isinstance(block, Mapping) or not block:
+        raise InputError("expected a non-empty mapping of panel types", source=source, key="panels")
+    out = {}
+    for name, entry in block.items():
+        check_safe_name(name, source=source, key="panels")
+        out[name] = _one(name, entry, source)
+    if not any(p.in_frustum for p in out.values()):
+        raise InputError("no in-frustum panel type", source=source, key="panels")
+    return out

@@ -1,0 +1,314 @@
+"""The optional ``panels`` section of a measurements file: several LED panel types on one stage.
+
+Most volumes are built from more than one panel model (a fine-pitch wall, a brighter ceiling,
+wild walls or a floor), each with its own LEDs. A file with ``panels`` describes each type as
+the top-level ``primaries``/``lit_chart`` describe the single wall of a file without it::
+
+    panels:
+      - name: wall                  # safe name, unique
+        in_frustum: true            # shows the in-camera background (gets N)
+        calibration_panel: {width: 1.2, height: 0.8, distance: 1.5}   # or beta
+        primaries: {red: [r, g, b], green: [...], blue: [...]}       # this type's [SL]
+        lit_chart: {red: [[r, g, b], ...], green: [...], blue: [...]} # chart lit by this type
+        ramps: ...                  # optional, as the top-level ramps (docs/linearity.md)
+        region: {elevation: [-30, 45], azimuth: [-90, 90]}   # optional, for --hdri
+        encoding: pq                # optional signal encoding of this type (else --wall-encoding)
+        peak_nits: 1500             # optional, with encoding pq
+      - name: ceiling
+        in_frustum: false
+        ...
+    environments:
+      - name: overcast
+        target_chart: [...]
+        w_avg: {wall: [r, g, b], ceiling: [r, g, b]}   # the diffuse light each type delivers
+        black_level: {wall: [r, g, b]}                  # optional, in-frustum types only
+
+It replaces the top-level ``primaries``, ``lit_chart``, ``ramps`` and the stage's
+``calibration_panel``/``beta``; a file mixing both forms is refused. Like
+:mod:`ocio_vp.formats.fixtures`, this module takes the measurements file's
+:class:`~ocio_vp.formats.measurements.Validator` as ``ctx`` (every error names the file and
+the key path) and does not import :mod:`ocio_vp.formats.measurements`, which imports it.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ocio_vp.choices import WALL_ENCODINGS
+from ocio_vp.errors import InputError, excerpt, format_key_path
+from ocio_vp.wall.linearity import CHANNELS, parse_ramps, ramps_to_dict
+
+__all__ = [
+    "PANEL_KEYS",
+    "PanelRegion",
+    "PanelType",
+    "panel_values_to_dict",
+    "panels_to_dict",
+    "parse_panel_values",
+    "parse_panels",
+    "primary_panel",
+]
+
+#: Keys of one ``panels`` entry: (required, optional).
+PANEL_KEYS = (
+    ("name", "in_frustum", "primaries", "lit_chart"),
+    ("calibration_panel", "beta", "ramps", "region", "encoding", "peak_nits"),
+)
+
+
+@dataclass(frozen=True)
+class PanelRegion:
+    """Where a panel type sits in the volume, as seen from the chart (degrees).
+
+    ``elevation`` from the horizon (-90 nadir, 90 zenith); ``azimuth`` from the chart's normal
+    (the HDRI's centre), positive towards +x (the image's right), in [-180, 180].
+    """
+
+    elevation: tuple[float, float]
+    azimuth: tuple[float, float] = (-180.0, 180.0)
+
+    def overlaps(self, other: PanelRegion) -> bool:
+        """True when the two boxes share directions (touching edges do not count)."""
+        (e0, e1), (a0, a1) = self.elevation, self.azimuth
+        (f0, f1), (b0, b1) = other.elevation, other.azimuth
+        return e0 < f1 and f0 < e1 and a0 < b1 and b0 < a1
+
+
+@dataclass(frozen=True)
+class PanelType:
+    """One panel type: its [SL] (3, 3) and [SRL]_j (n, 3, 3) as photographed, like a file
+    without ``panels`` gives them for its one wall, plus where it is and how it is driven.
+
+    ``panel`` is the calibration panel's geometry (a
+    :class:`~ocio_vp.formats.measurements.PanelGeometry`) or None when ``beta`` is given.
+    """
+
+    name: str
+    in_frustum: bool
+    SL: np.ndarray
+    SRL: np.ndarray
+    panel: Any = None
+    beta: float | None = None
+    ramps: Mapping[str, Any] | None = None
+    regions: tuple[PanelRegion, ...] = ()
+    encoding: str | None = None
+    peak_nits: float | None = None
+
+
+def primary_panel(panels: tuple[PanelType, ...]) -> PanelType:
+    """The first in-frustum panel type: its M and N are solution.json's top-level ones."""
+    return next(p for p in panels if p.in_frustum)
+
+
+def _kind(value: Any) -> str:
+    if isinstance(value, (list, tuple)):
+        return f"a list of {len(value)}"
+    return f"{type(value).__name__} {excerpt(value)}"
+
+
+def _pair(ctx: Any, value: Any, key: tuple, low: float, high: float) -> tuple[float, float]:
+    if not isinstance(value, (list, tuple)) or len(value) != 2:
+        raise ctx.error(key, f"expected [min, max] in degrees, got {_kind(value)}")
+    a, b = (ctx.number(v, (*key, i), minimum=low, maximum=high) for i, v in enumerate(value))
+    if not a < b:
+        raise ctx.error(key, f"expected min < max, got [{a:g}, {b:g}]")
+    return a, b
+
+
+def _region(ctx: Any, value: Any, key: tuple) -> PanelRegion:
+    raw = ctx.mapping(value, key, required=("elevation",), optional=("azimuth",))
+    elevation = _pair(ctx, raw["elevation"], (*key, "elevation"), -90.0, 90.0)
+    azimuth = (-180.0, 180.0)
+    if "azimuth" in raw:
+        azimuth = _pair(ctx, raw["azimuth"], (*key, "azimuth"), -180.0, 180.0)
+    return PanelRegion(elevation, azimuth)
+
+
+def _regions(ctx: Any, value: Any, key: tuple) -> tuple[PanelRegion, ...]:
+    """One ``{elevation, azimuth}`` box or a non-empty list of them."""
+    if isinstance(value, list):
+        if not value:
+            raise ctx.error(key, "expected a region or a non-empty list of regions")
+        return tuple(_region(ctx, v, (*key, i)) for i, v in enumerate(value))
+    return (_region(ctx, value, key),)
+
+
+def _encoding(ctx: Any, entry: Mapping[str, Any], key: tuple) -> tuple[str | None, float | None]:
+    encoding = entry.get("encoding")
+    if encoding is not None and encoding not in WALL_ENCODINGS:
+        raise ctx.error(
+            (*key, "encoding"),
+            f"unknown encoding {excerpt(encoding)}; expected one of: {', '.join(WALL_ENCODINGS)}",
+        )
+    peak = None
+    if "peak_nits" in entry:
+        if encoding != "pq":
+            raise ctx.error((*key, "peak_nits"), "only with encoding: pq")
+        peak = ctx.number(entry["peak_nits"], (*key, "peak_nits"), strict=True, maximum=10000.0)
+    return encoding, peak
+
+
+def _ramps(ctx: Any, value: Any, key: tuple) -> Mapping[str, Any]:
+    """``parse_ramps`` with its errors placed under ``panels[i].ramps``."""
+    try:
+        return parse_ramps(value, source=ctx.source)
+    except InputError as error:
+        where = format_key_path(*key[:-1])
+        raise InputError(error.problem, source=ctx.source, key=f"{where}.{error.key}") from None
+
+
+def _parse_one(ctx: Any, value: Any, key: tuple, n: int | None) -> PanelType:
+    required, optional = PANEL_KEYS
+    entry = ctx.mapping(value, key, required=required, optional=optional)
+    name = ctx.name(entry["name"], (*key, "name"))
+    in_frustum = entry["in_frustum"]
+    if not isinstance(in_frustum, bool):
+        raise ctx.error((*key, "in_frustum"), f"expected true or false, got {_kind(in_frustum)}")
+    panel, beta = ctx.calibration(entry, key)
+    primaries = ctx.mapping(entry["primaries"], (*key, "primaries"), required=CHANNELS)
+    SL = np.stack([ctx.rgb(primaries[c], (*key, "primaries", c)) for c in CHANNELS], axis=1)
+    ctx.signal(SL, (*key, "primaries"))
+    lit = ctx.mapping(entry["lit_chart"], (*key, "lit_chart"), required=CHANNELS)
+    charts: list[np.ndarray] = []
+    for c in CHANNELS:
+        chart_key = (*key, "lit_chart", c)
+        expected, like = n, "panels[0].lit_chart.red"
+        if n is None and charts:
+            expected, like = len(charts[0]), f"{format_key_path(*key)}.lit_chart.red"
+        count = len(lit[c]) if isinstance(lit[c], list) else None
+        if expected is not None and count and count != expected:
+            raise ctx.error(chart_key, f"has {count} patches, expected {expected} like {like}")
+        charts.append(ctx.chart(lit[c], chart_key, None))
+    SRL = ctx.signal(np.stack(charts, axis=2), (*key, "lit_chart"))
+    ramps = _ramps(ctx, entry["ramps"], (*key, "ramps")) if "ramps" in entry else None
+    regions = _regions(ctx, entry["region"], (*key, "region")) if "region" in entry else ()
+    encoding, peak = _encoding(ctx, entry, key)
+    return PanelType(name, in_frustum, SL, SRL, panel, beta, ramps, regions, encoding, peak)
+
+
+def parse_panels(ctx: Any, value: Any) -> tuple[PanelType, ...]:
+    """Validate the ``panels`` list: safe, unique names, the same number of chart patches in
+    every ``lit_chart``, at least one in-frustum type, regions that do not overlap."""
+    if not isinstance(value, list) or not value:
+        raise ctx.error(
+            ("panels",), f"expected a non-empty list of panel types, got {_kind(value)}"
+        )
+    panels: list[PanelType] = []
+    for i, raw in enumerate(value):
+        panel = _parse_one(ctx, raw, ("panels", i), panels[0].SRL.shape[0] if panels else None)
+        for j, other in enumerate(panels):
+            if other.name == panel.name:
+                raise ctx.error(
+                    ("panels", i, "name"), f"duplicate name {panel.name!r} (also panels[{j}])"
+                )
+            for a in panel.regions:
+                if any(a.overlaps(b) for b in other.regions):
+                    raise ctx.error(
+                        ("panels", i, "region"),
+                        f"overlaps panels[{j}].region ({other.name}): light from one "
+                        "direction would be counted for two panel types",
+                    )
+        panels.append(panel)
+    if not any(p.in_frustum for p in panels):
+        raise ctx.error(
+            ("panels",),
+            "no panel type has in_frustum: true; one must show the in-camera background "
+            "(its M and N are solution.json's top-level ones)",
+        )
+    return tuple(panels)
+
+
+def parse_panel_values(
+    ctx: Any,
+    value: Any,
+    key: tuple,
+    panels: tuple[PanelType, ...],
+    *,
+    in_frustum_only: bool = False,
+) -> dict[str, np.ndarray]:
+    """An environment's per-panel ``w_avg`` (every panel type) or ``black_level``
+    (``in_frustum_only``: in-frustum types, each optional) as ``{name: (3,)}``."""
+    names = [p.name for p in panels]
+    if not isinstance(value, Mapping):
+        raise ctx.error(
+            key,
+            f"with panels, expected a mapping of panel type -> [r, g, b] ({', '.join(names)}), "
+            f"got {_kind(value)}",
+        )
+    for name in value:
+        if name not in names:
+            hint = difflib.get_close_matches(str(name)[:100], names, n=1)
+            suggestion = f" (did you mean {hint[0]!r}?)" if hint else ""
+            raise ctx.error(
+                (*key, str(name)[:60]),
+                f"unknown panel type{suggestion}; panel types: {', '.join(names)}",
+            )
+    out = {}
+    for panel in panels:
+        if panel.name not in value:
+            if not in_frustum_only:
+                raise ctx.error(
+                    key,
+                    f"missing panel type {panel.name!r}: give the diffuse light every panel "
+                    "type delivers (or no w_avg, to take it from an HDRI with --hdri)",
+                )
+            continue
+        if in_frustum_only and not panel.in_frustum:
+            raise ctx.error(
+                (*key, panel.name),
+                "is not an in-frustum panel type (in_frustum: false): the camera never sees "
+                "its black level",
+            )
+        out[panel.name] = ctx.rgb(value[panel.name], (*key, panel.name))
+    if not in_frustum_only and not any(np.any(v > 0) for v in out.values()):
+        raise ctx.error(key, "is black for every panel type: the environment gives no light")
+    return out
+
+
+def _rows(array: np.ndarray) -> list[list[float]]:
+    return [[float(v) for v in row] for row in np.asarray(array, dtype=np.float64)]
+
+
+def _region_dict(region: PanelRegion) -> dict[str, Any]:
+    out: dict[str, Any] = {"elevation": list(region.elevation)}
+    if region.azimuth != (-180.0, 180.0):
+        out["azimuth"] = list(region.azimuth)
+    return out
+
+
+def panels_to_dict(panels: tuple[PanelType, ...]) -> list[dict[str, Any]]:
+    """The inverse of :func:`parse_panels` (plain Python types, file key order)."""
+    out = []
+    for p in panels:
+        entry: dict[str, Any] = {"name": p.name, "in_frustum": p.in_frustum}
+        if p.panel is not None:
+            geometry = {"width": p.panel.width, "height": p.panel.height}
+            geometry["distance"] = p.panel.distance
+            if p.panel.offset_x or p.panel.offset_y:
+                geometry.update(offset_x=p.panel.offset_x, offset_y=p.panel.offset_y)
+            entry["calibration_panel"] = geometry
+        if p.beta is not None:
+            entry["beta"] = p.beta
+        entry["primaries"] = {c: _rows(p.SL.T)[k] for k, c in enumerate(CHANNELS)}
+        entry["lit_chart"] = {c: _rows(p.SRL[:, :, k]) for k, c in enumerate(CHANNELS)}
+        if p.ramps is not None:
+            entry["ramps"] = ramps_to_dict(p.ramps)
+        if p.regions:
+            regions = [_region_dict(r) for r in p.regions]
+            entry["region"] = regions[0] if len(regions) == 1 else regions
+        if p.encoding is not None:
+            entry["encoding"] = p.encoding
+        if p.peak_nits is not None:
+            entry["peak_nits"] = p.peak_nits
+        out.append(entry)
+    return out
+
+
+def panel_values_to_dict(values: Mapping[str, np.ndarray]) -> dict[str, list[float]]:
+    """``{name: [r, g, b]}`` of per-panel values (plain floats)."""
+    return {name: [float(v) for v in rgb] for name, rgb in values.items()}

@@ -1,0 +1,188 @@
+"""The colour spaces of a stage's other panel types, beside the wall's.
+
+A stage of several panel types (solution.json's ``panels``) keeps the wall colour spaces of a
+single-type stage for its first in-frustum type (``LED Wall - Outer Frustum`` /
+``LED Wall - Inner Frustum``, built by :mod:`ocio_vp.ocio.config` from the top-level M and N)
+and gets, for every other type, its own:
+
+- ``LED <Type> - Outer Frustum``: reference -> that type's drive through its own M (every type
+  lights the actors where it is out of frame);
+- ``LED <Type> - Inner Frustum`` (in-frustum types only): through its own N and black-level
+  offset (or ``M_k Q^-1(c)`` for a non-linear Q: the config's baked Q^-1, then M_k);
+
+each followed by that type's own linearity LUT and signal encoding (the same tail as the wall's,
+:func:`ocio_vp.ocio.wall.wall_outputs` and :func:`ocio_vp.ocio.config.wall_signal_tail`), and
+views ``<Type> Outer Frustum`` / ``<Type> Inner Frustum`` on the ``LED Wall`` display.
+``<Type>`` is the panel type's name in title case ("ceiling" -> "LED Ceiling - Outer Frustum"),
+or ``Panel <name>`` where two names would read alike or one would read "Wall".
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+import PyOpenColorIO as OCIO
+
+from ocio_vp.formats.panel_solution import PanelSolution
+from ocio_vp.formats.solution import Solution
+from ocio_vp.ocio.config import (
+    DISPLAY,
+    FAMILY,
+    IN_FRUSTUM,
+    OUT_OF_FRUSTUM,
+    VIEW_INNER,
+    VIEW_OUTER,
+    WALL_SIGNAL_ENCODINGS,
+    ocio_names,
+    wall_signal_tail,
+    wall_transforms,
+)
+from ocio_vp.ocio.viewing import set_categories
+from ocio_vp.ocio.wall import wall_outputs
+
+__all__ = ["PanelOutputs", "add_panel_spaces", "panel_labels", "panel_outputs"]
+
+
+def panel_labels(names: list[str], primary: str) -> dict[str, str]:
+    """How each panel type reads in colour-space names: ``Wall`` for ``primary``, the others
+    in title case, ``Panel <name>`` where that would repeat a label or read ``Wall``.
+
+    >>> panel_labels(["wall", "ceiling", "wild-wall", "wild_wall"], "wall")
+    {'wall': 'Wall', 'ceiling': 'Ceiling', 'wild-wall': 'Panel wild-wall', 'wild_wall': 'Panel wild_wall'}
+    """
+    titles = {n: " ".join(n.replace("-", " ").replace("_", " ").split()).title() for n in names}
+    labels = {}
+    for name in names:
+        title = titles[name]
+        clash = title == "Wall" or sum(t == title for t in titles.values()) > 1
+        labels[name] = "Wall" if name == primary else (f"Panel {name}" if clash else title)
+    return labels
+
+
+def _names(label: str, in_frustum: bool) -> dict[str, str]:
+    names = {
+        "out_of_frustum": f"LED {label} - Outer Frustum",
+        "view_out_of_frustum": f"{label} {VIEW_OUTER}",
+    }
+    if in_frustum:
+        names["in_frustum"] = f"LED {label} - Inner Frustum"
+        names["view_in_frustum"] = f"{label} {VIEW_INNER}"
+    return names
+
+
+def _fmt(matrix: np.ndarray | None) -> str:
+    """A matrix as descriptions print it (6 digits; rounding-level entries as 0)."""
+    if matrix is None:
+        return "none"
+    matrix = np.asarray(matrix, dtype=np.float64)
+    floor = 1e-12 * float(np.max(np.abs(matrix), initial=0.0))
+    matrix = np.where(np.abs(matrix) <= floor, 0.0, matrix)
+    return "[" + "; ".join(" ".join(f"{v:.6g}" for v in row) for row in matrix) + "]"
+
+
+@dataclass(frozen=True)
+class PanelOutputs:
+    """What the other panel types add: colour spaces, (view, colour space) pairs for the
+    ``LED Wall`` display, LUT sidecars (relative path -> text), and every type's
+    :class:`~ocio_vp.formats.panel_solution.PanelSolution` with its ``ocio`` names and
+    ``linearity`` (LUT file) filled in, as solution.json records them."""
+
+    colorspaces: tuple[OCIO.ColorSpace, ...]
+    views: tuple[tuple[str, str], ...]
+    files: dict[str, str] = field(default_factory=dict)
+    panels: dict[str, PanelSolution] = field(default_factory=dict)
+
+
+def _view(solution: Solution, panel: PanelSolution) -> Solution:
+    """The solution as if ``panel`` were the stage's one wall (its M, N, offset, linearity)."""
+    return dataclasses.replace(
+        solution,
+        SL=panel.SL,
+        M=panel.M,
+        N=panel.N,
+        black_level_offset=panel.black_level_offset,
+        linearity=panel.linearity,
+        panels=None,
+    )
+
+
+def _space(name: str, description: str, encoding: str, chain: list) -> OCIO.ColorSpace:
+    cs = OCIO.ColorSpace(
+        referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
+        name=name,
+        family=f"{FAMILY}/LED Wall",
+        encoding=encoding,
+        description=description,
+    )
+    cs.setTransform(chain[0] if len(chain) == 1 else OCIO.GroupTransform(chain),
+                    OCIO.COLORSPACE_DIR_FROM_REFERENCE)  # fmt: skip
+    return cs
+
+
+def _descriptions(solution: Solution, panel: PanelSolution) -> dict[str, str]:
+    origin = f"stage {solution.stage!r}, environment {solution.environment!r}"
+    inner = f"N = M Q^-1 {_fmt(panel.N)}"
+    if panel.N is None:
+        inner = f"N NOT SOLVED ({panel.N_reason}); M is used instead, {_fmt(panel.M)}"
+    if panel.black_level_offset is not None:
+        inner += f", plus black-level offset {_fmt(panel.black_level_offset[None])}"
+    return {
+        OUT_OF_FRUSTUM: f"Panel drive of panel type {panel.name!r} for content OUTSIDE the "
+        f"camera frustum (lights the actors): its own M = [SL]^-1 {_fmt(panel.M)}. {origin}.",
+        IN_FRUSTUM: f"Panel drive of panel type {panel.name!r} for content INSIDE the camera "
+        f"frustum (the in-camera background): {inner}. {origin}.",
+    }
+
+
+def panel_outputs(solution: Solution, q_inverse_file: str | None = None) -> PanelOutputs | None:
+    """The other panel types' colour spaces (None for a stage of one panel type).
+
+    ``q_inverse_file``: a non-linear Q's baked inverse (the config's sidecar), through which
+    the in-frustum types show content (``M_k Q^-1(c)``), as the wall's inner frustum does.
+    """
+    if not solution.panels:
+        return None
+    primary = next(p.name for p in solution.panels.values() if p.in_frustum)
+    labels = panel_labels(list(solution.panels), primary)
+    spaces, views, files, panels = [], [], {}, {}
+    top = ocio_names()
+    for name, panel in solution.panels.items():
+        if name == primary:
+            names = {k: top[k] for k in ("out_of_frustum", "in_frustum")}
+            names |= {k: top[k] for k in ("view_out_of_frustum", "view_in_frustum")}
+            panels[name] = dataclasses.replace(panel, linearity=solution.linearity, ocio=names)
+            continue
+        view = _view(solution, panel)
+        wall = wall_outputs(view)  # this type's own linearity LUT and signal encoding
+        files.update(wall.files)
+        chains = wall_transforms(view, q_inverse_file)
+        tail = wall.extra_wall_transforms or {}
+        encoding_name = ((wall.linearity or {}).get("wall_encoding") or {}).get("name", "linear")
+        encoding = WALL_SIGNAL_ENCODINGS.get(encoding_name, "scene-linear")
+        names = _names(labels[name], panel.in_frustum)
+        texts = _descriptions(solution, panel)
+        roles = [(OUT_OF_FRUSTUM, "out_of_frustum")]
+        roles += [(IN_FRUSTUM, "in_frustum")] if panel.in_frustum else []
+        for role, key in roles:
+            chain = chains[role] + wall_signal_tail(view, list(tail.get(role, [])))
+            spaces.append(_space(names[key], texts[role], encoding, chain))
+            views.append((names[f"view_{key}"], names[key]))
+        panels[name] = dataclasses.replace(panel, linearity=wall.linearity, ocio=names)
+    return PanelOutputs(tuple(spaces), tuple(views), files, panels)
+
+
+def add_panel_spaces(config: OCIO.Config, outputs: PanelOutputs) -> None:
+    """Add the colour spaces and their views on the ``LED Wall`` display (and the categories
+    every colour space of the config has), then validate."""
+    for space in outputs.colorspaces:
+        config.addColorSpace(space)
+    for view, space in outputs.views:
+        config.addDisplayView(DISPLAY, view, space)
+    views = config.getActiveViews()  # a string before OCIO 2.5, an iterator since
+    active = [v.strip() for v in (views.split(",") if isinstance(views, str) else views)]
+    if active:  # none listed: every view is active
+        config.setActiveViews(", ".join([*active, *(view for view, _ in outputs.views)]))
+    set_categories(config)  # as the wall's: menus that filter by category list them
+    config.validate()
