@@ -206,7 +206,7 @@ def add_monitor_displays(
     for monitor in MONITORS:
         display = aces.getColorSpace(monitor.display)
         if config.getColorSpace(monitor.display) is None:
-            config.addColorSpace(copy.deepcopy(display))
+            config.addColorSpace(_clamped_display(display))
         view = monitor.view if camera_to_aces is not None else UNTONEMAPPED_VIEW
         if view not in added:
             config.addViewTransform(_view_transform(aces, view, camera_to_aces))
@@ -222,6 +222,31 @@ def add_monitor_displays(
             "",
         )
     return list(MONITORS)
+
+
+def _clamped_display(display: OCIO.ColorSpace) -> OCIO.ColorSpace:
+    """A copy of an ACES config display colour space; a PQ one with its negative signal
+    clamped to 0 in both directions.
+
+    OCIO versions disagree on PQ below 0 (the builtin clamps negative values in 2.2 and 2.3 and
+    mirrors them from 2.4 on): with the clamp, and the decode given explicitly, every version
+    gives the same numbers. A negative display signal does not exist on the monitor, so nothing
+    it shows changes; the SDR displays are kept exactly as the ACES config has them.
+    """
+    copied = copy.deepcopy(display)
+    encode = display.getTransform(OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+    if "ST2084" not in display.getName() or encode is None:
+        return copied
+    if display.getTransform(OCIO.COLORSPACE_DIR_TO_REFERENCE) is not None:
+        return copied
+    floor = OCIO.RangeTransform(minInValue=0.0, minOutValue=0.0)
+    decode = copy.deepcopy(encode)
+    decode.setDirection(OCIO.TRANSFORM_DIR_INVERSE)
+    copied.setTransform(
+        OCIO.GroupTransform([copy.deepcopy(encode), floor]), OCIO.COLORSPACE_DIR_FROM_REFERENCE
+    )
+    copied.setTransform(OCIO.GroupTransform([floor, decode]), OCIO.COLORSPACE_DIR_TO_REFERENCE)
+    return copied
 
 
 def _view_transform(aces, name: str, camera_to_aces) -> OCIO.ViewTransform:
