@@ -8,6 +8,9 @@ colour-science is imported inside the functions: ``ocio-vp --help`` must stay fa
 from __future__ import annotations
 
 import difflib
+import functools
+import json
+from importlib import resources
 
 import numpy as np
 
@@ -16,7 +19,9 @@ from ocio_vp.errors import InputError
 __all__ = [
     "DEFAULT_CAMERA",
     "SPECTRAL_SHAPE",
+    "VENDORED_CAMERAS",
     "align",
+    "camera_names",
     "camera_sensitivities",
     "spectral_shape",
     "unknown_name",
@@ -26,6 +31,10 @@ __all__ = [
 #: (start, end, interval) in nm: the grid of colour's camera sensitivity datasets.
 SPECTRAL_SHAPE = (380.0, 780.0, 5.0)
 DEFAULT_CAMERA = "Nikon 5100 (NPL)"
+#: Measured sensitivities shipped with ocio_vp (``ocio_vp/data/camera_sensitivities.json``, from
+#: the rawtoaces project's data; licences in ``ocio_vp/data/CAMERAS_LICENSE.md``), beside
+#: colour-science's ``MSDS_CAMERA_SENSITIVITIES``.
+VENDORED_CAMERAS = "data/camera_sensitivities.json"
 
 
 def spectral_shape():
@@ -52,16 +61,44 @@ def align(sd) -> np.ndarray:
 
 
 def camera_sensitivities(name: str = DEFAULT_CAMERA) -> np.ndarray:
-    """(W, 3) spectral sensitivities of a camera in ``colour.MSDS_CAMERA_SENSITIVITIES``."""
+    """(W, 3) spectral sensitivities of a camera: a key of colour's
+    ``MSDS_CAMERA_SENSITIVITIES`` or of :data:`VENDORED_CAMERAS` (:func:`camera_names`).
+
+    >>> camera_sensitivities("ARRI D21 (rawtoaces)").shape
+    (81, 3)
+    """
     import colour
 
-    try:
+    if name in colour.MSDS_CAMERA_SENSITIVITIES:
         msds = colour.MSDS_CAMERA_SENSITIVITIES[name]
-    except KeyError:
-        raise InputError(
-            unknown_name("camera", name, colour.MSDS_CAMERA_SENSITIVITIES), key="camera"
-        ) from None
-    return np.asarray(msds.copy().align(spectral_shape()).values, dtype=np.float64)
+        return np.asarray(msds.copy().align(spectral_shape()).values, dtype=np.float64)
+    vendored = _vendored_cameras()
+    if name not in vendored:
+        raise InputError(unknown_name("camera", name, camera_names()), key="camera")
+    return vendored[name].copy()
+
+
+def camera_names() -> tuple[str, ...]:
+    """Every camera :func:`camera_sensitivities` knows: colour-science's, then the vendored."""
+    import colour
+
+    return (*colour.MSDS_CAMERA_SENSITIVITIES, *_vendored_cameras())
+
+
+@functools.lru_cache(maxsize=1)
+def _vendored_cameras() -> dict[str, np.ndarray]:
+    """The cameras of :data:`VENDORED_CAMERAS`, (W, 3) each; the file is on the grid already."""
+    text = resources.files("ocio_vp").joinpath(VENDORED_CAMERAS).read_text(encoding="utf-8")
+    document = json.loads(text)
+    grid = document["wavelengths"]
+    if (grid["start"], grid["end"], grid["interval"]) != SPECTRAL_SHAPE:
+        raise RuntimeError(f"{VENDORED_CAMERAS} is not on the grid {SPECTRAL_SHAPE}")
+    cameras = {}
+    for name, record in document["cameras"].items():
+        values = np.asarray(record["RGB"], dtype=np.float64)
+        values.setflags(write=False)
+        cameras[name] = values
+    return cameras
 
 
 def unknown_name(what: str, name: object, valid) -> str:

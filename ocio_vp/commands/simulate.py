@@ -55,7 +55,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--camera",
         default=None,
-        help="a colour.MSDS_CAMERA_SENSITIVITIES key (default: Nikon 5100 (NPL))",
+        help="a camera: a colour.MSDS_CAMERA_SENSITIVITIES key or one shipped with ocio-vp "
+        "(measured sensitivities from the rawtoaces project, e.g. 'ARRI D21 (rawtoaces)', "
+        "'RED MX (rawtoaces)', 'Sony ILCE-7SM2 (rawtoaces)'; an unknown name lists them all) "
+        "(default: Nikon 5100 (NPL))",
     )
     parser.add_argument(
         "--leds",

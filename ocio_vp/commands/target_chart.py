@@ -50,7 +50,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--camera",
         metavar="NAME",
-        help="camera in colour.MSDS_CAMERA_SENSITIVITIES (default: from --camera-sensitivities, "
+        help="camera in colour.MSDS_CAMERA_SENSITIVITIES or shipped with ocio-vp (as simulate "
+        "--camera) (default: from --camera-sensitivities, "
         "else approximated from stage.camera_colorspace)",
     )
     parser.add_argument(

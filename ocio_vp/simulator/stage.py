@@ -179,7 +179,8 @@ def spectral_stage(
     Parameters
     ----------
     camera
-        A key of ``colour.MSDS_CAMERA_SENSITIVITIES``.
+        A name of :func:`ocio_vp.spectra.camera_names`: colour's
+        ``MSDS_CAMERA_SENSITIVITIES`` or the measured cameras shipped with ocio_vp.
     leds
         Three ``(peak nm, FWHM nm)`` pairs for Gaussian primaries (default
         :data:`~ocio_vp.simulator.data.DEFAULT_LEDS`), or measured spectra: a (W, 3) array on

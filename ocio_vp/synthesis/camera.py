@@ -77,7 +77,7 @@ def _from_sensitivities(sensitivities: np.ndarray, description: str) -> CameraMo
 
 
 def camera_from_dataset(name: str) -> CameraModel:
-    """The sensitivities of a camera in ``colour.MSDS_CAMERA_SENSITIVITIES`` (key ``--camera``)."""
+    """The sensitivities of a named camera (:func:`ocio_vp.spectra.camera_names`; ``--camera``)."""
     return _from_sensitivities(camera_sensitivities(name), f"{name} spectral sensitivities")
 
 
