@@ -1,8 +1,9 @@
 """The spectral stage simulator: colour-science datasets, the simulated stage and its
 measurements, the ground-truth prediction of what a solution does, evaluation, sample data,
-sample calibration photographs (plates), a camera take of the wall playing patterns, and the
-ground truth on colours the chart does not
-contain (:mod:`ocio_vp.simulator.truth`).
+sample calibration photographs (plates), a camera take of the wall playing patterns, the
+ground truth on colours the chart does not contain (:mod:`ocio_vp.simulator.truth`), and
+beyond reflectances: narrow-band emitters and optimal colours
+(:mod:`ocio_vp.simulator.extremes`).
 """
 
 from ocio_vp.simulator.data import (
@@ -25,6 +26,16 @@ from ocio_vp.simulator.evaluate import (
     agreement_with_spectra,
     evaluate_solution,
     noise_study,
+)
+from ocio_vp.simulator.extremes import (
+    EMITTER_FWHM,
+    EMITTER_LEVELS,
+    EMITTER_PEAKS,
+    OPTIMAL_EDGES,
+    emitter_errors,
+    emitter_spectra,
+    emitters_in_scene,
+    optimal_reflectances,
 )
 from ocio_vp.simulator.options import (
     environments_from_args,
@@ -73,6 +84,8 @@ from ocio_vp.simulator.take import (
 from ocio_vp.simulator.truth import (
     CHART_DUPLICATE_TOLERANCE,
     HeldOutErrors,
+    camera_matrix,
+    held_out_colours,
     held_out_errors,
     held_out_reflectances,
     noisy_measurements,
@@ -85,7 +98,11 @@ __all__ = [
     "DEFAULT_LEDS",
     "DEFAULT_PANEL",
     "DEFAULT_PANEL_ALBEDO",
+    "EMITTER_FWHM",
+    "EMITTER_LEVELS",
+    "EMITTER_PEAKS",
     "ENVIRONMENTS",
+    "OPTIMAL_EDGES",
     "PAPER_ENVIRONMENTS",
     "SAMPLE_METHOD",
     "SAMPLE_NAME",
@@ -101,17 +118,23 @@ __all__ = [
     "TakeOptions",
     "agreement_with_spectra",
     "align",
+    "camera_matrix",
     "camera_rgb",
     "camera_sensitivities",
     "chart_reflectances",
+    "emitter_errors",
+    "emitter_spectra",
+    "emitters_in_scene",
     "environment_spectrum",
     "environments_from_args",
     "evaluate_solution",
     "gaussian_leds",
+    "held_out_colours",
     "held_out_errors",
     "held_out_reflectances",
     "noise_study",
     "noisy_measurements",
+    "optimal_reflectances",
     "paper_stage",
     "paper_stage_measurements",
     "plate_count",

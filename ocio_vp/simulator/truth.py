@@ -35,6 +35,8 @@ from ocio_vp.spectra import align, spectral_shape
 __all__ = [
     "CHART_DUPLICATE_TOLERANCE",
     "HeldOutErrors",
+    "camera_matrix",
+    "held_out_colours",
     "held_out_errors",
     "held_out_reflectances",
     "noisy_measurements",
@@ -146,13 +148,39 @@ class HeldOutErrors:
     delta_E_ITP: np.ndarray
 
 
-def _camera_matrix(stage: SpectralStage) -> np.ndarray:
+def camera_matrix(stage: SpectralStage) -> np.ndarray:
+    """(3, 3) the stage camera's RGB -> XYZ matrix (:func:`ocio_vp.metrics.camera_to_xyz_matrix`),
+    the one every ground-truth ΔE here goes through (cached per camera)."""
     return _camera_matrix_cached(stage.camera.tobytes(), stage.camera.shape)
 
 
 @functools.lru_cache(maxsize=8)
 def _camera_matrix_cached(camera: bytes, shape: tuple[int, ...]) -> np.ndarray:
     return camera_to_xyz_matrix(np.frombuffer(camera, dtype=np.float64).reshape(shape))
+
+
+def held_out_colours(
+    stage: SpectralStage,
+    environment,
+    *,
+    M: np.ndarray,
+    w_avg: np.ndarray,
+    reflectances: np.ndarray,
+    extra_emission: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(lit, target), each (k + 1, 3) camera RGB: ``reflectances`` (k, W) and a perfect white
+    diffuser (the last row) lit by what the wall emits (``clip(M w_avg, 0)`` through the stage's
+    true LEDs, plus ``extra_emission``) and under ``environment``'s real light. The colours
+    :func:`held_out_errors` judges; to judge many corrections of one solve, compute them once."""
+    spectrum = environment_spectrum(stage, environment)
+    white = camera_rgb(stage, spectrum)
+    target = np.vstack([camera_rgb(stage, reflectances * spectrum), white])
+    drive = np.clip(np.asarray(M, dtype=np.float64) @ np.asarray(w_avg, dtype=np.float64), 0, None)
+    emitted = stage.leds @ drive
+    if extra_emission is not None:
+        emitted = emitted + np.asarray(extra_emission, dtype=np.float64)
+    lit = np.vstack([camera_rgb(stage, reflectances * emitted), camera_rgb(stage, emitted)])
+    return lit, target
 
 
 def held_out_errors(
@@ -174,18 +202,19 @@ def held_out_errors(
     stage camera's own RGB -> XYZ matrix and a perfect white diffuser under the real light as
     the reference white. ``extra_emission`` (W,) is light added by practical fixtures (their
     spectra times their drives, :mod:`ocio_vp.simulator.fixtures`). ``correct`` replaces
-    ``Q`` by a non-linear post-correction (:func:`ocio_vp.correction.post_correction`).
+    ``Q`` by a non-linear post-correction (a :data:`~ocio_vp.model.PostCorrection`'s
+    ``apply``). :func:`held_out_colours` gives the colours compared.
     """
-    spectrum = environment_spectrum(stage, environment)
-    white = camera_rgb(stage, spectrum)
-    target = np.vstack([camera_rgb(stage, reflectances * spectrum), white])
-    drive = np.clip(np.asarray(M, dtype=np.float64) @ np.asarray(w_avg, dtype=np.float64), 0, None)
-    emitted = stage.leds @ drive
-    if extra_emission is not None:
-        emitted = emitted + np.asarray(extra_emission, dtype=np.float64)
-    lit = np.vstack([camera_rgb(stage, reflectances * emitted), camera_rgb(stage, emitted)])
+    lit, target = held_out_colours(
+        stage,
+        environment,
+        M=M,
+        w_avg=w_avg,
+        reflectances=reflectances,
+        extra_emission=extra_emission,
+    )
     corrected = lit @ np.asarray(Q, dtype=np.float64).T if correct is None else correct(lit)
     errors = chart_errors(
-        corrected, target, camera_to_xyz=_camera_matrix(stage), white_patch=len(target) - 1
+        corrected, target, camera_to_xyz=camera_matrix(stage), white_patch=len(target) - 1
     )
     return HeldOutErrors(errors.delta_E_2000[:-1], errors.delta_E_ITP[:-1])
