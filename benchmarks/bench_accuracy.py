@@ -7,7 +7,14 @@ measurements are simulated, every photographed value gets multiplicative Gaussia
 solved through the product's own path (:func:`ocio_vp.pipeline.solve_environment`). The
 solution is then judged on reflectances that are not on the chart, lit by what the wall really
 emits (drive clipped at 0) and compared with the real light
-(:func:`ocio_vp.simulator.truth.held_out_errors`): mean and 95th percentile ΔE2000 and ΔE ITP.
+(:func:`ocio_vp.simulator.truth.held_out_errors`): mean and 95th percentile ΔE2000 and ΔE ITP;
+and on the optimal colours (mean ΔE2000) and narrow-band emitters (95th percentile of ΔE2000
+between Q(x) and x) of :mod:`ocio_vp.simulator.extremes`.
+
+Then :mod:`benchmarks.accuracy_beyond`: least squares, the default (``auto``) and
+``--protect-emitters`` on stages the sample data does not contain (the rawtoaces cameras), the
+issue's criteria, bright saturated inputs and the protection's trade-off curve; and
+:mod:`benchmarks.accuracy_hosts`: ``apply`` against the written config's processor.
 
 Then the bad-patch study (:func:`outlier_study`): false alarms of the screening
 (:func:`ocio_vp.correction.outliers.inconsistent_patches`) on clean charts, and what one or two
@@ -42,6 +49,9 @@ CAMERAS = ("Nikon 5100 (NPL)", "Sigma SDMerill (NPL)")
 NOISE_LEVELS = (0.002, 0.005, 0.01)
 #: Sets pooled as "held-out"; "skin" is reported on its own.
 GENERAL_SETS = ("rawtoaces", "cie2017")
+#: The optimal colours (:func:`ocio_vp.simulator.extremes.optimal_reflectances`), judged as the
+#: held-out reflectances are and reported on their own.
+OPTIMAL = "optimal"
 
 
 @dataclass
@@ -63,6 +73,8 @@ class Results:
     de2000: dict = field(default_factory=lambda: defaultdict(list))
     itp: dict = field(default_factory=lambda: defaultdict(list))
     skin: dict = field(default_factory=lambda: defaultdict(list))
+    optimal: dict = field(default_factory=lambda: defaultdict(list))
+    emitters: dict = field(default_factory=lambda: defaultdict(list))
     models: dict = field(default_factory=lambda: defaultdict(lambda: defaultdict(int)))
     seconds: dict = field(default_factory=lambda: defaultdict(float))
     failures: dict = field(default_factory=lambda: defaultdict(list))
@@ -83,7 +95,8 @@ def config(quick: bool, methods=None) -> Config:
 def _solve_and_judge(results, stage, measurements, env, noise, method, held_out):
     from ocio_vp.errors import InputError
     from ocio_vp.pipeline import solve_environment
-    from ocio_vp.simulator.truth import held_out_errors
+    from ocio_vp.simulator.extremes import emitter_errors
+    from ocio_vp.simulator.truth import camera_matrix, held_out_errors
 
     key = (method, env.name, noise)
     start = time.perf_counter()
@@ -107,8 +120,14 @@ def _solve_and_judge(results, stage, measurements, env, noise, method, held_out)
         if name in GENERAL_SETS:
             results.de2000[key].append(errors.delta_E_2000)
             results.itp[key].append(errors.delta_E_ITP)
+        elif name == OPTIMAL:
+            results.optimal[key].append(errors.delta_E_2000)
         else:
             results.skin[key].append(errors.delta_E_2000)
+    emitted, _ = emitter_errors(
+        stage, env.name, solution.correction.apply, camera_to_xyz=camera_matrix(stage)
+    )
+    results.emitters[key].append(emitted)
 
 
 def _simulate(stage, environments, results):
@@ -130,11 +149,12 @@ def _simulate(stage, environments, results):
 
 def measure(cfg: Config, *, progress=None) -> Results:
     """Run every (stage, environment, noise, seed, method) of ``cfg``."""
+    from ocio_vp.simulator.extremes import optimal_reflectances
     from ocio_vp.simulator.stage import spectral_stage
     from ocio_vp.simulator.truth import held_out_reflectances, noisy_measurements
 
     results = Results()
-    held_out = held_out_reflectances(cfg.chart)
+    held_out = {**held_out_reflectances(cfg.chart), OPTIMAL: optimal_reflectances()}
     for camera, leds in cfg.stages:
         stage = spectral_stage(camera=camera, leds=leds, chart=cfg.chart)
         clean = _simulate(stage, cfg.environments, results)
@@ -174,6 +194,8 @@ def summary_table(results: Results, cfg: Config, envs) -> str:
                 ("itp", "p95"),
                 ("skin", "mean"),
                 ("skin", "p95"),
+                ("optimal", "mean"),
+                ("emitters", "p95"),
             )
         ]
         n = sum(len(results.de2000.get((method, e, x), [])) for e in envs for x in cfg.noise_levels)
@@ -181,7 +203,8 @@ def summary_table(results: Results, cfg: Config, envs) -> str:
         rows.append(
             (
                 f"`{method}`",
-                *[f"{v:.2f}" for v in cells],
+                *[f"{v:.2f}" for v in cells[:-1]],
+                f"{cells[-1]:.1f}",
                 f"{1e3 * results.seconds[method] / calls:.0f} ms",
             )
         )
@@ -193,6 +216,8 @@ def summary_table(results: Results, cfg: Config, envs) -> str:
         "p95 ΔE ITP",
         "skin mean ΔE2000",
         "skin p95 ΔE2000",
+        "optimal colours mean ΔE2000",
+        "emitter p95 ΔE2000",
         "solve time",
     ]
     return markdown_table(header, rows)
@@ -264,6 +289,11 @@ def report(results: Results, cfg: Config, quick: bool) -> str:
         f"- Held-out reflectances: RAW to ACES training set ({len(sets['rawtoaces'])} kept), CIE "
         f"2017 colour evaluation samples ({len(sets['cie2017'])} kept), pooled; skin "
         f"({len(sets['skin'])}: PMC skin tones and CIE 1995 TCS13) separately.",
+        "- Beyond the reflectances: optimal colours (block band-pass and band-stop "
+        "reflectances, judged as the held-out ones: mean ΔE2000) and narrow-band emitters "
+        "(420-680 nm at 0.25, 1 and 4 times the scene white's CIE Y, ΔE2000 between Q(x) and x: "
+        "p95), both explained under *Beyond the chart* below.",
+        "- Run time of the whole document: {seconds}.",
         "",
         "ΔE ITP is summarised by its median and 95th percentile, not its mean: a colour "
         "corrected to (slightly) negative light (a 3x3 Q under sodium) has no PQ encoding, and "
@@ -302,10 +332,25 @@ def report(results: Results, cfg: Config, quick: bool) -> str:
     return "\n".join(lines)
 
 
+def _progress(text: str) -> None:
+    print(f"  {text}", file=sys.stderr, flush=True)
+
+
 def run(quick: bool = False, methods=None) -> str:
+    from benchmarks.accuracy_beyond import beyond_section
+    from benchmarks.accuracy_hosts import hosts_section
+
+    start = time.perf_counter()
     cfg = config(quick, methods)
-    results = measure(cfg, progress=lambda text: print(f"  {text}", file=sys.stderr, flush=True))
-    return report(results, cfg, quick) + "\n\n" + screening_section(quick)
+    results = measure(cfg, progress=_progress)
+    sections = [
+        report(results, cfg, quick),
+        beyond_section(quick, progress=_progress),
+        hosts_section(quick, cfg.methods, progress=_progress),
+        screening_section(quick),
+    ]
+    minutes = (time.perf_counter() - start) / 60
+    return "\n\n".join(sections).replace("{seconds}", f"{minutes:.0f} min", 1)
 
 
 def main(argv=None) -> int:
