@@ -19,6 +19,10 @@ VENDORED = (
     "Sony ILCE-7SM2 (rawtoaces)",
     "Canon EOS 5D Mark II (rawtoaces)",
     "Nikon D810 (rawtoaces)",
+    "Canon EOS R5 (rawtoaces)",
+    "Fujifilm X-T3 (rawtoaces)",
+    "Nikon Z f (rawtoaces)",
+    "Panasonic DC-GX9 (rawtoaces)",
 )
 
 
