@@ -292,7 +292,10 @@ class TestAutoOnTheSimulator:
 
     def test_auto_N_varies_less_than_least_squares_with_noise_on_hps(self, simulated) -> None:
         # 0.5% multiplicative noise on every calibration sample ([SL] and the [SRL]_j), the same
-        # draws for both methods; N's spread is RMS ||N_i - mean N||_F / ||mean N||_F.
+        # draws for both methods; N's spread is RMS ||N_i - mean N||_F / ||mean N||_F. auto picks
+        # the bounded root-polynomial (whose 3x3, hence N, is least squares' own) or a shrunk
+        # least squares, so its N is never more variable (docs/stability.md); equal up to
+        # rounding when every draw takes the root-polynomial or a shrinkage of ~0.
         env = simulated.environment("high_pressure_sodium")
         spreads = {}
         for method in ("least-squares", "auto"):
@@ -310,7 +313,7 @@ class TestAutoOnTheSimulator:
             Ns = np.array(Ns)
             spread = np.sqrt(np.mean(np.sum((Ns - Ns.mean(0)) ** 2, axis=(1, 2))))
             spreads[method] = spread / np.linalg.norm(Ns.mean(0))
-        assert spreads["auto"] < spreads["least-squares"]
+        assert spreads["auto"] <= spreads["least-squares"] * (1 + 1e-9)
 
 
 class TestChooseModel:

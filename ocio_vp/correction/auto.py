@@ -10,7 +10,8 @@ predictions (every patch predicted by the model fitted without it, in closed for
 (:func:`ocio_vp.correction.perceptual.patch_delta_e`). The paper's least squares is kept unless
 another model is better by more than :data:`~ocio_vp.correction.linear.AUTO_SE_FACTOR`
 standard errors of the paired per-patch differences (a one-standard-error rule: the
-comparison's own noise decides what "better" means); among equals the simplest wins
+comparison's own noise decides what "better" means; ``regularised``, a shrunk least squares,
+needs :data:`SHRUNK_SE_FACTOR`); among equals the simplest wins.
 Root-polynomial degree 3 is not a candidate:
 its 13 terms per channel over-fit a 24-patch chart (on held-out colours it was 34 % worse than
 the 3x3 under broadband light, and worse in 29 of 30 environment and noise cells,
@@ -50,13 +51,20 @@ from ocio_vp.errors import InputError
 from ocio_vp.metrics import error_relative_to_white
 from ocio_vp.model.correction import MatrixCorrection
 
-__all__ = ["DEGREE_3_EXCLUDED", "q_auto"]
+__all__ = ["DEGREE_3_EXCLUDED", "SHRUNK_SE_FACTOR", "q_auto"]
 
 #: Said in every ``auto`` reason: why the richer root-polynomial is not a candidate.
 DEGREE_3_EXCLUDED = (
     "root-polynomial degree 3 is not a candidate: its 13 terms per channel over-fit a 24-patch "
     "chart"
 )
+
+#: ``regularised`` (least squares shrunk toward white balance) replaces least squares only when
+#: better by this many standard errors of the paired per-patch differences, not
+#: :data:`~ocio_vp.correction.linear.AUTO_SE_FACTOR`: its leave-one-patch-out gains on the chart
+#: carried to held-out reflectances less often than the other candidates' (docs/accuracy.md,
+#: "Beyond the chart": a shrunk 3x3 renders optimal colours better and reflectances worse).
+SHRUNK_SE_FACTOR = 2.0
 
 _NAMES = {"root-polynomial": "root-polynomial (degree 2, bounded)"}
 
@@ -129,7 +137,8 @@ def _singular_text(singular: np.ndarray) -> str:
 def _bounded_candidate(problem: QProblem, name: str) -> tuple[QFit | None, str | None]:
     """The bounded root-polynomial fit and its held-out predictions' source; (None, why) when it
     is not a candidate: the chart does not constrain its terms, it folds among reflective
-    colours whatever its fade, or it flips or collapses a bright saturated input."""
+    colours whatever its fade, or it flips or collapses a bright saturated input that least
+    squares does not."""
     try:
         fit = make_q_root_polynomial(ROOT_POLYNOMIAL_DEGREES[name])(problem)
     except InputError as error:
@@ -138,10 +147,16 @@ def _bounded_candidate(problem: QProblem, name: str) -> tuple[QFit | None, str |
         return None, f"{_label(name)} is not a candidate: {fit.warnings[0]}"
     white = problem.predicted[problem.white_patch]
     kept, negative = saturation_probe(fit.correction, white)
-    if kept < MIN_RETAINED or negative < MIN_NEGATIVE:
+    # Judged against its own fallback, the least-squares 3x3 that is also a candidate: a flip or
+    # collapse that least squares has too is the light's or the camera's, not the polynomial's.
+    fallback_kept, fallback_negative = saturation_probe(
+        MatrixCorrection(fit.correction.matrix), white
+    )
+    if kept < min(MIN_RETAINED, fallback_kept) or negative < min(MIN_NEGATIVE, fallback_negative):
         return None, (
             f"{_label(name)} is not a candidate: a bright saturated input keeps {kept:.0%} of "
-            f"its channel, lowest channel {negative:+.0%} of it"
+            f"its channel, lowest channel {negative:+.0%} of it (least squares: "
+            f"{fallback_kept:.0%}, {fallback_negative:+.0%})"
         )
     return fit, None
 
@@ -160,6 +175,32 @@ def _chosen_fit(chosen: str, X, P, w, white, alpha: float, model: QFit | None, *
         chosen,
         description.get(chosen, f"{chosen} (chosen by auto)"),
         **typed,
+    )
+
+
+def _choose(scores: dict[str, np.ndarray]) -> tuple[str, dict, list[str]]:
+    """:func:`~ocio_vp.correction.linear.choose_model`, with ``regularised`` held to
+    :data:`SHRUNK_SE_FACTOR`: (chosen, the table of every candidate, why regularised was
+    passed over, if it was)."""
+    chosen, table = choose_model(scores, AUTO_SE_FACTOR)
+    row = table.get("regularised")
+    if (
+        chosen != "regularised"
+        or abs(row["difference"]) <= AUTO_TIE  # shrunk by nothing: least squares itself
+        or row["difference"] < -SHRUNK_SE_FACTOR * row["standard_error"]
+    ):
+        return chosen, table, []
+    chosen, _ = choose_model(
+        {k: v for k, v in scores.items() if k != "regularised"}, AUTO_SE_FACTOR
+    )
+    return (
+        chosen,
+        table,
+        [
+            f"regularised is not taken: better than least-squares by {-row['difference']:.2g} ± "
+            f"{row['standard_error']:.2g}, less than the {SHRUNK_SE_FACTOR:g} standard errors a "
+            "shrunk 3x3 needs"
+        ],
     )
 
 
@@ -212,7 +253,8 @@ def q_auto(problem: QProblem) -> QFit:
             held[name] = bounded_loo_predictions(problem, models[name].correction)
     stacked, unit = patch_errors(np.stack(list(held.values())), P, w, white)
     scores = {name: e[active] for name, e in zip(held, stacked, strict=True)}
-    chosen, table = choose_model(scores, AUTO_SE_FACTOR)
+    chosen, table, shrunk = _choose(scores)
+    excluded += shrunk
     reason = _auto_reason(chosen, table, AUTO_SE_FACTOR, "least-squares", unit)
     details |= {
         "metric": f"leave-one-patch-out {unit}",
