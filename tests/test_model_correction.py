@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,6 +19,10 @@ from conftest import oracle_correction, paper_stage_problem
 from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import load_solution, solution_to_json
 from ocio_vp.model import (
+    DEFAULT_BRIGHT,
+    DEFAULT_NEGATIVE,
+    PROTECTION,
+    FitDomain,
     MatrixCorrection,
     ProtectedCorrection,
     correction_from_dict,
@@ -26,6 +31,8 @@ from ocio_vp.model import (
     newton_inverse,
 )
 from ocio_vp.pipeline import solve_environment
+
+ACCURACY = Path(__file__).resolve().parents[1] / "docs" / "accuracy.md"
 
 
 @pytest.fixture(scope="module")
@@ -222,3 +229,24 @@ def test_a_solve_with_protection_writes_it_into_the_solution(tmp_path):
         dataclasses.asdict(guarded.diagnostics)["extrapolation"]["led_damage"]
         < (dataclasses.asdict(plain.diagnostics)["extrapolation"]["led_damage"])
     )
+
+
+class TestProtectionPoint:
+    def test_the_default_point_is_the_protections_default(self) -> None:
+        assert (DEFAULT_BRIGHT, DEFAULT_NEGATIVE) == (PROTECTION.bright, PROTECTION.negative)
+        domain = FitDomain(np.eye(3), [[0.2, 0.2], [0.5, 0.2], [0.2, 0.5]], [0.3, 0.3])
+        protected = ProtectedCorrection(MatrixCorrection(np.eye(3)), domain, np.eye(3))
+        assert (protected.bright, protected.negative) == (PROTECTION.bright, PROTECTION.negative)
+
+    def test_docs_state_the_measured_trade_off_the_record_carries(self) -> None:
+        # python -m benchmarks.bench_accuracy writes the protect variant's figures on the report
+        # stages as PROTECTION.describe() words them; a run that moves them makes it stale.
+        text = ACCURACY.read_text(encoding="utf-8")
+        assert f"Default point (`ocio_vp.model.PROTECTION`): {PROTECTION.describe()}." in text
+        assert 0 < PROTECTION.emitters <= PROTECTION.worst_emitters <= 0.5
+        assert 0 < PROTECTION.reflectances <= PROTECTION.worst_reflectances <= 1.05
+
+    def test_the_setting_in_words(self) -> None:
+        assert PROTECTION.setting().startswith(
+            f"the identity above {PROTECTION.bright[1]:g}x white"
+        )

@@ -67,27 +67,85 @@ __all__ = [
     "DRIVE_FLOOR",
     "HULL_MIN_RADIUS",
     "MAX_CONDITION_INVERSE",
+    "PROTECTION",
     "FitDomain",
     "MatrixCorrection",
     "PostCorrection",
     "ProtectedCorrection",
+    "ProtectionPoint",
     "RootPolynomialCorrection",
     "correction_from_dict",
     "correction_to_dict",
     "fit_domain",
     "newton_inverse",
+    "protection_words",
     "smoothstep",
 ]
 
 #: A root-polynomial Q starts fading to its fallback matrix at the first gauge and has faded
 #: out at the second (1 = the chart's hull).
 DEFAULT_FADE = (1.0, 1.5)
-#: ``--protect-emitters``: the brightness (largest drive-relative channel, 1 = a perfect white
-#: diffuser) where the fade to the identity starts and where it ends.
-DEFAULT_BRIGHT = (1.1, 2.0)
-#: ``--protect-emitters``: the negative drive (most negative drive channel over the largest)
-#: where the fade to the identity starts and where it ends.
-DEFAULT_NEGATIVE = (0.05, 0.25)
+
+
+def protection_words(bright: tuple[float, float], negative: tuple[float, float]) -> str:
+    """Where an emitter protection hands over to the identity, in words."""
+    return (
+        f"the identity above {bright[1]:g}x white in any LED channel (fading from "
+        f"{bright[0]:g}x) and beyond {negative[1]:.0%} negative drive (fading "
+        f"from {negative[0]:.0%})"
+    )
+
+
+@dataclass(frozen=True)
+class ProtectionPoint:
+    """The default point of ``solve --protect-emitters`` and what it trades, as measured.
+
+    ``bright``: the brightness (largest drive-relative channel, 1 = a perfect white diffuser)
+    where the fade to the identity starts and ends; ``negative``: the negative drive (most
+    negative drive channel over the largest) where it starts and ends. The figures are the
+    accuracy benchmark's on stages nothing was tuned on (``python -m benchmarks.bench_accuracy``,
+    docs/accuracy.md, "The trade-off of --protect-emitters"): per environment, the protected
+    default's p95 ΔE2000 on narrow-band emitters and its mean ΔE2000 on held-out reflectances,
+    each over least squares'; averaged over the environments (``emitters``, ``reflectances``)
+    and in the worst one (``worst_*``). tests/test_model_correction.py checks that
+    docs/accuracy.md states the same figures.
+    """
+
+    bright: tuple[float, float]
+    negative: tuple[float, float]
+    emitters: float
+    worst_emitters: float
+    reflectances: float
+    worst_reflectances: float
+
+    def setting(self) -> str:
+        """The point in words, as :meth:`ProtectedCorrection.protection` words any point."""
+        return protection_words(self.bright, self.negative)
+
+    def describe(self) -> str:
+        """The point and its measured trade-off in one sentence."""
+        return (
+            f"{self.setting()}: on the benchmark's unseen stages, emitter damage "
+            f"{self.emitters:.2f}x least squares' (worst environment {self.worst_emitters:.2f}x), "
+            f"held-out reflectances {self.reflectances:.2f}x least squares' (worst "
+            f"{self.worst_reflectances:.2f}x) (docs/accuracy.md)"
+        )
+
+
+#: ``--protect-emitters``' default point, chosen on the benchmark's tuning stages by the rule
+#: in docs/accuracy.md; its figures are the report stages'.
+PROTECTION = ProtectionPoint(
+    bright=(1.1, 2.0),
+    negative=(0.2, 0.5),
+    emitters=0.15,
+    worst_emitters=0.30,
+    reflectances=0.89,
+    worst_reflectances=0.95,
+)
+#: ``--protect-emitters``: the brightness fade (:attr:`ProtectionPoint.bright`).
+DEFAULT_BRIGHT = PROTECTION.bright
+#: ``--protect-emitters``: the negative-drive fade (:attr:`ProtectionPoint.negative`).
+DEFAULT_NEGATIVE = PROTECTION.negative
 #: A lighting drive channel below this fraction of the largest counts as this fraction (a light
 #: the wall cannot emit in that channel: reflectances there are noise and crosstalk).
 DRIVE_FLOOR = 0.05
@@ -505,11 +563,7 @@ class ProtectedCorrection:
 
     def protection(self) -> str:
         """Where the identity takes over, in words."""
-        return (
-            f"the identity above {self.bright[1]:g}x white in any LED channel (fading from "
-            f"{self.bright[0]:g}x) and beyond {self.negative[1]:.0%} negative drive (fading "
-            f"from {self.negative[0]:.0%})"
-        )
+        return protection_words(self.bright, self.negative)
 
     def parameters(self) -> dict[str, Any]:
         return {
