@@ -691,16 +691,31 @@ def _holds_text(solves: Sequence[Solve]) -> list[str]:
     return lines
 
 
-def seed_spread(solves: Sequence[Solve], figure: str) -> float:
-    """The largest difference, over environments, between the default / least-squares ratios of
-    ``figure`` measured on each seed (noise draw) alone: how much a row moves by noise."""
-    spread = 0.0
-    for members in _groups(solves, lambda s: (s.environment,)).values():
+def seed_spread(solves: Sequence[Solve], figure: str) -> tuple[float, float, str]:
+    """How much a row moves by noise: per environment, the difference between the default /
+    least-squares ratios of ``figure`` measured on each seed (noise draw) alone; (the median
+    over the environments, the largest, the environment with the largest)."""
+    spreads = {}
+    for (env,), members in _groups(solves, lambda s: (s.environment,)).items():
         by_seed = _groups(members, lambda s: (s.seed,))
         if len(by_seed) > 1:
             ratios = [summarise(v).ratio(figure, "default") for v in by_seed.values()]
-            spread = max(spread, max(ratios) - min(ratios))
-    return spread
+            spreads[env] = max(ratios) - min(ratios)
+    if not spreads:
+        return 0.0, 0.0, "-"
+    worst = max(spreads, key=spreads.get)
+    return float(np.median(list(spreads.values()))), spreads[worst], worst
+
+
+def _spread_words(solves: Sequence[Solve]) -> str:
+    parts = []
+    for figure, words in (("reflectances", "reflectance"), ("optimal", "optimal-colour")):
+        median, worst, env = seed_spread(solves, figure)
+        parts.append(
+            f"{100 * median:.1f} % in the default / LS {words} ratio (median over the "
+            f"environments; {100 * worst:.1f} % under {env})"
+        )
+    return " and ".join(parts)
 
 
 def _relative_flips(solves: Sequence[Solve]) -> str:
@@ -785,10 +800,7 @@ def beyond_report(
             "**PR** protect reflectances <= 1.05x LS'; **F** the default flips or collapses a "
             "bright saturated input in some solve (next section). A ratio within "
             f"{100 * TIE:g} % above its limit is a *tie*: the same row measured on one noise "
-            "draw (seed) or the other differs by up to "
-            f"{100 * seed_spread(report.solves, 'reflectances'):.1f} % in the default / LS "
-            f"reflectance ratio and {100 * seed_spread(report.solves, 'optimal'):.1f} % in the "
-            "optimal-colour one.",
+            f"draw (seed) or the other differs by {_spread_words(report.solves)}.",
             "",
             *_holds_text(report.solves),
             "",
