@@ -8,6 +8,8 @@
   from the CIE 1931 2-degree observer.
 - :func:`chart_errors`: ΔE2000 and ΔE ITP per patch through that matrix, with colour's own
   ``delta_E`` implementations.
+- :func:`delta_E_2000`: ΔE2000 between two renderings of the same pixels (two hosts, or a
+  host and the exact model), through a camera -> XYZ matrix, relative to a scene white.
 
 Normalisation (both ΔE need one):
 
@@ -43,6 +45,7 @@ __all__ = [
     "ChartErrors",
     "camera_to_xyz_matrix",
     "chart_errors",
+    "delta_E_2000",
     "error_relative_to_white",
     "training_rgb_xyz",
     "white_scale",
@@ -255,3 +258,28 @@ def chart_errors(
         delta_E_2000=np.asarray(colour.delta_E(lab_t, lab_p, method="CIE 2000")),
         delta_E_ITP=np.asarray(colour.delta_E(itp_t, itp_p, method="ITP")),
     )
+
+
+def delta_E_2000(
+    a: ArrayLike, b: ArrayLike, *, camera_to_xyz: ArrayLike, white: ArrayLike
+) -> np.ndarray:
+    """(n,) ΔE2000 between two (n, 3) camera RGB renderings of the same pixels.
+
+    Normalised as :func:`chart_errors` does: XYZ through ``camera_to_xyz``, scaled so that
+    ``white`` (camera RGB of the scene's white) has Y = 1, Lab relative to its chromaticity.
+    Pixels brighter than white, negative or out of gamut are measured as they are (CIE Lab
+    continues linearly below black).
+
+    >>> white = np.array([0.9, 1.0, 0.8])
+    >>> float(delta_E_2000(white[None], white[None], camera_to_xyz=np.eye(3), white=white)[0])
+    0.0
+    """
+    import colour
+
+    matrix = np.asarray(camera_to_xyz, dtype=np.float64)
+    white_xyz = np.asarray(white, dtype=np.float64) @ matrix.T
+    scale = 1.0 / white_xyz[1]
+    white_xy = colour.XYZ_to_xy(white_xyz * scale)
+    lab_a = colour.XYZ_to_Lab(np.asarray(a, dtype=np.float64) @ matrix.T * scale, white_xy)
+    lab_b = colour.XYZ_to_Lab(np.asarray(b, dtype=np.float64) @ matrix.T * scale, white_xy)
+    return np.asarray(colour.delta_E(lab_a, lab_b, method="CIE 2000"), dtype=np.float64)

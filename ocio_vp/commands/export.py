@@ -90,6 +90,8 @@ def run(args: argparse.Namespace) -> int:
             )
         for name, reason in result.summary.get("not_written", {}).items():
             print(f"  {name}: not written: {reason}")
+        if result.summary.get("post_correction"):
+            print(f"  post-correction: {result.summary['post_correction']}")
     for failure in results.failures:
         print(f"not exported: {failure.reason}", file=sys.stderr)
     return 0

@@ -6,9 +6,11 @@ environment: ``Input -> OCIONamedTransform (Q from the config) -> ColorMatrix (Q
 where the config cannot be loaded. Q is the paper's post-correction (LeGendre et al. 2022,
 eq. 5), applied to camera-native linear footage.
 
-A root-polynomial Q is non-linear: the named transform carries it (the config's LUT bake), and
-a disabled ``OCIOFileTransform`` reading its CLF sidecar is the fallback that works under any
-Root config; the ColorMatrix then holds only the model's 3x3 approximation, the last resort.
+A non-linear Q (root-polynomial, emitter-protected) is carried by the named transform as the
+config's LUT chain, and a disabled ``OCIOFileTransform`` reading its CLF sidecar is the
+fallback that works under any Root config; the ColorMatrix then holds only the model's 3x3
+approximation, the last resort. The OCIO node's label says how close the chain is to the
+exact model and where it is not close enough (``ocio-vp apply`` computes it exactly).
 
 Paths are relative to the script: Nuke evaluates Tcl in file knobs when it reads them, so
 ``[file dirname [value root.name]]/config/config.ocio`` names the config beside the script
@@ -27,7 +29,7 @@ from typing import Any
 
 from ocio_vp.errors import InputError
 from ocio_vp.exports.escape import nuke_identifier
-from ocio_vp.exports.source import ExportSource, copy_config
+from ocio_vp.exports.source import ExportSource, copy_config, post_correction_carriage
 from ocio_vp.exports.templating import render_template
 from ocio_vp.formats.measurements import check_safe_name
 
@@ -52,7 +54,7 @@ _MATRIX_LABEL = (
     "Q as a plain matrix: enable this and disable the OCIO node when the config is unavailable"
 )
 _APPROXIMATION_LABEL = (
-    "3x3 approximation of the root-polynomial Q: only where neither OCIO node can be used"
+    "3x3 approximation of the non-linear Q, NOT the model: only where neither OCIO node can be used"
 )
 
 
@@ -64,12 +66,14 @@ def render_nuke_script(
     config_path: str,
     names: dict[str, str],
     q_lut: str | None = None,
+    model_note: str | None = None,
 ) -> str:
     """The ``.nk`` text for one environment (see the module docstring for its nodes).
 
-    ``config_path`` and ``q_lut`` (a root-polynomial Q's CLF; None for a matrix Q) are relative
-    to the script's folder. Names are validated here too (not only on input): Nuke labels
-    evaluate Tcl.
+    ``config_path`` and ``q_lut`` (a non-linear Q's CLF; None for a matrix Q) are relative to
+    the script's folder, and ``model_note`` says how the config carries a non-linear Q
+    (:func:`post_correction_carriage`). Names are validated here too (not only on input): Nuke
+    labels evaluate Tcl.
     """
     check_safe_name(environment, source="nuke export", key="environment")
     check_safe_name(stage, source="nuke export", key="stage")
@@ -84,6 +88,8 @@ def render_nuke_script(
         label=f"ocio-vp Q: {stage} / {environment}",
         Q=[[float(v) for v in row] for row in Q],
         q_lut=None if q_lut is None else _relative(q_lut),
+        ocio_label="Q from the config (needs the Root OCIO config)"
+        + ("" if not model_note else f". {model_note}"),
         matrix_label=_MATRIX_LABEL if q_lut is None else _APPROXIMATION_LABEL,
     )
 
@@ -94,8 +100,11 @@ def write_nuke(source: ExportSource, folder: Path, **_: Any) -> dict:
     solution = source.solution
     copy_config(source, folder / "config")
     config_path = f"config/{source.config_path.name}"
-    q_files = (solution.diagnostics.get("root_polynomial_ocio") or {}).get("files") or []
+    diagnostics = solution.diagnostics
+    block = diagnostics.get("post_correction_ocio") or diagnostics.get("root_polynomial_ocio")
+    q_files = (block or {}).get("files") or []
     q_lut = f"config/{q_files[0]}" if q_files else None
+    carriage = post_correction_carriage(solution)
     text = render_nuke_script(
         stage=solution.stage,
         environment=solution.environment,
@@ -103,6 +112,7 @@ def write_nuke(source: ExportSource, folder: Path, **_: Any) -> dict:
         config_path=config_path,
         names=source.names,
         q_lut=q_lut,
+        model_note=None if carriage is None else carriage["note"],
     )
     script = folder / f"{solution.environment}.nk"
     script.write_text(text, encoding="utf-8")

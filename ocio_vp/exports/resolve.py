@@ -4,9 +4,11 @@
   (content -> drive: M, and N plus the black-level offset, with the panel-linearity LUT1D when
   the config carries one), serialised by OCIO's own CLF writer from the config's processors.
 - ``post_correction_Q.dctl``: Q (LeGendre et al. 2022, eq. 5) as a DCTL in full float precision;
-  for a root-polynomial Q, the model itself (its terms and coefficients, sign-preserving roots),
-  not its 3x3 approximation. The CLFs carry a root-polynomial Q as the config does (its LUT
-  bake); its ``.cube`` is written only if it meets the limit.
+  for a non-linear Q (root-polynomial, emitter-protected), the model itself (its terms and
+  coefficients, sign-preserving roots, its fades), not its 3x3 approximation. The CLFs carry a
+  non-linear Q as the config does (its LUT chain, :mod:`ocio_vp.ocio.bake`): the manifest gives
+  its measured agreement with the model and names the DCTL as the exact alternative; its
+  ``.cube`` is written only if it meets the limit.
 - ``*_<size>.cube``: the same transforms as a 1D shaper + 3D LUT over an HDR input range,
   written only when the measured worst error meets :data:`ocio_vp.exports.cube.CUBE_LIMIT`
   (:mod:`ocio_vp.exports.cube`): in practice the affine transforms (Q; walls without a
@@ -27,7 +29,7 @@ import PyOpenColorIO as OCIO
 
 from ocio_vp.correction.root_polynomial import root_polynomial_term_powers
 from ocio_vp.exports.cube import CUBE_LIMIT, fit_cube
-from ocio_vp.exports.source import ExportSource
+from ocio_vp.exports.source import ExportSource, post_correction_carriage
 from ocio_vp.exports.templating import render_template
 from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
 
@@ -192,6 +194,24 @@ def _cube_entry(
     return name, None, f"{result.reason}; use {clf} (exact)"
 
 
+def _clf_accuracy(stem: str, solution: Any, carriage: dict[str, Any] | None) -> Any:
+    """A CLF's accuracy: exact (OCIO's own serialisation of the config's matrices and curves),
+    or, where it holds a non-linear Q's LUT chain, the chain's measured agreement with the
+    exact model (ΔE2000; the DCTL is the exact alternative)."""
+    if carriage is None or stem == "wall_out_of_frustum":
+        return "exact"
+    block = solution.diagnostics.get("post_correction_ocio") or {}
+    if stem == "post_correction_Q":
+        return {"delta_E_2000_vs_model": carriage["agreement"], "note": carriage["note"]}
+    if solution.N is None:  # the in-frustum drive is M: no LUT chain in it
+        return "exact"
+    return {
+        "round_trip_delta_E_2000": block.get("inverse_agreement"),
+        "note": "content -> this drive's Q^-1 LUT chain -> [SL] -> the exact Q, against the "
+        "content (ΔE2000 over the corrected camera range)",
+    }
+
+
 def write_resolve(
     source: ExportSource,
     folder: Path,
@@ -206,10 +226,12 @@ def write_resolve(
     solution, config = source.solution, source.config
     files: dict[str, dict[str, Any]] = {}
     not_written: dict[str, str] = {}
+    carriage = post_correction_carriage(solution)
     for stem, (src, dst, description) in resolve_transforms(source).items():
         clf = write_clf(config, src, dst, folder / f"{stem}.clf", name=f"ocio-vp {stem}",
                         description=description)  # fmt: skip
-        files[clf.name] = {"kind": "clf", "from": src, "to": dst, "accuracy": "exact"}
+        files[clf.name] = {"kind": "clf", "from": src, "to": dst,
+                           "accuracy": _clf_accuracy(stem, solution, carriage)}  # fmt: skip
         name, errors, reason = _cube_entry(
             source, folder, stem, clf.name, size=cube_size, input_range=cube_range
         )
@@ -227,6 +249,7 @@ def write_resolve(
         "stage": solution.stage,
         "environment": solution.environment,
         "cube_limit": CUBE_LIMIT,
+        "post_correction": carriage,
         "files": files,
         "not_written": not_written,
     }
@@ -234,4 +257,9 @@ def write_resolve(
         json.dumps(manifest, indent=2, allow_nan=False) + "\n", encoding="utf-8"
     )
     cubes = {k: v["accuracy"] for k, v in files.items() if v["kind"] == "cube"}
-    return {"files": [*files, MANIFEST], "cubes": cubes, "not_written": not_written}
+    return {
+        "files": [*files, MANIFEST],
+        "cubes": cubes,
+        "not_written": not_written,
+        "post_correction": None if carriage is None else carriage["note"],
+    }

@@ -11,6 +11,7 @@ from __future__ import annotations
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import PyOpenColorIO as OCIO
 
@@ -18,7 +19,13 @@ from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import check_safe_name
 from ocio_vp.formats.solution import Solution, load_solution
 
-__all__ = ["ExportSource", "copy_config", "load_export_source", "sidecar_dirs"]
+__all__ = [
+    "ExportSource",
+    "copy_config",
+    "load_export_source",
+    "post_correction_carriage",
+    "sidecar_dirs",
+]
 
 
 @dataclass(frozen=True)
@@ -119,3 +126,47 @@ def copy_config(source: ExportSource, destination: Path) -> Path:
     for folder in sidecar_dirs(source):
         shutil.copytree(source.directory / folder, destination / folder)
     return target
+
+
+def post_correction_carriage(solution: Solution) -> dict[str, Any] | None:
+    """How the config, and every file made from it, carries a non-linear post-correction; None
+    for a matrix (carried exactly everywhere).
+
+    ``agreement``: ΔE2000 of the config's LUT chain against the exact model over the camera
+    range, measured when the config was written (``diagnostics.post_correction_ocio``);
+    ``beyond``: the sets where it exceeds :data:`ocio_vp.ocio.bake.AGREEMENT_P99` (p99) or
+    :data:`~ocio_vp.ocio.bake.AGREEMENT_WORST` (worst); ``exact``: where the model is computed
+    exactly; ``note``: all of it in one sentence, for labels and descriptions.
+    """
+    from ocio_vp.ocio.bake import AGREEMENT_P99, AGREEMENT_WORST
+
+    correction = solution.correction
+    if correction.linear:
+        return None
+    diagnostics = solution.diagnostics
+    block = diagnostics.get("post_correction_ocio") or diagnostics.get("root_polynomial_ocio")
+    measured = (block or {}).get("agreement")
+    exact = ["post_correction_Q.dctl (Resolve export)", "ocio-vp apply"]
+    head = f"The {correction.kind} Q is carried by the OCIO config and its CLFs as a LUT chain"
+    if not measured:
+        note = f"{head} whose agreement with the model was not measured (an older solve)"
+        return {"kind": correction.kind, "agreement": None, "beyond": None, "exact": exact,
+                "note": f"{note}; exact: {', '.join(exact)}."}  # fmt: skip
+    p99, worst = measured["p99"], measured["worst"]
+    beyond = [
+        k for k in p99 if k != "all" and (p99[k] > AGREEMENT_P99 or worst[k] > AGREEMENT_WORST)
+    ]
+    note = (
+        f"{head}, within {p99['all']:.2g} ΔE2000 (p99) and {worst['all']:.2g} (worst) of the "
+        "exact model over the camera range"
+    )
+    if beyond:
+        note += (
+            f"; beyond {AGREEMENT_P99:g} (p99) or {AGREEMENT_WORST:g} (worst) on "
+            f"{', '.join(s.replace('_', ' ') for s in beyond)}, where the model bends faster "
+            f"than the LUT's nodes: for exact results use {' or '.join(exact)}"
+        )
+    else:
+        note += f"; exact: {', '.join(exact)}"
+    return {"kind": correction.kind, "agreement": measured, "beyond": beyond, "exact": exact,
+            "note": note + "."}  # fmt: skip

@@ -27,7 +27,7 @@ import PyOpenColorIO as OCIO
 from ocio_vp.calibration.headroom import content_scale
 from ocio_vp.errors import InputError
 from ocio_vp.exports.panels import panel_notes, with_panel_assignments
-from ocio_vp.exports.source import ExportSource, copy_config
+from ocio_vp.exports.source import ExportSource, copy_config, post_correction_carriage
 from ocio_vp.exports.templating import render_template
 from ocio_vp.exports.unreal_script import SCRIPT_FILE, render_unreal_script
 from ocio_vp.ocio.config import WORKING_SPACE_NAMES
@@ -165,10 +165,25 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> dict[str
             ),
         ],
         "post_correction": names["post_correction"],
+        "post_correction_carriage": post_correction_carriage(solution),
         "N_solved": solution.N is not None,
         "content_scale": content_scale(solution).to_dict(),
     }
     return with_panel_assignments(mapping, solution, content)  # a stage's other panel types
+
+
+def _inverse_note(solution) -> str | None:
+    """How close the in-frustum chain's Q^-1 comes to the model's inverse (round trip through
+    the exact model, ΔE2000), when N is solved with a non-linear Q."""
+    block = solution.diagnostics.get("post_correction_ocio") or {}
+    measured = block.get("inverse_agreement")
+    if solution.N is None or not measured:
+        return None
+    return (
+        f"content -> Q^-1 (the LUT chain) -> Q (the exact model) returns the content within "
+        f"{measured['p99']['all']:.2g} ΔE2000 (p99) and {measured['worst']['all']:.2g} (worst) "
+        "over the corrected camera range."
+    )
 
 
 def write_unreal(source: ExportSource, folder: Path, **_: Any) -> dict[str, Any]:
@@ -212,6 +227,8 @@ def write_unreal(source: ExportSource, folder: Path, **_: Any) -> dict[str, Any]
         n_reason=solution.diagnostics.get("N_reason") or "Q is not invertible",
         content_scale=content_scale(solution).lines(),
         panel_notes=panel_notes(solution),
+        model_note=(mapping["post_correction_carriage"] or {}).get("note"),
+        inverse_note=_inverse_note(solution),
     )
     (folder / "UNREAL.md").write_text(text, encoding="utf-8")
     script = render_unreal_script(

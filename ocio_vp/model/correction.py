@@ -590,9 +590,11 @@ def newton_inverse(
     homogeneous: bool,
     tolerance: float = 1e-12,
     max_iterations: int = 50,
+    start: ArrayLike | None = None,
 ) -> np.ndarray:
     """x with ``function(x) = rgb`` for (..., 3) ``rgb``: damped Newton with a finite-difference
-    Jacobian, started from ``start_matrix^-1 rgb``; every colour at once.
+    Jacobian, started from ``start_matrix^-1 rgb`` (or from ``start``, the same shape as
+    ``rgb``: a close guess, e.g. a neighbour's solution); every colour at once.
 
     A ``homogeneous`` function is solved on each colour's direction (divided by its largest
     absolute channel, then scaled back) and maps black to black. A colour whose iteration does
@@ -606,7 +608,11 @@ def newton_inverse(
     target = np.zeros_like(flat)
     target[live] = flat[live] / scale[live, None]
     size = np.maximum(np.max(np.abs(target), axis=1), 1e-300)
-    x = target @ np.linalg.inv(start_matrix).T
+    if start is None:
+        x = target @ np.linalg.inv(start_matrix).T
+    else:
+        x = np.asarray(start, dtype=np.float64).reshape(-1, 3) / np.where(live, scale, 1.0)[:, None]
+        x = np.where(np.all(np.isfinite(x), axis=1)[:, None], x, 0.0)
     residual = function(x) - target
     norm = np.max(np.abs(residual), axis=1) / size
     active = live.copy()

@@ -17,6 +17,7 @@ Layout (names are module constants so other tools can rely on them):
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +42,7 @@ __all__ = [
     "POST_CORRECTION_COLORSPACE",
     "RAW",
     "REFERENCE",
+    "ModelFiles",
     "build_config",
     "matrix_transform",
     "post_correction_transforms",
@@ -97,25 +99,47 @@ def _colorspace(
     return cs
 
 
+@dataclass(frozen=True)
+class ModelFiles:
+    """A non-linear post-correction's sidecars (:mod:`ocio_vp.ocio.bake`): the Q file, the
+    Q^-1 file (None where the correction has no inverse) and a sentence on how close they
+    come to the exact model (for the descriptions)."""
+
+    q: str
+    q_inverse: str | None
+    note: str = ""
+
+
 def wall_transforms(
-    solution: Solution, q_inverse_file: str | None = None
-) -> dict[str, list[OCIO.Transform]]:
-    """Reference -> drive transform chains for the two wall colorspaces.
+    solution: Solution, model: ModelFiles | None = None
+) -> dict[str, tuple[list[OCIO.Transform], list[OCIO.Transform]]]:
+    """Reference -> drive transform chains for the two wall colorspaces, each with the chain of
+    the other direction (drive -> reference) given explicitly.
 
-    With ``q_inverse_file`` (a non-linear Q's inverse as a LUT sidecar) the in-frustum drive is
-    ``M Q^-1(c)`` (the file, then M) instead of the matrix N.
+    With ``model`` (a non-linear Q's sidecars) and N solved, the in-frustum drive is
+    ``M Q^-1(c)`` (the Q^-1 file, then M) instead of the matrix N, and its other direction is
+    ``Q(M^-1 d)`` (M inverted, then the Q file): OCIO is never asked to invert a LUT file.
 
-    Linearity LUTs (when the solution has them) are appended by :mod:`ocio_vp.wall.encoding` (linearity LUT, then signal encoding).
+    The wall's tail (linearity LUT, signal encoding) is appended by :func:`build_config`.
     """
-    outer: list[OCIO.Transform] = [matrix_transform(solution.M)]
+    outer = [matrix_transform(solution.M)]
+    outer_back = [matrix_transform(solution.M, direction=OCIO.TRANSFORM_DIR_INVERSE)]
     # An offset the camera cannot see is left out (docs/stability.md); solution.json keeps it.
     offset = solution.black_level_offset
     if offset_is_negligible(offset, solution.SL):
         offset = None
-    inner: list[OCIO.Transform] = [matrix_transform(solution.in_frustum_matrix, offset)]
-    if q_inverse_file is not None:
-        inner = [OCIO.FileTransform(src=q_inverse_file), matrix_transform(solution.M, offset)]
-    return {OUT_OF_FRUSTUM: outer, IN_FRUSTUM: inner}
+    inverse = OCIO.TRANSFORM_DIR_INVERSE
+    inner = [matrix_transform(solution.in_frustum_matrix, offset)]
+    inner_back = [matrix_transform(solution.in_frustum_matrix, offset, direction=inverse)]
+    if model is not None and solution.N is not None:
+        if model.q_inverse is None:
+            raise ValueError("N is solved but the non-linear Q has no baked inverse")
+        inner = [OCIO.FileTransform(src=model.q_inverse), matrix_transform(solution.M, offset)]
+        inner_back = [
+            matrix_transform(solution.M, offset, direction=inverse),
+            OCIO.FileTransform(src=model.q),
+        ]
+    return {OUT_OF_FRUSTUM: (outer, outer_back), IN_FRUSTUM: (inner, inner_back)}
 
 
 #: OCIO encoding of the wall colorspaces for each wall signal encoding (docs/linearity.md).
@@ -138,36 +162,66 @@ def _group(transforms: list[OCIO.Transform]) -> OCIO.Transform:
     return OCIO.GroupTransform(transforms)
 
 
+def _pseudo_inverse(Q: np.ndarray) -> tuple[np.ndarray, int]:
+    """Q's truncated pseudo-inverse (singular values below ``sigma_max /``
+    :data:`MAX_CONDITION_Q_FOR_N` dropped) and the rank kept."""
+    U, sigma, Vt = np.linalg.svd(Q)
+    keep = sigma >= sigma[0] / MAX_CONDITION_Q_FOR_N
+    return (Vt.T[:, keep] / sigma[keep]) @ U[:, keep].T, int(keep.sum())
+
+
 def post_correction_transforms(
-    solution: Solution,
-) -> tuple[OCIO.Transform, OCIO.Transform | None, str]:
-    """Q as OCIO transforms: (footage -> corrected, an explicit inverse or None, its note).
+    solution: Solution, model: ModelFiles | None = None
+) -> tuple[OCIO.Transform, OCIO.Transform, str]:
+    """Q as OCIO transforms: (footage -> corrected, corrected -> footage, a note on the second).
 
-    OCIO inverts a matrix by itself when a host asks for the other direction (the reference to
-    ``Stage Footage``, the inverse of the named transform). For a Q that is singular or too
-    ill-conditioned to invert (cond(Q) above :data:`MAX_CONDITION_Q_FOR_N`, the limit for N),
-    that inverse would amplify a finite input to 1e17 and more, so the inverse direction is
-    given explicitly as the truncated pseudo-inverse of Q: singular values below
-    ``sigma_max / MAX_CONDITION_Q_FOR_N`` are dropped, so its gain is at most
-    ``MAX_CONDITION_Q_FOR_N / sigma_max``. It maps content to the smallest footage that Q
-    maps to its projection onto Q's range (a bounded stand-in, not a true inverse).
+    Both directions are explicit, so a host asking for the other one (reference -> ``Stage
+    Footage``, the named transform inverted) never makes OCIO invert a chain by itself (it
+    inverts a LUT by search: minutes for a 65^3 cube):
 
-    The forward transform is a chain of OCIO transforms, so a non-matrix Q fits here too.
+    - a 3x3 Q: the matrix, and its inverse;
+    - a Q too ill-conditioned to invert (cond(Q) above :data:`MAX_CONDITION_Q_FOR_N`, the limit
+      for N), whose inverse would amplify a finite input to 1e17 and more: its truncated
+      pseudo-inverse (gain at most ``MAX_CONDITION_Q_FOR_N / sigma_max``; content goes to the
+      smallest footage that Q maps to content's projection onto Q's range), a bounded stand-in;
+    - a non-linear Q: its ``model`` files (Q, Q^-1), or where the model has no inverse the
+      3x3's pseudo-inverse, marked as a stand-in that is not the model's inverse.
+
+    A non-linear Q without its files is refused: the config never silently carries a 3x3 where
+    ``ocio-vp apply`` runs the model.
     """
     Q = np.asarray(solution.Q, dtype=np.float64)
-    forward = matrix_transform(Q)
-    U, sigma, Vt = np.linalg.svd(Q)
-    if sigma[-1] > 0 and sigma[0] / sigma[-1] <= MAX_CONDITION_Q_FOR_N:
-        return forward, None, ""
-    keep = sigma >= sigma[0] / MAX_CONDITION_Q_FOR_N
-    pinv = (Vt.T[:, keep] / sigma[keep]) @ U[:, keep].T
-    note = (
-        f"Q has rank {int(keep.sum())} at cond <= {MAX_CONDITION_Q_FOR_N:g} (cond(Q) "
-        f"{condition_text(float(np.linalg.cond(Q)))}): it cannot be inverted, so the inverse direction (reference "
-        f"-> Stage Footage, the inverse of the named transform) is Q's truncated pseudo-inverse "
-        f"{_fmt(pinv)}, bounded, not a true inverse."
+    correction = solution.correction
+    if not correction.linear and model is None:
+        raise ValueError(
+            f"a {correction.kind} post-correction needs its LUT files (ocio_vp.ocio.bake); "
+            "the config would otherwise carry only its 3x3"
+        )
+    forward = matrix_transform(Q) if model is None else OCIO.FileTransform(src=model.q)
+    sigma = np.linalg.svd(Q, compute_uv=False)
+    invertible = sigma[-1] > 0 and sigma[0] / sigma[-1] <= MAX_CONDITION_Q_FOR_N
+    if model is not None and model.q_inverse is not None:
+        text = f"The inverse direction is the baked Q^-1 ({model.q_inverse})."
+        return forward, OCIO.FileTransform(src=model.q_inverse), text
+    if invertible and model is None:
+        return forward, matrix_transform(Q, direction=OCIO.TRANSFORM_DIR_INVERSE), ""
+    pinv, rank = _pseudo_inverse(Q)
+    if model is not None:
+        text = (
+            f"The inverse direction (reference -> Stage Footage) is NOT PROVIDED as the model's "
+            f"inverse: the {correction.kind} model has none (its 3x3 has rank {rank} at cond <= "
+            f"{MAX_CONDITION_Q_FOR_N:g}). That direction is a bounded stand-in, the 3x3's "
+            f"truncated pseudo-inverse {_fmt(pinv)}, so that a host asking for it gets finite "
+            "numbers at once; do not use it to undo the post-correction."
+        )
+        return forward, matrix_transform(pinv), text
+    text = (
+        f"Q has rank {rank} at cond <= {MAX_CONDITION_Q_FOR_N:g} (cond(Q) "
+        f"{condition_text(float(np.linalg.cond(Q)))}): it cannot be inverted, so the inverse "
+        "direction (reference -> Stage Footage, the inverse of the named transform) is Q's "
+        f"truncated pseudo-inverse {_fmt(pinv)}, bounded, not a true inverse."
     )
-    return forward, matrix_transform(pinv), note
+    return forward, matrix_transform(pinv), text
 
 
 #: Drive at which an encoded wall signal reaches 1.0, by encoding (PQ: 10000 nits / peak).
@@ -208,7 +262,7 @@ def build_config(
     *,
     extra_wall_transforms: dict[str, list[OCIO.Transform]] | None = None,
     search_path: str | None = None,
-    q_files: tuple[str, str | None] | None = None,
+    model: ModelFiles | None = None,
 ) -> OCIO.Config:
     """Build and validate the OCIO config for one solved environment.
 
@@ -221,24 +275,33 @@ def build_config(
         chains, e.g. the panel-linearity LUT and the wall signal encoding.
     search_path
         The config's search path for sidecar files (e.g. ``"luts"``).
-    q_files
-        (Q, Q^-1) LUT sidecars of a non-linear post-correction
-        (:mod:`ocio_vp.ocio.root_polynomial`), used in place of the matrices Q and N.
+    model
+        The LUT sidecars of a non-linear post-correction (:mod:`ocio_vp.ocio.bake`), used in
+        place of the matrices Q and N; required for one.
+
+    Every colorspace with a transform and the named transform get both directions explicitly
+    (OCIO never has to invert a LUT file by itself).
 
     Raises
     ------
+    ValueError
+        A non-linear post-correction without ``model``.
     PyOpenColorIO.Exception
         If the config does not validate (never expected: that is a bug).
     """
     origin = _origin(solution)
     config = _empty_config(solution, origin, search_path)
     _add_camera_spaces(config, solution.camera_colorspace)
-    chains = wall_transforms(solution, None if q_files is None else q_files[1])
+    chains = wall_transforms(solution, model)
     for name, extra in (extra_wall_transforms or {}).items():
-        chains[name] = chains[name] + wall_signal_tail(solution, list(extra))
+        tail = wall_signal_tail(solution, list(extra))
+        if tail:
+            there, back = chains[name]
+            undo = OCIO.GroupTransform(tail, direction=OCIO.TRANSFORM_DIR_INVERSE)
+            chains[name] = (there + tail, [undo, *back])
     config.addColorSpace(_out_of_frustum_space(solution, chains[OUT_OF_FRUSTUM], origin))
-    config.addColorSpace(_in_frustum_space(solution, chains[IN_FRUSTUM], origin))
-    _add_post_correction(config, solution, origin, q_files)
+    config.addColorSpace(_in_frustum_space(solution, chains[IN_FRUSTUM], origin, model))
+    _add_post_correction(config, solution, origin, model)
     camera_to_aces = _set_roles(config, solution.camera_colorspace)
     _add_displays(config, camera_to_aces)
     set_categories(config)
@@ -303,9 +366,14 @@ def _add_camera_spaces(config: OCIO.Config, camera: str | None) -> None:
     config.addColorSpace(raw)
 
 
-def _out_of_frustum_space(
-    solution: Solution, chain: list[OCIO.Transform], origin: str
-) -> OCIO.ColorSpace:
+def _set_both(space: OCIO.ColorSpace, chains) -> None:
+    """Reference -> space, and space -> reference, both explicit."""
+    there, back = chains
+    space.setTransform(_group(there), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+    space.setTransform(_group(back), OCIO.COLORSPACE_DIR_TO_REFERENCE)
+
+
+def _out_of_frustum_space(solution: Solution, chains, origin: str) -> OCIO.ColorSpace:
     """The panel drive for content outside the camera frustum: M, then the wall's tail."""
     outer = _colorspace(
         OUT_OF_FRUSTUM,
@@ -314,13 +382,19 @@ def _out_of_frustum_space(
         family="LED Wall",
         encoding=_wall_signal_encoding(solution),
     )
-    outer.setTransform(_group(chain), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+    _set_both(outer, chains)
     return outer
 
 
-def _in_frustum_text(solution: Solution) -> str:
+def _in_frustum_text(solution: Solution, model: ModelFiles | None = None) -> str:
     """What the in-frustum drive is: N, or M when N was not solved, plus the offset."""
-    if solution.N is not None and is_identity(solution.Q):
+    if solution.N is not None and model is not None:
+        text = (
+            f"M Q^-1(c), the baked inverse of the {solution.correction.kind} Q "
+            f"({model.q_inverse}) then M {_fmt(solution.M)} (N = M Q^-1 for its 3x3 would be "
+            f"{_fmt(solution.N)})"
+        )
+    elif solution.N is not None and is_identity(solution.Q):
         text = f"N = M (Q is the identity, so no in-frustum change is needed) {_fmt(solution.N)}"
     elif solution.N is not None:
         text = f"N = M Q^-1 {_fmt(solution.N)}"
@@ -338,17 +412,17 @@ def _in_frustum_text(solution: Solution) -> str:
 
 
 def _in_frustum_space(
-    solution: Solution, chain: list[OCIO.Transform], origin: str
+    solution: Solution, chains, origin: str, model: ModelFiles | None = None
 ) -> OCIO.ColorSpace:
     """The panel drive for the in-camera background: N (or M) and the offset, then the tail."""
     inner = _colorspace(
         IN_FRUSTUM,
         f"Panel drive for content INSIDE the camera frustum (the in-camera background): "
-        f"{_in_frustum_text(solution)}. {origin}.",
+        f"{_in_frustum_text(solution, model)}. {origin}.",
         family="LED Wall",
         encoding=_wall_signal_encoding(solution),
     )
-    inner.setTransform(_group(chain), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+    _set_both(inner, chains)
     return inner
 
 
@@ -356,66 +430,51 @@ def _add_post_correction(
     config: OCIO.Config,
     solution: Solution,
     origin: str,
-    q_files: tuple[str, str | None] | None = None,
+    model: ModelFiles | None = None,
 ) -> None:
-    """Q twice: the ``Stage Footage`` colorspace and the ``Post-Correction Q`` named transform.
+    """Q twice: the ``Stage Footage`` colorspace and the ``Post-Correction Q`` named transform,
+    both directions explicit (:func:`post_correction_transforms`).
 
-    A non-linear Q comes as LUT sidecars ``q_files`` = (Q, Q^-1); Q's matrix is then its 3x3
-    approximation. Both directions are given explicitly: OCIO cannot invert the Q LUT by
-    itself (a 3D LUT on scale x direction; its own inversion of such a chain is far off and
-    slow), so reference -> ``Stage Footage`` uses the baked Q^-1.
+    A non-linear Q comes as LUT sidecars (``model``); Q's matrix is then only its 3x3
+    approximation, printed for reference.
     """
-    q_file = None if q_files is None else q_files[0]
-    q_identity = is_identity(solution.Q) and q_file is None
-
-    model = solution.diagnostics.get("model") or solution.method
+    q_identity = is_identity(solution.Q) and model is None
+    method_model = solution.diagnostics.get("model") or solution.method
     reason = solution.diagnostics.get("model_reason")
     q_text = (
         f"Post-correction Q {_fmt(solution.Q)} for footage shot on the stage ({solution.method}, "
-        f"model {model}{': ' + reason if reason else ''}). {origin}."
+        f"model {method_model}{': ' + reason if reason else ''}). {origin}."
     )
-    if q_file is not None:
+    if model is not None:
         q_text = (
-            f"Root-polynomial Q baked as a LUT ({q_file}; the matrix is its 3x3 approximation). "
-            + q_text
+            f"The {solution.correction.kind} Q ({solution.correction.describe()}) as a LUT chain "
+            f"({model.q}; the matrix below is only its 3x3 approximation). {model.note} " + q_text
         )
     if q_identity:
         # Kept under the same names so hosts' settings survive, but as no-op transforms.
         q_text = "Q is the identity: no post-correction is needed. " + q_text
+    forward, inverse, inverse_text = post_correction_transforms(solution, model)
+    if inverse_text:
+        q_text += " " + inverse_text
     footage = _colorspace(
         POST_CORRECTION_COLORSPACE,
         "Camera linear RGB as recorded on the stage; converting to the reference applies Q. "
         + q_text,
         family="Camera",
     )
-    forward, inverse, inverse_text = post_correction_transforms(solution)
-    if q_files is not None:  # a non-linear Q: its LUT sidecars
-        forward = OCIO.FileTransform(src=q_files[0])
-        if q_files[1] is not None:
-            inverse = OCIO.FileTransform(src=q_files[1])
-            inverse_text = f"The inverse direction is the baked Q^-1 ({q_files[1]})."
-        elif inverse is None:  # a Q^-1 is not baked where N is not solved: its 3x3's inverse
-            inverse = matrix_transform(np.linalg.inv(solution.Q))
-            inverse_text = (
-                "The inverse direction is the inverse of Q's 3x3 (N is not solved here, so Q^-1 "
-                "is not baked): it undoes the matrix, not the non-linear model."
-            )
-    if inverse is not None:
-        q_text += " " + inverse_text
-        footage.setDescription(footage.getDescription() + " " + inverse_text)
-    if not q_identity:
+    if q_identity:
+        forward = inverse = OCIO.GroupTransform()
+    else:
         footage.setTransform(forward, OCIO.COLORSPACE_DIR_TO_REFERENCE)
-        if inverse is not None:
-            footage.setTransform(inverse, OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+        footage.setTransform(inverse, OCIO.COLORSPACE_DIR_FROM_REFERENCE)
     config.addColorSpace(footage)
     named = OCIO.NamedTransform(
         name=POST_CORRECTION,
         family=f"{FAMILY}/Post",
         description=q_text,
-        forwardTransform=OCIO.GroupTransform() if q_identity else forward,
+        forwardTransform=forward,
     )
-    if inverse is not None:
-        named.setTransform(inverse, OCIO.TRANSFORM_DIR_INVERSE)
+    named.setTransform(inverse, OCIO.TRANSFORM_DIR_INVERSE)
     config.addNamedTransform(named)
 
 

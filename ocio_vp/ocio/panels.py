@@ -8,7 +8,9 @@ and gets, for every other type, its own:
 - ``LED <Type> - Outer Frustum``: reference -> that type's drive through its own M (every type
   lights the actors where it is out of frame);
 - ``LED <Type> - Inner Frustum`` (in-frustum types only): through its own N and black-level
-  offset (or ``M_k Q^-1(c)`` for a non-linear Q: the config's baked Q^-1, then M_k);
+  offset (or ``M_k Q^-1(c)`` for a non-linear Q: the config's Q^-1 LUT chain, then M_k);
+
+both directions given explicitly, as the wall's (:func:`ocio_vp.ocio.config.wall_transforms`);
 
 each followed by that type's own linearity LUT and signal encoding (the same tail as the wall's,
 :func:`ocio_vp.ocio.wall.wall_outputs` and :func:`ocio_vp.ocio.config.wall_signal_tail`), and
@@ -35,6 +37,7 @@ from ocio_vp.ocio.config import (
     VIEW_INNER,
     VIEW_OUTER,
     WALL_SIGNAL_ENCODINGS,
+    ModelFiles,
     ocio_names,
     wall_signal_tail,
     wall_transforms,
@@ -108,7 +111,8 @@ def _view(solution: Solution, panel: PanelSolution) -> Solution:
     )
 
 
-def _space(name: str, description: str, encoding: str, chain: list) -> OCIO.ColorSpace:
+def _space(name: str, description: str, encoding: str, there: list, back: list) -> OCIO.ColorSpace:
+    """A panel type's colour space, reference -> drive (``there``) and back, both explicit."""
     cs = OCIO.ColorSpace(
         referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
         name=name,
@@ -116,8 +120,9 @@ def _space(name: str, description: str, encoding: str, chain: list) -> OCIO.Colo
         encoding=encoding,
         description=description,
     )
-    cs.setTransform(chain[0] if len(chain) == 1 else OCIO.GroupTransform(chain),
-                    OCIO.COLORSPACE_DIR_FROM_REFERENCE)  # fmt: skip
+    for chain, direction in ((there, OCIO.COLORSPACE_DIR_FROM_REFERENCE),
+                             (back, OCIO.COLORSPACE_DIR_TO_REFERENCE)):  # fmt: skip
+        cs.setTransform(chain[0] if len(chain) == 1 else OCIO.GroupTransform(chain), direction)
     return cs
 
 
@@ -136,11 +141,11 @@ def _descriptions(solution: Solution, panel: PanelSolution) -> dict[str, str]:
     }
 
 
-def panel_outputs(solution: Solution, q_inverse_file: str | None = None) -> PanelOutputs | None:
+def panel_outputs(solution: Solution, model: ModelFiles | None = None) -> PanelOutputs | None:
     """The other panel types' colour spaces (None for a stage of one panel type).
 
-    ``q_inverse_file``: a non-linear Q's baked inverse (the config's sidecar), through which
-    the in-frustum types show content (``M_k Q^-1(c)``), as the wall's inner frustum does.
+    ``model``: a non-linear Q's LUT chains (the config's sidecars), through whose Q^-1 the
+    in-frustum types show content (``M_k Q^-1(c)``), as the wall's inner frustum does.
     """
     if not solution.panels:
         return None
@@ -157,7 +162,7 @@ def panel_outputs(solution: Solution, q_inverse_file: str | None = None) -> Pane
         view = _view(solution, panel)
         wall = wall_outputs(view)  # this type's own linearity LUT and signal encoding
         files.update(wall.files)
-        chains = wall_transforms(view, q_inverse_file)
+        chains = wall_transforms(view, model)
         tail = wall.extra_wall_transforms or {}
         encoding_name = ((wall.linearity or {}).get("wall_encoding") or {}).get("name", "linear")
         encoding = WALL_SIGNAL_ENCODINGS.get(encoding_name, "scene-linear")
@@ -166,8 +171,12 @@ def panel_outputs(solution: Solution, q_inverse_file: str | None = None) -> Pane
         roles = [(OUT_OF_FRUSTUM, "out_of_frustum")]
         roles += [(IN_FRUSTUM, "in_frustum")] if panel.in_frustum else []
         for role, key in roles:
-            chain = chains[role] + wall_signal_tail(view, list(tail.get(role, [])))
-            spaces.append(_space(names[key], texts[role], encoding, chain))
+            there, back = chains[role]
+            signal = wall_signal_tail(view, list(tail.get(role, [])))
+            if signal:
+                undo = OCIO.GroupTransform(signal, direction=OCIO.TRANSFORM_DIR_INVERSE)
+                there, back = there + signal, [undo, *back]
+            spaces.append(_space(names[key], texts[role], encoding, there, back))
             views.append((names[f"view_{key}"], names[key]))
         panels[name] = dataclasses.replace(panel, linearity=wall.linearity, ocio=names)
     return PanelOutputs(tuple(spaces), tuple(views), files, panels)

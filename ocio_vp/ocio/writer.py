@@ -25,9 +25,9 @@ from pathlib import Path
 
 from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import Solution, solution_to_json
-from ocio_vp.ocio.config import build_config, ocio_names, write_config
+from ocio_vp.ocio.bake import model_outputs
+from ocio_vp.ocio.config import ModelFiles, build_config, ocio_names, write_config
 from ocio_vp.ocio.panels import add_panel_spaces, panel_outputs
-from ocio_vp.ocio.root_polynomial import root_polynomial_outputs
 from ocio_vp.ocio.wall import wall_outputs
 from ocio_vp.staging import publish_dirs, staged_dir
 from ocio_vp.wall.encoding import LUT_DIR
@@ -42,15 +42,16 @@ def write_environment(solution: Solution, directory: Path) -> Solution:
     """
     wall = wall_outputs(solution)  # panel-linearity LUT sidecar and wall signal encoding
     solution = dataclasses.replace(solution, ocio=ocio_names(), linearity=wall.linearity)
-    q_luts = root_polynomial_outputs(solution)  # a non-linear Q's LUT sidecars, else None
-    files, search_path, q_files = dict(wall.files), wall.search_path, None
-    if q_luts is not None:
-        files.update(q_luts.files)
-        search_path, q_files = LUT_DIR, (q_luts.q_file, q_luts.q_inverse_file)
-        diagnostics = {**solution.diagnostics, "root_polynomial_ocio": q_luts.block}
+    luts = model_outputs(solution)  # a non-linear Q's LUT sidecars, else None
+    files, search_path, model = dict(wall.files), wall.search_path, None
+    if luts is not None:
+        files.update(luts.files)
+        search_path = LUT_DIR
+        model = ModelFiles(luts.q_file, luts.q_inverse_file, luts.note())
+        diagnostics = {**solution.diagnostics, "post_correction_ocio": luts.block}
         solution = dataclasses.replace(solution, diagnostics=diagnostics)
     # A stage's other panel types: their own colour spaces, LUTs and encodings (ocio/panels.py).
-    panels = panel_outputs(solution, None if q_files is None else q_files[1])
+    panels = panel_outputs(solution, model)
     if panels is not None:
         files.update(panels.files)
         search_path = LUT_DIR if files else search_path
@@ -59,7 +60,7 @@ def write_environment(solution: Solution, directory: Path) -> Solution:
         solution,
         extra_wall_transforms=wall.extra_wall_transforms,
         search_path=search_path,
-        q_files=q_files,
+        model=model,
     )
     if panels is not None:
         add_panel_spaces(config, panels)

@@ -28,18 +28,23 @@ import numpy as np
 
 from ocio_vp.formats.measurements import Measurements
 from ocio_vp.metrics import camera_to_xyz_matrix, chart_errors
+from ocio_vp.model.footage_range import FootageRange, footage_range
 from ocio_vp.simulator.data import chart_reflectances
 from ocio_vp.simulator.stage import SpectralStage, camera_rgb, environment_spectrum
 from ocio_vp.spectra import align, spectral_shape
 
 __all__ = [
     "CHART_DUPLICATE_TOLERANCE",
+    "EMITTER_FWHM",
+    "EMITTER_PEAKS",
     "HeldOutErrors",
     "camera_matrix",
     "held_out_colours",
     "held_out_errors",
     "held_out_reflectances",
+    "narrow_band_emitters",
     "noisy_measurements",
+    "stage_footage_range",
 ]
 
 #: A held-out sample whose reflectance is within this (max over wavelengths) of a chart patch's
@@ -218,3 +223,60 @@ def held_out_errors(
         corrected, target, camera_to_xyz=camera_matrix(stage), white_patch=len(target) - 1
     )
     return HeldOutErrors(errors.delta_E_2000[:-1], errors.delta_E_ITP[:-1])
+
+
+#: Narrow-band emitters (LEDs, neon, screens' primaries): Gaussian spectra peaking every 10 nm
+#: from 420 to 680 nm, of this full width at half maximum (nm).
+EMITTER_PEAKS = tuple(range(420, 681, 10))
+EMITTER_FWHM = 20.0
+
+
+def _luminance(stage: SpectralStage, spectra: np.ndarray) -> np.ndarray:
+    """CIE 1931 Y of (..., W) spectra (unnormalised sums, like :func:`camera_rgb`)."""
+    import colour
+
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+    return np.asarray(spectra, dtype=np.float64) @ align(cmfs.signals["y_bar"])
+
+
+def narrow_band_emitters(stage: SpectralStage, environment) -> np.ndarray:
+    """(k, 3) camera RGB of :data:`EMITTER_PEAKS` at the luminance (CIE Y) of a perfect white
+    diffuser under ``environment``, and of the wall's LEDs (each, and each pair) at the same
+    luminance."""
+    from ocio_vp.spectra import wavelengths
+
+    grid = wavelengths()
+    sigma = EMITTER_FWHM / (2.0 * np.sqrt(2.0 * np.log(2.0)))
+    leds = stage.leds.T
+    spectra = np.vstack(
+        [
+            np.exp(-0.5 * ((grid[None] - np.asarray(EMITTER_PEAKS)[:, None]) / sigma) ** 2),
+            leds,
+            leds[[0, 1]].sum(0),
+            leds[[1, 2]].sum(0),
+            leds[[0, 2]].sum(0),
+        ]
+    )
+    white = _luminance(stage, environment_spectrum(stage, environment))
+    spectra = spectra / _luminance(stage, spectra)[:, None] * white
+    return camera_rgb(stage, spectra)
+
+
+def stage_footage_range(stage: SpectralStage, environment, solution, seed: int = 0) -> FootageRange:
+    """The camera range of :mod:`ocio_vp.model.footage_range` on this stage: the held-out
+    reflectances and the chart lit by what the wall emits for ``solution`` (``clip(M w_avg)``
+    through the stage's LEDs), the white diffuser under the real light as the scene white,
+    :func:`narrow_band_emitters`, and the stage camera's own RGB -> XYZ matrix."""
+    spectrum = environment_spectrum(stage, environment)
+    drive = np.clip(np.asarray(solution.M) @ np.asarray(solution.w_avg, dtype=np.float64), 0, None)
+    emitted = stage.leds @ drive
+    sets = held_out_reflectances(stage.chart_name)
+    reflectances = np.vstack([sets["rawtoaces"], sets["cie2017"], sets["skin"], stage.reflectances])
+    return footage_range(
+        lit=camera_rgb(stage, reflectances * emitted),
+        lit_white=camera_rgb(stage, emitted),
+        white=camera_rgb(stage, spectrum),
+        emitters=narrow_band_emitters(stage, environment),
+        camera_to_xyz=_camera_matrix(stage),
+        seed=seed,
+    )
