@@ -10,7 +10,10 @@ builds every processor a host can ask for: each colorspace to each other one, ea
 to each display/view (both directions), each named transform (both directions), and every
 ``.clf`` / ``.cube`` file under the ROOTs as a FileTransform (CLF both directions, except the
 inverse of a CLF that is a singular matrix, which is undefined: the post-correction Q of a
-rank-1 environment). Each is
+rank-1 environment, and of a CLF holding a 3D LUT, which OCIO inverts by search: the configs
+give that direction explicitly as its own file). Each colorspace's two directions against the
+reference and each named transform's two directions are also built from cold (every cache
+cleared), and the slowest such build is reported. Each is
 applied on the CPU to the rows of INPUTS (float32 RGB), and its GPU shader text is extracted as
 Unreal's OpenColorIO plugin does (HLSL for DirectX 11; this machine has no GPU, so the shader
 is generated but not run). RESULT.npz holds one array per processor, named
@@ -57,6 +60,35 @@ def hlsl_shader(processor) -> str:
 
 def colorspace_names(config) -> list[str]:
     return [cs.getName() for cs in config.getColorSpaces()]
+
+
+def cold_builds(config) -> dict[str, float]:
+    """Seconds to build (from cold: OCIO's caches cleared) each colorspace <-> the reference
+    and each named transform, both directions, with its CPU processor."""
+    import time
+
+    reference = config.getColorSpace("reference") or config.getColorSpaces()[0]
+    reference = reference.getName()
+    jobs = []
+    for name in colorspace_names(config):
+        if name != reference:
+            jobs += [(f"{name} -> {reference}", (name, reference)),
+                     (f"{reference} -> {name}", (reference, name))]  # fmt: skip
+    for named in config.getNamedTransforms():
+        for label, direction in (("forward", OCIO.TRANSFORM_DIR_FORWARD),
+                                 ("inverse", OCIO.TRANSFORM_DIR_INVERSE)):  # fmt: skip
+            jobs.append((f"{named.getName()} {label}", (named, direction)))
+    seconds = {}
+    for label, args in jobs:
+        OCIO.ClearAllCaches()
+        start = time.perf_counter()
+        config.getProcessor(*args).getDefaultCPUProcessor()
+        seconds[label] = time.perf_counter() - start
+    return seconds
+
+
+def has_lut3d(path: Path) -> bool:
+    return path.suffix.lower() == ".clf" and "<LUT3D" in path.read_text(errors="replace")
 
 
 def config_processors(config) -> dict[str, object]:
@@ -112,7 +144,7 @@ def file_processors(path: Path) -> dict[str, object]:
     procs = {}
     directions = [OCIO.TRANSFORM_DIR_FORWARD]
     forward = raw.getProcessor(OCIO.FileTransform(src=str(path.resolve())))
-    if path.suffix.lower() == ".clf" and invertible(forward):
+    if path.suffix.lower() == ".clf" and not has_lut3d(path) and invertible(forward):
         directions.append(OCIO.TRANSFORM_DIR_INVERSE)
     for direction in directions:
         transform = OCIO.FileTransform(
@@ -166,18 +198,23 @@ def group_key(path: Path) -> str:
     return str(path)
 
 
-def run(rgb: np.ndarray, roots: list[Path]) -> tuple[dict[str, np.ndarray], list[str], int]:
-    """All results (by ``<relative file>|kind|src|dst``), problems, and the processor count."""
+def run(rgb: np.ndarray, roots: list[Path]) -> tuple[dict[str, np.ndarray], list[str], int, list]:
+    """All results (by ``<relative file>|kind|src|dst``), problems, the processor count, and
+    the slowest cold build (seconds, what)."""
     results: dict[str, np.ndarray] = {}
     problems: list[str] = []
     firsts: dict[str, dict[str, np.ndarray]] = {}
     count = 0
+    slowest = [0.0, ""]
     for path in config_files(roots):
         label = str(path)
         try:
             config = OCIO.Config.CreateFromFile(str(path))  # .ocio or .ocioz
             config.validate()
             procs = config_processors(config)
+            for what, seconds in cold_builds(config).items():
+                if seconds > slowest[0]:
+                    slowest = [seconds, f"{label}: {what}"]
         except Exception as error:
             problems.append(f"{label}: does not load: {error}")
             continue
@@ -201,14 +238,15 @@ def run(rgb: np.ndarray, roots: list[Path]) -> tuple[dict[str, np.ndarray], list
         values = evaluate(procs, rgb, str(path), problems)
         count += len(values)
         results.update({f"{path}|{k}": v for k, v in values.items()})
-    return results, problems, count
+    return results, problems, count, slowest
 
 
 def main(argv: list[str]) -> int:
     inputs, output, *roots = argv
     rgb = np.load(inputs)
-    results, problems, count = run(rgb, [Path(r) for r in roots])
-    meta = {"version": OCIO.__version__, "problems": problems, "processors": count}
+    results, problems, count, slowest = run(rgb, [Path(r) for r in roots])
+    meta = {"version": OCIO.__version__, "problems": problems, "processors": count,
+            "slowest_build": slowest}  # fmt: skip
     np.savez_compressed(output, __meta__=np.array(json.dumps(meta)), **results)
     print(f"OpenColorIO {OCIO.__version__}: {count} processors, {len(problems)} problems")
     return 0

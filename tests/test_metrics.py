@@ -145,3 +145,17 @@ def test_training_rgb_xyz_matches_colour_align_path(illuminant):
     np.testing.assert_allclose(xyz, (reflectances * light) @ cmfs, rtol=1e-12, atol=0)
     again, _ = training_rgb_xyz(2 * camera, illuminant=illuminant)  # cached spectra, new camera
     np.testing.assert_allclose(again, 2 * rgb, rtol=1e-15)
+
+
+def test_delta_E_2000_between_renderings_is_chart_errors():
+    """Two renderings compared with the white as reference give chart_errors' ΔE2000 when the
+    target chart's white patch is that white."""
+    from ocio_vp.metrics import chart_errors, delta_E_2000
+
+    rng = np.random.default_rng(4)
+    target = rng.uniform(0.02, 0.9, (24, 3))
+    predicted = target * rng.uniform(0.95, 1.05, (24, 3))
+    matrix = np.array([[0.49, 0.31, 0.2], [0.18, 0.81, 0.01], [0.0, 0.01, 0.99]])
+    expected = chart_errors(predicted, target, camera_to_xyz=matrix, white_patch=18)
+    got = delta_E_2000(predicted, target, camera_to_xyz=matrix, white=target[18])
+    np.testing.assert_allclose(got, expected.delta_E_2000, rtol=1e-12)

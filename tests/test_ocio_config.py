@@ -173,8 +173,8 @@ def test_every_processor_is_bounded_finite_and_has_a_shader(exported_matrix):
     from benchmarks.ocio_compat import test_inputs
     from benchmarks.ocio_compat_worker import run
 
-    results, problems, count = run(test_inputs(), exported_matrix)
-    assert problems == []
+    results, problems, count, slowest = run(test_inputs(), exported_matrix)
+    assert problems == [] and slowest[0] > 0
     assert count > 300 and len(results) > 100
     for values in results.values():
         assert np.abs(values).max() <= 1e6
@@ -222,3 +222,82 @@ def test_every_clf_is_academy_clf_v3(exported_matrix):
     for clf in clfs:
         assert 'xmlns="urn:AMPAS:CLF:v3.0"' in clf.read_text()
         assert colour_clf_io.read_clf(clf.read_bytes()) is not None
+
+
+# --------------------------------------------------------------------------------------------
+# Both directions of every colorspace and named transform, given explicitly
+
+
+@pytest.fixture(scope="module")
+def every_kind(tmp_path_factory, exported_matrix) -> list[OCIO.Config]:
+    """Configs of every kind of post-correction: a matrix, the identity, a rank-deficient
+    matrix, a root-polynomial (and one with no inverse, under sodium), an emitter-protected
+    matrix; and a PQ wall with a linearity LUT."""
+    from ocio_vp.ocio import write_solutions
+    from ocio_vp.pipeline import solve_environment
+    from ocio_vp.simulator.stage import paper_stage_measurements
+
+    m = paper_stage_measurements(("rgb_led_white", "sodium_vapour", "direct_sun"))
+    runs = [
+        ("direct_sun", {"method": "least-squares"}),
+        ("rgb_led_white", {"method": "auto"}),
+        ("sodium_vapour", {"method": "auto"}),
+        ("direct_sun", {"method": "root-polynomial"}),
+        ("sodium_vapour", {"method": "root-polynomial"}),
+        ("direct_sun", {"method": "least-squares", "protect_emitters": True}),
+    ]
+    configs = []
+    for i, (env, options) in enumerate(runs):
+        out = tmp_path_factory.mktemp(f"kind{i}")
+        write_solutions([solve_environment(m, m.environment(env), **options)], out)
+        configs.append(OCIO.Config.CreateFromFile(str(out / env / "config.ocio")))
+    pq = exported_matrix[1] / "config.ocio"
+    return [*configs, OCIO.Config.CreateFromFile(str(pq))]
+
+
+def _leaves(transform, inverted=False):
+    """Every transform inside ``transform`` with whether it runs inverted."""
+    flip = inverted ^ (transform.getDirection() == OCIO.TRANSFORM_DIR_INVERSE)
+    if isinstance(transform, OCIO.GroupTransform):
+        for child in transform:
+            yield from _leaves(child, flip)
+    else:
+        yield transform, flip
+
+
+def _holds_a_3d_lut(config, transform) -> bool:
+    if isinstance(transform, OCIO.Lut3DTransform):
+        return True
+    if not isinstance(transform, OCIO.FileTransform):
+        return False
+    path = Path(config.getWorkingDir()) / config.getSearchPath() / transform.getSrc()
+    return "<LUT3D" in path.read_text(encoding="utf-8")
+
+
+def test_every_direction_is_explicit_and_no_lut3d_is_inverted(every_kind):
+    """Every colorspace with a transform (the working spaces aside: matrices only, which OCIO
+    inverts exactly) and every named transform give both directions, and none asks OCIO to
+    invert a 3D LUT (a search: ~230 s for a 65^3 cube in OCIO 2.6). Each direction builds."""
+    for config in every_kind:
+        for space in config.getColorSpaces():
+            there = space.getTransform(OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+            back = space.getTransform(OCIO.COLORSPACE_DIR_TO_REFERENCE)
+            if there is None and back is None:
+                continue
+            if space.getFamily().endswith(("/Working", "/Utility")):
+                kinds = {type(t) for t in (there, back) if t is not None for t, _ in _leaves(t)}
+                assert kinds == {OCIO.MatrixTransform}, (space.getName(), kinds)
+                continue
+            assert there is not None and back is not None, space.getName()
+            for transform in (there, back):
+                for leaf, inverted in _leaves(transform):
+                    assert not (inverted and _holds_a_3d_lut(config, leaf)), space.getName()
+            for src, dst in ((space.getName(), oc.REFERENCE), (oc.REFERENCE, space.getName())):
+                config.getProcessor(src, dst).getDefaultCPUProcessor()
+        for named in config.getNamedTransforms():
+            for direction in (OCIO.TRANSFORM_DIR_FORWARD, OCIO.TRANSFORM_DIR_INVERSE):
+                transform = named.getTransform(direction)
+                assert transform is not None, (named.getName(), direction)
+                for leaf, inverted in _leaves(transform):
+                    assert not (inverted and _holds_a_3d_lut(config, leaf))
+                config.getProcessor(named, direction).getDefaultCPUProcessor()

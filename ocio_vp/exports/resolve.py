@@ -179,7 +179,8 @@ def _q_dctl(solution: Any) -> tuple[str, str]:
 def _cube_entry(
     source: ExportSource, folder: Path, stem: str, clf: str, *, size: int, input_range
 ) -> tuple[str, dict[str, Any] | None, str | None]:
-    """Bake one transform's cube; returns (file name, accuracy or None, reason not written)."""
+    """Bake one transform's cube; returns (file name, accuracy or None, reason not written,
+    naming the file to use instead)."""
     src, dst, _ = resolve_transforms(source)[stem]
     name = f"{stem}_{size}.cube"
     result = fit_cube(
@@ -191,7 +192,18 @@ def _cube_entry(
     )
     if result.path is not None:
         return name, result.errors, None
-    return name, None, f"{result.reason}; use {clf} (exact)"
+    solution = source.solution
+    if (
+        solution.correction.linear
+        or stem == "wall_out_of_frustum"
+        or (stem == "wall_in_frustum" and solution.N is None)
+    ):
+        return name, None, f"{result.reason}; use {clf} (exact)"
+    if stem == "post_correction_Q":
+        instead = f"use post_correction_Q.dctl (the model, exact) or {clf} (its LUT chain)"
+    else:
+        instead = f"use {clf} (its Q^-1 LUT chain: see manifest's accuracy)"
+    return name, None, f"{result.reason}; {instead}"
 
 
 def _clf_accuracy(stem: str, solution: Any, carriage: dict[str, Any] | None) -> Any:

@@ -150,6 +150,13 @@ class Diagnostics(Mapping[str, Any]):
         the primary's M, as a calibration of that type alone would), and
         ``in_frustum_match`` (how the in-frustum types match in camera on the chart:
         :func:`ocio_vp.calibration.panels.in_frustum_match`, None for one in-frustum type).
+    post_correction_ocio
+        How the config carries a non-linear post-correction (:mod:`ocio_vp.ocio.bake`):
+        ``files`` (its LUT chains' sidecars), ``lut_size``, ``chains`` (each one's design),
+        ``agreement`` (ΔE2000 of the Q chain against the exact model, ``p99`` and ``worst`` per
+        set of the camera range and over ``all``, and the ``worst_input``) and
+        ``inverse_agreement`` (the same for the content through the Q^-1 chain and back through
+        the model; null without Q^-1); only written for a non-linear post-correction.
     extra
         Keys of a loaded file that this version does not know, kept so they round-trip.
     """
@@ -191,6 +198,7 @@ class Diagnostics(Mapping[str, Any]):
     synthesized_target: dict[str, Any] | None = None
     fixtures: dict[str, Any] | None = None
     panels: dict[str, Any] | None = None
+    post_correction_ocio: dict[str, Any] | None = None
     extra: dict[str, Any] = field(default_factory=dict)
     #: The keys a loaded file had (None: every field, as after a solve).
     present: tuple[str, ...] | None = field(default=None, repr=False, compare=False)
@@ -204,7 +212,12 @@ class Diagnostics(Mapping[str, Any]):
         return cls(**values, extra=extra, present=tuple(data))
 
     #: Fields written only when set.
-    OPTIONAL: ClassVar[tuple[str, ...]] = ("synthesized_target", "fixtures", "panels")
+    OPTIONAL: ClassVar[tuple[str, ...]] = (
+        "synthesized_target",
+        "fixtures",
+        "panels",
+        "post_correction_ocio",
+    )
 
     def _keys(self) -> tuple[str, ...]:
         if self.present is not None:

@@ -75,7 +75,11 @@ __all__ = [
     "LutChain",
     "ModelOutputs",
     "bake",
+    "bake_inverse",
     "chain_transform",
+    "chart_content",
+    "clf_text",
+    "content_range",
     "forward_chain",
     "inverse_chain",
     "model_outputs",
@@ -351,6 +355,7 @@ def _design(
     linear_break: float | None,
     s_nodes: list[float],
     colours: np.ndarray,
+    size: int = LUT_SIZE,
 ) -> LutChain:
     """A :class:`LutChain` whose direction nodes follow the largest curvature of each
     (function, its reference matrix, scales) of ``curvatures``, with a share on ``colours``."""
@@ -368,8 +373,9 @@ def _design(
         reference,
         linear_break,
         nodes,
-        _direction_nodes(along_a, box_a, LUT_SIZE),
-        _direction_nodes(along_b, box_b, LUT_SIZE),
+        _direction_nodes(along_a, box_a, size),
+        _direction_nodes(along_b, box_b, size),
+        size,
     )
 
 
@@ -424,7 +430,9 @@ def _fade_nodes(correction, T: np.ndarray, colours: np.ndarray) -> list[float]:
     return _spread(chart, light, FADE_NODES)
 
 
-def forward_chain(correction: PostCorrection, white: np.ndarray, colours: np.ndarray) -> LutChain:
+def forward_chain(
+    correction: PostCorrection, white: np.ndarray, colours: np.ndarray, size: int = LUT_SIZE
+) -> LutChain:
     """The footage-side chain of ``correction`` (Q): ``white`` the lit white patch and
     ``colours`` the chart's colours, as the camera records them on the stage.
 
@@ -457,6 +465,7 @@ def forward_chain(correction: PostCorrection, white: np.ndarray, colours: np.nda
         linear_break=linear_break,
         s_nodes=s_nodes,
         colours=colours,
+        size=size,
     )
 
 
@@ -486,7 +495,9 @@ def _content_nodes(low: float, high: float, size: int) -> np.ndarray:
     return _snap(nodes, -RATIO_RANGE, RATIO_RANGE)
 
 
-def inverse_chain(correction: PostCorrection, content: np.ndarray) -> LutChain:
+def inverse_chain(
+    correction: PostCorrection, content: np.ndarray, size: int = LUT_SIZE
+) -> LutChain:
     """The corrected-side chain of Q^-1; ``content`` the colours it is finest on (the target
     chart and mixtures of it). A plain log2: content is light, its mixed channels positive."""
     T = _mix(CONTENT_MIX)
@@ -504,8 +515,9 @@ def inverse_chain(correction: PostCorrection, content: np.ndarray) -> LutChain:
         reference,
         None,
         _snap(np.asarray(s_nodes), *SCALE_RANGE),
-        _content_nodes(low[0], high[0], LUT_SIZE),
-        _content_nodes(low[1], high[1], LUT_SIZE),
+        _content_nodes(low[0], high[0], size),
+        _content_nodes(low[1], high[1], size),
+        size,
     )
 
 
@@ -532,8 +544,15 @@ def _fade_band_content(correction, content: np.ndarray) -> list[float]:
     return _spread(chart, light, INVERSE_FADE_NODES)
 
 
+#: Newton steps per slice of the inverse (each started from the slice below: a few suffice;
+#: a colour with no preimage, where the model folds, keeps its best iterate).
+INVERSE_ITERATIONS = 8
+
+
 def _solved(function, c: np.ndarray, start: np.ndarray | None, matrix: np.ndarray) -> np.ndarray:
-    return newton_inverse(function, c, matrix, homogeneous=False, start=start)
+    return newton_inverse(
+        function, c, matrix, homogeneous=False, start=start, max_iterations=INVERSE_ITERATIONS
+    )
 
 
 def bake_inverse(correction: PostCorrection, chain: LutChain) -> np.ndarray:
@@ -662,7 +681,7 @@ class ModelOutputs:
         )
 
 
-def _content(chart: np.ndarray) -> np.ndarray:
+def chart_content(chart: np.ndarray) -> np.ndarray:
     """The target chart and random positive mixtures of its patches (the inverse's content)."""
     rng = np.random.default_rng(5)
     mixtures = rng.dirichlet(np.full(len(chart), 0.3), 2000) @ chart
@@ -699,16 +718,16 @@ def model_outputs(solution: Solution) -> ModelOutputs | None:
     chains = [("post_correction_q", forward, lut, "Q")]
     measured_inverse = None
     if correction.invertible:
-        backward = inverse_chain(correction, _content(target))
+        backward = inverse_chain(correction, chart_content(target))
         inverse_lut = bake_inverse(correction, backward)
         q_inverse = _cpu(chain_transform(backward, inverse_lut))
-        content = _content_range(footage, correction)
+        content = content_range(footage, correction)
         measured_inverse = agreement(content, lambda c: c, lambda c: correction.apply(q_inverse(c)))
         chains.append(("post_correction_q_inverse", backward, inverse_lut, "Q^-1"))
     return _outputs(solution, chains, measured, measured_inverse)
 
 
-def _content_range(footage, correction):
+def content_range(footage, correction):
     """The corrected images of the footage range's surfaces, highlights and emitters (near
     black noise is not content), those the corrected side's chain holds (every mixed channel
     positive): what the inverse chain is checked on."""

@@ -3,8 +3,9 @@
 All environments are written into a staging folder first and renamed into place only when
 every one of them succeeded, so a failure never leaves a half-written output folder.
 
-A root-polynomial environment costs ~0.2 s to write (it bakes, checks and formats two 3D
-LUTs); a 3x3 one ~0.02 s. :func:`writer_pool` starts one helper process that writes some
+A non-linear environment costs ~0.5 s to write (it designs, bakes, checks and formats two LUT
+chains; a few seconds with emitter protection, whose inverse is solved slice by slice); a 3x3
+one ~0.02 s. :func:`writer_pool` starts one helper process that writes some
 environments while this process writes the others. It imports only numpy, OpenColorIO and this
 package's writer (~0.25 s, not colour-science), so a command that starts it before it loads
 and solves finds it ready; the files are the same either way.
@@ -24,7 +25,7 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 from ocio_vp.errors import InputError
-from ocio_vp.formats.solution import Solution, solution_to_json
+from ocio_vp.formats.solution import Diagnostics, Solution, solution_to_json
 from ocio_vp.ocio.bake import model_outputs
 from ocio_vp.ocio.config import ModelFiles, build_config, ocio_names, write_config
 from ocio_vp.ocio.panels import add_panel_spaces, panel_outputs
@@ -48,7 +49,16 @@ def write_environment(solution: Solution, directory: Path) -> Solution:
         files.update(luts.files)
         search_path = LUT_DIR
         model = ModelFiles(luts.q_file, luts.q_inverse_file, luts.note())
-        diagnostics = {**solution.diagnostics, "post_correction_ocio": luts.block}
+        diagnostics = solution.diagnostics
+        if isinstance(diagnostics, Diagnostics):
+            present = diagnostics.present
+            if present is not None and "post_correction_ocio" not in present:
+                present = (*present, "post_correction_ocio")
+            diagnostics = dataclasses.replace(
+                diagnostics, post_correction_ocio=luts.block, present=present
+            )
+        else:
+            diagnostics = {**diagnostics, "post_correction_ocio": luts.block}
         solution = dataclasses.replace(solution, diagnostics=diagnostics)
     # A stage's other panel types: their own colour spaces, LUTs and encodings (ocio/panels.py).
     panels = panel_outputs(solution, model)
