@@ -126,6 +126,32 @@ class TestUnrealFiles:
         assert f"`{REFERENCE}`, `{OUT_OF_FRUSTUM}`, `{IN_FRUSTUM}`." in text
         for ui in ("All Viewports Color Configuration", "All Nodes Color Configuration"):
             assert ui in text
+        assert mapping["post_correction_carriage"] is None  # a matrix: carried exactly
+        assert "not a matrix" not in text
+
+    def test_a_non_linear_q_says_how_it_is_carried(self, tmp_path):
+        """A root-polynomial Q: UNREAL.md and unreal_ocio.json give the measured agreement of
+        the config's LUT chains with the model (Q, and Q^-1 in the inner frustum) and name the
+        exact alternatives."""
+        from ocio_vp.ocio import write_solutions
+        from ocio_vp.pipeline import solve_environment
+        from ocio_vp.simulator.stage import paper_stage_measurements
+
+        m = paper_stage_measurements(("incandescent",))
+        (solution,) = write_solutions(
+            [solve_environment(m, m.environments[0], method="root-polynomial")], tmp_path
+        )
+        folder = tmp_path / "incandescent"
+        export_solutions([folder], targets=["unreal"])
+        unreal = folder / "exports" / "unreal"
+        carriage = json.loads((unreal / "unreal_ocio.json").read_text())["post_correction_carriage"]
+        block = solution.diagnostics["post_correction_ocio"]
+        assert carriage["kind"] == "root-polynomial"
+        assert carriage["agreement"] == block["agreement"]
+        text = (unreal / "UNREAL.md").read_text()
+        assert "**The post-correction is not a matrix.**" in text and carriage["note"] in text
+        worst = block["inverse_agreement"]["worst"]["all"]
+        assert f"{worst:.2g} (worst) over the corrected camera range" in text
 
     def test_working_space_source(self, tmp_path):
         """With a named camera gamut the source is Unreal's Linear Rec.709; converting it to

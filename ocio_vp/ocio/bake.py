@@ -263,10 +263,14 @@ def _lut_array(values: np.ndarray, chain: LutChain) -> np.ndarray:
     return out
 
 
-def chain_transform(chain: LutChain, lut: np.ndarray) -> OCIO.GroupTransform:
-    """The OCIO operators of the module docstring for a baked ``lut`` (:func:`bake`)."""
-    lut3d = OCIO.Lut3DTransform(gridSize=chain.size)
-    lut3d.setData(np.ascontiguousarray(lut, dtype=np.float32).ravel())
+def chain_transform(chain: LutChain, lut: np.ndarray | None) -> OCIO.GroupTransform:
+    """The OCIO operators of the module docstring for a baked ``lut`` (:func:`bake`); with
+    ``lut`` None a 2^3 placeholder stands for the 3D LUT (for :func:`clf_text`)."""
+    if lut is None:
+        lut3d = OCIO.Lut3DTransform(gridSize=2)
+    else:
+        lut3d = OCIO.Lut3DTransform(gridSize=chain.size)
+        lut3d.setData(np.ascontiguousarray(lut, dtype=np.float32).ravel())
     lut3d.setInterpolation(OCIO.INTERP_TETRAHEDRAL)
     return OCIO.GroupTransform(
         [
@@ -613,10 +617,7 @@ def clf_text(chain: LutChain, lut: np.ndarray, description: str) -> str:
     """CLF text of the chain. OCIO writes every operator but the 3D LUT's numbers (integers,
     :data:`LUT_STEPS_PER_STOP`), which are formatted here, each distinct slice once (OCIO's
     writer formats all 65^3 entries, ~20x slower); the tests read the files back with OCIO."""
-    ops = list(chain_transform(chain, lut))
-    placeholder = OCIO.Lut3DTransform(gridSize=2)
-    placeholder.setInterpolation(OCIO.INTERP_TETRAHEDRAL)
-    shell = OCIO.GroupTransform([*ops[:4], placeholder, *ops[5:]])
+    shell = chain_transform(chain, None)
     shell.getFormatMetadata().addChildElement("Description", description)
     text = clf_v3(shell.write(formatName=CLF_FORMAT, config=OCIO.Config.CreateRaw()))
     numbers = _lut3d_text(np.asarray(lut, dtype=np.float32).reshape(chain.size, -1, 3))
