@@ -233,11 +233,14 @@ def every_kind(tmp_path_factory, exported_matrix) -> list[OCIO.Config]:
     """Configs of every kind of post-correction: a matrix, the identity, a rank-deficient
     matrix, a root-polynomial (and one with no inverse, under sodium), an emitter-protected
     matrix; and a PQ wall with a linearity LUT."""
+    from ocio_vp.formats.measurements import with_camera_colorspace
     from ocio_vp.ocio import write_solutions
     from ocio_vp.pipeline import solve_environment
     from ocio_vp.simulator.stage import paper_stage_measurements
 
     m = paper_stage_measurements(("rgb_led_white", "sodium_vapour", "direct_sun"))
+    # a camera gamut: the camera's log spaces, ACEScct and the Q look join the config
+    m_gamut = with_camera_colorspace(m, "ARRI Wide Gamut 4", key="camera_colorspace")
     runs = [
         ("direct_sun", {"method": "least-squares"}),
         ("rgb_led_white", {"method": "auto"}),
@@ -245,11 +248,13 @@ def every_kind(tmp_path_factory, exported_matrix) -> list[OCIO.Config]:
         ("direct_sun", {"method": "root-polynomial"}),
         ("sodium_vapour", {"method": "root-polynomial"}),
         ("direct_sun", {"method": "least-squares", "protect_emitters": True}),
+        ("direct_sun", {"method": "root-polynomial", "gamut": True}),
     ]
     configs = []
     for i, (env, options) in enumerate(runs):
         out = tmp_path_factory.mktemp(f"kind{i}")
-        write_solutions([solve_environment(m, m.environment(env), **options)], out)
+        source = m_gamut if options.pop("gamut", False) else m
+        write_solutions([solve_environment(source, source.environment(env), **options)], out)
         configs.append(OCIO.Config.CreateFromFile(str(out / env / "config.ocio")))
     pq = exported_matrix[1] / "config.ocio"
     return [*configs, OCIO.Config.CreateFromFile(str(pq))]
@@ -274,30 +279,44 @@ def _holds_a_3d_lut(config, transform) -> bool:
     return "<LUT3D" in path.read_text(encoding="utf-8")
 
 
+def _inverts_no_lut3d(config, transform) -> bool:
+    return not any(inverted and _holds_a_3d_lut(config, t) for t, inverted in _leaves(transform))
+
+
+def _one_way_is_analytic(config, transform) -> bool:
+    """A direction OCIO may invert by itself: nothing in it is a 3D LUT (matrices, curves,
+    ranges and 1D LUTs invert exactly or by a quick table)."""
+    return not any(_holds_a_3d_lut(config, t) for t, _ in _leaves(transform))
+
+
 def test_every_direction_is_explicit_and_no_lut3d_is_inverted(every_kind):
-    """Every colorspace with a transform (the working spaces aside: matrices only, which OCIO
-    inverts exactly) and every named transform give both directions, and none asks OCIO to
-    invert a 3D LUT (a search: ~230 s for a 65^3 cube in OCIO 2.6). Each direction builds."""
+    """Every colorspace carrying the post-correction or the wall, and every named transform,
+    gives both directions; any other colorspace or look given one way holds no 3D LUT (OCIO
+    inverts the rest exactly: matrices, curves, 1D LUTs); and no direction asks OCIO to invert
+    a 3D LUT (a search: ~230 s for a 65^3 cube in OCIO 2.6). Each direction builds."""
     for config in every_kind:
         for space in config.getColorSpaces():
             there = space.getTransform(OCIO.COLORSPACE_DIR_FROM_REFERENCE)
             back = space.getTransform(OCIO.COLORSPACE_DIR_TO_REFERENCE)
             if there is None and back is None:
                 continue
-            if space.getFamily().endswith(("/Working", "/Utility")):
-                kinds = {type(t) for t in (there, back) if t is not None for t, _ in _leaves(t)}
-                assert kinds == {OCIO.MatrixTransform}, (space.getName(), kinds)
-                continue
-            assert there is not None and back is not None, space.getName()
-            for transform in (there, back):
-                for leaf, inverted in _leaves(transform):
-                    assert not (inverted and _holds_a_3d_lut(config, leaf)), space.getName()
-            for src, dst in ((space.getName(), oc.REFERENCE), (oc.REFERENCE, space.getName())):
+            name = space.getName()
+            if name in (oc.POST_CORRECTION_COLORSPACE, oc.IN_FRUSTUM, oc.OUT_OF_FRUSTUM):
+                assert there is not None and back is not None, name
+            given = [t for t in (there, back) if t is not None]
+            if len(given) == 1:
+                assert _one_way_is_analytic(config, given[0]), name
+            assert all(_inverts_no_lut3d(config, t) for t in given), name
+            for src, dst in ((name, oc.REFERENCE), (oc.REFERENCE, name)):
                 config.getProcessor(src, dst).getDefaultCPUProcessor()
         for named in config.getNamedTransforms():
             for direction in (OCIO.TRANSFORM_DIR_FORWARD, OCIO.TRANSFORM_DIR_INVERSE):
                 transform = named.getTransform(direction)
                 assert transform is not None, (named.getName(), direction)
-                for leaf, inverted in _leaves(transform):
-                    assert not (inverted and _holds_a_3d_lut(config, leaf))
+                assert _inverts_no_lut3d(config, transform)
                 config.getProcessor(named, direction).getDefaultCPUProcessor()
+        for look in config.getLooks():
+            given = [t for t in (look.getTransform(), look.getInverseTransform()) if t is not None]
+            if len(given) == 1:  # the identity Q's look: nothing to invert
+                assert _one_way_is_analytic(config, given[0]), look.getName()
+            assert all(_inverts_no_lut3d(config, t) for t in given), look.getName()
