@@ -148,9 +148,10 @@ def _dctl(dctl: Path, work: Path):
     return apply
 
 
-def _cube(cube: Path, input_range):
+def _cube(cube: Path):
     import PyOpenColorIO as OCIO
 
+    OCIO.ClearAllCaches()  # OCIO caches files by path: every solve writes a cube of this name
     transform = OCIO.FileTransform(src=str(cube), interpolation=OCIO.INTERP_TETRAHEDRAL)
     cpu = OCIO.Config.CreateRaw().getProcessor(transform).getDefaultCPUProcessor()
 
@@ -222,7 +223,7 @@ def measure(stage, measurements, environment, method, protect, work: Path) -> di
     cube = next((k for k in manifest["files"] if k.startswith("post_correction_Q_")), None)
     if cube is not None:
         low, high = manifest["files"][cube]["accuracy"]["input_range"]
-        row["cube"] = agreement(_within(footage, low, high), exact, _cube(resolve / cube, None))
+        row["cube"] = agreement(_within(footage, low, high), exact, _cube(resolve / cube))
     if solution.N is not None:
         row["in-frustum"] = _in_frustum(solution, config, footage)
     named = _named(config)

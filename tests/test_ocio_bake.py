@@ -33,6 +33,8 @@ from ocio_vp.ocio.bake import AGREEMENT_P99, AGREEMENT_WORST, LUT_SIZE
 CASES = {
     "root-polynomial": ("incandescent", {"method": "root-polynomial"}),
     "protected": ("direct_sun", {"method": "auto", "protect_emitters": True}),
+    # joint lights with its own M: the in-frustum chain inverts Q for the calibrated [SL]
+    "joint": ("direct_sun", {"method": "joint", "protect_emitters": True}),
     # sodium vapour: the root-polynomial's 3x3 is rank-deficient, so N is not solved and the
     # model has no inverse; the config must still carry the model forward
     "no-inverse": ("sodium_vapour", {"method": "root-polynomial"}),
@@ -155,7 +157,7 @@ def _content(solution, n, rng, exposures=(0.01, 4.0)):
     return mix / mix.max() * rng.uniform(*exposures, (n, 1))
 
 
-@pytest.mark.parametrize("case", ["root-polynomial", "protected"])
+@pytest.mark.parametrize("case", ["root-polynomial", "protected", "joint"])
 def test_in_frustum_round_trip_through_the_config(written, case):
     """Content -> the config's in-frustum drive (OCIO) -> the wall [SL] -> the exact model:
     the content again, within 0.5 ΔE2000 (p99) and 2 (worst), content in the chart's gamut

@@ -36,10 +36,11 @@ they hold zeros, so each file stays small.
 (measured on a grid; where the root-polynomial's fade meets its growing polynomial, the grid
 needs most), with shares kept uniform over the chart's directions and over the whole range.
 
-What the chain does not carry: a pixel whose mixed channels fall below the linear segment's
-reach (``-``:data:`NEGATIVE_REACH` breaks, where the log-ratios leave +-:data:`RATIO_RANGE`),
-and, on the corrected side, content with a channel negative enough to stay negative after the
-mix (the plain log2 floors it). Inside that range, how close the chain comes to the model is
+What the chain does not carry: a pixel whose log-ratios leave +-:data:`RATIO_RANGE` (near
+black, a mixed channel below about -:data:`NEGATIVE_REACH` breaks beside others within a few
+breaks of black; less beside brighter ones: no colour of light), and, on the corrected side,
+content with a channel negative enough to stay negative after the mix (the plain log2 floors
+it). Inside that range, how close the chain comes to the model is
 measured when the config is written (:func:`model_outputs`): ΔE2000 against the exact model
 on the camera range of :mod:`ocio_vp.model.footage_range`, stored in ``solution.json``
 (``diagnostics.post_correction_ocio``) and quoted in the config's descriptions.
@@ -99,7 +100,8 @@ SCALE_RANGE = (-40.0, -40.0 + (WARP_SIZE - 1) / 64.0)
 #: |log2 r/g| and |log2 b/g| the chains cover; beyond, the ratio is clamped.
 RATIO_RANGE = 10.0
 #: How far below zero (in breaks) a mixed channel of a pixel near black may go and stay
-#: inside the footage side's range (its log-ratio is still within RATIO_RANGE).
+#: inside the footage side's range beside channels within a few breaks of black (its
+#: log-ratio is still within RATIO_RANGE; about 4 to 7 breaks, fewer beside brighter ones).
 NEGATIVE_REACH = 4.0
 #: The 3D LUT holds log2 values in steps of 2^-12 stop (integers, exact in float32 up to
 #: +-4096 stops; the rounding, <= 9e-5 relative, is far below the interpolation's error).
@@ -692,7 +694,8 @@ def chart_content(chart: np.ndarray) -> np.ndarray:
 def model_outputs(solution: Solution) -> ModelOutputs | None:
     """The Q (and, where it has one, Q^-1) sidecars of a non-linear post-correction, None for
     a matrix. Q^-1 is baked whenever the correction is invertible: the in-frustum drive is
-    ``M Q^-1(c)`` where N is solved, and it is the explicit inverse of ``Stage Footage``."""
+    ``[SL]^-1 Q^-1(c)`` where N is solved, and it is the explicit inverse of ``Stage
+    Footage``."""
     from ocio_vp.correction.perceptual import default_camera_to_xyz  # deferred: colour-science
 
     correction = solution.correction

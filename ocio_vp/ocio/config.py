@@ -117,8 +117,9 @@ def wall_transforms(
     the other direction (drive -> reference) given explicitly.
 
     With ``model`` (a non-linear Q's sidecars) and N solved, the in-frustum drive is
-    ``M Q^-1(c)`` (the Q^-1 file, then M) instead of the matrix N, and its other direction is
-    ``Q(M^-1 d)`` (M inverted, then the Q file): OCIO is never asked to invert a LUT file.
+    ``[SL]^-1 Q^-1(c)`` (the Q^-1 file, then the calibrated ``[SL]^-1``, which is M except for
+    a method that lights with its own M) instead of the matrix N, and its other direction is
+    ``Q([SL] d)`` ([SL]^-1 inverted, then the Q file): OCIO never inverts a LUT file.
 
     The wall's tail (linearity LUT, signal encoding) is appended by :func:`build_config`.
     """
@@ -134,9 +135,11 @@ def wall_transforms(
     if model is not None and solution.N is not None:
         if model.q_inverse is None:
             raise ValueError("N is solved but the non-linear Q has no baked inverse")
-        inner = [OCIO.FileTransform(src=model.q_inverse), matrix_transform(solution.M, offset)]
+        # N inverts Q for the calibrated wall, [SL]^-1, whatever M lights with (joint's M)
+        calibrated = np.linalg.inv(np.asarray(solution.SL, dtype=np.float64))
+        inner = [OCIO.FileTransform(src=model.q_inverse), matrix_transform(calibrated, offset)]
         inner_back = [
-            matrix_transform(solution.M, offset, direction=inverse),
+            matrix_transform(calibrated, offset, direction=inverse),
             OCIO.FileTransform(src=model.q),
         ]
     return {OUT_OF_FRUSTUM: (outer, outer_back), IN_FRUSTUM: (inner, inner_back)}
@@ -390,9 +393,9 @@ def _in_frustum_text(solution: Solution, model: ModelFiles | None = None) -> str
     """What the in-frustum drive is: N, or M when N was not solved, plus the offset."""
     if solution.N is not None and model is not None:
         text = (
-            f"M Q^-1(c), the baked inverse of the {solution.correction.kind} Q "
-            f"({model.q_inverse}) then M {_fmt(solution.M)} (N = M Q^-1 for its 3x3 would be "
-            f"{_fmt(solution.N)})"
+            f"[SL]^-1 Q^-1(c), the baked inverse of the {solution.correction.kind} Q "
+            f"({model.q_inverse}) then [SL]^-1 {_fmt(np.linalg.inv(solution.SL))} (N = "
+            f"[SL]^-1 Q^-1 for its 3x3 would be {_fmt(solution.N)})"
         )
     elif solution.N is not None and is_identity(solution.Q):
         text = f"N = M (Q is the identity, so no in-frustum change is needed) {_fmt(solution.N)}"
