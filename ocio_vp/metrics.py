@@ -41,6 +41,7 @@ from ocio_vp.spectra import spectral_shape, wavelengths
 
 __all__ = [
     "ITP_WHITE_NITS",
+    "SAMPLE_CAMERA_TO_XYZ",
     "WHITE_FLOOR",
     "ChartErrors",
     "camera_to_xyz_matrix",
@@ -260,6 +261,63 @@ def chart_errors(
     )
 
 
+#: :func:`camera_to_xyz_matrix` of the sample camera (``ocio_vp.spectra.DEFAULT_CAMERA``, under
+#: D65), written out so that code writing files (the OCIO config's agreement check) needs no
+#: colour-science; ``tests/test_metrics.py`` checks it against the fit.
+SAMPLE_CAMERA_TO_XYZ = np.array(
+    [
+        [1.175937912022459, 0.18740115341315514, 0.07828249928974618],
+        [0.46818955373939086, 0.9721658230598503, -0.29600542599689184],
+        [0.14763589265679136, -0.36631353850047915, 1.5902201930558895],
+    ]
+)
+SAMPLE_CAMERA_TO_XYZ.setflags(write=False)
+
+
+def _lab(xyz: np.ndarray, white: np.ndarray) -> np.ndarray:
+    """CIE 1976 L*a*b* of (n, 3) XYZ relative to the XYZ ``white`` (linear below (6/29)^3)."""
+    t = xyz / white
+    d = 6.0 / 29.0
+    f = np.where(t > d**3, np.cbrt(t), t / (3 * d * d) + 4.0 / 29.0)
+    return np.stack(
+        [116 * f[:, 1] - 16, 500 * (f[:, 0] - f[:, 1]), 200 * (f[:, 1] - f[:, 2])], axis=-1
+    )
+
+
+def _ciede2000(lab_1: np.ndarray, lab_2: np.ndarray) -> np.ndarray:
+    """CIEDE2000 (Sharma, Wu & Dalal 2005) of (n, 3) Lab pairs, kL = kC = kH = 1."""
+    (L1, a1, b1), (L2, a2, b2) = lab_1.T, lab_2.T
+    c_bar = (np.hypot(a1, b1) + np.hypot(a2, b2)) / 2
+    g = 0.5 * (1 - np.sqrt(c_bar**7 / (c_bar**7 + 25.0**7)))
+    a1, a2 = (1 + g) * a1, (1 + g) * a2
+    c1, c2 = np.hypot(a1, b1), np.hypot(a2, b2)
+    h1 = np.degrees(np.arctan2(b1, a1)) % 360
+    h2 = np.degrees(np.arctan2(b2, a2)) % 360
+    both = c1 * c2 != 0
+    dh = h2 - h1
+    dh = np.where(dh > 180, dh - 360, np.where(dh < -180, dh + 360, dh))
+    dh = np.where(both, dh, 0.0)
+    d_hue = 2 * np.sqrt(c1 * c2) * np.sin(np.radians(dh / 2))
+    l_bar, c_bar = (L1 + L2) / 2, (c1 + c2) / 2
+    h_sum, h_gap = h1 + h2, np.abs(h1 - h2)
+    h_bar = np.where(h_gap <= 180, h_sum / 2, np.where(h_sum < 360, h_sum + 360, h_sum - 360) / 2)
+    h_bar = np.where(both, h_bar, h_sum)
+    t = (
+        1
+        - 0.17 * np.cos(np.radians(h_bar - 30))
+        + 0.24 * np.cos(np.radians(2 * h_bar))
+        + 0.32 * np.cos(np.radians(3 * h_bar + 6))
+        - 0.20 * np.cos(np.radians(4 * h_bar - 63))
+    )
+    rotation = 30 * np.exp(-(((h_bar - 275) / 25) ** 2))
+    r_c = 2 * np.sqrt(c_bar**7 / (c_bar**7 + 25.0**7))
+    s_l = 1 + 0.015 * (l_bar - 50) ** 2 / np.sqrt(20 + (l_bar - 50) ** 2)
+    s_c, s_h = 1 + 0.045 * c_bar, 1 + 0.015 * c_bar * t
+    r_t = -np.sin(np.radians(2 * rotation)) * r_c
+    dl, dc, dhh = (L2 - L1) / s_l, (c2 - c1) / s_c, d_hue / s_h
+    return np.sqrt(dl**2 + dc**2 + dhh**2 + r_t * dc * dhh)
+
+
 def delta_E_2000(
     a: ArrayLike, b: ArrayLike, *, camera_to_xyz: ArrayLike, white: ArrayLike
 ) -> np.ndarray:
@@ -273,13 +331,14 @@ def delta_E_2000(
     >>> white = np.array([0.9, 1.0, 0.8])
     >>> float(delta_E_2000(white[None], white[None], camera_to_xyz=np.eye(3), white=white)[0])
     0.0
-    """
-    import colour
 
+    In numpy (no colour-science: the config writer measures its LUT chains with it);
+    ``tests/test_metrics.py`` checks it against colour-science's ``delta_E`` and ``XYZ_to_Lab``.
+    """
     matrix = np.asarray(camera_to_xyz, dtype=np.float64)
     white_xyz = np.asarray(white, dtype=np.float64) @ matrix.T
-    scale = 1.0 / white_xyz[1]
-    white_xy = colour.XYZ_to_xy(white_xyz * scale)
-    lab_a = colour.XYZ_to_Lab(np.asarray(a, dtype=np.float64) @ matrix.T * scale, white_xy)
-    lab_b = colour.XYZ_to_Lab(np.asarray(b, dtype=np.float64) @ matrix.T * scale, white_xy)
-    return np.asarray(colour.delta_E(lab_a, lab_b, method="CIE 2000"), dtype=np.float64)
+    white_xyz = white_xyz / white_xyz[1]
+    scale = 1.0 / (np.asarray(white, dtype=np.float64) @ matrix[1])
+    lab_a = _lab(np.asarray(a, dtype=np.float64).reshape(-1, 3) @ matrix.T * scale, white_xyz)
+    lab_b = _lab(np.asarray(b, dtype=np.float64).reshape(-1, 3) @ matrix.T * scale, white_xyz)
+    return _ciede2000(lab_a, lab_b)

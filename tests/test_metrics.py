@@ -159,3 +159,33 @@ def test_delta_E_2000_between_renderings_is_chart_errors():
     expected = chart_errors(predicted, target, camera_to_xyz=matrix, white_patch=18)
     got = delta_E_2000(predicted, target, camera_to_xyz=matrix, white=target[18])
     np.testing.assert_allclose(got, expected.delta_E_2000, rtol=1e-12)
+
+
+def test_delta_E_2000_is_colour_sciences():
+    """The numpy ΔE2000 (and its Lab) against colour-science's, on random pairs including
+    negative, near-black, above-white and very saturated values, and identical pairs."""
+    import colour
+
+    from ocio_vp.metrics import delta_E_2000
+
+    rng = np.random.default_rng(5)
+    a = np.vstack([rng.uniform(-0.05, 4.0, (3000, 3)), rng.uniform(0, 1e-3, (200, 3))])
+    b = a * rng.uniform(0.5, 1.5, a.shape) + rng.normal(0, 0.01, a.shape)
+    b[:50] = a[:50]
+    matrix = np.array([[0.49, 0.31, 0.2], [0.18, 0.81, 0.01], [0.0, 0.01, 0.99]])
+    white = np.array([0.9, 1.0, 0.8])
+    scale = 1.0 / (white @ matrix[1])
+    white_xy = colour.XYZ_to_xy(white @ matrix.T * scale)
+    lab_a = colour.XYZ_to_Lab(a @ matrix.T * scale, white_xy)
+    lab_b = colour.XYZ_to_Lab(b @ matrix.T * scale, white_xy)
+    expected = colour.delta_E(lab_a, lab_b, method="CIE 2000")
+    got = delta_E_2000(a, b, camera_to_xyz=matrix, white=white)
+    np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-9)
+
+
+def test_sample_camera_matrix_is_the_fit():
+    from ocio_vp.metrics import SAMPLE_CAMERA_TO_XYZ
+    from ocio_vp.spectra import camera_sensitivities
+
+    fitted = camera_to_xyz_matrix(camera_sensitivities())
+    np.testing.assert_allclose(SAMPLE_CAMERA_TO_XYZ, fitted, rtol=1e-9, atol=1e-12)

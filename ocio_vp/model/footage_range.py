@@ -81,7 +81,7 @@ class FootageRange:
 
     def delta_E(self, a: ArrayLike, b: ArrayLike) -> np.ndarray:
         """(n,) ΔE2000 between two renderings (camera RGB) of the same pixels."""
-        from ocio_vp.metrics import delta_E_2000  # deferred: colour-science
+        from ocio_vp.metrics import delta_E_2000
 
         return delta_E_2000(a, b, camera_to_xyz=self.camera_to_xyz, white=self.white)
 

@@ -58,6 +58,7 @@ import PyOpenColorIO as OCIO
 
 from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import Solution
+from ocio_vp.metrics import SAMPLE_CAMERA_TO_XYZ
 from ocio_vp.model.correction import PostCorrection, newton_inverse
 from ocio_vp.model.footage_range import Agreement, agreement, calibration_footage_range
 from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
@@ -696,8 +697,6 @@ def model_outputs(solution: Solution) -> ModelOutputs | None:
     a matrix. Q^-1 is baked whenever the correction is invertible: the in-frustum drive is
     ``[SL]^-1 Q^-1(c)`` where N is solved, and it is the explicit inverse of ``Stage
     Footage``."""
-    from ocio_vp.correction.perceptual import default_camera_to_xyz  # deferred: colour-science
-
     correction = solution.correction
     if correction.linear:
         return None
@@ -715,7 +714,7 @@ def model_outputs(solution: Solution) -> ModelOutputs | None:
     lut = bake(correction.apply, forward)
     footage = calibration_footage_range(
         lit_chart=lit, white_patch=white, target_white=target[white], SL=solution.SL,
-        camera_to_xyz=default_camera_to_xyz(),
+        camera_to_xyz=SAMPLE_CAMERA_TO_XYZ,
     )  # fmt: skip
     q = _cpu(chain_transform(forward, lut))
     measured = agreement(footage, correction.apply, q)
