@@ -35,8 +35,6 @@ from ocio_vp.spectra import align, spectral_shape
 
 __all__ = [
     "CHART_DUPLICATE_TOLERANCE",
-    "EMITTER_FWHM",
-    "EMITTER_PEAKS",
     "HeldOutErrors",
     "camera_matrix",
     "held_out_colours",
@@ -225,41 +223,20 @@ def held_out_errors(
     return HeldOutErrors(errors.delta_E_2000[:-1], errors.delta_E_ITP[:-1])
 
 
-#: Narrow-band emitters (LEDs, neon, screens' primaries): Gaussian spectra peaking every 10 nm
-#: from 420 to 680 nm, of this full width at half maximum (nm).
-EMITTER_PEAKS = tuple(range(420, 681, 10))
-EMITTER_FWHM = 20.0
-
-
-def _luminance(stage: SpectralStage, spectra: np.ndarray) -> np.ndarray:
-    """CIE 1931 Y of (..., W) spectra (unnormalised sums, like :func:`camera_rgb`)."""
-    import colour
-
-    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
-    return np.asarray(spectra, dtype=np.float64) @ align(cmfs.signals["y_bar"])
-
-
 def narrow_band_emitters(stage: SpectralStage, environment) -> np.ndarray:
-    """(k, 3) camera RGB of :data:`EMITTER_PEAKS` at the luminance (CIE Y) of a perfect white
-    diffuser under ``environment``, and of the wall's LEDs (each, and each pair) at the same
-    luminance."""
-    from ocio_vp.spectra import wavelengths
+    """(k, 3) camera RGB of the narrow-band emitters of :mod:`ocio_vp.simulator.extremes`
+    (:func:`~ocio_vp.simulator.extremes.emitters_in_scene`) at the luminance (CIE Y) of a
+    perfect white diffuser under ``environment``, and of the wall's LEDs (each, and each pair)
+    at the same luminance."""
+    from ocio_vp.simulator.extremes import emitters_in_scene, luminance
 
-    grid = wavelengths()
-    sigma = EMITTER_FWHM / (2.0 * np.sqrt(2.0 * np.log(2.0)))
     leds = stage.leds.T
-    spectra = np.vstack(
-        [
-            np.exp(-0.5 * ((grid[None] - np.asarray(EMITTER_PEAKS)[:, None]) / sigma) ** 2),
-            leds,
-            leds[[0, 1]].sum(0),
-            leds[[1, 2]].sum(0),
-            leds[[0, 2]].sum(0),
-        ]
+    leds = np.vstack([leds, leds[[0, 1]].sum(0), leds[[1, 2]].sum(0), leds[[0, 2]].sum(0)])
+    white = float(luminance(environment_spectrum(stage, environment)))
+    leds = leds * (white / luminance(leds))[:, None]
+    return camera_rgb(
+        stage, np.vstack([emitters_in_scene(stage, environment, levels=(1.0,)), leds])
     )
-    white = _luminance(stage, environment_spectrum(stage, environment))
-    spectra = spectra / _luminance(stage, spectra)[:, None] * white
-    return camera_rgb(stage, spectra)
 
 
 def stage_footage_range(stage: SpectralStage, environment, solution, seed: int = 0) -> FootageRange:
@@ -277,6 +254,6 @@ def stage_footage_range(stage: SpectralStage, environment, solution, seed: int =
         lit_white=camera_rgb(stage, emitted),
         white=camera_rgb(stage, spectrum),
         emitters=narrow_band_emitters(stage, environment),
-        camera_to_xyz=_camera_matrix(stage),
+        camera_to_xyz=camera_matrix(stage),
         seed=seed,
     )
