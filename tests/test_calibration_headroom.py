@@ -54,3 +54,21 @@ def test_a_clipping_solve_warns_and_pq_states_the_nits():
     want = 600.0 * y(white) / y(solution.SL @ np.ones(3))
     assert abs(scale.white_nits - want) < 1e-9 * want
     assert "drive 1.0 = 600 nits" in lines[0]
+
+
+def test_white_needing_negative_drive_is_stated_and_writes_strict_json():
+    """A stage whose LEDs cannot reach the environment's white (a channel of M 1 below zero):
+    that channel has no headroom (null, not inf, so strict JSON readers accept it) and the
+    solve warns in words."""
+    import json
+
+    solution = _solution()
+    M = solution.M.copy()
+    M[1] = -0.5 * M[1]  # green drive of content white negative outside the frustum
+    scale = content_scale(dataclasses.replace(solution, M=M))
+    assert scale.outer_drive[1] < 0 and scale.negative_channels == ["green"]
+    data = json.loads(json.dumps(scale.to_dict(), allow_nan=False))
+    assert data["outer_headroom_stops"][1] is None
+    assert data["outer_headroom_stops"][0] == -math.log2(scale.outer_drive[0])
+    _, err = content_scale_lines([scale])
+    assert any("negative drive in green" in line for line in err)

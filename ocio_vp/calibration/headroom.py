@@ -55,8 +55,16 @@ class ContentScale:
         """The content value (grey) whose drive first reaches 1.0 in some channel."""
         return 1.0 / self.worst_drive if self.worst_drive > 0 else math.inf
 
-    def headroom_stops(self, drive: np.ndarray) -> list[float]:
-        return [-math.log2(d) if d > 0 else math.inf for d in drive]
+    @property
+    def negative_channels(self) -> list[str]:
+        """Channels where content white needs drive below zero, outside or inside the frustum."""
+        both = np.minimum(self.outer_drive, self.inner_drive)
+        return [c for c, d in zip(CHANNELS, both, strict=True) if d < 0]
+
+    def headroom_stops(self, drive: np.ndarray) -> list[float | None]:
+        """Stops of headroom per channel; None where content white needs no positive drive
+        (zero, or negative: light the wall cannot take away, so that channel shows 0)."""
+        return [-math.log2(d) if d > 0 else None for d in drive]
 
     def to_dict(self) -> dict:
         return {
@@ -66,7 +74,7 @@ class ContentScale:
             "inner_drive": self.inner_drive.tolist(),
             "outer_headroom_stops": self.headroom_stops(self.outer_drive),
             "inner_headroom_stops": self.headroom_stops(self.inner_drive),
-            "peak_content": self.peak_content,
+            "peak_content": self.peak_content if math.isfinite(self.peak_content) else None,
             "clips": self.clips,
             "drive_1_nits": self.peak_nits,
             "content_white_nits": self.white_nits,
@@ -110,9 +118,10 @@ def content_scale_lines(scales: list[ContentScale]) -> tuple[list[str], list[str
     if not scales:
         return [], []
     out = [header(scales[0].content_space, scales[0].peak_nits), *("  " + s.row() for s in scales)]
+    warnings = [_negative_warning(s) for s in scales if s.negative_channels]
     clipping = [s for s in scales if s.clips]
     if not clipping:
-        return out, []
+        return out, warnings
     worst = max(clipping, key=lambda s: s.worst_drive)
     names = ", ".join(s.environment for s in clipping)
     warning = (
@@ -120,7 +129,16 @@ def content_scale_lines(scales: list[ContentScale]) -> tuple[list[str], list[str
         f"{worst.environment}: {100 * worst.worst_drive:.0f}% in {_worst_channel(worst)}): content "
         "above each row's peak clips there; scale the content down to it"
     )
-    return out, [warning]
+    return out, [warning, *warnings]
+
+
+def _negative_warning(scale: ContentScale) -> str:
+    channels = " and ".join(scale.negative_channels)
+    return (
+        f"warning: {scale.environment}: content white needs negative drive in {channels}: the "
+        "wall cannot take light away, so that channel shows 0 and white is tinted; the LEDs "
+        "cannot reach this environment's white (see the solve's LED gamut warning)"
+    )
 
 
 def _worst_channel(scale: ContentScale) -> str:
