@@ -26,7 +26,7 @@ import PyOpenColorIO as OCIO
 from ocio_vp.calibration.diagnostics import is_identity, offset_is_negligible
 from ocio_vp.calibration.equations import MAX_CONDITION_Q_FOR_N, condition_text
 from ocio_vp.formats.solution import Solution
-from ocio_vp.ocio.matrix import matrix_transform
+from ocio_vp.ocio.matrix import format_matrix, matrix_transform
 from ocio_vp.ocio.viewing import (
     add_acescct,
     add_camera_log_spaces,
@@ -74,16 +74,6 @@ WORKING_SPACE_NAMES = {
     "ITU-R BT.709": "Linear Rec.709 (sRGB)",
 }
 
-
-def _fmt(matrix: np.ndarray | None) -> str:
-    """A matrix as descriptions print it: 6 digits; an entry below 1e-12 of the largest is
-    rounding (its digits differ between machines) and prints as 0."""
-    if matrix is None:
-        return "none"
-    matrix = np.asarray(matrix, dtype=np.float64)
-    floor = 1e-12 * float(np.max(np.abs(matrix), initial=0.0))
-    matrix = np.where(np.abs(matrix) <= floor, 0.0, matrix)
-    return "[" + "; ".join(" ".join(f"{v:.6g}" for v in row) for row in matrix) + "]"
 
 
 def _colorspace(
@@ -214,7 +204,7 @@ def post_correction_transforms(
             f"The inverse direction (reference -> Stage Footage) is NOT PROVIDED as the model's "
             f"inverse: the {correction.kind} model has none (its 3x3 has rank {rank} at cond <= "
             f"{MAX_CONDITION_Q_FOR_N:g}). That direction is a bounded stand-in, the 3x3's "
-            f"truncated pseudo-inverse {_fmt(pinv)}, so that a host asking for it gets finite "
+            f"truncated pseudo-inverse {format_matrix(pinv)}, so that a host asking for it gets finite "
             "numbers at once; do not use it to undo the post-correction."
         )
         return forward, matrix_transform(pinv), text
@@ -222,7 +212,7 @@ def post_correction_transforms(
         f"Q has rank {rank} at cond <= {MAX_CONDITION_Q_FOR_N:g} (cond(Q) "
         f"{condition_text(float(np.linalg.cond(Q)))}): it cannot be inverted, so the inverse "
         "direction (reference -> Stage Footage, the inverse of the named transform) is Q's "
-        f"truncated pseudo-inverse {_fmt(pinv)}, bounded, not a true inverse."
+        f"truncated pseudo-inverse {format_matrix(pinv)}, bounded, not a true inverse."
     )
     return forward, matrix_transform(pinv), text
 
@@ -381,7 +371,7 @@ def _out_of_frustum_space(solution: Solution, chains, origin: str) -> OCIO.Color
     outer = _colorspace(
         OUT_OF_FRUSTUM,
         f"Panel drive for content OUTSIDE the camera frustum (lights the actors): M = [SL]^-1 "
-        f"{_fmt(solution.M)}. {origin}.",
+        f"{format_matrix(solution.M)}. {origin}.",
         family="LED Wall",
         encoding=_wall_signal_encoding(solution),
     )
@@ -394,19 +384,19 @@ def _in_frustum_text(solution: Solution, model: ModelFiles | None = None) -> str
     if solution.N is not None and model is not None:
         text = (
             f"[SL]^-1 Q^-1(c), the baked inverse of the {solution.correction.kind} Q "
-            f"({model.q_inverse}) then [SL]^-1 {_fmt(np.linalg.inv(solution.SL))} (N = "
-            f"[SL]^-1 Q^-1 for its 3x3 would be {_fmt(solution.N)})"
+            f"({model.q_inverse}) then [SL]^-1 {format_matrix(np.linalg.inv(solution.SL))} (N = "
+            f"[SL]^-1 Q^-1 for its 3x3 would be {format_matrix(solution.N)})"
         )
     elif solution.N is not None and is_identity(solution.Q):
-        text = f"N = M (Q is the identity, so no in-frustum change is needed) {_fmt(solution.N)}"
+        text = f"N = M (Q is the identity, so no in-frustum change is needed) {format_matrix(solution.N)}"
     elif solution.N is not None:
-        text = f"N = M Q^-1 {_fmt(solution.N)}"
+        text = f"N = M Q^-1 {format_matrix(solution.N)}"
     else:
         reason = solution.diagnostics.get("N_reason") or "Q is not invertible"
-        text = f"N NOT SOLVED ({reason}); M is used instead, {_fmt(solution.M)}"
+        text = f"N NOT SOLVED ({reason}); M is used instead, {format_matrix(solution.M)}"
     if solution.black_level_offset is not None:
         text += (
-            f", plus black-level offset {_fmt(solution.black_level_offset[None])} "
+            f", plus black-level offset {format_matrix(solution.black_level_offset[None])} "
             f"({solution.black_level_method})"
         )
         if offset_is_negligible(solution.black_level_offset, solution.SL):
@@ -445,7 +435,7 @@ def _add_post_correction(
     method_model = solution.diagnostics.get("model") or solution.method
     reason = solution.diagnostics.get("model_reason")
     q_text = (
-        f"Post-correction Q {_fmt(solution.Q)} for footage shot on the stage ({solution.method}, "
+        f"Post-correction Q {format_matrix(solution.Q)} for footage shot on the stage ({solution.method}, "
         f"model {method_model}{': ' + reason if reason else ''}). {origin}."
     )
     if model is not None:

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 import PyOpenColorIO as OCIO
 
-__all__ = ["matrix_transform"]
+__all__ = ["format_matrix", "matrix_transform"]
 
 
 def matrix_transform(
@@ -36,3 +36,14 @@ def _significant(values: np.ndarray) -> np.ndarray:
     top = float(np.max(np.abs(values), initial=0.0))
     values = np.where(np.abs(values) <= 1e-12 * top, 0.0, values)
     return np.array([float(f"{v:.12g}") for v in values.ravel()]).reshape(values.shape)
+
+
+def format_matrix(matrix: np.ndarray | None) -> str:
+    """A matrix as config descriptions print it: 6 digits; an entry below 1e-12 of the largest
+    is rounding (its digits differ between machines) and prints as 0."""
+    if matrix is None:
+        return "none"
+    matrix = np.asarray(matrix, dtype=np.float64)
+    floor = 1e-12 * float(np.max(np.abs(matrix), initial=0.0))
+    matrix = np.where(np.abs(matrix) <= floor, 0.0, matrix)
+    return "[" + "; ".join(" ".join(f"{v:.6g}" for v in row) for row in matrix) + "]"

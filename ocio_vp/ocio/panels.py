@@ -24,7 +24,6 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 
-import numpy as np
 import PyOpenColorIO as OCIO
 
 from ocio_vp.formats.panel_solution import PanelSolution
@@ -42,6 +41,7 @@ from ocio_vp.ocio.config import (
     wall_signal_tail,
     wall_transforms,
 )
+from ocio_vp.ocio.matrix import format_matrix
 from ocio_vp.ocio.viewing import set_categories
 from ocio_vp.ocio.wall import wall_outputs
 
@@ -74,15 +74,6 @@ def _names(label: str, in_frustum: bool) -> dict[str, str]:
         names["view_in_frustum"] = f"{label} {VIEW_INNER}"
     return names
 
-
-def _fmt(matrix: np.ndarray | None) -> str:
-    """A matrix as descriptions print it (6 digits; rounding-level entries as 0)."""
-    if matrix is None:
-        return "none"
-    matrix = np.asarray(matrix, dtype=np.float64)
-    floor = 1e-12 * float(np.max(np.abs(matrix), initial=0.0))
-    matrix = np.where(np.abs(matrix) <= floor, 0.0, matrix)
-    return "[" + "; ".join(" ".join(f"{v:.6g}" for v in row) for row in matrix) + "]"
 
 
 @dataclass(frozen=True)
@@ -128,14 +119,14 @@ def _space(name: str, description: str, encoding: str, there: list, back: list) 
 
 def _descriptions(solution: Solution, panel: PanelSolution) -> dict[str, str]:
     origin = f"stage {solution.stage!r}, environment {solution.environment!r}"
-    inner = f"N = M Q^-1 {_fmt(panel.N)}"
+    inner = f"N = M Q^-1 {format_matrix(panel.N)}"
     if panel.N is None:
-        inner = f"N NOT SOLVED ({panel.N_reason}); M is used instead, {_fmt(panel.M)}"
+        inner = f"N NOT SOLVED ({panel.N_reason}); M is used instead, {format_matrix(panel.M)}"
     if panel.black_level_offset is not None:
-        inner += f", plus black-level offset {_fmt(panel.black_level_offset[None])}"
+        inner += f", plus black-level offset {format_matrix(panel.black_level_offset[None])}"
     return {
         OUT_OF_FRUSTUM: f"Panel drive of panel type {panel.name!r} for content OUTSIDE the "
-        f"camera frustum (lights the actors): its own M = [SL]^-1 {_fmt(panel.M)}. {origin}.",
+        f"camera frustum (lights the actors): its own M = [SL]^-1 {format_matrix(panel.M)}. {origin}.",
         IN_FRUSTUM: f"Panel drive of panel type {panel.name!r} for content INSIDE the camera "
         f"frustum (the in-camera background): {inner}. {origin}.",
     }

@@ -232,13 +232,9 @@ def _plates(measurements: Any, options: PlateOptions) -> Iterator[tuple[str, np.
         yield from _panel_plates(measurements, options)
         return
     rows, columns = _grid(measurements.SRL.shape[0])
-    sensor = {"vignetting": options.vignetting, "noise": options.noise}
-    sensor["read_noise"] = options.read_noise
+    sensor = _sensor_options(options)
     seed = iter(range(options.seed * 1000, options.seed * 1000 + 1000))
-    white = {"flat": ((0, 0, *PLATE_SIZE), (0.5, 0.5, 0.5))}
-    for i in range(options.flat_frames):
-        flat = render_regions(white, vignetting=options.vignetting, noise=0.003, seed=next(seed))
-        yield f"flat.{i + 1:04d}.exr", flat
+    yield from _flat_fields(options, seed)
     for k, channel in enumerate(("red", "green", "blue")):
         panel = {channel: (PANEL_REGION, measurements.SL[:, k])}
         image = render_regions(panel, seed=next(seed), **sensor)
@@ -267,6 +263,23 @@ def _plates(measurements: Any, options: PlateOptions) -> Iterator[tuple[str, np.
             yield f"footage/{env.name}.{frame:04d}.exr", image
 
 
+def _sensor_options(options: PlateOptions) -> dict[str, float]:
+    """The sensor's fall-off and noise as :func:`render_regions` takes them."""
+    return {
+        "vignetting": options.vignetting,
+        "noise": options.noise,
+        "read_noise": options.read_noise,
+    }
+
+
+def _flat_fields(options: PlateOptions, seed: Iterator[int]) -> Iterator[tuple[str, np.ndarray]]:
+    """``flat.####.exr``: the evenly lit white frames that remove the lens fall-off."""
+    white = {"flat": ((0, 0, *PLATE_SIZE), (0.5, 0.5, 0.5))}
+    for i in range(options.flat_frames):
+        flat = render_regions(white, vignetting=options.vignetting, noise=0.003, seed=next(seed))
+        yield f"flat.{i + 1:04d}.exr", flat
+
+
 def _panel_plates(measurements: Any, options: PlateOptions) -> Iterator[tuple[str, np.ndarray]]:
     """:func:`_plates` of a stage of several panel types: each type's primaries and lit
     charts (``<type>_primary_<channel>.exr``, ``<type>_lit_<channel>.exr``), each in-frustum
@@ -275,13 +288,9 @@ def _panel_plates(measurements: Any, options: PlateOptions) -> Iterator[tuple[st
     from ocio_vp.calibration.panels import panel_lights
 
     rows, columns = _grid(measurements.SRL.shape[0])
-    sensor = {"vignetting": options.vignetting, "noise": options.noise}
-    sensor["read_noise"] = options.read_noise
+    sensor = _sensor_options(options)
     seed = iter(range(options.seed * 1000, options.seed * 1000 + 1000))
-    white = {"flat": ((0, 0, *PLATE_SIZE), (0.5, 0.5, 0.5))}
-    for i in range(options.flat_frames):
-        flat = render_regions(white, vignetting=options.vignetting, noise=0.003, seed=next(seed))
-        yield f"flat.{i + 1:04d}.exr", flat
+    yield from _flat_fields(options, seed)
     for panel in measurements.panels:
         for k, channel in enumerate(("red", "green", "blue")):
             region = {channel: (PANEL_REGION, panel.SL[:, k])}
