@@ -60,7 +60,7 @@ from ocio_vp.formats.panels import primary_panel
 from ocio_vp.formats.solution import Diagnostics, Solution
 from ocio_vp.formats.synthesis import synthesis_to_dict, synthesis_warnings
 from ocio_vp.metrics import error_relative_to_white
-from ocio_vp.model.correction import PostCorrection, ProtectedCorrection
+from ocio_vp.model.correction import DEFAULT_DARK, PostCorrection, ProtectedCorrection
 
 __all__ = [
     "DEFAULT_METHOD",
@@ -123,7 +123,7 @@ def solve_environment(
     fit = _fit(problem, options.method, measurements, environment)
     correction = fit.correction
     if options.protect_emitters:
-        correction = ProtectedCorrection(correction, problem.domain, problem.M)
+        correction = ProtectedCorrection(correction, problem.domain, problem.M, dark=DEFAULT_DARK)
     SL, M_calibrated = problem.SL, problem.M
     M = M_calibrated if fit.M is None else np.asarray(fit.M, dtype=np.float64)
     if lighting is not None:

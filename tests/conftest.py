@@ -95,12 +95,16 @@ def oracle_correction(block: dict, rgb) -> np.ndarray:
         inner = oracle_correction({**p["inner"], "domain": domain}, x)
         u = x @ np.asarray(domain["to_drive"]).T
         d = x @ np.asarray(p["drive_matrix"]).T
-        v, top = u.max(axis=1), d.max(axis=1)
+        # the floor: dark times the largest drive channel of the colour whose drive relative
+        # to a perfect white is 1 in every channel (least squares: it is exact here)
+        white, *_ = np.linalg.lstsq(np.asarray(domain["to_drive"]), np.ones(3), rcond=None)
+        floor = p.get("dark", 0.0) * max(float(np.max(np.asarray(p["drive_matrix"]) @ white)), 0)
+        v, top = u.max(axis=1), np.maximum(d.max(axis=1), floor)
         (b0, b1), (n0, n1) = p["bright"], p["negative"]
         with np.errstate(divide="ignore", invalid="ignore"):
-            g = _fade_out(np.log2(v / b0) / np.log2(b1 / b0))
-            g = g * _fade_out((-d.min(axis=1) / top - n0) / (n1 - n0))
-        g = np.where((v > 0) & (top > 0), g, 0.0)[:, None]
+            g_bright = np.where(v > 0, _fade_out(np.log2(v / b0) / np.log2(b1 / b0)), 1.0)
+            g_negative = _fade_out((-d.min(axis=1) / top - n0) / (n1 - n0))
+        g = np.where(top > 0, g_bright * g_negative, 0.0)[:, None]
         return (x + g * (inner - x)).reshape(np.shape(rgb))
     C = np.asarray(p["coefficients"])
     terms = polynomial_expansion_Finlayson2015(x, p["degree"], root_polynomial_expansion=True)

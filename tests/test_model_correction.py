@@ -197,6 +197,40 @@ class TestProtected:
         steps = np.abs(np.diff(out, axis=0)).max(axis=1) / levels[1:]
         assert steps.max() < 0.01  # no jump: at most ~1% of the level per 1/800 stop
 
+    def test_near_black_noise_keeps_the_inner_model_below_the_dark_floor(
+        self, protected, bounded, problem
+    ):
+        """Near black, negative channels are noise: with ``dark`` the negative drive is
+        measured against ``dark`` times a perfect white's largest drive, so a dark noisy pixel
+        (and one with no positive channel) keeps the inner model, as the dark surface around
+        it does, instead of switching to the identity with the noise. The same colour scaled
+        up to a visible level (a saturated emitter) still goes to the identity."""
+        guarded = dataclasses.replace(protected, dark=2.0**-5)
+        white_drive = problem.M @ (
+            problem.predicted[problem.white_patch] / problem.white_reflectance
+        )
+        # a negative-light colour (as in the test above), and black noise with no positive drive
+        negative = problem.SL @ np.array([-0.4, 0.5, 0.0])
+        for x in (negative, -1e-4 * np.ones(3)):
+            d = problem.M @ x
+            level = 1e-3 * white_drive.max() / np.abs(d).max()  # 1/1000 of white's drive
+            dark = level * x
+            # closed form: negativity -min(d) / (dark * white's largest drive): well below 0.2
+            assert -np.min(problem.M @ dark) / (2.0**-5 * white_drive.max()) < 0.2
+            np.testing.assert_allclose(guarded.apply(dark), bounded.apply(dark), rtol=1e-12)
+            assert guarded.weight(dark) == 1.0 and protected.weight(dark) == 0.0
+        np.testing.assert_array_equal(guarded.apply(negative), negative)  # visible: identity
+        # the serialised form carries it, and the oracle (tests/conftest.py) agrees
+        block = correction_to_dict(guarded)
+        assert correction_from_dict(block).dark == 2.0**-5
+        x = _probe()
+        np.testing.assert_allclose(oracle_correction(block, x), guarded.apply(x), atol=1e-9)
+
+    def test_a_file_without_dark_reads_as_no_floor(self, protected):
+        block = correction_to_dict(dataclasses.replace(protected, dark=2.0**-5))
+        del block["parameters"]["dark"]
+        assert correction_from_dict(block).dark == 0.0
+
     def test_the_inverse_and_the_serialised_form(self, protected, problem):
         content = problem.target * 1.3
         np.testing.assert_allclose(protected.apply(protected.inverse(content)), content, rtol=1e-9)

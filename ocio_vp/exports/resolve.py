@@ -124,6 +124,7 @@ def _model_context(correction: Any) -> dict[str, Any]:
             "bright": [low, high],
             "bright_span": float(np.log2(high / low)),
             "negative": list(correction.negative),
+            "floor": correction.floor,
         }
         correction = correction.inner
     context: dict[str, Any] = {

@@ -5,6 +5,7 @@ export read it without the solvers (which live in :mod:`ocio_vp.correction`)."""
 
 from ocio_vp.model.correction import (
     DEFAULT_BRIGHT,
+    DEFAULT_DARK,
     DEFAULT_FADE,
     DEFAULT_NEGATIVE,
     DRIVE_FLOOR,
@@ -34,6 +35,7 @@ from ocio_vp.model.expansion import (
 
 __all__ = [
     "DEFAULT_BRIGHT",
+    "DEFAULT_DARK",
     "DEFAULT_FADE",
     "DEFAULT_NEGATIVE",
     "DRIVE_FLOOR",

@@ -62,6 +62,7 @@ from ocio_vp.model.expansion import (
 
 __all__ = [
     "DEFAULT_BRIGHT",
+    "DEFAULT_DARK",
     "DEFAULT_FADE",
     "DEFAULT_NEGATIVE",
     "DRIVE_FLOOR",
@@ -146,6 +147,13 @@ PROTECTION = ProtectionPoint(
 DEFAULT_BRIGHT = PROTECTION.bright
 #: ``--protect-emitters``: the negative-drive fade (:attr:`ProtectionPoint.negative`).
 DEFAULT_NEGATIVE = PROTECTION.negative
+#: ``--protect-emitters``: below this brightness (of a perfect white diffuser) negative drive
+#: is measured against it rather than against the colour's own drive. Near black, negative
+#: channels are sensor noise, not light the wall cannot make: without the floor the protection
+#: switched pixel by pixel between Q and the identity with the noise. 2^-5 is 30 times the read
+#: noise of :mod:`ocio_vp.model.footage_range` and below every emitter it protects (1/4 of
+#: white's luminance and up).
+DEFAULT_DARK = 2.0**-5
 #: A lighting drive channel below this fraction of the largest counts as this fraction (a light
 #: the wall cannot emit in that channel: reflectances there are noise and crosstalk).
 DRIVE_FLOOR = 0.05
@@ -246,11 +254,14 @@ class FitDomain:
         """(...,) the largest drive-relative channel ``max_k u_k`` (1: a perfect white)."""
         return np.max(self.drive(rgb), axis=-1)
 
-    def negativity(self, rgb: ArrayLike, drive_matrix: np.ndarray) -> np.ndarray:
-        """(...,) ``-min_k (M x)_k / max_k (M x)_k``: the negative light a colour needs,
-        relative to its largest drive (``inf`` when no drive channel is positive)."""
+    def negativity(
+        self, rgb: ArrayLike, drive_matrix: np.ndarray, floor: float = 0.0
+    ) -> np.ndarray:
+        """(...,) ``-min_k (M x)_k / max(max_k (M x)_k, floor)``: the negative light a colour
+        needs, relative to its largest drive or ``floor`` (in the same drive units), whichever
+        is larger (``inf`` when neither is positive)."""
         d = np.asarray(rgb, dtype=np.float64) @ np.asarray(drive_matrix).T
-        top = d.max(axis=-1)
+        top = np.maximum(d.max(axis=-1), floor)
         return np.where(top > 0, -d.min(axis=-1) / np.where(top > 0, top, 1.0), np.inf)
 
     def to_dict(self) -> dict[str, Any]:
@@ -495,8 +506,9 @@ class ProtectedCorrection:
 
     ``weight = fade(brightness; bright) * fade(negativity; negative)``: brightness is the
     largest drive-relative channel (:meth:`FitDomain.brightness`, 1 = a perfect white),
-    negativity the negative light the colour needs (:meth:`FitDomain.negativity`); each fades
-    out between its (start, end). ``Q(x) = x + weight (inner(x) - x)``. Brightness depends on
+    negativity the negative light the colour needs (:meth:`FitDomain.negativity`), relative to
+    its largest drive or, below ``dark`` times a perfect white's, to that (files written before
+    ``dark`` existed read as 0: no floor); each fades out between its (start, end). ``Q(x) = x + weight (inner(x) - x)``. Brightness depends on
     exposure: the domain is the calibration's, so footage exposed brighter than the chart's
     plates should be scaled to it first (docs/stability.md).
     """
@@ -506,6 +518,7 @@ class ProtectedCorrection:
     drive_matrix: np.ndarray
     bright: tuple[float, float] = DEFAULT_BRIGHT
     negative: tuple[float, float] = DEFAULT_NEGATIVE
+    dark: float = 0.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "drive_matrix", _matrix(self.drive_matrix, "drive_matrix"))
@@ -513,10 +526,21 @@ class ProtectedCorrection:
         object.__setattr__(self, "negative", _pair(self.negative, "post_correction.negative"))
         if self.bright[0] <= 0:
             raise InputError("the brightness fade must start above 0", key="post_correction")
+        if not (np.isfinite(self.dark) and 0.0 <= self.dark < self.bright[0]):
+            raise InputError(
+                "dark must be at least 0 and below the brightness fade", key="post_correction.dark"
+            )
+        object.__setattr__(self, "dark", float(self.dark))
+        object.__setattr__(self, "_floor", self.dark * _white_drive(self.domain, self.drive_matrix))
 
     @property
     def kind(self) -> str:
         return "protected"
+
+    @property
+    def floor(self) -> float:
+        """``dark`` in drive units: the least drive negative light is measured against."""
+        return self._floor  # type: ignore[attr-defined]
 
     @property
     def matrix(self) -> np.ndarray:
@@ -540,8 +564,8 @@ class ProtectedCorrection:
         low, high = self.bright
         with np.errstate(divide="ignore", invalid="ignore"):
             t = np.log2(np.maximum(v, 1e-300) / low) / np.log2(high / low)
-        g_bright = np.where(v > 0, _fade_out(t), 0.0)
-        n = self.domain.negativity(rgb, self.drive_matrix)
+        g_bright = np.where(v > 0, _fade_out(t), 1.0)  # no positive drive: dark, not bright
+        n = self.domain.negativity(rgb, self.drive_matrix, self.floor)
         start, end = self.negative
         g_negative = np.where(np.isfinite(n), _fade_out((n - start) / (end - start)), 0.0)
         return g_bright * g_negative
@@ -571,7 +595,18 @@ class ProtectedCorrection:
             "drive_matrix": self.drive_matrix.tolist(),
             "bright": list(self.bright),
             "negative": list(self.negative),
+            "dark": self.dark,
         }
+
+
+def _white_drive(domain: FitDomain, drive_matrix: np.ndarray) -> float:
+    """The largest channel of the drive (``drive_matrix`` units) of a perfect white diffuser:
+    the colour whose drive relative to white (:meth:`FitDomain.drive`) is 1 in every channel."""
+    try:
+        white = np.linalg.solve(domain.to_drive, np.ones(3))
+    except np.linalg.LinAlgError:
+        return 0.0
+    return float(max(np.max(drive_matrix @ white), 0.0))
 
 
 #: Every kind of post-correction.
@@ -692,6 +727,7 @@ def correction_from_dict(data: Mapping[str, Any]) -> PostCorrection:
                 parameters["drive_matrix"],
                 tuple(parameters["bright"]),
                 tuple(parameters["negative"]),
+                float(parameters.get("dark", 0.0)),  # files before it: no dark floor
             )
     except InputError as error:
         key = error.key or ""

@@ -85,6 +85,7 @@ __all__ = [
     "forward_chain",
     "inverse_chain",
     "model_outputs",
+    "protected_references",
 ]
 
 #: 3D LUT grid size (CLF and OCIO take cubes; the scale axis uses only its first slices).
@@ -387,11 +388,23 @@ def _design(
 
 
 def _reference(correction: PostCorrection) -> np.ndarray:
-    """L: the matrix a correction reduces to where it is linear (the identity for the emitter
-    protection, and where the matrix has no inverse)."""
+    """L: the matrix a correction reduces to where it is linear (the identity where the matrix
+    has no inverse; for the emitter protection, the identity it hands over to)."""
     if correction.kind == "protected" or not correction.invertible:
         return np.eye(3)
     return correction.matrix
+
+
+def protected_references(correction: PostCorrection) -> list[np.ndarray]:
+    """The candidate L of an emitter protection's footage chain: the identity (exact on the
+    emitters and highlights it hands over to) and the inner model's matrix (exact on the
+    reflective colours it keeps, most of a frame). Which interpolates closer depends on the
+    stage; :func:`model_outputs` bakes both and keeps the one nearer the model."""
+    candidates = [np.eye(3)]
+    inner = _reference(correction.inner)
+    if not np.array_equal(inner, candidates[0]):
+        candidates.append(inner)
+    return candidates
 
 
 def _fade_band(correction, T: np.ndarray, colours: np.ndarray) -> tuple[float, float]:
@@ -438,13 +451,20 @@ def _fade_nodes(correction, T: np.ndarray, colours: np.ndarray) -> list[float]:
 
 
 def forward_chain(
-    correction: PostCorrection, white: np.ndarray, colours: np.ndarray, size: int = LUT_SIZE
+    correction: PostCorrection,
+    white: np.ndarray,
+    colours: np.ndarray,
+    size: int = LUT_SIZE,
+    reference: np.ndarray | None = None,
 ) -> LutChain:
     """The footage-side chain of ``correction`` (Q): ``white`` the lit white patch and
-    ``colours`` the chart's colours, as the camera records them on the stage.
+    ``colours`` the chart's colours, as the camera records them on the stage; ``reference``
+    the chain's L (default :func:`_reference`; for the emitter protection,
+    :func:`protected_references` lists the candidates).
 
     Scale nodes around the log's break, and for the emitter protection across its fade; the
     direction nodes follow the curvature of the (inner) model's departure from its matrix."""
+    reference = _reference(correction) if reference is None else reference
     T = _mix(CAMERA_MIX)
     level = float(np.mean(T @ np.asarray(white, dtype=np.float64)))
     # black's scale, log2(break) - 1/ln 2, on a node of the warp's grid: black maps to a node
@@ -468,7 +488,7 @@ def forward_chain(
     return _design(
         curvatures,
         mix=CAMERA_MIX,
-        reference=_reference(correction),
+        reference=reference,
         linear_break=linear_break,
         s_nodes=s_nodes,
         colours=colours,
@@ -710,14 +730,19 @@ def model_outputs(solution: Solution) -> ModelOutputs | None:
     white = int(solution.diagnostics.get("white_patch") or 18)
     lit = np.asarray(charts["lit_baseline"], dtype=np.float64)
     target = np.asarray(charts["target"], dtype=np.float64)
-    forward = forward_chain(correction, lit[white], np.vstack([lit, target]))
-    lut = bake(correction.apply, forward)
     footage = calibration_footage_range(
         lit_chart=lit, white_patch=white, target_white=target[white], SL=solution.SL,
         camera_to_xyz=SAMPLE_CAMERA_TO_XYZ,
     )  # fmt: skip
-    q = _cpu(chain_transform(forward, lut))
-    measured = agreement(footage, correction.apply, q)
+    colours = np.vstack([lit, target])
+    candidates = protected_references(correction) if correction.kind == "protected" else [None]
+    baked = []
+    for reference in candidates:
+        forward = forward_chain(correction, lit[white], colours, LUT_SIZE, reference)
+        lut = bake(correction.apply, forward)
+        measured = agreement(footage, correction.apply, _cpu(chain_transform(forward, lut)))
+        baked.append((_shortfall(measured), forward, lut, measured))
+    _, forward, lut, measured = min(baked, key=lambda b: b[0])
     chains = [("post_correction_q", forward, lut, "Q")]
     measured_inverse = None
     if correction.invertible:
@@ -728,6 +753,13 @@ def model_outputs(solution: Solution) -> ModelOutputs | None:
         measured_inverse = agreement(content, lambda c: c, lambda c: correction.apply(q_inverse(c)))
         chains.append(("post_correction_q_inverse", backward, inverse_lut, "Q^-1"))
     return _outputs(solution, chains, measured, measured_inverse)
+
+
+def _shortfall(measured: Agreement) -> float:
+    """How far an agreement is from the hosts' limits: the larger of p99 / AGREEMENT_P99 and
+    worst / AGREEMENT_WORST (at most 1 within them)."""
+    p99, worst = measured.overall
+    return max(p99 / AGREEMENT_P99, worst / AGREEMENT_WORST)
 
 
 def content_range(footage, correction):

@@ -75,7 +75,6 @@ WORKING_SPACE_NAMES = {
 }
 
 
-
 def _colorspace(
     name: str, description: str, *, family: str, encoding: str = "scene-linear"
 ) -> OCIO.ColorSpace:

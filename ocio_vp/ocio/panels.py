@@ -75,7 +75,6 @@ def _names(label: str, in_frustum: bool) -> dict[str, str]:
     return names
 
 
-
 @dataclass(frozen=True)
 class PanelOutputs:
     """What the other panel types add: colour spaces, (view, colour space) pairs for the
