@@ -231,7 +231,7 @@ def baked_cubes(quick: bool, configs: dict[str, Path], folder: Path) -> str:
     import PyOpenColorIO as OCIO
 
     from ocio_vp.exports.cube import bake_cube
-    from ocio_vp.exports.resolve import DEFAULT_CUBE_RANGE
+    from ocio_vp.exports.source import DEFAULT_CUBE_RANGE
     from ocio_vp.ocio.config import IN_FRUSTUM, POST_CORRECTION_COLORSPACE, REFERENCE
 
     lo, hi = DEFAULT_CUBE_RANGE

@@ -92,10 +92,10 @@ def test_an_ocio_failure_in_one_environment_keeps_the_others(solved, tmp_path, m
 
     nuke = exports.EXPORT_TARGETS["nuke"]
 
-    def fails_for_env_1(source, folder, **kwargs):
+    def fails_for_env_1(source, folder, cubes):
         if source.solution.environment == "env_1":
             raise OCIO.Exception("simulated OCIO failure")
-        return nuke(source, folder, **kwargs)
+        return nuke(source, folder, cubes)
 
     monkeypatch.setitem(exports.EXPORT_TARGETS, "nuke", fails_for_env_1)
     report = export_solutions(solved, targets=["unreal", "nuke"], out=tmp_path / "o")

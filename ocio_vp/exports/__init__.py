@@ -23,9 +23,15 @@ from ocio_vp.exports.dit import has_camera_log, write_dit
 from ocio_vp.exports.escape import inside
 from ocio_vp.exports.lights import write_lights
 from ocio_vp.exports.nuke import write_nuke
-from ocio_vp.exports.resolve import DEFAULT_CUBE_RANGE, DEFAULT_CUBE_SIZE, write_resolve
+from ocio_vp.exports.resolve import write_resolve
 from ocio_vp.exports.show import SHOW_FOLDER, write_show
-from ocio_vp.exports.source import ExportSource, load_export_source
+from ocio_vp.exports.source import (
+    DEFAULT_CUBE_RANGE,
+    DEFAULT_CUBE_SIZE,
+    CubeOptions,
+    ExportSource,
+    load_export_source,
+)
 from ocio_vp.exports.unreal import write_unreal
 from ocio_vp.formats.provenance import SOURCE_FILE, source_record
 from ocio_vp.staging import publish_dirs, staged_dir
@@ -39,8 +45,9 @@ __all__ = [
     "export_solutions",
 ]
 
-#: Target name -> writer(source, folder, *, final_folder, cube_size, cube_range) -> summary.
-EXPORT_TARGETS: dict[str, Callable[..., dict[str, Any]]] = {
+#: Target name -> writer(source, folder, cubes) -> summary (cubes: what a writer that bakes a
+#: .cube uses; the others take it and ignore it).
+EXPORT_TARGETS: dict[str, Callable[[ExportSource, Path, CubeOptions], dict[str, Any]]] = {
     "unreal": write_unreal,
     "nuke": write_nuke,
     "resolve": write_resolve,
@@ -248,9 +255,7 @@ def _export_environment(
                 stage = stack.enter_context(staged_dir(final.parent))
                 folder = stage / target
                 folder.mkdir()
-                summary = EXPORT_TARGETS[target](
-                    source, folder, final_folder=final, cube_size=cube_size, cube_range=cube_range
-                )
+                summary = EXPORT_TARGETS[target](source, folder, CubeOptions(cube_size, cube_range))
                 (folder / SOURCE_FILE).write_text(_source_text(source), encoding="utf-8")
                 staged.append((folder, final))
                 results.append(ExportResult(source.solution.environment, target, final, summary))

@@ -18,7 +18,7 @@ from typing import Any
 
 from ocio_vp.errors import InputError
 from ocio_vp.exports.cube import CUBE_LIMIT, fit_cube
-from ocio_vp.exports.source import ExportSource
+from ocio_vp.exports.source import DEFAULT_CUBES, CubeOptions, ExportSource
 from ocio_vp.ocio.camera_log import camera_log_for
 from ocio_vp.ocio.viewing import camera_log_names
 
@@ -35,7 +35,7 @@ def has_camera_log(source: ExportSource) -> bool:
     return curve is not None and source.config.getColorSpace(camera_log_names(curve)[1]) is not None
 
 
-def write_dit(source: ExportSource, folder: Path, *, cube_size: int = 33, **_: Any) -> dict:
+def write_dit(source: ExportSource, folder: Path, cubes: CubeOptions = DEFAULT_CUBES) -> dict:
     """Write the log-in log-out cube (where it meets the limit) and ``dit.json``."""
     solution = source.solution
     curve = camera_log_for(solution.camera_colorspace)
@@ -45,11 +45,11 @@ def write_dit(source: ExportSource, folder: Path, *, cube_size: int = 33, **_: A
             source=str(source.directory),
         )
     native, footage = camera_log_names(curve)
-    name = f"{solution.environment}_{curve.short}_post_correction_{cube_size}.cube"
+    name = f"{solution.environment}_{curve.short}_post_correction_{cubes.size}.cube"
     result = fit_cube(
         source.config.getProcessor(footage, native),
         folder / name,
-        size=cube_size,
+        size=cubes.size,
         input_range=LOG_RANGE,
         title=f"ocio-vp DIT {solution.environment}: {footage} -> {native}",
     )

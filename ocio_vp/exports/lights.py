@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ocio_vp.errors import InputError
-from ocio_vp.exports.source import ExportSource
+from ocio_vp.exports.source import DEFAULT_CUBES, CubeOptions, ExportSource
 from ocio_vp.fixtures.dmx import content_matrix, dmx_csv, dmx_rows
 
 __all__ = ["write_lights"]
@@ -26,7 +26,7 @@ ASSUMPTIONS = (
 )
 
 
-def write_lights(source: ExportSource, folder: Path, **_: Any) -> dict:
+def write_lights(source: ExportSource, folder: Path, cubes: CubeOptions = DEFAULT_CUBES) -> dict:
     """Write ``lights.json`` and ``lights.csv`` into ``folder``."""
     solution = source.solution
     if not solution.fixtures:

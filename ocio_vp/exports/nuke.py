@@ -29,7 +29,13 @@ from typing import Any
 
 from ocio_vp.errors import InputError
 from ocio_vp.exports.escape import nuke_identifier
-from ocio_vp.exports.source import ExportSource, copy_config, post_correction_carriage
+from ocio_vp.exports.source import (
+    DEFAULT_CUBES,
+    CubeOptions,
+    ExportSource,
+    copy_config,
+    post_correction_carriage,
+)
 from ocio_vp.exports.templating import render_template
 from ocio_vp.formats.measurements import check_safe_name
 
@@ -94,7 +100,7 @@ def render_nuke_script(
     )
 
 
-def write_nuke(source: ExportSource, folder: Path, **_: Any) -> dict:
+def write_nuke(source: ExportSource, folder: Path, cubes: CubeOptions = DEFAULT_CUBES) -> dict:
     """Write ``<environment>.nk`` and ``config/`` into ``folder`` (paths relative to the
     script, so the folder can be moved)."""
     solution = source.solution

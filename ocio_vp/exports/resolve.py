@@ -29,13 +29,16 @@ import PyOpenColorIO as OCIO
 
 from ocio_vp.correction.root_polynomial import root_polynomial_term_powers
 from ocio_vp.exports.cube import CUBE_LIMIT, fit_cube
-from ocio_vp.exports.source import ExportSource, post_correction_carriage
+from ocio_vp.exports.source import (
+    DEFAULT_CUBES,
+    CubeOptions,
+    ExportSource,
+    post_correction_carriage,
+)
 from ocio_vp.exports.templating import render_template
 from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
 
 __all__ = [
-    "DEFAULT_CUBE_RANGE",
-    "DEFAULT_CUBE_SIZE",
     "MANIFEST",
     "render_dctl",
     "render_model_dctl",
@@ -44,8 +47,6 @@ __all__ = [
     "write_resolve",
 ]
 
-DEFAULT_CUBE_SIZE = 33
-DEFAULT_CUBE_RANGE = (-0.25, 16.0)
 MANIFEST = "manifest.json"
 
 
@@ -228,10 +229,7 @@ def _clf_accuracy(stem: str, solution: Any, carriage: dict[str, Any] | None) -> 
 def write_resolve(
     source: ExportSource,
     folder: Path,
-    *,
-    cube_size: int = DEFAULT_CUBE_SIZE,
-    cube_range: tuple[float, float] = DEFAULT_CUBE_RANGE,
-    **_: Any,
+    cubes: CubeOptions = DEFAULT_CUBES,
 ) -> dict[str, Any]:
     """Write the CLFs, the Q DCTL, the cubes that meet :data:`CUBE_LIMIT` and ``manifest.json``
     (every file with its accuracy, every file not written with the reason)."""
@@ -246,7 +244,7 @@ def write_resolve(
         files[clf.name] = {"kind": "clf", "from": src, "to": dst,
                            "accuracy": _clf_accuracy(stem, solution, carriage)}  # fmt: skip
         name, errors, reason = _cube_entry(
-            source, folder, stem, clf.name, size=cube_size, input_range=cube_range
+            source, folder, stem, clf.name, size=cubes.size, input_range=cubes.input_range
         )
         if errors is None:
             not_written[name] = reason or "not written"

@@ -19,7 +19,27 @@ from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import check_safe_name
 from ocio_vp.formats.solution import Solution, load_solution
 
+#: Cube lattice size and input range (camera RGB) of every exported .cube.
+DEFAULT_CUBE_SIZE = 33
+DEFAULT_CUBE_RANGE = (-0.25, 16.0)
+
+
+@dataclass(frozen=True)
+class CubeOptions:
+    """What every writer that bakes a .cube is given (``export --cube-size/--cube-range``)."""
+
+    size: int = DEFAULT_CUBE_SIZE
+    input_range: tuple[float, float] = DEFAULT_CUBE_RANGE
+
+
+DEFAULT_CUBES = CubeOptions()
+
+
 __all__ = [
+    "DEFAULT_CUBES",
+    "DEFAULT_CUBE_RANGE",
+    "DEFAULT_CUBE_SIZE",
+    "CubeOptions",
     "ExportSource",
     "copy_config",
     "load_export_source",

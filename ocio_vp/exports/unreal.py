@@ -27,7 +27,13 @@ import PyOpenColorIO as OCIO
 from ocio_vp.calibration.headroom import content_scale
 from ocio_vp.errors import InputError
 from ocio_vp.exports.panels import panel_notes, with_panel_assignments
-from ocio_vp.exports.source import ExportSource, copy_config, post_correction_carriage
+from ocio_vp.exports.source import (
+    DEFAULT_CUBES,
+    CubeOptions,
+    ExportSource,
+    copy_config,
+    post_correction_carriage,
+)
 from ocio_vp.exports.templating import render_template
 from ocio_vp.exports.unreal_script import SCRIPT_FILE, render_unreal_script
 from ocio_vp.ocio.config import WORKING_SPACE_NAMES
@@ -186,7 +192,9 @@ def _inverse_note(solution) -> str | None:
     )
 
 
-def write_unreal(source: ExportSource, folder: Path, **_: Any) -> dict[str, Any]:
+def write_unreal(
+    source: ExportSource, folder: Path, cubes: CubeOptions = DEFAULT_CUBES
+) -> dict[str, Any]:
     """Write ``config/``, ``<environment>.ocioz``, ``UNREAL.md`` and ``unreal_ocio.json``."""
     solution = source.solution
     copied = copy_config(source, folder / "config")
