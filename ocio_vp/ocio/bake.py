@@ -399,7 +399,8 @@ def protected_references(correction: PostCorrection) -> list[np.ndarray]:
     """The candidate L of an emitter protection's footage chain: the identity (exact on the
     emitters and highlights it hands over to) and the inner model's matrix (exact on the
     reflective colours it keeps, most of a frame). Which interpolates closer depends on the
-    stage; :func:`model_outputs` bakes both and keeps the one nearer the model."""
+    stage; :func:`model_outputs` bakes both (for Q and for Q^-1) and keeps the one nearer the
+    model."""
     candidates = [np.eye(3)]
     inner = _reference(correction.inner)
     if not np.array_equal(inner, candidates[0]):
@@ -523,10 +524,15 @@ def _content_nodes(low: float, high: float, size: int) -> np.ndarray:
 
 
 def inverse_chain(
-    correction: PostCorrection, content: np.ndarray, size: int = LUT_SIZE
+    correction: PostCorrection,
+    content: np.ndarray,
+    size: int = LUT_SIZE,
+    reference: np.ndarray | None = None,
 ) -> LutChain:
     """The corrected-side chain of Q^-1; ``content`` the colours it is finest on (the target
-    chart and mixtures of it). A plain log2: content is light, its mixed channels positive."""
+    chart and mixtures of it). A plain log2: content is light, its mixed channels positive.
+    ``reference``: the forward L whose inverse the chain is exact on (default
+    :func:`_reference`)."""
     T = _mix(CONTENT_MIX)
     y = np.asarray(content, dtype=np.float64) @ T.T
     c = np.log2(y[np.all(y > 0, axis=1)]) @ _BASIS.T
@@ -536,7 +542,7 @@ def inverse_chain(
     s_nodes = list(SCALE_RANGE)
     if correction.kind == "protected":  # the fade, where the preimage's brightness crosses it
         s_nodes[1:1] = _fade_band_content(correction, content)
-    reference = np.linalg.inv(_reference(correction))
+    reference = np.linalg.inv(_reference(correction) if reference is None else reference)
     return LutChain(
         CONTENT_MIX,
         reference,
@@ -734,25 +740,40 @@ def model_outputs(solution: Solution) -> ModelOutputs | None:
         lit_chart=lit, white_patch=white, target_white=target[white], SL=solution.SL,
         camera_to_xyz=SAMPLE_CAMERA_TO_XYZ,
     )  # fmt: skip
-    colours = np.vstack([lit, target])
     candidates = protected_references(correction) if correction.kind == "protected" else [None]
-    baked = []
-    for reference in candidates:
-        forward = forward_chain(correction, lit[white], colours, LUT_SIZE, reference)
-        lut = bake(correction.apply, forward)
-        measured = agreement(footage, correction.apply, _cpu(chain_transform(forward, lut)))
-        baked.append((_shortfall(measured), forward, lut, measured))
-    _, forward, lut, measured = min(baked, key=lambda b: b[0])
+    forward, lut, measured = _nearest(
+        candidates,
+        lambda L: forward_chain(correction, lit[white], np.vstack([lit, target]), LUT_SIZE, L),
+        lambda chain: bake(correction.apply, chain),
+        lambda q: agreement(footage, correction.apply, q),
+    )
     chains = [("post_correction_q", forward, lut, "Q")]
     measured_inverse = None
     if correction.invertible:
-        backward = inverse_chain(correction, chart_content(target))
-        inverse_lut = bake_inverse(correction, backward)
-        q_inverse = _cpu(chain_transform(backward, inverse_lut))
         content = content_range(footage, correction)
-        measured_inverse = agreement(content, lambda c: c, lambda c: correction.apply(q_inverse(c)))
+        backward, inverse_lut, measured_inverse = _nearest(
+            candidates,
+            lambda L: inverse_chain(correction, chart_content(target), LUT_SIZE, L),
+            lambda chain: bake_inverse(correction, chain),
+            lambda q_inverse: agreement(
+                content, lambda c: c, lambda c: correction.apply(q_inverse(c))
+            ),
+        )
         chains.append(("post_correction_q_inverse", backward, inverse_lut, "Q^-1"))
     return _outputs(solution, chains, measured, measured_inverse)
+
+
+def _nearest(candidates, chain_for, bake_for, measure):
+    """(chain, LUT, agreement) of the candidate reference whose baked chain measures nearest
+    the model (:func:`_shortfall`); the first wins a tie."""
+    best = None
+    for reference in candidates:
+        chain = chain_for(reference)
+        lut = bake_for(chain)
+        measured = measure(_cpu(chain_transform(chain, lut)))
+        if best is None or _shortfall(measured) < _shortfall(best[2]):
+            best = (chain, lut, measured)
+    return best
 
 
 def _shortfall(measured: Agreement) -> float:
