@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ocio_vp.formats.solution import Solution
+from ocio_vp.wall.softclip import soft_clip_knee
 
 __all__ = ["ContentScale", "content_scale", "content_scale_lines"]
 
@@ -40,6 +41,8 @@ class ContentScale:
     peak_nits: float | None = None
     white_nits: float | None = None
     luminance_note: str = ""
+    #: The wall's soft clip (``solve --soft-clip``): the fraction of full drive where it starts.
+    soft_clip: float | None = None
 
     @property
     def worst_drive(self) -> float:
@@ -56,6 +59,14 @@ class ContentScale:
         return 1.0 / self.worst_drive if self.worst_drive > 0 else math.inf
 
     @property
+    def knee_content(self) -> float | None:
+        """The content value (grey) whose drive first reaches the soft clip's knee (None
+        without a soft clip): above it the wall compresses."""
+        if self.soft_clip is None:
+            return None
+        return self.soft_clip * self.peak_content
+
+    @property
     def negative_channels(self) -> list[str]:
         """Channels where content white needs drive below zero, outside or inside the frustum."""
         both = np.minimum(self.outer_drive, self.inner_drive)
@@ -67,6 +78,7 @@ class ContentScale:
         return [-math.log2(d) if d > 0 else None for d in drive]
 
     def to_dict(self) -> dict:
+        clip = {} if self.soft_clip is None else {"soft_clip_knee": self.soft_clip}
         return {
             "content_space": self.content_space,
             "content_white_camera_rgb": self.white_camera.tolist(),
@@ -78,6 +90,7 @@ class ContentScale:
             "clips": self.clips,
             "drive_1_nits": self.peak_nits,
             "content_white_nits": self.white_nits,
+            **clip,
         }
 
     def row(self) -> str:
@@ -95,6 +108,11 @@ class ContentScale:
         )
         if self.white_nits is not None:
             text += f"; content white {self.white_nits:.0f} nits{self.luminance_note}"
+        if self.soft_clip is not None:
+            text += (
+                f"; soft clip from {100 * self.soft_clip:.0f}% of full drive (content "
+                f"{self.knee_content:.3g}) on"
+            )
         return text
 
     def lines(self) -> list[str]:
@@ -124,10 +142,13 @@ def content_scale_lines(scales: list[ContentScale]) -> tuple[list[str], list[str
         return out, warnings
     worst = max(clipping, key=lambda s: s.worst_drive)
     names = ", ".join(s.environment for s in clipping)
+    above = "clips there"
+    if all(s.soft_clip is not None for s in clipping):
+        above = "is compressed towards full drive by the soft clip, not reproduced"
     warning = (
         f"warning: {names}: content white needs more drive than the panel has (worst "
         f"{worst.environment}: {100 * worst.worst_drive:.0f}% in {_worst_channel(worst)}): content "
-        "above each row's peak clips there; scale the content down to it"
+        f"above each row's peak {above}; scale the content down to it"
     )
     return out, [warning, *warnings]
 
@@ -181,6 +202,7 @@ def content_scale(solution: Solution) -> ContentScale:
                 " (camera green as luminance: gamut not stated)",
             )
         white = peak * float(y_row @ c) / float(y_row @ (SL @ np.ones(3)))
+    knee = soft_clip_knee(solution.linearity)
     return ContentScale(
-        solution.environment, space, c, M @ c, inner @ c + offset, peak, white, note
+        solution.environment, space, c, M @ c, inner @ c + offset, peak, white, note, knee
     )

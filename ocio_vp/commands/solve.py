@@ -122,7 +122,7 @@ def _add_light_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _add_wall_arguments(parser: argparse.ArgumentParser) -> None:
-    """The wall's signal encoding and peak luminance."""
+    """The wall's signal encoding, peak luminance and soft clip."""
     parser.add_argument(
         "--wall-encoding",
         choices=WALL_ENCODINGS,
@@ -138,6 +138,15 @@ def _add_wall_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="with --wall-encoding pq only: luminance (cd/m2) of drive 1.0, the level of the "
         f"measured primaries (default: {PEAK_NITS_DEFAULT:g})",
+    )
+    parser.add_argument(
+        "--soft-clip",
+        type=float,
+        default=None,
+        metavar="KNEE",
+        help="compress each channel's drive above KNEE (0 < KNEE < 1, a fraction of the panel's "
+        "full drive) smoothly towards full drive instead of clipping it there, in both wall "
+        "colorspaces (default: off, drive above full clips; docs/headroom.md)",
     )
 
 
@@ -246,6 +255,11 @@ def run(args: argparse.Namespace) -> int:
     peak_nits = PEAK_NITS_DEFAULT if args.peak_nits is None else args.peak_nits
     if not 0 < peak_nits <= 10000:
         raise InputError(f"expected 0 < cd/m2 <= 10000, got {peak_nits:g}", key="--peak-nits")
+    if args.soft_clip is not None and not 0.0 < args.soft_clip < 1.0:
+        raise InputError(
+            f"expected a knee in (0, 1), a fraction of full drive, got {args.soft_clip:g}",
+            key="--soft-clip",
+        )
     if args.hdri_width is not None and not args.hdri:
         raise InputError("applies only with --hdri", key="--hdri-width")
     # The writing helper starts first, so that its imports overlap loading and solving.
@@ -272,6 +286,7 @@ def _solve_and_write(args: argparse.Namespace, peak_nits: float, pool) -> list:
     from ocio_vp.formats.merge import load_measurement_files
     from ocio_vp.ocio.writer import write_solutions
     from ocio_vp.wall.encoding import with_wall_encoding
+    from ocio_vp.wall.softclip import with_soft_clip
 
     measurements = load_measurement_files(args.measurements)
     if args.camera_colorspace is not None:
@@ -293,6 +308,7 @@ def _solve_and_write(args: argparse.Namespace, peak_nits: float, pool) -> list:
         print("\n".join(notes))
     solutions = _solve(measurements, environments, args)
     solutions = [with_wall_encoding(s, args.wall_encoding, peak_nits=peak_nits) for s in solutions]
+    solutions = [with_soft_clip(s, args.soft_clip) for s in solutions]
     hdri_files = [spec.partition("=")[2] or spec for spec in args.hdri]
     return write_solutions(solutions, args.out, inputs=[*args.measurements, *hdri_files], pool=pool)
 

@@ -27,12 +27,14 @@ from ocio_vp.calibration.diagnostics import is_identity, offset_is_negligible
 from ocio_vp.calibration.equations import MAX_CONDITION_Q_FOR_N, condition_text
 from ocio_vp.formats.solution import Solution
 from ocio_vp.ocio.matrix import format_matrix, matrix_transform
+from ocio_vp.ocio.softclip import soft_clip_text, soft_clip_transforms
 from ocio_vp.ocio.viewing import (
     add_acescct,
     add_camera_log_spaces,
     add_monitor_displays,
     set_categories,
 )
+from ocio_vp.wall.softclip import soft_clip_knee
 
 __all__ = [
     "DISPLAY",
@@ -47,6 +49,7 @@ __all__ = [
     "matrix_transform",
     "post_correction_transforms",
     "wall_signal_tail",
+    "wall_tail",
     "write_config",
 ]
 
@@ -249,6 +252,22 @@ def wall_signal_tail(solution: Solution, extra: list[OCIO.Transform]) -> list[OC
     ]
 
 
+def wall_tail(
+    solution: Solution, extra: list[OCIO.Transform]
+) -> tuple[list[OCIO.Transform], list[OCIO.Transform]]:
+    """(drive -> wall signal, wall signal -> drive): the soft clip when the solve asked for one
+    (``linearity.soft_clip``, :mod:`ocio_vp.ocio.softclip`), then :func:`wall_signal_tail`;
+    the other direction inverts the signal tail and then the soft clip, each explicitly. Both
+    empty for a linear wall without LUT or soft clip (its drive stays affine)."""
+    signal = wall_signal_tail(solution, extra)
+    undo = [OCIO.GroupTransform(signal, direction=OCIO.TRANSFORM_DIR_INVERSE)] if signal else []
+    knee = soft_clip_knee(solution.linearity)
+    if knee is None:
+        return signal, undo
+    clip, unclip = soft_clip_transforms(knee)
+    return clip + signal, undo + unclip
+
+
 def build_config(
     solution: Solution,
     *,
@@ -285,12 +304,11 @@ def build_config(
     config = _empty_config(solution, origin, search_path)
     _add_camera_spaces(config, solution.camera_colorspace)
     chains = wall_transforms(solution, model)
-    for name, extra in (extra_wall_transforms or {}).items():
-        tail = wall_signal_tail(solution, list(extra))
+    extra = extra_wall_transforms or {}
+    for name, (there, back) in chains.items():
+        tail, undo = wall_tail(solution, list(extra.get(name, [])))
         if tail:
-            there, back = chains[name]
-            undo = OCIO.GroupTransform(tail, direction=OCIO.TRANSFORM_DIR_INVERSE)
-            chains[name] = (there + tail, [undo, *back])
+            chains[name] = (there + tail, [*undo, *back])
     config.addColorSpace(_out_of_frustum_space(solution, chains[OUT_OF_FRUSTUM], origin))
     config.addColorSpace(_in_frustum_space(solution, chains[IN_FRUSTUM], origin, model))
     _add_post_correction(config, solution, origin, model)
@@ -370,7 +388,7 @@ def _out_of_frustum_space(solution: Solution, chains, origin: str) -> OCIO.Color
     outer = _colorspace(
         OUT_OF_FRUSTUM,
         f"Panel drive for content OUTSIDE the camera frustum (lights the actors): M = [SL]^-1 "
-        f"{format_matrix(solution.M)}. {origin}.",
+        f"{format_matrix(solution.M)}{soft_clip_text(solution.linearity)}. {origin}.",
         family="LED Wall",
         encoding=_wall_signal_encoding(solution),
     )
@@ -410,7 +428,7 @@ def _in_frustum_space(
     inner = _colorspace(
         IN_FRUSTUM,
         f"Panel drive for content INSIDE the camera frustum (the in-camera background): "
-        f"{_in_frustum_text(solution, model)}. {origin}.",
+        f"{_in_frustum_text(solution, model)}{soft_clip_text(solution.linearity)}. {origin}.",
         family="LED Wall",
         encoding=_wall_signal_encoding(solution),
     )

@@ -13,7 +13,7 @@ and gets, for every other type, its own:
 both directions given explicitly, as the wall's (:func:`ocio_vp.ocio.config.wall_transforms`);
 
 each followed by that type's own linearity LUT and signal encoding (the same tail as the wall's,
-:func:`ocio_vp.ocio.wall.wall_outputs` and :func:`ocio_vp.ocio.config.wall_signal_tail`), and
+:func:`ocio_vp.ocio.wall.wall_outputs` and :func:`ocio_vp.ocio.config.wall_tail`), and
 views ``<Type> Outer Frustum`` / ``<Type> Inner Frustum`` on the ``LED Wall`` display.
 ``<Type>`` is the panel type's name in title case ("ceiling" -> "LED Ceiling - Outer Frustum"),
 or ``Panel <name>`` where two names would read alike or one would read "Wall".
@@ -38,10 +38,11 @@ from ocio_vp.ocio.config import (
     WALL_SIGNAL_ENCODINGS,
     ModelFiles,
     ocio_names,
-    wall_signal_tail,
+    wall_tail,
     wall_transforms,
 )
 from ocio_vp.ocio.matrix import format_matrix
+from ocio_vp.ocio.softclip import soft_clip_text
 from ocio_vp.ocio.viewing import set_categories
 from ocio_vp.ocio.wall import wall_outputs
 
@@ -123,11 +124,13 @@ def _descriptions(solution: Solution, panel: PanelSolution) -> dict[str, str]:
         inner = f"N NOT SOLVED ({panel.N_reason}); M is used instead, {format_matrix(panel.M)}"
     if panel.black_level_offset is not None:
         inner += f", plus black-level offset {format_matrix(panel.black_level_offset[None])}"
+    clip = soft_clip_text(panel.linearity)
     return {
         OUT_OF_FRUSTUM: f"Panel drive of panel type {panel.name!r} for content OUTSIDE the "
-        f"camera frustum (lights the actors): its own M = [SL]^-1 {format_matrix(panel.M)}. {origin}.",
+        f"camera frustum (lights the actors): its own M = [SL]^-1 {format_matrix(panel.M)}"
+        f"{clip}. {origin}.",
         IN_FRUSTUM: f"Panel drive of panel type {panel.name!r} for content INSIDE the camera "
-        f"frustum (the in-camera background): {inner}. {origin}.",
+        f"frustum (the in-camera background): {inner}{clip}. {origin}.",
     }
 
 
@@ -162,10 +165,9 @@ def panel_outputs(solution: Solution, model: ModelFiles | None = None) -> PanelO
         roles += [(IN_FRUSTUM, "in_frustum")] if panel.in_frustum else []
         for role, key in roles:
             there, back = chains[role]
-            signal = wall_signal_tail(view, list(tail.get(role, [])))
+            signal, undo = wall_tail(view, list(tail.get(role, [])))
             if signal:
-                undo = OCIO.GroupTransform(signal, direction=OCIO.TRANSFORM_DIR_INVERSE)
-                there, back = there + signal, [undo, *back]
+                there, back = there + signal, [*undo, *back]
             spaces.append(_space(names[key], texts[role], encoding, there, back))
             views.append((names[f"view_{key}"], names[key]))
         panels[name] = dataclasses.replace(panel, linearity=wall.linearity, ocio=names)

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from ocio_vp.calibration.equations import condition_number
+from ocio_vp.calibration.headroom import content_scale
 from ocio_vp.errors import InputError
 from ocio_vp.formats.provenance import solution_sha256
 from ocio_vp.formats.solution import Solution
@@ -48,6 +49,7 @@ from ocio_vp.report.plots import (
     plot_linearity,
 )
 from ocio_vp.staging import publish_dir, staged_dir
+from ocio_vp.wall.softclip import soft_clip_knee
 
 __all__ = [
     "Report",
@@ -217,6 +219,7 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
     facts.insert(3, ("calibration panel", panel or "not recorded in solution.json (beta only)"))
     facts += _fixture_facts(s)
     facts += panel_facts(s)  # a stage of several panel types
+    facts += _soft_clip_facts(s)
     notes = d.get("method_notes") or {}
     rows = []
     for chart in STAGE_CHARTS:
@@ -241,6 +244,21 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
         "transform": data.transform.description,
         "linearity": _linearity_facts(s.linearity),
     }
+
+
+def _soft_clip_facts(solution: Any) -> list[tuple[str, str]]:
+    """The wall's soft clip (solve --soft-clip) and what content it starts at; none when off."""
+    if soft_clip_knee(solution.linearity) is None:
+        return []
+    scale = content_scale(solution)
+    return [
+        (
+            "wall soft clip",
+            f"each channel's drive compressed from {100 * scale.soft_clip:.0f}% of full drive "
+            f"towards full drive (content {scale.knee_content:.3g} on; hard clip at content "
+            f"{scale.peak_content:.3g} without it)",
+        )
+    ]
 
 
 def _fixture_facts(solution: Any) -> list[tuple[str, str]]:

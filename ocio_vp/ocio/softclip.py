@@ -1,0 +1,61 @@
+"""The wall drive's soft clip (:mod:`ocio_vp.wall.softclip`) as OCIO transforms, both ways.
+
+The curve ``f(d) = 1 - (1 - k) exp(-(d - k) / (1 - k))`` above the knee ``k``, the identity
+below, is exactly OCIO's ``LogCameraTransform`` (OCIO 2.0 on; a CLF ``Log`` node, styles
+``cameraLogToLin`` / ``cameraLinToLog``) run in its inverse direction with base e,
+``logSideSlope = -(1 - k)``, ``logSideOffset = k``, ``linSideSlope = -1 / (1 - k)``,
+``linSideOffset = 1 / (1 - k)`` and ``linSideBreak = k``: its log side is the drive, its lin side
+the clipped drive, ``log(linSideSlope k + linSideOffset) = log 1 = 0`` puts the break at drive
+``k``, and the linear segment OCIO derives below the break for C1 continuity has slope 1 and
+offset 0, the identity (negative drive included). An analytic operator rather than a Lut1D:
+no table, no shaper, no interpolation error, no domain to clamp negative drive to, and OCIO
+inverts it analytically too.
+
+Other direction (given explicitly): a ``RangeTransform`` caps the signal at
+:data:`~ocio_vp.wall.softclip.INVERSE_CAP` (``f`` never reaches 1.0; its inverse diverges
+there), then the same LogCameraTransform forward, ``d = k - (1 - k) ln((1 - y) / (1 - k))``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import PyOpenColorIO as OCIO
+
+from ocio_vp.wall.softclip import INVERSE_CAP, check_knee, soft_clip_knee
+
+__all__ = ["soft_clip_text", "soft_clip_transforms"]
+
+
+def _curve(knee: float, direction) -> OCIO.LogCameraTransform:
+    span = 1.0 - knee
+    return OCIO.LogCameraTransform(
+        linSideBreak=[knee] * 3,
+        base=math.e,
+        logSideSlope=[-span] * 3,
+        logSideOffset=[knee] * 3,
+        linSideSlope=[-1.0 / span] * 3,
+        linSideOffset=[1.0 / span] * 3,
+        direction=direction,
+    )
+
+
+def soft_clip_transforms(knee: float) -> tuple[list, list]:
+    """(drive -> clipped drive, clipped drive -> drive) transform lists for ``knee``."""
+    check_knee(knee)
+    cap = OCIO.RangeTransform(maxInValue=INVERSE_CAP, maxOutValue=INVERSE_CAP)
+    return (
+        [_curve(knee, OCIO.TRANSFORM_DIR_INVERSE)],
+        [cap, _curve(knee, OCIO.TRANSFORM_DIR_FORWARD)],
+    )
+
+
+def soft_clip_text(linearity) -> str:
+    """What a wall colour space's description adds for a soft clip ("" without one)."""
+    knee = soft_clip_knee(linearity)
+    if knee is None:
+        return ""
+    return (
+        f", then a soft clip of each channel's drive from {knee:g} of full drive on "
+        f"(1 - {1 - knee:g} exp(-(d - {knee:g}) / {1 - knee:g}) above it, approaching full drive)"
+    )

@@ -1,0 +1,123 @@
+"""An optional soft clip of the wall drive (``solve --soft-clip KNEE``), in numpy.
+
+Per channel, on linear drive (1.0 = the panel's full drive as measured), after M (outside the
+frustum) or N + offset (inside) and before the linearity LUT and the signal encoding::
+
+    f(d) = d                                        d <= k
+    f(d) = 1 - (1 - k) exp(-(d - k) / (1 - k))      d >  k
+
+``k`` (the knee, 0 < k < 1) is where compression starts. ``f`` is the identity below the knee
+(negative drive included), its slope is 1 on both sides of the knee (C1), it rises strictly
+and approaches 1.0 (full drive) without reaching it. It is within :data:`FULL_TOLERANCE`
+(1/1023, one 10-bit code value of drive) of 1.0 from :func:`full_drive` ``= k + (1 - k)
+ln(1023 (1 - k))`` on, which is at most ln 1023 = 6.93 for any knee: every drive content can
+ask for on a stage whose content white needs at least 6.93 / 16 = 0.43 of the peak (16x content
+white, four stops over, the linear wall's LUT domain) ends within a code value of full drive.
+
+OCIO carries ``f`` exactly as a ``LogCameraTransform`` (:mod:`ocio_vp.ocio.wall`). The inverse,
+``d = k - (1 - k) ln((1 - y) / (1 - k))`` above the knee, is defined on ``y < 1``; the config
+clamps the signal it inverts to :data:`INVERSE_CAP` (``1 - 2^-12``), so full drive (and above)
+reads back as :func:`inverse` of the cap, ``k + (1 - k) ln(4096 (1 - k))``: the brightest
+drive the curve tells apart at 12 bits.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from ocio_vp.formats.solution import Solution
+
+__all__ = [
+    "FULL_TOLERANCE",
+    "INVERSE_CAP",
+    "SOFT_CLIP_CURVE",
+    "check_knee",
+    "forward",
+    "full_drive",
+    "inverse",
+    "soft_clip_knee",
+    "with_soft_clip",
+]
+
+#: How close to full drive the curve must come by the largest drive content asks for.
+FULL_TOLERANCE = 1.0 / 1023.0
+#: The largest signal the config's inverse takes (above it, the inverse returns its value here).
+INVERSE_CAP = 1.0 - 2.0**-12
+#: What solution.json says the curve is.
+SOFT_CLIP_CURVE = "d <= knee: d; d > knee: 1 - (1 - knee) exp(-(d - knee) / (1 - knee))"
+
+
+def check_knee(knee: float) -> None:
+    """Raise ValueError unless ``0 < knee < 1`` (a finite fraction of full drive)."""
+    if not (math.isfinite(knee) and 0.0 < knee < 1.0):
+        raise ValueError(f"expected a knee in (0, 1) (a fraction of full drive), got {knee:g}")
+
+
+def forward(drive: np.ndarray, knee: float) -> np.ndarray:
+    """The soft clip ``f(drive)`` (float64; see the module docstring)."""
+    check_knee(knee)
+    d = np.asarray(drive, dtype=np.float64)
+    span = 1.0 - knee
+    above = 1.0 - span * np.exp(-np.maximum(d - knee, 0.0) / span)
+    return np.where(d > knee, above, d)
+
+
+def inverse(signal: np.ndarray, knee: float) -> np.ndarray:
+    """``f^-1`` on ``signal < 1`` (float64); ``inf`` at 1.0 and above, where ``f`` has no
+    inverse (the config caps its input at :data:`INVERSE_CAP` first)."""
+    check_knee(knee)
+    y = np.asarray(signal, dtype=np.float64)
+    span = 1.0 - knee
+    with np.errstate(divide="ignore", invalid="ignore"):
+        above = knee - span * np.log(np.maximum(1.0 - y, 0.0) / span)
+    return np.where(y > knee, above, y)
+
+
+def full_drive(knee: float) -> float:
+    """The drive from which ``f`` is within :data:`FULL_TOLERANCE` of 1.0."""
+    check_knee(knee)
+    span = 1.0 - knee
+    return knee + span * max(math.log(span / FULL_TOLERANCE), 0.0)
+
+
+def soft_clip_knee(linearity: Mapping[str, Any] | None) -> float | None:
+    """The knee recorded in a ``linearity`` block, or None (off; files without one)."""
+    block = (linearity or {}).get("soft_clip")
+    if not block:
+        return None
+    return float(block["knee"])
+
+
+def _block(knee: float) -> dict[str, Any]:
+    return {
+        "knee": float(knee),
+        "curve": SOFT_CLIP_CURVE,
+        "full_drive": round(full_drive(knee), 6),
+        "inverse_cap": INVERSE_CAP,
+    }
+
+
+def with_soft_clip(solution: Solution, knee: float | None) -> Solution:
+    """A copy of ``solution`` whose ``linearity`` block (and every panel type's) records the
+    soft clip; ``knee`` None returns ``solution`` unchanged."""
+    if knee is None:
+        return solution
+    check_knee(knee)
+
+    def clipped(linearity: dict | None) -> dict:
+        base = dict(linearity or {"measured": False, "model": "linear (assumed)"})
+        return {**base, "soft_clip": _block(knee)}
+
+    panels = solution.panels
+    if panels:
+        panels = {
+            name: dataclasses.replace(panel, linearity=clipped(panel.linearity))
+            for name, panel in panels.items()
+        }
+    return dataclasses.replace(solution, linearity=clipped(solution.linearity), panels=panels)
