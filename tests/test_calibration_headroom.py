@@ -72,3 +72,23 @@ def test_white_needing_negative_drive_is_stated_and_writes_strict_json():
     assert data["outer_headroom_stops"][0] == -math.log2(scale.outer_drive[0])
     _, err = content_scale_lines([scale])
     assert any("negative drive in green" in line for line in err)
+
+
+def test_soft_clip_is_shown_with_the_content_where_it_starts():
+    """Knee k: compression starts at content k * peak_content (the drive is linear in content
+    below it); to_dict says so only when the solve asked for a soft clip."""
+    from ocio_vp.wall.softclip import with_soft_clip
+
+    solution = _solution()
+    solution = dataclasses.replace(solution, M=solution.M * 2.0)  # content white clips
+    plain = content_scale(solution)
+    assert plain.soft_clip is None and plain.knee_content is None
+    assert "soft_clip_knee" not in plain.to_dict() and "soft clip" not in plain.row()
+    scale = content_scale(with_soft_clip(solution, 0.8))
+    assert scale.knee_content == 0.8 * scale.peak_content
+    assert scale.to_dict()["soft_clip_knee"] == 0.8
+    assert f"soft clip from 80% of full drive (content {scale.knee_content:.3g})" in scale.row()
+    _, err = content_scale_lines([scale])
+    assert "compressed towards full drive by the soft clip" in err[0]
+    _, err = content_scale_lines([plain])
+    assert "clips there" in err[0]

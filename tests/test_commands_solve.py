@@ -215,3 +215,23 @@ def test_output_path_that_is_a_file(tmp_path, capsys) -> None:
     assert main(["solve", str(path), "--out", str(blocker)]) == 2
     assert "exists and is not a folder" in capsys.readouterr().err
     assert blocker.read_text() == "not a folder"
+
+
+@pytest.mark.parametrize("knee", ["0", "1", "-0.2", "1.5", "nan"])
+def test_soft_clip_knee_outside_0_1_is_refused(knee, tmp_path, capsys) -> None:
+    path = _write(tmp_path, make_measurements_dict(environments=1))
+    out = tmp_path / "calib"
+    assert main(["solve", str(path), "--out", str(out), "--soft-clip", knee]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--soft-clip: expected a knee in (0, 1)" in err
+    assert not out.exists()
+
+
+def test_soft_clip_is_written_and_said(tmp_path, capsys) -> None:
+    path = _write(tmp_path, make_measurements_dict(environments=1))
+    args = ["solve", str(path), "--out", str(tmp_path / "calib"), "--method", "least-squares"]
+    assert main([*args, "--soft-clip", "0.75"]) == 0
+    solution = json.loads((tmp_path / "calib" / "env_0" / "solution.json").read_text())
+    assert solution["linearity"]["soft_clip"]["knee"] == 0.75
+    assert "soft clip from 75% of full drive" in capsys.readouterr().out
+    assert "LogCameraTransform" in (tmp_path / "calib" / "env_0" / "config.ocio").read_text()
