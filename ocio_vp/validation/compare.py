@@ -31,6 +31,8 @@ from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import Solution
 from ocio_vp.patterns.sequence import PatternSequence
 from ocio_vp.plates.take import TakeReading
+from ocio_vp.wall.softclip import forward as soft_clip
+from ocio_vp.wall.softclip import soft_clip_knee
 
 __all__ = [
     "DEFAULT_THRESHOLD",
@@ -69,8 +71,12 @@ def in_frustum_light(solution: Solution, content: np.ndarray) -> np.ndarray:
 
 def expected_camera(solution: Solution, light: np.ndarray) -> np.ndarray:
     """(n, 3) camera RGB the calibration itself predicts for in-frustum ``light``: the wall
-    clips it to [0, 1], [SL] films it, plus the bounce the offset was solved to cancel
-    (``b = -[SL] offset`` for the exact offset, ``-offset w_camera`` for the paper's)."""
+    applies the solve's soft clip if it has one (``solve --soft-clip``), clips to [0, 1],
+    [SL] films it, plus the bounce the offset was solved to cancel (``b = -[SL] offset`` for
+    the exact offset, ``-offset w_camera`` for the paper's)."""
+    knee = soft_clip_knee(solution.linearity)
+    if knee is not None:
+        light = soft_clip(light, knee)
     SL = np.asarray(solution.SL, dtype=np.float64)
     offset = solution.in_frustum_offset
     if solution.black_level_method == "paper":
