@@ -85,7 +85,6 @@ __all__ = [
     "forward_chain",
     "inverse_chain",
     "model_outputs",
-    "protected_references",
 ]
 
 #: 3D LUT grid size (CLF and OCIO take cubes; the scale axis uses only its first slices).
@@ -395,19 +394,6 @@ def _reference(correction: PostCorrection) -> np.ndarray:
     return correction.matrix
 
 
-def protected_references(correction: PostCorrection) -> list[np.ndarray]:
-    """The candidate L of an emitter protection's footage chain: the identity (exact on the
-    emitters and highlights it hands over to) and the inner model's matrix (exact on the
-    reflective colours it keeps, most of a frame). Which interpolates closer depends on the
-    stage; :func:`model_outputs` bakes both (for Q and for Q^-1) and keeps the one nearer the
-    model."""
-    candidates = [np.eye(3)]
-    inner = _reference(correction.inner)
-    if not np.array_equal(inner, candidates[0]):
-        candidates.append(inner)
-    return candidates
-
-
 def _fade_band(correction, T: np.ndarray, colours: np.ndarray) -> tuple[float, float]:
     """Scales (mean log2 of ``T x``) over which the emitter protection's brightness fade runs
     for the directions of ``colours``: the fade is at fixed brightness, so where it falls in
@@ -452,20 +438,13 @@ def _fade_nodes(correction, T: np.ndarray, colours: np.ndarray) -> list[float]:
 
 
 def forward_chain(
-    correction: PostCorrection,
-    white: np.ndarray,
-    colours: np.ndarray,
-    size: int = LUT_SIZE,
-    reference: np.ndarray | None = None,
+    correction: PostCorrection, white: np.ndarray, colours: np.ndarray, size: int = LUT_SIZE
 ) -> LutChain:
     """The footage-side chain of ``correction`` (Q): ``white`` the lit white patch and
-    ``colours`` the chart's colours, as the camera records them on the stage; ``reference``
-    the chain's L (default :func:`_reference`; for the emitter protection,
-    :func:`protected_references` lists the candidates).
+    ``colours`` the chart's colours, as the camera records them on the stage.
 
     Scale nodes around the log's break, and for the emitter protection across its fade; the
     direction nodes follow the curvature of the (inner) model's departure from its matrix."""
-    reference = _reference(correction) if reference is None else reference
     T = _mix(CAMERA_MIX)
     level = float(np.mean(T @ np.asarray(white, dtype=np.float64)))
     # black's scale, log2(break) - 1/ln 2, on a node of the warp's grid: black maps to a node
@@ -489,7 +468,7 @@ def forward_chain(
     return _design(
         curvatures,
         mix=CAMERA_MIX,
-        reference=reference,
+        reference=_reference(correction),
         linear_break=linear_break,
         s_nodes=s_nodes,
         colours=colours,
@@ -524,15 +503,10 @@ def _content_nodes(low: float, high: float, size: int) -> np.ndarray:
 
 
 def inverse_chain(
-    correction: PostCorrection,
-    content: np.ndarray,
-    size: int = LUT_SIZE,
-    reference: np.ndarray | None = None,
+    correction: PostCorrection, content: np.ndarray, size: int = LUT_SIZE
 ) -> LutChain:
     """The corrected-side chain of Q^-1; ``content`` the colours it is finest on (the target
-    chart and mixtures of it). A plain log2: content is light, its mixed channels positive.
-    ``reference``: the forward L whose inverse the chain is exact on (default
-    :func:`_reference`)."""
+    chart and mixtures of it). A plain log2: content is light, its mixed channels positive."""
     T = _mix(CONTENT_MIX)
     y = np.asarray(content, dtype=np.float64) @ T.T
     c = np.log2(y[np.all(y > 0, axis=1)]) @ _BASIS.T
@@ -542,7 +516,7 @@ def inverse_chain(
     s_nodes = list(SCALE_RANGE)
     if correction.kind == "protected":  # the fade, where the preimage's brightness crosses it
         s_nodes[1:1] = _fade_band_content(correction, content)
-    reference = np.linalg.inv(_reference(correction) if reference is None else reference)
+    reference = np.linalg.inv(_reference(correction))
     return LutChain(
         CONTENT_MIX,
         reference,
@@ -740,47 +714,19 @@ def model_outputs(solution: Solution) -> ModelOutputs | None:
         lit_chart=lit, white_patch=white, target_white=target[white], SL=solution.SL,
         camera_to_xyz=SAMPLE_CAMERA_TO_XYZ,
     )  # fmt: skip
-    candidates = protected_references(correction) if correction.kind == "protected" else [None]
-    forward, lut, measured = _nearest(
-        candidates,
-        lambda L: forward_chain(correction, lit[white], np.vstack([lit, target]), LUT_SIZE, L),
-        lambda chain: bake(correction.apply, chain),
-        lambda q: agreement(footage, correction.apply, q),
-    )
+    forward = forward_chain(correction, lit[white], np.vstack([lit, target]))
+    lut = bake(correction.apply, forward)
+    measured = agreement(footage, correction.apply, _cpu(chain_transform(forward, lut)))
     chains = [("post_correction_q", forward, lut, "Q")]
     measured_inverse = None
     if correction.invertible:
+        backward = inverse_chain(correction, chart_content(target))
+        inverse_lut = bake_inverse(correction, backward)
+        q_inverse = _cpu(chain_transform(backward, inverse_lut))
         content = content_range(footage, correction)
-        backward, inverse_lut, measured_inverse = _nearest(
-            candidates,
-            lambda L: inverse_chain(correction, chart_content(target), LUT_SIZE, L),
-            lambda chain: bake_inverse(correction, chain),
-            lambda q_inverse: agreement(
-                content, lambda c: c, lambda c: correction.apply(q_inverse(c))
-            ),
-        )
+        measured_inverse = agreement(content, lambda c: c, lambda c: correction.apply(q_inverse(c)))
         chains.append(("post_correction_q_inverse", backward, inverse_lut, "Q^-1"))
     return _outputs(solution, chains, measured, measured_inverse)
-
-
-def _nearest(candidates, chain_for, bake_for, measure):
-    """(chain, LUT, agreement) of the candidate reference whose baked chain measures nearest
-    the model (:func:`_shortfall`); the first wins a tie."""
-    best = None
-    for reference in candidates:
-        chain = chain_for(reference)
-        lut = bake_for(chain)
-        measured = measure(_cpu(chain_transform(chain, lut)))
-        if best is None or _shortfall(measured) < _shortfall(best[2]):
-            best = (chain, lut, measured)
-    return best
-
-
-def _shortfall(measured: Agreement) -> float:
-    """How far an agreement is from the hosts' limits: the larger of p99 / AGREEMENT_P99 and
-    worst / AGREEMENT_WORST (at most 1 within them)."""
-    p99, worst = measured.overall
-    return max(p99 / AGREEMENT_P99, worst / AGREEMENT_WORST)
 
 
 def content_range(footage, correction):
