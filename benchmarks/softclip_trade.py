@@ -1,6 +1,6 @@
 """What the wall's soft clip (``solve --soft-clip KNEE``) costs below the peak and gains above it.
 
-    python -m benchmarks.bench_softclip [--write docs/headroom.md]
+    python -m benchmarks.softclip_trade [--write docs/headroom.md]
 
 Two simulated stages, each solved by least squares for its seven environments: the sample
 stage (``paper_stage()``, ``sample_configs/``) and a stage of narrower LEDs (620/530/465 nm)
@@ -19,7 +19,7 @@ samples with C* > 10 in both).
 
 Rows split the samples by the drive they need: "below the peak" (largest channel <= 1, where a
 hard clip changes nothing and any error is the soft clip's cost) and "above the peak".
-Prints Markdown; ``--write FILE`` replaces the section between the ``bench_softclip`` markers.
+Prints Markdown; ``--write FILE`` replaces the section between the ``softclip_trade`` markers.
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ from ocio_vp.wall.softclip import forward  # noqa: E402
 LEVELS = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
 KNEES = (0.6, 0.8, 0.9)
 MAX_RGB_KNEE = 0.8
-BEGIN, END = "<!-- bench_softclip: begin -->", "<!-- bench_softclip: end -->"
+BEGIN, END = "<!-- softclip_trade: begin -->", "<!-- softclip_trade: end -->"
 
 
 def stages():
@@ -195,13 +195,13 @@ def table(name: str, result: dict) -> list[str]:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--write", type=Path, help="replace the bench_softclip section of FILE")
+    parser.add_argument("--write", type=Path, help="replace the softclip_trade section of FILE")
     args = parser.parse_args(argv)
     start = time.perf_counter()
     lines = []
     for name, stage in stages().items():
         lines += table(name, measure(stage))
-    lines.append(f"_(python -m benchmarks.bench_softclip, {time.perf_counter() - start:.0f} s)_")
+    lines.append(f"_(python -m benchmarks.softclip_trade, {time.perf_counter() - start:.0f} s)_")
     text = "\n".join(lines)
     print(text)
     if args.write:
