@@ -44,17 +44,10 @@ ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+from ocio_vp.simulator.data import PAPER_ENVIRONMENTS  # noqa: E402
+
 DOC = "hosts.md"
-ENVIRONMENTS = (
-    "warm_white_led",
-    "incandescent",
-    "indoor_daylight",
-    "rgb_led_white",
-    "sodium_vapour",
-    "outdoor_shade",
-    "direct_sun",
-    "high_pressure_sodium",
-)
+ENVIRONMENTS = (*PAPER_ENVIRONMENTS, "high_pressure_sodium")
 QUICK_ENVIRONMENTS = ("incandescent", "direct_sun", "high_pressure_sodium")
 QUICK_METHODS = ("least-squares", "auto", "root-polynomial")
 HOSTS = ("apply", "config", "CLF", "DCTL", "cube", "in-frustum")
@@ -152,15 +145,7 @@ def _cube(cube: Path):
     import PyOpenColorIO as OCIO
 
     OCIO.ClearAllCaches()  # OCIO caches files by path: every solve writes a cube of this name
-    transform = OCIO.FileTransform(src=str(cube), interpolation=OCIO.INTERP_TETRAHEDRAL)
-    cpu = OCIO.Config.CreateRaw().getProcessor(transform).getDefaultCPUProcessor()
-
-    def apply(rgb):
-        pixels = np.ascontiguousarray(rgb, dtype=np.float32).copy()
-        cpu.applyRGB(pixels)
-        return pixels.astype(np.float64)
-
-    return apply
+    return ocio_function(OCIO.FileTransform(src=str(cube), interpolation=OCIO.INTERP_TETRAHEDRAL))
 
 
 def _within(footage, low, high):
