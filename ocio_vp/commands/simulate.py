@@ -198,6 +198,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("only with --ceiling-leds", key="--ceiling-gain")
     else:
         environments = environments_from_args(args.environment)
+        if args.environment is None:
+            environments = _mixable_defaults(environments, stage)
         _check_no_scene(environments)
         measurements = simulate_measurements(environments, stage=stage)
     if args.fixture:
@@ -273,6 +275,25 @@ def _film(measurements, args: argparse.Namespace) -> str:
 
 
 _DEFAULTS = {"vignetting": 0.05, "noise": 0.01, "seed": 0}
+
+
+def _mixable_defaults(environments: dict, stage) -> dict:
+    """The default environments without rgb_led_white when the stage's LEDs cannot mix a
+    camera-neutral white (named with --environment, it is refused instead)."""
+    import numpy as np
+
+    from ocio_vp.simulator.data import camera_white_drive
+
+    if "rgb_led_white" in environments:
+        drive = camera_white_drive(stage.leds, stage.camera)
+        if np.any(drive < 0):
+            warn(
+                "simulate",
+                "rgb_led_white left out: this camera sees no mix of the stage's LEDs as "
+                "neutral (drive " + ", ".join(f"{n} {d:.3g}" for n, d in zip("RGB", drive)) + ")",
+            )
+            return {k: v for k, v in environments.items() if k != "rgb_led_white"}
+    return environments
 
 
 def _check_no_scene(environments) -> None:

@@ -49,6 +49,7 @@ __all__ = [
     "EnvironmentSpec",
     "align",
     "camera_sensitivities",
+    "camera_white_drive",
     "chart_reflectances",
     "gaussian_leds",
     "wavelengths",
@@ -125,14 +126,28 @@ def _dataset(collection: str, key: str) -> Callable[[np.ndarray, np.ndarray], np
     return spectrum
 
 
+def camera_white_drive(leds: np.ndarray, camera: np.ndarray) -> np.ndarray:
+    """(3,) the drive that makes the camera see R = G = B = 1 from the stage's own LEDs:
+    ``[SL]^-1 [1, 1, 1]`` (eq. 1's [SL]); a negative entry means they cannot mix it.
+
+    >>> from ocio_vp.simulator.stage import paper_stage
+    >>> stage = paper_stage()
+    >>> bool(np.all(camera_white_drive(stage.leds, stage.camera) > 0))
+    True
+    """
+    return np.linalg.solve(camera.T @ leds, np.ones(3))
+
+
 def _rgb_led_white(leds: np.ndarray, camera: np.ndarray) -> np.ndarray:
-    # Drive the stage's LEDs so the camera sees R = G = B: d = [SL]^-1 [1, 1, 1].
-    SL = camera.T @ leds
-    drive = np.linalg.solve(SL, np.ones(3))
+    drive = camera_white_drive(leds, camera)
     if np.any(drive < 0):
+        # Sigma's Foveon sensor with 620/535/455 nm LEDs: green would need negative light.
+        negative = ", ".join(n for n, d in zip("RGB", drive) if d < 0)
+        levels = ", ".join(f"{n} {d:.3g}" for n, d in zip("RGB", drive))
         raise InputError(
-            f"the stage's LEDs cannot make a camera-neutral white (drive {drive.round(4)})",
-            key="leds",
+            f"rgb_led_white: this camera sees no mix of the stage's LEDs as neutral: it needs "
+            f"negative drive in {negative} (drive {levels}); leave this environment out",
+            key="environment",
         )
     return leds @ drive
 
