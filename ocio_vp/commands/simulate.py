@@ -282,7 +282,7 @@ def _mixable_defaults(environments: dict, stage) -> dict:
     camera-neutral white (named with --environment, it is refused instead)."""
     import numpy as np
 
-    from ocio_vp.simulator.data import camera_white_drive
+    from ocio_vp.simulator.data import camera_white_drive, describe_drive
 
     if "rgb_led_white" in environments:
         drive = camera_white_drive(stage.leds, stage.camera)
@@ -290,7 +290,7 @@ def _mixable_defaults(environments: dict, stage) -> dict:
             warn(
                 "simulate",
                 "rgb_led_white left out: this camera sees no mix of the stage's LEDs as "
-                "neutral (drive " + ", ".join(f"{n} {d:.3g}" for n, d in zip("RGB", drive)) + ")",
+                f"neutral ({describe_drive(drive)})",
             )
             return {k: v for k, v in environments.items() if k != "rgb_led_white"}
     return environments

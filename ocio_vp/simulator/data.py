@@ -51,6 +51,7 @@ __all__ = [
     "camera_sensitivities",
     "camera_white_drive",
     "chart_reflectances",
+    "describe_drive",
     "gaussian_leds",
     "wavelengths",
 ]
@@ -138,15 +139,19 @@ def camera_white_drive(leds: np.ndarray, camera: np.ndarray) -> np.ndarray:
     return np.linalg.solve(camera.T @ leds, np.ones(3))
 
 
+def describe_drive(drive: np.ndarray) -> str:
+    """``'drive R 3.45, G -0.794, B 1.38'``: a drive for people, three significant digits."""
+    return "drive " + ", ".join(f"{n} {d:.3g}" for n, d in zip("RGB", drive, strict=True))
+
+
 def _rgb_led_white(leds: np.ndarray, camera: np.ndarray) -> np.ndarray:
     drive = camera_white_drive(leds, camera)
     if np.any(drive < 0):
         # Sigma's Foveon sensor with 620/535/455 nm LEDs: green would need negative light.
-        negative = ", ".join(n for n, d in zip("RGB", drive) if d < 0)
-        levels = ", ".join(f"{n} {d:.3g}" for n, d in zip("RGB", drive))
+        negative = ", ".join(n for n, d in zip("RGB", drive, strict=True) if d < 0)
         raise InputError(
             f"rgb_led_white: this camera sees no mix of the stage's LEDs as neutral: it needs "
-            f"negative drive in {negative} (drive {levels}); leave this environment out",
+            f"negative drive in {negative} ({describe_drive(drive)}); leave this environment out",
             key="environment",
         )
     return leds @ drive
