@@ -8,6 +8,7 @@ import pytest
 import yaml
 
 from ocio_vp.cli import main
+from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import load_measurements
 from ocio_vp.pipeline import solve_environment
 from ocio_vp.simulator.panels import (
@@ -106,3 +107,11 @@ def test_ceiling_gain_needs_a_ceiling(tmp_path, capsys):
     assert err.count("\n") == 1 and "--ceiling-gain: only with --ceiling-leds" in err
     assert main(["simulate", "--out", str(tmp_path / "s.yaml"), "--ceiling-leds", "1,2"]) == 2
     assert "--ceiling-leds: expected PEAK/FWHM" in capsys.readouterr().err
+
+
+def test_a_ceiling_of_leds_the_camera_cannot_tell_apart_names_the_ceiling():
+    # The ceiling's LEDs are refused under their own name, not as the wall's --leds.
+    with pytest.raises(InputError) as caught:
+        panel_stage(paper_stage(), ceiling_leds=((530, 30), (530, 30), (530, 30)))
+    assert caught.value.key == "ceiling_leds"
+    assert "cannot tell these LEDs apart" in caught.value.problem

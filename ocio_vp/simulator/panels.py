@@ -187,14 +187,19 @@ def panel_stage(
         raise InputError(f"expected a gain in [0.01, 100], got {gain!r}", key="gain")
     if white not in ("xyz", "camera"):
         raise InputError(f"expected 'xyz' or 'camera', got {white!r}", key="white")
-    ceiling = spectral_stage(
-        camera=wall.camera_name,
-        leds=ceiling_leds,
-        chart=wall.chart_name,
-        panel=panel,
-        panel_albedo=None,
-        name=wall.name,
-    )
+    try:
+        ceiling = spectral_stage(
+            camera=wall.camera_name,
+            leds=ceiling_leds,
+            chart=wall.chart_name,
+            panel=panel,
+            panel_albedo=None,
+            name=wall.name,
+        )
+    except InputError as error:
+        if error.key != "leds":
+            raise
+        raise InputError(error.problem, key="ceiling_leds") from None  # not the wall's LEDs
     observer = wall.camera  # camera: the ceiling is already matched to D65 as the wall is
     if white == "xyz":
         cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]

@@ -215,6 +215,7 @@ def spectral_stage(
     reflectances = chart_reflectances(chart)
     # White-balance the wall: drive [1, 1, 1] looks like D65 (green = 1) to the camera.
     unscaled = sensitivities.T @ raw_leds
+    _check_camera_tells_leds_apart(unscaled)
     d65 = ENVIRONMENTS["d65"].spectrum(raw_leds, sensitivities) @ sensitivities
     gains = np.linalg.solve(unscaled, d65 / d65[1])
     if np.any(gains <= 0):
@@ -248,6 +249,19 @@ def white_reflectance(stage: SpectralStage) -> float:
 def paper_stage() -> SpectralStage:
     """The default simulated stage (see the module docstring), named ``paper-stage``."""
     return spectral_stage(name="paper-stage")
+
+
+def _check_camera_tells_leds_apart(SL: np.ndarray) -> None:
+    """Refuse LEDs whose [SL] (eq. 1) the solve would refuse: singular or as badly conditioned
+    as :data:`~ocio_vp.calibration.equations.MAX_CONDITION_SL`."""
+    from ocio_vp.calibration.equations import MAX_CONDITION_SL, condition_number
+
+    if not condition_number(SL) < MAX_CONDITION_SL:
+        raise InputError(
+            "the camera cannot tell these LEDs apart ([SL] is singular: two of them look alike "
+            "to it, or one is dark to it); choose LEDs of different colours",
+            key="leds",
+        )
 
 
 def environment_spectrum(stage: SpectralStage, environment: Any) -> np.ndarray:
