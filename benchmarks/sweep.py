@@ -4,19 +4,19 @@ Runs ``ocio-vp`` as a user would (one subprocess per command, in a scratch folde
 of simulated stages the project's data does not contain, and checks the standards' promises on
 every run (docs/robustness.md):
 
-- **spectral** stages: every camera ``simulate --camera`` accepts x four LED sets (the default,
-  shifted, wide, narrow), each with half the environments ``simulate --list-environments``
-  offers (alternating, so every environment meets every camera and every LED set);
-  ``solve`` with a ``--method`` that rotates so that every method meets every LED set (and, with
-  ``--protect-emitters`` and ``--camera-colorspace "ARRI Wide Gamut 4"``, a quarter and a third
-  of the stages), then ``export --target all``, ``export --target show``, ``report``;
+- **spectral** stages: every camera ``simulate --camera`` accepts, each on two of four LED
+  sets (the default, shifted, wide, narrow), three of the environments
+  ``simulate --list-environments`` offers (rotating), a ``--method`` rotating through all of
+  them, ``--protect-emitters`` on a quarter and ``--camera-colorspace "ARRI Wide Gamut 4"`` on
+  a third; then ``export --target all``, ``export --target show``, ``report``;
 - **plates** stages: ``simulate --plates``, ``measure`` the plates, ``solve`` in the camera's
-  gamut, ``export``, ``apply`` on the simulated footage (linear, and LogC4-encoded with
-  ``--footage-encoding``), ``report``; ``validate`` on two of them (``patterns --validate``,
+  gamut, the exports, ``apply`` on the simulated footage (linear, and LogC4-encoded with
+  ``--footage-encoding``), ``report``, ``validate`` (``patterns --validate``,
   ``simulate --film``, ``validate``);
 - **encoding** stages: ``patterns --wall-encoding E``, a take of them (ramps), ``measure``,
   ``solve --wall-encoding E`` for linear, gamma2.4, srgb and pq;
-- **ceiling** stages: ``simulate --ceiling-leds`` (two panel types, the scenes lit from above).
+- **ceiling** stages: ``simulate --ceiling-leds`` (two panel types, the scenes lit from above);
+- **edge** stages: LEDs no stage should have (identical, 10 nm apart, a 400 nm blue).
 
 For every command it records the exit status, a traceback or "internal error" on stderr, any
 non-finite number in a JSON/YAML file it wrote (and in the configs, CLFs, cubes, Nuke scripts,
@@ -26,8 +26,8 @@ a failure; it is counted and listed by message. The failures are printed grouped
 line of the error, each with the smallest command chain that reproduces it (a chain on many
 environments is retried on the one environment the error names).
 
-``--quick`` runs one stage of each kind (a few minutes on 2 cores); the full sweep (~15 minutes)
-also writes its tables into docs/robustness.md.
+``--quick`` runs six stages, one of each kind (a few minutes on 2 cores); the full sweep (35
+stages, about 25 minutes on 2 busy cores) also writes its tables into docs/robustness.md.
 """
 
 from __future__ import annotations
@@ -63,6 +63,12 @@ LED_SETS = {
     "shifted": "620/20,535/35,455/22",
     "wide": "610/30,545/50,470/30",
     "narrow": "640/15,515/25,450/15",
+}
+# LEDs no stage should have: refused on one line, or warned about.
+EDGE_LEDS = {
+    "identical": "530/30,530/30,530/30",
+    "close": "520/30,530/30,540/30",
+    "deep-blue": "630/20,525/35,400/5",
 }
 CEILING_LEDS = ("618/24,538/40,470/26", "640/15,515/25,450/15")
 CAMERA_GAMUT = "ARRI Wide Gamut 4"
@@ -137,53 +143,51 @@ def grid(quick: bool) -> list[Stage]:
     """The stages of the sweep (``quick``: one of each kind)."""
     cameras, environments, scenes = _names()
     leds = tuple(LED_SETS)
-    spectral = [
-        Stage(
-            "spectral",
-            camera,
-            leds[li],
-            environments[(ci + li) % 2 :: 2],
-            method=Q_METHODS[(ci + 3 * li) % len(Q_METHODS)],
-            protect=(ci + li) % 4 == 0,
-            gamut=(ci + 2 * li) % 3 == 0,
+    spectral = []
+    for k, (ci, li) in enumerate((c, (c + 2 * j) % 4) for j in range(2) for c in range(12)):
+        spectral.append(
+            Stage(
+                "spectral",
+                cameras[ci % len(cameras)],
+                leds[li],
+                tuple(environments[(3 * k + j) % len(environments)] for j in range(3)),
+                method=Q_METHODS[k % len(Q_METHODS)],
+                protect=k % 4 == 1,
+                gamut=k % 3 == 0,
+            )
         )
-        for li in range(len(leds))
-        for ci, camera in enumerate(cameras)
-    ]
     plates = [
-        Stage("plates", cameras[i], leds[i % 4], ("direct_sun", env), method=m, protect=p,
-              gamut=True, validate=i < 2)
-        for i, (env, m, p) in enumerate((
-            ("sodium_vapour", "auto", False),
-            ("high_pressure_sodium", "root-polynomial", True),
-            ("incandescent", "least-squares", True),
-            ("warm_white_led", "joint", False),
-        ))
+        Stage("plates", cameras[1], "shifted", ("direct_sun", "high_pressure_sodium"),
+              method="root-polynomial", protect=True, gamut=True, validate=True),
+        Stage("plates", cameras[4], "narrow", ("incandescent", "sodium_vapour"),
+              method="least-squares", protect=True, gamut=True, validate=True),
     ]  # fmt: skip
     encoding = [
-        Stage("encoding", cameras[(2 * i + k) % len(cameras)], leds[(i + k) % 4],
-              ("direct_sun", "incandescent"), method=("auto", "root-polynomial")[k],
-              gamut=k == 1, encoding=enc)
+        Stage("encoding", cameras[(3 * i + 2) % len(cameras)], leds[(i + 1) % 4],
+              ("direct_sun", "incandescent"), method=("auto", "root-polynomial")[i % 2],
+              gamut=i % 2 == 1, encoding=enc)
         for i, enc in enumerate(WALL_ENCODINGS)
-        for k in range(2)
     ]  # fmt: skip
     ceiling = [
-        Stage("ceiling", cameras[3 * i % len(cameras)], leds[i % 4], scenes,
-              method=("auto", "least-squares", "root-polynomial", "regularised")[i],
-              protect=i == 2, gamut=i % 2 == 0, ceiling=CEILING_LEDS[i % 2])
-        for i in range(4)
+        Stage("ceiling", cameras[5], "wide", scenes, method="root-polynomial", protect=True,
+              gamut=True, ceiling=CEILING_LEDS[0]),
+        Stage("ceiling", cameras[1], "shifted", scenes, method="least-squares",
+              ceiling=CEILING_LEDS[1]),
     ]  # fmt: skip
+    edge = [
+        Stage("edge", cameras[0], name, ("direct_sun", "sodium_vapour", "rgb_led_white"))
+        for name in EDGE_LEDS
+    ]
     if quick:
-        picks = {("Sigma SDMerill (NPL)", "shifted"), ("ARRI D21 (rawtoaces)", "narrow")}
-        chosen = [s for s in spectral if (s.camera, s.leds) in picks]
-        return [*chosen, plates[1], encoding[7], ceiling[2]]
-    return spectral + plates + encoding + ceiling
+        return [spectral[1], spectral[9], plates[0], encoding[3], ceiling[0], edge[0]]
+    return spectral + plates + encoding + ceiling + edge
 
 
 def _simulate(stage: Stage, *, plates: bool = False, sequence: str | None = None) -> Step:
     argv = ["ocio-vp", "simulate", "--out", "stage.yaml", "--camera", stage.camera]
-    if LED_SETS[stage.leds]:
-        argv += ["--leds", LED_SETS[stage.leds]]
+    spectra = LED_SETS.get(stage.leds) or EDGE_LEDS.get(stage.leds)
+    if spectra:
+        argv += ["--leds", spectra]
     if stage.ceiling:
         argv += ["--ceiling-leds", stage.ceiling]
     for env in stage.environments:
@@ -252,7 +256,7 @@ def _validate_steps(stage: Stage) -> list[Step]:
 
 def steps(stage: Stage) -> list[Step]:
     """The chain of commands run on ``stage``, in order."""
-    if stage.kind in ("spectral", "ceiling"):
+    if stage.kind in ("spectral", "ceiling", "edge"):
         return [_simulate(stage), _solve(stage, "stage.yaml", "simulate"), *_outputs_steps(stage)]
     chain = []
     if stage.kind == "encoding":

@@ -7,12 +7,16 @@ here for the fold count.
 
 from __future__ import annotations
 
+import dataclasses
+import json
+
 import numpy as np
 import pytest
 from conftest import paper_stage_problem
 
 from ocio_vp.correction.extrapolation import (
     FADES,
+    Extrapolation,
     choose_fade,
     fold_fraction,
     in_frame_led_damage,
@@ -58,6 +62,24 @@ def test_saturation_probe_of_the_identity_and_a_flipping_matrix(problem):
     kept, negative = saturation_probe(MatrixCorrection(flip), white)
     # a red input (1, 0.01, 0.01) gives green 0.01 - 3: -2.99 of its red
     assert negative == pytest.approx(-2.99)
+
+
+def test_a_collapsed_dominant_channel_is_written_finite(problem):
+    # A rank-1 Q onto grey (what a sodium-lit solve gives): a red input (1, 0.01, 0.01) comes
+    # out as 0.34 of its red in every channel; a Q that negates green sends a green input to
+    # -1 of it: no "lowest channel relative to the dominant one" exists there (it was -inf,
+    # written into solution.json as the string "-inf" and shown as "-inf%").
+    rank1 = np.full((3, 3), 1.0 / 3.0)
+    negate_green = np.diag([1.0, -1.0, 1.0])
+    white = problem.predicted[problem.white_patch]
+    assert saturation_probe(MatrixCorrection(rank1), white)[0] == pytest.approx(1.02 / 3)
+    kept, negative = saturation_probe(MatrixCorrection(negate_green), white)
+    assert kept == pytest.approx(-1.0) and negative == -np.inf
+    figures = Extrapolation(1.0, 1.0, kept=kept, negative=negative, folds=0.0)
+    assert figures.negative is None and figures.flips_or_collapses
+    json.dumps(dataclasses.asdict(figures), allow_nan=False)
+    assert "the channel itself at or below zero" in figures.describe()
+    assert "inf" not in figures.describe()
 
 
 def test_the_identity_damages_no_in_frame_led(problem):

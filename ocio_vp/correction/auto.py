@@ -25,7 +25,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ocio_vp.correction.extrapolation import MIN_NEGATIVE, MIN_RETAINED, saturation_probe
+from ocio_vp.correction.extrapolation import (
+    MIN_NEGATIVE,
+    MIN_RETAINED,
+    lowest_channel_words,
+    saturation_probe,
+)
 from ocio_vp.correction.guards import relative_figure
 from ocio_vp.correction.linear import (
     AUTO_LADDER,
@@ -155,8 +160,8 @@ def _bounded_candidate(problem: QProblem, name: str) -> tuple[QFit | None, str |
     if kept < min(MIN_RETAINED, fallback_kept) or negative < min(MIN_NEGATIVE, fallback_negative):
         return None, (
             f"{_label(name)} is not a candidate: a bright saturated input keeps {kept:.0%} of "
-            f"its channel, lowest channel {negative:+.0%} of it (least squares: "
-            f"{fallback_kept:.0%}, {fallback_negative:+.0%})"
+            f"its channel, {lowest_channel_words(negative)} (least squares: "
+            f"{fallback_kept:.0%}, {lowest_channel_words(fallback_negative)})"
         )
     return fit, None
 

@@ -46,6 +46,7 @@ __all__ = [
     "extrapolation",
     "fold_fraction",
     "in_frame_led_damage",
+    "lowest_channel_words",
     "saturation_probe",
 ]
 
@@ -175,21 +176,39 @@ class Extrapolation:
     led_damage: float
     led_damage_least_squares: float
     kept: float
-    negative: float
+    negative: float | None
     folds: float | None
+
+    def __post_init__(self) -> None:
+        # The probe's -inf (a dominant output at or below zero: no share of it exists) is
+        # written as null, never as a non-finite number; ``kept`` <= 0 says the same.
+        if self.negative is not None and not np.isfinite(self.negative):
+            object.__setattr__(self, "negative", None)
 
     @property
     def flips_or_collapses(self) -> bool:
-        return self.kept < MIN_RETAINED or self.negative < MIN_NEGATIVE
+        return self.kept < MIN_RETAINED or (self.negative or 0.0) < MIN_NEGATIVE
 
     def describe(self) -> str:
         return (
             f"in-frame LEDs p95 ΔE2000 {self.led_damage:.3g} (least squares "
             f"{self.led_damage_least_squares:.3g}); bright saturated inputs keep >= "
-            f"{self.kept:.0%} of their channel, lowest channel {self.negative:+.0%} of it; "
+            f"{self.kept:.0%} of their channel, {lowest_channel_words(self.negative)}; "
             + ("rank-deficient" if self.folds is None else f"folds in {self.folds:.1%}")
             + " of the reflective solid"
         )
+
+
+def lowest_channel_words(negative: float | None) -> str:
+    """``'lowest channel -299% of it'`` (:func:`saturation_probe`'s second figure), or what an
+    undefined one (None, -inf: the dominant output at or below zero) means.
+
+    >>> lowest_channel_words(-2.99), lowest_channel_words(float("-inf"))
+    ('lowest channel -299% of it', 'the channel itself at or below zero')
+    """
+    if negative is None or not np.isfinite(negative):
+        return "the channel itself at or below zero"
+    return f"lowest channel {negative:+.0%} of it"
 
 
 def extrapolation(

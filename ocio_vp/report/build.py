@@ -300,6 +300,15 @@ def _share(value: Any, sign: str = "") -> str:
     return f"{number:{sign}.0%}" if np.isfinite(number) else f"{number:{sign}}"
 
 
+def _lowest_channel(value: Any) -> str:
+    """The probe's lowest channel; null (or "-inf" in older files): the dominant output at or
+    below zero (as ocio_vp.correction.extrapolation.lowest_channel_words, without importing a
+    solver)."""
+    if value is None or not np.isfinite(float(value)):
+        return "the channel itself at or below zero"
+    return f"lowest channel {_share(value, '+')} of it"
+
+
 def _beyond_the_chart(solution: Any) -> str:
     """The extrapolation figures (docs/stability.md, *Beyond the chart*) and the emitter guard."""
     figures = solution.diagnostics.get("extrapolation")
@@ -309,8 +318,8 @@ def _beyond_the_chart(solution: Any) -> str:
         text = (
             f"the wall's LEDs seen in frame: p95 ΔE2000 {float(figures['led_damage']):.3g} "
             f"(least squares {float(figures['led_damage_least_squares']):.3g}); bright saturated "
-            f"inputs keep >= {_share(figures['kept'])} of their channel, lowest channel "
-            f"{_share(figures['negative'], '+')} of it; "
+            f"inputs keep >= {_share(figures['kept'])} of their channel, "
+            f"{_lowest_channel(figures['negative'])}; "
             + ("no inverse" if folds is None else f"folds in {folds:.1%} of reflective colours")
         )
     if solution.correction.kind == "protected":
