@@ -137,7 +137,7 @@ class Diagnostics(Mapping[str, Any]):
         ``led_damage_least_squares`` (p95 ΔE2000 of the wall's own LEDs in frame, through it
         and through least squares), ``kept`` and ``negative`` (bright saturated inputs: least
         share of the dominant channel kept, lowest channel relative to it; null where a
-        dominant output is at or below zero, files before 2026-12 say "-inf"), ``folds`` (share
+        dominant output is at or below zero, older files say "-inf"), ``folds`` (share
         of the reflective solid where it maps two colours to one).
     synthesized_target
         How a synthesized target chart was made (``ocio-vp target-chart``); only written for
