@@ -77,8 +77,10 @@ PATTERN_SIZE = "64x36"
 STEP_TIMEOUT = 600.0
 # Files scanned for non-finite numbers: parsed (JSON, YAML) or searched as text.
 PARSED = (".json", ".yaml", ".yml")
-TEXT = (".ocio", ".clf", ".cube", ".nk", ".dctl", ".ctf", ".spi1d", ".spi3d")
+TEXT = (".ocio", ".clf", ".cube", ".nk", ".dctl", ".ctf", ".spi1d", ".spi3d", ".html", ".svg")
+TEXT += (".md", ".txt", ".csv")
 NON_FINITE_TEXT = re.compile(r"(?<![\w.])[-+]?(?:nan|inf|infinity)(?![\w(])", re.IGNORECASE)
+NON_FINITE_WORD = re.compile(r"[-+]?(?:nan|inf|infinity)", re.IGNORECASE)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -303,7 +305,9 @@ def _first_error(stderr: str) -> str:
 
 
 def _walk_non_finite(value, key: str) -> Iterator[str]:
-    if isinstance(value, float) and not math.isfinite(value):
+    # A non-finite number written as text ("-inf") is one too.
+    text = isinstance(value, str) and NON_FINITE_WORD.fullmatch(value.strip())
+    if text or (isinstance(value, float) and not math.isfinite(value)):
         yield key or "(top)"
     elif isinstance(value, dict):
         for k, v in value.items():

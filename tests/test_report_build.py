@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import html
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -130,3 +131,14 @@ def test_report_shows_the_root_polynomial_model(tmp_path):
     assert "Q (root-polynomial)" in text and "3x3 fallback of Q" in text
     for value in np.ravel(model["coefficients"]):
         assert f"{value:+.5f}" in text
+
+
+def test_report_prints_no_non_finite_number_and_a_singular_q_as_the_terminal(calib):
+    # Sodium's rank-1 Q: numpy calls it singular; the report said "cond = inf" (and would print
+    # the digits of rounding noise for a nearly singular one); the terminal's "> 1e+12" now.
+    q = json.loads((calib / "sodium_vapour" / "solution.json").read_text())["Q"]
+    assert np.linalg.cond(q) > 1e12
+    assert _report(calib) == 0
+    page = html.unescape((calib / "report" / "index.html").read_text())
+    assert 'class="num">> 1e+12</td>' in page and "cond = > 1e+12" in page
+    assert not re.findall(r"(?<![\w.])[-+]?(?:nan|inf|infinity)(?![\w(])", page, re.IGNORECASE)

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from ocio_vp.calibration.equations import condition_number
+from ocio_vp.calibration.equations import condition_number, condition_text
 from ocio_vp.calibration.headroom import content_scale
 from ocio_vp.errors import InputError
 from ocio_vp.formats.provenance import solution_sha256
@@ -177,7 +177,7 @@ def _matrix_rows(name: str, matrix: np.ndarray | None, meaning: str) -> dict[str
         "name": name,
         "meaning": meaning,
         "rows": [[f"{v:+.5f}" for v in row] for row in np.asarray(matrix)],
-        "cond": f"{condition_number(matrix):.4g}",
+        "cond": condition_text(condition_number(matrix)),  # a singular one as the terminal
     }
 
 
@@ -390,7 +390,7 @@ def _summary(environments: Sequence[EnvironmentData]) -> list[dict[str, str]]:
                 "name": e.solution.environment,
                 "key": e.key,
                 "method": _method(e.solution),
-                "cond_q": f"{float(d.get('cond_Q', float('nan'))):.3g}",
+                "cond_q": "-" if d.get("cond_Q") is None else condition_text(float(d["cond_Q"])),
                 "n": "solved" if e.solution.N is not None else "not solved",
                 **{chart: _percent(e.errors[chart]) for chart in STAGE_CHARTS},
                 "warnings": str(len(d.get("warnings", []))),
