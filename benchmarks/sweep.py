@@ -107,11 +107,14 @@ class Stage:
     encoding: str = "linear"
     ceiling: str | None = None
     validate: bool = False
+    fixture: str | None = None  # simulate --fixture KIND
+    paper_black: bool = False  # solve --black-level paper
 
     @property
     def label(self) -> str:
         parts = [self.kind, self.camera.split(" (")[0], self.leds, self.method]
         parts += ["protect"] * self.protect + ["gamut"] * self.gamut
+        parts += [self.fixture or ""] * bool(self.fixture) + ["paper-black"] * self.paper_black
         parts += [self.encoding] * (self.kind == "encoding")
         return "/".join(parts)
 
@@ -156,6 +159,10 @@ def grid(quick: bool) -> list[Stage]:
                 method=Q_METHODS[k % len(Q_METHODS)],
                 protect=k % 4 == 1,
                 gamut=k % 3 == 0,
+                fixture=("rgbw", "rgbacl", "rgbww", "rgbw-fluorescent")[k // 6]
+                if k % 6 == 2
+                else None,
+                paper_black=k % 5 == 3,
             )
         )
     plates = [
@@ -194,6 +201,8 @@ def _simulate(stage: Stage, *, plates: bool = False, sequence: str | None = None
         argv += ["--ceiling-leds", stage.ceiling]
     for env in stage.environments:
         argv += ["--environment", env]
+    if stage.fixture:
+        argv += ["--fixture", stage.fixture]
     outputs = ["stage.yaml"]
     if plates:
         argv += ["--plates", "plates"] + (["--sequence", sequence] if sequence else [])
@@ -207,6 +216,8 @@ def _solve(stage: Stage, measurements: str, needs: str) -> Step:
         argv.append("--protect-emitters")
     if stage.gamut:
         argv += ["--camera-colorspace", CAMERA_GAMUT]
+    if stage.paper_black:
+        argv += ["--black-level", "paper"]
     if stage.encoding != "linear":
         argv += ["--wall-encoding", stage.encoding]
     if stage.encoding == "pq":

@@ -269,3 +269,18 @@ class TestPanelRegions:
         assert main(["solve", str(stage), "--out", str(tmp_path / "o"), "--hdri", str(hdri)]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "panels[1].region: no region" in err
+
+
+def test_a_map_black_in_front_is_refused_naming_it(tmp_path):
+    # A sun straight behind the chart (-z): cos+ is 0 over the back hemisphere, so w_avg is 0
+    # exactly; the solve used to fail later with "lit_chart: ... black", naming the
+    # measurements instead of the map.
+    behind = cap_image(32, 64, (0.0, 0.0, -1.0), np.radians(10.0), radiance=1e4)
+    assert diffuse_integral(behind) == pytest.approx(np.zeros(3), abs=1e-12)
+    path = tmp_path / "behind.exr"
+    write_exr(path, behind.astype(np.float32))
+    with pytest.raises(InputError) as caught:
+        w_avg_from_hdri(path, width=None)
+    assert caught.value.source == str(path) and "frontal hemisphere" in caught.value.problem
+    write_exr(path, cap_image(32, 64, FRONT, np.radians(10.0), radiance=1e4).astype(np.float32))
+    assert np.all(w_avg_from_hdri(path, width=None) > 0)

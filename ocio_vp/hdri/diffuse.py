@@ -271,8 +271,21 @@ def w_avg_from_hdri(
     -------
     numpy.ndarray
         (3,) float64 RGB, in the HDRI's linear RGB.
+
+    Raises
+    ------
+    InputError
+        When no channel of it is above zero: the frontal hemisphere is black (or negative),
+        which no stage can calibrate for (the solve would fail later, blaming the chart).
     """
-    return diffuse_integral(read_equirect(path, width=width), normal=normal)
+    w_avg = diffuse_integral(read_equirect(path, width=width), normal=normal)
+    if not np.any(w_avg > 0):
+        raise InputError(
+            "the frontal hemisphere (the half of the map around its centre) is black: w_avg "
+            "would be 0; check the map's orientation (its centre faces the wall) and exposure",
+            source=path,
+        )
+    return w_avg
 
 
 def region_mask(height: int, width: int, regions) -> np.ndarray:
