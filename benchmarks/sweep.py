@@ -453,7 +453,7 @@ def failure_key(run: Run) -> str:
     for env in run.stage.environments:
         text = text.replace(env, "ENV")
     text = re.sub(r"\[\d+\]", "[#]", text)
-    return re.sub(r"(?<![A-Za-z])[-+]?\d+(\.\d+)?(e[-+]?\d+)?", "#", text)
+    return re.sub(r"(?<![\w.])[-+]?\d+(\.\d+)?(e[-+]?\d+)?", "#", text)
 
 
 def _failed(run: Run) -> bool:
