@@ -302,7 +302,9 @@ class Solution:
 
 
 def _plain(value: Any) -> Any:
-    """Convert numpy values to JSON types; non-finite floats become an error (never written)."""
+    """Convert numpy values to JSON types. A non-finite float is written as null (NaN) or the
+    string "inf"/"-inf": only cond_Q of a singular Q should ever be one (docs/stability.md;
+    tests/test_pipeline.py and benchmarks/sweep.py look for any other)."""
     if isinstance(value, np.ndarray):
         return _plain(value.tolist())
     if isinstance(value, Mapping):
