@@ -27,7 +27,7 @@ line of the error, each with the smallest command chain that reproduces it (a ch
 environments is retried on the one environment the error names).
 
 ``--quick`` runs six stages, one of each kind (a few minutes on 2 cores); the full sweep (35
-stages, about 25 minutes on 2 busy cores) also writes its tables into docs/robustness.md.
+stages, about 10 minutes on 2 busy cores) also writes its tables into docs/robustness.md.
 """
 
 from __future__ import annotations
@@ -400,6 +400,15 @@ def _chain_text(done: list[Step]) -> str:
                        else shlex.join(("python", *s.argv[1:])) for s in done)  # fmt: skip
 
 
+def _needed(done: list[Step]) -> list[Step]:
+    """The last step of ``done`` and the earlier ones it needs, directly or not, in order."""
+    wanted = {done[-1].name}
+    for step in reversed(done):
+        if step.name in wanted:
+            wanted.update(step.needs)
+    return [step for step in done if step.name in wanted]
+
+
 def _run_step(folder: Path, step: Step) -> tuple[int, str, float]:
     argv = list(step.argv)
     if argv[0] == "ocio-vp":
@@ -423,7 +432,7 @@ def run_stage(stage: Stage, scratch: Path) -> list[Run]:
     for step in steps(stage):
         done.append(step)
         if not all(n in ok for n in step.needs):
-            runs.append(Run(stage, step.name, _chain_text(done), None, 0.0, "", ()))
+            runs.append(Run(stage, step.name, _chain_text(_needed(done)), None, 0.0, "", ()))
             continue
         before = _snapshot(folder, step.outputs)
         status, stderr, seconds = _run_step(folder, step)
@@ -433,7 +442,7 @@ def run_stage(stage: Stage, scratch: Path) -> list[Run]:
         if status == 0:
             ok.add(step.name)
         error = _first_error(stderr) if status or problems else ""
-        runs.append(Run(stage, step.name, _chain_text(done), status, seconds, error,
+        runs.append(Run(stage, step.name, _chain_text(_needed(done)), status, seconds, error,
                         tuple(problems)))  # fmt: skip
         named = [e for e in stage.environments if re.search(rf"\b{e}\b", error)]
         if step.name == "simulate" and status == 2 and len(named) == 1:
