@@ -75,7 +75,12 @@ def ocio_function(transform):
     """An OCIO transform as a function on (n, 3) RGB (CPU, float32)."""
     import PyOpenColorIO as OCIO
 
-    cpu = OCIO.Config.CreateRaw().getProcessor(transform).getDefaultCPUProcessor()
+    return processor_function(OCIO.Config.CreateRaw().getProcessor(transform))
+
+
+def processor_function(processor):
+    """An OCIO processor as a function on (n, 3) RGB (its default CPU processor, float32)."""
+    cpu = processor.getDefaultCPUProcessor()
 
     def apply(rgb):
         pixels = np.ascontiguousarray(rgb, dtype=np.float32).copy()
@@ -226,14 +231,7 @@ def _named(config):
     from ocio_vp.ocio import POST_CORRECTION
 
     named = config.getNamedTransform(POST_CORRECTION)
-    cpu = config.getProcessor(named, OCIO.TRANSFORM_DIR_FORWARD).getDefaultCPUProcessor()
-
-    def apply(rgb):
-        pixels = np.ascontiguousarray(rgb, dtype=np.float32).copy()
-        cpu.applyRGB(pixels)
-        return pixels.astype(np.float64)
-
-    return apply
+    return processor_function(config.getProcessor(named, OCIO.TRANSFORM_DIR_FORWARD))
 
 
 def _cell(measured) -> str:
