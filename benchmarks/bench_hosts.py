@@ -44,6 +44,7 @@ ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+from ocio_vp.ocio.bake import processor_function  # noqa: E402
 from ocio_vp.simulator.data import PAPER_ENVIRONMENTS  # noqa: E402
 
 DOC = "hosts.md"
@@ -61,14 +62,7 @@ def _float32(function):
 
 
 def _ocio(config, src, dst):
-    cpu = config.getProcessor(src, dst).getDefaultCPUProcessor()
-
-    def apply(rgb):
-        pixels = np.ascontiguousarray(rgb, dtype=np.float32).copy()
-        cpu.applyRGB(pixels)
-        return pixels.astype(np.float64)
-
-    return apply
+    return processor_function(config.getProcessor(src, dst))
 
 
 def ocio_function(transform):
@@ -76,18 +70,6 @@ def ocio_function(transform):
     import PyOpenColorIO as OCIO
 
     return processor_function(OCIO.Config.CreateRaw().getProcessor(transform))
-
-
-def processor_function(processor):
-    """An OCIO processor as a function on (n, 3) RGB (its default CPU processor, float32)."""
-    cpu = processor.getDefaultCPUProcessor()
-
-    def apply(rgb):
-        pixels = np.ascontiguousarray(rgb, dtype=np.float32).copy()
-        cpu.applyRGB(pixels)
-        return pixels.astype(np.float64)
-
-    return apply
 
 
 def _apply_host(folder: Path):

@@ -85,6 +85,7 @@ __all__ = [
     "forward_chain",
     "inverse_chain",
     "model_outputs",
+    "processor_function",
 ]
 
 #: 3D LUT grid size (CLF and OCIO take cubes; the scale axis uses only its first slices).
@@ -638,7 +639,13 @@ def clf_text(chain: LutChain, lut: np.ndarray, description: str) -> str:
 
 
 def _cpu(transform: OCIO.Transform) -> Callable[[np.ndarray], np.ndarray]:
-    cpu = OCIO.Config.CreateRaw().getProcessor(transform).getDefaultCPUProcessor()
+    return processor_function(OCIO.Config.CreateRaw().getProcessor(transform))
+
+
+def processor_function(processor: OCIO.Processor) -> Callable[[np.ndarray], np.ndarray]:
+    """An OCIO processor as a function on (n, 3) RGB: its default CPU processor, float32 in,
+    float64 out (what a host computes)."""
+    cpu = processor.getDefaultCPUProcessor()
 
     def apply(rgb: np.ndarray) -> np.ndarray:
         pixels = np.ascontiguousarray(rgb, dtype=np.float32).copy()

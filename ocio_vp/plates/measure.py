@@ -336,14 +336,7 @@ def _wall_part(capture: Capture, chart: Any, plates: list, step: Any) -> dict[st
     wall file from a take has no lit chart; a charts file no primaries)."""
     out: dict[str, Any] = {}
     if capture.primaries:
-        sampled = _sample_regions(capture, capture.primaries, "primaries")
-        plates.extend(sampled)
-        step()
-        means = {}
-        for sampling in sampled:
-            for label, mean in zip(sampling.labels, sampling.samples.means, strict=True):
-                means[label] = mean
-        out["primaries"] = {c: means[c].tolist() for c in CHANNELS}
+        out["primaries"] = _primaries(capture, capture.primaries, plates, step)
     if capture.lit_chart:
         out["lit_chart"] = {c: chart(capture.lit_chart[c]).tolist() for c in CHANNELS}
     return out
@@ -358,6 +351,16 @@ def _wall_values(
     step: Any,
 ) -> dict[str, Any]:
     """``primaries`` and ``lit_chart`` of the wall (or of one panel type), sampled."""
+    return {
+        "primaries": _primaries(capture, primaries, plates, step),
+        "lit_chart": {c: chart(lit_chart[c]).tolist() for c in CHANNELS},
+    }
+
+
+def _primaries(
+    capture: Capture, primaries: Mapping[str, RegionShot], plates: list, step: Any
+) -> dict[str, list[float]]:
+    """The mean camera RGB of each primary's region (the plates' samplings go to ``plates``)."""
     sampled = _sample_regions(capture, primaries, "primaries")
     plates.extend(sampled)
     step()
@@ -365,11 +368,7 @@ def _wall_values(
     for sampling in sampled:
         for label, mean in zip(sampling.labels, sampling.samples.means, strict=True):
             means[label] = mean
-    lit = {c: chart(lit_chart[c]) for c in CHANNELS}
-    return {
-        "primaries": {c: means[c].tolist() for c in CHANNELS},
-        "lit_chart": {c: lit[c].tolist() for c in CHANNELS},
-    }
+    return {c: means[c].tolist() for c in CHANNELS}
 
 
 def _overlay(sampling: PlateSampling) -> np.ndarray:
