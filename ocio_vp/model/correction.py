@@ -48,6 +48,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -531,16 +532,15 @@ class ProtectedCorrection:
                 "dark must be at least 0 and below the brightness fade", key="post_correction.dark"
             )
         object.__setattr__(self, "dark", float(self.dark))
-        object.__setattr__(self, "_floor", self.dark * _white_drive(self.domain, self.drive_matrix))
 
     @property
     def kind(self) -> str:
         return "protected"
 
-    @property
+    @cached_property
     def floor(self) -> float:
         """``dark`` in drive units: the least drive negative light is measured against."""
-        return self._floor  # type: ignore[attr-defined]
+        return self.dark * _white_drive(self.domain, self.drive_matrix)
 
     @property
     def matrix(self) -> np.ndarray:
