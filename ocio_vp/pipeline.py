@@ -160,7 +160,7 @@ def solve_environment(
         w_avg=problem.w_avg,
         SL=SL,
         M=M,
-        Q=Q,
+        post_correction=correction,
         N=N,
         black_level_offset=offset,
         black_level_method=None if offset is None else options.black_level,
@@ -170,7 +170,6 @@ def solve_environment(
         camera_colorspace=measurements.stage.camera_colorspace,
         linearity=linearity,
         fixtures=None if lighting is None else fixtures_block(lighting),
-        post_correction=correction,
         panels=panels,
     )
 

@@ -252,8 +252,8 @@ class Solution:
     matrix to light with while the fixtures are on.
 
     ``post_correction`` is the post-correction itself (:mod:`ocio_vp.model`), which every
-    consumer applies; ``Q`` is its 3x3 (the matrix, or a non-linear model's 3x3 fallback, for
-    readers that want one). Left out, it is ``Q`` as a matrix.
+    consumer applies; :attr:`Q` is derived from it, never stored beside it: its 3x3 (the
+    matrix, or a non-linear model's 3x3 fallback, for readers that want one).
 
     ``panels`` (a stage of several panel types: :mod:`ocio_vp.formats.panel_solution`) holds
     every type's solve by name, None otherwise; the top-level ``SL``, ``M``, ``N``, ``beta``,
@@ -267,7 +267,7 @@ class Solution:
     w_avg: np.ndarray
     SL: np.ndarray
     M: np.ndarray
-    Q: np.ndarray
+    post_correction: PostCorrection
     N: np.ndarray | None
     black_level_offset: np.ndarray | None
     black_level_method: str | None
@@ -278,18 +278,17 @@ class Solution:
     ocio: dict[str, str] = field(default_factory=dict)
     linearity: dict[str, Any] | None = None
     fixtures: dict[str, Any] | None = None
-    post_correction: PostCorrection | None = None
     panels: Mapping[str, PanelSolution] | None = None
-
-    def __post_init__(self) -> None:
-        if self.post_correction is None:
-            object.__setattr__(self, "post_correction", MatrixCorrection(self.Q))
 
     @property
     def correction(self) -> PostCorrection:
-        """The post-correction (never None; :attr:`post_correction` typed for checkers)."""
-        assert self.post_correction is not None
+        """The post-correction (:attr:`post_correction`)."""
         return self.post_correction
+
+    @property
+    def Q(self) -> np.ndarray:
+        """The post-correction's 3x3 (``solution.json``'s ``Q``), derived from it."""
+        return self.post_correction.matrix
 
     @property
     def in_frustum_matrix(self) -> np.ndarray:
@@ -494,7 +493,7 @@ def load_solution(path: str | Path) -> Solution:
         w_avg=_rgb(data, "w_avg", source),
         SL=_matrix(data, "SL", source),
         M=_matrix(data, "M", source),
-        Q=Q,
+        post_correction=_post_correction(data, Q, diagnostics, source),
         N=_matrix(data, "N", source, optional=True),
         black_level_offset=_rgb(data, "black_level_offset", source, optional=True),
         black_level_method=_text(data, "black_level_method", source),
@@ -505,7 +504,6 @@ def load_solution(path: str | Path) -> Solution:
         ocio=ocio,
         linearity=linearity,
         fixtures=_fixtures(data, source),
-        post_correction=_post_correction(data, Q, diagnostics, source),
         panels=panel_solutions_from_dict(data.get("panels"), source),
     )
 
@@ -519,12 +517,16 @@ def _post_correction(
     block = data.get("post_correction")
     try:
         if block is not None:
-            return correction_from_dict(block)
+            correction = correction_from_dict(block)
+            _check_Q(Q, correction.matrix, source)
+            return correction
         old = (diagnostics.get("method_notes") or {}).get("root_polynomial")
         if old is None:
             return MatrixCorrection(Q)
         return RootPolynomialCorrection(old["coefficients"], Q)
     except InputError as error:
+        if error.source is not None:
+            raise
         raise InputError(error.problem, source=source, key=error.key) from None
     except (KeyError, TypeError, ValueError) as error:
         raise InputError(
@@ -532,3 +534,22 @@ def _post_correction(
             source=source,
             key="diagnostics.method_notes.root_polynomial",
         ) from None
+
+
+#: ``Q`` may differ from its ``post_correction``'s matrix by this much (relative, largest entry)
+#: and no more: JSON round-trips a float64 exactly, so more means the file was edited.
+Q_TOLERANCE = 1e-9
+
+
+def _check_Q(Q: np.ndarray, matrix: np.ndarray, source: str) -> None:
+    """Refuse a ``Q`` that is not its ``post_correction``'s matrix (Q is derived from it: an
+    edited Q would reach the readers of Q but not ``apply`` and ``validate``)."""
+    scale = max(float(np.max(np.abs(matrix))), np.finfo(np.float64).tiny)
+    relative = float(np.max(np.abs(Q - matrix))) / scale
+    if relative > Q_TOLERANCE:
+        raise InputError(
+            f"differs from post_correction's matrix by {relative:.2g} relative (more than "
+            f"{Q_TOLERANCE:g}); Q is derived from post_correction: edit that block, or restore Q",
+            source=source,
+            key="Q",
+        )

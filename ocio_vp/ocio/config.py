@@ -24,8 +24,9 @@ import numpy as np
 import PyOpenColorIO as OCIO
 
 from ocio_vp.calibration.diagnostics import is_identity, offset_is_negligible
-from ocio_vp.calibration.equations import MAX_CONDITION_Q_FOR_N, condition_text
+from ocio_vp.calibration.equations import condition_text
 from ocio_vp.formats.solution import Solution
+from ocio_vp.model.correction import MAX_CONDITION_INVERSE, truncated_pseudo_inverse
 from ocio_vp.ocio.matrix import format_matrix, matrix_transform
 from ocio_vp.ocio.softclip import soft_clip_text, soft_clip_transforms
 from ocio_vp.ocio.viewing import (
@@ -157,14 +158,6 @@ def _group(transforms: list[OCIO.Transform]) -> OCIO.Transform:
     return OCIO.GroupTransform(transforms)
 
 
-def _pseudo_inverse(Q: np.ndarray) -> tuple[np.ndarray, int]:
-    """Q's truncated pseudo-inverse (singular values below ``sigma_max /``
-    :data:`MAX_CONDITION_Q_FOR_N` dropped) and the rank kept."""
-    U, sigma, Vt = np.linalg.svd(Q)
-    keep = sigma >= sigma[0] / MAX_CONDITION_Q_FOR_N
-    return (Vt.T[:, keep] / sigma[keep]) @ U[:, keep].T, int(keep.sum())
-
-
 def post_correction_transforms(
     solution: Solution, model: ModelFiles | None = None
 ) -> tuple[OCIO.Transform, OCIO.Transform, str]:
@@ -175,9 +168,9 @@ def post_correction_transforms(
     inverts a LUT by search: minutes for a 65^3 cube):
 
     - a 3x3 Q: the matrix, and its inverse;
-    - a Q too ill-conditioned to invert (cond(Q) above :data:`MAX_CONDITION_Q_FOR_N`, the limit
+    - a Q too ill-conditioned to invert (cond(Q) above :data:`MAX_CONDITION_INVERSE`, the limit
       for N), whose inverse would amplify a finite input to 1e17 and more: its truncated
-      pseudo-inverse (gain at most ``MAX_CONDITION_Q_FOR_N / sigma_max``; content goes to the
+      pseudo-inverse (gain at most ``MAX_CONDITION_INVERSE / sigma_max``; content goes to the
       smallest footage that Q maps to content's projection onto Q's range), a bounded stand-in;
     - a non-linear Q: its ``model`` files (Q, Q^-1), or where the model has no inverse the
       3x3's pseudo-inverse, marked as a stand-in that is not the model's inverse.
@@ -185,33 +178,31 @@ def post_correction_transforms(
     A non-linear Q without its files is refused: the config never silently carries a 3x3 where
     ``ocio-vp apply`` runs the model.
     """
-    Q = np.asarray(solution.Q, dtype=np.float64)
     correction = solution.correction
+    Q = correction.matrix
     if not correction.linear and model is None:
         raise ValueError(
             f"a {correction.kind} post-correction needs its LUT files (ocio_vp.ocio.bake); "
             "the config would otherwise carry only its 3x3"
         )
     forward = matrix_transform(Q) if model is None else OCIO.FileTransform(src=model.q)
-    sigma = np.linalg.svd(Q, compute_uv=False)
-    invertible = sigma[-1] > 0 and sigma[0] / sigma[-1] <= MAX_CONDITION_Q_FOR_N
     if model is not None and model.q_inverse is not None:
         text = f"The inverse direction is the baked Q^-1 ({model.q_inverse})."
         return forward, OCIO.FileTransform(src=model.q_inverse), text
-    if invertible and model is None:
+    if correction.invertible and model is None:
         return forward, matrix_transform(Q, direction=OCIO.TRANSFORM_DIR_INVERSE), ""
-    pinv, rank = _pseudo_inverse(Q)
+    pinv, rank = truncated_pseudo_inverse(Q)
     if model is not None:
         text = (
             f"The inverse direction (reference -> Stage Footage) is NOT PROVIDED as the model's "
             f"inverse: the {correction.kind} model has none (its 3x3 has rank {rank} at cond <= "
-            f"{MAX_CONDITION_Q_FOR_N:g}). That direction is a bounded stand-in, the 3x3's "
+            f"{MAX_CONDITION_INVERSE:g}). That direction is a bounded stand-in, the 3x3's "
             f"truncated pseudo-inverse {format_matrix(pinv)}, so that a host asking for it gets finite "
             "numbers at once; do not use it to undo the post-correction."
         )
         return forward, matrix_transform(pinv), text
     text = (
-        f"Q has rank {rank} at cond <= {MAX_CONDITION_Q_FOR_N:g} (cond(Q) "
+        f"Q has rank {rank} at cond <= {MAX_CONDITION_INVERSE:g} (cond(Q) "
         f"{condition_text(float(np.linalg.cond(Q)))}): it cannot be inverted, so the inverse "
         "direction (reference -> Stage Footage, the inverse of the named transform) is Q's "
         f"truncated pseudo-inverse {format_matrix(pinv)}, bounded, not a true inverse."
