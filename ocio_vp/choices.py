@@ -16,12 +16,18 @@ __all__ = [
     "DEFAULT_METHOD",
     "DEFAULT_PEAK_NITS",
     "DEFAULT_WALL_ENCODING",
+    "DEFAULT_WHITE_PATCH",
     "EXPORT_TARGETS",
     "LINEAR_METHODS",
     "OPTIMIZATIONS",
     "Q_METHODS",
     "WALL_ENCODINGS",
 ]
+
+#: The white patch of a ColorChecker 24, 0-based in reading order (people see it as patch 19,
+#: "white 9.5 (.05 D)"): the default of ``stage.white_patch`` and of an older solution.json
+#: that does not say.
+DEFAULT_WHITE_PATCH = 18
 
 #: Post-correction (Q) methods, in the order ``--help`` lists them (the registry's records:
 #: :data:`ocio_vp.correction.registry.Q_SOLVE_METHODS`).

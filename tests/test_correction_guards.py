@@ -102,8 +102,8 @@ def test_patches_of_one_colour_span_one_direction(measurements) -> None:
 
 def test_n_reason_names_the_real_cause(measurements) -> None:
     sodium = solve_environment(measurements, measurements.environment("sodium_vapour"))
-    assert "rank 1" in sodium.diagnostics["N_reason"]
-    assert "sodium" in sodium.diagnostics["N_reason"]
+    assert "rank 1" in sodium.diagnostics.N_reason
+    assert "sodium" in sodium.diagnostics.N_reason
     # A singular Q that is not the light's fault is not blamed on sodium vapour.
     problem = QProblem(
         SL=measurements.SL, SRL=measurements.SRL, beta=0.24, M=np.linalg.inv(measurements.SL),

@@ -176,13 +176,13 @@ def _zeroed(measurements, name: str, j: int):
 def test_the_solve_excludes_names_and_can_keep_all(clean) -> None:
     m, env = _zeroed(clean, "incandescent", 6)
     s = solve_environment(m, env, method="least-squares")
-    assert [p["index"] for p in s.diagnostics["excluded_patches"]] == [6]
-    assert s.diagnostics["excluded_patches"][0]["name"] == "patch 6 (orange)"
-    assert any("patch 6 (orange)" in w for w in s.diagnostics["warnings"])
+    assert [p.index for p in s.diagnostics.excluded_patches] == [6]
+    assert s.diagnostics.excluded_patches[0].name == "patch 6 (orange)"
+    assert any("patch 6 (orange)" in w for w in s.diagnostics.warnings)
     clean_Q = solve_environment(clean, clean.environment("incandescent"), method="least-squares").Q
     assert np.linalg.norm(s.Q - clean_Q) / np.linalg.norm(clean_Q) < 0.03
     kept = solve_environment(m, env, method="least-squares", keep_all_patches=True)
-    assert kept.diagnostics["excluded_patches"] == [] and not kept.diagnostics["patch_screening"]
+    assert kept.diagnostics.excluded_patches == [] and not kept.diagnostics.patch_screening
     assert np.linalg.norm(kept.Q - clean_Q) / np.linalg.norm(clean_Q) > 0.1
 
 
@@ -397,12 +397,12 @@ def test_the_solve_says_which_patches_look_swapped(clean) -> None:
     envs = tuple(swapped if e.name == env.name else e for e in clean.environments)
     m = dataclasses.replace(clean, environments=envs)
     s = solve_environment(m, swapped, method="least-squares")
-    excluded = s.diagnostics["excluded_patches"]
-    assert [(p["index"], p["swapped_with"]) for p in excluded] == [(11, 12), (12, 11)]
-    assert excluded[0]["swapped_name"] == "patch 12 (blue)"
+    excluded = s.diagnostics.excluded_patches
+    assert [(p.index, p.swapped_with) for p in excluded] == [(11, 12), (12, 11)]
+    assert excluded[0].swapped_name == "patch 12 (blue)"
     assert any(
         "patch 11 (orange yellow) and patch 12 (blue) look swapped" in w
-        for w in s.diagnostics["warnings"]
+        for w in s.diagnostics.warnings
     )
 
 

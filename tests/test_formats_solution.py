@@ -5,7 +5,9 @@ Independent source: the JSON text itself (``json`` from the standard library).""
 
 from __future__ import annotations
 
+import dataclasses
 import json
+from collections.abc import Mapping
 
 import numpy as np
 import pytest
@@ -39,12 +41,56 @@ def solution():
 
 def test_a_solve_writes_every_diagnostics_key_in_order(solution):
     assert isinstance(solution.diagnostics, Diagnostics)
-    assert list(solution.diagnostics) == DIAGNOSTICS_KEYS
+    assert not isinstance(solution.diagnostics, Mapping)  # read by attribute, never by string
+    assert list(solution.diagnostics.to_dict()) == DIAGNOSTICS_KEYS
     assert list(json.loads(solution_to_json(solution))["diagnostics"]) == DIAGNOSTICS_KEYS
-    assert solution.diagnostics["cond_Q"] == solution.diagnostics.cond_Q
     np.testing.assert_array_equal(
-        solution.diagnostics["out_of_frustum_drive"], solution.M @ solution.w_avg
+        solution.diagnostics.out_of_frustum_drive, solution.M @ solution.w_avg
     )
+
+
+def _types(value):
+    """The type tree of a record: the class of every field, nested records and arrays'
+    dtype and shape included."""
+    if dataclasses.is_dataclass(value):
+        return (
+            type(value),
+            {
+                f.name: _types(getattr(value, f.name))
+                for f in dataclasses.fields(value)
+                if f.name != "present"
+            },
+        )
+    if isinstance(value, np.ndarray):
+        return (np.ndarray, value.dtype, value.shape)
+    if isinstance(value, (list, tuple)):
+        return (type(value), [_types(v) for v in value])
+    if isinstance(value, dict):
+        return (dict, {k: _types(v) for k, v in value.items()})
+    return float if isinstance(value, np.floating) else type(value)
+
+
+def test_diagnostics_have_the_same_types_and_values_after_a_load(solution, tmp_path):
+    (tmp_path / "solution.json").write_text(solution_to_json(solution))
+    loaded = load_solution(tmp_path).diagnostics
+    fresh = solution.diagnostics
+    assert _types(loaded) == _types(fresh)
+    assert isinstance(loaded.charts.lit_corrected, np.ndarray)
+    assert loaded.charts.lit_corrected.dtype == np.float64
+    for name in ("lit_chart_error", "cross_validated_error", "residuals_per_patch"):
+        np.testing.assert_array_equal(getattr(loaded, name), getattr(fresh, name))
+    assert loaded.extrapolation == fresh.extrapolation
+    assert loaded.in_frustum_drive_range == fresh.in_frustum_drive_range
+
+
+def test_a_malformed_diagnostics_value_names_its_key(solution, tmp_path):
+    data = json.loads(solution_to_json(solution))
+    data["diagnostics"]["charts"]["target"][3] = "grey"
+    (tmp_path / "solution.json").write_text(json.dumps(data))
+    with pytest.raises(
+        InputError, match=r"diagnostics\.charts\.target: expected a list of numbers"
+    ):
+        load_solution(tmp_path)
 
 
 def test_solution_json_round_trips_byte_for_byte(solution, tmp_path):
@@ -61,10 +107,8 @@ def test_an_older_file_keeps_its_keys(solution, tmp_path):
     data["diagnostics"]["retired_number"] = 3.5
     (tmp_path / "solution.json").write_text(json.dumps(data))
     d = load_solution(tmp_path).diagnostics
-    assert "model" not in d and d.get("model", "fallback") == "fallback"
-    with pytest.raises(KeyError):
-        d["model"]
-    assert d["retired_number"] == 3.5
+    assert d.model is None and "model" not in d.to_dict()
+    assert d.extra == {"retired_number": 3.5}
     assert (
         json.loads(solution_to_json(load_solution(tmp_path)))["diagnostics"] == data["diagnostics"]
     )
@@ -159,3 +203,34 @@ def test_invertibility_is_decided_once_by_the_model(solution, cond):
         # the bounded stand-in: gain at most MAX_CONDITION_INVERSE / sigma_max
         assert np.linalg.norm(columns, 2) <= MAX_CONDITION_INVERSE * 1.0001
         np.testing.assert_allclose(columns @ Q @ columns, columns, atol=1e-5)
+
+
+def test_white_patch_0_is_honoured_after_a_solve_and_a_load(tmp_path):
+    """The same chart with its white patch moved to index 0: every figure made relative to the
+    white patch is the same as with it at 18 (Fig. 11 does not depend on the order)."""
+    from ocio_vp.patterns.validation import content_scale
+    from ocio_vp.report.data import infer_white_patch
+
+    data = make_measurements_dict(environments=1)
+    moved = json.loads(json.dumps(data))
+    moved["stage"]["white_patch"] = 0
+    for c in ("red", "green", "blue"):
+        moved["lit_chart"][c] = np.roll(data["lit_chart"][c], -18, axis=0).tolist()
+    env = moved["environments"][0]
+    env["target_chart"] = np.roll(env["target_chart"], -18, axis=0).tolist()
+    solved = []
+    for document in (data, moved):
+        m = measurements_from_dict(document, source="m.yaml")
+        solved.append(solve_environment(m, m.environments[0], method="least-squares"))
+    at_18, at_0 = solved
+    assert at_0.diagnostics.white_patch == 0
+    np.testing.assert_allclose(
+        at_0.diagnostics.lit_chart_error, at_18.diagnostics.lit_chart_error, rtol=1e-9
+    )
+    (tmp_path / "solution.json").write_text(solution_to_json(at_0))
+    loaded = load_solution(tmp_path)
+    assert loaded.diagnostics.white_patch == 0
+    target = loaded.diagnostics.charts.target
+    assert content_scale(loaded, target) == content_scale(at_18, at_18.diagnostics.charts.target)
+    charts = loaded.diagnostics.charts.to_dict()
+    assert infer_white_patch(loaded, charts) == 0

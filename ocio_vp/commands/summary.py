@@ -51,7 +51,7 @@ def model_words(solution: Any) -> str:
     correction = solution.correction
     protected = correction.kind == "protected"
     inner = correction.inner if protected else correction
-    model = str(solution.diagnostics.get("model") or solution.method)
+    model = solution.model
     words = _KIND_WORDS.get(inner.kind)
     if words is None or model.startswith("rank-"):
         text = model
@@ -79,7 +79,7 @@ def _condition(value: Any) -> str:
 def _n_state(solution: Any) -> str:
     if solution.N is None:
         return "not solved"
-    return "= M" if solution.diagnostics.get("N_equals_M") else "solved"
+    return "= M" if solution.diagnostics.N_equals_M else "solved"
 
 
 def _delta_e(value: float) -> str:
@@ -88,10 +88,10 @@ def _delta_e(value: float) -> str:
 
 
 def _leds(diagnostics: Any) -> str:
-    figures = diagnostics.get("extrapolation") or {}
-    if "led_damage" not in figures:
+    figures = diagnostics.extrapolation
+    if figures is None:
         return "-"
-    return f"{_delta_e(figures['led_damage'])} ({_delta_e(figures['led_damage_least_squares'])})"
+    return f"{_delta_e(figures.led_damage)} ({_delta_e(figures.led_damage_least_squares)})"
 
 
 def summary_row(solution: Any) -> tuple[str, ...]:
@@ -103,14 +103,14 @@ def summary_row(solution: Any) -> tuple[str, ...]:
     return (
         solution.environment,
         model_words(solution),
-        _condition(d.get("cond_Q")),
+        _condition(d.cond_Q),
         _n_state(solution),
-        f"{_percent(errors['lit_baseline'])}>{_percent(errors['lit'])}",
-        f"{_percent(errors['shown_baseline'])}>{_percent(errors['shown'])}",
-        _percent(errors["cross_validated"]),
+        f"{_percent(errors.lit_baseline)}>{_percent(errors.lit)}",
+        f"{_percent(errors.shown_baseline)}>{_percent(errors.shown)}",
+        _percent(errors.cross_validated),
         _leds(d),
-        ",".join("RGB"[c] for c in d.get("out_of_frustum_negative_channels") or []) or "-",
-        str(len(d.get("clipped_patches") or [])),
+        ",".join("RGB"[c] for c in d.out_of_frustum_negative_channels or []) or "-",
+        str(len(d.clipped_patches or [])),
     )
 
 
@@ -126,7 +126,7 @@ def _wall_line(solutions: Sequence[Any]) -> str:
     else:
         signal = f"{name} signal of the linear drive (1.0 = the measured primaries' full drive)"
     return (
-        f"stage {first.stage}: cond[SL] {_condition(first.diagnostics.get('cond_SL'))}; "
+        f"stage {first.stage}: cond[SL] {_condition(first.diagnostics.cond_SL)}; "
         f"wall signal: {signal}"
     )
 
@@ -135,7 +135,7 @@ def _grouped(solutions: Sequence[Any]) -> list[str]:
     """Every warning once, with the environments it concerns."""
     where: dict[str, list[str]] = {}
     for s in solutions:
-        for warning in s.diagnostics.get("warnings") or []:
+        for warning in s.diagnostics.warnings:
             where.setdefault(str(warning), []).append(s.environment)
     lines = []
     for text, names in where.items():

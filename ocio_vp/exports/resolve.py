@@ -214,13 +214,15 @@ def _clf_accuracy(stem: str, solution: Any, carriage: dict[str, Any] | None) -> 
     exact model (ΔE2000; the DCTL is the exact alternative)."""
     if carriage is None or stem == "wall_out_of_frustum":
         return "exact"
-    block = solution.diagnostics.get("post_correction_ocio") or {}
+    block = solution.diagnostics.post_correction_ocio
     if stem == "post_correction_Q":
         return {"delta_E_2000_vs_model": carriage["agreement"], "note": carriage["note"]}
     if solution.N is None:  # the in-frustum drive is M: no LUT chain in it
         return "exact"
     return {
-        "round_trip_delta_E_2000": block.get("inverse_agreement"),
+        "round_trip_delta_E_2000": None
+        if block is None or block.inverse_agreement is None
+        else block.inverse_agreement.to_dict(),
         "note": "content -> this drive's Q^-1 LUT chain -> [SL] -> the exact Q, against the "
         "content (ΔE2000 over the corrected camera range)",
     }

@@ -51,12 +51,12 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 import PyOpenColorIO as OCIO
 
 from ocio_vp.errors import InputError
+from ocio_vp.formats.diagnostics import PostCorrectionOCIO
 from ocio_vp.formats.solution import Solution
 from ocio_vp.metrics import SAMPLE_CAMERA_TO_XYZ
 from ocio_vp.model.correction import PostCorrection, newton_inverse
@@ -666,7 +666,7 @@ class ModelOutputs:
     forward: Agreement
     inverse: Agreement | None
     files: dict[str, str] = field(default_factory=dict)
-    block: dict[str, Any] = field(default_factory=dict)
+    block: PostCorrectionOCIO | None = None
 
     def note(self) -> str:
         """One sentence for descriptions: how close the chain is, and what to use where it is
@@ -713,10 +713,11 @@ def model_outputs(solution: Solution) -> ModelOutputs | None:
             "needs one (re-solve, or set N to null)",
             key="post_correction",
         )
-    charts = solution.diagnostics["charts"]
-    white = int(solution.diagnostics.get("white_patch") or 18)
-    lit = np.asarray(charts["lit_baseline"], dtype=np.float64)
-    target = np.asarray(charts["target"], dtype=np.float64)
+    charts = solution.diagnostics.charts
+    if charts is None:
+        raise InputError("no charts to bake the post-correction on", key="diagnostics.charts")
+    white = solution.diagnostics.white_patch
+    lit, target = charts.lit_baseline, charts.target
     footage = calibration_footage_range(
         lit_chart=lit, white_patch=white, target_white=target[white], SL=solution.SL,
         camera_to_xyz=SAMPLE_CAMERA_TO_XYZ,
@@ -765,13 +766,13 @@ def _outputs(solution, chains, measured, measured_inverse) -> ModelOutputs:
         files[f"{LUT_DIR}/{name}"] = text
         names.append(name)
         designs[what] = chain.describe()
-    block = {
-        "files": list(files),
-        "lut_size": LUT_SIZE,
-        "chains": designs,
-        "agreement": measured.to_dict(),
-        "inverse_agreement": None if measured_inverse is None else measured_inverse.to_dict(),
-    }
+    block = PostCorrectionOCIO(
+        files=list(files),
+        lut_size=LUT_SIZE,
+        chains=designs,
+        agreement=measured,
+        inverse_agreement=measured_inverse,
+    )
     return ModelOutputs(
         q_file=names[0],
         q_inverse_file=names[1] if len(names) > 1 else None,

@@ -343,7 +343,7 @@ def _empty_config(solution: Solution, origin: str, search_path: str | None) -> O
     config.setName(f"ocio-vp_{solution.stage}_{solution.environment}")
     config.setDescription(
         f"ocio_vp calibration of {origin}. Q method: {solution.method} "
-        f"(model {solution.diagnostics.get('model') or solution.method}). "
+        f"(model {solution.model}). "
         "LeGendre, Lepicovsky & Debevec, DigiPro 2022."
     )
     if search_path:
@@ -400,7 +400,7 @@ def _in_frustum_text(solution: Solution, model: ModelFiles | None = None) -> str
     elif solution.N is not None:
         text = f"N = M Q^-1 {format_matrix(solution.N)}"
     else:
-        reason = solution.diagnostics.get("N_reason") or "Q is not invertible"
+        reason = solution.diagnostics.N_reason or "Q is not invertible"
         text = f"N NOT SOLVED ({reason}); M is used instead, {format_matrix(solution.M)}"
     if solution.black_level_offset is not None:
         text += (
@@ -440,8 +440,8 @@ def _add_post_correction(
     approximation, printed for reference.
     """
     q_identity = is_identity(solution.Q) and model is None
-    method_model = solution.diagnostics.get("model") or solution.method
-    reason = solution.diagnostics.get("model_reason")
+    method_model = solution.model
+    reason = solution.diagnostics.model_reason
     q_text = (
         f"Post-correction Q {format_matrix(solution.Q)} for footage shot on the stage ({solution.method}, "
         f"model {method_model}{': ' + reason if reason else ''}). {origin}."

@@ -68,7 +68,7 @@ def wall_signal(config_path: str | Path, solution: Solution, content: np.ndarray
 def content_scale(solution: Solution, target: np.ndarray) -> float:
     """The factor (4 significant digits) that puts the target's white patch at
     :data:`WHITE_DRIVE` through the in-frustum matrix (N, or M where N was not solved)."""
-    white = int(solution.diagnostics.get("white_patch") or 18)
+    white = solution.diagnostics.white_patch
     white = white if 0 <= white < len(target) else int(np.argmax(target.sum(axis=1)))
     peak = float(np.max(solution.in_frustum_matrix @ target[white]))
     if not peak > 0:
@@ -91,8 +91,8 @@ def validation_sequence(environment_dir: str | Path, options: PatternOptions) ->
     folder = Path(environment_dir)
     solution = load_solution(folder)
     source = folder / "solution.json"
-    charts = solution.diagnostics.get("charts") or {}
-    target = np.asarray(charts.get("target") or [], dtype=np.float64)
+    charts = solution.diagnostics.charts
+    target = np.zeros((0,)) if charts is None else charts.target
     if target.ndim != 2 or target.shape[1:] != (3,) or not np.all(np.isfinite(target)):
         raise InputError("no target chart in diagnostics.charts.target", source=source)
     encoding, peak = wall_encoding_of(solution)

@@ -28,6 +28,7 @@ import numpy as np
 from ocio_vp.calibration.equations import condition_number, condition_text
 from ocio_vp.calibration.headroom import content_scale
 from ocio_vp.errors import InputError
+from ocio_vp.formats.diagnostics import lowest_channel_words
 from ocio_vp.formats.provenance import solution_sha256
 from ocio_vp.formats.solution import Solution
 from ocio_vp.formats.solution_inputs import solution_folders
@@ -197,19 +198,19 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
     facts = [
         ("stage", s.stage),
         ("Q method", _method(s)),
-        ("why this model", d.get("model_reason") or "the method asked for"),
+        ("why this model", d.model_reason or "the method asked for"),
         ("beyond the chart", _beyond_the_chart(s)),
         ("beta (panel form factor)", f"{s.beta:.5f}"),
         ("w_avg (camera RGB)", ", ".join(f"{v:.5g}" for v in s.w_avg)),
-        ("out-of-frustum drive M w_avg", _triple(d.get("out_of_frustum_drive"))),
-        ("N", "solved" if s.N is not None else f"not solved: {d.get('N_reason')}"),
+        ("out-of-frustum drive M w_avg", _triple(d.out_of_frustum_drive)),
+        ("N", "solved" if s.N is not None else f"not solved: {d.N_reason}"),
         (
             "black level offset",
             "none (no black-level measurement)"
             if s.black_level_offset is None
             else f"{_triple(s.black_level_offset)} ({s.black_level_method})",
         ),
-        ("rank Q", d.get("rank_Q")),
+        ("rank Q", d.rank_Q),
         ("camera colour space", s.camera_colorspace or "camera native (as measured)"),
         ("measurements", f"{s.measurements_file} (sha256 {str(s.measurements_sha256)[:12]}…)"),
         ("solution file", Path(*Path(data.path).parts[-2:]).as_posix()),  # no absolute paths
@@ -220,7 +221,7 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
     facts += _fixture_facts(s)
     facts += panel_facts(s)  # a stage of several panel types
     facts += _soft_clip_facts(s)
-    notes = d.get("method_notes") or {}
+    notes = d.method_notes or {}
     rows = []
     for chart in STAGE_CHARTS:
         rows.append(
@@ -239,7 +240,7 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
         "matrices": matrices,
         "facts": facts,
         "notes": sorted((str(k), _short(v)) for k, v in notes.items()),
-        "warnings": [str(w) for w in d.get("warnings", [])],
+        "warnings": [str(w) for w in d.warnings],
         "errors": rows,
         "transform": data.transform.description,
         "linearity": _linearity_facts(s.linearity),
@@ -265,7 +266,7 @@ def _fixture_facts(solution: Any) -> list[tuple[str, str]]:
     """Practical fixtures: each one's drives, and what they did to the error Q cannot remove."""
     if not solution.fixtures:
         return []
-    notes = solution.diagnostics.get("fixtures") or {}
+    notes = solution.diagnostics.fixtures
     facts = [
         (
             f"fixture {name}",
@@ -274,22 +275,22 @@ def _fixture_facts(solution: Any) -> list[tuple[str, str]]:
         )
         for name, block in solution.fixtures.items()
     ]
-    if notes.get("applied"):
-        limits = ", ".join(notes.get("active_limits", [])) or "none"
+    if notes is not None and notes.applied:
+        limits = ", ".join(notes.active_limits) or "none"
         change = (
-            f"{notes['error_wall_only']:.3g} with the wall alone -> {notes['error_with_fixtures']:.3g} "
-            f"with the fixtures ({100 * notes['error_reduction']:.0f}% lower); active limits: {limits}"
+            f"{notes.error_wall_only:.3g} with the wall alone -> {notes.error_with_fixtures:.3g} "
+            f"with the fixtures ({100 * notes.error_reduction:.0f}% lower); active limits: {limits}"
         )
     else:
-        change = f"fixtures off: {notes.get('reason', 'not solved')}"
+        change = f"fixtures off: {'not solved' if notes is None else notes.reason}"
     return [*facts, ("error Q cannot remove (eq. 5 residual)", change)]
 
 
 def _method(solution: Any) -> str:
     """The Q method, the model an automatic method chose, and the post-correction in words."""
-    model = solution.diagnostics.get("model")
+    model = solution.model
     text = solution.method
-    if isinstance(model, str) and model != solution.method:
+    if model != solution.method:
         text = f"{solution.method} → {model}"
     return f"{text} ({solution.correction.describe()})"
 
@@ -300,26 +301,17 @@ def _share(value: Any, sign: str = "") -> str:
     return f"{number:{sign}.0%}" if np.isfinite(number) else f"{number:{sign}}"
 
 
-def _lowest_channel(value: Any) -> str:
-    """The probe's lowest channel; null (or "-inf" in older files): the dominant output at or
-    below zero (as ocio_vp.correction.extrapolation.lowest_channel_words, without importing a
-    solver)."""
-    if value is None or not np.isfinite(float(value)):
-        return "the channel itself at or below zero"
-    return f"lowest channel {_share(value, '+')} of it"
-
-
 def _beyond_the_chart(solution: Any) -> str:
     """The extrapolation figures (docs/stability.md, *Beyond the chart*) and the emitter guard."""
-    figures = solution.diagnostics.get("extrapolation")
+    figures = solution.diagnostics.extrapolation
     text = "not measured (a solution written before these figures)"
-    if figures:
-        folds = figures.get("folds")
+    if figures is not None:
+        folds = figures.folds
         text = (
-            f"the wall's LEDs seen in frame: p95 ΔE2000 {float(figures['led_damage']):.3g} "
-            f"(least squares {float(figures['led_damage_least_squares']):.3g}); bright saturated "
-            f"inputs keep >= {_share(figures['kept'])} of their channel, "
-            f"{_lowest_channel(figures['negative'])}; "
+            f"the wall's LEDs seen in frame: p95 ΔE2000 {figures.led_damage:.3g} "
+            f"(least squares {figures.led_damage_least_squares:.3g}); bright saturated "
+            f"inputs keep >= {_share(figures.kept)} of their channel, "
+            f"{lowest_channel_words(figures.negative)}; "
             + ("no inverse" if folds is None else f"folds in {folds:.1%} of reflective colours")
         )
     if solution.correction.kind == "protected":
@@ -390,10 +382,10 @@ def _summary(environments: Sequence[EnvironmentData]) -> list[dict[str, str]]:
                 "name": e.solution.environment,
                 "key": e.key,
                 "method": _method(e.solution),
-                "cond_q": "-" if d.get("cond_Q") is None else condition_text(float(d["cond_Q"])),
+                "cond_q": "-" if d.cond_Q is None else condition_text(d.cond_Q),
                 "n": "solved" if e.solution.N is not None else "not solved",
                 **{chart: _percent(e.errors[chart]) for chart in STAGE_CHARTS},
-                "warnings": str(len(d.get("warnings", []))),
+                "warnings": str(len(d.warnings)),
             }
         )
     return rows
