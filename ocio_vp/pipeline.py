@@ -351,9 +351,9 @@ def _type_linearity(measurements: Measurements, index: int) -> dict | None:
     if panel.encoding is None:
         return linearity
     linearity = dict(linearity or {"measured": False, "model": "linear (assumed)"})
-    linearity["wall_encoding"] = {"name": panel.encoding}
-    if panel.encoding == "pq" and panel.peak_nits is not None:
-        linearity["wall_encoding"]["peak_nits"] = float(panel.peak_nits)
+    from ocio_vp.wall.encoding import WallEncoding
+
+    linearity["wall_encoding"] = WallEncoding(panel.encoding, panel.peak_nits).to_dict()
     return linearity
 
 

@@ -117,14 +117,7 @@ def summary_row(solution: Any) -> tuple[str, ...]:
 def _wall_line(solutions: Sequence[Any]) -> str:
     """The stage's cond[SL] and the wall's signal, once."""
     first = solutions[0]
-    encoding = (first.linearity or {}).get("wall_encoding") or {"name": "linear"}
-    name = encoding.get("name", "linear")
-    if name == "pq":
-        signal = f"PQ (SMPTE ST 2084), drive 1.0 = {encoding['peak_nits']:g} cd/m2"
-    elif name == "linear":
-        signal = "linear drive (1.0 = the measured primaries' full drive)"
-    else:
-        signal = f"{name} signal of the linear drive (1.0 = the measured primaries' full drive)"
+    signal = first.wall_encoding.describe()
     return (
         f"stage {first.stage}: cond[SL] {_condition(first.diagnostics.cond_SL)}; "
         f"wall signal: {signal}"

@@ -138,18 +138,8 @@ def wall_transforms(
     return {OUT_OF_FRUSTUM: (outer, outer_back), IN_FRUSTUM: (inner, inner_back)}
 
 
-#: OCIO encoding of the wall colorspaces for each wall signal encoding (docs/linearity.md).
-WALL_SIGNAL_ENCODINGS = {
-    "linear": "scene-linear",
-    "gamma2.4": "sdr-video",
-    "srgb": "sdr-video",
-    "pq": "hdr-video",
-}
-
-
 def _wall_signal_encoding(solution: Solution) -> str:
-    wall = (solution.linearity or {}).get("wall_encoding") or {}
-    return WALL_SIGNAL_ENCODINGS.get(wall.get("name", "linear"), "scene-linear")
+    return solution.wall_encoding.ocio_encoding
 
 
 def _group(transforms: list[OCIO.Transform]) -> OCIO.Transform:
@@ -210,16 +200,6 @@ def post_correction_transforms(
     return forward, matrix_transform(pinv), text
 
 
-#: Drive at which an encoded wall signal reaches 1.0, by encoding (PQ: 10000 nits / peak).
-def _signal_top(encoding: dict) -> float | None:
-    name = encoding.get("name", "linear")
-    if name == "linear":
-        return None
-    if name == "pq":
-        return 10000.0 / float(encoding.get("peak_nits", 1000.0))
-    return 1.0
-
-
 def wall_signal_tail(solution: Solution, extra: list[OCIO.Transform]) -> list[OCIO.Transform]:
     """``extra`` (the wall's LUT and encoding) between explicit clamps.
 
@@ -232,8 +212,7 @@ def wall_signal_tail(solution: Solution, extra: list[OCIO.Transform]) -> list[OC
     """
     if not extra:
         return []
-    encoding = (solution.linearity or {}).get("wall_encoding") or {}
-    top = _signal_top(encoding)
+    top = solution.wall_encoding.signal_top
     if top is None:
         return [OCIO.RangeTransform(minInValue=0.0, minOutValue=0.0), *extra]
     return [

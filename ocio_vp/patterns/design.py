@@ -30,9 +30,10 @@ from typing import Any
 
 import numpy as np
 
+from ocio_vp.choices import WALL_ENCODINGS
 from ocio_vp.errors import InputError
 from ocio_vp.patterns.sequence import FILE_FORMATS, Patch, PatternSequence
-from ocio_vp.wall.encoding import WALL_ENCODINGS, decode, encode
+from ocio_vp.wall.encoding import decode, encode
 from ocio_vp.wall.linearity import CHANNELS
 
 __all__ = [

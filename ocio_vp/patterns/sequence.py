@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from ocio_vp.choices import WALL_ENCODINGS
 from ocio_vp.formats.measurements import CHANNELS, Validator, read_document
-from ocio_vp.wall.encoding import WALL_ENCODINGS
 
 __all__ = [
     "FILE_FORMATS",

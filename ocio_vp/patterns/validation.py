@@ -30,7 +30,6 @@ from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import Solution, load_solution
 from ocio_vp.patterns.design import PatternOptions, SequenceBuilder
 from ocio_vp.patterns.sequence import PatternSequence, Validation
-from ocio_vp.wall.encoding import decode
 
 __all__ = ["WHITE_DRIVE", "content_scale", "validation_sequence", "wall_encoding_of", "wall_signal"]
 
@@ -41,10 +40,8 @@ WHITE_DRIVE = 0.7
 
 def wall_encoding_of(solution: Solution) -> tuple[str, float | None]:
     """(encoding, peak_nits or None) the solve's config sends to the wall."""
-    block = (solution.linearity or {}).get("wall_encoding") or {"name": "linear"}
-    name = str(block.get("name", "linear"))
-    peak = block.get("peak_nits")
-    return name, (float(peak) if name == "pq" and peak is not None else None)
+    encoding = solution.wall_encoding
+    return encoding.name, encoding.peak_nits
 
 
 def wall_signal(config_path: str | Path, solution: Solution, content: np.ndarray) -> np.ndarray:
@@ -109,7 +106,7 @@ def validation_sequence(environment_dir: str | Path, options: PatternOptions) ->
     scale = content_scale(solution, target)
     target = target * scale
     signals = wall_signal(config, solution, np.vstack([np.zeros((1, 3)), target]))
-    drives = signals if encoding == "linear" else decode(signals, encoding, peak_nits=peak or 1e3)
+    drives = solution.wall_encoding.decode(signals)
     if not np.all(np.isfinite(drives)):
         raise InputError("the config sends a non-finite drive for the chart", source=config)
     builder = SequenceBuilder(options)
