@@ -234,3 +234,30 @@ def test_white_patch_0_is_honoured_after_a_solve_and_a_load(tmp_path):
     assert content_scale(loaded, target) == content_scale(at_18, at_18.diagnostics.charts.target)
     charts = loaded.diagnostics.charts.to_dict()
     assert infer_white_patch(loaded, charts) == 0
+
+
+def test_no_module_reads_a_solve_result_by_string():
+    """``solution.diagnostics["..."]`` and ``.get("...")`` are gone from the package: the
+    diagnostics are typed records (read by attribute, checked by type checkers)."""
+    import ast
+    from pathlib import Path
+
+    package = Path(__file__).resolve().parents[1] / "ocio_vp"
+    found = []
+    for path in sorted(package.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            target = None
+            if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant):
+                target = node.value
+            elif (
+                isinstance(node, ast.Call)
+                and isinstance(node.func, ast.Attribute)
+                and node.func.attr == "get"
+            ):
+                target = node.func.value
+            while isinstance(target, ast.Attribute):  # solution.diagnostics.charts[...] too
+                if target.attr == "diagnostics":
+                    found.append(f"{path.relative_to(package)}:{node.lineno}")
+                    break
+                target = target.value
+    assert found == []
