@@ -8,6 +8,8 @@ the other fails the suite.
 
 from __future__ import annotations
 
+from typing import Literal
+
 __all__ = [
     "BLACK_LEVEL_METHODS",
     "DEFAULT_BASE_CONFIG",
@@ -22,6 +24,7 @@ __all__ = [
     "OPTIMIZATIONS",
     "Q_METHODS",
     "WALL_ENCODINGS",
+    "BlackLevelMethod",
 ]
 
 #: The white patch of a ColorChecker 24, 0-based in reading order (people see it as patch 19,
@@ -49,8 +52,9 @@ LINEAR_METHODS = frozenset(Q_METHODS) - {"auto", "root-polynomial", "root-polyno
 DEFAULT_METHOD = "auto"
 
 #: In-frustum black-level offset: ``exact`` (``-M b``) or the paper's ``b / w_camera``.
-BLACK_LEVEL_METHODS = ("exact", "paper")
-DEFAULT_BLACK_LEVEL = "exact"
+BlackLevelMethod = Literal["exact", "paper"]
+BLACK_LEVEL_METHODS: tuple[BlackLevelMethod, ...] = ("exact", "paper")
+DEFAULT_BLACK_LEVEL: BlackLevelMethod = "exact"
 
 #: The wall's signal encodings (docs/linearity.md).
 WALL_ENCODINGS = ("linear", "gamma2.4", "srgb", "pq")

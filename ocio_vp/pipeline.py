@@ -39,7 +39,7 @@ from ocio_vp.calibration.panels import (
     panel_lights,
     panel_solutions,
 )
-from ocio_vp.choices import DEFAULT_BLACK_LEVEL, DEFAULT_METHOD
+from ocio_vp.choices import DEFAULT_BLACK_LEVEL, DEFAULT_METHOD, BlackLevelMethod
 from ocio_vp.correction.extrapolation import Extrapolation, extrapolation
 from ocio_vp.correction.guards import check_problem, singular_q_cause
 from ocio_vp.correction.outliers import Inconsistency, inconsistent_patches
@@ -89,7 +89,7 @@ class SolveOptions:
     """
 
     method: str = DEFAULT_METHOD
-    black_level: str = DEFAULT_BLACK_LEVEL
+    black_level: BlackLevelMethod = DEFAULT_BLACK_LEVEL
     max_condition_q: float = MAX_CONDITION_Q_FOR_N
     fixtures: bool = True
     keep_all_patches: bool = False
@@ -124,7 +124,7 @@ def solve_environment(
     problem, excluded = _screen(problem, measurements, environment, options.keep_all_patches)
     fit = _fit(problem, options.method, measurements, environment)
     correction = fit.correction
-    if options.protect_emitters:
+    if options.protect_emitters and not isinstance(correction, ProtectedCorrection):
         correction = ProtectedCorrection(correction, problem.domain, problem.M, dark=DEFAULT_DARK)
     SL, M_calibrated = problem.SL, problem.M
     M = M_calibrated if fit.M is None else np.asarray(fit.M, dtype=np.float64)
@@ -467,7 +467,7 @@ def _diagnostics(
     problem: QProblem,
     fit: QFit,
     correction: PostCorrection,
-    charts: dict[str, np.ndarray],
+    charts: Charts,
     *,
     options: SolveOptions,
     M: np.ndarray,

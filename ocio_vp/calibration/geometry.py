@@ -83,7 +83,8 @@ def form_factor_parallel_rectangle(
 
     def corner(x: float, y: float) -> float:
         # Quadrant rectangle [0, x] x [0, y] with signs: superpose four of them.
-        return float(np.sign(x) * np.sign(y) * _corner_form_factor(abs(x), abs(y), distance))
+        size_x, size_y = float(np.abs(x)), float(np.abs(y))
+        return float(np.sign(x) * np.sign(y) * _corner_form_factor(size_x, size_y, distance))
 
     return corner(x1, y1) - corner(x0, y1) - corner(x1, y0) + corner(x0, y0)
 

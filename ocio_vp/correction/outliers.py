@@ -600,6 +600,11 @@ def _ambiguous(scores: dict, j: int, k: int, n: int) -> list[Inconsistency]:
     ]
 
 
+def _rgb(values: np.ndarray) -> tuple[float, float, float]:
+    r, g, b = (float(v) for v in values)
+    return r, g, b
+
+
 def _inconsistency(scores: dict, j: int, n: int, **swap) -> Inconsistency:
     return Inconsistency(
         j,
@@ -607,7 +612,7 @@ def _inconsistency(scores: dict, j: int, n: int, **swap) -> Inconsistency:
         float(scores["relative"][j]),
         float(scores["z"][j]),
         float(scores["influence"][j]),
-        tuple(float(v) for v in scores["residual"][j]),
+        _rgb(scores["residual"][j]),
         **swap,
         deletion=float(scores["deletion"][j]),
     )

@@ -69,7 +69,7 @@ def read_record(cls: type[R], data: object, key: str) -> R:
     """``data`` (a JSON mapping) as a ``cls`` record; ``key`` names the block in errors."""
     if not isinstance(data, Mapping):
         raise InputError(f"expected a mapping, got {excerpt(data)}", key=key)
-    hints = _hints(cls)
+    hints = _hints(cls)  # type: ignore[arg-type]  # a class is hashable
     fields = {f.name: f for f in dataclasses.fields(cls) if f.name not in _HIDDEN}  # type: ignore[arg-type]
     values = {}
     for name, field in fields.items():

@@ -227,6 +227,11 @@ def _text(data: dict[str, Any], key: str, source: str, *, name: bool = False) ->
     return value
 
 
+def _name(data: dict[str, Any], key: str, source: str) -> str:
+    """A required name: safe as a folder and an OCIO name."""
+    return check_safe_name(data.get(key), source=source, key=key)
+
+
 def _mapping(data: dict[str, Any], key: str, source: str) -> dict[str, Any]:
     value = data.get(key)
     if value is None:
@@ -280,8 +285,8 @@ def load_solution(path: str | Path) -> Solution:
     except InputError as error:
         raise InputError(error.problem, source=source, key=error.key) from None
     return Solution(
-        stage=_text(data, "stage", source, name=True),
-        environment=_text(data, "environment", source, name=True),
+        stage=_name(data, "stage", source),
+        environment=_name(data, "environment", source),
         method=_text(data, "method", source) or "",
         beta=float(beta),
         w_avg=_rgb(data, "w_avg", source),

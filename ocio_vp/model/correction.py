@@ -746,8 +746,14 @@ def correction_from_dict(data: Mapping[str, Any]) -> PostCorrection:
         if kind == "protected":
             if domain is None:
                 raise InputError("a protected correction needs its domain", key="post_correction")
+            inner = correction_from_dict({**parameters["inner"], "domain": data.get("domain")})
+            if isinstance(inner, ProtectedCorrection):
+                raise InputError(
+                    "a protected correction cannot protect another",
+                    key="post_correction.parameters.inner",
+                )
             return ProtectedCorrection(
-                correction_from_dict({**parameters["inner"], "domain": data.get("domain")}),
+                inner,
                 domain,
                 parameters["drive_matrix"],
                 tuple(parameters["bright"]),

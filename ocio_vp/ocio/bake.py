@@ -49,7 +49,7 @@ on the camera range of :mod:`ocio_vp.model.footage_range`, stored in ``solution.
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -59,7 +59,7 @@ from ocio_vp.errors import InputError
 from ocio_vp.formats.diagnostics import PostCorrectionOCIO
 from ocio_vp.formats.solution import Solution
 from ocio_vp.metrics import SAMPLE_CAMERA_TO_XYZ
-from ocio_vp.model.correction import PostCorrection, newton_inverse
+from ocio_vp.model.correction import PostCorrection, ProtectedCorrection, newton_inverse
 from ocio_vp.model.footage_range import Agreement, agreement, calibration_footage_range
 from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
 from ocio_vp.ocio.wall import sidecar_name
@@ -356,7 +356,7 @@ def _box(chain: LutChain, colours: np.ndarray) -> tuple[tuple[float, float], tup
 
 
 def _design(
-    curvatures: list[tuple[Callable[[np.ndarray], np.ndarray], np.ndarray, list[float]]],
+    curvatures: Sequence[tuple[Callable[[np.ndarray], np.ndarray], np.ndarray, list[float]]],
     *,
     mix: float,
     reference: np.ndarray,
@@ -457,7 +457,7 @@ def forward_chain(
     s_nodes = [black, *(np.log2(linear_break) + o for o in BREAK_NODES)]
     scales = [np.log2(level) - 2.0, np.log2(level)]
     curvatures = [(correction.apply, _reference(correction), scales)]
-    if correction.kind == "protected":
+    if isinstance(correction, ProtectedCorrection):
         fade = _fade_nodes(correction, T, np.vstack([colours, white]))
         s_nodes = [s for s in s_nodes if s < fade[0] - 0.3] + fade + [fade[-1] + 1, fade[-1] + 3]
         # the inner model's departure from its matrix, and (below the fade, where only the
@@ -574,7 +574,7 @@ def bake_inverse(correction: PostCorrection, chain: LutChain) -> np.ndarray:
     a, b = np.meshgrid(chain.a_nodes, chain.b_nodes, indexing="ij")
     s_nodes = chain.s_nodes
     values = np.empty((len(s_nodes), n * n, 3))
-    if correction.kind != "protected":
+    if not isinstance(correction, ProtectedCorrection):
         c = chain.inputs(np.zeros_like(a), a, b).reshape(-1, 3)
         x = correction.inverse(c)
         level = chain.values(lambda _: x, c)
@@ -589,7 +589,7 @@ def bake_inverse(correction: PostCorrection, chain: LutChain) -> np.ndarray:
     for i, s in enumerate(s_nodes[1:-1], start=1):
         c = chain.inputs(np.full_like(a, s), a, b).reshape(-1, 3)
         x = _solved(correction.apply, c, x * np.exp2(s - previous), correction.inner.matrix)
-        values[i] = chain.values(lambda _, x=x: x, c)
+        values[i] = chain.values(_returning(x), c)
         previous = s
     c = chain.inputs(np.full_like(a, s_nodes[-1]), a, b).reshape(-1, 3)
     values[-1] = chain.values(lambda _: c, c)  # the identity above the fade
@@ -640,6 +640,11 @@ def clf_text(chain: LutChain, lut: np.ndarray, description: str) -> str:
 
 def _cpu(transform: OCIO.Transform) -> Callable[[np.ndarray], np.ndarray]:
     return processor_function(OCIO.Config.CreateRaw().getProcessor(transform))
+
+
+def _returning(x: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """A function of one argument that returns ``x`` whatever it is given."""
+    return lambda _: x
 
 
 def processor_function(processor: OCIO.Processor) -> Callable[[np.ndarray], np.ndarray]:

@@ -402,6 +402,6 @@ def _with_panel_encodings(solution: Solution, encoding: str, peak_nits: float) -
 
     panels = {
         name: dataclasses.replace(panel, linearity=encoded(panel.linearity))
-        for name, panel in solution.panels.items()
+        for name, panel in (solution.panels or {}).items()
     }
     return dataclasses.replace(solution, linearity=encoded(solution.linearity), panels=panels)
