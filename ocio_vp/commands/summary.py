@@ -117,7 +117,9 @@ def summary_row(solution: Any) -> tuple[str, ...]:
 def _wall_line(solutions: Sequence[Any]) -> str:
     """The stage's cond[SL] and the wall's signal, once."""
     first = solutions[0]
-    signal = first.wall_encoding.describe()
+    from ocio_vp.wall.encoding import WallEncoding
+
+    signal = WallEncoding.of(first.linearity).describe()
     return (
         f"stage {first.stage}: cond[SL] {_condition(first.diagnostics.cond_SL)}; "
         f"wall signal: {signal}"

@@ -54,7 +54,7 @@ from ocio_vp.correction.problem import QFit, QProblem
 from ocio_vp.correction.root_polynomial import bounded_loo_predictions, make_q_root_polynomial
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import error_relative_to_white
-from ocio_vp.model.correction import MatrixCorrection
+from ocio_vp.model.correction import MatrixCorrection, RootPolynomialCorrection
 
 __all__ = ["DEGREE_3_EXCLUDED", "SHRUNK_SE_FACTOR", "q_auto"]
 
@@ -252,10 +252,12 @@ def q_auto(problem: QProblem) -> QFit:
         if int(np.count_nonzero(active)) <= {2: 6, 3: 13}[ROOT_POLYNOMIAL_DEGREES[name]]:
             continue
         models[name], why = _bounded_candidate(problem, name)
+        fit = models[name]
         if why:
             excluded.append(why)
-        else:
-            held[name] = bounded_loo_predictions(problem, models[name].correction)
+        else:  # a candidate: a bounded root-polynomial fit
+            assert fit is not None and isinstance(fit.correction, RootPolynomialCorrection)
+            held[name] = bounded_loo_predictions(problem, fit.correction)
     stacked, unit = patch_errors(np.stack(list(held.values())), P, w, white)
     scores = {name: e[active] for name, e in zip(held, stacked, strict=True)}
     chosen, table, shrunk = _choose(scores)

@@ -269,10 +269,10 @@ def write_resolve(
     (folder / MANIFEST).write_text(
         json.dumps(manifest, indent=2, allow_nan=False) + "\n", encoding="utf-8"
     )
-    cubes = {k: v["accuracy"] for k, v in files.items() if v["kind"] == "cube"}
+    written = {k: v["accuracy"] for k, v in files.items() if v["kind"] == "cube"}
     return {
         "files": [*files, MANIFEST],
-        "cubes": cubes,
+        "cubes": written,
         "not_written": not_written,
         "post_correction": None if carriage is None else carriage["note"],
     }

@@ -33,7 +33,6 @@ from ocio_vp.model.correction import (
     correction_from_dict,
     correction_to_dict,
 )
-from ocio_vp.wall.encoding import WallEncoding
 
 __all__ = ["SOLUTION_FORMAT", "Diagnostics", "Solution", "load_solution", "solution_to_json"]
 
@@ -92,11 +91,6 @@ class Solution:
     def model(self) -> str:
         """The Q model fitted (``auto`` chooses one); the method for a file that does not say."""
         return self.diagnostics.model or self.method
-
-    @property
-    def wall_encoding(self) -> WallEncoding:
-        """The signal this solve's config sends the wall (``linearity.wall_encoding``)."""
-        return WallEncoding.of(self.linearity)
 
     @property
     def Q(self) -> np.ndarray:

@@ -35,6 +35,7 @@ from ocio_vp.ocio.viewing import (
     add_monitor_displays,
     set_categories,
 )
+from ocio_vp.wall.encoding import WallEncoding
 from ocio_vp.wall.softclip import soft_clip_knee
 
 __all__ = [
@@ -139,7 +140,7 @@ def wall_transforms(
 
 
 def _wall_signal_encoding(solution: Solution) -> str:
-    return solution.wall_encoding.ocio_encoding
+    return WallEncoding.of(solution.linearity).ocio_encoding
 
 
 def _group(transforms: list[OCIO.Transform]) -> OCIO.Transform:
@@ -212,7 +213,7 @@ def wall_signal_tail(solution: Solution, extra: list[OCIO.Transform]) -> list[OC
     """
     if not extra:
         return []
-    top = solution.wall_encoding.signal_top
+    top = WallEncoding.of(solution.linearity).signal_top
     if top is None:
         return [OCIO.RangeTransform(minInValue=0.0, minOutValue=0.0), *extra]
     return [

@@ -112,6 +112,11 @@ class PatternOptions:
         return 2 ** FILE_FORMATS[self.file_format] - 1
 
 
+def _triple(values: np.ndarray) -> tuple[float, float, float]:
+    r, g, b = (float(v) for v in values)
+    return r, g, b
+
+
 def flash_frames(fps: float) -> int:
     """Frames per sync flash (and per gap between flashes): ~1/6 s, at least 2."""
     return max(2, round(fps * FLASH_SECONDS))
@@ -233,8 +238,8 @@ class SequenceBuilder:
                 kind=kind,
                 first=first,
                 last=last,
-                drive=tuple(float(v) for v in shown),
-                signal=tuple(float(v) for v in signal),
+                drive=_triple(shown),
+                signal=_triple(signal),
                 **extra,
             )
         )

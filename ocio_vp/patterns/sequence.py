@@ -246,7 +246,8 @@ def _validation(ctx: Validator, raw: Any) -> Validation:
 def _checked_patches(ctx: Validator, raw: Any, first_frame: int) -> tuple[Patch, ...]:
     if not isinstance(raw, list) or not raw:
         raise ctx.error(("patches",), "expected a non-empty list of patches")
-    patches, names = [], set()
+    patches: list[Patch] = []
+    names: set[str] = set()
     for i, entry in enumerate(raw):
         patch = _patch(ctx, entry, i, patches[-1].last if patches else first_frame - 1)
         if patch.name in names:

@@ -30,6 +30,7 @@ from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import Solution, load_solution
 from ocio_vp.patterns.design import PatternOptions, SequenceBuilder
 from ocio_vp.patterns.sequence import PatternSequence, Validation
+from ocio_vp.wall.encoding import WallEncoding
 
 __all__ = ["WHITE_DRIVE", "content_scale", "validation_sequence", "wall_encoding_of", "wall_signal"]
 
@@ -40,7 +41,7 @@ WHITE_DRIVE = 0.7
 
 def wall_encoding_of(solution: Solution) -> tuple[str, float | None]:
     """(encoding, peak_nits or None) the solve's config sends to the wall."""
-    encoding = solution.wall_encoding
+    encoding = WallEncoding.of(solution.linearity)
     return encoding.name, encoding.peak_nits
 
 
@@ -106,7 +107,7 @@ def validation_sequence(environment_dir: str | Path, options: PatternOptions) ->
     scale = content_scale(solution, target)
     target = target * scale
     signals = wall_signal(config, solution, np.vstack([np.zeros((1, 3)), target]))
-    drives = solution.wall_encoding.decode(signals)
+    drives = WallEncoding.of(solution.linearity).decode(signals)
     if not np.all(np.isfinite(drives)):
         raise InputError("the config sends a non-finite drive for the chart", source=config)
     builder = SequenceBuilder(options)

@@ -252,6 +252,8 @@ def _soft_clip_facts(solution: Any) -> list[tuple[str, str]]:
     if soft_clip_knee(solution.linearity) is None:
         return []
     scale = content_scale(solution)
+    if scale.soft_clip is None:
+        return []
     return [
         (
             "wall soft clip",
@@ -538,6 +540,19 @@ def build_report(
 
 def _relocate(report: Report, staged: Path, final: Path) -> None:
     """Point the plot records at the published folder instead of the staging one."""
-    for plots in (report.error_bars, report.charts, report.delta_e, report.linearity):
-        for key, plot in plots.items():
-            plots[key] = dataclasses.replace(plot, path=final / plot.path.relative_to(staged))
+
+    def moved(path: Path) -> Path:
+        return final / path.relative_to(staged)
+
+    report.error_bars.update(
+        {k: dataclasses.replace(p, path=moved(p.path)) for k, p in report.error_bars.items()}
+    )
+    report.charts.update(
+        {k: dataclasses.replace(p, path=moved(p.path)) for k, p in report.charts.items()}
+    )
+    report.delta_e.update(
+        {k: dataclasses.replace(p, path=moved(p.path)) for k, p in report.delta_e.items()}
+    )
+    report.linearity.update(
+        {k: dataclasses.replace(p, path=moved(p.path)) for k, p in report.linearity.items()}
+    )

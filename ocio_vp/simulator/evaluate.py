@@ -142,16 +142,16 @@ def noise_study(
         if N_noisy is None:
             changes.append(np.inf)
             continue
-        changes.append(np.linalg.norm(N_noisy - N) / np.linalg.norm(N))
-    changes = np.array(changes)
+        changes.append(float(np.linalg.norm(N_noisy - N) / np.linalg.norm(N)))
+    relative = np.array(changes)
     return NoiseStudy(
         environment=environment,
         noise=noise,
         trials=trials,
         cond_Q=condition_number(Q),
-        median=float(np.median(changes)),
-        p95=float(np.percentile(changes, 95)),
-        maximum=float(np.max(changes)),
+        median=float(np.median(relative)),
+        p95=float(np.percentile(relative, 95)),
+        maximum=float(np.max(relative)),
     )
 
 

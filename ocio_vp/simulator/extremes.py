@@ -81,8 +81,8 @@ def emitter_spectra(
     (1.0, (1, 81))
     """
     grid = wavelengths()
-    peaks = np.asarray(peaks, dtype=np.float64)[:, None]
-    return np.exp(-4.0 * np.log(2.0) * (grid[None, :] - peaks) ** 2 / float(fwhm) ** 2)
+    centres = np.asarray(peaks, dtype=np.float64)[:, None]
+    return np.exp(-4.0 * np.log(2.0) * (grid[None, :] - centres) ** 2 / float(fwhm) ** 2)
 
 
 def emitters_in_scene(

@@ -18,7 +18,7 @@ from __future__ import annotations
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypedDict
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -263,7 +263,16 @@ def _plates(measurements: Any, options: PlateOptions) -> Iterator[tuple[str, np.
             yield f"footage/{env.name}.{frame:04d}.exr", image
 
 
-def _sensor_options(options: PlateOptions) -> dict[str, float]:
+class _Sensor(TypedDict):
+    """The sensor's fall-off and noise, as :func:`render_regions` and :func:`render_chart`
+    take them."""
+
+    vignetting: float
+    noise: float
+    read_noise: float
+
+
+def _sensor_options(options: PlateOptions) -> _Sensor:
     """The sensor's fall-off and noise as :func:`render_regions` takes them."""
     return {
         "vignetting": options.vignetting,
