@@ -34,6 +34,7 @@ from ocio_vp.formats.diagnostics import (
     Extrapolation,
     lowest_channel_words,
 )
+from ocio_vp.metrics import camera_delta_E_2000
 from ocio_vp.model.correction import (
     FitDomain,
     MatrixCorrection,
@@ -151,17 +152,11 @@ def in_frame_led_damage(
 ) -> float:
     """p95 ΔE2000 between Q(x) and x over the wall's own LEDs in frame (module docstring);
     ``white`` is the target white patch (camera RGB), the reference white of the ΔE."""
-    # Deferred: colour-science is heavy and only this figure needs it here.
-    import colour
-
     x = _led_colours(SL, white, camera_to_xyz)
     if len(x) == 0:
         return 0.0
-    scale = 1.0 / float(white @ camera_to_xyz[1])
-    white_xy = colour.XYZ_to_xy(white @ camera_to_xyz.T * scale)
-    lab_x = colour.XYZ_to_Lab(x @ camera_to_xyz.T * scale, white_xy)
-    lab_q = colour.XYZ_to_Lab(correction.apply(x) @ camera_to_xyz.T * scale, white_xy)
-    return float(np.percentile(colour.delta_E(lab_x, lab_q, method="CIE 2000"), 95))
+    moved = camera_delta_E_2000(x, correction.apply(x), camera_to_xyz=camera_to_xyz, white=white)
+    return float(np.percentile(moved, 95))
 
 
 def extrapolation(
