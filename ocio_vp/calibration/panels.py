@@ -46,6 +46,7 @@ from ocio_vp.formats.measurements import Measurements
 from ocio_vp.formats.panel_solution import PanelSolution
 from ocio_vp.formats.panels import PanelType
 from ocio_vp.metrics import chart_errors, white_scale
+from ocio_vp.model.correction import PostCorrection
 
 __all__ = [
     "InFrustumDrive",
@@ -173,7 +174,7 @@ def shown_in_camera(
     light: PanelLight,
     drive: InFrustumDrive,
     content: np.ndarray,
-    correction: Any,
+    correction: PostCorrection,
     *,
     black_level: np.ndarray | None,
     max_drive: float | None = None,
@@ -204,7 +205,7 @@ def in_frustum_match(
     *,
     primary: str,
     target: np.ndarray,
-    correction: Any,
+    correction: PostCorrection,
     black_levels: Mapping[str, np.ndarray | None],
     white_patch: int,
     camera_to_xyz: np.ndarray,

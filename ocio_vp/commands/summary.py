@@ -16,7 +16,10 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Sequence
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
+
+if TYPE_CHECKING:
+    from ocio_vp.formats.solution import Solution
 
 __all__ = ["SUMMARY_COLUMNS", "model_words", "print_summary", "summary_lines", "summary_row"]
 
@@ -46,11 +49,13 @@ LEGEND = (
 _KIND_WORDS = {"root-polynomial": "root-polynomial, bounded", "rank-deficient": "no inverse"}
 
 
-def model_words(solution: Any) -> str:
+def model_words(solution: Solution) -> str:
     """The model in a few words: ``auto: root-polynomial, bounded + emitter guard``."""
+    from ocio_vp.model.correction import ProtectedCorrection, unprotected
+
     correction = solution.correction
-    protected = correction.kind == "protected"
-    inner = correction.inner if protected else correction
+    protected = isinstance(correction, ProtectedCorrection)
+    inner = unprotected(correction)
     model = solution.model
     words = _KIND_WORDS.get(inner.kind)
     if words is None or model.startswith("rank-"):
@@ -76,7 +81,7 @@ def _condition(value: Any) -> str:
     return condition_text(float(value)) if value is not None else "-"
 
 
-def _n_state(solution: Any) -> str:
+def _n_state(solution: Solution) -> str:
     if solution.N is None:
         return "not solved"
     return "= M" if solution.diagnostics.N_equals_M else "solved"
@@ -94,7 +99,7 @@ def _leds(diagnostics: Any) -> str:
     return f"{_delta_e(figures.led_damage)} ({_delta_e(figures.led_damage_least_squares)})"
 
 
-def summary_row(solution: Any) -> tuple[str, ...]:
+def summary_row(solution: Solution) -> tuple[str, ...]:
     """One environment's row (:func:`ocio_vp.calibration.diagnostics.summary_errors`)."""
     from ocio_vp.calibration.diagnostics import summary_errors
 

@@ -84,6 +84,7 @@ __all__ = [
     "protection_words",
     "smoothstep",
     "truncated_pseudo_inverse",
+    "unprotected",
 ]
 
 #: A root-polynomial Q starts fading to its fallback matrix at the first gauge and has faded
@@ -636,6 +637,12 @@ def _white_drive(domain: FitDomain, drive_matrix: np.ndarray) -> float:
 
 #: Every kind of post-correction.
 PostCorrection = MatrixCorrection | RootPolynomialCorrection | ProtectedCorrection
+
+
+def unprotected(correction: PostCorrection) -> MatrixCorrection | RootPolynomialCorrection:
+    """The model a correction applies where nothing fades it out: a protected one's inner
+    model, any other one itself."""
+    return correction.inner if isinstance(correction, ProtectedCorrection) else correction
 
 
 # ---------------------------------------------------------------------------------------------

@@ -390,7 +390,7 @@ def _design(
 def _reference(correction: PostCorrection) -> np.ndarray:
     """L: the matrix a correction reduces to where it is linear (the identity where the matrix
     has no inverse; for the emitter protection, the identity it hands over to)."""
-    if correction.kind == "protected" or not correction.invertible:
+    if isinstance(correction, ProtectedCorrection) or not correction.invertible:
         return np.eye(3)
     return correction.matrix
 
@@ -515,7 +515,9 @@ def inverse_chain(
     low = np.maximum(c.min(axis=0)[1:] - CONTENT_MARGIN, -limit)
     high = np.minimum(c.max(axis=0)[1:] + CONTENT_MARGIN, limit)
     s_nodes = list(SCALE_RANGE)
-    if correction.kind == "protected":  # the fade, where the preimage's brightness crosses it
+    if isinstance(
+        correction, ProtectedCorrection
+    ):  # the fade, where the preimage's brightness crosses it
         s_nodes[1:1] = _fade_band_content(correction, content)
     reference = np.linalg.inv(_reference(correction))
     return LutChain(

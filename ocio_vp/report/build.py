@@ -32,6 +32,12 @@ from ocio_vp.formats.diagnostics import lowest_channel_words
 from ocio_vp.formats.provenance import solution_sha256
 from ocio_vp.formats.solution import Solution
 from ocio_vp.formats.solution_inputs import solution_folders
+from ocio_vp.model.correction import (
+    PostCorrection,
+    ProtectedCorrection,
+    RootPolynomialCorrection,
+    unprotected,
+)
 from ocio_vp.model.expansion import root_polynomial_terms
 from ocio_vp.report.data import (
     STAGE_CHARTS,
@@ -247,7 +253,7 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
     }
 
 
-def _soft_clip_facts(solution: Any) -> list[tuple[str, str]]:
+def _soft_clip_facts(solution: Solution) -> list[tuple[str, str]]:
     """The wall's soft clip (solve --soft-clip) and what content it starts at; none when off."""
     if soft_clip_knee(solution.linearity) is None:
         return []
@@ -264,7 +270,7 @@ def _soft_clip_facts(solution: Any) -> list[tuple[str, str]]:
     ]
 
 
-def _fixture_facts(solution: Any) -> list[tuple[str, str]]:
+def _fixture_facts(solution: Solution) -> list[tuple[str, str]]:
     """Practical fixtures: each one's drives, and what they did to the error Q cannot remove."""
     if not solution.fixtures:
         return []
@@ -288,7 +294,7 @@ def _fixture_facts(solution: Any) -> list[tuple[str, str]]:
     return [*facts, ("error Q cannot remove (eq. 5 residual)", change)]
 
 
-def _method(solution: Any) -> str:
+def _method(solution: Solution) -> str:
     """The Q method, the model an automatic method chose, and the post-correction in words."""
     model = solution.model
     text = solution.method
@@ -303,7 +309,7 @@ def _share(value: Any, sign: str = "") -> str:
     return f"{number:{sign}.0%}" if np.isfinite(number) else f"{number:{sign}}"
 
 
-def _beyond_the_chart(solution: Any) -> str:
+def _beyond_the_chart(solution: Solution) -> str:
     """The extrapolation figures (docs/stability.md, *Beyond the chart*) and the emitter guard."""
     figures = solution.diagnostics.extrapolation
     text = "not measured (a solution written before these figures)"
@@ -316,18 +322,18 @@ def _beyond_the_chart(solution: Any) -> str:
             f"{lowest_channel_words(figures.negative)}; "
             + ("no inverse" if folds is None else f"folds in {folds:.1%} of reflective colours")
         )
-    if solution.correction.kind == "protected":
+    if isinstance(solution.correction, ProtectedCorrection):
         text += f"; emitter guard: {solution.correction.protection()}"
     return text
 
 
-def _polynomial(correction: Any) -> Any:
+def _polynomial(correction: PostCorrection) -> RootPolynomialCorrection | None:
     """The root-polynomial inside a correction (protected or not), else None."""
-    inner = correction.inner if correction.kind == "protected" else correction
-    return inner if inner.kind == "root-polynomial" else None
+    inner = unprotected(correction)
+    return inner if isinstance(inner, RootPolynomialCorrection) else None
 
 
-def _q_rows(solution: Any) -> list[dict[str, Any]]:
+def _q_rows(solution: Solution) -> list[dict[str, Any]]:
     """Q's matrix; for a root-polynomial Q, its coefficients too (what the config's LUTs and
     ``ocio-vp apply`` use) and the matrix named as the model's 3x3 fallback."""
     polynomial = _polynomial(solution.correction)

@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from ocio_vp.formats.solution import Solution
+
 __all__ = ["panel_facts"]
 
 
@@ -19,7 +21,7 @@ def _percent(values: Any) -> str:
     return " / ".join(f"{100 * v:.1f}%" for v in np.asarray(values, dtype=np.float64).ravel())
 
 
-def panel_facts(solution: Any) -> list[tuple[str, str]]:
+def panel_facts(solution: Solution) -> list[tuple[str, str]]:
     """(label, text) rows for the report's facts table; none for a stage of one panel type."""
     if not solution.panels:
         return []

@@ -20,10 +20,10 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
+from ocio_vp.formats.solution import Solution
 from ocio_vp.report.data import EnvironmentData, patch_names
 from ocio_vp.report.svg import Axes, Canvas, data_limits, hex_colours, num, subplot_boxes
 
@@ -47,7 +47,7 @@ PANELS = ("lit_baseline", "lit_corrected", "displayed_baseline", "displayed_corr
 SERIES = ("baseline", "corrected")
 
 
-def panel_titles(solution: Any) -> dict[str, str]:
+def panel_titles(solution: Solution) -> dict[str, str]:
     """Panel titles that say what "ours" is for this solution (N or black level may be absent)."""
     background = ["N" if solution.N is not None else "M (N not solved)"]
     if solution.black_level_offset is not None:
