@@ -9,10 +9,9 @@ light. :func:`singular_q_cause` names the real cause when N cannot be solved.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
+from ocio_vp.correction.problem import QProblem
 from ocio_vp.errors import InputError
 
 __all__ = [
@@ -65,7 +64,7 @@ def _check_range(values: np.ndarray, active: np.ndarray, key: str, what: str) ->
             )
 
 
-def check_problem(problem: Any) -> None:
+def check_problem(problem: QProblem) -> None:
     """Refuse a Q problem no method can solve sensibly (see the module docstring).
 
     Raises
@@ -115,7 +114,7 @@ def _check_directions(X: np.ndarray) -> None:
         )
 
 
-def singular_q_cause(problem: Any, model: str) -> str:
+def singular_q_cause(problem: QProblem, model: str) -> str:
     """Why a fitted Q is singular, in the terms of the measurements (for ``N_reason``);
     ``model`` is the fitted model's name (``rank-1`` for a reduced-rank fit)."""
     if model.startswith("rank-"):
