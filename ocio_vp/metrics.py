@@ -40,6 +40,7 @@ from numpy.typing import ArrayLike
 from ocio_vp.spectra import spectral_shape, wavelengths
 
 __all__ = [
+    "COLORCHECKER_NAMES",
     "ITP_WHITE_NITS",
     "SAMPLE_CAMERA_TO_XYZ",
     "WHITE_FLOOR",
@@ -49,9 +50,51 @@ __all__ = [
     "chart_errors",
     "delta_E_2000",
     "error_relative_to_white",
+    "patch_label",
     "training_rgb_xyz",
     "white_scale",
 ]
+
+#: The 24 patches of the ColorChecker Classic in reading order (X-Rite's names).
+COLORCHECKER_NAMES = (
+    "dark skin",
+    "light skin",
+    "blue sky",
+    "foliage",
+    "blue flower",
+    "bluish green",
+    "orange",
+    "purplish blue",
+    "moderate red",
+    "purple",
+    "yellow green",
+    "orange yellow",
+    "blue",
+    "green",
+    "red",
+    "yellow",
+    "magenta",
+    "cyan",
+    "white 9.5 (.05 D)",
+    "neutral 8 (.23 D)",
+    "neutral 6.5 (.44 D)",
+    "neutral 5 (.70 D)",
+    "neutral 3.5 (1.05 D)",
+    "black 2 (1.5 D)",
+)
+
+
+def patch_label(index: int, n: int) -> str:
+    """A chart patch as people see it: numbered from 1 in reading order, with its name on a
+    ColorChecker 24 (files keep 0-based indices: ``index`` is one).
+
+    >>> patch_label(18, 24), patch_label(0, 140)
+    ('patch 19 (white 9.5 (.05 D))', 'patch 1')
+    """
+    if n == len(COLORCHECKER_NAMES):
+        return f"patch {index + 1} ({COLORCHECKER_NAMES[index]})"
+    return f"patch {index + 1}"
+
 
 #: Luminance (cd/m^2) that the target white patch is mapped to for ΔE ITP.
 ITP_WHITE_NITS = 100.0

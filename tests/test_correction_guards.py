@@ -75,7 +75,7 @@ def test_a_value_no_camera_produces(measurements, method: str, where: str) -> No
         env, key = m.environments[0], "lit_chart"
     with pytest.raises(InputError, match="not a camera value") as error:
         solve_environment(m, env, method=method)
-    assert error.value.key == key and "patch 4" in str(error.value)
+    assert error.value.key == key and "patch 5" in str(error.value)
 
 
 def test_cli_refuses_in_one_line_with_exit_2(measurements, tmp_path, capsys) -> None:

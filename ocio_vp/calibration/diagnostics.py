@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike
 
 from ocio_vp.calibration.equations import condition_number, in_frustum_drive, predict_lit_chart
 from ocio_vp.formats.diagnostics import ClippedCharts, Diagnostics, DriveRange, IdentityCheck
-from ocio_vp.metrics import error_relative_to_white, white_scale
+from ocio_vp.metrics import error_relative_to_white, patch_label, white_scale
 
 __all__ = [
     "SummaryErrors",
@@ -203,7 +203,8 @@ def stability_diagnostics(
         )
     if clipped:
         warnings.append(
-            f"{len(clipped)} chart patch(es) clipped and left out of the fit: {clipped}"
+            f"{len(clipped)} chart patch(es) clipped and left out of the fit: "
+            + ", ".join(patch_label(j, len(target)) for j in clipped)
         )
     if N is not None and in_range.below_zero > in_range_M.below_zero:
         warnings.append(

@@ -13,6 +13,7 @@ import numpy as np
 
 from ocio_vp.correction.problem import QProblem
 from ocio_vp.errors import InputError
+from ocio_vp.metrics import patch_label
 
 __all__ = [
     "MAX_DYNAMIC_RANGE",
@@ -57,7 +58,7 @@ def _check_range(values: np.ndarray, active: np.ndarray, key: str, what: str) ->
         if np.max(column) > MAX_DYNAMIC_RANGE * median:
             j = int(np.flatnonzero(active)[np.argmax(column)])
             raise InputError(
-                f"patch {j} of the {what} reads {float(np.max(column)):.3g}, more than "
+                f"{patch_label(j, len(values))} of the {what} reads {float(np.max(column)):.3g}, more than "
                 f"{MAX_DYNAMIC_RANGE:.0e} times the median of its channel ({median:.3g}): not "
                 "a camera value",
                 key=key,

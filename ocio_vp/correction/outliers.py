@@ -78,7 +78,8 @@ from ocio_vp.correction.perceptual import (
 )
 from ocio_vp.errors import InputError
 from ocio_vp.formats.diagnostics import Inconsistency
-from ocio_vp.metrics import white_scale
+from ocio_vp.metrics import COLORCHECKER_NAMES, white_scale
+from ocio_vp.metrics import patch_label as patch_name
 
 __all__ = [
     "COLORCHECKER_NAMES",
@@ -223,41 +224,6 @@ SWAP_FLOOR = 0.25
 SWAP_Z = 2.0
 #: Patches needed after exclusion (a 9-parameter fit with headroom to judge it).
 _MIN_REMAINING = 12
-
-#: The 24 patches of the ColorChecker Classic in reading order (X-Rite's names).
-COLORCHECKER_NAMES = (
-    "dark skin",
-    "light skin",
-    "blue sky",
-    "foliage",
-    "blue flower",
-    "bluish green",
-    "orange",
-    "purplish blue",
-    "moderate red",
-    "purple",
-    "yellow green",
-    "orange yellow",
-    "blue",
-    "green",
-    "red",
-    "yellow",
-    "magenta",
-    "cyan",
-    "white 9.5 (.05 D)",
-    "neutral 8 (.23 D)",
-    "neutral 6.5 (.44 D)",
-    "neutral 5 (.70 D)",
-    "neutral 3.5 (1.05 D)",
-    "black 2 (1.5 D)",
-)
-
-
-def patch_name(index: int, n: int) -> str:
-    """``patch 18 (white 9.5 (.05 D))`` on a 24-patch chart, ``patch 18`` otherwise."""
-    if n == len(COLORCHECKER_NAMES):
-        return f"patch {index} ({COLORCHECKER_NAMES[index]})"
-    return f"patch {index}"
 
 
 def _robust_sd(values: np.ndarray) -> float:

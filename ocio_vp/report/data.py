@@ -45,7 +45,7 @@ from ocio_vp.errors import InputError
 from ocio_vp.formats.diagnostics import Diagnostics
 from ocio_vp.formats.solution import Solution, load_solution
 from ocio_vp.formats.solution_inputs import solution_folders
-from ocio_vp.metrics import error_relative_to_white
+from ocio_vp.metrics import COLORCHECKER_NAMES, error_relative_to_white
 
 __all__ = [
     "CHART_KEYS",
@@ -194,13 +194,11 @@ def colorchecker_srgb() -> np.ndarray:
 
 
 def patch_names(n: int) -> list[str]:
-    """ColorChecker 24 patch names (reading order) for a 24-patch chart, else the indices."""
-    if n != 24:
-        return [str(j) for j in range(n)]
-    import colour
-
-    names = colour.CCS_COLOURCHECKERS[COLORCHECKER].data.keys()
-    return [f"{j} {name.split(' (')[0]}" for j, name in enumerate(names)]  # drop densities
+    """Axis labels: patches numbered from 1 (:func:`ocio_vp.metrics.patch_label`), with their
+    ColorChecker 24 names (densities dropped) on a 24-patch chart."""
+    if n != len(COLORCHECKER_NAMES):
+        return [str(j + 1) for j in range(n)]
+    return [f"{j + 1} {name.split(' (')[0]}" for j, name in enumerate(COLORCHECKER_NAMES)]
 
 
 def fit_display_matrix(target: np.ndarray) -> tuple[np.ndarray, float]:

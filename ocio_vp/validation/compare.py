@@ -139,9 +139,9 @@ class ValidationResult:
 
 
 def _names(n: int) -> list[str]:
-    from ocio_vp.correction.outliers import patch_name
+    from ocio_vp.metrics import patch_label
 
-    return [patch_name(j, n) for j in range(n)]
+    return [patch_label(j, n) for j in range(n)]
 
 
 def _predicted_mean(solution: Solution, xyz: np.ndarray, white: int) -> float | None:
