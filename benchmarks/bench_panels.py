@@ -155,8 +155,8 @@ def extrapolation_rows(stages) -> list[list[str]]:
                     [name, env.name, "protect-emitters" if protect else "default",
                      s.diagnostics.model, f"{100 * x.folds:.2f}%", f"{x.kept:.2f}",
                      "-" if x["negative"] is None else f"{x['negative']:.2f}",
-                     f"{x['led_damage']:.1f}",
-                     f"{x['led_damage_least_squares']:.1f}"]
+                     f"{x.led_damage:.1f}",
+                     f"{x.led_damage_least_squares:.1f}"]
                 )  # fmt: skip
     return rows
 
