@@ -26,6 +26,7 @@ https://doi.org/10.1145/3543664.3543699
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import itertools
@@ -59,6 +60,7 @@ __all__ = [
     "apply_in_place",
     "cpu_processor",
     "existing_output",
+    "frame_failure",
     "load_frame",
     "load_post_correction",
     "other_solution_reason",
@@ -68,6 +70,7 @@ __all__ = [
     "solution_identity",
     "store_frame",
     "transform_frame",
+    "write_failure",
 ]
 
 
@@ -447,17 +450,23 @@ def store_frame(dst: str | Path, parts: list[tuple[Any, np.ndarray]]) -> None:
     Raises
     ------
     OSError
-        The output could not be written.
+        The output could not be written (disk full, read-only, no permission, a file where a
+        folder should be...): ``filename`` is ``dst`` (never the temporary name) and
+        ``strerror`` says why, in a few words.
     """
     dst = Path(dst)
-    dst.parent.mkdir(parents=True, exist_ok=True)
     # Same folder (same file system) for an atomic rename; the extension picks the format.
     tmp = dst.with_name(f".{dst.stem}.partial-{os.getpid()}{dst.suffix}")
     try:
+        dst.parent.mkdir(parents=True, exist_ok=True)
         _write_all(tmp, parts)
         os.replace(tmp, dst)
+    except OSError as exc:
+        reason = exc.strerror or str(exc).replace(f"{tmp}: ", "").replace(str(tmp), dst.name)
+        raise OSError(exc.errno, reason, str(dst)) from exc
     finally:
-        tmp.unlink(missing_ok=True)
+        with contextlib.suppress(OSError):  # a folder that cannot be listed: nothing to remove
+            tmp.unlink(missing_ok=True)
 
 
 def apply_file(src: str | Path, dst: str | Path, pc: PostCorrection, *, threads: int = 1) -> int:
@@ -489,7 +498,9 @@ class FrameTask:
 
 @dataclass(frozen=True)
 class FrameResult:
-    """What happened to one frame: ``status`` is done, skipped, input-error or error."""
+    """What happened to one frame: ``status`` is done, skipped, input-error (this frame's
+    input), write-error (the output could not be written: disk full, read-only, permissions;
+    ``message`` is the reason, without the path) or error (a bug)."""
 
     src: str
     dst: str
@@ -534,12 +545,28 @@ def run_task(task: FrameTask) -> FrameResult:
         return ended
     try:
         set_io_threads(task.threads)
-        apply_file(task.src, task.dst, task.post_correction, threads=task.threads)
-    except InputError as exc:
-        return FrameResult(task.src, task.dst, "input-error", str(exc))
-    except Exception as exc:  # a write failure, out of disk...: report it, go on
-        return FrameResult(task.src, task.dst, "error", f"{type(exc).__name__}: {exc}")
+        parts = load_frame(task.src)
+        transform_frame(parts, task.post_correction, threads=task.threads, source=task.src)
+    except Exception as exc:  # this frame's input (or a bug): reported, the others go on
+        return frame_failure(task, exc)
+    try:
+        store_frame(task.dst, parts)
+    except OSError as exc:  # out of disk, read-only...: the caller stops the run
+        return write_failure(task, exc)
     return FrameResult(task.src, task.dst, "done", seconds=time.perf_counter() - start)
+
+
+def frame_failure(task: FrameTask, exc: Exception) -> FrameResult:
+    """The result of a frame whose reading or transform raised ``exc``."""
+    if isinstance(exc, InputError):
+        return FrameResult(task.src, task.dst, "input-error", str(exc))
+    return FrameResult(task.src, task.dst, "error", f"{type(exc).__name__}: {exc}")
+
+
+def write_failure(task: FrameTask, exc: OSError) -> FrameResult:
+    """The result of a frame :func:`store_frame` could not write (``exc``)."""
+    reason = exc.strerror or str(exc) or type(exc).__name__
+    return FrameResult(task.src, task.dst, "write-error", " ".join(str(reason).split()))
 
 
 def set_io_threads(threads: int) -> None:
