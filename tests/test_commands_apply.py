@@ -292,3 +292,49 @@ def test_run_task_reports_a_write_failure_apart_from_a_bad_frame(calib, tmp_path
     result = run_task(FrameTask(str(src), str(tmp_path / "o" / "a.exr"), post))
     assert (result.status, result.message) == ("write-error", "No space left on device")
     assert not list((tmp_path / "o").iterdir())
+
+
+def test_via_config_runs_the_configs_chain_and_marks_its_frames(tmp_path, capsys):
+    """``--via config`` on a root-polynomial solution: the pixels are OCIO's processor of the
+    config's Stage Footage -> reference (its LUT chain, read here by OCIO directly), within the
+    chain's recorded agreement of the model; the frames' header says so, so a rerun with the
+    exact model refuses them rather than mixing the two in one sequence."""
+    import PyOpenColorIO as OCIO
+    import yaml
+
+    from ocio_vp.footage.sequences import output_solution
+    from ocio_vp.formats.solution import load_solution
+    from tests.conftest import make_measurements_dict
+
+    path = tmp_path / "stage.yaml"
+    path.write_text(yaml.safe_dump(make_measurements_dict(environments=1)))
+    calib = tmp_path / "calib"
+    assert main(["solve", str(path), "--out", str(calib), "--method", "root-polynomial"]) == 0
+    folder = calib / "env_0"
+    rng = np.random.default_rng(4)
+    shot = tmp_path / "shot"
+    shot.mkdir()
+    rgb = rng.uniform(0.01, 1.0, (8, 16, 3))
+    write_plate(shot / "C001.0001.exr", rgb, dtype="float")
+    out = tmp_path / "o"
+    assert _apply(folder, shot / "C001.####.exr", "--out", out, "--via", "config") == 0
+    got = oiio_pixels(out / "C001.0001.exr")
+    config = OCIO.Config.CreateFromFile(str(folder / "config.ocio"))
+    names = load_solution(folder).ocio
+    cpu = config.getProcessor(names["post_correction_colorspace"], names["reference"])
+    expected = np.asarray(
+        cpu.getDefaultCPUProcessor().applyRGB(rgb.astype(np.float32).ravel().tolist())
+    ).reshape(rgb.shape)
+    np.testing.assert_allclose(got, expected, rtol=1e-6, atol=1e-7)
+    model = load_solution(folder).correction.apply(rgb.astype(np.float32))
+    assert np.abs(got - model).max() > 1e-5  # the LUT bake, not the model
+    assert "via the config's LUT chain" in output_solution(out / "C001.0001.exr")
+    capsys.readouterr()
+    assert _apply(folder, shot / "C001.####.exr", "--out", out) == 2  # the exact model
+    assert "via the config" in capsys.readouterr().err
+
+
+def oiio_pixels(path: Path) -> np.ndarray:
+    import OpenImageIO as oiio
+
+    return np.asarray(oiio.ImageBuf(str(path)).get_pixels(oiio.FLOAT), dtype=np.float64)

@@ -70,6 +70,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "are decoded, post-corrected exactly and encoded again",
     )
     parser.add_argument(
+        "--via",
+        choices=("model", "config"),
+        default="model",
+        help="how a non-linear Q (root-polynomial, emitter-protected) is computed: its exact "
+        "model (default), or the solution's config, the OCIO LUT chain every host runs (the "
+        "same pixels as Nuke or oiiotool; its agreement with the model is in solution.json; "
+        "speeds of both in docs/performance.md). A 3x3 Q is the config's matrix either way",
+    )
+    parser.add_argument(
         "--workers",
         type=int,
         default=None,
@@ -145,7 +154,7 @@ def run(args: argparse.Namespace) -> int:
     for folder in chosen.folders:
         for caveat in post_correction_caveats(load_solution(folder)):
             warn("apply", f"{folder.name}: {caveat}")
-        post = load_post_correction(folder, encoding)
+        post = load_post_correction(folder, encoding, via=args.via)
         out = Path(args.out) if len(chosen.folders) == 1 else Path(args.out) / folder.name
         tasks += [
             FrameTask(str(s), str(d), post, overwrite=args.overwrite, threads=threads)

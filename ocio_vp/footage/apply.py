@@ -49,6 +49,7 @@ from ocio_vp.model.correction import correction_from_dict, correction_to_dict
 __all__ = [
     "OPTIMIZATIONS",
     "TRANSFORMS",
+    "VIA",
     "EncodedTransform",
     "FrameResult",
     "FrameTask",
@@ -96,13 +97,29 @@ class PostCorrection:
     solution: str = ""
 
 
-def load_post_correction(solution_dir: str | Path, encoding: str = "") -> PostCorrection:
+#: How ``apply`` computes a non-linear Q: its exact ``model`` (default) or the solution's
+#: ``config`` (the OCIO chain every host runs: LUT bakes of the model, their agreement with
+#: it recorded in ``solution.json``). A 3x3 Q is the config's matrix either way.
+VIA = ("model", "config")
+
+
+def load_post_correction(
+    solution_dir: str | Path, encoding: str = "", *, via: str = "model"
+) -> PostCorrection:
     """Read ``solution.json`` and its config; check that the named colorspaces exist.
 
     ``encoding``: the footage's encoding (a colour-science decoding name, ``linear`` or ``""``
-    for linear footage)."""
+    for linear footage). ``via``: see :data:`VIA`."""
     if encoding == "linear":
         encoding = ""
+    if via not in VIA:
+        raise InputError(f"expected one of {', '.join(VIA)}, got {via!r}", key="--via")
+    if via == "config" and encoding:
+        raise InputError(
+            "the config's chain takes linear footage; encoded footage is corrected with the "
+            "model (leave --via out)",
+            key="--via",
+        )
     import PyOpenColorIO as OCIO
 
     from ocio_vp.formats.solution import load_solution
@@ -140,11 +157,18 @@ def load_post_correction(solution_dir: str | Path, encoding: str = "") -> PostCo
             encoding,
             identity,
         )
-    if not solution.correction.linear:  # the exact model, not the config's LUT bake of it
+    if solution.correction.linear:
         return PostCorrection(
-            str(config_path), source, target, solution.environment, "model", model, "", identity
+            str(config_path), source, target, solution.environment, solution=identity
         )
-    return PostCorrection(str(config_path), source, target, solution.environment, solution=identity)
+    if via == "config":  # the config's LUT chains: the same pixels as every host, not the model
+        identity = f"{identity}, via the config's LUT chain"
+        return PostCorrection(
+            str(config_path), source, target, solution.environment, solution=identity
+        )
+    return PostCorrection(  # the exact model, not the config's LUT bake of it
+        str(config_path), source, target, solution.environment, "model", model, "", identity
+    )
 
 
 def solution_identity(stage: str, environment: str, model: str, encoding: str = "") -> str:
