@@ -162,7 +162,7 @@ def load_post_correction(
             str(config_path), source, target, solution.environment, solution=identity
         )
     if via == "config":  # the config's LUT chains: the same pixels as every host, not the model
-        identity = f"{identity}, via the config's LUT chain"
+        identity = f"{identity}, via config"
         return PostCorrection(
             str(config_path), source, target, solution.environment, solution=identity
         )
