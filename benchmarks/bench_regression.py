@@ -169,9 +169,9 @@ def _solve_commands(pythons, files, root: Path) -> dict[tuple[str, str], list]:
     return out
 
 
-def _rounds(commands: dict, rounds: int, env: dict, cwd: Path) -> dict:
+def _rounds(commands: dict, rounds: int, env: dict, cwd: Path, warmup: bool = True) -> dict:
     cells = {key: Cell() for key in commands}
-    for cmd in commands.values():  # warm-up: page cache, bytecode cache
+    for cmd in commands.values() if warmup else ():  # page cache, bytecode cache
         _run(cmd, env, cwd)
     for _ in range(rounds):
         for key, cmd in commands.items():
@@ -218,8 +218,11 @@ def _apply_section(pythons, files, root, env, count: int, rounds: int) -> str:
     ]}  # fmt: skip
     commands.update(_commands(pythons, files, root, frames))
     load = os.getloadavg()[0]
-    cells = _rounds(commands, rounds, env, root)
+    # A long sequence runs once: its frames are in the page cache (just copied) and the
+    # bytecode cache is filled by the short one.
+    cells = _rounds(commands, rounds, env, root, warmup=count <= 8)
     plain = cells.pop(("plain read + write", "this"))
+    agreement = _agreement(root / "o" / "this", frames[0].name)
     rows = list(dict.fromkeys(row for row, _ in cells))
     targets = {
         "`apply`, 3x3 Q (least squares)": ">= 0.9x",
@@ -236,7 +239,25 @@ def _apply_section(pythons, files, root, env, count: int, rounds: int) -> str:
             f"Load average (1 min) at the start: {load:.1f} on {os.cpu_count()} cores.",
             "",
             _table(cells, rows, plain, targets),
+            "",
+            agreement,
         ]
+    )
+
+
+def _agreement(out: Path, name: str) -> str:
+    """How far ``--via config`` (the config's LUT chain) is from the exact model on a frame."""
+    import OpenImageIO as oiio
+
+    exact = oiio.ImageBuf(str(out / "auto0" / name)).get_pixels(oiio.FLOAT).astype(np.float64)
+    chain = oiio.ImageBuf(str(out / "auto2" / name)).get_pixels(oiio.FLOAT).astype(np.float64)
+    scale = np.maximum(np.abs(exact).max(axis=-1), 1e-3)
+    relative = np.abs(chain - exact).max(axis=-1) / scale
+    return (
+        f"- `--via config` against the exact model on {name} (half output): "
+        f"{np.percentile(relative, 99) * 100:.3g}% of the pixel's largest channel at the 99th "
+        f"percentile, {relative.max() * 100:.3g}% at worst; the model itself is computed in "
+        "float32 on half frames (within 5e-7 of float64, tested)."
     )
 
 
@@ -250,8 +271,11 @@ def _frame_size(files) -> str:
 def _solve_section(pythons, files, root, env, rounds: int) -> str:
     commands = _solve_commands(pythons, files, root)
     load = os.getloadavg()[0]
-    cells = _rounds(commands, rounds, env, root)
-    rows = list(dict.fromkeys(row for row, _ in cells))
+    longest = {k: v for k, v in commands.items() if "environments" in k[0]}
+    small = {k: v for k, v in commands.items() if k not in longest}
+    cells = _rounds(small, rounds, env, root)
+    cells.update(_rounds(longest, 1, env, root, warmup=False))  # the longest: once
+    rows = list(dict.fromkeys(row for row, _ in commands))
     many = files["many"].stem.removeprefix("env")
     targets = {
         "`solve`, 1000 patches, least squares": "<= 2 s",
@@ -260,7 +284,7 @@ def _solve_section(pythons, files, root, env, rounds: int) -> str:
     }
     return "\n".join(
         [
-            f"### `solve`, best of {rounds} rounds",
+            f"### `solve`, best of {rounds} rounds ({many} environments: one run)",
             "",
             f"Load average (1 min) at the start: {load:.1f} on {os.cpu_count()} cores.",
             "",
