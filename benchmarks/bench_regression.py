@@ -8,7 +8,7 @@ OpenImageIO read + write of the same frames in one process (``bench_apply``'s lo
 ratio of speeds (plain time / command time) measured in the same rounds.
 
 The other checkout: set ``OCIO_VP_BASELINE_PYTHON`` to the Python of an environment where it
-is installed (``docs/performance.md`` says how to make one for last round's commit); without it
+is installed (the README says how to make one for last round's commit); without it
 the baseline columns say so. Each checkout solves its own calibration for its ``apply`` rows
 (solution files change between rounds); both read the same measurement files and frames.
 """
@@ -305,7 +305,7 @@ def run(quick: bool = False) -> str:
     baseline = os.environ.get(BASELINE_ENV)
     pythons = {"this": sys.executable}
     if baseline:
-        pythons["baseline"] = baseline
+        pythons["baseline"] = baseline = os.path.abspath(baseline)  # commands run elsewhere
     with tempfile.TemporaryDirectory() as tmp, cached_bytecode() as env:
         root = Path(tmp)
         env = {**env, "PYTHONPATH": ""}  # each interpreter imports its own checkout
