@@ -169,7 +169,7 @@ def stop_on_signals() -> Iterator[None]:
     Previous handlers are restored on exit. Outside the main thread it does nothing (Python
     delivers signals to the main thread only).
     """
-    stopping = []
+    stopping: list[int] = []
 
     def handler(signum: int, frame: object) -> None:
         if not stopping:

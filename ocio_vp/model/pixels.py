@@ -54,7 +54,7 @@ def pixel_function(correction, dtype: type = np.float32) -> PixelFunction:
     [[1.0, 1.0], [1.0, 1.0], [1.0, 1.0]]
     """
     if isinstance(correction, MatrixCorrection):
-        Q = correction.Q.astype(dtype)
+        Q: np.ndarray = correction.Q.astype(dtype)
         return lambda X: Q @ X
     if isinstance(correction, RootPolynomialCorrection):
         return _root_polynomial(correction, dtype)
@@ -76,7 +76,7 @@ def _fade_out(t: np.ndarray) -> np.ndarray:
 
 def _polynomial(correction: RootPolynomialCorrection, dtype: type) -> PixelFunction:
     """``C e(x)``: the expansion's terms as planes, then one (3, terms) matrix product."""
-    C = correction.coefficients.astype(dtype)
+    C: np.ndarray = correction.coefficients.astype(dtype)
     powers = root_polynomial_term_powers(correction.degree)
 
     def f(X: np.ndarray) -> np.ndarray:
@@ -106,6 +106,7 @@ def _gauge_matrix(correction: RootPolynomialCorrection) -> np.ndarray:
     """(edges + 1, 3): rows ``b_i`` (the hull's edges) and, last, ``s``: the gauge of ``x`` is
     ``max_i (b_i . x) / (s . x)`` (:meth:`FitDomain.gauge` with its steps folded together)."""
     domain = correction.domain
+    assert domain is not None  # the caller returns the plain polynomial without a domain
     U = domain.to_drive
     normals = domain.edge_normals  # (k, 2), each over its edge's reach
     s = U.sum(axis=0)
@@ -118,8 +119,8 @@ def _root_polynomial(correction: RootPolynomialCorrection, dtype: type) -> Pixel
     poly = _polynomial(correction, dtype)
     if correction.domain is None:
         return poly
-    A = correction.fallback.astype(dtype)
-    G = _gauge_matrix(correction).astype(dtype)
+    A: np.ndarray = correction.fallback.astype(dtype)
+    G: np.ndarray = _gauge_matrix(correction).astype(dtype)
     start, end = correction.fade
     offset, scale = dtype(start), dtype(1.0 / (end - start))
 
@@ -145,8 +146,8 @@ def _root_polynomial(correction: RootPolynomialCorrection, dtype: type) -> Pixel
 
 def _protected(correction: ProtectedCorrection, dtype: type) -> PixelFunction:
     inner = pixel_function(correction.inner, dtype)
-    U = correction.domain.to_drive.astype(dtype)
-    D = correction.drive_matrix.astype(dtype)
+    U: np.ndarray = correction.domain.to_drive.astype(dtype)
+    D: np.ndarray = correction.drive_matrix.astype(dtype)
     low, high = correction.bright
     start, end = correction.negative
     log_low, log_scale = dtype(np.log2(low)), dtype(1.0 / np.log2(high / low))
