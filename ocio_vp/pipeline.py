@@ -46,6 +46,7 @@ from ocio_vp.correction.outliers import Inconsistency, inconsistent_patches
 from ocio_vp.correction.perceptual import default_camera_to_xyz
 from ocio_vp.correction.problem import fit_least_squares
 from ocio_vp.correction.registry import QFit, QProblem, solve_post_correction
+from ocio_vp.correction.skin import chart_skin_samples
 from ocio_vp.correction.validation import CLOSED_FORM_METHODS, cross_validated_error
 from ocio_vp.errors import InputError
 from ocio_vp.fixtures.lighting import (
@@ -120,6 +121,7 @@ def solve_environment(
     if lighting is not None and lighting.result.applied:
         problem = dataclasses.replace(problem, extra_light=lighting.extra_light)
     problem, excluded = _screen(problem, measurements, environment, options.keep_all_patches)
+    problem = with_skin(problem)
     fit = _fit(problem, options.method, measurements, environment)
     correction = fit.correction
     if options.protect_emitters:
@@ -392,6 +394,14 @@ def _screen(
     weights = w.copy()
     weights[[f.index for f in excluded]] = 0.0
     return dataclasses.replace(problem, weights=weights), excluded
+
+
+def with_skin(problem: QProblem) -> QProblem:
+    """``problem`` with its skin samples (:mod:`ocio_vp.correction.skin`) for the patches it
+    fits: virtual skin on a ColorChecker 24, none on another chart."""
+    active = problem.fit_weights > 0
+    skin = chart_skin_samples(problem.SRL, np.asarray(problem.target, float), active)
+    return dataclasses.replace(problem, skin=skin)
 
 
 def _fit(
