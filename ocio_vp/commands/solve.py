@@ -10,7 +10,9 @@ from ocio_vp.choices import (
     BLACK_LEVEL_METHODS,
     DEFAULT_BLACK_LEVEL,
     DEFAULT_PEAK_NITS,
+    DEFAULT_PRIORITY,
     DEFAULT_WALL_ENCODING,
+    PRIORITIES,
     WALL_ENCODINGS,
 )
 from ocio_vp.commands.common import add_method_argument, progress
@@ -61,6 +63,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "the identity where no reflective surface lit by the wall can be (brighter than white in "
         "an LED channel, or needing negative light); by default it fades to the 3x3 there "
         "(docs/stability.md)",
+    )
+    parser.add_argument(
+        "--priority",
+        choices=PRIORITIES,
+        default=DEFAULT_PRIORITY,
+        help="what the default post-correction puts first: general colours (default; it never "
+        "renders skin worse than least squares) or skin (faces first, general reflectances at "
+        "a bounded cost); an environment's own 'priority' in the measurements file wins "
+        "(docs/skin.md)",
     )
     parser.add_argument(
         "--black-level",
@@ -323,6 +334,7 @@ def _solve(measurements, environments, args: argparse.Namespace) -> list:
         fixtures=not args.no_fixtures,
         keep_all_patches=args.keep_all_patches,
         protect_emitters=args.protect_emitters,
+        priority=args.priority,
     )
     if args.scheduler:
         from ocio_vp.footage.distributed import solve_environments

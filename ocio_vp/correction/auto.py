@@ -58,7 +58,14 @@ from ocio_vp.errors import InputError
 from ocio_vp.metrics import error_relative_to_white
 from ocio_vp.model.correction import MatrixCorrection, PostCorrection
 
-__all__ = ["DEGREE_3_EXCLUDED", "SHRUNK_SE_FACTOR", "candidate_skin_errors", "q_auto"]
+__all__ = [
+    "AUTO_SKIN_WEIGHT",
+    "DEGREE_3_EXCLUDED",
+    "SHRUNK_SE_FACTOR",
+    "bounded_candidate",
+    "candidate_skin_errors",
+    "q_auto",
+]
 
 #: Said in every ``auto`` reason: why the richer root-polynomial is not a candidate.
 DEGREE_3_EXCLUDED = (
@@ -149,7 +156,7 @@ def _singular_text(singular: np.ndarray) -> str:
     return ", ".join(relative_figure(v) for v in singular)
 
 
-def _bounded_candidate(
+def bounded_candidate(
     problem: QProblem, name: str, skin_weight: float = 0.0
 ) -> tuple[QFit | None, str | None]:
     """The bounded root-polynomial fit and its held-out predictions' source; (None, why) when it
@@ -266,7 +273,7 @@ def _root_polynomial_candidates(
     for name in (m for m in ladder if m in ROOT_POLYNOMIAL_DEGREES):
         if active <= {2: 6, 3: 13}[ROOT_POLYNOMIAL_DEGREES[name]]:
             continue
-        fit, why = _bounded_candidate(problem, name, AUTO_SKIN_WEIGHT)
+        fit, why = bounded_candidate(problem, name, AUTO_SKIN_WEIGHT)
         if fit is None:
             excluded.append(why or "")
             continue

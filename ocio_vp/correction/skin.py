@@ -35,6 +35,7 @@ __all__ = [
     "chart_reflectances",
     "chart_skin_samples",
     "chart_skin_weights",
+    "patch_skin_samples",
     "skin_delta_e",
     "skin_patch_weights",
     "skin_rows",
@@ -205,6 +206,29 @@ def skin_patch_weights(
     weights[np.arange(len(chosen)), chosen] = 1.0
     bands = tuple(band_of(float(v)) for v in ita_degrees(lab[chosen]))
     return weights, bands
+
+
+def patch_skin_samples(
+    SRL: np.ndarray,
+    target: np.ndarray,
+    white_patch: int,
+    active: np.ndarray,
+    named: tuple[int, ...] = (),
+) -> SkinSamples | None:
+    """The chart's own skin patches as skin samples (:func:`skin_patch_weights`); None when
+    there are none."""
+    weights, bands = skin_patch_weights(target, white_patch, active, named)
+    if len(weights) == 0:
+        return None
+    chosen = [int(j) for j in np.argmax(weights, axis=1)]
+    how = "named in the measurements file" if named else "found by their colour"
+    return SkinSamples(
+        SRL=np.asarray(SRL, dtype=np.float64)[chosen],
+        target=np.asarray(target, dtype=np.float64)[chosen],
+        band=bands,
+        source=f"the chart's skin patches {', '.join(map(str, chosen))} ({how})",
+        weights=weights,
+    )
 
 
 def _lab(xyz: np.ndarray, white_xyz: np.ndarray) -> np.ndarray:

@@ -25,6 +25,7 @@ from ocio_vp.formats.panel_solution import (
     panel_solutions_from_dict,
     panel_solutions_to_dict,
 )
+from ocio_vp.formats.skin import SkinFigures, skin_figures_from_dict, skin_figures_to_dict
 from ocio_vp.model.correction import (
     MatrixCorrection,
     PostCorrection,
@@ -158,6 +159,11 @@ class Diagnostics(Mapping[str, Any]):
         set of the camera range and over ``all``, and the ``worst_input``) and
         ``inverse_agreement`` (the same for the content through the Q^-1 chain and back through
         the model; null without Q^-1); only written for a non-linear post-correction.
+    skin
+        What the solve expects of skin (:class:`ocio_vp.formats.skin.SkinFigures`): mean
+        ΔE2000 on its skin samples for the post-correction and least squares, per lightness
+        band, the chart's beside them, and with skin first the default's; only written where
+        the chart gives skin samples (docs/skin.md).
     extra
         Keys of a loaded file that this version does not know, kept so they round-trip.
     """
@@ -200,6 +206,7 @@ class Diagnostics(Mapping[str, Any]):
     fixtures: dict[str, Any] | None = None
     panels: dict[str, Any] | None = None
     post_correction_ocio: dict[str, Any] | None = None
+    skin: SkinFigures | None = None
     extra: dict[str, Any] = field(default_factory=dict)
     #: The keys a loaded file had (None: every field, as after a solve).
     present: tuple[str, ...] | None = field(default=None, repr=False, compare=False)
@@ -209,6 +216,8 @@ class Diagnostics(Mapping[str, Any]):
         """The block as read from ``solution.json``; missing keys stay missing, unknown kept."""
         known = {f.name for f in dataclasses.fields(cls)} - {"extra", "present"}
         values = {k: v for k, v in data.items() if k in known}
+        if values.get("skin") is not None:
+            values["skin"] = skin_figures_from_dict(values["skin"])
         extra = {k: v for k, v in data.items() if k not in known}
         return cls(**values, extra=extra, present=tuple(data))
 
@@ -218,6 +227,7 @@ class Diagnostics(Mapping[str, Any]):
         "fixtures",
         "panels",
         "post_correction_ocio",
+        "skin",
     )
 
     def _keys(self) -> tuple[str, ...]:
@@ -307,6 +317,8 @@ def _plain(value: Any) -> Any:
     tests/test_pipeline.py and benchmarks/sweep.py look for any other)."""
     if isinstance(value, np.ndarray):
         return _plain(value.tolist())
+    if isinstance(value, SkinFigures):
+        return _plain(skin_figures_to_dict(value))
     if isinstance(value, Mapping):
         return {str(k): _plain(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
