@@ -46,9 +46,10 @@ from ocio_vp.correction.outliers import Inconsistency, inconsistent_patches
 from ocio_vp.correction.perceptual import default_camera_to_xyz
 from ocio_vp.correction.problem import fit_least_squares
 from ocio_vp.correction.registry import QFit, QProblem, solve_post_correction
-from ocio_vp.correction.skin import chart_skin_samples, patch_skin_samples
+from ocio_vp.correction.skin import chart_skin_samples, joined, patch_skin_samples
 from ocio_vp.correction.skin_figures import skin_figures
 from ocio_vp.correction.skin_priority import q_skin_priority
+from ocio_vp.correction.skin_spectra import StageSpectra, spectral_skin_samples
 from ocio_vp.correction.validation import CLOSED_FORM_METHODS, cross_validated_error
 from ocio_vp.errors import InputError
 from ocio_vp.fixtures.lighting import (
@@ -90,7 +91,9 @@ class SolveOptions:
     lit by the stage can be (:class:`ocio_vp.model.ProtectedCorrection`); ``priority``:
     ``"skin"`` fits the default post-correction with faces first
     (:mod:`ocio_vp.correction.skin_priority`; only with ``method="auto"``), ``"general"`` is
-    the default's own choice; an environment's ``priority`` in the measurements file wins.
+    the default's own choice; an environment's ``priority`` in the measurements file wins;
+    ``spectra``: the panel's LED spectra and the camera's sensitivities (and location lights),
+    from which skin samples are computed too (:mod:`ocio_vp.correction.skin_spectra`).
     """
 
     method: str = DEFAULT_METHOD
@@ -100,6 +103,7 @@ class SolveOptions:
     keep_all_patches: bool = False
     protect_emitters: bool = False
     priority: str = DEFAULT_PRIORITY
+    spectra: StageSpectra | None = None
 
     def __post_init__(self) -> None:
         if self.priority not in PRIORITIES:
@@ -130,7 +134,7 @@ def solve_environment(
     if lighting is not None and lighting.result.applied:
         problem = dataclasses.replace(problem, extra_light=lighting.extra_light)
     problem, excluded = _screen(problem, measurements, environment, options.keep_all_patches)
-    problem = with_skin(problem, measurements.stage.skin_patches)
+    problem = with_skin(problem, measurements.stage.skin_patches, options.spectra, environment.name)
     priority = environment.priority or options.priority
     fit = _fit(problem, options.method, measurements, environment, priority)
     correction = _protected(fit.correction, problem, options)
@@ -428,15 +432,23 @@ def _screen(
     return dataclasses.replace(problem, weights=weights), excluded
 
 
-def with_skin(problem: QProblem, named: tuple[int, ...] = ()) -> QProblem:
+def with_skin(
+    problem: QProblem,
+    named: tuple[int, ...] = (),
+    spectra: StageSpectra | None = None,
+    environment: str = "",
+) -> QProblem:
     """``problem`` with its skin samples (:mod:`ocio_vp.correction.skin`) for the patches it
-    fits: the ``named`` skin patches; else virtual skin on a ColorChecker 24; else the patches
-    of skin colour."""
+    fits: the ``named`` skin patches; else virtual skin on a ColorChecker 24 (with the stage's
+    ``spectra``, skin computed from them too); else the patches of skin colour."""
     active = problem.fit_weights > 0
     target = np.asarray(problem.target, dtype=np.float64)
     skin = None
     if not named:
         skin = chart_skin_samples(problem.SRL, target, active)
+    if skin is not None and spectra is not None and problem.extra_light is None:
+        exact = spectral_skin_samples(problem.SRL, target, active, spectra, environment)
+        skin = joined(skin, exact)
     if skin is None:
         skin = patch_skin_samples(problem.SRL, target, problem.white_patch, active, named)
     return dataclasses.replace(problem, skin=skin)

@@ -136,3 +136,43 @@ def test_skin_first_with_another_method_is_refused_on_one_line(stage_and_measure
     with pytest.raises(InputError, match=r"--priority.*cannot be combined with --method") as e:
         solve_environment(m, m.environments[0], method="least-squares", priority="skin")
     assert "\n" not in str(e.value)
+
+
+def test_skin_from_spectra_is_the_skin_the_stage_camera_sees(stage_and_measurements):
+    """Given the stage's own LED spectra, camera and light, the skin samples are the simulator's
+    skin (up to the gains fitted through the chart's reference spectra, a different chart
+    measurement than the simulated one)."""
+    from ocio_vp.correction.skin_spectra import StageSpectra, spectral_skin_samples
+    from ocio_vp.simulator.stage import environment_spectrum
+
+    stage, m = stage_and_measurements
+    env = m.environment("incandescent")
+    light = environment_spectrum(stage, "incandescent")
+    spectra = StageSpectra(stage.leds, stage.camera, {"incandescent": light}, "the stage's")
+    samples = spectral_skin_samples(
+        m.SRL, env.target_chart, np.ones(24, bool), spectra, "incandescent"
+    )
+    skin = training_skin().reflectances
+    lit = stage.beta * np.einsum("wc,kw,wl->kcl", stage.camera, skin, stage.leds)
+    np.testing.assert_allclose(samples.SRL, lit, rtol=0.03)
+    np.testing.assert_allclose(samples.target, (skin * light) @ stage.camera, rtol=0.03)
+    assert "location light measured" in samples.source
+
+
+def test_a_bad_spectral_file_writes_nothing(stage_and_measurements, tmp_path, capsys):
+    from ocio_vp.cli import main
+    from ocio_vp.formats.measurements import save_measurements
+
+    _, m = stage_and_measurements
+    save_measurements(m, tmp_path / "m.yaml")
+    (tmp_path / "leds.csv").write_text("nm,red,green,blue\n400,1,1,1\n700,1,1,-1\n")
+    code = main(
+        ["solve", str(tmp_path / "m.yaml"), "--out", str(tmp_path / "out"),
+         "--led-spectra", str(tmp_path / "leds.csv"), "--camera-sensitivities", "Nikon 5100 (NPL)"]
+    )  # fmt: skip
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and not (tmp_path / "out").exists()
+    assert err.endswith(
+        "leds.csv: column 'wavelength': too few samples: 2 between 400 and 700 nm, need at least 16"
+    )
+    assert "\n" not in err

@@ -74,6 +74,26 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "(docs/skin.md)",
     )
     parser.add_argument(
+        "--led-spectra",
+        metavar="FILE.csv",
+        help="the panel's measured LED spectra (wavelength in nm, then red, green, blue): skin "
+        "is then also computed from spectra, with --camera-sensitivities (docs/skin.md)",
+    )
+    parser.add_argument(
+        "--camera-sensitivities",
+        metavar="FILE.csv|NAME",
+        help="the camera's spectral sensitivities (wavelength in nm, then R, G, B) or a camera "
+        "of the bundled database (docs/skin.md)",
+    )
+    parser.add_argument(
+        "--location-light",
+        action="append",
+        default=[],
+        metavar="ENV=FILE.csv",
+        help="the measured light of an environment (wavelength in nm, then its power); "
+        "otherwise estimated from its target chart (repeat per environment)",
+    )
+    parser.add_argument(
         "--black-level",
         choices=BLACK_LEVEL_METHODS,
         default=DEFAULT_BLACK_LEVEL,
@@ -326,8 +346,16 @@ def _solve_and_write(args: argparse.Namespace, peak_nits: float, pool) -> list:
 
 def _solve(measurements, environments, args: argparse.Namespace) -> list:
     """Every environment, on a Dask cluster or here (with a progress bar on a terminal)."""
+    from ocio_vp.correction.skin_spectra import stage_spectra
+    from ocio_vp.errors import InputError
     from ocio_vp.pipeline import SolveOptions, solve_environment
 
+    spectra = stage_spectra(args.led_spectra, args.camera_sensitivities, args.location_light)
+    if spectra is not None:
+        names = {e.name for e in measurements.environments}
+        for name in spectra.lights:
+            if name not in names:
+                raise InputError(f"no environment named {name!r}", key="--location-light")
     options = SolveOptions(
         method=args.method,
         black_level=args.black_level,
@@ -335,6 +363,7 @@ def _solve(measurements, environments, args: argparse.Namespace) -> list:
         keep_all_patches=args.keep_all_patches,
         protect_emitters=args.protect_emitters,
         priority=args.priority,
+        spectra=spectra,
     )
     if args.scheduler:
         from ocio_vp.footage.distributed import solve_environments

@@ -35,6 +35,7 @@ __all__ = [
     "chart_reflectances",
     "chart_skin_samples",
     "chart_skin_weights",
+    "joined",
     "patch_skin_samples",
     "skin_delta_e",
     "skin_patch_weights",
@@ -105,6 +106,23 @@ def chart_reflectances(name: str = SKIN_CHART) -> np.ndarray:
     values = np.stack([align(sd) for sd in colour.SDS_COLOURCHECKERS[name].values()])
     values.setflags(write=False)
     return values
+
+
+def joined(first: SkinSamples, second: SkinSamples | None) -> SkinSamples:
+    """Both sets of samples as one (``second`` None: ``first``); the chart combination is
+    kept only where both have one."""
+    if second is None:
+        return first
+    weights = None
+    if first.weights is not None and second.weights is not None:
+        weights = np.vstack([first.weights, second.weights])
+    return SkinSamples(
+        SRL=np.concatenate([first.SRL, second.SRL]),
+        target=np.concatenate([first.target, second.target]),
+        band=first.band + second.band,
+        source=f"{first.source}; and {second.source}",
+        weights=weights,
+    )
 
 
 def chart_skin_weights(

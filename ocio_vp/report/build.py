@@ -38,7 +38,6 @@ from ocio_vp.report.data import (
     environment_data,
 )
 from ocio_vp.report.panels import panel_facts
-from ocio_vp.report.skin import skin_facts, skin_panel
 from ocio_vp.report.plots import (
     ChartPlot,
     DeltaEPlot,
@@ -49,6 +48,7 @@ from ocio_vp.report.plots import (
     plot_error_bars,
     plot_linearity,
 )
+from ocio_vp.report.skin import skin_facts, skin_panel
 from ocio_vp.staging import publish_dir, staged_dir
 from ocio_vp.wall.softclip import soft_clip_knee
 
