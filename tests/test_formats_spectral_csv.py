@@ -93,7 +93,7 @@ def test_stage_spectra_needs_both_files_and_a_known_camera(tmp_path):
         stage_spectra(str(leds), None)
     with pytest.raises(InputError, match="--camera-sensitivities: unknown camera 'Nikon 51'"):
         stage_spectra(str(leds), "Nikon 51")
-    with pytest.raises(InputError, match="--location-light: expected ENV=FILE.csv"):
+    with pytest.raises(InputError, match=r"--location-light: expected ENV=FILE\.csv"):
         stage_spectra(str(leds), "Nikon 5100 (NPL)", ["daylight"])
     spectra = stage_spectra(str(leds), "Nikon 5100 (NPL)")
     assert spectra.leds.shape == spectra.camera.shape == (len(nm), 3) and spectra.lights == {}

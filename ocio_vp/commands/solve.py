@@ -64,35 +64,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "an LED channel, or needing negative light); by default it fades to the 3x3 there "
         "(docs/stability.md)",
     )
-    parser.add_argument(
-        "--priority",
-        choices=PRIORITIES,
-        default=DEFAULT_PRIORITY,
-        help="what the default post-correction puts first: general colours (default; it never "
-        "renders skin worse than least squares) or skin (faces first, general reflectances at "
-        "a bounded cost); an environment's own 'priority' in the measurements file wins "
-        "(docs/skin.md)",
-    )
-    parser.add_argument(
-        "--led-spectra",
-        metavar="FILE.csv",
-        help="the panel's measured LED spectra (wavelength in nm, then red, green, blue): skin "
-        "is then also computed from spectra, with --camera-sensitivities (docs/skin.md)",
-    )
-    parser.add_argument(
-        "--camera-sensitivities",
-        metavar="FILE.csv|NAME",
-        help="the camera's spectral sensitivities (wavelength in nm, then R, G, B) or a camera "
-        "of the bundled database (docs/skin.md)",
-    )
-    parser.add_argument(
-        "--location-light",
-        action="append",
-        default=[],
-        metavar="ENV=FILE.csv",
-        help="the measured light of an environment (wavelength in nm, then its power); "
-        "otherwise estimated from its target chart (repeat per environment)",
-    )
+    _add_skin_arguments(parser)
     parser.add_argument(
         "--black-level",
         choices=BLACK_LEVEL_METHODS,
@@ -199,6 +171,40 @@ def print_fixtures(solutions: Sequence) -> None:
             f"fixtures, {solution.environment}: {drives} (error Q cannot remove "
             f"{100 * notes['error_reduction']:.0f}% lower; active limits: {limits})"
         )
+
+
+def _add_skin_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--priority`` and what skin may be computed from (docs/skin.md)."""
+    parser.add_argument(
+        "--priority",
+        choices=PRIORITIES,
+        default=DEFAULT_PRIORITY,
+        help="what the default post-correction puts first: general colours (default; it never "
+        "renders skin worse than least squares) or skin (faces first, general reflectances at "
+        "a bounded cost); an environment's own 'priority' in the measurements file wins "
+        "(docs/skin.md)",
+    )
+    parser.add_argument(
+        "--led-spectra",
+        metavar="FILE.csv",
+        help="the panel's measured LED spectra (wavelength in nm, then red, green, blue): skin "
+        "is then also computed from spectra, with --camera-sensitivities (default: skin from "
+        "the chart alone, docs/skin.md)",
+    )
+    parser.add_argument(
+        "--camera-sensitivities",
+        metavar="FILE.csv|NAME",
+        help="the camera's spectral sensitivities (wavelength in nm, then R, G, B) or a camera "
+        "of the bundled database (default: none; docs/skin.md)",
+    )
+    parser.add_argument(
+        "--location-light",
+        action="append",
+        default=[],
+        metavar="ENV=FILE.csv",
+        help="the measured light of an environment (wavelength in nm, then its power); "
+        "by default estimated from its target chart (repeat per environment)",
+    )
 
 
 def print_panels(solutions: Sequence) -> None:
