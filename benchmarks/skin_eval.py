@@ -82,8 +82,9 @@ REFERENCE = "least-squares"
 class Variant:
     """One way to solve: a label for the tables, a Q method, and extra solve options.
 
-    ``measured``: solve options given the stage's true spectra, as (option name, ``"leds"`` or
-    ``"camera"``): what a stage engineer who measured the panels and the camera would pass.
+    ``measured``: when not empty, the solve is given the stage's true LED spectra and camera
+    sensitivities (the ``spectra`` solve option; the location light estimated from the target
+    chart): what a stage engineer who measured the panels and the camera would pass.
     """
 
     label: str
@@ -187,8 +188,8 @@ def variants(methods: Iterable[str] | None = None) -> tuple[Variant, ...]:
     if methods is None and "priority" in fields:
         skin = (("priority", "skin"),)
         out.append(Variant("auto, priority skin", "auto", skin))
-        if {"led_spectra", "camera_sensitivities"} <= fields:
-            measured = (("led_spectra", "leds"), ("camera_sensitivities", "camera"))
+        if "spectra" in fields:
+            measured = (("spectra", "leds"), ("spectra", "camera"))
             out.append(Variant("auto, priority skin, measured spectra", "auto", skin, measured))
     return tuple(out)
 
@@ -206,7 +207,10 @@ def _judge(stage, measurements, env, variant: Variant, samples) -> SkinRow:
     skin, general = samples
     start = time.perf_counter()
     options = dict(variant.options)
-    options.update({name: getattr(stage, attribute) for name, attribute in variant.measured})
+    if variant.measured:  # the stage's true LED spectra and camera, the light estimated
+        from ocio_vp.correction.skin_spectra import StageSpectra
+
+        options["spectra"] = StageSpectra(stage.leds, stage.camera, {}, "the measured spectra")
     solution = solve_environment(measurements, env, method=variant.method, **options)
     seconds = time.perf_counter() - start
 
