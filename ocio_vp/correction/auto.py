@@ -346,7 +346,10 @@ def q_auto(problem: QProblem) -> QFit:
         "excluded_candidates": excluded,
     }
     if skin:
-        details["skin_delta_e"] = {k: float(np.mean(v)) for k, v in skin.items()}
+        # Below 1e-6 a ΔE is rounding (digits that differ between machines): written as 0.
+        details["skin_delta_e"] = {
+            k: float(np.mean(v)) if np.mean(v) >= 1e-6 else 0.0 for k, v in skin.items()
+        }
     return _chosen_fit(
         chosen,
         X,

@@ -17,7 +17,7 @@ from ocio_vp.correction.extrapolation import in_frame_led_damage
 from ocio_vp.correction.linear import patch_errors
 from ocio_vp.correction.problem import QProblem, fit_least_squares
 from ocio_vp.correction.skin import sample_camera_to_xyz, skin_delta_e
-from ocio_vp.formats.skin import SkinBand, SkinDefault, SkinFigures
+from ocio_vp.formats.skin import ROUNDING, SkinBand, SkinDefault, SkinFigures
 from ocio_vp.model.correction import MatrixCorrection, PostCorrection
 from ocio_vp.skin_data import ITA_BANDS
 
@@ -25,6 +25,13 @@ __all__ = ["skin_figures"]
 
 #: An in-frustum matrix is not formed from a Q less well conditioned than this (as N's solve).
 _MAX_CONDITION = 1e8
+
+
+def _figure(value: float) -> float:
+    """A ΔE2000 figure; below :data:`~ocio_vp.formats.skin.ROUNDING` it is rounding, whose
+    digits differ between machines: written as 0."""
+    value = float(value)
+    return 0.0 if abs(value) < ROUNDING else value
 
 
 def _background_outside(problem: QProblem, correction: PostCorrection) -> int:
@@ -64,7 +71,9 @@ def skin_figures(
     band = np.asarray(skin.band)
     bands = tuple(
         SkinBand(
-            name, int(np.sum(band == name)), *(float(np.mean(e[band == name])) for e in errors[:2])
+            name,
+            int(np.sum(band == name)),
+            *(_figure(np.mean(e[band == name])) for e in errors[:2]),
         )
         for name, _ in ITA_BANDS
         if np.any(band == name)
@@ -73,9 +82,9 @@ def skin_figures(
     if default is not None:
         comparison = SkinDefault(
             model=default[0],
-            expected=float(np.mean(errors[2])),
-            led_damage=in_frame_led_damage(correction, problem.SL, white, camera),
-            led_damage_default=in_frame_led_damage(default[1], problem.SL, white, camera),
+            expected=_figure(np.mean(errors[2])),
+            led_damage=_figure(in_frame_led_damage(correction, problem.SL, white, camera)),
+            led_damage_default=_figure(in_frame_led_damage(default[1], problem.SL, white, camera)),
             background_outside=_background_outside(problem, correction),
             background_outside_default=_background_outside(problem, default[1]),
         )
@@ -83,10 +92,10 @@ def skin_figures(
         priority=priority,
         source=skin.source,
         samples=skin.count,
-        expected=float(np.mean(errors[0])),
-        least_squares=float(np.mean(errors[1])),
-        chart=float(np.mean(chart[0][0][active])),
-        chart_least_squares=float(np.mean(chart[0][1][active])),
+        expected=_figure(np.mean(errors[0])),
+        least_squares=_figure(np.mean(errors[1])),
+        chart=_figure(np.mean(chart[0][0][active])),
+        chart_least_squares=_figure(np.mean(chart[0][1][active])),
         bands=bands,
         default=comparison,
     )
