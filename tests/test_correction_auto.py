@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ocio_vp.correction.auto import SHRUNK_SE_FACTOR, bounded_candidate, _choose
+from ocio_vp.correction.auto import SHRUNK_SE_FACTOR, _choose, bounded_candidate
 from ocio_vp.correction.extrapolation import MIN_NEGATIVE, MIN_RETAINED, saturation_probe
 from ocio_vp.model.correction import MatrixCorrection
 from ocio_vp.pipeline import post_correction_problem

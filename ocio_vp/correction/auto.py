@@ -87,6 +87,12 @@ SHRUNK_SE_FACTOR = 2.0
 #: margin, 0.1 loses to least squares on skin at 1 % noise (docs/skin.md).
 AUTO_SKIN_WEIGHT = 0.25
 
+#: A candidate is not taken when its mean ΔE2000 on the skin samples is above least squares' by
+#: more than this many standard errors of the paired per-sample differences: worse beyond the
+#: comparison's own noise (a root-polynomial within a hundredth of a ΔE of least squares on
+#: skin and 0.8 ΔE better on the chart is not refused for that hundredth).
+SKIN_SE_FACTOR = 1.0
+
 
 _NAMES = {"root-polynomial": "root-polynomial (degree 2, bounded)"}
 
@@ -245,20 +251,37 @@ def candidate_skin_errors(
 
 
 def _skin_veto(skin: dict[str, np.ndarray]) -> tuple[set[str], list[str]]:
-    """The candidates that render the skin samples worse than least squares by more than
-    :data:`~ocio_vp.correction.linear.AUTO_TIE` (rounding; faces first: a model must not lose
-    on skin, however much it gains on the chart), and why, in words."""
+    """The candidates that render the skin samples worse than least squares beyond the noise of
+    the comparison: their mean ΔE2000 above least squares' by more than
+    :data:`SKIN_SE_FACTOR` standard errors of the paired per-sample differences (and more than
+    :data:`~ocio_vp.correction.linear.AUTO_TIE`, rounding). Faces first: a model must not lose
+    on skin, however much it gains on the chart. Returns them and why, in words."""
     if not skin:
         return set(), []
-    reference = float(np.mean(skin["least-squares"]))
-    vetoed = {name for name, e in skin.items() if float(np.mean(e)) > reference + AUTO_TIE}
-    words = [
-        f"{_label(name)} is not taken: it renders skin worse than least squares (mean ΔE2000 "
-        f"{_g(float(np.mean(skin[name])))} against {_g(reference)} on the skin samples)"
-        for name in skin
-        if name in vetoed
-    ]
+    base = skin["least-squares"]
+    reference = float(np.mean(base))
+    vetoed, words = set(), []
+    for name, errors in skin.items():
+        difference = errors - base
+        se = float(np.std(difference, ddof=1) / np.sqrt(len(difference))) if len(base) > 1 else 0.0
+        if float(np.mean(difference)) > max(AUTO_TIE, SKIN_SE_FACTOR * se):
+            vetoed.add(name)
+            words.append(
+                f"{_label(name)} is not taken: it renders skin worse than least squares (mean "
+                f"ΔE2000 {_g(float(np.mean(errors)))} against {_g(reference)} on the skin "
+                f"samples, by more than {SKIN_SE_FACTOR:g} standard error)"
+            )
     return vetoed, words
+
+
+def _corrections(held, models, X, P, w, white, alpha) -> dict[str, PostCorrection]:
+    """Every candidate's post-correction fitted to all its patches, by name."""
+    return {
+        name: models[name].correction
+        if name in models
+        else MatrixCorrection(fit_model(name, X, P, w, white, alpha))
+        for name in held
+    }
 
 
 def _root_polynomial_candidates(
@@ -323,13 +346,7 @@ def q_auto(problem: QProblem) -> QFit:
     models, excluded = _root_polynomial_candidates(problem, ladder, held)
     stacked, unit = patch_errors(np.stack(list(held.values())), P, w, white)
     scores = {name: e[active] for name, e in zip(held, stacked, strict=True)}
-    corrections = {
-        name: models[name].correction
-        if name in models
-        else MatrixCorrection(fit_model(name, X, P, w, white, alpha))
-        for name in held
-    }
-    skin = candidate_skin_errors(problem, corrections)
+    skin = candidate_skin_errors(problem, _corrections(held, models, X, P, w, white, alpha))
     vetoed, veto_words = _skin_veto(skin)
     chosen, _, shrunk = _choose({k: v for k, v in scores.items() if k not in vetoed})
     table = choose_model(scores, AUTO_SE_FACTOR)[1]  # every candidate, for the reason
