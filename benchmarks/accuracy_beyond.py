@@ -251,7 +251,7 @@ def _lit(stage, environment: str, solution, scene: _Scene) -> _Lit:
     lit, _ = held_out_colours(stage, environment, M=solution.M, w_avg=solution.w_avg,
                               reflectances=both)  # fmt: skip
     k = len(scene.reflectances)
-    white = solution.diagnostics["charts"]["lit_baseline"][solution.diagnostics["white_patch"]]
+    white = solution.diagnostics.charts.lit_baseline[solution.diagnostics.white_patch]
     return _Lit(lit[:k], lit[k:-1], np.asarray(white, dtype=np.float64))
 
 

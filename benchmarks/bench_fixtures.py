@@ -48,7 +48,7 @@ def _solve_and_judge(stage, measurements, env_name, kind, noise, seed, reflectan
         block = solution.fixtures[kind.replace("-", "_")]
         drives = np.array([block["drive"][c] for c in block["channels"]])
         extra = fixture_spectra(stage, kind)[1] @ drives
-        notes = solution.diagnostics["fixtures"]
+        notes = solution.diagnostics.fixtures
         drives_ok = bool(np.all(drives >= 0) and np.all(drives <= block["max_drive"] + 1e-9))
         white_ok = notes["limits"].get("white_point_delta_e", 0.0) <= 2.0 + 1e-6
     errors = held_out_errors(

@@ -150,13 +150,13 @@ def extrapolation_rows(stages) -> list[list[str]]:
         for env in m.environments:
             for protect in (False, True):
                 s = solve_environment(m, env, protect_emitters=protect)
-                x = s.diagnostics["extrapolation"]
+                x = s.diagnostics.extrapolation
                 rows.append(
                     [name, env.name, "protect-emitters" if protect else "default",
-                     s.diagnostics["model"], f"{100 * x['folds']:.2f}%", f"{x['kept']:.2f}",
+                     s.diagnostics.model, f"{100 * x.folds:.2f}%", f"{x.kept:.2f}",
                      "-" if x["negative"] is None else f"{x['negative']:.2f}",
-                     f"{x['led_damage']:.1f}",
-                     f"{x['led_damage_least_squares']:.1f}"]
+                     f"{x.led_damage:.1f}",
+                     f"{x.led_damage_least_squares:.1f}"]
                 )  # fmt: skip
     return rows
 

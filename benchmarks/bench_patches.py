@@ -51,7 +51,7 @@ def run(quick: bool = False) -> str:
                 warmup=0 if method in ITERATIVE else 1,
             )
             s = solve_environment(m, env, method=method)
-            cv = s.diagnostics.get("cross_validated_error")
+            cv = s.diagnostics.cross_validated_error
             accuracy = "" if cv is None else f" ({100 * float(np.mean(cv)):.2f}%)"
             cells.append(fmt_ms(seconds) + accuracy)
         rows.append((f"`{method}`", *cells))

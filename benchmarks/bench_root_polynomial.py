@@ -52,8 +52,8 @@ def _bakes(solution, size: int = 65):
     from ocio_vp.ocio import bake
 
     correction = solution.correction
-    lit = np.asarray(solution.diagnostics["charts"]["lit_baseline"], dtype=np.float64)
-    chart = np.asarray(solution.diagnostics["charts"]["target"], dtype=np.float64)
+    lit = np.asarray(solution.diagnostics.charts.lit_baseline, dtype=np.float64)
+    chart = np.asarray(solution.diagnostics.charts.target, dtype=np.float64)
     forward = bake.forward_chain(correction, lit[18], np.vstack([lit, chart]), size)
     q = bake.chain_transform(forward, bake.bake(correction.apply, forward))
     backward = bake.inverse_chain(correction, bake.chart_content(chart), size)
@@ -168,7 +168,7 @@ def round_trip(quick: bool) -> str:
                 str(Path(tmp) / solution.environment / "config.ocio")
             )
             cpu = config.getProcessor(REFERENCE, IN_FRUSTUM).getDefaultCPUProcessor()
-            chart = np.asarray(solution.diagnostics["charts"]["target"], dtype=np.float64)
+            chart = np.asarray(solution.diagnostics.charts.target, dtype=np.float64)
             rng = np.random.default_rng(7)
             mix = rng.dirichlet(np.full(len(chart), 0.3), 5000) @ chart
             c = mix / mix.max(axis=1, keepdims=True) * np.exp2(rng.uniform(-13, 2, (5000, 1)))

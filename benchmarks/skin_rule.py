@@ -155,7 +155,7 @@ def expectation() -> str:
                         stage, env.name, M=s.M, w_avg=s.w_avg, Q=s.Q, reflectances=skin,
                         correct=s.correction.apply,
                     ).delta_E_2000.mean()  # fmt: skip
-                    out[priority].append((s.diagnostics["skin"].ratio, measured / reference))
+                    out[priority].append((s.diagnostics.skin.ratio, measured / reference))
     rows = [
         "| priority | solves | expected skin / LS (mean) | measured skin / LS (mean) | "
         "correlation | solves where both say 'better than LS' or both 'not' |",

@@ -32,11 +32,11 @@ def model_table(m) -> str:
         t0 = time.perf_counter()
         s = solve_environment(m, env, method="auto")
         ms = 1000 * (time.perf_counter() - t0)
-        cv = s.diagnostics["method_notes"]["cv_delta_e"]
+        cv = s.diagnostics.method_notes["cv_delta_e"]
         cells = [f"{cv[k]:.2f}" if k in cv else "-" for k in (
             "identity", "diagonal", "regularised", "least-squares", "root-polynomial")]  # fmt: skip
-        n = "= M" if s.diagnostics["N_equals_M"] else ("solved" if s.N is not None else "no")
-        rows.append(f"| {env.name} | {s.diagnostics['model']} | {n} | " + " | ".join(cells) + " |")
+        n = "= M" if s.diagnostics.N_equals_M else ("solved" if s.N is not None else "no")
+        rows.append(f"| {env.name} | {s.diagnostics.model} | {n} | " + " | ".join(cells) + " |")
     rows.append(f"\nOne `solve_environment(method='auto')` with its diagnostics: ~{ms:.0f} ms.")
     return "\n".join(rows)
 
@@ -59,7 +59,7 @@ def noise_table(m) -> str:
                 )
                 s = solve_environment(noisy, env, method=method)
                 Ns.append(s.in_frustum_matrix)
-                models[s.diagnostics["model"]] += 1
+                models[s.diagnostics.model] += 1
                 # The solve from noisy plates, played on the true stage (eq. 3 with true [SRL]).
                 correct = s.correction.apply
                 lit = correct(predict_lit_chart(m.SRL, s.beta, s.M, s.w_avg))

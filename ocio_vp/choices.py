@@ -8,6 +8,8 @@ the other fails the suite.
 
 from __future__ import annotations
 
+from typing import Literal
+
 __all__ = [
     "BLACK_LEVEL_METHODS",
     "DEFAULT_BASE_CONFIG",
@@ -17,13 +19,20 @@ __all__ = [
     "DEFAULT_PEAK_NITS",
     "DEFAULT_PRIORITY",
     "DEFAULT_WALL_ENCODING",
+    "DEFAULT_WHITE_PATCH",
     "EXPORT_TARGETS",
     "LINEAR_METHODS",
     "OPTIMIZATIONS",
     "PRIORITIES",
     "Q_METHODS",
     "WALL_ENCODINGS",
+    "BlackLevelMethod",
 ]
+
+#: The white patch of a ColorChecker 24, 0-based in reading order (people see it as patch 19,
+#: "white 9.5 (.05 D)"): the default of ``stage.white_patch`` and of an older solution.json
+#: that does not say.
+DEFAULT_WHITE_PATCH = 18
 
 #: Post-correction (Q) methods, in the order ``--help`` lists them (the registry's records:
 #: :data:`ocio_vp.correction.registry.Q_SOLVE_METHODS`).
@@ -51,8 +60,9 @@ PRIORITIES = ("general", "skin")
 DEFAULT_PRIORITY = "general"
 
 #: In-frustum black-level offset: ``exact`` (``-M b``) or the paper's ``b / w_camera``.
-BLACK_LEVEL_METHODS = ("exact", "paper")
-DEFAULT_BLACK_LEVEL = "exact"
+BlackLevelMethod = Literal["exact", "paper"]
+BLACK_LEVEL_METHODS: tuple[BlackLevelMethod, ...] = ("exact", "paper")
+DEFAULT_BLACK_LEVEL: BlackLevelMethod = "exact"
 
 #: The wall's signal encodings (docs/linearity.md).
 WALL_ENCODINGS = ("linear", "gamma2.4", "srgb", "pq")

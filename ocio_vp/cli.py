@@ -91,7 +91,7 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=HelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
-    subparsers = parser.add_subparsers(
+    subparsers = parser.add_subparsers(  # type: ignore[call-overload]  # parser_class: a partial
         dest="command",
         required=True,
         metavar="COMMAND",

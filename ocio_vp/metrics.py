@@ -40,17 +40,61 @@ from numpy.typing import ArrayLike
 from ocio_vp.spectra import spectral_shape, wavelengths
 
 __all__ = [
+    "COLORCHECKER_NAMES",
     "ITP_WHITE_NITS",
     "SAMPLE_CAMERA_TO_XYZ",
     "WHITE_FLOOR",
     "ChartErrors",
+    "camera_delta_E_2000",
     "camera_to_xyz_matrix",
     "chart_errors",
     "delta_E_2000",
     "error_relative_to_white",
+    "patch_label",
     "training_rgb_xyz",
     "white_scale",
 ]
+
+#: The 24 patches of the ColorChecker Classic in reading order (X-Rite's names).
+COLORCHECKER_NAMES = (
+    "dark skin",
+    "light skin",
+    "blue sky",
+    "foliage",
+    "blue flower",
+    "bluish green",
+    "orange",
+    "purplish blue",
+    "moderate red",
+    "purple",
+    "yellow green",
+    "orange yellow",
+    "blue",
+    "green",
+    "red",
+    "yellow",
+    "magenta",
+    "cyan",
+    "white 9.5 (.05 D)",
+    "neutral 8 (.23 D)",
+    "neutral 6.5 (.44 D)",
+    "neutral 5 (.70 D)",
+    "neutral 3.5 (1.05 D)",
+    "black 2 (1.5 D)",
+)
+
+
+def patch_label(index: int, n: int) -> str:
+    """A chart patch as people see it: numbered from 1 in reading order, with its name on a
+    ColorChecker 24 (files keep 0-based indices: ``index`` is one).
+
+    >>> patch_label(18, 24), patch_label(0, 140)
+    ('patch 19 (white 9.5 (.05 D))', 'patch 1')
+    """
+    if n == len(COLORCHECKER_NAMES):
+        return f"patch {index + 1} ({COLORCHECKER_NAMES[index]})"
+    return f"patch {index + 1}"
+
 
 #: Luminance (cd/m^2) that the target white patch is mapped to for ΔE ITP.
 ITP_WHITE_NITS = 100.0
@@ -245,20 +289,48 @@ def chart_errors(
     predicted = np.asarray(predicted, dtype=np.float64)
     target = np.asarray(target, dtype=np.float64)
     matrix = np.asarray(camera_to_xyz, dtype=np.float64)
-    xyz_target = target @ matrix.T
-    xyz_predicted = predicted @ matrix.T
-    scale = 1.0 / xyz_target[white_patch, 1]
-    xyz_target, xyz_predicted = xyz_target * scale, xyz_predicted * scale
-    white_xy = colour.XYZ_to_xy(xyz_target[white_patch])
-    lab_t = colour.XYZ_to_Lab(xyz_target, white_xy)
-    lab_p = colour.XYZ_to_Lab(xyz_predicted, white_xy)
-    itp_t = colour.XYZ_to_ICtCp(xyz_target * ITP_WHITE_NITS, method="ITU-R BT.2100-2 PQ")
-    itp_p = colour.XYZ_to_ICtCp(xyz_predicted * ITP_WHITE_NITS, method="ITU-R BT.2100-2 PQ")
+    scale = 1.0 / (target[white_patch] @ matrix[1])
+    itp_t = colour.XYZ_to_ICtCp(
+        target @ matrix.T * scale * ITP_WHITE_NITS, method="ITU-R BT.2100-2 PQ"
+    )
+    itp_p = colour.XYZ_to_ICtCp(
+        predicted @ matrix.T * scale * ITP_WHITE_NITS, method="ITU-R BT.2100-2 PQ"
+    )
     return ChartErrors(
         relative_to_white=error_relative_to_white(predicted, target, white_patch),
-        delta_E_2000=np.asarray(colour.delta_E(lab_t, lab_p, method="CIE 2000")),
+        delta_E_2000=camera_delta_E_2000(
+            target, predicted, camera_to_xyz=matrix, white=target[white_patch]
+        ),
         delta_E_ITP=np.asarray(colour.delta_E(itp_t, itp_p, method="ITP")),
     )
+
+
+def camera_delta_E_2000(
+    reference: ArrayLike, other: ArrayLike, *, camera_to_xyz: ArrayLike, white: ArrayLike
+) -> np.ndarray:
+    """(...,) ΔE2000 between two camera RGB renderings (..., 3) of the same colours, with
+    colour-science's ``XYZ_to_Lab`` and ``delta_E``: the one camera RGB -> ΔE2000 of the package.
+
+    XYZ through ``camera_to_xyz``, scaled so that ``white`` (camera RGB of the scene's white)
+    has Y = 1, Lab relative to its chromaticity. Colours brighter than white, negative or out
+    of gamut are measured as they are. :func:`delta_E_2000` is the same figure in numpy alone,
+    for the config writer, which does not load colour-science.
+
+    >>> white = np.array([0.9, 1.0, 0.8])
+    >>> round(float(camera_delta_E_2000(white, 1.05 * white, camera_to_xyz=np.eye(3), white=white)), 4)
+    1.0798
+    """
+    import colour
+
+    matrix = np.asarray(camera_to_xyz, dtype=np.float64)
+    white = np.asarray(white, dtype=np.float64)
+    scale = 1.0 / float(white @ matrix[1])
+    white_xy = colour.XYZ_to_xy(white @ matrix.T * scale)
+    lab = [
+        colour.XYZ_to_Lab(np.asarray(rgb, dtype=np.float64) @ matrix.T * scale, white_xy)
+        for rgb in (reference, other)
+    ]
+    return np.asarray(colour.delta_E(lab[0], lab[1], method="CIE 2000"))
 
 
 #: :func:`camera_to_xyz_matrix` of the sample camera (``ocio_vp.spectra.DEFAULT_CAMERA``, under

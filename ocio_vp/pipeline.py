@@ -39,7 +39,13 @@ from ocio_vp.calibration.panels import (
     panel_lights,
     panel_solutions,
 )
-from ocio_vp.choices import DEFAULT_BLACK_LEVEL, DEFAULT_METHOD, DEFAULT_PRIORITY, PRIORITIES
+from ocio_vp.choices import (
+    DEFAULT_BLACK_LEVEL,
+    DEFAULT_METHOD,
+    DEFAULT_PRIORITY,
+    PRIORITIES,
+    BlackLevelMethod,
+)
 from ocio_vp.correction.extrapolation import Extrapolation, extrapolation
 from ocio_vp.correction.guards import check_problem, singular_q_cause
 from ocio_vp.correction.outliers import Inconsistency, inconsistent_patches
@@ -58,11 +64,13 @@ from ocio_vp.fixtures.lighting import (
     fixtures_diagnostics,
     light_with_fixtures,
 )
+from ocio_vp.formats.diagnostics import Charts, Diagnostics, PanelsNotes
 from ocio_vp.formats.measurements import Environment, Measurements
 from ocio_vp.formats.panel_solution import PanelSolution
 from ocio_vp.formats.panels import primary_panel
+from ocio_vp.formats.records import json_value
 from ocio_vp.formats.skin import SkinFigures
-from ocio_vp.formats.solution import Diagnostics, Solution
+from ocio_vp.formats.solution import Solution
 from ocio_vp.formats.synthesis import synthesis_to_dict, synthesis_warnings
 from ocio_vp.metrics import error_relative_to_white
 from ocio_vp.model.correction import DEFAULT_DARK, PostCorrection, ProtectedCorrection
@@ -97,7 +105,7 @@ class SolveOptions:
     """
 
     method: str = DEFAULT_METHOD
-    black_level: str = DEFAULT_BLACK_LEVEL
+    black_level: BlackLevelMethod = DEFAULT_BLACK_LEVEL
     max_condition_q: float = MAX_CONDITION_Q_FOR_N
     fixtures: bool = True
     keep_all_patches: bool = False
@@ -166,7 +174,7 @@ def solve_environment(
             measurements, environment, correction, options, M=M, N=N, n_reason=n_reason,
             offset=offset, linearity=linearity,
         )  # fmt: skip
-        warnings = [*(diagnostics.warnings or []), *notes]
+        warnings = [*diagnostics.warnings, *notes]
         diagnostics = dataclasses.replace(diagnostics, panels=block, warnings=warnings)
     return Solution(
         stage=measurements.stage.name,
@@ -176,7 +184,7 @@ def solve_environment(
         w_avg=problem.w_avg,
         SL=SL,
         M=M,
-        Q=Q,
+        post_correction=correction,
         N=N,
         black_level_offset=offset,
         black_level_method=None if offset is None else options.black_level,
@@ -186,7 +194,6 @@ def solve_environment(
         camera_colorspace=measurements.stage.camera_colorspace,
         linearity=linearity,
         fixtures=None if lighting is None else fixtures_block(lighting),
-        post_correction=correction,
         panels=panels,
     )
 
@@ -196,7 +203,7 @@ def _protected(
 ) -> PostCorrection:
     """``correction``, fading to the identity beyond the reflective solid with
     ``protect_emitters``."""
-    if not options.protect_emitters:
+    if not options.protect_emitters or isinstance(correction, ProtectedCorrection):
         return correction
     return ProtectedCorrection(correction, problem.domain, problem.M, dark=DEFAULT_DARK)
 
@@ -328,7 +335,7 @@ def _solve_panels(
     n_reason: str | None,
     offset: np.ndarray | None,
     linearity: dict | None,
-) -> tuple[dict[str, PanelSolution], dict[str, Any], list[str]]:
+) -> tuple[dict[str, PanelSolution], PanelsNotes, list[str]]:
     """solution.json's ``panels`` block, the diagnostics' and the warnings: every type's M,
     N and offset for the in-frustum ones (the first one's are the top-level ones), each
     type's share of the light, and how the in-frustum types match in camera."""
@@ -361,14 +368,14 @@ def _solve_panels(
                 f"panel type {light.name}: its drive M w_avg has a negative channel: this light "
                 "is outside its LED gamut and the panels clip it"
             )
-    errors = lit_white_errors(lights, environment.target_chart, white, primary)
-    block = {
-        "primary": primary,
-        "shares": shares,
-        "lit_white_error": errors["per_panel"],
-        "lit_white_error_primary_M": errors["primary_M"],
-        "in_frustum_match": match,
-    }
+    own_M, primary_M = lit_white_errors(lights, environment.target_chart, white, primary)
+    block = PanelsNotes(
+        primary=primary,
+        shares=shares,
+        lit_white_error=own_M,
+        lit_white_error_primary_M=primary_M,
+        in_frustum_match=match,
+    )
     return panels, block, warnings
 
 
@@ -388,9 +395,9 @@ def _type_linearity(measurements: Measurements, index: int) -> dict | None:
     if panel.encoding is None:
         return linearity
     linearity = dict(linearity or {"measured": False, "model": "linear (assumed)"})
-    linearity["wall_encoding"] = {"name": panel.encoding}
-    if panel.encoding == "pq" and panel.peak_nits is not None:
-        linearity["wall_encoding"]["peak_nits"] = float(panel.peak_nits)
+    from ocio_vp.wall.encoding import WallEncoding
+
+    linearity["wall_encoding"] = WallEncoding(panel.encoding, panel.peak_nits).to_dict()
     return linearity
 
 
@@ -490,7 +497,7 @@ def _charts(
     N: np.ndarray | None,
     offset: np.ndarray | None,
     environment: Environment,
-) -> dict[str, np.ndarray]:
+) -> Charts:
     """Per-patch camera RGB, for reports and the errors.
 
     The target p_j, the lit chart under M alone (baseline) and after Q, and the chart shown
@@ -515,13 +522,13 @@ def _charts(
         matrix=problem.M,
         black_level=environment.black_level,
     )
-    return {
-        "target": environment.target_chart,
-        "lit_baseline": baseline,
-        "lit_corrected": correction.apply(lit),
-        "displayed_baseline": displayed_baseline,
-        "displayed_corrected": displayed if N is None else correction.apply(displayed),
-    }
+    return Charts(
+        target=environment.target_chart,
+        lit_baseline=baseline,
+        lit_corrected=correction.apply(lit),
+        displayed_baseline=displayed_baseline,
+        displayed_corrected=displayed if N is None else correction.apply(displayed),
+    )
 
 
 def _extrapolation(problem: QProblem, correction: PostCorrection) -> Extrapolation:
@@ -543,7 +550,7 @@ def _diagnostics(
     problem: QProblem,
     fit: QFit,
     correction: PostCorrection,
-    charts: dict[str, np.ndarray],
+    charts: Charts,
     *,
     options: SolveOptions,
     M: np.ndarray,
@@ -559,8 +566,8 @@ def _diagnostics(
     target, white, weights = problem.target, problem.white_patch, problem.weights
     Q = correction.matrix
 
-    def error(chart: str) -> np.ndarray:
-        return error_relative_to_white(charts[chart], target, white, weights)
+    def error(chart: np.ndarray) -> np.ndarray:
+        return error_relative_to_white(chart, target, white, weights)
 
     drive = M @ problem.w_avg
     warnings = [
@@ -584,7 +591,7 @@ def _diagnostics(
         N=N,
         offset=offset,
         black_level=environment.black_level,
-        corrected=charts["lit_corrected"],
+        corrected=charts.lit_corrected,
         clipped=clipped,
         cross_validated=cross_validated_error(problem, method)
         if fit.cross_validated_error is None and method in CLOSED_FORM_METHODS
@@ -601,22 +608,22 @@ def _diagnostics(
         N_solved=N is not None,
         N_reason=n_reason,
         max_condition_q_for_N=options.max_condition_q,
-        lit_chart_error_baseline=error("lit_baseline"),
-        lit_chart_error=error("lit_corrected"),
-        residual_rms=float(np.sqrt(np.mean((charts["lit_corrected"] - target) ** 2))),
-        displayed_chart_error_baseline=error("displayed_baseline"),
-        displayed_chart_error=error("displayed_corrected"),
+        lit_chart_error_baseline=error(charts.lit_baseline),
+        lit_chart_error=error(charts.lit_corrected),
+        residual_rms=float(np.sqrt(np.mean((charts.lit_corrected - target) ** 2))),
+        displayed_chart_error_baseline=error(charts.displayed_baseline),
+        displayed_chart_error=error(charts.displayed_corrected),
         out_of_frustum_drive=drive,
-        method_notes=fit.notes,
+        method_notes=json_value(fit.notes),
         warnings=warnings + stability_warnings + synthesized_warnings,
         charts=charts,
         **stability,
         synthesized_target=None if synthesized is None else synthesis_to_dict(synthesized),
         fixtures=None if lighting is None else fixtures_diagnostics(lighting),
         patch_screening=excluded is not None,
-        excluded_patches=[dataclasses.asdict(f) for f in excluded or []],
+        excluded_patches=list(excluded or []),
         model_description=correction.describe(),
-        extrapolation=dataclasses.asdict(_extrapolation(problem, correction)),
+        extrapolation=_extrapolation(problem, correction),
     )
 
 

@@ -55,10 +55,10 @@ class TestDrives:
         matrix = np.eye(3)
         matrix[0, 1] = -0.5
         r = in_frustum_drive_range(target, M=np.eye(3), matrix=matrix, white_patch=18)
-        assert r["content_scale"] == 2.0
+        assert r.content_scale == 2.0
         # Red drive 2 (c_r - 0.5 c_g): patch 0 -> 1.1 (above), patch 1 -> -0.2 (below); the
         # others 2 (0.25 - 0.125) = 0.25, and white 2 (0.5 - 0.25) = 0.5.
-        assert (r["below_zero"], r["above_max"], r["patches_outside"]) == (1, 1, [0, 1])
+        assert (r.below_zero, r.above_max, r.patches_outside) == (1, 1, [0, 1])
 
     def test_black_level_bounce_is_the_papers_ratio(self) -> None:
         SL = np.array([[0.9, 0.12, 0.02], [0.25, 0.8, 0.1], [0.02, 0.15, 0.85]])
@@ -70,10 +70,10 @@ class TestDrives:
         m = simulate_measurements(["sodium_vapour", "d65"])
         sodium = solve_environment(m, m.environment("sodium_vapour"))
         daylight = solve_environment(m, m.environment("d65"))
-        assert sodium.diagnostics["out_of_frustum_negative_channels"]
-        assert sodium.diagnostics["lit_chart_error_clipped_drive"] is not None
-        assert daylight.diagnostics["out_of_frustum_negative_channels"] == []
-        assert daylight.diagnostics["lit_chart_error_clipped_drive"] is None
+        assert sodium.diagnostics.out_of_frustum_negative_channels
+        assert sodium.diagnostics.lit_chart_error_clipped_drive is not None
+        assert daylight.diagnostics.out_of_frustum_negative_channels == []
+        assert daylight.diagnostics.lit_chart_error_clipped_drive is None
 
 
 class TestClipping:
@@ -91,11 +91,11 @@ class TestClipping:
         m = measurements_from_dict(data)
         assert clipped_patches(m.SRL, target, 0.95) == [2, 5]
         s = solve_environment(m, m.environments[0], method="least-squares")
-        clipped = s.diagnostics["clipped_patches"]
+        clipped = s.diagnostics.clipped_patches
         assert clipped == [2, 5]
-        assert any("clipped" in w for w in s.diagnostics["warnings"])
+        assert any("clipped" in w for w in s.diagnostics.warnings)
         keep = np.setdiff1d(np.arange(24), clipped)
-        X = s.diagnostics["charts"]["lit_baseline"]
+        X = s.diagnostics.charts.lit_baseline
         QT = np.linalg.lstsq(X[keep], target[keep], rcond=None)[0]
         np.testing.assert_allclose(s.Q, QT.T, atol=1e-12)
 
@@ -107,7 +107,7 @@ class TestClipping:
             solve_environment(m, m.environments[0])
         data["environments"][0]["w_avg"] = [0.85, 0.85, 0.85]
         m = measurements_from_dict(data)
-        assert 18 in solve_environment(m, m.environments[0]).diagnostics["clipped_patches"]
+        assert 18 in solve_environment(m, m.environments[0]).diagnostics.clipped_patches
 
     def test_clipped_primary_is_an_input_error(self) -> None:
         m = measurements_from_dict(self._document(0.85))  # the red primary reads 0.9
@@ -208,10 +208,10 @@ def test_clipped_drive_charts_are_what_the_spectral_stage_shows() -> None:
     )
     truth = predict_stage(stage, "sodium_vapour", M=sodium.M, Q=sodium.Q)
     assert truth.lit_drive_clipped
-    charts = sodium.diagnostics["charts_clipped_drive"]
+    charts = sodium.diagnostics.charts_clipped_drive
     scale = truth.target[18].max()
-    np.testing.assert_allclose(charts["lit_baseline"], truth.lit, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(charts.lit_baseline, truth.lit, rtol=0, atol=1e-12 * scale)
     np.testing.assert_allclose(
-        charts["lit_corrected"], truth.lit_corrected, rtol=0, atol=1e-12 * scale
+        charts.lit_corrected, truth.lit_corrected, rtol=0, atol=1e-12 * scale
     )
-    assert sun.diagnostics["charts_clipped_drive"] is None  # nothing clipped: eq. 3 as is
+    assert sun.diagnostics.charts_clipped_drive is None  # nothing clipped: eq. 3 as is

@@ -134,7 +134,7 @@ class TestRoundTrips:
         w_camera = s.SL.sum(axis=1)
         np.testing.assert_allclose(
             s.black_level_offset,
-            -(np.asarray(s.diagnostics["charts"]["target"])[18] * 0.04 / w_camera),
+            -(np.asarray(s.diagnostics.charts.target)[18] * 0.04 / w_camera),
             rtol=1e-12,
         )
 
@@ -167,8 +167,8 @@ class TestSolveN:
         ).tolist()
         _, _, s = _solve(data)
         assert s.N is None
-        assert s.diagnostics["N_solved"] is False
-        assert any("N not solved" in w for w in s.diagnostics["warnings"])
+        assert s.diagnostics.N_solved is False
+        assert any("N not solved" in w for w in s.diagnostics.warnings)
         np.testing.assert_array_equal(s.in_frustum_matrix, s.M)
 
 

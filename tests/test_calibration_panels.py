@@ -54,7 +54,7 @@ def test_every_method_fits_q_to_the_summed_light(panel_stage_and_measurements, m
     assert ceiling.N is None and not ceiling.in_frustum
     truth = spectral_lit_chart(stage, env.name, solution.M, ceiling.M)
     # The chart after Q is the summed light corrected (the solve's own "lit_corrected").
-    corrected = solution.diagnostics["charts"]["lit_corrected"]
+    corrected = solution.diagnostics.charts.lit_corrected
     assert np.allclose(corrected, solution.correction.apply(truth), rtol=1e-9, atol=1e-12)
     if method == "least-squares":  # eq. 5 on the summed light, by numpy's own least squares
         QT, *_ = np.linalg.lstsq(truth, env.target_chart, rcond=None)
@@ -80,7 +80,7 @@ def test_the_ceiling_gets_m_and_no_n_in_solution_json(panel_stage_and_measuremen
 def test_lit_white_with_the_walls_m_everywhere(panel_stage_and_measurements):
     stage, m = panel_stage_and_measurements
     env = m.environments[1]
-    notes = solve_environment(m, env).diagnostics["panels"]
+    notes = solve_environment(m, env).diagnostics.panels
     M_wall = np.linalg.inv(stage.wall.SL)
     white = env.target_chart[18]
     for key, M_ceiling in (
@@ -88,8 +88,8 @@ def test_lit_white_with_the_walls_m_everywhere(panel_stage_and_measurements):
         ("lit_white_error_primary_M", M_wall),
     ):
         lit = spectral_lit_chart(stage, env.name, M_wall, M_ceiling)[18]
-        assert np.allclose(notes[key], np.abs(lit - white) / white, rtol=1e-9)
-    assert max(notes["lit_white_error"]) < 0.01 < max(notes["lit_white_error_primary_M"])
+        assert np.allclose(getattr(notes, key), np.abs(lit - white) / white, rtol=1e-9)
+    assert max(notes.lit_white_error) < 0.01 < max(notes.lit_white_error_primary_M)
 
 
 def with_floor(m: Measurements, gain: float = 1.0) -> Measurements:
@@ -131,9 +131,9 @@ def test_in_frustum_types_match_in_camera_by_construction(panel_stage_and_measur
     assert both.sum() >= 18
     assert np.allclose(seen["wall"][0][both], env.target_chart[both], rtol=1e-9, atol=1e-12)
     assert np.allclose(seen["floor"][0][both], env.target_chart[both], rtol=1e-9, atol=1e-12)
-    block = solution.diagnostics["panels"]["in_frustum_match"]["types"]["floor"]
-    assert solution.diagnostics["panels"]["in_frustum_match"]["reference"] == "wall"
-    assert set(block["unreachable"]) | set(block["unreachable_on_reference"]) >= set(
+    block = solution.diagnostics.panels.in_frustum_match.types["floor"]
+    assert solution.diagnostics.panels.in_frustum_match.reference == "wall"
+    assert set(block.unreachable) | set(block.unreachable_on_reference) >= set(
         np.flatnonzero(~both).tolist()
     ) - set(np.flatnonzero(~seen["wall"][1] & ~seen["floor"][1]).tolist())
 
@@ -142,11 +142,11 @@ def test_a_dim_floor_cannot_reach_what_the_wall_shows_and_says_so(panel_stage_an
     _, m = panel_stage_and_measurements
     m = with_floor(m, gain=0.5)
     solution = solve_environment(m, m.environments[0], method="least-squares")
-    block = solution.diagnostics["panels"]["in_frustum_match"]["types"]["floor"]
-    assert block["unreachable"]  # half as bright: the wall's brightest colours are out of reach
-    assert block["delta_E_2000_max"] > 1
-    warnings = [w for w in solution.diagnostics["warnings"] if "panel type floor cannot show" in w]
-    assert len(warnings) == 1 and str(block["unreachable"]) in warnings[0]
+    block = solution.diagnostics.panels.in_frustum_match.types["floor"]
+    assert block.unreachable  # half as bright: the wall's brightest colours are out of reach
+    assert block.delta_E_2000_max > 1
+    warnings = [w for w in solution.diagnostics.warnings if "panel type floor cannot show" in w]
+    assert len(warnings) == 1 and str(block.unreachable) in warnings[0]
 
 
 def test_one_panel_type_in_the_panels_form_solves_as_a_file_without_it(
@@ -195,7 +195,7 @@ def test_fixtures_light_with_the_other_panel_types(panel_stage_and_measurements)
     m = with_simulated_fixtures(m, stage.wall, ["rgbw"])
     env = m.environments[1]
     solution = solve_environment(m, env, method="least-squares")
-    notes = solution.diagnostics["fixtures"]
+    notes = solution.diagnostics.fixtures
     # The error Q cannot remove with the wall alone counts the ceiling's light (independently:
     # numpy's least squares on the spectral chart of both types).
     lit = spectral_lit_chart(
@@ -204,8 +204,8 @@ def test_fixtures_light_with_the_other_panel_types(panel_stage_and_measurements)
     QT, *_ = np.linalg.lstsq(lit, env.target_chart, rcond=None)
     residual = np.sum((lit @ QT - env.target_chart) ** 2)
     expected = residual / (24 * np.sum(env.target_chart[18] ** 2))
-    assert notes["error_wall_only"] == pytest.approx(expected, rel=1e-9)
-    assert notes["applied"] and notes["error_with_fixtures"] < notes["error_wall_only"]
+    assert notes.error_wall_only == pytest.approx(expected, rel=1e-9)
+    assert notes.applied and notes.error_with_fixtures < notes.error_wall_only
 
 
 def test_one_panel_type_without_w_avg_takes_it_from_the_white_patch(panel_stage_and_measurements):

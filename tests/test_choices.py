@@ -7,7 +7,7 @@ from ocio_vp.calibration.equations import BLACK_LEVEL_METHODS
 from ocio_vp.correction.registry import Q_SOLVE_METHODS
 from ocio_vp.exports import EXPORT_TARGETS, SHOW_TARGETS
 from ocio_vp.footage.apply import OPTIMIZATIONS
-from ocio_vp.ocio.config import WALL_SIGNAL_ENCODINGS
+from ocio_vp.wall import WALL_ENCODINGS, WallEncoding
 
 
 def test_every_choice_is_the_librarys():
@@ -15,7 +15,10 @@ def test_every_choice_is_the_librarys():
     assert choices.LINEAR_METHODS == {n for n, r in Q_SOLVE_METHODS.items() if r.linear}
     assert choices.DEFAULT_METHOD in choices.Q_METHODS
     assert tuple(BLACK_LEVEL_METHODS) == choices.BLACK_LEVEL_METHODS
-    assert tuple(WALL_SIGNAL_ENCODINGS) == choices.WALL_ENCODINGS
+    assert WALL_ENCODINGS is choices.WALL_ENCODINGS  # defined once
+    assert {WallEncoding(name).ocio_encoding for name in WALL_ENCODINGS} == {
+        "scene-linear", "sdr-video", "hdr-video",
+    }  # fmt: skip
     assert (*EXPORT_TARGETS, "all", *SHOW_TARGETS) == choices.EXPORT_TARGETS
     assert tuple(OPTIMIZATIONS) == choices.OPTIMIZATIONS
 

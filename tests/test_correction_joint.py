@@ -102,7 +102,7 @@ def test_in_frustum_chart_comes_back_equal_to_target():
     stage = dataclasses.replace(paper_stage(), panel_albedo=None)
     m = simulate_measurements(["direct_sun"], stage=stage)
     solution = solve_environment(m, m.environments[0], method="joint")
-    assert solution.diagnostics["method_notes"]["joint_applied"]
+    assert solution.diagnostics.method_notes["joint_applied"]
     assert not np.allclose(solution.M, np.linalg.inv(m.SL))  # the lighting matrix moved
     np.testing.assert_allclose(solution.Q @ m.SL @ solution.N, np.eye(3), atol=1e-12)
     truth = predict_solution(stage, "direct_sun", solution)

@@ -211,9 +211,9 @@ class TestAutoOnTheSimulator:
         # judge the choice: auto's root-polynomial renders them better than least squares.
         env = simulated.environment("direct_sun")
         s = solve_environment(simulated, env, method="auto")
-        assert s.diagnostics["model"] == "root-polynomial"
+        assert s.diagnostics.model == "root-polynomial"
         assert s.correction.kind == "root-polynomial" and s.correction.degree == 2
-        assert "degree 3 is not a candidate" in s.diagnostics["model_reason"]
+        assert "degree 3 is not a candidate" in s.diagnostics.model_reason
         ls = solve_environment(simulated, env, method="least-squares")
         stage = spectral_stage()
         samples = held_out_reflectances()["rawtoaces"]
@@ -246,24 +246,24 @@ class TestAutoOnTheSimulator:
 
     def test_stage_led_white_gives_identity_and_N_equals_M(self, simulated) -> None:
         s = solve_environment(simulated, simulated.environment("rgb_led_white"), method="auto")
-        assert s.diagnostics["model"] == "identity"
+        assert s.diagnostics.model == "identity"
         assert np.array_equal(s.Q, np.eye(3))
         assert s.N is not None and np.array_equal(s.N, solve_M(simulated.SL))
-        assert s.diagnostics["N_equals_M"] is True
+        assert s.diagnostics.N_equals_M is True
 
     def test_low_pressure_sodium_never_solves_N(self, simulated) -> None:
         s = solve_environment(simulated, simulated.environment("sodium_vapour"), method="auto")
         assert s.N is None
-        assert s.diagnostics["model"] == "rank-1"
-        assert s.diagnostics["rank_Q"] == 1
-        assert "rank 1" in s.diagnostics["model_reason"]
+        assert s.diagnostics.model == "rank-1"
+        assert s.diagnostics.rank_Q == 1
+        assert "rank 1" in s.diagnostics.model_reason
 
     def test_auto_reports_its_choice_in_delta_e_recomputed_by_brute_force(self, simulated) -> None:
         # Every candidate re-solved without each patch by the registry (a plain loop), then
         # ΔE2000 by metrics.chart_errors (its own Lab normalisation), not from auto's code path.
         env = simulated.environment("direct_sun")
         s = solve_environment(simulated, env, method="auto")
-        notes = s.diagnostics["method_notes"]
+        notes = s.diagnostics.method_notes
         problem = QProblem(
             SL=simulated.SL, SRL=simulated.SRL, beta=s.beta, M=s.M, w_avg=s.w_avg,
             target=env.target_chart, white_reflectance=simulated.stage.white_reflectance,
@@ -299,8 +299,8 @@ class TestAutoOnTheSimulator:
                 held[j] = Q.apply(X[j]) if hasattr(Q, "apply") else Q @ X[j]
             de = chart_errors(held, P, camera_to_xyz=default_camera_to_xyz()).delta_E_2000
             np.testing.assert_allclose(notes["cv_delta_e"][name], de.mean(), rtol=1e-9)
-        assert s.diagnostics["model"] in AUTO_LADDER
-        assert "ΔE2000" in s.diagnostics["model_reason"]
+        assert s.diagnostics.model in AUTO_LADDER
+        assert "ΔE2000" in s.diagnostics.model_reason
 
     def test_auto_N_varies_less_than_least_squares_with_noise_on_hps(self, simulated) -> None:
         # 0.5% multiplicative noise on every calibration sample ([SL] and the [SRL]_j), the same
@@ -443,6 +443,6 @@ class TestAutoOnHeldOutColours:
         )
         m = simulate_measurements(["warm_white_led", "sodium_vapour"], stage=stage)
         warm = solve_environment(m, m.environment("warm_white_led"), method="auto")
-        assert warm.diagnostics["rank_target"] == 3 and warm.N is not None
+        assert warm.diagnostics.rank_target == 3 and warm.N is not None
         sodium = solve_environment(m, m.environment("sodium_vapour"), method="auto")
-        assert sodium.diagnostics["model"] == "rank-1" and sodium.N is None
+        assert sodium.diagnostics.model == "rank-1" and sodium.N is None

@@ -64,8 +64,8 @@ def _lstsq(X, P, keep=None):
 
 def test_names_are_colour_sciences_colorchecker_names() -> None:
     assert list(COLORCHECKER_NAMES) == list(colour.SDS_COLOURCHECKERS["ColorChecker N Ohta"])
-    assert patch_name(18, 24) == "patch 18 (white 9.5 (.05 D))"
-    assert patch_name(18, 140) == "patch 18"
+    assert patch_name(18, 24) == "patch 19 (white 9.5 (.05 D))"  # people count from 1
+    assert patch_name(18, 140) == "patch 19"
 
 
 @pytest.mark.parametrize("camera", [None, "Sigma SDMerill (NPL)"])
@@ -176,13 +176,13 @@ def _zeroed(measurements, name: str, j: int):
 def test_the_solve_excludes_names_and_can_keep_all(clean) -> None:
     m, env = _zeroed(clean, "incandescent", 6)
     s = solve_environment(m, env, method="least-squares")
-    assert [p["index"] for p in s.diagnostics["excluded_patches"]] == [6]
-    assert s.diagnostics["excluded_patches"][0]["name"] == "patch 6 (orange)"
-    assert any("patch 6 (orange)" in w for w in s.diagnostics["warnings"])
+    assert [p.index for p in s.diagnostics.excluded_patches] == [6]
+    assert s.diagnostics.excluded_patches[0].name == "patch 7 (orange)"
+    assert any("patch 7 (orange)" in w for w in s.diagnostics.warnings)
     clean_Q = solve_environment(clean, clean.environment("incandescent"), method="least-squares").Q
     assert np.linalg.norm(s.Q - clean_Q) / np.linalg.norm(clean_Q) < 0.03
     kept = solve_environment(m, env, method="least-squares", keep_all_patches=True)
-    assert kept.diagnostics["excluded_patches"] == [] and not kept.diagnostics["patch_screening"]
+    assert kept.diagnostics.excluded_patches == [] and not kept.diagnostics.patch_screening
     assert np.linalg.norm(kept.Q - clean_Q) / np.linalg.norm(clean_Q) > 0.1
 
 
@@ -210,12 +210,12 @@ def test_cli_names_the_patch_and_keep_all_patches_opts_out(clean, tmp_path, caps
     fast = ["--environment", "direct_sun", "--method", "least-squares"]
     assert main(["solve", str(path), "--out", str(tmp_path / "a"), *fast]) == 0
     out = capsys.readouterr().err  # warnings go to stderr
-    assert "patch 13 (green)" in out
+    assert "patch 14 (green)" in out
     solution = json.loads((tmp_path / "a" / "direct_sun" / "solution.json").read_text())
     assert solution["diagnostics"]["excluded_patches"][0]["index"] == 13
     args = ["solve", str(path), "--out", str(tmp_path / "b"), *fast]
     assert main([*args, "--keep-all-patches"]) == 0
-    assert "patch 13 (green)" not in capsys.readouterr().err
+    assert "patch 14 (green)" not in capsys.readouterr().err
 
 
 def _delta_e_2000(rgb, reference_rgb, white_rgb):
@@ -397,12 +397,12 @@ def test_the_solve_says_which_patches_look_swapped(clean) -> None:
     envs = tuple(swapped if e.name == env.name else e for e in clean.environments)
     m = dataclasses.replace(clean, environments=envs)
     s = solve_environment(m, swapped, method="least-squares")
-    excluded = s.diagnostics["excluded_patches"]
-    assert [(p["index"], p["swapped_with"]) for p in excluded] == [(11, 12), (12, 11)]
-    assert excluded[0]["swapped_name"] == "patch 12 (blue)"
+    excluded = s.diagnostics.excluded_patches
+    assert [(p.index, p.swapped_with) for p in excluded] == [(11, 12), (12, 11)]
+    assert excluded[0].swapped_name == "patch 13 (blue)"
     assert any(
-        "patch 11 (orange yellow) and patch 12 (blue) look swapped" in w
-        for w in s.diagnostics["warnings"]
+        "patch 12 (orange yellow) and patch 13 (blue) look swapped" in w
+        for w in s.diagnostics.warnings
     )
 
 
@@ -533,10 +533,10 @@ def test_when_the_data_cannot_tell_two_patches_apart_both_are_excluded_and_named
     assert [(f.index, f.ambiguous_with) for f in found] == [(10, 13), (13, 10)]
     text = found[0].describe()
     assert text.startswith(
-        "patch 10 (yellow green) or patch 13 (green): one of the two is inconsistent with the "
+        "patch 11 (yellow green) or patch 14 (green): one of the two is inconsistent with the "
         "rest and the data cannot tell which"
     )
-    assert f"without patch 13 (green) {scores['deletion'][13]:.2f}x" in text
+    assert f"without patch 14 (green) {scores['deletion'][13]:.2f}x" in text
     assert text.endswith("both are excluded")
 
     def held_out(Q):

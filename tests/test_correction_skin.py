@@ -96,14 +96,14 @@ def test_the_colorchecker_skin_patches_are_found_by_colour(stage_and_measurement
 
 def test_the_default_never_expects_skin_worse_than_least_squares(solved):
     """Worse only within the comparison's noise (a hundredth of a ΔE here), better overall."""
-    ratios = [solved[(name, "general")].diagnostics["skin"].ratio for name in BROADBAND]
+    ratios = [solved[(name, "general")].diagnostics.skin.ratio for name in BROADBAND]
     assert max(ratios) <= 1.001 and np.mean(ratios) < 0.95
 
 
 def test_skin_first_renders_the_samples_better_and_keeps_emitters(solved):
     ratios = []
     for name in BROADBAND:
-        skin = solved[(name, "skin")].diagnostics["skin"]
+        skin = solved[(name, "skin")].diagnostics.skin
         ratios.append(skin.ratio)
         assert skin.chart_ratio <= 1.15
         default = skin.default
@@ -116,7 +116,7 @@ def test_skin_first_renders_the_samples_better_and_keeps_emitters(solved):
 def test_skin_first_is_safe_under_sodium(solved):
     general = solved[("sodium_vapour", "general")]
     skin = solved[("sodium_vapour", "skin")]
-    assert skin.diagnostics["model"] == general.diagnostics["model"] == "rank-1"
+    assert skin.diagnostics.model == general.diagnostics.model == "rank-1"
     np.testing.assert_array_equal(skin.Q, general.Q)
 
 
@@ -124,7 +124,7 @@ def test_skin_first_composes_with_the_emitter_guard(stage_and_measurements):
     _, m = stage_and_measurements
     s = solve_environment(m, m.environments[0], priority="skin", protect_emitters=True)
     assert s.correction.kind == "protected"
-    skin = s.diagnostics["skin"]
+    skin = s.diagnostics.skin
     assert skin.priority == "skin" and skin.ratio < 1.0
     # Guarded alike, the wall's LEDs in frame move as little as by the default (within 1 %:
     # inside the guard's fade the two fits differ a little).

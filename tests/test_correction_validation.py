@@ -26,4 +26,4 @@ class TestCrossValidation:
             held[j] = X[j] @ QT
         expected = np.mean(np.abs(held - P) / P[18], axis=0)
         np.testing.assert_allclose(cross_validated_error(problem, "least-squares"), expected)
-        np.testing.assert_allclose(s.diagnostics["cross_validated_error"], expected)
+        np.testing.assert_allclose(s.diagnostics.cross_validated_error, expected)

@@ -198,9 +198,9 @@ def test_root_polynomial_q_has_its_clf_fallback(tmp_path):
     assert "3x3 approximation" in knobs["ColorMatrix"]["label"]
     solution = load_solution(folder)
     # the OCIO node says how close the config's chain is, read back through Tcl
-    measured = solution.diagnostics["post_correction_ocio"]["agreement"]
+    measured = solution.diagnostics.post_correction_ocio.agreement
     label = knobs["OCIONamedTransform"]["label"]
-    assert f"within {measured['p99']['all']:.2g} ΔE2000 (p99)" in label
+    assert f"within {measured.overall[0]:.2g} ΔE2000 (p99)" in label
     assert "ocio-vp apply" in label
     rgb = np.array([0.3, 0.2, 0.1])
     result = run_tool("ociochecklut", str(lut), *map(str, rgb))

@@ -145,12 +145,12 @@ class TestUnrealFiles:
         export_solutions([folder], targets=["unreal"])
         unreal = folder / "exports" / "unreal"
         carriage = json.loads((unreal / "unreal_ocio.json").read_text())["post_correction_carriage"]
-        block = solution.diagnostics["post_correction_ocio"]
+        block = solution.diagnostics.post_correction_ocio
         assert carriage["kind"] == "root-polynomial"
-        assert carriage["agreement"] == block["agreement"]
+        assert carriage["agreement"] == json.loads(json.dumps(block.agreement.to_dict()))
         text = (unreal / "UNREAL.md").read_text()
         assert "**The post-correction is not a matrix.**" in text and carriage["note"] in text
-        worst = block["inverse_agreement"]["worst"]["all"]
+        worst = block.inverse_agreement.worst["all"]
         assert f"{worst:.2g} (worst) over the corrected camera range" in text
 
     def test_working_space_source(self, tmp_path):

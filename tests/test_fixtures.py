@@ -73,11 +73,11 @@ def test_fixtures_respect_every_limit(solved, rgbw):
     xyz = default_camera_to_xyz()
     for name in ("d65", "incandescent"):
         solution = solved[name]
-        notes = solution.diagnostics["fixtures"]
-        assert notes["applied"]
+        notes = solution.diagnostics.fixtures
+        assert notes.applied
         drives = np.array(list(solution.fixtures["rgbw"]["drive"].values()))
         assert np.all(drives >= 0) and np.all(drives <= 1.0 + 1e-9)
-        wall = np.asarray(notes["wall_drive"])
+        wall = np.asarray(notes.wall_drive)
         baseline = np.linalg.inv(rgbw.SL) @ solution.w_avg
         assert np.all(wall >= -1e-12) and np.all(wall <= baseline.max() * (1 + 1e-9))
         # The light on the white patch: luminance kept, chromaticity within 2 ΔE2000 (colour).
@@ -92,7 +92,7 @@ def test_fixtures_respect_every_limit(solved, rgbw):
         lab1 = colour.XYZ_to_Lab(xyz1 / xyz1[1], ref)
         # The joint method's white-point limit, which the drive solve shares.
         assert colour.delta_E(lab0, lab1, method="CIE 2000") <= DEFAULT_MAX_DELTA_E + 1e-5
-        assert notes["error_with_fixtures"] < notes["error_wall_only"]
+        assert notes.error_with_fixtures < notes.error_wall_only
 
 
 def test_n_stays_exact_for_the_calibrated_wall(solved, rgbw):
@@ -100,7 +100,7 @@ def test_n_stays_exact_for_the_calibrated_wall(solved, rgbw):
         s = solved[name]
         assert np.allclose(s.Q @ rgbw.SL @ s.N, np.eye(3), atol=1e-12)
         # M lights with the solved wall drive for the average light.
-        assert np.allclose(s.M @ s.w_avg, s.diagnostics["fixtures"]["wall_drive"], rtol=1e-12)
+        assert np.allclose(s.M @ s.w_avg, s.diagnostics.fixtures.wall_drive, rtol=1e-12)
 
 
 def test_fixtures_lower_held_out_error_by_40_percent_in_a_broadband_scene(stage, rgbw, solved):
@@ -133,7 +133,7 @@ def test_fixtures_that_add_nothing_stay_off(stage):
     m = dataclasses.replace(base, fixtures=(same,))
     s = solve_environment(m, m.environments[0], method="least-squares")
     wall = solve_environment(m, m.environments[0], method="least-squares", fixtures=False)
-    assert not s.diagnostics["fixtures"]["applied"]
+    assert not s.diagnostics.fixtures.applied
     assert all(v == 0.0 for v in s.fixtures["rgb"]["drive"].values())
     assert np.array_equal(s.M, wall.M) and np.array_equal(s.Q, wall.Q)
 

@@ -189,3 +189,39 @@ def test_sample_camera_matrix_is_the_fit():
 
     fitted = camera_to_xyz_matrix(camera_sensitivities())
     np.testing.assert_allclose(SAMPLE_CAMERA_TO_XYZ, fitted, rtol=1e-9, atol=1e-12)
+
+
+#: Sharma, Wu & Dalal (2005), CIEDE2000 test data: (Lab 1, Lab 2, ΔE00), pairs 1, 2, 3, 7,
+#: 17 and 25.
+SHARMA_PAIRS = [
+    ((50.0, 2.6772, -79.7751), (50.0, 0.0, -82.7485), 2.0425),
+    ((50.0, 3.1571, -77.2803), (50.0, 0.0, -82.7485), 2.8615),
+    ((50.0, 2.8361, -74.0200), (50.0, 0.0, -82.7485), 3.4412),
+    ((50.0, 0.0, 0.0), (50.0, -1.0, 2.0), 2.3669),
+    ((50.0, 2.5, 0.0), (73.0, 25.0, -18.0), 27.1492),
+    ((60.2574, -34.0099, 36.2677), (60.4626, -34.1751, 39.4387), 1.2644),
+]
+
+
+def test_camera_delta_E_2000_is_the_published_ciede2000_through_a_camera():
+    """The one camera RGB -> ΔE2000 (colour-science's) gives Sharma's published values for
+    colours a camera with a non-trivial matrix recorded, and the numpy copy agrees with it."""
+    from ocio_vp.metrics import camera_delta_E_2000, delta_E_2000
+
+    matrix = np.array([[0.49, 0.31, 0.2], [0.18, 0.81, 0.01], [0.0, 0.01, 0.99]])
+    to_camera = np.linalg.inv(matrix)
+    white = to_camera @ colour.xy_to_XYZ(D65_XY)  # camera RGB of the white, Y = 1
+    first, second, expected = (
+        np.array(v, dtype=np.float64) for v in zip(*SHARMA_PAIRS, strict=True)
+    )
+    a = colour.Lab_to_XYZ(first, D65_XY) @ to_camera.T
+    b = colour.Lab_to_XYZ(second, D65_XY) @ to_camera.T
+    got = camera_delta_E_2000(a, b, camera_to_xyz=matrix, white=white)
+    np.testing.assert_allclose(got, expected, atol=1e-4)
+    np.testing.assert_allclose(
+        delta_E_2000(a, b, camera_to_xyz=matrix, white=white), got, rtol=1e-9, atol=1e-12
+    )
+    # the scale of the exposure does not matter: white and colours 4x brighter
+    np.testing.assert_allclose(
+        camera_delta_E_2000(4 * a, 4 * b, camera_to_xyz=matrix, white=4 * white), got, rtol=1e-12
+    )

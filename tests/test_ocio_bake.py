@@ -82,7 +82,7 @@ def _processor(config, src, dst):
 
 def _sidecar(solution, config, index=0):
     folder = config.getWorkingDir()
-    return f"{folder}/{solution.diagnostics['post_correction_ocio']['files'][index]}"
+    return f"{folder}/{solution.diagnostics.post_correction_ocio.files[index]}"
 
 
 @pytest.mark.parametrize("case", ["root-polynomial", "protected"])
@@ -134,25 +134,25 @@ def test_recorded_agreement_is_what_the_config_does(written):
     from ocio_vp.model.footage_range import agreement, calibration_footage_range
 
     for solution, config in written.values():
-        charts = solution.diagnostics["charts"]
-        white = solution.diagnostics["white_patch"]
+        charts = solution.diagnostics.charts
+        white = solution.diagnostics.white_patch
         footage = calibration_footage_range(
-            lit_chart=charts["lit_baseline"], white_patch=white,
-            target_white=np.asarray(charts["target"])[white], SL=solution.SL,
+            lit_chart=charts.lit_baseline, white_patch=white,
+            target_white=charts.target[white], SL=solution.SL,
             camera_to_xyz=default_camera_to_xyz(),
         )  # fmt: skip
         measured = agreement(
             footage, _model(solution), _processor(config, POST_CORRECTION_COLORSPACE, REFERENCE)
         )
-        recorded = solution.diagnostics["post_correction_ocio"]["agreement"]
-        np.testing.assert_allclose(measured.p99["all"], recorded["p99"]["all"], rtol=1e-3)
-        np.testing.assert_allclose(measured.worst["all"], recorded["worst"]["all"], rtol=1e-3)
+        recorded = solution.diagnostics.post_correction_ocio.agreement
+        np.testing.assert_allclose(measured.p99["all"], recorded.p99["all"], rtol=1e-3)
+        np.testing.assert_allclose(measured.worst["all"], recorded.worst["all"], rtol=1e-3)
         description = config.getColorSpace(POST_CORRECTION_COLORSPACE).getDescription()
-        assert f"within {recorded['p99']['all']:.2g} ΔE2000 (p99)" in description
+        assert f"within {recorded.p99['all']:.2g} ΔE2000 (p99)" in description
 
 
 def _content(solution, n, rng, exposures=(0.01, 4.0)):
-    chart = np.asarray(solution.diagnostics["charts"]["target"])
+    chart = np.asarray(solution.diagnostics.charts.target)
     mix = rng.dirichlet(np.full(len(chart), 0.3), n) @ chart
     return mix / mix.max() * rng.uniform(*exposures, (n, 1))
 
@@ -170,7 +170,7 @@ def test_in_frustum_round_trip_through_the_config(written, case):
     c = _content(solution, 3000, np.random.default_rng(7))
     drive = _processor(config, REFERENCE, IN_FRUSTUM)(c) - solution.in_frustum_offset
     seen = model(drive @ np.asarray(solution.SL).T)
-    white = np.asarray(solution.diagnostics["charts"]["target"])[18]
+    white = np.asarray(solution.diagnostics.charts.target)[18]
     de = delta_E_2000(seen, c, camera_to_xyz=default_camera_to_xyz(), white=white)
     assert np.percentile(de, 99) <= AGREEMENT_P99 and de.max() <= AGREEMENT_WORST
     seen_3x3 = model((c @ np.asarray(solution.N).T) @ np.asarray(solution.SL).T)
@@ -209,8 +209,8 @@ def test_a_model_without_inverse_is_still_carried(written):
     direction is a bounded stand-in its description marks as NOT the model's inverse."""
     solution, config = written["no-inverse"]
     assert solution.N is None and not solution.correction.invertible
-    assert len(solution.diagnostics["post_correction_ocio"]["files"]) == 1
-    lit = np.asarray(solution.diagnostics["charts"]["lit_baseline"])
+    assert len(solution.diagnostics.post_correction_ocio.files) == 1
+    lit = np.asarray(solution.diagnostics.charts.lit_baseline)
     x = lit * np.exp2(np.random.default_rng(4).uniform(-3, 1, (len(lit), 1)))
     got = _processor(config, POST_CORRECTION_COLORSPACE, REFERENCE)(x)
     want = _model(solution)(x)
@@ -256,7 +256,7 @@ def test_ociochecklut_reads_the_q_sidecar(written):
     below black stays finite."""
     solution, config = written["root-polynomial"]
     model = _model(solution)
-    lit = np.asarray(solution.diagnostics["charts"]["lit_baseline"])
+    lit = np.asarray(solution.diagnostics.charts.lit_baseline)
     for rgb in [lit[0], lit[13], lit[18] * 8, lit[5] * 1e-3, [-0.001, 0.002, 0.0005]]:
         result = subprocess.run(
             ["ociochecklut", _sidecar(solution, config), *(f"{v:.9g}" for v in rgb)],
@@ -283,7 +283,7 @@ def test_sidecars_are_clf_v3_and_read_back_as_written(written):
     LUT, number for number. Past the last scale node the cube holds one clamp slice (a copy
     of the last) and zeros, which the chain never reaches."""
     for solution, config in written.values():
-        for index, _ in enumerate(solution.diagnostics["post_correction_ocio"]["files"]):
+        for index, _ in enumerate(solution.diagnostics.post_correction_ocio.files):
             text = Path(_sidecar(solution, config, index)).read_text(encoding="utf-8")
             nodes = set(re.findall(r"<(\w+)[ >]", text.split("<ProcessList", 1)[1]))
             assert nodes - {"Description", "Array", "LogParams"} <= {

@@ -87,7 +87,7 @@ def test_the_floor_shows_the_background_through_its_own_n(written):
 def test_a_non_linear_q_shows_the_floor_through_m_q_inverse(written):
     solution = load_solution(written["root-polynomial"])
     floor = solution.panels["floor"]
-    content = np.asarray(solution.diagnostics["charts"]["target"])  # the bake's gamut
+    content = np.asarray(solution.diagnostics.charts.target)  # the bake's gamut
     got = apply(written["root-polynomial"], REFERENCE, "LED Floor - Inner Frustum", content)
     pre = solution.correction.inverse(content)
     # The baked Q^-1 (docs/root_polynomial.md: under 0.1% of each colour in the chart's gamut).

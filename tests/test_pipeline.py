@@ -142,7 +142,7 @@ def test_outputs_are_finite_and_eq7_holds_within_its_bound(document: dict) -> No
             error = np.max(np.abs(s.Q @ s.SL @ s.N - np.eye(3)))
             bound = IDENTITY_BOUND_FACTOR * np.finfo(float).eps
             assert error <= bound * condition_number(s.Q) * condition_number(s.SL)
-            assert s.diagnostics["identity_check"]["max_abs_error"] == error
+            assert s.diagnostics.identity_check.max_abs_error == error
         clip = m.stage.clip_level
         target = m.environments[0].target_chart
         expected = (
@@ -150,7 +150,7 @@ def test_outputs_are_finite_and_eq7_holds_within_its_bound(document: dict) -> No
             if clip is None
             else np.flatnonzero(np.any(m.SRL >= clip, axis=(1, 2)) | np.any(target >= clip, axis=1))
         )
-        assert s.diagnostics["clipped_patches"] == [int(j) for j in expected]
+        assert s.diagnostics.clipped_patches == [int(j) for j in expected]
     build_config(s).validate()  # the config of the last solve builds and validates
 
 
@@ -165,7 +165,7 @@ def test_monochromatic_scenes_never_solve_N_with_auto(document: dict) -> None:
         assert EXPECTED_ERRORS.search(str(error)), str(error)
         return
     assert s.N is None
-    assert s.diagnostics["model"] == "rank-1"
+    assert s.diagnostics.model == "rank-1"
 
 
 @SETTINGS
@@ -192,16 +192,16 @@ def test_invariant_to_the_exposure_of_the_calibration_plates(
         return
     _, t = _solve(scaled, "auto")
     # Relative rounding of each solve grows with cond([SL]) (M) and cond(Q) (N).
-    rtol = 1e-13 * s.diagnostics["cond_SL"] * max(1.0, min(s.diagnostics["cond_Q"], 1e3))
+    rtol = 1e-13 * s.diagnostics.cond_SL * max(1.0, min(s.diagnostics.cond_Q, 1e3))
     rtol = max(rtol, 1e-10)
-    assert t.diagnostics["model"] == s.diagnostics["model"]
+    assert t.diagnostics.model == s.diagnostics.model
     np.testing.assert_allclose(t.M * scale, s.M, rtol=rtol, atol=rtol * np.abs(s.M).max())
     np.testing.assert_allclose(t.Q, s.Q, rtol=rtol, atol=rtol)
     assert (t.N is None) == (s.N is None)
     if s.N is not None:
         np.testing.assert_allclose(t.N * scale, s.N, rtol=rtol, atol=rtol * np.abs(s.N).max())
     np.testing.assert_allclose(
-        t.diagnostics["lit_chart_error"], s.diagnostics["lit_chart_error"], rtol=rtol, atol=1e-12
+        t.diagnostics.lit_chart_error, s.diagnostics.lit_chart_error, rtol=rtol, atol=1e-12
     )
 
 
@@ -226,8 +226,8 @@ def test_invariant_to_the_exposure_of_the_target_chart(document: dict, log_scale
             _solve(scaled, "auto")
         return
     _, t = _solve(scaled, "auto")
-    rtol = max(1e-13 * s.diagnostics["cond_SL"], 1e-10)
-    assert t.diagnostics["model"] == s.diagnostics["model"]
+    rtol = max(1e-13 * s.diagnostics.cond_SL, 1e-10)
+    assert t.diagnostics.model == s.diagnostics.model
     np.testing.assert_allclose(t.Q, s.Q, rtol=rtol, atol=rtol)
     np.testing.assert_array_equal(t.M, s.M)
     if s.N is not None:
@@ -282,7 +282,7 @@ def test_a_degenerate_lit_chart_never_crashes(document: dict, method: str) -> No
     _finite_tree(json.loads(solution_to_json(s)))
     if s.N is not None:
         error = np.max(np.abs(s.Q @ s.SL @ s.N - np.eye(3)))
-        assert error <= s.diagnostics["identity_check"]["bound"]
+        assert error <= s.diagnostics.identity_check.bound
 
 
 def test_a_black_target_chart_is_an_input_error() -> None:
@@ -328,15 +328,13 @@ def test_a_diagonal_stage_by_hand() -> None:
     np.testing.assert_allclose(s.M, np.diag([0.5, 0.25, 0.2]), rtol=1e-15)
     np.testing.assert_allclose(s.Q, np.diag(g), atol=1e-13)
     np.testing.assert_allclose(s.N, np.diag([0.5 / 1.1, 0.25, 0.25]), atol=1e-13)
-    np.testing.assert_allclose(d["charts"]["lit_baseline"], a * [0.8, 1.0, 1.2], rtol=1e-14)
+    np.testing.assert_allclose(d.charts.lit_baseline, a * [0.8, 1.0, 1.2], rtol=1e-14)
     # Fig. 11 error of M alone: |1 - g| / g times the mean reflectance over the white's 0.9.
     by_hand = np.abs(1 - g) / g * a.mean(axis=0) / 0.9
-    np.testing.assert_allclose(d["lit_chart_error_baseline"], by_hand, rtol=1e-12)
-    np.testing.assert_allclose(d["lit_chart_error"], 0.0, atol=1e-13)
+    np.testing.assert_allclose(d.lit_chart_error_baseline, by_hand, rtol=1e-12)
+    np.testing.assert_allclose(d.lit_chart_error, 0.0, atol=1e-13)
     # In-frustum (eq. 7): Q [SL] N p = p, so the background is exact after Q; shown through
     # M instead it would be off by |g - 1| p.
-    np.testing.assert_allclose(d["displayed_chart_error_baseline"], 0.0, atol=1e-13)
-    np.testing.assert_allclose(d["displayed_chart_error"], 0.0, atol=1e-13)
-    np.testing.assert_allclose(
-        d["charts"]["displayed_corrected"], d["charts"]["target"], atol=1e-13
-    )
+    np.testing.assert_allclose(d.displayed_chart_error_baseline, 0.0, atol=1e-13)
+    np.testing.assert_allclose(d.displayed_chart_error, 0.0, atol=1e-13)
+    np.testing.assert_allclose(d.charts.displayed_corrected, d.charts.target, atol=1e-13)

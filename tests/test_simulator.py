@@ -152,12 +152,12 @@ class TestPaperFindings:
         # One spectral line: every patch is a multiple of one camera RGB, so Q has rank 1.
         singular = np.linalg.svd(solution.Q, compute_uv=False)
         assert singular[1] < 1e-12 * singular[0]
-        assert d["cond_Q"] > 1e12
-        assert solution.N is None and not d["N_solved"]
-        assert "rank" in d["N_reason"] and "sodium" in d["N_reason"]
-        assert any("N not solved" in w for w in d["warnings"])
+        assert d.cond_Q > 1e12
+        assert solution.N is None and not d.N_solved
+        assert "rank" in d.N_reason and "sodium" in d.N_reason
+        assert any("N not solved" in w for w in d.warnings)
         # DESIGN.md: M w_avg has a negative channel (outside the LED gamut).
-        assert np.any(d["out_of_frustum_drive"] < 0)
+        assert np.any(d.out_of_frustum_drive < 0)
 
     def test_rgb_led_white_gives_identity(self, solutions, stage):
         solution = solutions["rgb_led_white"]

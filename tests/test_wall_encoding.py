@@ -16,6 +16,7 @@ from ocio_vp.ocio.config import OUT_OF_FRUSTUM, REFERENCE
 from ocio_vp.ocio.wall import encoding_transforms, log_shaper_transform
 from ocio_vp.wall.encoding import (
     LINEAR_HEADROOM,
+    WallEncoding,
     decode,
     encode,
     lut_accuracy,
@@ -167,3 +168,30 @@ def test_panel_types_keep_their_own_encoding_and_take_the_stages_otherwise(
     pq = {"name": "pq", "peak_nits": 1200.0}
     assert solution.panels["wall"].linearity["wall_encoding"] == pq
     assert solution.linearity["wall_encoding"] == pq  # the top level is the wall's
+
+
+@pytest.mark.parametrize("name, peak", [("gamma2.4", None), ("srgb", None), ("pq", 600.0)])
+def test_a_wall_encoding_is_one_object_for_numpy_ocio_and_the_file(name, peak):
+    """The same curve three ways: numpy (independently, colour-science's), OCIO, and the
+    ``wall_encoding`` block it round-trips through."""
+    wall = WallEncoding(name, peak)
+    assert WallEncoding.from_dict(json.loads(json.dumps(wall.to_dict()))) == wall
+    drive = np.geomspace(1e-4, 1.0, 201)
+    reference = {
+        "gamma2.4": lambda d: d ** (1 / 2.4),
+        "srgb": colour.models.eotf_inverse_sRGB,
+        "pq": lambda d: colour.models.eotf_inverse_ST2084(d * 600.0),
+    }[name](drive)
+    np.testing.assert_allclose(wall.encode(drive), reference, rtol=1e-9)
+    np.testing.assert_allclose(wall.decode(wall.encode(drive)), drive, rtol=1e-9)
+    np.testing.assert_allclose(run(wall.ocio_transforms(), drive), reference, atol=2e-5)
+    # where the signal is 1.0: the clamp the config puts before the curve
+    np.testing.assert_allclose(wall.encode(np.array([wall.signal_top])), [1.0], rtol=1e-9)
+
+
+def test_the_linear_wall_is_the_default_and_has_no_curve():
+    wall = WallEncoding.of(None)
+    assert wall.linear and wall.ocio_transforms() == [] and wall.signal_top is None
+    assert wall.ocio_encoding == "scene-linear" and wall.to_dict() == {"name": "linear"}
+    with pytest.raises(ValueError, match="unknown wall encoding"):
+        WallEncoding("hlg")

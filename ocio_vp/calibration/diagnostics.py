@@ -12,15 +12,19 @@ channel relative to the target white patch, the metric used throughout ocio_vp's
 
 from __future__ import annotations
 
+import dataclasses
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.calibration.equations import condition_number, in_frustum_drive, predict_lit_chart
-from ocio_vp.metrics import error_relative_to_white, white_scale
+from ocio_vp.formats.diagnostics import ClippedCharts, Diagnostics, DriveRange, IdentityCheck
+from ocio_vp.metrics import error_relative_to_white, patch_label, white_scale
 
 __all__ = [
+    "SummaryErrors",
     "black_level_bounce",
     "clipped_drive_lit",
     "clipped_patches",
@@ -63,7 +67,7 @@ def in_frustum_drive_range(
     offset: ArrayLike | None = None,
     white_patch: int = 18,
     max_drive: float = 1.0,
-) -> dict[str, Any]:
+) -> DriveRange:
     """How many chart colours the in-frustum matrix would drive outside ``[0, max_drive]``.
 
     The chart (the target p_j, as background content) is first scaled so that its white patch
@@ -78,13 +82,13 @@ def in_frustum_drive_range(
     drive = in_frustum_drive(target * scale, matrix=matrix, offset=scaled_offset)
     below = np.any(drive < 0, axis=1)
     above = np.any(drive > max_drive, axis=1)
-    return {
-        "below_zero": int(below.sum()),
-        "above_max": int(above.sum()),
-        "patches_outside": [int(j) for j in np.flatnonzero(below | above)],
-        "max_drive": max_drive,
-        "content_scale": scale,
-    }
+    return DriveRange(
+        below_zero=int(below.sum()),
+        above_max=int(above.sum()),
+        patches_outside=[int(j) for j in np.flatnonzero(below | above)],
+        max_drive=max_drive,
+        content_scale=scale,
+    )
 
 
 def black_level_bounce(black_level: ArrayLike, SL: ArrayLike) -> np.ndarray:
@@ -117,7 +121,7 @@ WARN_CONDITION_SL = 1e2
 IDENTITY_BOUND_FACTOR = 32.0
 
 
-def identity_check(Q: ArrayLike, SL: ArrayLike, N: ArrayLike | None) -> dict[str, Any] | None:
+def identity_check(Q: ArrayLike, SL: ArrayLike, N: ArrayLike | None) -> IdentityCheck | None:
     """How exactly eq. 7, ``Q [SL] N = I``, holds, against its rounding-error bound."""
     if N is None:
         return None
@@ -125,7 +129,7 @@ def identity_check(Q: ArrayLike, SL: ArrayLike, N: ArrayLike | None) -> dict[str
     error = float(np.max(np.abs(Q @ SL @ N - np.eye(3))))
     bound = IDENTITY_BOUND_FACTOR * np.finfo(np.float64).eps
     bound *= condition_number(Q) * condition_number(SL)
-    return {"max_abs_error": error, "bound": float(bound)}
+    return IdentityCheck(max_abs_error=error, bound=float(bound))
 
 
 def clipped_drive_lit(problem: Any, Q: ArrayLike, drive: dict[str, Any]) -> dict[str, Any]:
@@ -144,11 +148,11 @@ def clipped_drive_lit(problem: Any, Q: ArrayLike, drive: dict[str, Any]) -> dict
     lit = predict_lit_chart(problem.SRL, problem.beta, np.eye(3), drive["clipped_drive"])
     if getattr(problem, "extra_light", None) is not None:  # the stage's other panel types
         lit = lit + problem.extra_light
-    charts = {"lit_baseline": lit, "lit_corrected": lit @ np.asarray(Q, dtype=np.float64).T}
+    charts = ClippedCharts(lit_baseline=lit, lit_corrected=lit @ np.asarray(Q, dtype=np.float64).T)
     args = (problem.target, problem.white_patch, problem.fit_weights)
     out["charts_clipped_drive"] = charts
     out["lit_chart_error_baseline_clipped_drive"] = error_relative_to_white(lit, *args)
-    out["lit_chart_error_clipped_drive"] = error_relative_to_white(charts["lit_corrected"], *args)
+    out["lit_chart_error_clipped_drive"] = error_relative_to_white(charts.lit_corrected, *args)
     return out
 
 
@@ -188,8 +192,9 @@ def stability_diagnostics(
     in_range_M = in_frustum_drive_range(
         target, M=problem.M, matrix=problem.M, offset=offset, white_patch=white
     )
-    in_range["below_zero_with_M"] = in_range_M["below_zero"]
-    in_range["above_max_with_M"] = in_range_M["above_max"]
+    in_range = dataclasses.replace(
+        in_range, below_zero_with_M=in_range_M.below_zero, above_max_with_M=in_range_M.above_max
+    )
     cond_SL = condition_number(problem.SL)
     if not cond_SL <= WARN_CONDITION_SL:
         warnings.append(
@@ -198,12 +203,13 @@ def stability_diagnostics(
         )
     if clipped:
         warnings.append(
-            f"{len(clipped)} chart patch(es) clipped and left out of the fit: {clipped}"
+            f"{len(clipped)} chart patch(es) clipped and left out of the fit: "
+            + ", ".join(patch_label(j, len(target)) for j in clipped)
         )
-    if N is not None and in_range["below_zero"] > in_range_M["below_zero"]:
+    if N is not None and in_range.below_zero > in_range_M.below_zero:
         warnings.append(
-            f"N drives {in_range['below_zero']} chart colour(s) below zero in-frustum (M: "
-            f"{in_range_M['below_zero']}, same black-level offset): Q's inverse pushes them "
+            f"N drives {in_range.below_zero} chart colour(s) below zero in-frustum (M: "
+            f"{in_range_M.below_zero}, same black-level offset): Q's inverse pushes them "
             "outside the LED gamut"
         )
     block = {
@@ -227,30 +233,35 @@ def stability_diagnostics(
     return block, warnings
 
 
-def summary_errors(diagnostics: dict[str, Any]) -> dict[str, np.ndarray | None]:
-    """The per-channel errors (relative to white, (3,)) every table shows: ``solve``, ``demo``
-    and the report all take them from here, so one environment shows one set of numbers.
-
+@dataclass(frozen=True)
+class SummaryErrors:
+    """The per-channel errors (relative to white, (3,)) every table shows (:func:`summary_errors`):
     ``lit_baseline``/``lit``: the chart lit by the wall through M alone / after Q, with the
-    drive the wall can emit (where ``M w_avg`` has a negative channel the wall clips it to 0,
-    and the clipped-drive errors are the ones shown); ``shown_baseline``/``shown``: the
-    in-frustum background through M / through N, the offset and Q; ``cross_validated``:
-    leave-one-patch-out after Q (None when the method does not give it).
-    """
+    drive the wall can emit; ``shown_baseline``/``shown``: the in-frustum background through M
+    / through N, the offset and Q; ``cross_validated``: leave-one-patch-out after Q (None when
+    the method does not give it). None where an older file lacks one."""
 
-    def get(key: str) -> np.ndarray | None:
-        value = diagnostics.get(key)
-        return None if value is None else np.asarray(value, dtype=np.float64)
+    lit_baseline: np.ndarray | None
+    lit: np.ndarray | None
+    shown_baseline: np.ndarray | None
+    shown: np.ndarray | None
+    cross_validated: np.ndarray | None
 
-    clipped = get("lit_chart_error_clipped_drive") is not None
-    lit_baseline = get("lit_chart_error_baseline_clipped_drive") if clipped else None
-    return {
-        "lit_baseline": get("lit_chart_error_baseline") if lit_baseline is None else lit_baseline,
-        "lit": get("lit_chart_error_clipped_drive" if clipped else "lit_chart_error"),
-        "shown_baseline": get("displayed_chart_error_baseline"),
-        "shown": get("displayed_chart_error"),
-        "cross_validated": get("cross_validated_error"),
-    }
+
+def summary_errors(diagnostics: Diagnostics) -> SummaryErrors:
+    """The errors ``solve``, ``demo`` and the report all show, so one environment shows one
+    set of numbers: where ``M w_avg`` has a negative channel the wall clips it to 0, and the
+    clipped-drive lit-chart errors are the ones shown."""
+    d = diagnostics
+    clipped = d.lit_chart_error_clipped_drive is not None
+    baseline = d.lit_chart_error_baseline_clipped_drive if clipped else None
+    return SummaryErrors(
+        lit_baseline=d.lit_chart_error_baseline if baseline is None else baseline,
+        lit=d.lit_chart_error_clipped_drive if clipped else d.lit_chart_error,
+        shown_baseline=d.displayed_chart_error_baseline,
+        shown=d.displayed_chart_error,
+        cross_validated=d.cross_validated_error,
+    )
 
 
 #: A black-level offset whose light ``[SL] offset`` stays below this fraction of the wall's

@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike
 
 from ocio_vp.choices import BLACK_LEVEL_METHODS
 from ocio_vp.errors import InputError
+from ocio_vp.model.correction import MAX_CONDITION_INVERSE
 
 __all__ = [
     "BLACK_LEVEL_METHODS",
@@ -42,10 +43,9 @@ __all__ = [
 #: from arithmetic alone, ~ cond * noise from the plates).
 MAX_CONDITION_SL = 1e10
 
-#: N = M Q^-1 is not solved when cond(Q) is above this: Q^-1 would amplify a 0.1% error in the
-#: chart measurements into more than 100% of the in-frustum drive (as the paper found for
-#: low-pressure sodium, where Q has rank 1).
-MAX_CONDITION_Q_FOR_N = 1e3
+#: N = M Q^-1 is not solved when cond(Q) is above this: the post-correction's own invertibility
+#: limit (:data:`ocio_vp.model.MAX_CONDITION_INVERSE`, defined there once).
+MAX_CONDITION_Q_FOR_N = MAX_CONDITION_INVERSE
 
 
 def condition_number(matrix: ArrayLike) -> float:

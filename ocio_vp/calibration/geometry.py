@@ -31,7 +31,9 @@ __all__ = [
 ]
 
 
-def _corner_form_factor(a: np.ndarray, b: np.ndarray, c: float) -> np.ndarray:
+def _corner_form_factor(
+    a: np.ndarray | np.float64, b: np.ndarray | np.float64, c: float
+) -> np.ndarray:
     """Form factor to a rectangle [0, a] x [0, b] at distance c, one corner on the normal.
 
     Signed in ``a`` and ``b`` so that rectangles anywhere in the plane can be composed by
@@ -83,7 +85,8 @@ def form_factor_parallel_rectangle(
 
     def corner(x: float, y: float) -> float:
         # Quadrant rectangle [0, x] x [0, y] with signs: superpose four of them.
-        return float(np.sign(x) * np.sign(y) * _corner_form_factor(abs(x), abs(y), distance))
+        size_x, size_y = np.abs(np.float64(x)), np.abs(np.float64(y))
+        return float(np.sign(x) * np.sign(y) * _corner_form_factor(size_x, size_y, distance))
 
     return corner(x1, y1) - corner(x0, y1) - corner(x1, y0) + corner(x0, y0)
 

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ocio_vp.formats.solution import Solution
+from ocio_vp.wall.encoding import WallEncoding
 from ocio_vp.wall.softclip import soft_clip_knee
 
 __all__ = ["ContentScale", "content_scale", "content_scale_lines"]
@@ -190,11 +191,11 @@ def content_scale(solution: Solution) -> ContentScale:
         if solution.black_level_offset is None
         else np.asarray(solution.black_level_offset)
     )
-    encoding = ((solution.linearity or {}).get("wall_encoding")) or {}
+    encoding = WallEncoding.of(solution.linearity)
     peak = white = None
     note = ""
-    if encoding.get("name") == "pq":
-        peak = float(encoding.get("peak_nits", 1000.0))
+    if encoding.peak_nits is not None:  # PQ: the wall's white in cd/m2
+        peak = encoding.peak_nits
         SL = np.asarray(solution.SL, dtype=np.float64)
         if y_row is None:
             y_row, note = (

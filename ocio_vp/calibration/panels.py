@@ -41,10 +41,12 @@ from ocio_vp.calibration.equations import (
 )
 from ocio_vp.calibration.geometry import panel_type_beta
 from ocio_vp.errors import InputError
+from ocio_vp.formats.diagnostics import InFrustumMatch, TypeMatch
 from ocio_vp.formats.measurements import Measurements
 from ocio_vp.formats.panel_solution import PanelSolution
 from ocio_vp.formats.panels import PanelType
 from ocio_vp.metrics import chart_errors, white_scale
+from ocio_vp.model.correction import PostCorrection
 
 __all__ = [
     "InFrustumDrive",
@@ -126,17 +128,17 @@ def light_shares(
 
 def lit_white_errors(
     lights: Sequence[PanelLight], target: np.ndarray, white_patch: int, primary: str
-) -> dict[str, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray]:
     """(3,) the lit white patch against the target's, per channel relative to it, before Q:
-    ``per_panel`` (each type through its own M) and ``primary_M`` (every type driven with the
-    first in-frustum type's M, as a calibration of that type alone would)."""
+    with each type through its own M, and with every type driven with the first in-frustum
+    type's M (as a calibration of that type alone would)."""
     M = next(light.M for light in lights if light.name == primary)
     target = np.asarray(target, dtype=np.float64)
     scale = white_scale(target, white_patch)
     white = target[white_patch]
     ours = sum(light.lit()[white_patch] for light in lights)
     theirs = sum(light.lit(M)[white_patch] for light in lights)
-    return {"per_panel": np.abs(ours - white) / scale, "primary_M": np.abs(theirs - white) / scale}
+    return np.abs(ours - white) / scale, np.abs(theirs - white) / scale
 
 
 @dataclass(frozen=True)
@@ -172,7 +174,7 @@ def shown_in_camera(
     light: PanelLight,
     drive: InFrustumDrive,
     content: np.ndarray,
-    correction: Any,
+    correction: PostCorrection,
     *,
     black_level: np.ndarray | None,
     max_drive: float | None = None,
@@ -203,11 +205,11 @@ def in_frustum_match(
     *,
     primary: str,
     target: np.ndarray,
-    correction: Any,
+    correction: PostCorrection,
     black_levels: Mapping[str, np.ndarray | None],
     white_patch: int,
     camera_to_xyz: np.ndarray,
-) -> tuple[dict[str, Any] | None, list[str]]:
+) -> tuple[InFrustumMatch | None, list[str]]:
     """How closely the in-frustum types match in camera on the chart, and warnings.
 
     The target chart, as background content at the exposure where the first type's white
@@ -230,7 +232,7 @@ def in_frustum_match(
         for light in shown
     }  # fmt: skip
     ref_colours, ref_reach = seen[primary]
-    block: dict[str, Any] = {"reference": primary, "types": {}}
+    types: dict[str, TypeMatch] = {}
     warnings = []
     for name, (colours, reach) in seen.items():
         if name == primary:
@@ -240,12 +242,12 @@ def in_frustum_match(
         ).delta_E_2000
         lost = [int(j) for j in np.flatnonzero(ref_reach & ~reach)]
         gained = [int(j) for j in np.flatnonzero(reach & ~ref_reach)]
-        block["types"][name] = {
-            "delta_E_2000_mean": float(np.mean(de)),
-            "delta_E_2000_max": float(np.max(de)),
-            "unreachable": lost,
-            "unreachable_on_reference": gained,
-        }
+        types[name] = TypeMatch(
+            delta_E_2000_mean=float(np.mean(de)),
+            delta_E_2000_max=float(np.max(de)),
+            unreachable=lost,
+            unreachable_on_reference=gained,
+        )
         for who, other, patches in ((name, primary, lost), (primary, name, gained)):
             if patches:
                 worst = float(np.max(de[patches]))
@@ -254,7 +256,7 @@ def in_frustum_match(
                     f"{other} shows (drive outside [0, 1] at the exposure where {primary}'s "
                     f"white peaks at 1): in camera they differ by up to ΔE2000 {worst:.1f}"
                 )
-    return block, warnings
+    return InFrustumMatch(reference=primary, types=types), warnings
 
 
 def panel_solutions(

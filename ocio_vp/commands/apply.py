@@ -90,10 +90,11 @@ def post_correction_caveats(solution) -> list[str]:
     """Why post-correcting with this solution's Q may harm a shot (empty when it is safe)."""
     d = solution.diagnostics
     caveats = []
-    rank = d.get("rank_Q")
+    rank = d.rank_Q
     if rank is not None and rank < 3:
+        cond = float("inf") if d.cond_Q is None else d.cond_Q
         caveats.append(
-            f"Q is rank {rank} (cond {float(d.get('cond_Q', 'inf')):.3g}): it maps every colour "
+            f"Q is rank {rank} (cond {cond:.3g}): it maps every colour "
             "onto a line or plane, so corrected footage loses colours the camera recorded"
         )
     if solution.N is None:

@@ -158,18 +158,19 @@ def print_fixtures(solutions: Sequence) -> None:
     for solution in solutions:
         if not solution.fixtures:
             continue
-        notes = solution.diagnostics["fixtures"]
-        if not notes["applied"]:
-            print(f"fixtures, {solution.environment}: off ({notes['reason']})")
+        notes = solution.diagnostics.fixtures
+        if notes is None or not notes.applied:
+            reason = "not solved" if notes is None else notes.reason
+            print(f"fixtures, {solution.environment}: off ({reason})")
             continue
         drives = "; ".join(
             f"{name} " + " ".join(f"{c}={block['drive'][c]:.3f}" for c in block["channels"])
             for name, block in solution.fixtures.items()
         )
-        limits = ", ".join(notes["active_limits"]) or "none"
+        limits = ", ".join(notes.active_limits) or "none"
         print(
             f"fixtures, {solution.environment}: {drives} (error Q cannot remove "
-            f"{100 * notes['error_reduction']:.0f}% lower; active limits: {limits})"
+            f"{100 * notes.error_reduction:.0f}% lower; active limits: {limits})"
         )
 
 
@@ -216,20 +217,21 @@ def print_panels(solutions: Sequence) -> None:
         return "/".join(f"{100 * v:.1f}" for v in values) + "%"
 
     for solution in solutions:
-        notes = solution.diagnostics.get("panels") if solution.panels else None
-        if not notes:
+        notes = solution.diagnostics.panels if solution.panels else None
+        if notes is None:
             continue
-        shares = " + ".join(f"{name} {100 * v:.0f}%" for name, v in notes["shares"].items())
+        shares = " + ".join(f"{name} {100 * v:.0f}%" for name, v in notes.shares.items())
         line = (
             f"panels, {solution.environment}: {shares} of the light; lit white before Q "
-            f"{percent(notes['lit_white_error'])} off per channel ("
-            f"{percent(notes['lit_white_error_primary_M'])} with {notes['primary']}'s M for all)"
+            f"{percent(notes.lit_white_error)} off per channel ("
+            f"{percent(notes.lit_white_error_primary_M)} with {notes.primary}'s M for all)"
         )
-        match = notes.get("in_frustum_match") or {}
-        for name, block in (match.get("types") or {}).items():
+        match = notes.in_frustum_match
+        reference, types = ("", {}) if match is None else (match.reference, match.types)
+        for name, block in types.items():
             line += (
-                f"; in camera {name} vs {match['reference']}: mean ΔE2000 "
-                f"{block['delta_E_2000_mean']:.2f} (max {block['delta_E_2000_max']:.2f})"
+                f"; in camera {name} vs {reference}: mean ΔE2000 "
+                f"{block.delta_E_2000_mean:.2f} (max {block.delta_E_2000_max:.2f})"
             )
         print(line)
 

@@ -16,7 +16,10 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Sequence
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
+
+if TYPE_CHECKING:
+    from ocio_vp.formats.solution import Solution
 
 __all__ = ["SUMMARY_COLUMNS", "model_words", "print_summary", "summary_lines", "summary_row"]
 
@@ -48,12 +51,14 @@ LEGEND = (
 _KIND_WORDS = {"root-polynomial": "root-polynomial, bounded", "rank-deficient": "no inverse"}
 
 
-def model_words(solution: Any) -> str:
+def model_words(solution: Solution) -> str:
     """The model in a few words: ``auto: root-polynomial, bounded + emitter guard``."""
+    from ocio_vp.model.correction import ProtectedCorrection, unprotected
+
     correction = solution.correction
-    protected = correction.kind == "protected"
-    inner = correction.inner if protected else correction
-    model = str(solution.diagnostics.get("model") or solution.method)
+    protected = isinstance(correction, ProtectedCorrection)
+    inner = unprotected(correction)
+    model = solution.model
     words = _KIND_WORDS.get(inner.kind)
     if words is None or model.startswith("rank-"):
         text = model
@@ -63,7 +68,7 @@ def model_words(solution: Any) -> str:
         text = f"{model}, {words}"
     if solution.method != model and not model.startswith(solution.method):
         text = f"{solution.method}: {text}"
-    skin = solution.diagnostics.get("skin")
+    skin = solution.diagnostics.skin
     first = " (skin first)" if skin is not None and skin.priority == "skin" else ""
     return text + first + (" + emitter guard" if protected else "")
 
@@ -80,10 +85,10 @@ def _condition(value: Any) -> str:
     return condition_text(float(value)) if value is not None else "-"
 
 
-def _n_state(solution: Any) -> str:
+def _n_state(solution: Solution) -> str:
     if solution.N is None:
         return "not solved"
-    return "= M" if solution.diagnostics.get("N_equals_M") else "solved"
+    return "= M" if solution.diagnostics.N_equals_M else "solved"
 
 
 def _delta_e(value: float) -> str:
@@ -92,13 +97,13 @@ def _delta_e(value: float) -> str:
 
 
 def _leds(diagnostics: Any) -> str:
-    figures = diagnostics.get("extrapolation") or {}
-    if "led_damage" not in figures:
+    figures = diagnostics.extrapolation
+    if figures is None:
         return "-"
-    return f"{_delta_e(figures['led_damage'])} ({_delta_e(figures['led_damage_least_squares'])})"
+    return f"{_delta_e(figures.led_damage)} ({_delta_e(figures.led_damage_least_squares)})"
 
 
-def summary_row(solution: Any) -> tuple[str, ...]:
+def summary_row(solution: Solution) -> tuple[str, ...]:
     """One environment's row (:func:`ocio_vp.calibration.diagnostics.summary_errors`)."""
     from ocio_vp.calibration.diagnostics import summary_errors
 
@@ -107,31 +112,26 @@ def summary_row(solution: Any) -> tuple[str, ...]:
     return (
         solution.environment,
         model_words(solution),
-        _condition(d.get("cond_Q")),
+        _condition(d.cond_Q),
         _n_state(solution),
-        f"{_percent(errors['lit_baseline'])}>{_percent(errors['lit'])}",
-        f"{_percent(errors['shown_baseline'])}>{_percent(errors['shown'])}",
-        _percent(errors["cross_validated"]),
+        f"{_percent(errors.lit_baseline)}>{_percent(errors.lit)}",
+        f"{_percent(errors.shown_baseline)}>{_percent(errors.shown)}",
+        _percent(errors.cross_validated),
         _leds(d),
-        "-" if d.get("skin") is None else d["skin"].words(),
-        ",".join("RGB"[c] for c in d.get("out_of_frustum_negative_channels") or []) or "-",
-        str(len(d.get("clipped_patches") or [])),
+        "-" if d.skin is None else d.skin.words(),
+        ",".join("RGB"[c] for c in d.out_of_frustum_negative_channels or []) or "-",
+        str(len(d.clipped_patches or [])),
     )
 
 
 def _wall_line(solutions: Sequence[Any]) -> str:
     """The stage's cond[SL] and the wall's signal, once."""
     first = solutions[0]
-    encoding = (first.linearity or {}).get("wall_encoding") or {"name": "linear"}
-    name = encoding.get("name", "linear")
-    if name == "pq":
-        signal = f"PQ (SMPTE ST 2084), drive 1.0 = {encoding['peak_nits']:g} cd/m2"
-    elif name == "linear":
-        signal = "linear drive (1.0 = the measured primaries' full drive)"
-    else:
-        signal = f"{name} signal of the linear drive (1.0 = the measured primaries' full drive)"
+    from ocio_vp.wall.encoding import WallEncoding
+
+    signal = WallEncoding.of(first.linearity).describe()
     return (
-        f"stage {first.stage}: cond[SL] {_condition(first.diagnostics.get('cond_SL'))}; "
+        f"stage {first.stage}: cond[SL] {_condition(first.diagnostics.cond_SL)}; "
         f"wall signal: {signal}"
     )
 
@@ -140,7 +140,7 @@ def _grouped(solutions: Sequence[Any]) -> list[str]:
     """Every warning once, with the environments it concerns."""
     where: dict[str, list[str]] = {}
     for s in solutions:
-        for warning in s.diagnostics.get("warnings") or []:
+        for warning in s.diagnostics.warnings:
             where.setdefault(str(warning), []).append(s.environment)
     lines = []
     for text, names in where.items():

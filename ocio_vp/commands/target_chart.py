@@ -161,7 +161,10 @@ def _light(args: argparse.Namespace):
     from ocio_vp.synthesis import LightSource
 
     if args.average_rgb is not None:
-        return LightSource(_average_rgb(args.average_rgb), args.hdri_colorspace, "average-rgb")
+        import numpy as np
+
+        rgb = np.asarray(_average_rgb(args.average_rgb), dtype=np.float64)
+        return LightSource(rgb, args.hdri_colorspace, "average-rgb")
     from ocio_vp.hdri.diffuse import DEFAULT_HDRI_WIDTH, w_avg_from_hdri
 
     rgb = w_avg_from_hdri(args.hdri, width=args.hdri_width or DEFAULT_HDRI_WIDTH)

@@ -117,6 +117,7 @@ def run(args: argparse.Namespace) -> int:
     finally:
         bar.close()
     result = compare_take(solution, sequence, reading, threshold=args.threshold)
+    assert sequence.validation is not None  # _check_sequence refused a calibration sequence
     sources = {
         "solution_sha256": sequence.validation.solution_sha256,
         "sequence_sha256": sequence.sha256,

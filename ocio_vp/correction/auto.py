@@ -56,7 +56,7 @@ from ocio_vp.correction.root_polynomial import bounded_loo_predictions, make_q_r
 from ocio_vp.correction.skin import skin_delta_e
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import error_relative_to_white
-from ocio_vp.model.correction import MatrixCorrection, PostCorrection
+from ocio_vp.model.correction import MatrixCorrection, PostCorrection, RootPolynomialCorrection
 
 __all__ = [
     "AUTO_SKIN_WEIGHT",
@@ -301,6 +301,7 @@ def _root_polynomial_candidates(
             excluded.append(why or "")
             continue
         models[name] = fit
+        assert isinstance(fit.correction, RootPolynomialCorrection)  # a bounded fit
         held[name] = bounded_loo_predictions(problem, fit.correction, rows)
     return models, excluded
 

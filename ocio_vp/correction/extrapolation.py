@@ -26,10 +26,15 @@ the calibration data alone:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
+from ocio_vp.formats.diagnostics import (
+    MIN_NEGATIVE,
+    MIN_RETAINED,
+    Extrapolation,
+    lowest_channel_words,
+)
+from ocio_vp.metrics import camera_delta_E_2000
 from ocio_vp.model.correction import (
     FitDomain,
     MatrixCorrection,
@@ -55,10 +60,6 @@ __all__ = [
 FADES = ((1.0, 1.5), (0.75, 1.5), (0.5, 1.5))
 #: Points of the reflective solid the fold check samples (a fixed quasi-random set).
 FOLD_SAMPLES = 4096
-#: A bright saturated input whose output keeps less than this share of its dominant channel
-#: has collapsed; one whose output has a channel below this times its dominant one has flipped.
-MIN_RETAINED = 0.25
-MIN_NEGATIVE = -0.5
 #: Brightness of the in-frame LEDs, relative to the white patch's luminance.
 LED_LEVELS = (0.25, 1.0, 4.0)
 
@@ -151,64 +152,11 @@ def in_frame_led_damage(
 ) -> float:
     """p95 ΔE2000 between Q(x) and x over the wall's own LEDs in frame (module docstring);
     ``white`` is the target white patch (camera RGB), the reference white of the ΔE."""
-    # Deferred: colour-science is heavy and only this figure needs it here.
-    import colour
-
     x = _led_colours(SL, white, camera_to_xyz)
     if len(x) == 0:
         return 0.0
-    scale = 1.0 / float(white @ camera_to_xyz[1])
-    white_xy = colour.XYZ_to_xy(white @ camera_to_xyz.T * scale)
-    lab_x = colour.XYZ_to_Lab(x @ camera_to_xyz.T * scale, white_xy)
-    lab_q = colour.XYZ_to_Lab(correction.apply(x) @ camera_to_xyz.T * scale, white_xy)
-    return float(np.percentile(colour.delta_E(lab_x, lab_q, method="CIE 2000"), 95))
-
-
-@dataclass(frozen=True)
-class Extrapolation:
-    """What a solve measured of its post-correction beyond the chart (module docstring).
-
-    ``led_damage`` and ``led_damage_least_squares``: p95 ΔE2000 of the in-frame LEDs through
-    this correction and through the paper's least squares; ``kept`` and ``negative``: the
-    saturation probe; ``folds``: the fold fraction in the reflective solid.
-    """
-
-    led_damage: float
-    led_damage_least_squares: float
-    kept: float
-    negative: float | None
-    folds: float | None
-
-    def __post_init__(self) -> None:
-        # The probe's -inf (a dominant output at or below zero: no share of it exists) is
-        # written as null, never as a non-finite number; ``kept`` <= 0 says the same.
-        if self.negative is not None and not np.isfinite(self.negative):
-            object.__setattr__(self, "negative", None)
-
-    @property
-    def flips_or_collapses(self) -> bool:
-        return self.kept < MIN_RETAINED or (self.negative or 0.0) < MIN_NEGATIVE
-
-    def describe(self) -> str:
-        return (
-            f"in-frame LEDs p95 ΔE2000 {self.led_damage:.3g} (least squares "
-            f"{self.led_damage_least_squares:.3g}); bright saturated inputs keep >= "
-            f"{self.kept:.0%} of their channel, {lowest_channel_words(self.negative)}; "
-            + ("rank-deficient" if self.folds is None else f"folds in {self.folds:.1%}")
-            + " of the reflective solid"
-        )
-
-
-def lowest_channel_words(negative: float | None) -> str:
-    """``'lowest channel -299% of it'`` (:func:`saturation_probe`'s second figure), or what an
-    undefined one (None, -inf: the dominant output at or below zero) means.
-
-    >>> lowest_channel_words(-2.99), lowest_channel_words(float("-inf"))
-    ('lowest channel -299% of it', 'the channel itself at or below zero')
-    """
-    if negative is None or not np.isfinite(negative):
-        return "the channel itself at or below zero"
-    return f"lowest channel {negative:+.0%} of it"
+    moved = camera_delta_E_2000(x, correction.apply(x), camera_to_xyz=camera_to_xyz, white=white)
+    return float(np.percentile(moved, 95))
 
 
 def extrapolation(
@@ -225,14 +173,21 @@ def extrapolation(
     the target white patch (the ΔE's reference), ``lit_white`` the lit one (the probes' scale)."""
     kept, negative = saturation_probe(correction, lit_white)
     return Extrapolation(
-        led_damage=in_frame_led_damage(correction, SL, white, camera_to_xyz),
-        led_damage_least_squares=in_frame_led_damage(
-            MatrixCorrection(least_squares), SL, white, camera_to_xyz
+        led_damage=_recorded(in_frame_led_damage(correction, SL, white, camera_to_xyz)),
+        led_damage_least_squares=_recorded(
+            in_frame_led_damage(MatrixCorrection(least_squares), SL, white, camera_to_xyz)
         ),
         kept=kept,
         negative=negative,
         folds=_folds(correction, domain),
     )
+
+
+def _recorded(delta_e: float) -> float:
+    """A ΔE2000 figure as solution.json keeps it: 4 significant digits, and 0 below 1e-6 (the
+    rounding of a correction that leaves the LEDs alone). The digits beyond differ between
+    machines: the sodium stage's rank-1 Q moves its LEDs by a p95 that agrees to 2e-8 only."""
+    return 0.0 if delta_e < 1e-6 else float(f"{delta_e:.4g}")
 
 
 def _folds(correction: PostCorrection, domain: FitDomain) -> float | None:

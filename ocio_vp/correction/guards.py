@@ -9,11 +9,11 @@ light. :func:`singular_q_cause` names the real cause when N cannot be solved.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
+from ocio_vp.correction.problem import QProblem
 from ocio_vp.errors import InputError
+from ocio_vp.metrics import patch_label
 
 __all__ = [
     "MAX_DYNAMIC_RANGE",
@@ -58,14 +58,14 @@ def _check_range(values: np.ndarray, active: np.ndarray, key: str, what: str) ->
         if np.max(column) > MAX_DYNAMIC_RANGE * median:
             j = int(np.flatnonzero(active)[np.argmax(column)])
             raise InputError(
-                f"patch {j} of the {what} reads {float(np.max(column)):.3g}, more than "
+                f"{patch_label(j, len(values))} of the {what} reads {float(np.max(column)):.3g}, more than "
                 f"{MAX_DYNAMIC_RANGE:.0e} times the median of its channel ({median:.3g}): not "
                 "a camera value",
                 key=key,
             )
 
 
-def check_problem(problem: Any) -> None:
+def check_problem(problem: QProblem) -> None:
     """Refuse a Q problem no method can solve sensibly (see the module docstring).
 
     Raises
@@ -115,7 +115,7 @@ def _check_directions(X: np.ndarray) -> None:
         )
 
 
-def singular_q_cause(problem: Any, model: str) -> str:
+def singular_q_cause(problem: QProblem, model: str) -> str:
     """Why a fitted Q is singular, in the terms of the measurements (for ``N_reason``);
     ``model`` is the fitted model's name (``rank-1`` for a reduced-rank fit)."""
     if model.startswith("rank-"):

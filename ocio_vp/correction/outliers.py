@@ -63,8 +63,6 @@ detection and the change of the corrected colours; docs/stability.md explains it
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from ocio_vp.correction.linear import (
@@ -79,7 +77,9 @@ from ocio_vp.correction.perceptual import (
     patch_delta_e,
 )
 from ocio_vp.errors import InputError
-from ocio_vp.metrics import white_scale
+from ocio_vp.formats.diagnostics import Inconsistency
+from ocio_vp.metrics import COLORCHECKER_NAMES, white_scale
+from ocio_vp.metrics import patch_label as patch_name
 
 __all__ = [
     "COLORCHECKER_NAMES",
@@ -224,94 +224,6 @@ SWAP_FLOOR = 0.25
 SWAP_Z = 2.0
 #: Patches needed after exclusion (a 9-parameter fit with headroom to judge it).
 _MIN_REMAINING = 12
-
-#: The 24 patches of the ColorChecker Classic in reading order (X-Rite's names).
-COLORCHECKER_NAMES = (
-    "dark skin",
-    "light skin",
-    "blue sky",
-    "foliage",
-    "blue flower",
-    "bluish green",
-    "orange",
-    "purplish blue",
-    "moderate red",
-    "purple",
-    "yellow green",
-    "orange yellow",
-    "blue",
-    "green",
-    "red",
-    "yellow",
-    "magenta",
-    "cyan",
-    "white 9.5 (.05 D)",
-    "neutral 8 (.23 D)",
-    "neutral 6.5 (.44 D)",
-    "neutral 5 (.70 D)",
-    "neutral 3.5 (1.05 D)",
-    "black 2 (1.5 D)",
-)
-
-
-def patch_name(index: int, n: int) -> str:
-    """``patch 18 (white 9.5 (.05 D))`` on a 24-patch chart, ``patch 18`` otherwise."""
-    if n == len(COLORCHECKER_NAMES):
-        return f"patch {index} ({COLORCHECKER_NAMES[index]})"
-    return f"patch {index}"
-
-
-@dataclass(frozen=True)
-class Inconsistency:
-    """A patch found inconsistent: index, name, how far off it is, how far it drags the fit,
-    and its held-out residual."""
-
-    index: int
-    name: str
-    relative: float  # |held-out prediction - target| / the patch's own size
-    z: float  # robust standard deviations of all patches' residuals
-    influence: float  # mean ΔE2000 it moves the fit's colours of the other patches
-    residual: tuple[float, float, float]  # held-out prediction - target, relative to white
-    swapped_with: int | None = None  # the neighbour it looks swapped with, if that is the cause
-    swapped_name: str | None = None
-    # the pair's held-out residuals (fitted without both), as read and exchanged, of white
-    swap_residuals: tuple[float, float] | None = None
-    # how many times better the other patches are predicted without it than without a typical
-    # patch (:func:`deletion_gain`)
-    deletion: float = 1.0
-    # another patch that explains the chart at least as well, when the data cannot tell which
-    # of the two is bad (both are excluded)
-    ambiguous_with: int | None = None
-    ambiguous_name: str | None = None
-    ambiguous_deletion: float | None = None  # the other's deletion gain
-
-    def describe(self) -> str:
-        """One phrase for the terminal and solution.json."""
-        if self.swapped_with is not None:
-            as_read, exchanged = self.swap_residuals
-            return (
-                f"{self.name} and {self.swapped_name} look swapped: predicted from the other "
-                f"patches, the pair is off by {100 * as_read:.0f}% of white as read and by "
-                f"{100 * exchanged:.0f}% with the two exchanged "
-                f"({as_read / max(exchanged, 1e-12):.1f}x better); both are excluded"
-            )
-        off = ", ".join(f"{100 * v:+.1f}%" for v in self.residual)
-        if self.ambiguous_with is not None:
-            return (
-                f"{self.name} or {self.ambiguous_name}: one of the two is inconsistent with the "
-                f"rest and the data cannot tell which (without {self.name} the other patches "
-                f"are predicted {self.deletion:.2f}x better than without a typical patch, "
-                f"without {self.ambiguous_name} {self.ambiguous_deletion:.2f}x); {self.name} is "
-                f"off by {100 * self.relative:.0f}% of itself and moves the fit's colours of the "
-                f"other patches by {self.influence:.1f} ΔE2000; both are excluded"
-            )
-        return (
-            f"{self.name}: predicted from the other patches it is off by {off} of white "
-            f"(R, G, B), {100 * self.relative:.0f}% of the patch itself, {self.z:.1f} robust "
-            f"standard deviations; it moves the fit's colours of the other patches by "
-            f"{self.influence:.1f} ΔE2000 on average, and without it they are predicted "
-            f"{self.deletion:.1f}x better than without a typical patch"
-        )
 
 
 def _robust_sd(values: np.ndarray) -> float:
@@ -654,6 +566,11 @@ def _ambiguous(scores: dict, j: int, k: int, n: int) -> list[Inconsistency]:
     ]
 
 
+def _rgb(values: np.ndarray) -> tuple[float, float, float]:
+    r, g, b = (float(v) for v in values)
+    return r, g, b
+
+
 def _inconsistency(scores: dict, j: int, n: int, **swap) -> Inconsistency:
     return Inconsistency(
         j,
@@ -661,7 +578,7 @@ def _inconsistency(scores: dict, j: int, n: int, **swap) -> Inconsistency:
         float(scores["relative"][j]),
         float(scores["z"][j]),
         float(scores["influence"][j]),
-        tuple(float(v) for v in scores["residual"][j]),
+        _rgb(scores["residual"][j]),
         **swap,
         deletion=float(scores["deletion"][j]),
     )

@@ -46,7 +46,7 @@ def _background_outside(problem: QProblem, correction: PostCorrection) -> int:
         matrix=N,
         white_patch=problem.white_patch,
     )
-    return int(drive["below_zero"] + drive["above_max"])
+    return int(drive.below_zero + drive.above_max)
 
 
 def skin_figures(

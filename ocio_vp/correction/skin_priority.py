@@ -77,8 +77,10 @@ def q_skin_priority(problem: QProblem) -> QFit:
             cross_validated_error=fit.cross_validated_error, target_rank=rank,
             details=fit.details,
         )  # fmt: skip
-    fit, why = bounded_candidate(problem, "root-polynomial", PRIORITY_SKIN_WEIGHT)
-    if fit is None:
+    candidate, why = bounded_candidate(problem, "root-polynomial", PRIORITY_SKIN_WEIGHT)
+    if candidate is not None:
+        fit = candidate
+    else:
         rows = problem.skin_rows(PRIORITY_SKIN_WEIGHT)
         fit = QFit(
             MatrixCorrection(fit_least_squares(*with_rows(X, P, w, rows))),

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
 
 import numpy as np
 
 from ocio_vp.correction.linear import loo_predictions
+from ocio_vp.correction.problem import QProblem
 from ocio_vp.correction.registry import Q_SOLVE_METHODS, solve_post_correction
 from ocio_vp.metrics import error_relative_to_white
 
@@ -19,7 +19,7 @@ CLOSED_FORM_METHODS = frozenset(
 )
 
 
-def held_out_predictions(problem: Any, method: str) -> np.ndarray:
+def held_out_predictions(problem: QProblem, method: str) -> np.ndarray:
     """(n, 3) every fitted patch predicted by ``method`` solved without it.
 
     In closed form for the linear models (:data:`ocio_vp.correction.linear.LOO_KERNELS`,
@@ -44,7 +44,7 @@ def held_out_predictions(problem: Any, method: str) -> np.ndarray:
     return held
 
 
-def cross_validated_error(problem: Any, method: str) -> np.ndarray:
+def cross_validated_error(problem: QProblem, method: str) -> np.ndarray:
     """(3,) leave-one-patch-out error of a registry method (white-relative, per channel)."""
     held = held_out_predictions(problem, method)
     target = np.asarray(problem.target, dtype=np.float64)

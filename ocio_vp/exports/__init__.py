@@ -231,8 +231,7 @@ def _export_show(sources, report: ExportReport, out, base_config) -> ExportResul
 
 def _source_text(source: ExportSource) -> str:
     solution = source.solution
-    model = solution.diagnostics.get("model") or solution.method
-    return source_record(source.directory, solution.environment, str(model))
+    return source_record(source.directory, solution.environment, solution.model)
 
 
 def _export_environment(

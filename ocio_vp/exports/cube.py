@@ -128,7 +128,7 @@ def cube_error(
     rng = np.random.default_rng(seed)
     raw = OCIO.Config.CreateRaw()
     report: dict[str, Any] = {"samples_per_box": samples, "input_range": [lo, hi]}
-    worst, worst_input = -1.0, None
+    worst, worst_input = -1.0, np.zeros(3)  # every sample's error >= 0 replaces it
     for box, (a, b) in (("content_0_1", (max(lo, 0.0), min(hi, 1.0))), ("input_range", (lo, hi))):
         rgb = rng.uniform(a, b, size=(samples, 3))
         exact = _apply(processor, rgb)

@@ -106,9 +106,8 @@ def write_nuke(source: ExportSource, folder: Path, cubes: CubeOptions = DEFAULT_
     solution = source.solution
     copy_config(source, folder / "config")
     config_path = f"config/{source.config_path.name}"
-    diagnostics = solution.diagnostics
-    block = diagnostics.get("post_correction_ocio") or diagnostics.get("root_polynomial_ocio")
-    q_files = (block or {}).get("files") or []
+    block = solution.diagnostics.post_correction_ocio
+    q_files = [] if block is None else block.files
     q_lut = f"config/{q_files[0]}" if q_files else None
     carriage = post_correction_carriage(solution)
     text = render_nuke_script(

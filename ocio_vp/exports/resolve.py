@@ -36,6 +36,13 @@ from ocio_vp.exports.source import (
     post_correction_carriage,
 )
 from ocio_vp.exports.templating import render_template
+from ocio_vp.formats.solution import Solution
+from ocio_vp.model.correction import (
+    PostCorrection,
+    ProtectedCorrection,
+    RootPolynomialCorrection,
+    unprotected,
+)
 from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
 
 __all__ = [
@@ -113,11 +120,11 @@ def _term_expression(powers: Sequence[int], root: int) -> str:
     return product if root == 1 else f"signed_root({product}, {root}.0f)"
 
 
-def _model_context(correction: Any) -> dict[str, Any]:
+def _model_context(correction: PostCorrection) -> dict[str, Any]:
     """The template's values for a correction (:mod:`ocio_vp.model`): its 3x3, and the
     polynomial, domain and emitter protection it has."""
     protect = None
-    if correction.kind == "protected":
+    if isinstance(correction, ProtectedCorrection):
         low, high = correction.bright
         protect = {
             "to_drive": correction.domain.to_drive.tolist(),
@@ -127,28 +134,28 @@ def _model_context(correction: Any) -> dict[str, Any]:
             "negative": list(correction.negative),
             "floor": correction.floor,
         }
-        correction = correction.inner
+    model = unprotected(correction)
     context: dict[str, Any] = {
-        "matrix": correction.matrix.tolist(),
+        "matrix": model.matrix.tolist(),
         "terms": [],
         "edges": [],
         "protect": protect,
     }
-    if correction.kind == "root-polynomial":
+    if isinstance(model, RootPolynomialCorrection):
         context["terms"] = [
-            _term_expression(p, k) for p, k in root_polynomial_term_powers(correction.degree)
+            _term_expression(p, k) for p, k in root_polynomial_term_powers(model.degree)
         ]
-        context["coefficients"] = correction.coefficients.tolist()
-        context["fade"] = list(correction.fade)
-        if correction.domain is not None:
-            context["gauge_drive"] = correction.domain.to_drive.tolist()
-            context["centre"] = correction.domain.centre.tolist()
-            context["edges"] = correction.domain.edge_normals.tolist()
+        context["coefficients"] = model.coefficients.tolist()
+        context["fade"] = list(model.fade)
+        if model.domain is not None:
+            context["gauge_drive"] = model.domain.to_drive.tolist()
+            context["centre"] = model.domain.centre.tolist()
+            context["edges"] = model.domain.edge_normals.tolist()
     return context
 
 
 def render_model_dctl(
-    *, title: str, stage: str, environment: str, description: str, correction: Any
+    *, title: str, stage: str, environment: str, description: str, correction: PostCorrection
 ) -> str:
     """DCTL text computing a non-linear post-correction exactly (:mod:`ocio_vp.model`): the
     bounded root-polynomial and the emitter protection, as ``ocio-vp apply`` does."""
@@ -163,19 +170,25 @@ def render_model_dctl(
     )
 
 
-def _q_dctl(solution: Any) -> tuple[str, str]:
+def _q_dctl(solution: Solution) -> tuple[str, str]:
     """(DCTL text, accuracy note) for Q: the model itself for a non-linear Q."""
-    common = {
-        "title": "post-correction Q",
-        "stage": solution.stage,
-        "environment": solution.environment,
-        "description": "Footage shot on the stage (camera linear) -> corrected camera linear.",
-    }
+    title, description = (
+        "post-correction Q",
+        "Footage shot on the stage (camera linear) -> corrected camera linear.",
+    )
+    stage, environment = solution.stage, solution.environment
     correction = solution.correction
     if not correction.linear:
-        text = render_model_dctl(**common, correction=correction)
+        text = render_model_dctl(
+            title=title, stage=stage, environment=environment, description=description,
+            correction=correction,
+        )  # fmt: skip
         return text, f"{correction.kind} Q (the model, not its 3x3), float32 arithmetic"
-    return render_dctl(**common, matrix=solution.Q), "Q as float32 literals"
+    text = render_dctl(
+        title=title, stage=stage, environment=environment, description=description,
+        matrix=solution.Q,
+    )  # fmt: skip
+    return text, "Q as float32 literals"
 
 
 def _cube_entry(
@@ -208,19 +221,21 @@ def _cube_entry(
     return name, None, f"{result.reason}; {instead}"
 
 
-def _clf_accuracy(stem: str, solution: Any, carriage: dict[str, Any] | None) -> Any:
+def _clf_accuracy(stem: str, solution: Solution, carriage: dict[str, Any] | None) -> Any:
     """A CLF's accuracy: exact (OCIO's own serialisation of the config's matrices and curves),
     or, where it holds a non-linear Q's LUT chain, the chain's measured agreement with the
     exact model (ΔE2000; the DCTL is the exact alternative)."""
     if carriage is None or stem == "wall_out_of_frustum":
         return "exact"
-    block = solution.diagnostics.get("post_correction_ocio") or {}
+    block = solution.diagnostics.post_correction_ocio
     if stem == "post_correction_Q":
         return {"delta_E_2000_vs_model": carriage["agreement"], "note": carriage["note"]}
     if solution.N is None:  # the in-frustum drive is M: no LUT chain in it
         return "exact"
     return {
-        "round_trip_delta_E_2000": block.get("inverse_agreement"),
+        "round_trip_delta_E_2000": None
+        if block is None or block.inverse_agreement is None
+        else block.inverse_agreement.to_dict(),
         "note": "content -> this drive's Q^-1 LUT chain -> [SL] -> the exact Q, against the "
         "content (ΔE2000 over the corrected camera range)",
     }
@@ -267,10 +282,10 @@ def write_resolve(
     (folder / MANIFEST).write_text(
         json.dumps(manifest, indent=2, allow_nan=False) + "\n", encoding="utf-8"
     )
-    cubes = {k: v["accuracy"] for k, v in files.items() if v["kind"] == "cube"}
+    written = {k: v["accuracy"] for k, v in files.items() if v["kind"] == "cube"}
     return {
         "files": [*files, MANIFEST],
-        "cubes": cubes,
+        "cubes": written,
         "not_written": not_written,
         "post_correction": None if carriage is None else carriage["note"],
     }

@@ -163,16 +163,15 @@ def post_correction_carriage(solution: Solution) -> dict[str, Any] | None:
     correction = solution.correction
     if correction.linear:
         return None
-    diagnostics = solution.diagnostics
-    block = diagnostics.get("post_correction_ocio") or diagnostics.get("root_polynomial_ocio")
-    measured = (block or {}).get("agreement")
+    block = solution.diagnostics.post_correction_ocio
+    measured = None if block is None else block.agreement
     exact = ["post_correction_Q.dctl (Resolve export)", "ocio-vp apply"]
     head = f"The {correction.kind} Q is carried by the OCIO config and its CLFs as a LUT chain"
-    if not measured:
+    if measured is None:
         note = f"{head} whose agreement with the model was not measured (an older solve)"
         return {"kind": correction.kind, "agreement": None, "beyond": None, "exact": exact,
                 "note": f"{note}; exact: {', '.join(exact)}."}  # fmt: skip
-    p99, worst = measured["p99"], measured["worst"]
+    p99, worst = measured.p99, measured.worst
     beyond = [
         k for k in p99 if k != "all" and (p99[k] > AGREEMENT_P99 or worst[k] > AGREEMENT_WORST)
     ]
@@ -188,5 +187,5 @@ def post_correction_carriage(solution: Solution) -> dict[str, Any] | None:
         )
     else:
         note += f"; exact: {', '.join(exact)}"
-    return {"kind": correction.kind, "agreement": measured, "beyond": beyond, "exact": exact,
+    return {"kind": correction.kind, "agreement": measured.to_dict(), "beyond": beyond, "exact": exact,
             "note": note + "."}  # fmt: skip

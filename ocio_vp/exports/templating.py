@@ -32,7 +32,7 @@ def read_template(name: str) -> str:
     FileNotFoundError
         When the install lacks it (a broken install, not a user mistake).
     """
-    resource = resources.files(TEMPLATE_PACKAGE).joinpath("templates", name)
+    resource = resources.files(TEMPLATE_PACKAGE).joinpath("templates").joinpath(name)
     try:
         return resource.read_text(encoding="utf-8")
     except (FileNotFoundError, NotADirectoryError):

@@ -181,13 +181,14 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> dict[str
 def _inverse_note(solution) -> str | None:
     """How close the in-frustum chain's Q^-1 comes to the model's inverse (round trip through
     the exact model, ΔE2000), when N is solved with a non-linear Q."""
-    block = solution.diagnostics.get("post_correction_ocio") or {}
-    measured = block.get("inverse_agreement")
-    if solution.N is None or not measured:
+    block = solution.diagnostics.post_correction_ocio
+    measured = None if block is None else block.inverse_agreement
+    if solution.N is None or measured is None:
         return None
+    p99, worst = measured.overall
     return (
         f"content -> Q^-1 (the LUT chain) -> Q (the exact model) returns the content within "
-        f"{measured['p99']['all']:.2g} ΔE2000 (p99) and {measured['worst']['all']:.2g} (worst) "
+        f"{p99:.2g} ΔE2000 (p99) and {worst:.2g} (worst) "
         "over the corrected camera range."
     )
 
@@ -232,7 +233,7 @@ def write_unreal(
         post_correction=names["post_correction"],
         source_note=note,
         n_solved=solution.N is not None,
-        n_reason=solution.diagnostics.get("N_reason") or "Q is not invertible",
+        n_reason=solution.diagnostics.N_reason or "Q is not invertible",
         content_scale=content_scale(solution).lines(),
         panel_notes=panel_notes(solution),
         model_note=(mapping["post_correction_carriage"] or {}).get("note"),

@@ -80,9 +80,9 @@ class _BoundedLoader(Composer, *_PARSERS, SafeConstructor, Resolver):  # type: i
     """
 
     def __init__(self, stream: str) -> None:
-        _PARSERS[0].__init__(self, stream)
+        _PARSERS[0].__init__(self, stream)  # type: ignore[misc]  # the mixins' own __init__
         for base in _PARSERS[1:]:
-            base.__init__(self)
+            base.__init__(self)  # type: ignore[misc]
         Composer.__init__(self)
         SafeConstructor.__init__(self)
         Resolver.__init__(self)

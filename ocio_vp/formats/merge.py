@@ -101,7 +101,7 @@ def _combined_sha256(paths: Sequence[Path], digests: Sequence[str]) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
-def load_measurement_files(paths: Sequence[str | Path]) -> Measurements:
+def load_measurement_files(given: Sequence[str | Path]) -> Measurements:
     """Load one measurements file, or merge several (module docstring) into one.
 
     The merged measurements' ``source`` is the files' names joined by `` + ``, their
@@ -112,7 +112,7 @@ def load_measurement_files(paths: Sequence[str | Path]) -> Measurements:
     InputError
         A file invalid on its own, a conflict between files, a section no file gives.
     """
-    paths = [Path(p) for p in paths]
+    paths = [Path(p) for p in given]
     if len(set(paths)) != len(paths):
         raise InputError("the same measurements file is given twice", source=paths[0])
     documents, digests = [], []

@@ -109,8 +109,9 @@ def _one(name: str, entry: Any, source: str) -> PanelSolution:
             return None
         return _array(entry, field_name, shape, f"{key}.{field_name}", source)
 
-    beta, share = entry.get("beta"), entry.get("share")
-    for field_name, number in (("beta", beta), ("share", share)):
+    numbers: dict[str, float] = {}
+    for field_name in ("beta", "share"):
+        number = entry.get(field_name)
         where = f"{key}.{field_name}"
         if isinstance(number, bool) or not isinstance(number, (int, float)):
             raise InputError(f"expected a number, got {excerpt(number)}", source=source, key=where)
@@ -118,6 +119,7 @@ def _one(name: str, entry: Any, source: str) -> PanelSolution:
             raise InputError(
                 f"expected a number in [0, 1], got {number!r}", source=source, key=where
             )
+        numbers[field_name] = float(number)
     linearity, ocio, reason = entry.get("linearity"), entry.get("ocio") or {}, entry.get("N_reason")
     if linearity is not None and not isinstance(linearity, dict):
         raise InputError("expected a mapping", source=source, key=f"{key}.linearity")
@@ -130,10 +132,10 @@ def _one(name: str, entry: Any, source: str) -> PanelSolution:
         in_frustum=in_frustum,
         SL=array("SL", (3, 3)),
         M=array("M", (3, 3)),
-        beta=float(beta),
+        beta=numbers["beta"],
         w_avg=array("w_avg", (3,)),
         drive=array("drive", (3,)),
-        share=float(share),
+        share=numbers["share"],
         N=array("N", (3, 3), optional=True) if in_frustum else None,
         N_reason=reason if in_frustum else None,
         black_level_offset=array("black_level_offset", (3,), optional=True) if in_frustum else None,

@@ -59,8 +59,9 @@ def _read_json(path: Path) -> dict[str, Any] | None:
 
 def _model(folder: Path) -> str:
     data = _read_json(folder / SOLUTION_FILE) or {}
-    diagnostics = data.get("diagnostics") if isinstance(data.get("diagnostics"), dict) else {}
-    return str(diagnostics.get("model") or data.get("method") or "?")
+    diagnostics = data.get("diagnostics")
+    model = diagnostics.get("model") if isinstance(diagnostics, dict) else None
+    return str(model or data.get("method") or "?")
 
 
 def _stale_exports(folder: Path, current: str) -> list[str]:

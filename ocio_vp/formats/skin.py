@@ -9,21 +9,15 @@ With skin first, the default's figures beside them (what the priority cost or bo
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
 
-__all__ = [
-    "SkinBand",
-    "SkinDefault",
-    "SkinFigures",
-    "skin_figures_from_dict",
-    "skin_figures_to_dict",
-]
+from ocio_vp.formats.records import Record
+
+__all__ = ["ROUNDING", "SkinBand", "SkinDefault", "SkinFigures"]
 
 
 @dataclass(frozen=True)
-class SkinBand:
+class SkinBand(Record):
     """One lightness band (ITA°): its sample count and mean ΔE2000, this solve and least
     squares."""
 
@@ -34,7 +28,7 @@ class SkinBand:
 
 
 @dataclass(frozen=True)
-class SkinDefault:
+class SkinDefault(Record):
     """The default post-correction on the same problem (written with skin first): its model,
     its expected skin ΔE2000, the wall's LEDs in frame (p95 ΔE2000) through it and through this
     solve, and the chart patches the in-frustum matrix drives outside [0, 1] for each."""
@@ -48,7 +42,7 @@ class SkinDefault:
 
 
 @dataclass(frozen=True)
-class SkinFigures:
+class SkinFigures(Record):
     """What a solve expects of skin (module docstring).
 
     ``priority``: ``general`` or ``skin``; ``source``: where the skin samples came from (in
@@ -94,37 +88,3 @@ def _ratio(value: float, reference: float) -> float:
 
 def _figure(value: float) -> str:
     return f"{value:.2f}" if value >= ROUNDING else "0"
-
-
-def skin_figures_to_dict(figures: SkinFigures) -> dict[str, Any]:
-    """The JSON block (plain types, field order)."""
-    block: dict[str, Any] = {
-        "priority": figures.priority,
-        "source": figures.source,
-        "samples": figures.samples,
-        "expected": figures.expected,
-        "least_squares": figures.least_squares,
-        "ratio": figures.ratio,
-        "chart": figures.chart,
-        "chart_least_squares": figures.chart_least_squares,
-        "bands": [vars(b).copy() for b in figures.bands],
-        "default": None if figures.default is None else vars(figures.default).copy(),
-    }
-    return block
-
-
-def skin_figures_from_dict(block: Mapping[str, Any]) -> SkinFigures:
-    """The record of a JSON block written by :func:`skin_figures_to_dict` (``ratio`` is
-    derived, not read)."""
-    default = block.get("default")
-    return SkinFigures(
-        priority=str(block["priority"]),
-        source=str(block["source"]),
-        samples=int(block["samples"]),
-        expected=float(block["expected"]),
-        least_squares=float(block["least_squares"]),
-        chart=float(block["chart"]),
-        chart_least_squares=float(block["chart_least_squares"]),
-        bands=tuple(SkinBand(**b) for b in block.get("bands") or ()),
-        default=None if default is None else SkinDefault(**default),
-    )

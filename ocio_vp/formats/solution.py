@@ -7,17 +7,17 @@ report): matrices as 3x3 row-major lists, ``N`` null when it was not solved (the
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import os
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 
 from ocio_vp.errors import InputError, excerpt
+from ocio_vp.formats.diagnostics import Diagnostics
 from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.measurements import check_safe_name
 from ocio_vp.formats.panel_solution import (
@@ -25,7 +25,7 @@ from ocio_vp.formats.panel_solution import (
     panel_solutions_from_dict,
     panel_solutions_to_dict,
 )
-from ocio_vp.formats.skin import SkinFigures, skin_figures_from_dict, skin_figures_to_dict
+from ocio_vp.formats.records import json_value
 from ocio_vp.model.correction import (
     MatrixCorrection,
     PostCorrection,
@@ -42,214 +42,6 @@ MAX_SOLUTION_VALUE = 1e30
 
 
 @dataclass(frozen=True)
-class Diagnostics(Mapping[str, Any]):
-    """What a solve measured about itself: ``solution.json``'s ``diagnostics`` block.
-
-    Errors are the paper's Fig. 11 metric, per channel, relative to the target white patch
-    (:func:`ocio_vp.metrics.error_relative_to_white`), over the patches the fit used. Arrays are
-    float64 after a solve; after :func:`load_solution` they are the file's JSON values. The
-    object reads like the ``dict`` it is written as (``diagnostics["cond_Q"]``, ``.get``,
-    iteration in file order), so code that reads ``solution.json`` reads a fresh solve alike.
-
-    Attributes
-    ----------
-    white_patch
-        Index of the chart's white patch.
-    cond_SL, cond_Q
-        2-norm condition numbers of [SL] and Q.
-    rank_Q
-        Numerical rank of Q.
-    N_solved, N_reason
-        Whether N = M Q^-1 was solved (eq. 8), and why not when it was not.
-    max_condition_q_for_N
-        The cond(Q) above which N is not solved.
-    lit_chart_error_baseline, lit_chart_error
-        (3,) the lit chart (eq. 3) against the target: through M alone, and after Q.
-    residual_rms
-        RMS of the lit chart after Q minus the target, in camera units.
-    displayed_chart_error_baseline, displayed_chart_error
-        (3,) the chart shown on the wall in-frustum as the camera records it, against the
-        target: through M (no Q), and through N and the black-level offset, then Q.
-    out_of_frustum_drive
-        (3,) the lighting drive M w_avg.
-    method_notes
-        What the Q method reported about itself, for people (method specific). The model
-        itself is the solution's ``post_correction``; no module reads it from here.
-    warnings
-        Sentences for the stage engineer (also printed by ``ocio-vp solve``).
-    charts
-        Per-patch (n, 3) camera RGB for the report: ``target``, ``lit_baseline``,
-        ``lit_corrected``, ``displayed_baseline``, ``displayed_corrected``.
-    model, model_reason
-        The Q model fitted (``auto`` chooses one) and why.
-    rank_target
-        The target chart's rank as the method saw it (rank-aware methods), else None.
-    cross_validated_error
-        (3,) leave-one-patch-out lit-chart error, None for an iterative method that does not
-        report its own (re-solving once per patch would multiply the solve time by n).
-    residuals_per_patch
-        (n, 3) signed residuals after Q, relative to the target white.
-    out_of_frustum_negative_channels
-        Channels of M w_avg below zero (the light is outside the LED gamut; the wall clips).
-    lit_chart_error_clipped_drive, lit_chart_error_baseline_clipped_drive
-        (3,) the lit-chart error after Q, and through M alone, when the wall clips a negative
-        drive, else None.
-    charts_clipped_drive
-        ``lit_baseline`` and ``lit_corrected`` (n, 3) as the wall lights the chart when it clips
-        a negative drive, else None (the report draws these then, like the figures it shows).
-    in_frustum_drive_range
-        How many chart colours the in-frustum matrix drives outside [0, 1] (``below_zero``,
-        ``above_max``, ``patches_outside``, ``max_drive``, ``content_scale``,
-        ``below_zero_with_M``, ``above_max_with_M``); see
-        :func:`ocio_vp.calibration.diagnostics.in_frustum_drive_range`.
-    black_level_bounce
-        (3,) the panels' bounced light relative to the wall's white (Section 3.4), or None.
-    clipped_patches
-        Chart patches left out of the fit because they reach the clip level.
-    N_equals_M
-        True when N is exactly M (Q is the identity).
-    identity_check
-        ``max_abs_error`` of eq. 7 (``Q [SL] N = I``) and its rounding ``bound``, or None.
-    fixtures
-        The practical fixtures' drive solve (:func:`ocio_vp.fixtures.fixtures_diagnostics`):
-        whether they are used and why, the error Q cannot remove with and without them, the
-        active limits; only written when the measurements have a ``fixtures`` section.
-    patch_screening
-        Whether patches inconsistent with the rest of the chart were looked for (False with
-        ``--keep-all-patches``).
-    excluded_patches
-        The patches excluded as inconsistent: ``index``, ``name``, ``relative`` (how far off,
-        relative to the patch itself), ``z`` (robust standard deviations), ``influence`` (mean
-        ΔE2000 by which it moves the fit's colours of the other patches), ``deletion`` (how many
-        times better the other patches are predicted without it than without a typical patch)
-        and ``residual`` (the held-out prediction minus the target, per channel, relative to
-        white); for two neighbours that look swapped also ``swapped_with`` (the other's
-        index), ``swapped_name`` and ``swap_residuals`` (the pair's held-out residuals as read
-        and exchanged, fitted without both, relative to white; both patches are listed),
-        otherwise those three are null; when the data cannot tell which of two patches is the
-        bad one (both excluded), ``ambiguous_with`` and ``ambiguous_name`` name the other and
-        ``ambiguous_deletion`` is its ``deletion``, otherwise null; see
-        :mod:`ocio_vp.correction.outliers`.
-    model_description
-        The post-correction in words (kind, bounds, protection).
-    extrapolation
-        How the post-correction behaves beyond the chart
-        (:class:`ocio_vp.correction.extrapolation.Extrapolation`): ``led_damage`` and
-        ``led_damage_least_squares`` (p95 ΔE2000 of the wall's own LEDs in frame, through it
-        and through least squares), ``kept`` and ``negative`` (bright saturated inputs: least
-        share of the dominant channel kept, lowest channel relative to it; null where a
-        dominant output is at or below zero, older files say "-inf"), ``folds`` (share
-        of the reflective solid where it maps two colours to one).
-    synthesized_target
-        How a synthesized target chart was made (``ocio-vp target-chart``); only written for
-        an environment whose chart was synthesized.
-    panels
-        Only for a stage of several panel types (``panels`` in the measurements file):
-        ``primary`` (the first in-frustum type, whose M and N are the top-level ones),
-        ``shares`` (each type's part of the light on the white patch, by luminance),
-        ``lit_white_error`` (3,) (the lit white against the target's, per channel relative to
-        it, before Q) and ``lit_white_error_primary_M`` (the same with every type driven by
-        the primary's M, as a calibration of that type alone would), and
-        ``in_frustum_match`` (how the in-frustum types match in camera on the chart:
-        :func:`ocio_vp.calibration.panels.in_frustum_match`, None for one in-frustum type).
-    post_correction_ocio
-        How the config carries a non-linear post-correction (:mod:`ocio_vp.ocio.bake`):
-        ``files`` (its LUT chains' sidecars), ``lut_size``, ``chains`` (each one's design),
-        ``agreement`` (ΔE2000 of the Q chain against the exact model, ``p99`` and ``worst`` per
-        set of the camera range and over ``all``, and the ``worst_input``) and
-        ``inverse_agreement`` (the same for the content through the Q^-1 chain and back through
-        the model; null without Q^-1); only written for a non-linear post-correction.
-    skin
-        What the solve expects of skin (:class:`ocio_vp.formats.skin.SkinFigures`): mean
-        ΔE2000 on its skin samples for the post-correction and least squares, per lightness
-        band, the chart's beside them, and with skin first the default's; only written where
-        the chart gives skin samples (docs/skin.md).
-    extra
-        Keys of a loaded file that this version does not know, kept so they round-trip.
-    """
-
-    white_patch: int | None = None
-    cond_SL: float | None = None
-    cond_Q: float | None = None
-    rank_Q: int | None = None
-    N_solved: bool | None = None
-    N_reason: str | None = None
-    max_condition_q_for_N: float | None = None
-    lit_chart_error_baseline: Any = None
-    lit_chart_error: Any = None
-    residual_rms: float | None = None
-    displayed_chart_error_baseline: Any = None
-    displayed_chart_error: Any = None
-    out_of_frustum_drive: Any = None
-    method_notes: dict[str, Any] | None = None
-    warnings: list[str] | None = None
-    charts: dict[str, Any] | None = None
-    model: str | None = None
-    model_reason: str | None = None
-    rank_target: int | None = None
-    cross_validated_error: Any = None
-    residuals_per_patch: Any = None
-    out_of_frustum_negative_channels: list[int] | None = None
-    lit_chart_error_clipped_drive: Any = None
-    lit_chart_error_baseline_clipped_drive: Any = None
-    charts_clipped_drive: dict[str, Any] | None = None
-    in_frustum_drive_range: dict[str, Any] | None = None
-    black_level_bounce: Any = None
-    clipped_patches: list[int] | None = None
-    N_equals_M: bool | None = None
-    identity_check: dict[str, float] | None = None
-    patch_screening: bool | None = None
-    excluded_patches: list[dict[str, Any]] | None = None
-    model_description: str | None = None
-    extrapolation: dict[str, float] | None = None
-    synthesized_target: dict[str, Any] | None = None
-    fixtures: dict[str, Any] | None = None
-    panels: dict[str, Any] | None = None
-    post_correction_ocio: dict[str, Any] | None = None
-    skin: SkinFigures | None = None
-    extra: dict[str, Any] = field(default_factory=dict)
-    #: The keys a loaded file had (None: every field, as after a solve).
-    present: tuple[str, ...] | None = field(default=None, repr=False, compare=False)
-
-    @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> Diagnostics:
-        """The block as read from ``solution.json``; missing keys stay missing, unknown kept."""
-        known = {f.name for f in dataclasses.fields(cls)} - {"extra", "present"}
-        values = {k: v for k, v in data.items() if k in known}
-        if values.get("skin") is not None:
-            values["skin"] = skin_figures_from_dict(values["skin"])
-        extra = {k: v for k, v in data.items() if k not in known}
-        return cls(**values, extra=extra, present=tuple(data))
-
-    #: Fields written only when set.
-    OPTIONAL: ClassVar[tuple[str, ...]] = (
-        "synthesized_target",
-        "fixtures",
-        "panels",
-        "post_correction_ocio",
-        "skin",
-    )
-
-    def _keys(self) -> tuple[str, ...]:
-        if self.present is not None:
-            return self.present
-        names = [f.name for f in dataclasses.fields(self)[:-2]]
-        names = [n for n in names if n not in self.OPTIONAL or getattr(self, n) is not None]
-        return (*names, *self.extra)
-
-    def __getitem__(self, key: str) -> Any:
-        if key not in self._keys():
-            raise KeyError(key)
-        return self.extra[key] if key in self.extra else getattr(self, key)
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._keys())
-
-    def __len__(self) -> int:
-        return len(self._keys())
-
-
-@dataclass(frozen=True)
 class Solution:
     """Everything solved for one environment; all arrays float64.
 
@@ -262,8 +54,8 @@ class Solution:
     matrix to light with while the fixtures are on.
 
     ``post_correction`` is the post-correction itself (:mod:`ocio_vp.model`), which every
-    consumer applies; ``Q`` is its 3x3 (the matrix, or a non-linear model's 3x3 fallback, for
-    readers that want one). Left out, it is ``Q`` as a matrix.
+    consumer applies; :attr:`Q` is derived from it, never stored beside it: its 3x3 (the
+    matrix, or a non-linear model's 3x3 fallback, for readers that want one).
 
     ``panels`` (a stage of several panel types: :mod:`ocio_vp.formats.panel_solution`) holds
     every type's solve by name, None otherwise; the top-level ``SL``, ``M``, ``N``, ``beta``,
@@ -277,29 +69,33 @@ class Solution:
     w_avg: np.ndarray
     SL: np.ndarray
     M: np.ndarray
-    Q: np.ndarray
+    post_correction: PostCorrection
     N: np.ndarray | None
     black_level_offset: np.ndarray | None
     black_level_method: str | None
-    diagnostics: Mapping[str, Any] = field(default_factory=dict)
+    diagnostics: Diagnostics = field(default_factory=Diagnostics)
     measurements_file: str | None = None
     measurements_sha256: str | None = None
     camera_colorspace: str | None = None
     ocio: dict[str, str] = field(default_factory=dict)
     linearity: dict[str, Any] | None = None
     fixtures: dict[str, Any] | None = None
-    post_correction: PostCorrection | None = None
     panels: Mapping[str, PanelSolution] | None = None
-
-    def __post_init__(self) -> None:
-        if self.post_correction is None:
-            object.__setattr__(self, "post_correction", MatrixCorrection(self.Q))
 
     @property
     def correction(self) -> PostCorrection:
-        """The post-correction (never None; :attr:`post_correction` typed for checkers)."""
-        assert self.post_correction is not None
+        """The post-correction (:attr:`post_correction`)."""
         return self.post_correction
+
+    @property
+    def model(self) -> str:
+        """The Q model fitted (``auto`` chooses one); the method for a file that does not say."""
+        return self.diagnostics.model or self.method
+
+    @property
+    def Q(self) -> np.ndarray:
+        """The post-correction's 3x3 (``solution.json``'s ``Q``), derived from it."""
+        return self.post_correction.matrix
 
     @property
     def in_frustum_matrix(self) -> np.ndarray:
@@ -311,32 +107,8 @@ class Solution:
         return np.zeros(3) if self.black_level_offset is None else self.black_level_offset
 
 
-def _plain(value: Any) -> Any:
-    """Convert numpy values to JSON types. A non-finite float is written as null (NaN) or the
-    string "inf"/"-inf": only cond_Q of a singular Q should ever be one (docs/stability.md;
-    tests/test_pipeline.py and benchmarks/sweep.py look for any other)."""
-    if isinstance(value, np.ndarray):
-        return _plain(value.tolist())
-    if isinstance(value, SkinFigures):
-        return _plain(skin_figures_to_dict(value))
-    if isinstance(value, Mapping):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, (np.floating, float)):
-        number = float(value)
-        if not np.isfinite(number):
-            return None if np.isnan(number) else ("inf" if number > 0 else "-inf")
-        return number
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, np.bool_):
-        return bool(value)
-    return value
-
-
 def solution_to_dict(solution: Solution) -> dict[str, Any]:
-    return _plain(
+    return json_value(
         {
             "format": SOLUTION_FORMAT,
             "version": 1,
@@ -449,6 +221,11 @@ def _text(data: dict[str, Any], key: str, source: str, *, name: bool = False) ->
     return value
 
 
+def _name(data: dict[str, Any], key: str, source: str) -> str:
+    """A required name: safe as a folder and an OCIO name."""
+    return check_safe_name(data.get(key), source=source, key=key)
+
+
 def _mapping(data: dict[str, Any], key: str, source: str) -> dict[str, Any]:
     value = data.get(key)
     if value is None:
@@ -497,16 +274,19 @@ def load_solution(path: str | Path) -> Solution:
     if not all(isinstance(k, str) and isinstance(v, str) for k, v in ocio.items()):
         raise InputError("expected names (text) only", source=source, key="ocio")
     Q = _matrix(data, "Q", source)
-    diagnostics = Diagnostics.from_dict(_mapping(data, "diagnostics", source))
+    try:
+        diagnostics = Diagnostics.from_dict(_mapping(data, "diagnostics", source))
+    except InputError as error:
+        raise InputError(error.problem, source=source, key=error.key) from None
     return Solution(
-        stage=_text(data, "stage", source, name=True),
-        environment=_text(data, "environment", source, name=True),
+        stage=_name(data, "stage", source),
+        environment=_name(data, "environment", source),
         method=_text(data, "method", source) or "",
         beta=float(beta),
         w_avg=_rgb(data, "w_avg", source),
         SL=_matrix(data, "SL", source),
         M=_matrix(data, "M", source),
-        Q=Q,
+        post_correction=_post_correction(data, Q, source),
         N=_matrix(data, "N", source, optional=True),
         black_level_offset=_rgb(data, "black_level_offset", source, optional=True),
         black_level_method=_text(data, "black_level_method", source),
@@ -517,26 +297,33 @@ def load_solution(path: str | Path) -> Solution:
         ocio=ocio,
         linearity=linearity,
         fixtures=_fixtures(data, source),
-        post_correction=_post_correction(data, Q, diagnostics, source),
         panels=panel_solutions_from_dict(data.get("panels"), source),
     )
 
 
-def _post_correction(
-    data: dict[str, Any], Q: np.ndarray, diagnostics: Diagnostics, source: str
-) -> PostCorrection:
+def _old_root_polynomial(data: dict[str, Any]) -> Any:
+    """Where files written before the ``post_correction`` block kept a root-polynomial model."""
+    notes = data.get("diagnostics", {}).get("method_notes") or {}
+    return notes.get("root_polynomial") if isinstance(notes, dict) else None
+
+
+def _post_correction(data: dict[str, Any], Q: np.ndarray, source: str) -> PostCorrection:
     """The ``post_correction`` block; a file written before it existed gets its model back from
     where those versions kept it (a root-polynomial's coefficients in
     ``diagnostics.method_notes``, applied unbounded as they were), otherwise Q as a matrix."""
     block = data.get("post_correction")
     try:
         if block is not None:
-            return correction_from_dict(block)
-        old = (diagnostics.get("method_notes") or {}).get("root_polynomial")
+            correction = correction_from_dict(block)
+            _check_Q(Q, correction.matrix, source)
+            return correction
+        old = _old_root_polynomial(data)
         if old is None:
             return MatrixCorrection(Q)
         return RootPolynomialCorrection(old["coefficients"], Q)
     except InputError as error:
+        if error.source is not None:
+            raise
         raise InputError(error.problem, source=source, key=error.key) from None
     except (KeyError, TypeError, ValueError) as error:
         raise InputError(
@@ -544,3 +331,22 @@ def _post_correction(
             source=source,
             key="diagnostics.method_notes.root_polynomial",
         ) from None
+
+
+#: ``Q`` may differ from its ``post_correction``'s matrix by this much (relative, largest entry)
+#: and no more: JSON round-trips a float64 exactly, so more means the file was edited.
+Q_TOLERANCE = 1e-9
+
+
+def _check_Q(Q: np.ndarray, matrix: np.ndarray, source: str) -> None:
+    """Refuse a ``Q`` that is not its ``post_correction``'s matrix (Q is derived from it: an
+    edited Q would reach the readers of Q but not ``apply`` and ``validate``)."""
+    scale = max(float(np.max(np.abs(matrix))), np.finfo(np.float64).tiny)
+    relative = float(np.max(np.abs(Q - matrix))) / scale
+    if relative > Q_TOLERANCE:
+        raise InputError(
+            f"differs from post_correction's matrix by {relative:.2g} relative (more than "
+            f"{Q_TOLERANCE:g}); Q is derived from post_correction: edit that block, or restore Q",
+            source=source,
+            key="Q",
+        )

@@ -115,7 +115,7 @@ def solution_folders(paths: Sequence[str | Path], *, key: str = "SOLUTION_DIR") 
     if not found:
         names = ", ".join(str(p) for p in paths)
         raise InputError(f"no solution among {names}", key=key)
-    folders = tuple(found.values())
-    solve_folders = tuple(dict.fromkeys(f.resolve().parent for f in folders))
+    chosen = tuple(found.values())
+    solve_folders = tuple(dict.fromkeys(f.resolve().parent for f in chosen))
     every = {p.parent.resolve() for s in solve_folders for p in s.glob(f"*/{SOLUTION_FILE}")}
-    return SolutionFolders(folders, solve_folders, every <= set(found), tuple(skipped))
+    return SolutionFolders(chosen, solve_folders, every <= set(found), tuple(skipped))

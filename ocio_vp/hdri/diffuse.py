@@ -229,7 +229,7 @@ def read_equirect(path: str | Path, *, width: int | None = DEFAULT_HDRI_WIDTH) -
     if inp is None:
         raise InputError(f"cannot read the HDRI: {oiio.geterror()}", source=source)
     try:
-        levels = []
+        levels: list[tuple[int, int, int]] = []
         while inp.seek_subimage(0, len(levels)):
             spec = inp.spec()
             levels.append((spec.width, spec.height, spec.nchannels))
@@ -337,7 +337,7 @@ def panel_w_avg(
         mask = region_mask(height, width, panel.regions)
         parts[panel.name] = diffuse_integral(img * mask[..., None], normal=normal)
     total = diffuse_integral(img, normal=normal)
-    covered = sum(parts.values())
+    covered = sum(parts.values(), np.zeros_like(total))
     uncovered = (total[1] - covered[1]) / total[1] if total[1] > 0 else 0.0
     return parts, float(max(uncovered, 0.0))
 

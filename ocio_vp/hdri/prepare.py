@@ -41,6 +41,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -466,7 +467,7 @@ def prepare_hdri_file(
     out_path: str | Path,
     *,
     peak: float,
-    normals: dict[str, ArrayLike] | None = None,
+    normals: Mapping[str, ArrayLike] | None = None,
 ) -> PreparedHDRI:
     """Read an equirectangular HDRI, :func:`fit_under_peak` its RGB, write it (atomically).
 
@@ -505,13 +506,15 @@ def prepare_hdri_file(
         prepared = fit_under_peak(pixels[..., rgb_index], peak=peak, storage_dtype=storage)
     except InputError as err:
         raise InputError(err.problem, source=source, key=err.key) from None
-    w_avg = {
-        name: (diffuse_integral(pixels[..., rgb_index], normal=n), None)
+    before = {
+        name: diffuse_integral(pixels[..., rgb_index], normal=n)
         for name, n in (normals or {}).items()
     }
     pixels[..., rgb_index] = prepared.image
-    for name, n in (normals or {}).items():
-        w_avg[name] = (w_avg[name][0], diffuse_integral(prepared.image, normal=n))
+    w_avg = {
+        name: (before[name], diffuse_integral(prepared.image, normal=n))
+        for name, n in (normals or {}).items()
+    }
     prepared = dataclasses.replace(prepared, w_avg=w_avg)
     out_spec = oiio.ImageSpec(spec)
     out_spec.set_format(out_format)

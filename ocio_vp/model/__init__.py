@@ -21,8 +21,10 @@ from ocio_vp.model.correction import (
     correction_from_dict,
     correction_to_dict,
     fit_domain,
+    matrix_invertible,
     newton_inverse,
     smoothstep,
+    truncated_pseudo_inverse,
 )
 from ocio_vp.model.expansion import (
     ROOT_POLYNOMIAL_TERMS,
@@ -53,10 +55,12 @@ __all__ = [
     "correction_from_dict",
     "correction_to_dict",
     "fit_domain",
+    "matrix_invertible",
     "newton_inverse",
     "root_polynomial_expansion",
     "root_polynomial_jacobian",
     "root_polynomial_term_powers",
     "root_polynomial_terms",
     "smoothstep",
+    "truncated_pseudo_inverse",
 ]

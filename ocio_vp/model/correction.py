@@ -79,9 +79,12 @@ __all__ = [
     "correction_from_dict",
     "correction_to_dict",
     "fit_domain",
+    "matrix_invertible",
     "newton_inverse",
     "protection_words",
     "smoothstep",
+    "truncated_pseudo_inverse",
+    "unprotected",
 ]
 
 #: A root-polynomial Q starts fading to its fallback matrix at the first gauge and has faded
@@ -161,8 +164,32 @@ DRIVE_FLOOR = 0.05
 #: The hull always holds a disc of this radius (chromaticity units) around white, so that a
 #: chart whose colours lie on a line (sodium light) still has a domain around white.
 HULL_MIN_RADIUS = 0.02
-#: Q with a condition number above this (the limit for N) has no inverse (``rank-deficient``).
+#: Q with a condition number above this has no inverse (``rank-deficient``), and N = M Q^-1 is
+#: not solved (:data:`ocio_vp.calibration.MAX_CONDITION_Q_FOR_N` is this number): Q^-1 would
+#: amplify a 0.1% error in the chart measurements into more than 100% of the in-frustum drive
+#: (as the paper found for low-pressure sodium, where Q has rank 1).
 MAX_CONDITION_INVERSE = 1e3
+
+
+def matrix_invertible(Q: ArrayLike) -> bool:
+    """Whether a 3x3 Q may be inverted: the one rule every consumer asks (cond(Q) at most
+    :data:`MAX_CONDITION_INVERSE`; a singular or non-finite Q never)."""
+    Q = np.asarray(Q, dtype=np.float64)
+    if not np.all(np.isfinite(Q)):
+        return False
+    s = np.linalg.svd(Q, compute_uv=False)
+    return bool(s[-1] > 0 and s[0] / s[-1] <= MAX_CONDITION_INVERSE)
+
+
+def truncated_pseudo_inverse(Q: ArrayLike) -> tuple[np.ndarray, int]:
+    """Q's pseudo-inverse with the singular values below ``sigma_max /``
+    :data:`MAX_CONDITION_INVERSE` dropped, and the rank kept: a bounded stand-in for the
+    inverse of a Q that :func:`matrix_invertible` refuses (gain at most
+    ``MAX_CONDITION_INVERSE / sigma_max``)."""
+    U, sigma, Vt = np.linalg.svd(np.asarray(Q, dtype=np.float64))
+    keep = sigma >= sigma[0] / MAX_CONDITION_INVERSE
+    return (Vt.T[:, keep] / sigma[keep]) @ U[:, keep].T, int(keep.sum())
+
 
 _CHANNEL_NAMES = ("red", "green", "blue")
 
@@ -381,8 +408,7 @@ class MatrixCorrection:
 
     @property
     def invertible(self) -> bool:
-        s = np.linalg.svd(self.Q, compute_uv=False)
-        return bool(s[-1] > 0 and s[0] / s[-1] <= MAX_CONDITION_INVERSE)
+        return matrix_invertible(self.Q)
 
     @property
     def homogeneous(self) -> bool:
@@ -452,7 +478,7 @@ class RootPolynomialCorrection:
 
     @property
     def invertible(self) -> bool:
-        return MatrixCorrection(self.fallback).invertible
+        return matrix_invertible(self.fallback)
 
     @property
     def homogeneous(self) -> bool:
@@ -613,6 +639,12 @@ def _white_drive(domain: FitDomain, drive_matrix: np.ndarray) -> float:
 PostCorrection = MatrixCorrection | RootPolynomialCorrection | ProtectedCorrection
 
 
+def unprotected(correction: PostCorrection) -> MatrixCorrection | RootPolynomialCorrection:
+    """The model a correction applies where nothing fades it out: a protected one's inner
+    model, any other one itself."""
+    return correction.inner if isinstance(correction, ProtectedCorrection) else correction
+
+
 # ---------------------------------------------------------------------------------------------
 # The inverse
 
@@ -721,8 +753,14 @@ def correction_from_dict(data: Mapping[str, Any]) -> PostCorrection:
         if kind == "protected":
             if domain is None:
                 raise InputError("a protected correction needs its domain", key="post_correction")
+            inner = correction_from_dict({**parameters["inner"], "domain": data.get("domain")})
+            if isinstance(inner, ProtectedCorrection):
+                raise InputError(
+                    "a protected correction cannot protect another",
+                    key="post_correction.parameters.inner",
+                )
             return ProtectedCorrection(
-                correction_from_dict({**parameters["inner"], "domain": data.get("domain")}),
+                inner,
                 domain,
                 parameters["drive_matrix"],
                 tuple(parameters["bright"]),

@@ -102,10 +102,10 @@ def root_polynomial_expansion(rgb: np.ndarray, degree: int) -> np.ndarray:
     channels = (rgb[..., 0], rgb[..., 1], rgb[..., 2])
     out = np.empty((*rgb.shape[:-1], ROOT_POLYNOMIAL_TERMS[degree]))
     for index, (powers, root) in enumerate(_TERMS[: ROOT_POLYNOMIAL_TERMS[degree]]):
-        p = None
+        p = np.ones(rgb.shape[:-1])
         for channel, power in zip(channels, powers, strict=True):
             for _ in range(power):
-                p = channel if p is None else p * channel
+                p = p * channel
         out[..., index] = _signed_root(p, root)
     return out
 

@@ -49,17 +49,17 @@ on the camera range of :mod:`ocio_vp.model.footage_range`, stored in ``solution.
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 import PyOpenColorIO as OCIO
 
 from ocio_vp.errors import InputError
+from ocio_vp.formats.diagnostics import PostCorrectionOCIO
 from ocio_vp.formats.solution import Solution
 from ocio_vp.metrics import SAMPLE_CAMERA_TO_XYZ
-from ocio_vp.model.correction import PostCorrection, newton_inverse
+from ocio_vp.model.correction import PostCorrection, ProtectedCorrection, newton_inverse
 from ocio_vp.model.footage_range import Agreement, agreement, calibration_footage_range
 from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
 from ocio_vp.ocio.wall import sidecar_name
@@ -356,7 +356,7 @@ def _box(chain: LutChain, colours: np.ndarray) -> tuple[tuple[float, float], tup
 
 
 def _design(
-    curvatures: list[tuple[Callable[[np.ndarray], np.ndarray], np.ndarray, list[float]]],
+    curvatures: Sequence[tuple[Callable[[np.ndarray], np.ndarray], np.ndarray, list[float]]],
     *,
     mix: float,
     reference: np.ndarray,
@@ -390,7 +390,7 @@ def _design(
 def _reference(correction: PostCorrection) -> np.ndarray:
     """L: the matrix a correction reduces to where it is linear (the identity where the matrix
     has no inverse; for the emitter protection, the identity it hands over to)."""
-    if correction.kind == "protected" or not correction.invertible:
+    if isinstance(correction, ProtectedCorrection) or not correction.invertible:
         return np.eye(3)
     return correction.matrix
 
@@ -457,7 +457,7 @@ def forward_chain(
     s_nodes = [black, *(np.log2(linear_break) + o for o in BREAK_NODES)]
     scales = [np.log2(level) - 2.0, np.log2(level)]
     curvatures = [(correction.apply, _reference(correction), scales)]
-    if correction.kind == "protected":
+    if isinstance(correction, ProtectedCorrection):
         fade = _fade_nodes(correction, T, np.vstack([colours, white]))
         s_nodes = [s for s in s_nodes if s < fade[0] - 0.3] + fade + [fade[-1] + 1, fade[-1] + 3]
         # the inner model's departure from its matrix, and (below the fade, where only the
@@ -515,7 +515,9 @@ def inverse_chain(
     low = np.maximum(c.min(axis=0)[1:] - CONTENT_MARGIN, -limit)
     high = np.minimum(c.max(axis=0)[1:] + CONTENT_MARGIN, limit)
     s_nodes = list(SCALE_RANGE)
-    if correction.kind == "protected":  # the fade, where the preimage's brightness crosses it
+    if isinstance(
+        correction, ProtectedCorrection
+    ):  # the fade, where the preimage's brightness crosses it
         s_nodes[1:1] = _fade_band_content(correction, content)
     reference = np.linalg.inv(_reference(correction))
     return LutChain(
@@ -574,7 +576,7 @@ def bake_inverse(correction: PostCorrection, chain: LutChain) -> np.ndarray:
     a, b = np.meshgrid(chain.a_nodes, chain.b_nodes, indexing="ij")
     s_nodes = chain.s_nodes
     values = np.empty((len(s_nodes), n * n, 3))
-    if correction.kind != "protected":
+    if not isinstance(correction, ProtectedCorrection):
         c = chain.inputs(np.zeros_like(a), a, b).reshape(-1, 3)
         x = correction.inverse(c)
         level = chain.values(lambda _: x, c)
@@ -589,7 +591,7 @@ def bake_inverse(correction: PostCorrection, chain: LutChain) -> np.ndarray:
     for i, s in enumerate(s_nodes[1:-1], start=1):
         c = chain.inputs(np.full_like(a, s), a, b).reshape(-1, 3)
         x = _solved(correction.apply, c, x * np.exp2(s - previous), correction.inner.matrix)
-        values[i] = chain.values(lambda _, x=x: x, c)
+        values[i] = chain.values(_returning(x), c)
         previous = s
     c = chain.inputs(np.full_like(a, s_nodes[-1]), a, b).reshape(-1, 3)
     values[-1] = chain.values(lambda _: c, c)  # the identity above the fade
@@ -642,6 +644,11 @@ def _cpu(transform: OCIO.Transform) -> Callable[[np.ndarray], np.ndarray]:
     return processor_function(OCIO.Config.CreateRaw().getProcessor(transform))
 
 
+def _returning(x: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """A function of one argument that returns ``x`` whatever it is given."""
+    return lambda _: x
+
+
 def processor_function(processor: OCIO.Processor) -> Callable[[np.ndarray], np.ndarray]:
     """An OCIO processor as a function on (n, 3) RGB: its default CPU processor, float32 in,
     float64 out (what a host computes)."""
@@ -666,7 +673,7 @@ class ModelOutputs:
     forward: Agreement
     inverse: Agreement | None
     files: dict[str, str] = field(default_factory=dict)
-    block: dict[str, Any] = field(default_factory=dict)
+    block: PostCorrectionOCIO | None = None
 
     def note(self) -> str:
         """One sentence for descriptions: how close the chain is, and what to use where it is
@@ -713,10 +720,11 @@ def model_outputs(solution: Solution) -> ModelOutputs | None:
             "needs one (re-solve, or set N to null)",
             key="post_correction",
         )
-    charts = solution.diagnostics["charts"]
-    white = int(solution.diagnostics.get("white_patch") or 18)
-    lit = np.asarray(charts["lit_baseline"], dtype=np.float64)
-    target = np.asarray(charts["target"], dtype=np.float64)
+    charts = solution.diagnostics.charts
+    if charts is None:
+        raise InputError("no charts to bake the post-correction on", key="diagnostics.charts")
+    white = solution.diagnostics.white_patch
+    lit, target = charts.lit_baseline, charts.target
     footage = calibration_footage_range(
         lit_chart=lit, white_patch=white, target_white=target[white], SL=solution.SL,
         camera_to_xyz=SAMPLE_CAMERA_TO_XYZ,
@@ -765,13 +773,13 @@ def _outputs(solution, chains, measured, measured_inverse) -> ModelOutputs:
         files[f"{LUT_DIR}/{name}"] = text
         names.append(name)
         designs[what] = chain.describe()
-    block = {
-        "files": list(files),
-        "lut_size": LUT_SIZE,
-        "chains": designs,
-        "agreement": measured.to_dict(),
-        "inverse_agreement": None if measured_inverse is None else measured_inverse.to_dict(),
-    }
+    block = PostCorrectionOCIO(
+        files=list(files),
+        lut_size=LUT_SIZE,
+        chains=designs,
+        agreement=measured,
+        inverse_agreement=measured_inverse,
+    )
     return ModelOutputs(
         q_file=names[0],
         q_inverse_file=names[1] if len(names) > 1 else None,

@@ -24,8 +24,9 @@ import numpy as np
 import PyOpenColorIO as OCIO
 
 from ocio_vp.calibration.diagnostics import is_identity, offset_is_negligible
-from ocio_vp.calibration.equations import MAX_CONDITION_Q_FOR_N, condition_text
+from ocio_vp.calibration.equations import condition_text
 from ocio_vp.formats.solution import Solution
+from ocio_vp.model.correction import MAX_CONDITION_INVERSE, truncated_pseudo_inverse
 from ocio_vp.ocio.matrix import format_matrix, matrix_transform
 from ocio_vp.ocio.softclip import soft_clip_text, soft_clip_transforms
 from ocio_vp.ocio.viewing import (
@@ -34,6 +35,7 @@ from ocio_vp.ocio.viewing import (
     add_monitor_displays,
     set_categories,
 )
+from ocio_vp.wall.encoding import WallEncoding
 from ocio_vp.wall.softclip import soft_clip_knee
 
 __all__ = [
@@ -137,32 +139,14 @@ def wall_transforms(
     return {OUT_OF_FRUSTUM: (outer, outer_back), IN_FRUSTUM: (inner, inner_back)}
 
 
-#: OCIO encoding of the wall colorspaces for each wall signal encoding (docs/linearity.md).
-WALL_SIGNAL_ENCODINGS = {
-    "linear": "scene-linear",
-    "gamma2.4": "sdr-video",
-    "srgb": "sdr-video",
-    "pq": "hdr-video",
-}
-
-
 def _wall_signal_encoding(solution: Solution) -> str:
-    wall = (solution.linearity or {}).get("wall_encoding") or {}
-    return WALL_SIGNAL_ENCODINGS.get(wall.get("name", "linear"), "scene-linear")
+    return WallEncoding.of(solution.linearity).ocio_encoding
 
 
 def _group(transforms: list[OCIO.Transform]) -> OCIO.Transform:
     if len(transforms) == 1:
         return transforms[0]
     return OCIO.GroupTransform(transforms)
-
-
-def _pseudo_inverse(Q: np.ndarray) -> tuple[np.ndarray, int]:
-    """Q's truncated pseudo-inverse (singular values below ``sigma_max /``
-    :data:`MAX_CONDITION_Q_FOR_N` dropped) and the rank kept."""
-    U, sigma, Vt = np.linalg.svd(Q)
-    keep = sigma >= sigma[0] / MAX_CONDITION_Q_FOR_N
-    return (Vt.T[:, keep] / sigma[keep]) @ U[:, keep].T, int(keep.sum())
 
 
 def post_correction_transforms(
@@ -175,9 +159,9 @@ def post_correction_transforms(
     inverts a LUT by search: minutes for a 65^3 cube):
 
     - a 3x3 Q: the matrix, and its inverse;
-    - a Q too ill-conditioned to invert (cond(Q) above :data:`MAX_CONDITION_Q_FOR_N`, the limit
+    - a Q too ill-conditioned to invert (cond(Q) above :data:`MAX_CONDITION_INVERSE`, the limit
       for N), whose inverse would amplify a finite input to 1e17 and more: its truncated
-      pseudo-inverse (gain at most ``MAX_CONDITION_Q_FOR_N / sigma_max``; content goes to the
+      pseudo-inverse (gain at most ``MAX_CONDITION_INVERSE / sigma_max``; content goes to the
       smallest footage that Q maps to content's projection onto Q's range), a bounded stand-in;
     - a non-linear Q: its ``model`` files (Q, Q^-1), or where the model has no inverse the
       3x3's pseudo-inverse, marked as a stand-in that is not the model's inverse.
@@ -185,48 +169,36 @@ def post_correction_transforms(
     A non-linear Q without its files is refused: the config never silently carries a 3x3 where
     ``ocio-vp apply`` runs the model.
     """
-    Q = np.asarray(solution.Q, dtype=np.float64)
     correction = solution.correction
+    Q = correction.matrix
     if not correction.linear and model is None:
         raise ValueError(
             f"a {correction.kind} post-correction needs its LUT files (ocio_vp.ocio.bake); "
             "the config would otherwise carry only its 3x3"
         )
     forward = matrix_transform(Q) if model is None else OCIO.FileTransform(src=model.q)
-    sigma = np.linalg.svd(Q, compute_uv=False)
-    invertible = sigma[-1] > 0 and sigma[0] / sigma[-1] <= MAX_CONDITION_Q_FOR_N
     if model is not None and model.q_inverse is not None:
         text = f"The inverse direction is the baked Q^-1 ({model.q_inverse})."
         return forward, OCIO.FileTransform(src=model.q_inverse), text
-    if invertible and model is None:
+    if correction.invertible and model is None:
         return forward, matrix_transform(Q, direction=OCIO.TRANSFORM_DIR_INVERSE), ""
-    pinv, rank = _pseudo_inverse(Q)
+    pinv, rank = truncated_pseudo_inverse(Q)
     if model is not None:
         text = (
             f"The inverse direction (reference -> Stage Footage) is NOT PROVIDED as the model's "
             f"inverse: the {correction.kind} model has none (its 3x3 has rank {rank} at cond <= "
-            f"{MAX_CONDITION_Q_FOR_N:g}). That direction is a bounded stand-in, the 3x3's "
+            f"{MAX_CONDITION_INVERSE:g}). That direction is a bounded stand-in, the 3x3's "
             f"truncated pseudo-inverse {format_matrix(pinv)}, so that a host asking for it gets finite "
             "numbers at once; do not use it to undo the post-correction."
         )
         return forward, matrix_transform(pinv), text
     text = (
-        f"Q has rank {rank} at cond <= {MAX_CONDITION_Q_FOR_N:g} (cond(Q) "
+        f"Q has rank {rank} at cond <= {MAX_CONDITION_INVERSE:g} (cond(Q) "
         f"{condition_text(float(np.linalg.cond(Q)))}): it cannot be inverted, so the inverse "
         "direction (reference -> Stage Footage, the inverse of the named transform) is Q's "
         f"truncated pseudo-inverse {format_matrix(pinv)}, bounded, not a true inverse."
     )
     return forward, matrix_transform(pinv), text
-
-
-#: Drive at which an encoded wall signal reaches 1.0, by encoding (PQ: 10000 nits / peak).
-def _signal_top(encoding: dict) -> float | None:
-    name = encoding.get("name", "linear")
-    if name == "linear":
-        return None
-    if name == "pq":
-        return 10000.0 / float(encoding.get("peak_nits", 1000.0))
-    return 1.0
 
 
 def wall_signal_tail(solution: Solution, extra: list[OCIO.Transform]) -> list[OCIO.Transform]:
@@ -241,8 +213,7 @@ def wall_signal_tail(solution: Solution, extra: list[OCIO.Transform]) -> list[OC
     """
     if not extra:
         return []
-    encoding = (solution.linearity or {}).get("wall_encoding") or {}
-    top = _signal_top(encoding)
+    top = WallEncoding.of(solution.linearity).signal_top
     if top is None:
         return [OCIO.RangeTransform(minInValue=0.0, minOutValue=0.0), *extra]
     return [
@@ -352,7 +323,7 @@ def _empty_config(solution: Solution, origin: str, search_path: str | None) -> O
     config.setName(f"ocio-vp_{solution.stage}_{solution.environment}")
     config.setDescription(
         f"ocio_vp calibration of {origin}. Q method: {solution.method} "
-        f"(model {solution.diagnostics.get('model') or solution.method}). "
+        f"(model {solution.model}). "
         "LeGendre, Lepicovsky & Debevec, DigiPro 2022."
     )
     if search_path:
@@ -409,7 +380,7 @@ def _in_frustum_text(solution: Solution, model: ModelFiles | None = None) -> str
     elif solution.N is not None:
         text = f"N = M Q^-1 {format_matrix(solution.N)}"
     else:
-        reason = solution.diagnostics.get("N_reason") or "Q is not invertible"
+        reason = solution.diagnostics.N_reason or "Q is not invertible"
         text = f"N NOT SOLVED ({reason}); M is used instead, {format_matrix(solution.M)}"
     if solution.black_level_offset is not None:
         text += (
@@ -449,8 +420,8 @@ def _add_post_correction(
     approximation, printed for reference.
     """
     q_identity = is_identity(solution.Q) and model is None
-    method_model = solution.diagnostics.get("model") or solution.method
-    reason = solution.diagnostics.get("model_reason")
+    method_model = solution.model
+    reason = solution.diagnostics.model_reason
     q_text = (
         f"Post-correction Q {format_matrix(solution.Q)} for footage shot on the stage ({solution.method}, "
         f"model {method_model}{': ' + reason if reason else ''}). {origin}."

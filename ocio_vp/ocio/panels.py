@@ -35,7 +35,6 @@ from ocio_vp.ocio.config import (
     OUT_OF_FRUSTUM,
     VIEW_INNER,
     VIEW_OUTER,
-    WALL_SIGNAL_ENCODINGS,
     ModelFiles,
     ocio_names,
     wall_tail,
@@ -45,6 +44,7 @@ from ocio_vp.ocio.matrix import format_matrix
 from ocio_vp.ocio.softclip import soft_clip_text
 from ocio_vp.ocio.viewing import set_categories
 from ocio_vp.ocio.wall import wall_outputs
+from ocio_vp.wall.encoding import WallEncoding
 
 __all__ = ["PanelOutputs", "add_panel_spaces", "panel_labels", "panel_outputs"]
 
@@ -157,8 +157,7 @@ def panel_outputs(solution: Solution, model: ModelFiles | None = None) -> PanelO
         files.update(wall.files)
         chains = wall_transforms(view, model)
         tail = wall.extra_wall_transforms or {}
-        encoding_name = ((wall.linearity or {}).get("wall_encoding") or {}).get("name", "linear")
-        encoding = WALL_SIGNAL_ENCODINGS.get(encoding_name, "scene-linear")
+        encoding = WallEncoding.of(wall.linearity).ocio_encoding
         names = _names(labels[name], panel.in_frustum)
         texts = _descriptions(solution, panel)
         roles = [(OUT_OF_FRUSTUM, "out_of_frustum")]

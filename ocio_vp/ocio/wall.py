@@ -24,7 +24,7 @@ import PyOpenColorIO as OCIO
 
 from ocio_vp.formats.solution import Solution
 from ocio_vp.ocio.clf import clf_v3
-from ocio_vp.ocio.config import IN_FRUSTUM, OUT_OF_FRUSTUM, matrix_transform
+from ocio_vp.ocio.config import IN_FRUSTUM, OUT_OF_FRUSTUM
 from ocio_vp.wall.encoding import (
     CLF_FORMAT,
     DEFAULT_PEAK_NITS,
@@ -32,7 +32,7 @@ from ocio_vp.wall.encoding import (
     LOG_SHAPER_KNEE,
     LUT_DIR,
     LinearityLut,
-    check_encoding,
+    WallEncoding,
     lut_accuracy,
     lut_table,
 )
@@ -48,30 +48,9 @@ __all__ = [
 
 
 def encoding_transforms(encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS) -> list:
-    """OCIO transforms for the wall encoding (empty for ``linear``)."""
-    check_encoding(encoding, peak_nits)
-    if encoding == "linear":
-        return []
-    if encoding == "gamma2.4":
-        return [
-            OCIO.ExponentTransform(value=[2.4, 2.4, 2.4, 1.0], direction=OCIO.TRANSFORM_DIR_INVERSE)
-        ]
-    if encoding == "srgb":  # IEC 61966-2-1 as OCIO's moncurve (gamma 2.4, offset 0.055)
-        # the moncurve continues its linear part below 0: clamp first (negative drive is black)
-        black = OCIO.RangeTransform(minInValue=0.0, minOutValue=0.0)
-        return [
-            black,
-            OCIO.ExponentWithLinearTransform(
-                gamma=[2.4, 2.4, 2.4, 1.0],
-                offset=[0.055, 0.055, 0.055, 0.0],
-                direction=OCIO.TRANSFORM_DIR_INVERSE,
-            ),
-        ]
-    # The builtin takes linear nits/100.
-    return [
-        matrix_transform(np.eye(3) * (peak_nits / 100.0)),
-        OCIO.BuiltinTransform(style="CURVE - LINEAR_to_ST-2084"),
-    ]
+    """OCIO transforms for the wall encoding (empty for ``linear``):
+    :meth:`ocio_vp.wall.encoding.WallEncoding.ocio_transforms`."""
+    return WallEncoding(encoding, peak_nits).ocio_transforms()
 
 
 def log_shaper_transform() -> OCIO.LogAffineTransform:
@@ -95,7 +74,7 @@ def lut_transform(lut: LinearityLut):
     lut1d.setInterpolation(OCIO.INTERP_LINEAR)
     for i, (r, g, b) in enumerate(table):
         lut1d.setValue(i, float(r), float(g), float(b))
-    shaper = [log_shaper_transform()] if lut.encoding == "linear" else []
+    shaper = [log_shaper_transform()] if WallEncoding(lut.encoding).linear else []
     return OCIO.GroupTransform([*shaper, lut1d])
 
 
@@ -133,9 +112,8 @@ def wall_outputs(solution: Solution) -> WallOutputs:
     if linearity is None:
         return WallOutputs()
     linearity = dict(linearity)
-    encoding_info = linearity.get("wall_encoding") or {"name": "linear"}
-    encoding = encoding_info["name"]
-    peak_nits = float(encoding_info.get("peak_nits", DEFAULT_PEAK_NITS))
+    wall = WallEncoding.of(linearity)
+    encoding, peak_nits = wall.name, float(wall.peak_nits or DEFAULT_PEAK_NITS)
     lut_name = None
     files: dict[str, str] = {}
     channels = linearity.get("channels") or {}
@@ -160,9 +138,7 @@ def wall_outputs(solution: Solution) -> WallOutputs:
 
     def chain() -> list:  # fresh objects for each colorspace
         lut = [] if lut_name is None else [OCIO.FileTransform(src=lut_name)]
-        if encoding == "linear":
-            return lut
-        return encoding_transforms(encoding, peak_nits=peak_nits) + lut
+        return wall.ocio_transforms() + lut
 
     if not chain():
         return WallOutputs(linearity=linearity)

@@ -25,7 +25,7 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 from ocio_vp.errors import InputError
-from ocio_vp.formats.solution import Diagnostics, Solution, solution_to_json
+from ocio_vp.formats.solution import Solution, solution_to_json
 from ocio_vp.ocio.bake import model_outputs
 from ocio_vp.ocio.config import ModelFiles, build_config, ocio_names, write_config
 from ocio_vp.ocio.panels import add_panel_spaces, panel_outputs
@@ -49,16 +49,7 @@ def write_environment(solution: Solution, directory: Path) -> Solution:
         files.update(luts.files)
         search_path = LUT_DIR
         model = ModelFiles(luts.q_file, luts.q_inverse_file, luts.note())
-        diagnostics = solution.diagnostics
-        if isinstance(diagnostics, Diagnostics):
-            present = diagnostics.present
-            if present is not None and "post_correction_ocio" not in present:
-                present = (*present, "post_correction_ocio")
-            diagnostics = dataclasses.replace(
-                diagnostics, post_correction_ocio=luts.block, present=present
-            )
-        else:
-            diagnostics = {**diagnostics, "post_correction_ocio": luts.block}
+        diagnostics = solution.diagnostics.adding(post_correction_ocio=luts.block)
         solution = dataclasses.replace(solution, diagnostics=diagnostics)
     # A stage's other panel types: their own colour spaces, LUTs and encodings (ocio/panels.py).
     panels = panel_outputs(solution, model)

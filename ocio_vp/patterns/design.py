@@ -30,9 +30,10 @@ from typing import Any
 
 import numpy as np
 
+from ocio_vp.choices import WALL_ENCODINGS
 from ocio_vp.errors import InputError
 from ocio_vp.patterns.sequence import FILE_FORMATS, Patch, PatternSequence
-from ocio_vp.wall.encoding import WALL_ENCODINGS, decode, encode
+from ocio_vp.wall.encoding import decode, encode
 from ocio_vp.wall.linearity import CHANNELS
 
 __all__ = [
@@ -109,6 +110,11 @@ class PatternOptions:
     @property
     def max_code(self) -> int:
         return 2 ** FILE_FORMATS[self.file_format] - 1
+
+
+def _triple(values: np.ndarray) -> tuple[float, float, float]:
+    r, g, b = (float(v) for v in values)
+    return r, g, b
 
 
 def flash_frames(fps: float) -> int:
@@ -232,8 +238,8 @@ class SequenceBuilder:
                 kind=kind,
                 first=first,
                 last=last,
-                drive=tuple(float(v) for v in shown),
-                signal=tuple(float(v) for v in signal),
+                drive=_triple(shown),
+                signal=_triple(signal),
                 **extra,
             )
         )

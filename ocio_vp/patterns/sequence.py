@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from ocio_vp.choices import WALL_ENCODINGS
 from ocio_vp.formats.measurements import CHANNELS, Validator, read_document
-from ocio_vp.wall.encoding import WALL_ENCODINGS
 
 __all__ = [
     "FILE_FORMATS",
@@ -246,7 +246,8 @@ def _validation(ctx: Validator, raw: Any) -> Validation:
 def _checked_patches(ctx: Validator, raw: Any, first_frame: int) -> tuple[Patch, ...]:
     if not isinstance(raw, list) or not raw:
         raise ctx.error(("patches",), "expected a non-empty list of patches")
-    patches, names = [], set()
+    patches: list[Patch] = []
+    names: set[str] = set()
     for i, entry in enumerate(raw):
         patch = _patch(ctx, entry, i, patches[-1].last if patches else first_frame - 1)
         if patch.name in names:

@@ -30,7 +30,7 @@ from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import Solution, load_solution
 from ocio_vp.patterns.design import PatternOptions, SequenceBuilder
 from ocio_vp.patterns.sequence import PatternSequence, Validation
-from ocio_vp.wall.encoding import decode
+from ocio_vp.wall.encoding import WallEncoding
 
 __all__ = ["WHITE_DRIVE", "content_scale", "validation_sequence", "wall_encoding_of", "wall_signal"]
 
@@ -41,10 +41,8 @@ WHITE_DRIVE = 0.7
 
 def wall_encoding_of(solution: Solution) -> tuple[str, float | None]:
     """(encoding, peak_nits or None) the solve's config sends to the wall."""
-    block = (solution.linearity or {}).get("wall_encoding") or {"name": "linear"}
-    name = str(block.get("name", "linear"))
-    peak = block.get("peak_nits")
-    return name, (float(peak) if name == "pq" and peak is not None else None)
+    encoding = WallEncoding.of(solution.linearity)
+    return encoding.name, encoding.peak_nits
 
 
 def wall_signal(config_path: str | Path, solution: Solution, content: np.ndarray) -> np.ndarray:
@@ -68,7 +66,7 @@ def wall_signal(config_path: str | Path, solution: Solution, content: np.ndarray
 def content_scale(solution: Solution, target: np.ndarray) -> float:
     """The factor (4 significant digits) that puts the target's white patch at
     :data:`WHITE_DRIVE` through the in-frustum matrix (N, or M where N was not solved)."""
-    white = int(solution.diagnostics.get("white_patch") or 18)
+    white = solution.diagnostics.white_patch
     white = white if 0 <= white < len(target) else int(np.argmax(target.sum(axis=1)))
     peak = float(np.max(solution.in_frustum_matrix @ target[white]))
     if not peak > 0:
@@ -91,8 +89,8 @@ def validation_sequence(environment_dir: str | Path, options: PatternOptions) ->
     folder = Path(environment_dir)
     solution = load_solution(folder)
     source = folder / "solution.json"
-    charts = solution.diagnostics.get("charts") or {}
-    target = np.asarray(charts.get("target") or [], dtype=np.float64)
+    charts = solution.diagnostics.charts
+    target = np.zeros((0,)) if charts is None else charts.target
     if target.ndim != 2 or target.shape[1:] != (3,) or not np.all(np.isfinite(target)):
         raise InputError("no target chart in diagnostics.charts.target", source=source)
     encoding, peak = wall_encoding_of(solution)
@@ -109,7 +107,7 @@ def validation_sequence(environment_dir: str | Path, options: PatternOptions) ->
     scale = content_scale(solution, target)
     target = target * scale
     signals = wall_signal(config, solution, np.vstack([np.zeros((1, 3)), target]))
-    drives = signals if encoding == "linear" else decode(signals, encoding, peak_nits=peak or 1e3)
+    drives = WallEncoding.of(solution.linearity).decode(signals)
     if not np.all(np.isfinite(drives)):
         raise InputError("the config sends a non-finite drive for the chart", source=config)
     builder = SequenceBuilder(options)

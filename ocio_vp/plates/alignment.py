@@ -377,9 +377,9 @@ def align_take(
     offset, rate, agree = _place(marks, source)
     T_list, r_list, trusted = [], [], []
     for k in agree:
-        _, T, t = marks[k]
-        T_list.append(float(np.mean(T)))
-        r_list.append(float(np.mean(t - offset - rate * T)))
+        _, mark_frames, mark_times = marks[k]
+        T_list.append(float(np.mean(mark_frames)))
+        r_list.append(float(np.mean(mark_times - offset - rate * mark_frames)))
         trusted.append(True)
     mark_T, mark_r = np.array(T_list), np.array(r_list)
     order = np.argsort(mark_T)

@@ -290,7 +290,7 @@ def capture_from_dict(
             lit_chart = {
                 c: _chart(ctx, lit[c], ("lit_chart", c), where, f"lit_{c}") for c in CHANNELS
             }
-    environments = ()
+    environments: tuple[EnvironmentCapture, ...] = ()
     if "environments" in top:
         environments = _environments(ctx, top["environments"], where, panels)
     return Capture(
@@ -370,7 +370,7 @@ def _panels(ctx: Validator, value: Any, where: _Where) -> tuple[PanelCapture, ..
     measurements file is built from them, under the same key paths)."""
     if not isinstance(value, list) or not value:
         raise ctx.error(("panels",), "expected a non-empty list of panel types")
-    panels = []
+    panels: list[PanelCapture] = []
     for i, raw in enumerate(value):
         key: tuple[str | int, ...] = ("panels", i)
         entry = ctx.mapping(raw, key, ("name", "in_frustum", "primaries", "lit_chart"),

@@ -68,7 +68,7 @@ def _size(frame: object, encoding: str | None) -> Box:
     if isinstance(frame, (str, os.PathLike, PlateInfo)):
         info = frame if isinstance(frame, PlateInfo) else open_plate(frame, encoding=encoding)
         return info.box
-    shape = np.shape(frame)
+    shape = np.shape(np.asarray(frame))
     return (0, 0, int(shape[1]), int(shape[0]))
 
 

@@ -225,7 +225,8 @@ def take_sections(reading: TakeReading) -> dict[str, Any]:
     ramps: dict[str, Any] = {}
     for k, channel in enumerate(CHANNELS):
         steps = sorted(
-            (p for p in sequence.of_kind("ramp") if p.channel == channel), key=lambda p: p.step
+            (p for p in sequence.of_kind("ramp") if p.channel == channel),
+            key=lambda p: -1 if p.step is None else p.step,  # every ramp patch has its step
         )
         if steps:
             ramps[channel] = {

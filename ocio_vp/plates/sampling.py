@@ -189,7 +189,7 @@ def _plate_box(frame: object, encoding: str | None) -> tuple[int, int, int, int]
         return frame.box
     if isinstance(frame, (str, os.PathLike)):
         return open_plate(frame, encoding=encoding).box
-    shape = np.shape(frame)
+    shape = np.shape(np.asarray(frame))
     return (0, 0, int(shape[1]), int(shape[0]))
 
 

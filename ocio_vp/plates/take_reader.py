@@ -140,7 +140,7 @@ def band_rows(
     height = max(_MIN_BAND, chunk)
     if bands * height >= y1 - y0:
         return [(y0, y1)]
-    out = []
+    out: list[tuple[int, int]] = []
     for centre in np.linspace(y0 + height / 2, y1 - height / 2, bands):
         start = int(info.y + (int(centre - height / 2) - info.y) // chunk * chunk)
         start = min(max(start, y0), y1 - height)

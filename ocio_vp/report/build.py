@@ -28,9 +28,16 @@ import numpy as np
 from ocio_vp.calibration.equations import condition_number, condition_text
 from ocio_vp.calibration.headroom import content_scale
 from ocio_vp.errors import InputError
+from ocio_vp.formats.diagnostics import lowest_channel_words
 from ocio_vp.formats.provenance import solution_sha256
 from ocio_vp.formats.solution import Solution
 from ocio_vp.formats.solution_inputs import solution_folders
+from ocio_vp.model.correction import (
+    PostCorrection,
+    ProtectedCorrection,
+    RootPolynomialCorrection,
+    unprotected,
+)
 from ocio_vp.model.expansion import root_polynomial_terms
 from ocio_vp.report.data import (
     STAGE_CHARTS,
@@ -198,19 +205,19 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
     facts = [
         ("stage", s.stage),
         ("Q method", _method(s)),
-        ("why this model", d.get("model_reason") or "the method asked for"),
+        ("why this model", d.model_reason or "the method asked for"),
         ("beyond the chart", _beyond_the_chart(s)),
         ("beta (panel form factor)", f"{s.beta:.5f}"),
         ("w_avg (camera RGB)", ", ".join(f"{v:.5g}" for v in s.w_avg)),
-        ("out-of-frustum drive M w_avg", _triple(d.get("out_of_frustum_drive"))),
-        ("N", "solved" if s.N is not None else f"not solved: {d.get('N_reason')}"),
+        ("out-of-frustum drive M w_avg", _triple(d.out_of_frustum_drive)),
+        ("N", "solved" if s.N is not None else f"not solved: {d.N_reason}"),
         (
             "black level offset",
             "none (no black-level measurement)"
             if s.black_level_offset is None
             else f"{_triple(s.black_level_offset)} ({s.black_level_method})",
         ),
-        ("rank Q", d.get("rank_Q")),
+        ("rank Q", d.rank_Q),
         ("camera colour space", s.camera_colorspace or "camera native (as measured)"),
         ("measurements", f"{s.measurements_file} (sha256 {str(s.measurements_sha256)[:12]}…)"),
         ("solution file", Path(*Path(data.path).parts[-2:]).as_posix()),  # no absolute paths
@@ -222,7 +229,7 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
     facts += panel_facts(s)  # a stage of several panel types
     facts += skin_facts(s)
     facts += _soft_clip_facts(s)
-    notes = d.get("method_notes") or {}
+    notes = d.method_notes or {}
     rows = []
     for chart in STAGE_CHARTS:
         rows.append(
@@ -241,18 +248,20 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
         "matrices": matrices,
         "facts": facts,
         "notes": sorted((str(k), _short(v)) for k, v in notes.items()),
-        "warnings": [str(w) for w in d.get("warnings", [])],
+        "warnings": [str(w) for w in d.warnings],
         "errors": rows,
         "transform": data.transform.description,
         "linearity": _linearity_facts(s.linearity),
     }
 
 
-def _soft_clip_facts(solution: Any) -> list[tuple[str, str]]:
+def _soft_clip_facts(solution: Solution) -> list[tuple[str, str]]:
     """The wall's soft clip (solve --soft-clip) and what content it starts at; none when off."""
     if soft_clip_knee(solution.linearity) is None:
         return []
     scale = content_scale(solution)
+    if scale.soft_clip is None:
+        return []
     return [
         (
             "wall soft clip",
@@ -263,11 +272,11 @@ def _soft_clip_facts(solution: Any) -> list[tuple[str, str]]:
     ]
 
 
-def _fixture_facts(solution: Any) -> list[tuple[str, str]]:
+def _fixture_facts(solution: Solution) -> list[tuple[str, str]]:
     """Practical fixtures: each one's drives, and what they did to the error Q cannot remove."""
     if not solution.fixtures:
         return []
-    notes = solution.diagnostics.get("fixtures") or {}
+    notes = solution.diagnostics.fixtures
     facts = [
         (
             f"fixture {name}",
@@ -276,22 +285,22 @@ def _fixture_facts(solution: Any) -> list[tuple[str, str]]:
         )
         for name, block in solution.fixtures.items()
     ]
-    if notes.get("applied"):
-        limits = ", ".join(notes.get("active_limits", [])) or "none"
+    if notes is not None and notes.applied:
+        limits = ", ".join(notes.active_limits) or "none"
         change = (
-            f"{notes['error_wall_only']:.3g} with the wall alone -> {notes['error_with_fixtures']:.3g} "
-            f"with the fixtures ({100 * notes['error_reduction']:.0f}% lower); active limits: {limits}"
+            f"{notes.error_wall_only:.3g} with the wall alone -> {notes.error_with_fixtures:.3g} "
+            f"with the fixtures ({100 * notes.error_reduction:.0f}% lower); active limits: {limits}"
         )
     else:
-        change = f"fixtures off: {notes.get('reason', 'not solved')}"
+        change = f"fixtures off: {'not solved' if notes is None else notes.reason}"
     return [*facts, ("error Q cannot remove (eq. 5 residual)", change)]
 
 
-def _method(solution: Any) -> str:
+def _method(solution: Solution) -> str:
     """The Q method, the model an automatic method chose, and the post-correction in words."""
-    model = solution.diagnostics.get("model")
+    model = solution.model
     text = solution.method
-    if isinstance(model, str) and model != solution.method:
+    if model != solution.method:
         text = f"{solution.method} → {model}"
     return f"{text} ({solution.correction.describe()})"
 
@@ -302,40 +311,31 @@ def _share(value: Any, sign: str = "") -> str:
     return f"{number:{sign}.0%}" if np.isfinite(number) else f"{number:{sign}}"
 
 
-def _lowest_channel(value: Any) -> str:
-    """The probe's lowest channel; null (or "-inf" in older files): the dominant output at or
-    below zero (as ocio_vp.correction.extrapolation.lowest_channel_words, without importing a
-    solver)."""
-    if value is None or not np.isfinite(float(value)):
-        return "the channel itself at or below zero"
-    return f"lowest channel {_share(value, '+')} of it"
-
-
-def _beyond_the_chart(solution: Any) -> str:
+def _beyond_the_chart(solution: Solution) -> str:
     """The extrapolation figures (docs/stability.md, *Beyond the chart*) and the emitter guard."""
-    figures = solution.diagnostics.get("extrapolation")
+    figures = solution.diagnostics.extrapolation
     text = "not measured (a solution written before these figures)"
-    if figures:
-        folds = figures.get("folds")
+    if figures is not None:
+        folds = figures.folds
         text = (
-            f"the wall's LEDs seen in frame: p95 ΔE2000 {float(figures['led_damage']):.3g} "
-            f"(least squares {float(figures['led_damage_least_squares']):.3g}); bright saturated "
-            f"inputs keep >= {_share(figures['kept'])} of their channel, "
-            f"{_lowest_channel(figures['negative'])}; "
+            f"the wall's LEDs seen in frame: p95 ΔE2000 {figures.led_damage:.3g} "
+            f"(least squares {figures.led_damage_least_squares:.3g}); bright saturated "
+            f"inputs keep >= {_share(figures.kept)} of their channel, "
+            f"{lowest_channel_words(figures.negative)}; "
             + ("no inverse" if folds is None else f"folds in {folds:.1%} of reflective colours")
         )
-    if solution.correction.kind == "protected":
+    if isinstance(solution.correction, ProtectedCorrection):
         text += f"; emitter guard: {solution.correction.protection()}"
     return text
 
 
-def _polynomial(correction: Any) -> Any:
+def _polynomial(correction: PostCorrection) -> RootPolynomialCorrection | None:
     """The root-polynomial inside a correction (protected or not), else None."""
-    inner = correction.inner if correction.kind == "protected" else correction
-    return inner if inner.kind == "root-polynomial" else None
+    inner = unprotected(correction)
+    return inner if isinstance(inner, RootPolynomialCorrection) else None
 
 
-def _q_rows(solution: Any) -> list[dict[str, Any]]:
+def _q_rows(solution: Solution) -> list[dict[str, Any]]:
     """Q's matrix; for a root-polynomial Q, its coefficients too (what the config's LUTs and
     ``ocio-vp apply`` use) and the matrix named as the model's 3x3 fallback."""
     polynomial = _polynomial(solution.correction)
@@ -392,10 +392,10 @@ def _summary(environments: Sequence[EnvironmentData]) -> list[dict[str, str]]:
                 "name": e.solution.environment,
                 "key": e.key,
                 "method": _method(e.solution),
-                "cond_q": "-" if d.get("cond_Q") is None else condition_text(float(d["cond_Q"])),
+                "cond_q": "-" if d.cond_Q is None else condition_text(d.cond_Q),
                 "n": "solved" if e.solution.N is not None else "not solved",
                 **{chart: _percent(e.errors[chart]) for chart in STAGE_CHARTS},
-                "warnings": str(len(d.get("warnings", []))),
+                "warnings": str(len(d.warnings)),
             }
         )
     return rows
@@ -549,6 +549,19 @@ def build_report(
 
 def _relocate(report: Report, staged: Path, final: Path) -> None:
     """Point the plot records at the published folder instead of the staging one."""
-    for plots in (report.error_bars, report.charts, report.delta_e, report.linearity):
-        for key, plot in plots.items():
-            plots[key] = dataclasses.replace(plot, path=final / plot.path.relative_to(staged))
+
+    def moved(path: Path) -> Path:
+        return final / path.relative_to(staged)
+
+    report.error_bars.update(
+        {k: dataclasses.replace(p, path=moved(p.path)) for k, p in report.error_bars.items()}
+    )
+    report.charts.update(
+        {k: dataclasses.replace(p, path=moved(p.path)) for k, p in report.charts.items()}
+    )
+    report.delta_e.update(
+        {k: dataclasses.replace(p, path=moved(p.path)) for k, p in report.delta_e.items()}
+    )
+    report.linearity.update(
+        {k: dataclasses.replace(p, path=moved(p.path)) for k, p in report.linearity.items()}
+    )

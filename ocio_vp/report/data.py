@@ -40,10 +40,12 @@ from pathlib import Path
 import numpy as np
 
 from ocio_vp.calibration.diagnostics import summary_errors
+from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.errors import InputError
+from ocio_vp.formats.diagnostics import Diagnostics
 from ocio_vp.formats.solution import Solution, load_solution
 from ocio_vp.formats.solution_inputs import solution_folders
-from ocio_vp.metrics import error_relative_to_white
+from ocio_vp.metrics import COLORCHECKER_NAMES, error_relative_to_white
 
 __all__ = [
     "CHART_KEYS",
@@ -78,13 +80,6 @@ STAGE_CHARTS = {
     "lit_corrected": "lit_chart_error",
     "displayed_baseline": "displayed_chart_error_baseline",
     "displayed_corrected": "displayed_chart_error",
-}
-#: The stage charts and their :func:`~ocio_vp.calibration.diagnostics.summary_errors` keys.
-SUMMARY_KEYS = {
-    "lit_baseline": "lit_baseline",
-    "lit_corrected": "lit",
-    "displayed_baseline": "shown_baseline",
-    "displayed_corrected": "shown",
 }
 COLORCHECKER = "ColorChecker24 - After November 2014"
 #: Display-linear value of the target white patch's largest channel.
@@ -140,33 +135,31 @@ def find_solutions(paths: Sequence[str | Path]) -> list[Path]:
 def _charts(solution: Solution, source: Path) -> dict[str, np.ndarray]:
     """The charts of ``diagnostics.charts``; the lit ones as the wall really lights them
     (``diagnostics.charts_clipped_drive``) where it clips a negative drive, like the figures."""
-    charts = solution.diagnostics.get("charts")
-    if not isinstance(charts, dict):
+    charts = solution.diagnostics.charts
+    if charts is None:
         raise InputError(
             "missing (re-run `ocio-vp solve`)", source=source, key="diagnostics.charts"
         )
-    out = {name: _chart(charts, name, source, "diagnostics.charts") for name in CHART_KEYS}
-    clipped = solution.diagnostics.get("charts_clipped_drive")
-    if isinstance(clipped, dict):
-        for name in ("lit_baseline", "lit_corrected"):
-            out[name] = _chart(clipped, name, source, "diagnostics.charts_clipped_drive")
+    out = {
+        "target": charts.target,
+        "lit_baseline": charts.lit_baseline,
+        "lit_corrected": charts.lit_corrected,
+        "displayed_baseline": charts.displayed_baseline,
+        "displayed_corrected": charts.displayed_corrected,
+    }
+    where = "diagnostics.charts"
+    clipped = solution.diagnostics.charts_clipped_drive
+    if clipped is not None:
+        out["lit_baseline"], out["lit_corrected"] = clipped.lit_baseline, clipped.lit_corrected
+    for name, array in out.items():
+        if array.ndim != 2 or array.shape[1] != 3 or not np.all(np.isfinite(array)):
+            raise InputError("expected a finite (n, 3) chart", source=source, key=f"{where}.{name}")
     n = out["target"].shape[0]
     for name, array in out.items():
         if array.shape[0] != n:
             key = f"diagnostics.charts.{name}"
             raise InputError(f"expected {n} patches, got {array.shape[0]}", source=source, key=key)
     return out
-
-
-def _chart(charts: dict, name: str, source: Path, where: str) -> np.ndarray:
-    key = f"{where}.{name}"
-    try:
-        array = np.asarray(charts.get(name), dtype=np.float64)
-    except (TypeError, ValueError):
-        raise InputError("expected a list of [r, g, b]", source=source, key=key) from None
-    if array.ndim != 2 or array.shape[1] != 3 or not np.all(np.isfinite(array)):
-        raise InputError("expected a finite (n, 3) chart", source=source, key=key)
-    return array
 
 
 def infer_white_patch(solution: Solution, charts: dict[str, np.ndarray]) -> int:
@@ -178,17 +171,17 @@ def infer_white_patch(solution: Solution, charts: dict[str, np.ndarray]) -> int:
     """
     d = solution.diagnostics
     n = charts["target"].shape[0]
-    if isinstance(d.get("white_patch"), int) and 0 <= d["white_patch"] < n:
-        return int(d["white_patch"])
-    stored = d.get("lit_chart_error_baseline")
+    if d.recorded("white_patch") and 0 <= d.white_patch < n:
+        return d.white_patch
+    stored = d.lit_chart_error_baseline
     if stored is not None and np.shape(stored) == (3,):
-        for index in [18, *range(n)] if n > 18 else range(n):
+        for index in [DEFAULT_WHITE_PATCH, *range(n)] if n > DEFAULT_WHITE_PATCH else range(n):
             if np.min(charts["target"][index]) <= 0:
                 continue
             redone = error_relative_to_white(charts["lit_baseline"], charts["target"], index)
             if np.allclose(redone, stored, rtol=1e-9, atol=1e-12):
                 return index
-    return 18 if n == 24 else int(np.argmax(charts["target"].sum(axis=1)))
+    return DEFAULT_WHITE_PATCH if n == 24 else int(np.argmax(charts["target"].sum(axis=1)))
 
 
 def colorchecker_srgb() -> np.ndarray:
@@ -201,13 +194,11 @@ def colorchecker_srgb() -> np.ndarray:
 
 
 def patch_names(n: int) -> list[str]:
-    """ColorChecker 24 patch names (reading order) for a 24-patch chart, else the indices."""
-    if n != 24:
-        return [str(j) for j in range(n)]
-    import colour
-
-    names = colour.CCS_COLOURCHECKERS[COLORCHECKER].data.keys()
-    return [f"{j} {name.split(' (')[0]}" for j, name in enumerate(names)]  # drop densities
+    """Axis labels: patches numbered from 1 (:func:`ocio_vp.metrics.patch_label`), with their
+    ColorChecker 24 names (densities dropped) on a 24-patch chart."""
+    if n != len(COLORCHECKER_NAMES):
+        return [str(j + 1) for j in range(n)]
+    return [f"{j + 1} {name.split(' (')[0]}" for j, name in enumerate(COLORCHECKER_NAMES)]
 
 
 def fit_display_matrix(target: np.ndarray) -> tuple[np.ndarray, float]:
@@ -369,15 +360,20 @@ def itp_defined(chart: np.ndarray, camera_to_xyz: np.ndarray) -> np.ndarray:
 
 
 def _errors(
-    diagnostics: dict, charts: dict[str, np.ndarray], white_patch: int
+    diagnostics: Diagnostics, charts: dict[str, np.ndarray], white_patch: int
 ) -> dict[str, np.ndarray]:
     """The solve's Fig. 11 errors, the figures ``solve`` and ``demo`` print
     (:func:`ocio_vp.calibration.diagnostics.summary_errors`); recomputed from the charts only
     if an old file lacks them."""
     figures = summary_errors(diagnostics)
+    stored_by_chart = {
+        "lit_baseline": figures.lit_baseline,
+        "lit_corrected": figures.lit,
+        "displayed_baseline": figures.shown_baseline,
+        "displayed_corrected": figures.shown,
+    }
     out = {}
-    for chart, key in SUMMARY_KEYS.items():
-        stored = figures[key]
+    for chart, stored in stored_by_chart.items():
         if stored is not None and np.shape(stored) == (3,):
             out[chart] = stored
         else:

@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from ocio_vp.formats.solution import Solution
+
 __all__ = ["panel_facts"]
 
 
@@ -19,11 +21,11 @@ def _percent(values: Any) -> str:
     return " / ".join(f"{100 * v:.1f}%" for v in np.asarray(values, dtype=np.float64).ravel())
 
 
-def panel_facts(solution: Any) -> list[tuple[str, str]]:
+def panel_facts(solution: Solution) -> list[tuple[str, str]]:
     """(label, text) rows for the report's facts table; none for a stage of one panel type."""
     if not solution.panels:
         return []
-    notes = solution.diagnostics.get("panels") or {}
+    notes = solution.diagnostics.panels
     facts = []
     for name, panel in solution.panels.items():
         where = "in frustum" if panel.in_frustum else "out of frustum only"
@@ -41,23 +43,25 @@ def panel_facts(solution: Any) -> list[tuple[str, str]]:
                 + (f"; colour spaces: {spaces}" if spaces else ""),
             )
         )
-    if notes.get("lit_white_error") is not None:
-        facts.append(
-            (
-                "lit white vs target, before Q (R / G / B)",
-                f"{_percent(notes['lit_white_error'])} with each panel type's own M; "
-                f"{_percent(notes['lit_white_error_primary_M'])} with every type driven by "
-                f"{notes.get('primary')}'s M (a calibration of {notes.get('primary')} alone)",
-            )
+    if notes is None:
+        return facts
+    facts.append(
+        (
+            "lit white vs target, before Q (R / G / B)",
+            f"{_percent(notes.lit_white_error)} with each panel type's own M; "
+            f"{_percent(notes.lit_white_error_primary_M)} with every type driven by "
+            f"{notes.primary}'s M (a calibration of {notes.primary} alone)",
         )
-    match = notes.get("in_frustum_match")
-    for name, block in ((match or {}).get("types") or {}).items():
-        lost = block.get("unreachable") or []
+    )
+    match = notes.in_frustum_match
+    reference, types = ("", {}) if match is None else (match.reference, match.types)
+    for name, block in types.items():
+        lost = block.unreachable
         facts.append(
             (
-                f"in camera, {name} vs {match['reference']}",
-                f"mean ΔE2000 {block['delta_E_2000_mean']:.2f}, max "
-                f"{block['delta_E_2000_max']:.2f} on the chart"
+                f"in camera, {name} vs {reference}",
+                f"mean ΔE2000 {block.delta_E_2000_mean:.2f}, max "
+                f"{block.delta_E_2000_max:.2f} on the chart"
                 + (f"; {name} cannot reach patches {lost}" if lost else ""),
             )
         )

@@ -17,13 +17,13 @@ relative to white; baseline solid, ours hatched).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
+from ocio_vp.formats.solution import Solution
 from ocio_vp.report.data import EnvironmentData, patch_names
 from ocio_vp.report.svg import Axes, Canvas, data_limits, hex_colours, num, subplot_boxes
 
@@ -47,7 +47,7 @@ PANELS = ("lit_baseline", "lit_corrected", "displayed_baseline", "displayed_corr
 SERIES = ("baseline", "corrected")
 
 
-def panel_titles(solution: Any) -> dict[str, str]:
+def panel_titles(solution: Solution) -> dict[str, str]:
     """Panel titles that say what "ours" is for this solution (N or black level may be absent)."""
     background = ["N" if solution.N is not None else "M (N not solved)"]
     if solution.black_level_offset is not None:
@@ -279,8 +279,8 @@ def plot_error_bars(
                 if top is not None and height > 100 * top:
                     cut.append((centre, height))
     canvas.close()
-    for centre, height in cut:  # clipped by the axis: print its value
-        _label_clipped(axes, centre, 100 * top, height)
+    for centre, height in cut:  # clipped by the axis (so ``top`` is set): print its value
+        _label_clipped(axes, centre, 100 * (top or 0.0), height)
     axes.frame()
     axes.xticks(x, names, rotate=20)
     axes.ylabel("mean |error| / target white (%)")
@@ -334,8 +334,8 @@ def _delta_e_panel(
                 data_patch=str(j),
                 **tags,
             )
-        for j in np.flatnonzero(np.isnan(values)):  # no bar: mark it so it is not read as 0
-            x, y = float(axes.x(j + shift)), float(axes.y(0.0))
+        for missing in np.flatnonzero(np.isnan(values)):  # no bar: mark it, not read as 0
+            x, y = float(axes.x(missing + shift)), float(axes.y(0.0))
             d = (
                 f"M{num(x - 3)},{num(y - 3)}L{num(x + 3)},{num(y + 3)}"
                 f"M{num(x - 3)},{num(y + 3)}L{num(x + 3)},{num(y - 3)}"
@@ -346,7 +346,7 @@ def _delta_e_panel(
                 stroke="#c0392b",
                 stroke_width=1.0,
                 class_="undefined",
-                data_patch=str(j),
+                data_patch=str(missing),
                 **tags,
             )
     axes.frame()
@@ -405,7 +405,7 @@ def _curve(axes: Axes, x: np.ndarray, y: np.ndarray, label: str, style: dict) ->
 
 
 def plot_linearity(
-    curves: dict[str, tuple[Sequence[float], Sequence[float]]],
+    curves: Mapping[str, tuple[Sequence[float] | np.ndarray, Sequence[float] | np.ndarray]],
     path: Path,
     *,
     title: str = "Panel linearity",

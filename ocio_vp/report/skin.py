@@ -24,7 +24,7 @@ def _pair(expected: float, least_squares: float) -> str:
 def skin_panel(solutions: Sequence[Any]) -> dict[str, Any] | None:
     """``{"bands": [...], "rows": [{"name", "key", "cells": [...], "all": str}]}`` for the
     template, bands lightest first; None when no solve has skin figures."""
-    figures = [(s, s.diagnostics.get("skin")) for s in solutions]
+    figures = [(s, s.diagnostics.skin) for s in solutions]
     figures = [(s, f) for s, f in figures if f is not None]
     if not figures:
         return None
@@ -51,7 +51,7 @@ def skin_panel(solutions: Sequence[Any]) -> dict[str, Any] | None:
 
 def skin_facts(solution: Any) -> list[tuple[str, str]]:
     """Per environment: the skin samples and, with skin first, the default's figures."""
-    f = solution.diagnostics.get("skin")
+    f = solution.diagnostics.skin
     if f is None:
         return []
     facts = [

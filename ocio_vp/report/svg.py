@@ -22,6 +22,7 @@ import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import overload
 
 import numpy as np
 
@@ -78,7 +79,7 @@ def escape(text: object) -> str:
     return str(text).translate(_ESCAPES)
 
 
-def num(value: float) -> str:
+def num(value: float | np.floating) -> str:
     """A coordinate rounded to 0.01, without trailing zeros (``-0`` written as ``0``).
 
     >>> num(1.0), num(2.345678), num(-0.001), num(10.5)
@@ -88,7 +89,7 @@ def num(value: float) -> str:
     return "0" if text in ("-0", "") else text
 
 
-def hex_colour(rgb: Sequence[float]) -> str:
+def hex_colour(rgb: Sequence[float] | np.ndarray) -> str:
     """``#rrggbb`` of sRGB-encoded values, clipped to [0, 1] and rounded to 8 bits.
 
     >>> hex_colour([1.0, 0.5, -0.2])
@@ -186,7 +187,7 @@ class Canvas:
         self._defs: dict[str, str] = {}
         self._parts: list[str] = []
 
-    def element(self, tag: str, text: str | None = None, **attributes: object) -> None:
+    def element(self, tag: str, text: str | None = None, /, **attributes: object) -> None:
         """``<tag attributes/>`` or with escaped ``text`` content."""
         attrs = _attrs(attributes)
         if text is None:
@@ -360,12 +361,20 @@ class Axes:
     ylim: tuple[float, float]
     name: str = "axes"
 
+    @overload
+    def x(self, value: float) -> float: ...
+    @overload
+    def x(self, value: Sequence[float] | np.ndarray) -> np.ndarray: ...
     def x(self, value: float | Sequence[float] | np.ndarray) -> float | np.ndarray:
         """Canvas x of data ``value`` (a number, or an array of them)."""
         x0, _, w, _ = self.box
         value = value if isinstance(value, float | int) else np.asarray(value, dtype=np.float64)
         return x0 + (value - self.xlim[0]) * w / (self.xlim[1] - self.xlim[0])
 
+    @overload
+    def y(self, value: float) -> float: ...
+    @overload
+    def y(self, value: Sequence[float] | np.ndarray) -> np.ndarray: ...
     def y(self, value: float | Sequence[float] | np.ndarray) -> float | np.ndarray:
         """Canvas y of data ``value``; SVG's y grows downwards."""
         _, y0, _, h = self.box
@@ -397,7 +406,7 @@ class Axes:
 
     def xticks(
         self,
-        values: Sequence[float] | None = None,
+        values: Sequence[float] | np.ndarray | None = None,
         labels: Sequence[str] | None = None,
         *,
         grid: bool = False,

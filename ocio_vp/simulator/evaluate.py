@@ -59,15 +59,15 @@ def evaluate_solution(stage: SpectralStage, solution, environment=None) -> Evalu
     baseline = predict_stage(stage, env, M=solution.M)
     white = stage.white_patch
     spec = ENVIRONMENTS.get(solution.environment) if isinstance(env, str) else None
-    model = solution.diagnostics.get("model")
-    method = solution.method if model in (None, solution.method) else f"{solution.method}: {model}"
+    model = solution.model
+    method = solution.method if model == solution.method else f"{solution.method}: {model}"
     return Evaluation(
         environment=solution.environment,
         broadband=None if spec is None else spec.broadband,
         method=method,
-        cond_Q=float(solution.diagnostics.get("cond_Q", np.nan)),
+        cond_Q=np.nan if solution.diagnostics.cond_Q is None else solution.diagnostics.cond_Q,
         N_solved=solution.N is not None,
-        N_reason=solution.diagnostics.get("N_reason"),
+        N_reason=solution.diagnostics.N_reason,
         lit_baseline=error_relative_to_white(baseline.lit, ours.target, white),
         lit=error_relative_to_white(ours.lit_corrected, ours.target, white),
         displayed_baseline=error_relative_to_white(baseline.displayed, ours.target, white),
@@ -142,27 +142,17 @@ def noise_study(
         if N_noisy is None:
             changes.append(np.inf)
             continue
-        changes.append(np.linalg.norm(N_noisy - N) / np.linalg.norm(N))
-    changes = np.array(changes)
+        changes.append(float(np.linalg.norm(N_noisy - N) / np.linalg.norm(N)))
+    relative = np.array(changes)
     return NoiseStudy(
         environment=environment,
         noise=noise,
         trials=trials,
         cond_Q=condition_number(Q),
-        median=float(np.median(changes)),
-        p95=float(np.percentile(changes, 95)),
-        maximum=float(np.max(changes)),
+        median=float(np.median(relative)),
+        p95=float(np.percentile(relative, 95)),
+        maximum=float(np.max(relative)),
     )
-
-
-#: :class:`Evaluation` fields and the :func:`~ocio_vp.calibration.diagnostics.summary_errors`
-#: keys that estimate the same thing from the measurements.
-SUMMARY_FIELDS = {
-    "lit_baseline": "lit_baseline",
-    "lit": "lit",
-    "displayed_baseline": "shown_baseline",
-    "displayed": "shown",
-}
 
 
 def agreement_with_spectra(stage: SpectralStage, solutions) -> tuple[float, str]:
@@ -178,8 +168,15 @@ def agreement_with_spectra(stage: SpectralStage, solutions) -> tuple[float, str]
     for solution in solutions:
         truth = evaluate_solution(stage, solution)
         figures = summary_errors(solution.diagnostics)
-        for field, key in SUMMARY_FIELDS.items():
-            gap = abs(float(np.mean(getattr(truth, field))) - float(np.mean(figures[key])))
+        # each spectral truth and the reported figure that estimates it from the measurements
+        pairs = {
+            "lit_baseline": (truth.lit_baseline, figures.lit_baseline),
+            "lit": (truth.lit, figures.lit),
+            "shown_baseline": (truth.displayed_baseline, figures.shown_baseline),
+            "shown": (truth.displayed, figures.shown),
+        }
+        for key, (spectral, reported) in pairs.items():
+            gap = abs(float(np.mean(spectral)) - float(np.mean(np.asarray(reported))))
             if gap >= worst:
                 worst, where = gap, f"{solution.environment} {key}"
     return worst, where

@@ -29,6 +29,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from ocio_vp.metrics import camera_delta_E_2000
 from ocio_vp.simulator.stage import SpectralStage, camera_rgb, environment_spectrum
 from ocio_vp.spectra import align, spectral_shape, wavelengths
 
@@ -81,8 +82,8 @@ def emitter_spectra(
     (1.0, (1, 81))
     """
     grid = wavelengths()
-    peaks = np.asarray(peaks, dtype=np.float64)[:, None]
-    return np.exp(-4.0 * np.log(2.0) * (grid[None, :] - peaks) ** 2 / float(fwhm) ** 2)
+    centres = np.asarray(peaks, dtype=np.float64)[:, None]
+    return np.exp(-4.0 * np.log(2.0) * (grid[None, :] - centres) ** 2 / float(fwhm) ** 2)
 
 
 def emitters_in_scene(
@@ -115,19 +116,13 @@ def emitter_errors(
     ``x`` (default :func:`emitters_in_scene`), through ``camera_to_xyz`` with the scene's
     white (a perfect diffuser under the real light) at Y = 1 as the reference white, as
     :func:`~ocio_vp.simulator.truth.held_out_errors` judges reflectances."""
-    import colour
-
     spectra = emitters_in_scene(stage, environment) if emitters is None else emitters
     x = camera_rgb(stage, spectra)
     white = camera_rgb(stage, environment_spectrum(stage, environment))
     corrected = np.asarray(correct(x), dtype=np.float64)
-    matrix = np.asarray(camera_to_xyz, dtype=np.float64)
-    white_xyz = white @ matrix.T
-    scale = 1.0 / white_xyz[1]  # the scene's white at Y = 1, as chart_errors normalises
-    white_xy = colour.XYZ_to_xy(white_xyz * scale)
-    lab_x = colour.XYZ_to_Lab(x @ matrix.T * scale, white_xy)
-    lab_q = colour.XYZ_to_Lab(corrected @ matrix.T * scale, white_xy)
-    return np.asarray(colour.delta_E(lab_x, lab_q, method="CIE 2000")), corrected
+    # the scene's white at Y = 1, as chart_errors normalises
+    moved = camera_delta_E_2000(x, corrected, camera_to_xyz=camera_to_xyz, white=white)
+    return moved, corrected
 
 
 def optimal_reflectances(edges: Sequence[float] = OPTIMAL_EDGES) -> np.ndarray:

@@ -39,7 +39,7 @@ def read_spectra_csv(path: str | Path, *, columns: int) -> np.ndarray:
         text = read_bounded(path).decode("utf-8")
     except UnicodeDecodeError:
         raise InputError("not a UTF-8 text file", source=source) from None
-    rows = []
+    rows: list[list[float]] = []
     for number, line in enumerate(text.splitlines(), start=1):
         fields = [f.strip() for f in line.replace(";", ",").split(",") if f.strip()]
         if not fields or fields[0].startswith("#"):

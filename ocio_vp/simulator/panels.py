@@ -365,7 +365,7 @@ def wall_only_measurements(measurements: Measurements) -> Measurements:
         Environment(
             name=e.name,
             target_chart=e.target_chart,
-            w_avg=None if e.panel_w_avg is None else sum(e.panel_w_avg.values()),
+            w_avg=None if e.panel_w_avg is None else sum(e.panel_w_avg.values(), np.zeros(3)),
             black_level=(e.panel_black_level or {}).get(first.name),
         )
         for e in measurements.environments

@@ -18,10 +18,12 @@ from __future__ import annotations
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypedDict
 
 import numpy as np
 from numpy.typing import ArrayLike
+
+from ocio_vp.formats.measurements import Measurements
 
 __all__ = [
     "CHART_CORNERS",
@@ -223,7 +225,7 @@ def _grid(patches: int) -> tuple[int, int]:
     return (4, 6) if patches == 24 else (1, patches)
 
 
-def _plates(measurements: Any, options: PlateOptions) -> Iterator[tuple[str, np.ndarray]]:
+def _plates(measurements: Measurements, options: PlateOptions) -> Iterator[tuple[str, np.ndarray]]:
     """(file name, image) of every plate, in a fixed order (seeds depend on the position)."""
     from ocio_vp.calibration.equations import predict_lit_chart, solve_M
     from ocio_vp.calibration.geometry import stage_beta
@@ -263,7 +265,16 @@ def _plates(measurements: Any, options: PlateOptions) -> Iterator[tuple[str, np.
             yield f"footage/{env.name}.{frame:04d}.exr", image
 
 
-def _sensor_options(options: PlateOptions) -> dict[str, float]:
+class _Sensor(TypedDict):
+    """The sensor's fall-off and noise, as :func:`render_regions` and :func:`render_chart`
+    take them."""
+
+    vignetting: float
+    noise: float
+    read_noise: float
+
+
+def _sensor_options(options: PlateOptions) -> _Sensor:
     """The sensor's fall-off and noise as :func:`render_regions` takes them."""
     return {
         "vignetting": options.vignetting,
@@ -280,7 +291,9 @@ def _flat_fields(options: PlateOptions, seed: Iterator[int]) -> Iterator[tuple[s
         yield f"flat.{i + 1:04d}.exr", flat
 
 
-def _panel_plates(measurements: Any, options: PlateOptions) -> Iterator[tuple[str, np.ndarray]]:
+def _panel_plates(
+    measurements: Measurements, options: PlateOptions
+) -> Iterator[tuple[str, np.ndarray]]:
     """:func:`_plates` of a stage of several panel types: each type's primaries and lit
     charts (``<type>_primary_<channel>.exr``, ``<type>_lit_<channel>.exr``), each in-frustum
     type's black level per environment, and footage lit by every type through its own M."""
@@ -320,7 +333,7 @@ def _panel_plates(measurements: Any, options: PlateOptions) -> Iterator[tuple[st
             yield f"footage/{env.name}.{frame:04d}.exr", image
 
 
-def _panel_capture(measurements: Any, names: set[str]) -> dict:
+def _panel_capture(measurements: Measurements, names: set[str]) -> dict:
     """The ``panels`` list and ``environments`` of a capture document (paths relative)."""
     from ocio_vp.formats.panels import panel_values_to_dict, panels_to_dict
 
@@ -356,7 +369,10 @@ def _panel_capture(measurements: Any, names: set[str]) -> dict:
 
 
 def _capture_document(
-    measurements: Any, names: set[str], options: PlateOptions, sequence_ref: str | None = None
+    measurements: Measurements,
+    names: set[str],
+    options: PlateOptions,
+    sequence_ref: str | None = None,
 ) -> dict:
     """The ``ocio-vp/capture`` document pointing at the plates (paths relative to it)."""
     from ocio_vp.formats.measurements import measurements_to_dict
@@ -401,7 +417,7 @@ def _capture_document(
 
 
 def write_capture(
-    measurements: Any,
+    measurements: Measurements,
     folder: str | Path,
     options: PlateOptions = PlateOptions(),
     *,
@@ -483,7 +499,7 @@ def _film_patterns(measurements, folder: Path, options: PlateOptions, sequence, 
 
 
 def plate_count(
-    measurements: Any, options: PlateOptions = PlateOptions(), sequence: Any = None
+    measurements: Measurements, options: PlateOptions = PlateOptions(), sequence: Any = None
 ) -> int:
     """How many plates (and take frames) :func:`write_capture` writes (for a progress bar)."""
     if measurements.panels:

@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.calibration.equations import in_frustum_drive, predict_displayed_chart, solve_M
+from ocio_vp.formats.solution import Solution
 from ocio_vp.simulator.stage import (
     SpectralStage,
     black_level_reading,
@@ -94,7 +95,7 @@ def predict_stage(
     )
 
 
-def predict_solution(stage: SpectralStage, environment: Any, solution: Any) -> StagePrediction:
+def predict_solution(stage: SpectralStage, environment: Any, solution: Solution) -> StagePrediction:
     """:func:`predict_stage` for a solved :class:`~ocio_vp.formats.solution.Solution`.
 
     Uses its M (lighting), post-correction, in-frustum matrix (N, or M where N was not solved,

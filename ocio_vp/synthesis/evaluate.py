@@ -112,6 +112,7 @@ def study_environment(
     if held_out is None:
         held_out = held_out_reflectances(stage.chart_name)["rawtoaces"]
     to_xyz = camera_to_xyz_matrix(stage.camera)
+    assert env.w_avg is not None  # the simulator measures it
     chart = chart_errors(synthesize(env.w_avg), env.target_chart, camera_to_xyz=to_xyz)
     rows = np.array(
         [

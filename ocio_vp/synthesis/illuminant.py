@@ -234,7 +234,7 @@ def given_illuminant(
     scaled = spectrum * w_avg[1] / rgb[1]
     cct, duv = cct_duv(camera.to_xyz @ w_avg)
     ratios = (camera.render(scaled) / np.where(w_avg > 0, w_avg, np.inf))[[0, 2]]
-    warnings = ()
+    warnings: tuple[str, ...] = ()
     if np.any(np.abs(ratios - 1.0) > 0.02):
         warnings = (
             "the given spectrum's colour differs from w_avg's (camera R/G, B/G off by "

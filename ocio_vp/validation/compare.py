@@ -139,20 +139,19 @@ class ValidationResult:
 
 
 def _names(n: int) -> list[str]:
-    from ocio_vp.correction.outliers import patch_name
+    from ocio_vp.metrics import patch_label
 
-    return [patch_name(j, n) for j in range(n)]
+    return [patch_label(j, n) for j in range(n)]
 
 
 def _predicted_mean(solution: Solution, xyz: np.ndarray, white: int) -> float | None:
     """Mean ΔE2000 the solve itself predicts for the chart shown in-frustum (its model)."""
     from ocio_vp.metrics import chart_errors
 
-    charts = solution.diagnostics.get("charts") or {}
-    if "displayed_corrected" not in charts or "target" not in charts:
+    charts = solution.diagnostics.charts
+    if charts is None:
         return None
-    shown = np.asarray(charts["displayed_corrected"], dtype=np.float64)
-    target = np.asarray(charts["target"], dtype=np.float64)
+    shown, target = charts.displayed_corrected, charts.target
     if shown.shape != target.shape:
         return None
     return float(
@@ -186,7 +185,7 @@ def compare_take(
     intended = np.array([p.content for p in charts], dtype=np.float64)
     measured = np.array([reading.patches[p.name].mean for p in charts])
     corrected = post_correct(solution)(measured) if solution.N is not None else measured
-    white = int(solution.diagnostics.get("white_patch") or 18)
+    white = solution.diagnostics.white_patch
     white = white if 0 <= white < len(charts) else int(np.argmax(intended.sum(axis=1)))
     display = camera_to_display([solution], [intended])
     errors = chart_errors(

@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ocio_vp.choices import DEFAULT_PEAK_NITS, WALL_ENCODINGS
 from ocio_vp.wall.linearity import CHANNELS, inverse_response, response_model
 
 if TYPE_CHECKING:
@@ -51,6 +52,7 @@ __all__ = [
     "LUT_SIZE",
     "WALL_ENCODINGS",
     "LinearityLut",
+    "WallEncoding",
     "apply_lut",
     "check_encoding",
     "decode",
@@ -62,8 +64,6 @@ __all__ = [
     "with_wall_encoding",
 ]
 
-WALL_ENCODINGS = ("linear", "gamma2.4", "srgb", "pq")
-DEFAULT_PEAK_NITS = 1000.0
 #: LUT domain above drive 1.0 for a linear (float) wall signal: four stops of headroom.
 LINEAR_HEADROOM = 16.0
 #: Where the linear wall's log2 shaper turns from linear to logarithmic (fraction of drive 1.0).
@@ -168,6 +168,124 @@ def _unshape(t: np.ndarray, encoding: str, peak_nits: float) -> np.ndarray:
     return (np.exp2(np.asarray(t, dtype=np.float64) * scale) - 1.0) * LOG_SHAPER_KNEE
 
 
+#: OCIO's ``encoding`` attribute of the wall colorspaces, per wall signal (docs/linearity.md).
+_OCIO_ENCODINGS = {
+    "linear": "scene-linear",
+    "gamma2.4": "sdr-video",
+    "srgb": "sdr-video",
+    "pq": "hdr-video",
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class WallEncoding:
+    """The signal the wall receives: its ``name`` (one of :data:`WALL_ENCODINGS`) and, for PQ,
+    the wall's ``peak_nits`` at drive 1.0 (None for the others).
+
+    One object for every step that needs the wall's signal: :meth:`encode`/:meth:`decode`
+    (numpy), :meth:`ocio_transforms` (the same curve in OpenColorIO), and the
+    ``linearity.wall_encoding`` block of ``solution.json`` (:meth:`to_dict`,
+    :meth:`from_dict`).
+
+    >>> WallEncoding("pq", 1000.0).signal_top
+    10.0
+    >>> WallEncoding.from_dict(None).linear
+    True
+    """
+
+    name: str = "linear"
+    peak_nits: float | None = None
+
+    def __post_init__(self) -> None:
+        peak = self.peak_nits
+        if self.name == "pq":
+            peak = DEFAULT_PEAK_NITS if peak is None else float(peak)
+            check_encoding(self.name, peak)
+        else:
+            check_encoding(self.name, DEFAULT_PEAK_NITS)
+            peak = None
+        object.__setattr__(self, "peak_nits", peak)
+
+    @classmethod
+    def from_dict(cls, block: Mapping[str, Any] | None) -> WallEncoding:
+        """The ``wall_encoding`` block (None or missing: a linear wall)."""
+        if not block:
+            return cls()
+        peak = block.get("peak_nits")
+        return cls(str(block.get("name", "linear")), None if peak is None else float(peak))
+
+    @classmethod
+    def of(cls, linearity: Mapping[str, Any] | None) -> WallEncoding:
+        """The encoding a ``linearity`` block records (a linear wall when it records none)."""
+        return cls.from_dict((linearity or {}).get("wall_encoding"))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"name": self.name} | (
+            {} if self.peak_nits is None else {"peak_nits": self.peak_nits}
+        )
+
+    @property
+    def linear(self) -> bool:
+        return self.name == "linear"
+
+    @property
+    def _peak(self) -> float:
+        return DEFAULT_PEAK_NITS if self.peak_nits is None else self.peak_nits
+
+    def encode(self, drive: np.ndarray) -> np.ndarray:
+        """Linear drive -> wall signal (:func:`encode`)."""
+        return encode(drive, self.name, peak_nits=self._peak)
+
+    def decode(self, signal: np.ndarray) -> np.ndarray:
+        """Wall signal -> linear drive (:func:`decode`)."""
+        return decode(signal, self.name, peak_nits=self._peak)
+
+    @property
+    def signal_top(self) -> float | None:
+        """The drive at which the signal reaches 1.0 (PQ: 10000 nits / peak); None for linear."""
+        if self.linear:
+            return None
+        return 10000.0 / self._peak if self.name == "pq" else 1.0
+
+    @property
+    def ocio_encoding(self) -> str:
+        """OCIO's ``encoding`` attribute of a colorspace carrying this signal."""
+        return _OCIO_ENCODINGS[self.name]
+
+    def ocio_transforms(self) -> list[Any]:
+        """Linear drive -> this signal as OpenColorIO transforms (none for linear)."""
+        import PyOpenColorIO as OCIO
+
+        if self.linear:
+            return []
+        inverse = OCIO.TRANSFORM_DIR_INVERSE
+        if self.name == "gamma2.4":
+            return [OCIO.ExponentTransform(value=[2.4, 2.4, 2.4, 1.0], direction=inverse)]
+        if self.name == "srgb":  # IEC 61966-2-1 as OCIO's moncurve (gamma 2.4, offset 0.055)
+            # the moncurve continues its linear part below 0: clamp first (negative is black)
+            return [
+                OCIO.RangeTransform(minInValue=0.0, minOutValue=0.0),
+                OCIO.ExponentWithLinearTransform(
+                    gamma=[2.4, 2.4, 2.4, 1.0], offset=[0.055, 0.055, 0.055, 0.0],
+                    direction=inverse,
+                ),
+            ]  # fmt: skip
+        scale = self._peak / 100.0  # the builtin takes linear nits/100
+        matrix = [scale, 0, 0, 0, 0, scale, 0, 0, 0, 0, scale, 0, 0, 0, 0, 1]
+        return [
+            OCIO.MatrixTransform(matrix=[float(v) for v in matrix]),
+            OCIO.BuiltinTransform(style="CURVE - LINEAR_to_ST-2084"),
+        ]
+
+    def describe(self) -> str:
+        """The wall's signal in words, for the terminal."""
+        if self.name == "pq":
+            return f"PQ (SMPTE ST 2084), drive 1.0 = {self._peak:g} cd/m2"
+        if self.linear:
+            return "linear drive (1.0 = the measured primaries' full drive)"
+        return f"{self.name} signal of the linear drive (1.0 = the measured primaries' full drive)"
+
+
 # --------------------------------------------------------------------------------------------
 # The LUT sidecar.
 
@@ -269,9 +387,7 @@ def with_wall_encoding(
     if encoding == "linear" and solution.linearity is None:
         return solution
     linearity = dict(solution.linearity or {"measured": False, "model": "linear (assumed)"})
-    linearity["wall_encoding"] = {"name": encoding}
-    if encoding == "pq":
-        linearity["wall_encoding"]["peak_nits"] = float(peak_nits)
+    linearity["wall_encoding"] = WallEncoding(encoding, peak_nits).to_dict()
     return dataclasses.replace(solution, linearity=linearity)
 
 
@@ -286,6 +402,6 @@ def _with_panel_encodings(solution: Solution, encoding: str, peak_nits: float) -
 
     panels = {
         name: dataclasses.replace(panel, linearity=encoded(panel.linearity))
-        for name, panel in solution.panels.items()
+        for name, panel in (solution.panels or {}).items()
     }
     return dataclasses.replace(solution, linearity=encoded(solution.linearity), panels=panels)

@@ -1,0 +1,461 @@
+"""``solution.json``'s ``diagnostics`` block as typed records (:mod:`ocio_vp.formats.records`).
+
+Every block a consumer reads is a small frozen dataclass with the same types after a solve and
+after a load; the package never looks a solve result up by string.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ocio_vp.choices import DEFAULT_WHITE_PATCH
+from ocio_vp.formats.records import Record, read_record, read_value
+from ocio_vp.formats.skin import SkinFigures
+from ocio_vp.model.footage_range import Agreement
+
+__all__ = [
+    "MIN_NEGATIVE",
+    "MIN_RETAINED",
+    "Charts",
+    "ClippedCharts",
+    "Diagnostics",
+    "DriveRange",
+    "Extrapolation",
+    "FixturesNotes",
+    "IdentityCheck",
+    "InFrustumMatch",
+    "Inconsistency",
+    "PanelsNotes",
+    "PostCorrectionOCIO",
+    "TypeMatch",
+    "lowest_channel_words",
+]
+
+#: A bright saturated input whose output keeps less than this share of its dominant channel
+#: has collapsed; one whose output has a channel below this times its dominant one has flipped.
+MIN_RETAINED = 0.25
+MIN_NEGATIVE = -0.5
+
+
+@dataclass(frozen=True)
+class Charts(Record):
+    """Per-patch (n, 3) camera RGB for the report: the target, the lit chart through M alone
+    and after Q, the chart shown in-frustum through M and through N, the offset and Q."""
+
+    target: np.ndarray
+    lit_baseline: np.ndarray
+    lit_corrected: np.ndarray
+    displayed_baseline: np.ndarray
+    displayed_corrected: np.ndarray
+
+
+@dataclass(frozen=True)
+class ClippedCharts(Record):
+    """The lit chart (n, 3) through M alone and after Q as the wall lights it when it clips a
+    negative drive."""
+
+    lit_baseline: np.ndarray
+    lit_corrected: np.ndarray
+
+
+@dataclass(frozen=True)
+class IdentityCheck(Record):
+    """``max_abs_error`` of eq. 7 (``Q [SL] N = I``) and its rounding ``bound``."""
+
+    max_abs_error: float
+    bound: float
+
+
+@dataclass(frozen=True)
+class DriveRange(Record):
+    """How many chart colours the in-frustum matrix drives outside [0, ``max_drive``]
+    (:func:`ocio_vp.calibration.diagnostics.in_frustum_drive_range`), and with M."""
+
+    below_zero: int
+    above_max: int
+    patches_outside: list[int]
+    max_drive: float
+    content_scale: float
+    below_zero_with_M: int | None = None
+    above_max_with_M: int | None = None
+
+    OMIT_NONE: ClassVar[tuple[str, ...]] = ("below_zero_with_M", "above_max_with_M")
+
+
+@dataclass(frozen=True)
+class Extrapolation(Record):
+    """What a solve measured of its post-correction beyond the chart
+    (:mod:`ocio_vp.correction.extrapolation`).
+
+    ``led_damage`` and ``led_damage_least_squares``: p95 ΔE2000 of the in-frame LEDs through
+    this correction and through the paper's least squares; ``kept`` and ``negative``: the
+    saturation probe; ``folds``: the fold fraction in the reflective solid (None: no inverse).
+    """
+
+    led_damage: float
+    led_damage_least_squares: float
+    kept: float
+    negative: float | None
+    folds: float | None
+
+    def __post_init__(self) -> None:
+        # The probe's -inf (a dominant output at or below zero: no share of it exists) is
+        # written as null, never as a non-finite number; ``kept`` <= 0 says the same.
+        if self.negative is not None and not np.isfinite(self.negative):
+            object.__setattr__(self, "negative", None)
+
+    @property
+    def flips_or_collapses(self) -> bool:
+        return self.kept < MIN_RETAINED or (self.negative or 0.0) < MIN_NEGATIVE
+
+    def describe(self) -> str:
+        return (
+            f"in-frame LEDs p95 ΔE2000 {self.led_damage:.3g} (least squares "
+            f"{self.led_damage_least_squares:.3g}); bright saturated inputs keep >= "
+            f"{self.kept:.0%} of their channel, {lowest_channel_words(self.negative)}; "
+            + ("rank-deficient" if self.folds is None else f"folds in {self.folds:.1%}")
+            + " of the reflective solid"
+        )
+
+
+def lowest_channel_words(negative: float | None) -> str:
+    """``'lowest channel -299% of it'`` (the saturation probe's second figure), or what an
+    undefined one (None, -inf: the dominant output at or below zero) means.
+
+    >>> lowest_channel_words(-2.99), lowest_channel_words(float("-inf"))
+    ('lowest channel -299% of it', 'the channel itself at or below zero')
+    """
+    if negative is None or not np.isfinite(negative):
+        return "the channel itself at or below zero"
+    return f"lowest channel {negative:+.0%} of it"
+
+
+@dataclass(frozen=True)
+class FixturesNotes(Record):
+    """The practical fixtures' drive solve (:func:`ocio_vp.fixtures.fixtures_diagnostics`)."""
+
+    applied: bool
+    reason: str
+    error_wall_only: float
+    error_with_fixtures: float
+    error_reduction: float
+    active_limits: list[str]
+    #: The limits the solve kept, described (numbers and sentences: a record for people).
+    limits: dict[str, Any]
+    wall_drive: np.ndarray
+    error_units: str
+
+
+@dataclass(frozen=True)
+class TypeMatch(Record):
+    """One in-frustum panel type against the reference type, in camera on the chart."""
+
+    delta_E_2000_mean: float
+    delta_E_2000_max: float
+    unreachable: list[int]
+    unreachable_on_reference: list[int]
+
+
+@dataclass(frozen=True)
+class InFrustumMatch(Record):
+    """How the in-frustum types match the ``reference`` type in camera
+    (:func:`ocio_vp.calibration.panels.in_frustum_match`)."""
+
+    reference: str
+    types: dict[str, TypeMatch]
+
+
+@dataclass(frozen=True)
+class PanelsNotes(Record):
+    """A stage of several panel types: the ``primary`` type, each type's ``shares`` of the
+    light on the white patch, the lit white against the target's (3,) with each type's own M
+    and with the primary's M for all, and the in-frustum types' match (None for one)."""
+
+    primary: str
+    shares: dict[str, float]
+    lit_white_error: np.ndarray
+    lit_white_error_primary_M: np.ndarray
+    in_frustum_match: InFrustumMatch | None = None
+
+
+@dataclass(frozen=True)
+class PostCorrectionOCIO(Record):
+    """How the config carries a non-linear post-correction (:mod:`ocio_vp.ocio.bake`): its LUT
+    chains' sidecar ``files``, ``lut_size``, each chain's design, and their agreement with the
+    exact model (``inverse_agreement`` None without Q^-1; both None in older files)."""
+
+    files: list[str]
+    lut_size: int | None = None
+    chains: dict[str, str] | None = None
+    agreement: Agreement | None = None
+    inverse_agreement: Agreement | None = None
+
+
+@dataclass(frozen=True)
+class Inconsistency(Record):
+    """A patch found inconsistent (:mod:`ocio_vp.correction.outliers`): index, name, how far
+    off it is, how far it drags the fit, and its held-out residual; an entry of
+    ``excluded_patches``."""
+
+    index: int
+    name: str
+    relative: float  # |held-out prediction - target| / the patch's own size
+    z: float  # robust standard deviations of all patches' residuals
+    influence: float  # mean ΔE2000 it moves the fit's colours of the other patches
+    residual: tuple[float, float, float]  # held-out prediction - target, relative to white
+    swapped_with: int | None = None  # the neighbour it looks swapped with, if that is the cause
+    swapped_name: str | None = None
+    # the pair's held-out residuals (fitted without both), as read and exchanged, of white
+    swap_residuals: tuple[float, float] | None = None
+    # how many times better the other patches are predicted without it than without a typical
+    # patch (:func:`deletion_gain`)
+    deletion: float = 1.0
+    # another patch that explains the chart at least as well, when the data cannot tell which
+    # of the two is bad (both are excluded)
+    ambiguous_with: int | None = None
+    ambiguous_name: str | None = None
+    ambiguous_deletion: float | None = None  # the other's deletion gain
+
+    def describe(self) -> str:
+        """One phrase for the terminal and solution.json."""
+        if self.swapped_with is not None:
+            as_read, exchanged = self.swap_residuals or (0.0, 0.0)
+            return (
+                f"{self.name} and {self.swapped_name} look swapped: predicted from the other "
+                f"patches, the pair is off by {100 * as_read:.0f}% of white as read and by "
+                f"{100 * exchanged:.0f}% with the two exchanged "
+                f"({as_read / max(exchanged, 1e-12):.1f}x better); both are excluded"
+            )
+        off = ", ".join(f"{100 * v:+.1f}%" for v in self.residual)
+        if self.ambiguous_with is not None:
+            return (
+                f"{self.name} or {self.ambiguous_name}: one of the two is inconsistent with the "
+                f"rest and the data cannot tell which (without {self.name} the other patches "
+                f"are predicted {self.deletion:.2f}x better than without a typical patch, "
+                f"without {self.ambiguous_name} {self.ambiguous_deletion:.2f}x); {self.name} is "
+                f"off by {100 * self.relative:.0f}% of itself and moves the fit's colours of the "
+                f"other patches by {self.influence:.1f} ΔE2000; both are excluded"
+            )
+        return (
+            f"{self.name}: predicted from the other patches it is off by {off} of white "
+            f"(R, G, B), {100 * self.relative:.0f}% of the patch itself, {self.z:.1f} robust "
+            f"standard deviations; it moves the fit's colours of the other patches by "
+            f"{self.influence:.1f} ΔE2000 on average, and without it they are predicted "
+            f"{self.deletion:.1f}x better than without a typical patch"
+        )
+
+
+@dataclass(frozen=True)
+class Diagnostics(Record):
+    """What a solve measured about itself: ``solution.json``'s ``diagnostics`` block.
+
+    Errors are the paper's Fig. 11 metric, per channel, relative to the target white patch
+    (:func:`ocio_vp.metrics.error_relative_to_white`), over the patches the fit used. Every
+    field has one type, the same after a solve and after
+    :func:`~ocio_vp.formats.solution.load_solution` (arrays float64, blocks typed records):
+    read it by attribute. :meth:`to_dict` is the block as written, keys in file order.
+
+    Attributes
+    ----------
+    white_patch
+        Index of the chart's white patch, 0-based as in the file (0 is a valid patch; people
+        see patches numbered from 1 with their names).
+    cond_SL, cond_Q
+        2-norm condition numbers of [SL] and Q.
+    rank_Q
+        Numerical rank of Q.
+    N_solved, N_reason
+        Whether N = M Q^-1 was solved (eq. 8), and why not when it was not.
+    max_condition_q_for_N
+        The cond(Q) above which N is not solved.
+    lit_chart_error_baseline, lit_chart_error
+        (3,) the lit chart (eq. 3) against the target: through M alone, and after Q.
+    residual_rms
+        RMS of the lit chart after Q minus the target, in camera units.
+    displayed_chart_error_baseline, displayed_chart_error
+        (3,) the chart shown on the wall in-frustum as the camera records it, against the
+        target: through M (no Q), and through N and the black-level offset, then Q.
+    out_of_frustum_drive
+        (3,) the lighting drive M w_avg.
+    method_notes
+        What the Q method reported about itself, for people (method specific). The model
+        itself is the solution's ``post_correction``; no module reads it from here.
+    warnings
+        Sentences for the stage engineer (also printed by ``ocio-vp solve``).
+    charts
+        Per-patch (n, 3) camera RGB for the report: ``target``, ``lit_baseline``,
+        ``lit_corrected``, ``displayed_baseline``, ``displayed_corrected``.
+    model, model_reason
+        The Q model fitted (``auto`` chooses one) and why.
+    rank_target
+        The target chart's rank as the method saw it (rank-aware methods), else None.
+    cross_validated_error
+        (3,) leave-one-patch-out lit-chart error, None for an iterative method that does not
+        report its own (re-solving once per patch would multiply the solve time by n).
+    residuals_per_patch
+        (n, 3) signed residuals after Q, relative to the target white.
+    out_of_frustum_negative_channels
+        Channels of M w_avg below zero (the light is outside the LED gamut; the wall clips).
+    lit_chart_error_clipped_drive, lit_chart_error_baseline_clipped_drive
+        (3,) the lit-chart error after Q, and through M alone, when the wall clips a negative
+        drive, else None.
+    charts_clipped_drive
+        ``lit_baseline`` and ``lit_corrected`` (n, 3) as the wall lights the chart when it clips
+        a negative drive, else None (the report draws these then, like the figures it shows).
+    in_frustum_drive_range
+        How many chart colours the in-frustum matrix drives outside [0, 1] (``below_zero``,
+        ``above_max``, ``patches_outside``, ``max_drive``, ``content_scale``,
+        ``below_zero_with_M``, ``above_max_with_M``); see
+        :func:`ocio_vp.calibration.diagnostics.in_frustum_drive_range`.
+    black_level_bounce
+        (3,) the panels' bounced light relative to the wall's white (Section 3.4), or None.
+    clipped_patches
+        Chart patches left out of the fit because they reach the clip level.
+    N_equals_M
+        True when N is exactly M (Q is the identity).
+    identity_check
+        ``max_abs_error`` of eq. 7 (``Q [SL] N = I``) and its rounding ``bound``, or None.
+    fixtures
+        The practical fixtures' drive solve (:func:`ocio_vp.fixtures.fixtures_diagnostics`):
+        whether they are used and why, the error Q cannot remove with and without them, the
+        active limits; only written when the measurements have a ``fixtures`` section.
+    patch_screening
+        Whether patches inconsistent with the rest of the chart were looked for (False with
+        ``--keep-all-patches``).
+    excluded_patches
+        The patches excluded as inconsistent: ``index``, ``name``, ``relative`` (how far off,
+        relative to the patch itself), ``z`` (robust standard deviations), ``influence`` (mean
+        ΔE2000 by which it moves the fit's colours of the other patches), ``deletion`` (how many
+        times better the other patches are predicted without it than without a typical patch)
+        and ``residual`` (the held-out prediction minus the target, per channel, relative to
+        white); for two neighbours that look swapped also ``swapped_with`` (the other's
+        index), ``swapped_name`` and ``swap_residuals`` (the pair's held-out residuals as read
+        and exchanged, fitted without both, relative to white; both patches are listed),
+        otherwise those three are null; when the data cannot tell which of two patches is the
+        bad one (both excluded), ``ambiguous_with`` and ``ambiguous_name`` name the other and
+        ``ambiguous_deletion`` is its ``deletion``, otherwise null; see
+        :mod:`ocio_vp.correction.outliers`.
+    model_description
+        The post-correction in words (kind, bounds, protection).
+    extrapolation
+        How the post-correction behaves beyond the chart
+        (:class:`ocio_vp.correction.extrapolation.Extrapolation`): ``led_damage`` and
+        ``led_damage_least_squares`` (p95 ΔE2000 of the wall's own LEDs in frame, through it
+        and through least squares), ``kept`` and ``negative`` (bright saturated inputs: least
+        share of the dominant channel kept, lowest channel relative to it; null where a
+        dominant output is at or below zero, older files say "-inf"), ``folds`` (share
+        of the reflective solid where it maps two colours to one).
+    synthesized_target
+        How a synthesized target chart was made (``ocio-vp target-chart``); only written for
+        an environment whose chart was synthesized.
+    panels
+        Only for a stage of several panel types (``panels`` in the measurements file):
+        ``primary`` (the first in-frustum type, whose M and N are the top-level ones),
+        ``shares`` (each type's part of the light on the white patch, by luminance),
+        ``lit_white_error`` (3,) (the lit white against the target's, per channel relative to
+        it, before Q) and ``lit_white_error_primary_M`` (the same with every type driven by
+        the primary's M, as a calibration of that type alone would), and
+        ``in_frustum_match`` (how the in-frustum types match in camera on the chart:
+        :func:`ocio_vp.calibration.panels.in_frustum_match`, None for one in-frustum type).
+    post_correction_ocio
+        How the config carries a non-linear post-correction (:mod:`ocio_vp.ocio.bake`):
+        ``files`` (its LUT chains' sidecars), ``lut_size``, ``chains`` (each one's design),
+        ``agreement`` (ΔE2000 of the Q chain against the exact model, ``p99`` and ``worst`` per
+        set of the camera range and over ``all``, and the ``worst_input``) and
+        ``inverse_agreement`` (the same for the content through the Q^-1 chain and back through
+        the model; null without Q^-1); only written for a non-linear post-correction.
+    skin
+        What the solve expects of skin (:class:`ocio_vp.formats.skin.SkinFigures`): mean
+        ΔE2000 on its skin samples for the post-correction and least squares, per lightness
+        band, the chart's beside them, and with skin first the default's; only written where
+        the chart gives skin samples (docs/skin.md).
+    extra
+        Keys of a loaded file that this version does not know, kept so they round-trip.
+    present
+        The keys a loaded file had, in its order (None after a solve: every field).
+    """
+
+    white_patch: int = DEFAULT_WHITE_PATCH
+    cond_SL: float | None = None
+    cond_Q: float | None = None
+    rank_Q: int | None = None
+    N_solved: bool | None = None
+    N_reason: str | None = None
+    max_condition_q_for_N: float | None = None
+    lit_chart_error_baseline: np.ndarray | None = None
+    lit_chart_error: np.ndarray | None = None
+    residual_rms: float | None = None
+    displayed_chart_error_baseline: np.ndarray | None = None
+    displayed_chart_error: np.ndarray | None = None
+    out_of_frustum_drive: np.ndarray | None = None
+    #: Method specific, for people (no module reads it): JSON as the method wrote it.
+    method_notes: dict[str, Any] | None = None
+    warnings: list[str] = field(default_factory=list)
+    charts: Charts | None = None
+    model: str | None = None
+    model_reason: str | None = None
+    rank_target: int | None = None
+    cross_validated_error: np.ndarray | None = None
+    residuals_per_patch: np.ndarray | None = None
+    out_of_frustum_negative_channels: list[int] | None = None
+    lit_chart_error_clipped_drive: np.ndarray | None = None
+    lit_chart_error_baseline_clipped_drive: np.ndarray | None = None
+    charts_clipped_drive: ClippedCharts | None = None
+    in_frustum_drive_range: DriveRange | None = None
+    black_level_bounce: np.ndarray | None = None
+    clipped_patches: list[int] | None = None
+    N_equals_M: bool | None = None
+    identity_check: IdentityCheck | None = None
+    patch_screening: bool | None = None
+    excluded_patches: list[Inconsistency] | None = None
+    model_description: str | None = None
+    extrapolation: Extrapolation | None = None
+    #: How the chart was synthesized (:mod:`ocio_vp.formats.synthesis`'s record, as written).
+    synthesized_target: dict[str, Any] | None = None
+    fixtures: FixturesNotes | None = None
+    panels: PanelsNotes | None = None
+    post_correction_ocio: PostCorrectionOCIO | None = None
+    skin: SkinFigures | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+    present: tuple[str, ...] | None = field(default=None, repr=False, compare=False)
+
+    #: Fields written only when set.
+    OMIT_NONE: ClassVar[tuple[str, ...]] = (
+        "synthesized_target",
+        "fixtures",
+        "panels",
+        "post_correction_ocio",
+        "skin",
+    )
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Diagnostics:
+        """The block as read from ``solution.json``: every value typed; missing keys keep
+        their defaults (and stay missing when written), unknown ones are kept in ``extra``.
+        The ``root_polynomial_ocio`` block of the versions before ``post_correction_ocio``
+        gives its ``files`` (the rest of it is kept as it was)."""
+        diagnostics = read_record(cls, data, "diagnostics")
+        legacy = data.get("root_polynomial_ocio")
+        if diagnostics.post_correction_ocio is None and isinstance(legacy, Mapping):
+            files = read_value(legacy.get("files", []), list[str], "root_polynomial_ocio.files")
+            block = PostCorrectionOCIO(files=files)
+            object.__setattr__(block, "_present", ())
+            object.__setattr__(diagnostics, "post_correction_ocio", block)
+        return diagnostics
+
+    def recorded(self, name: str) -> bool:
+        """Whether the solve (or the file it was read from) recorded field ``name``: an older
+        file may lack one, which then holds its default."""
+        return self.present is None or name in self.present
+
+    def adding(self, **changes: Any) -> Diagnostics:
+        """This record with ``changes``; a loaded one also writes the keys it gains."""
+        present = self.present
+        if present is not None:
+            present = (*present, *(k for k in changes if k not in present))
+        return dataclasses.replace(self, **changes, present=present)
