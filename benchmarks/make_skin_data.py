@@ -52,7 +52,11 @@ def read_nist(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
     columns = [i for i, label in enumerate(labels) if label == "Average"]
     names = [subjects[i - 3].strip() for i in columns]
     body = np.array(
-        [[float(row[0])] + [float(row[i]) for i in columns] for row in rows[header + 1 :] if row and row[0]]
+        [
+            [float(row[0])] + [float(row[i]) for i in columns]
+            for row in rows[header + 1 :]
+            if row and row[0]
+        ]
     )
     return body[:, 0], names, body[:, 1:].T
 
