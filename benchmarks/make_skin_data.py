@@ -39,7 +39,10 @@ NIST_SOURCE = (
     "subjects; copy: scottprahl/iadpython@dc8c91c0ad5732f62660dad8f536d7fe215815f4 "
     "iadpython/data/M38597.csv"
 )
-PHYSLIGHT_SOURCE = "wetadigital/physlight@4403821777cfa538c3fce3a46b12e682a24e07ac data/camera/"
+PHYSLIGHT_SOURCE = (
+    "https://github.com/wetadigital/physlight/blob/4403821777cfa538c3fce3a46b12e682a24e07ac/"
+    "data/camera/"
+)
 
 
 def read_nist(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
@@ -113,8 +116,13 @@ def main(argv=None) -> None:
         if name.lower() in known:  # the same values as the rawtoaces file's (checked)
             continue
         cameras[f"{name} (physlight)"] = {
+            "manufacturer": head["manufacturer"],
+            "model": head["model"],
             "source": f"{PHYSLIGHT_SOURCE}{file.name}",
-            "license": head["license"],
+            "licence": head["license"],
+            "document_creator": head["document_creator"],
+            "document_creation_date": head["document_creation_date"],
+            "units": record["spectral_data"]["units"],
             "split": None,
             "RGB": values,
         }
