@@ -301,12 +301,13 @@ LOSS_MARGIN = 0.02
 class VariantSummary:
     """One variant against least squares over the solves both have.
 
-    ``skin`` / ``general``: mean ΔE2000 (held-out skin, CES-99); ``*_ratio``: over least
-    squares' on the same solves; ``by_environment`` / ``by_band`` / ``by_camera``: skin ratios;
-    ``cameras_lost``: cameras whose mean skin ΔE2000 is more than :data:`LOSS_MARGIN` above
-    least squares'; ``cells_lost`` of ``cells`` (camera x LED set x environment) likewise;
-    ``emitters_p95``: the mean over solves of each solve's emitter p95; ``background``: mean
-    in-frustum error relative to white; ``models``: what the variant chose, share of solves.
+    ``skin`` / ``general``: mean ΔE2000 (skin, CES-99); ``*_ratio``: over least squares' on the
+    same solves; ``by_environment`` / ``by_band`` / ``by_camera``: mean skin ΔE2000 per group,
+    and ``*_ratio`` the same over least squares'; ``cameras_lost``: cameras whose mean skin
+    ΔE2000 is more than :data:`LOSS_MARGIN` above least squares'; ``cells_lost`` of ``cells``
+    (camera x LED set x environment solves) likewise; ``emitters_p95``: the mean over solves of
+    each solve's emitter p95; ``background``: mean in-frustum error relative to white;
+    ``models``: what the variant chose, share of solves; ``seconds``: mean solve time.
     """
 
     variant: str
@@ -316,8 +317,11 @@ class VariantSummary:
     general: float
     general_ratio: float
     by_environment: dict[str, float]
+    by_environment_ratio: dict[str, float]
     by_band: dict[str, float]
+    by_band_ratio: dict[str, float]
     by_camera: dict[str, float]
+    by_camera_ratio: dict[str, float]
     cameras_lost: int
     cells_lost: int
     emitters_p95: float
@@ -334,30 +338,37 @@ def _ratio(a: Sequence[float], b: Sequence[float]) -> float:
     return float(np.mean(a) / np.mean(b)) if len(a) and len(b) else float("nan")
 
 
+def _groups(pairs) -> dict[str, dict[str, tuple[list, list]]]:
+    """Per grouping (environment, band, camera): label -> (this variant's, least squares')."""
+    out: dict[str, dict[str, tuple[list, list]]] = {"environment": {}, "band": {}, "camera": {}}
+    for r, ref in pairs:
+        for kind, label in (("environment", r.environment), ("camera", r.camera)):
+            mine, theirs = out[kind].setdefault(label, ([], []))
+            mine.append(r.skin_mean)
+            theirs.append(ref.skin_mean)
+        for band, a, b in zip(r.bands, r.skin, ref.skin, strict=True):
+            mine, theirs = out["band"].setdefault(band, ([], []))
+            mine.append(a)
+            theirs.append(b)
+    return out
+
+
 def summarise(evaluation: Evaluation, variant: str) -> VariantSummary:
     """The figures of one variant (see :class:`VariantSummary`)."""
     reference = {_key(r): r for r in evaluation.rows if r.variant == REFERENCE}
-    pairs = [(r, reference[_key(r)]) for r in evaluation.rows if r.variant == variant]
-    pairs = [(r, ref) for r, ref in pairs if ref is not None]
-
-    def grouped(label: Callable[[SkinRow], str]) -> dict[str, float]:
-        groups: dict[str, tuple[list, list]] = {}
-        for r, ref in pairs:
-            mine, theirs = groups.setdefault(label(r), ([], []))
-            mine.append(r.skin_mean)
-            theirs.append(ref.skin_mean)
-        return {k: _ratio(a, b) for k, (a, b) in groups.items()}
-
-    bands: dict[str, tuple[list, list]] = {}
-    for r, ref in pairs:
-        for band, mine, theirs in zip(r.bands, r.skin, ref.skin, strict=True):
-            a, b = bands.setdefault(band, ([], []))
-            a.append(mine)
-            b.append(theirs)
-    by_camera = grouped(lambda r: r.camera)
-    models: dict[str, float] = {}
+    pairs = [
+        (r, reference[_key(r)])
+        for r in evaluation.rows
+        if r.variant == variant and _key(r) in reference
+    ]
+    if not pairs:
+        raise ValueError(f"no solves of {variant!r} beside {REFERENCE!r}")
+    groups = _groups(pairs)
+    means = {k: {g: float(np.mean(a)) for g, (a, _) in v.items()} for k, v in groups.items()}
+    ratios = {k: {g: _ratio(a, b) for g, (a, b) in v.items()} for k, v in groups.items()}
+    models: dict[str, int] = {}
     for r, _ in pairs:
-        models[r.model] = models.get(r.model, 0.0) + 1.0 / len(pairs)
+        models[r.model] = models.get(r.model, 0) + 1
     return VariantSummary(
         variant=variant,
         cells=len(pairs),
@@ -367,13 +378,16 @@ def summarise(evaluation: Evaluation, variant: str) -> VariantSummary:
         general_ratio=_ratio(
             [r.general_mean for r, _ in pairs], [b.general_mean for _, b in pairs]
         ),
-        by_environment=grouped(lambda r: r.environment),
-        by_band={k: _ratio(a, b) for k, (a, b) in bands.items()},
-        by_camera=by_camera,
-        cameras_lost=sum(v > 1 + LOSS_MARGIN for v in by_camera.values()),
+        by_environment=means["environment"],
+        by_environment_ratio=ratios["environment"],
+        by_band=means["band"],
+        by_band_ratio=ratios["band"],
+        by_camera=means["camera"],
+        by_camera_ratio=ratios["camera"],
+        cameras_lost=sum(v > 1 + LOSS_MARGIN for v in ratios["camera"].values()),
         cells_lost=sum(r.skin_mean > (1 + LOSS_MARGIN) * ref.skin_mean for r, ref in pairs),
         emitters_p95=float(np.mean([r.emitters_p95 for r, _ in pairs])),
         background=float(np.mean([r.background for r, _ in pairs])),
         seconds=float(np.mean([r.seconds for r, _ in pairs])),
-        models=models,
+        models={k: v / len(pairs) for k, v in models.items()},
     )
