@@ -44,6 +44,7 @@ HEADING = "## Skin: held-out measured skin, light to dark"
 SLOW = ("perceptual", "joint")
 DEFAULT = "auto"
 PRIORITY = "auto, priority skin"
+MEASURED = "auto, priority skin, measured spectra"
 
 
 def measure(quick: bool, progress=None) -> Evaluation:
@@ -176,11 +177,31 @@ def criteria(summaries: dict[str, VariantSummary]) -> list[str]:
     priority = summaries.get(PRIORITY)
     if priority is None:
         lines.append("- Skin priority: not in this solver (no `priority` solve option yet).")
-    else:
+        return lines
+    skin = float(np.mean(list(priority.by_environment_ratio.values())))
+    lines.append(
+        f"- Skin priority at most 0.80x least squares on skin (mean over broadband "
+        f"environments): {_r(skin)}: **{'met' if skin <= 0.80 else 'NOT met'}**; general "
+        f"reflectances at most 1.15x: {_r(priority.general_ratio)}: "
+        f"**{'met' if priority.general_ratio <= 1.15 else 'NOT met'}**; emitters "
+        f"{priority.emitters_p95:.1f} and background {100 * priority.background:.2f}% against "
+        f"the default's {auto.emitters_p95:.1f} and {100 * auto.background:.2f}%."
+        if auto is not None
+        else f"- Skin priority: skin {_r(skin)}, general {_r(priority.general_ratio)}."
+    )
+    measured = summaries.get(MEASURED)
+    if measured is None:
         lines.append(
-            f"- Skin priority at most 0.80x least squares on skin (mean over broadband "
-            f"environments): {_r(float(np.mean(list(priority.by_environment_ratio.values()))))}"
-            f"; general reflectances at most 1.15x: {_r(priority.general_ratio)}."
+            "- Skin priority with the measured LED spectra and camera sensitivities: not in "
+            "this solver (no `led_spectra` / `camera_sensitivities` solve options yet)."
+        )
+    else:
+        with_spectra = float(np.mean(list(measured.by_environment_ratio.values())))
+        lines.append(
+            f"- Skin priority with the measured LED spectra and camera sensitivities: skin "
+            f"{_r(with_spectra)} against {_r(skin)} without "
+            f"({100 * (1 - with_spectra / skin):.0f}% better), general "
+            f"{_r(measured.general_ratio)}."
         )
     return lines
 

@@ -80,11 +80,16 @@ REFERENCE = "least-squares"
 
 @dataclass(frozen=True)
 class Variant:
-    """One way to solve: a label for the tables, a Q method, and extra solve options."""
+    """One way to solve: a label for the tables, a Q method, and extra solve options.
+
+    ``measured``: solve options given the stage's true spectra, as (option name, ``"leds"`` or
+    ``"camera"``): what a stage engineer who measured the panels and the camera would pass.
+    """
 
     label: str
     method: str
     options: tuple[tuple[str, object], ...] = ()
+    measured: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -178,8 +183,13 @@ def variants(methods: Iterable[str] | None = None) -> tuple[Variant, ...]:
 
     names = tuple(methods) if methods is not None else tuple(Q_SOLVE_METHODS)
     out = [Variant(name, name) for name in names]
-    if methods is None and "priority" in {f.name for f in dataclasses.fields(SolveOptions)}:
-        out.append(Variant("auto, priority skin", "auto", (("priority", "skin"),)))
+    fields = {f.name for f in dataclasses.fields(SolveOptions)}
+    if methods is None and "priority" in fields:
+        skin = (("priority", "skin"),)
+        out.append(Variant("auto, priority skin", "auto", skin))
+        if {"led_spectra", "camera_sensitivities"} <= fields:
+            measured = (("led_spectra", "leds"), ("camera_sensitivities", "camera"))
+            out.append(Variant("auto, priority skin, measured spectra", "auto", skin, measured))
     return tuple(out)
 
 
@@ -195,7 +205,9 @@ def _judge(stage, measurements, env, variant: Variant, samples) -> SkinRow:
 
     skin, general = samples
     start = time.perf_counter()
-    solution = solve_environment(measurements, env, method=variant.method, **dict(variant.options))
+    options = dict(variant.options)
+    options.update({name: getattr(stage, attribute) for name, attribute in variant.measured})
+    solution = solve_environment(measurements, env, method=variant.method, **options)
     seconds = time.perf_counter() - start
 
     def errors(reflectances):
