@@ -76,6 +76,27 @@ def measure_training(progress=None) -> Evaluation:
     return evaluate(variant_list=chosen, split="training", quick=True, progress=progress)
 
 
+def measure_second_draw(quick: bool, progress=None) -> Evaluation:
+    """The default and the skin priority on the held-out half again, with another noise draw:
+    how far the headline ratios move with the noise alone."""
+    chosen = [v for v in variants() if v.label in (REFERENCE, DEFAULT, PRIORITY, MEASURED)]
+    return evaluate(variant_list=chosen, split="held-out", quick=quick, seed=1, progress=progress)
+
+
+def noise_line(summaries: dict[str, VariantSummary], second: Evaluation) -> str:
+    """One line: the headline skin and CES-99 ratios of the other draw beside this one's."""
+    parts = []
+    for label in (DEFAULT, PRIORITY, MEASURED):
+        if label in summaries:
+            other = summarise(second, label)
+            here = summaries[label]
+            parts.append(
+                f"`{label}` skin {_r(other.skin_ratio)} (here {_r(here.skin_ratio)}), CES-99 "
+                f"{_r(other.general_ratio)} (here {_r(here.general_ratio)})"
+            )
+    return "- Another noise draw on the same stages: " + "; ".join(parts) + "."
+
+
 def generalisation_table(held_out: dict[str, VariantSummary], training: Evaluation) -> str:
     """Skin and CES-99 ratios on the training half's quick subset beside the held-out half."""
     rows = []
@@ -238,7 +259,12 @@ def models_line(summary: VariantSummary) -> str:
     return ", ".join(f"{model} {100 * share:.0f}%" for model, share in shares)
 
 
-def report(evaluation: Evaluation, quick: bool, training: Evaluation | None = None) -> str:
+def report(
+    evaluation: Evaluation,
+    quick: bool,
+    training: Evaluation | None = None,
+    second: Evaluation | None = None,
+) -> str:
     from benchmarks.skin_eval import held_out_skin
 
     skin = held_out_skin()
@@ -277,6 +303,7 @@ def report(evaluation: Evaluation, quick: bool, training: Evaluation | None = No
         "### Targets",
         "",
         *criteria(summaries),
+        *([noise_line(summaries, second)] if second is not None and DEFAULT in summaries else []),
         "",
         "### Skin per environment (mean ΔE2000 over cameras, LED sets and subjects)",
         "",
@@ -333,7 +360,12 @@ def _progress(text: str) -> None:
 
 def run(quick: bool = False) -> str:
     held_out = measure(quick, progress=_progress)
-    return report(held_out, quick, training=measure_training(progress=_progress))
+    return report(
+        held_out,
+        quick,
+        training=measure_training(progress=_progress),
+        second=measure_second_draw(quick, progress=_progress),
+    )
 
 
 def main(argv=None) -> int:
