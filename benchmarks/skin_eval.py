@@ -229,7 +229,7 @@ def _judge(stage, measurements, env, variant: Variant, samples) -> SkinRow:
         camera=stage.camera_name,
         leds=stage.led_description,
         environment=env.name,
-        model=str(solution.diagnostics.get("model", variant.method)),
+        model=str(solution.diagnostics.model or variant.method),
         skin=errors(skin.reflectances),
         bands=skin.bands,
         general=errors(general),
