@@ -64,18 +64,13 @@ def read_nist(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
     return body[:, 0], names, body[:, 1:].T
 
 
-def main(argv=None) -> None:
+def split_skin(nist: Path) -> None:
+    """Write the training and held-out skin files from the NIST table (see the docstring)."""
     from ocio_vp.skin_data import band_of, ita_degrees, lab_d65
-    from ocio_vp.spectra import SPECTRAL_SHAPE, wavelengths
+    from ocio_vp.spectra import wavelengths
 
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--nist", type=Path, required=True)
-    parser.add_argument("--physlight", type=Path, required=True)
-    args = parser.parse_args(argv)
-
-    grid = wavelengths()
-    source_nm, names, averages = read_nist(args.nist)
-    on_grid = np.round(np.stack([np.interp(grid, source_nm, a) for a in averages]), 4)
+    source_nm, names, averages = read_nist(nist)
+    on_grid = np.round(np.stack([np.interp(wavelengths(), source_nm, a) for a in averages]), 4)
     ita = ita_degrees(lab_d65(on_grid))
     bands = [band_of(v) for v in ita]
     held_out = np.zeros(len(names), dtype=bool)
@@ -85,7 +80,6 @@ def main(argv=None) -> None:
             held_out[members[0]] = True
         for position, i in enumerate(members):
             held_out[i] = held_out[i] or position % 2 == 1
-    shape = dict(zip(("start", "end", "interval"), SPECTRAL_SHAPE, strict=True))
     for path, keep, split in ((TRAINING, ~held_out, "training"), (HELD_OUT, held_out, "held-out")):
         samples = {
             f"NIST {names[i]}": {"band": bands[i], "reflectance": on_grid[i].tolist()}
@@ -98,23 +92,33 @@ def main(argv=None) -> None:
             "description": "Measured human skin reflectance factors (0-1) on the project grid; "
             "see ocio_vp/data/SKIN_LICENSE.md",
             "source": NIST_SOURCE,
-            "wavelengths": shape,
+            "wavelengths": _shape(),
             "samples": samples,
         }
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(document, indent=1) + "\n", encoding="utf-8")
 
+
+def _shape() -> dict[str, float]:
+    from ocio_vp.spectra import SPECTRAL_SHAPE
+
+    return dict(zip(("start", "end", "interval"), SPECTRAL_SHAPE, strict=True))
+
+
+def gather_cameras(physlight: Path) -> None:
+    """Write the physlight cameras the rawtoaces file lacks, split tuning / held-out."""
+    from ocio_vp.spectra import wavelengths
+
     existing = json.loads((ROOT / "ocio_vp" / "data" / "camera_sensitivities.json").read_text())
     known = {name.split(" (")[0].lower() for name in existing["cameras"]}
-    cameras, fresh = {}, []
-    for file in sorted(args.physlight.glob("*_380_780_5.json")):
+    cameras = {}
+    for file in sorted(physlight.glob("*_380_780_5.json")):
         record = json.loads(file.read_text())
         head = record["header"]
         name = f"{head['manufacturer']} {head['model'].replace('_', ' ')}"
-        main_data = record["spectral_data"]["data"]["main"]
-        values = [main_data[f"{nm:g}"] for nm in grid]
         if name.lower() in known:  # the same values as the rawtoaces file's (checked)
             continue
+        main_data = record["spectral_data"]["data"]["main"]
         cameras[f"{name} (physlight)"] = {
             "manufacturer": head["manufacturer"],
             "model": head["model"],
@@ -124,28 +128,30 @@ def main(argv=None) -> None:
             "document_creation_date": head["document_creation_date"],
             "units": record["spectral_data"]["units"],
             "split": None,
-            "RGB": values,
+            "RGB": [main_data[f"{nm:g}"] for nm in wavelengths()],
         }
-        fresh.append(f"{name} (physlight)")
-    for position, name in enumerate(fresh):
-        cameras[name]["split"] = "held-out" if position % 2 == 1 else "tuning"
-    CAMERAS.write_text(
-        json.dumps(
-            {
-                "format": "ocio-vp/camera-sensitivities",
-                "version": 1,
-                "description": "Measured camera spectral sensitivities from Weta's physlight "
-                "(Apache-2.0), values unchanged, gathered into one file (see "
-                "CAMERAS_LICENSE.md); 'split' says which the benchmark holds out",
-                "wavelengths": shape,
-                "channels": ["R", "G", "B"],
-                "cameras": cameras,
-            },
-            indent=1,
-        )
-        + "\n",
-        encoding="utf-8",
-    )
+    for position, record in enumerate(cameras.values()):
+        record["split"] = "held-out" if position % 2 == 1 else "tuning"
+    document = {
+        "format": "ocio-vp/camera-sensitivities",
+        "version": 1,
+        "description": "Measured camera spectral sensitivities from Weta's physlight "
+        "(Apache-2.0), values unchanged, gathered into one file (see "
+        "CAMERAS_LICENSE.md); 'split' says which the benchmark holds out",
+        "wavelengths": _shape(),
+        "channels": ["R", "G", "B"],
+        "cameras": cameras,
+    }
+    CAMERAS.write_text(json.dumps(document, indent=1) + "\n", encoding="utf-8")
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--nist", type=Path, required=True)
+    parser.add_argument("--physlight", type=Path, required=True)
+    args = parser.parse_args(argv)
+    split_skin(args.nist)
+    gather_cameras(args.physlight)
 
 
 if __name__ == "__main__":

@@ -122,7 +122,15 @@ def main(argv: list[str] | None = None) -> int:
         default=None,
         help="output markdown (default docs/performance.md; none with --only)",
     )
+    parser.add_argument(
+        "--update",
+        action="store_true",
+        help="with --only: replace those sections of docs/performance.md (by their heading), "
+        "keep the others, and say in its header which were regenerated when",
+    )
     args = parser.parse_args(argv)
+    if args.update and not args.only:
+        parser.error("--update regenerates the sections given with --only")
     sections = [header(args.quick)]
     own_docs: dict[str, str] = {}
     sections_of: list[tuple[str, str]] = []  # (document, section) of SECTION_OF modules
@@ -158,6 +166,10 @@ def main(argv: list[str] | None = None) -> int:
         base = own_docs.get(doc) or (path.read_text(encoding="utf-8") if path.exists() else "")
         own_docs[doc] = replace_section(base, section)
     text = "\n".join(sections)
+    if args.update:
+        target = Path(args.out or ROOT / "docs" / "performance.md")
+        _write(target, update_sections(target.read_text(encoding="utf-8"), sections, args.quick))
+        return 1 if failed else 0
     out = args.out or (None if args.only else str(ROOT / "docs" / "performance.md"))
     if out:
         _write(Path(out), text)
@@ -166,6 +178,63 @@ def main(argv: list[str] | None = None) -> int:
     else:
         print("\n".join([text, *own_docs.values()]))
     return 1 if failed else 0
+
+
+def update_sections(document: str, sections: list[str], quick: bool) -> str:
+    r"""``document`` with each of ``sections[1:-1]`` (a module's section: its ``## `` heading and
+    body) in place of the section of the same heading, or before the closing load line when
+    it has none; a line under the header says which were regenerated, when, under what load.
+
+    >>> doc = "# P\n\n- Date: x\n\n## A\n\nold a\n\n## B\n\nold b\n\nLoad average: end.\n"
+    >>> print(update_sections(doc, ["header", "## B\n\nnew b\n", "Load"], False))
+    ... # doctest: +ELLIPSIS
+    # P
+    <BLANKLINE>
+    - Date: x
+    - Regenerated ... `## B` (python -m benchmarks.run --only ... --update; load average ...)
+    <BLANKLINE>
+    ## A
+    <BLANKLINE>
+    old a
+    <BLANKLINE>
+    ## B
+    <BLANKLINE>
+    new b
+    <BLANKLINE>
+    Load average: end.
+    <BLANKLINE>
+    """
+    head, *parts = document.split("\n## ")
+    parts = ["## " + part for part in parts]
+    closing = ""
+    if parts and "\nLoad average" in parts[-1]:
+        body, _, tail = parts[-1].partition("\nLoad average")
+        parts[-1], closing = body.rstrip("\n") + "\n", "Load average" + tail
+    elif not parts and "\nLoad average" in head:
+        head, _, tail = head.partition("\nLoad average")
+        closing = "Load average" + tail
+    titles = []
+    for section in sections[1:-1]:
+        title = section.split("\n", 1)[0]
+        titles.append(f"`{title}`")
+        matches = [i for i, part in enumerate(parts) if part.split("\n", 1)[0] == title]
+        new = section.rstrip("\n") + "\n"
+        if matches:
+            parts[matches[0]] = new
+        else:
+            parts.append(new)
+    load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
+    when = f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M UTC}"
+    mode = " --quick" if quick else ""
+    note = (
+        f"- Regenerated {when}: {', '.join(titles)} (python -m benchmarks.run --only ..."
+        f"{mode} --update; load average {load} at the end)"
+    )
+    head_lines = head.rstrip("\n").split("\n")
+    date_line = next((i for i, line in enumerate(head_lines) if line.startswith("- Date:")), None)
+    at = len(head_lines) if date_line is None else date_line + 1
+    head = "\n".join([*head_lines[:at], note, *head_lines[at:]]) + "\n"
+    return "\n".join([head, *parts, closing]).rstrip("\n") + "\n"
 
 
 def _write(path: Path, text: str) -> None:

@@ -109,13 +109,17 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    from ocio_vp.staging import stop_on_signals
+
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args.func(args) or 0)
-    except KeyboardInterrupt:
+        with stop_on_signals():  # kill, timeout: staging folders removed as on Ctrl-C
+            return int(args.func(args) or 0)
+    except KeyboardInterrupt as stop:
+        signum = getattr(stop, "signum", 2)  # Ctrl-C: SIGINT
         print(f"ocio-vp {args.command}: interrupted", file=sys.stderr)
-        return 130
+        return 128 + signum
     except (Exception, RecursionError) as error:
         status, message = describe_failure(error)
         if status != 2 and os.environ.get("OCIO_VP_TRACEBACK"):

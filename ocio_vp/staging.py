@@ -11,13 +11,20 @@
 - No output may be, or contain, an input of the same run (:func:`check_not_input`).
 - While a run writes into a folder it holds an exclusive lock on it; a second run writing into
   the same folder fails at once instead of mixing its files with the first one's.
+- A run that is stopped (Ctrl-C, ``kill``, ``timeout``, a CPU-time limit) removes its staging
+  folders: :func:`stop_on_signals` turns SIGTERM, SIGHUP and SIGXCPU into :class:`Interrupted`
+  as Python does SIGINT, so every ``finally`` runs, and a later signal no longer cuts the clean-up
+  short; staging folders still present at exit are removed too (``atexit``).
 """
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import os
+import secrets
 import shutil
+import signal
 import stat
 import tempfile
 from collections.abc import Iterable, Iterator, Sequence
@@ -33,6 +40,7 @@ except ImportError:  # pragma: no cover - not POSIX: no locking
 __all__ = [
     "FILE_SIGNATURE",
     "MARKER",
+    "Interrupted",
     "check_file_replaceable",
     "check_not_input",
     "check_replaceable",
@@ -41,6 +49,7 @@ __all__ = [
     "publish_dir",
     "publish_dirs",
     "staged_dir",
+    "stop_on_signals",
     "write_file_atomically",
     "write_output_file",
 ]
@@ -135,6 +144,62 @@ def _remove_empty(folders: Iterable[Path]) -> None:
             folder.rmdir()
 
 
+class Interrupted(KeyboardInterrupt):
+    """The run was stopped by signal ``signum`` (a KeyboardInterrupt, so that no ``except
+    Exception`` swallows it): the command exits with status 128 + ``signum``."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+#: Signals that stop a run: Ctrl-C, ``kill`` and ``timeout``, a closed terminal, ``ulimit -t``.
+STOP_SIGNALS = tuple(
+    getattr(signal, name)
+    for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGXCPU")
+    if hasattr(signal, name)
+)
+
+
+@contextlib.contextmanager
+def stop_on_signals() -> Iterator[None]:
+    """Within this block a stop signal raises :class:`Interrupted` in the main thread (once:
+    later ones are ignored, so they cannot interrupt the clean-up the first one started).
+
+    Previous handlers are restored on exit. Outside the main thread it does nothing (Python
+    delivers signals to the main thread only).
+    """
+    stopping = []
+
+    def handler(signum: int, frame: object) -> None:
+        if not stopping:
+            stopping.append(signum)
+            raise Interrupted(signum)
+
+    previous = {}
+    try:
+        for signum in STOP_SIGNALS:
+            previous[signum] = signal.signal(signum, handler)
+    except ValueError:  # not the main thread
+        pass
+    try:
+        yield
+    finally:
+        for signum, old in previous.items():
+            signal.signal(signum, old)
+
+
+# Staging folders of this process that are not removed yet: what atexit still removes.
+_LIVE_STAGES: set[Path] = set()
+
+
+@atexit.register
+def _remove_live_stages() -> None:
+    for stage in list(_LIVE_STAGES):
+        shutil.rmtree(stage, ignore_errors=True)
+        _LIVE_STAGES.discard(stage)
+
+
 @contextlib.contextmanager
 def staged_dir(parent: str | os.PathLike[str]) -> Iterator[Path]:
     """Yield a fresh staging folder inside ``parent`` (created if needed); removed on exit.
@@ -148,15 +213,21 @@ def staged_dir(parent: str | os.PathLike[str]) -> Iterator[Path]:
     created = _make_dirs(parent)
     try:
         with output_lock(parent):
+            # Named and registered before it exists: a stop signal arriving just as the folder
+            # is made still finds it (mkdtemp's name would be lost if it came before returning).
+            stage = parent / f".ocio-vp-staging-{os.getpid()}-{secrets.token_hex(6)}"
+            _LIVE_STAGES.add(stage)
             try:
-                stage = Path(tempfile.mkdtemp(prefix=".ocio-vp-staging-", dir=parent))
-            except OSError as error:
-                raise InputError(f"cannot write: {error.strerror}", source=parent) from None
-            try:
+                try:
+                    stage.mkdir(mode=0o700)
+                except OSError as error:
+                    raise InputError(f"cannot write: {error.strerror}", source=parent) from None
                 stage.chmod(default_mode(folder=True))  # it may itself be published
                 yield stage
             finally:
                 shutil.rmtree(stage, ignore_errors=True)
+                if not os.path.lexists(stage):  # else a straggler wrote into it: atexit
+                    _LIVE_STAGES.discard(stage)
     finally:
         _remove_empty(created)
 

@@ -458,19 +458,32 @@ def test_root_polynomial_apply_is_the_exact_model(tmp_path, rp_solution_dir):
 
 
 def test_root_polynomial_apply_half_and_continuity_around_black(rp_solution_dir):
-    """Half buffers: the float64 result rounded once to half. Around black the result is
-    continuous through zero (sign-preserving roots), never NaN."""
+    """Half buffers (computed in float32): the float64 result rounded to half, except at most
+    one half step where it lies within float32's error of a rounding midpoint (rare). Around
+    black the result is continuous through zero (sign-preserving roots), never NaN."""
     transform = pixel_transform(load_post_correction(rp_solution_dir))
     rgb = _extremes(np.random.default_rng(13))
     rgb[rgb > 1e3] = 1e3  # keep the corrected values inside half's range (65504)
     rgb = rgb.astype(np.float16)
-    ref = _finlayson(rp_solution_dir, rgb).astype(np.float16)
+    exact = _finlayson(rp_solution_dir, rgb)
+    ref = exact.astype(np.float16)
+
+    def check(got):
+        step = np.spacing(np.abs(ref)).astype(np.float64)  # one half step at each value
+        off = got != ref
+        assert np.all(np.abs(got.astype(np.float64) - ref) <= step)
+        # where it differs, the exact value was a hair from the midpoint between the two
+        midpoint = (got[off].astype(np.float64) + ref[off]) / 2
+        assert np.all(np.abs(exact[off] - midpoint) <= 1e-6 * np.abs(exact[off]) + 1e-12)
+        assert off.mean() < 0.01
+
     work = rgb.copy()
     apply_in_place(transform, work)
-    assert np.array_equal(work, ref)
+    check(work)
     rgba = np.concatenate([rgb, np.ones_like(rgb[..., :1])], axis=-1)
     transform(rgba[..., :3])  # a non-contiguous view (not what apply passes): still in place
-    assert np.array_equal(rgba[..., :3], ref) and np.all(rgba[..., 3] == 1)
+    check(rgba[..., :3])
+    assert np.all(rgba[..., 3] == 1)
     t = np.linspace(-1e-3, 1e-3, 2001, dtype=np.float32)
     ramp = np.ascontiguousarray(np.stack([t, 2e-3 + 0 * t, 1e-3 + 0 * t], -1)[None])
     out = ramp.copy()

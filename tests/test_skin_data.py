@@ -271,3 +271,31 @@ def test_replace_section_replaces_only_its_own_section() -> None:
     assert replace_section("", "## C\nc") == "## C\nc\n"
     last = replace_section(document, "## B\nnew b\n")
     assert last.endswith("## B\nnew b\n") and "old a" in last
+
+
+def test_the_skin_section_states_each_target_with_its_measured_figure(small) -> None:
+    import dataclasses
+
+    from benchmarks.bench_skin import HEADING, report
+    from benchmarks.skin_eval import Evaluation
+
+    # white-preserving stands in for the default: the section must judge whatever it measured.
+    rows = [dataclasses.replace(r, variant="auto") if r.variant == "wp" else r for r in small.rows]
+    evaluation = Evaluation(
+        rows=rows,
+        split="training",
+        cameras=small.cameras,
+        led_sets=small.led_sets,
+        environments=small.environments,
+    )
+    text = report(evaluation, quick=True)
+    auto = summarise(evaluation, "auto")
+    worst_env, worst = max(auto.by_environment_ratio.items(), key=lambda kv: kv[1])
+    target = next(line for line in text.splitlines() if line.startswith("- Default (`auto`)"))
+    assert f"worst {worst:.2f}x ({worst_env})" in target
+    assert target.endswith("**met**.") == (worst <= 1.0)
+    assert text.startswith(HEADING + "\n")
+    ls_row = next(
+        line for line in text.splitlines() if line.startswith("| `least-squares` (ΔE2000)")
+    )
+    assert f"| {summarise(evaluation, REFERENCE).skin:.2f} |" in ls_row

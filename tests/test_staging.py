@@ -25,3 +25,46 @@ def test_a_solve_replaces_its_environment_with_the_exports_and_report_inside(tmp
     assert main(["solve", str(stage), "--out", str(calib)]) == 2
     assert "exports/nuke/mine.txt" in capsys.readouterr().err
     assert (calib / "direct_sun" / "exports" / "nuke" / "mine.txt").read_text() == "keep"
+
+
+def test_a_stopped_solve_leaves_no_staging_folder(tmp_path):
+    """A real ``ocio-vp solve`` stopped by SIGINT (Ctrl-C) and one stopped by SIGTERM (kill,
+    timeout), each while its environments are being written into the staging folder: exit
+    128 + the signal, one line, and no staging folder, half-published environment or helper
+    process left behind. Both run at once (the test's cost is one solve's start)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from ocio_vp.formats.measurements import save_measurements
+    from ocio_vp.simulator.stage import simulate_measurements
+
+    # Two environments whose emitter-protected Q bakes LUT chains: ~1 s in the staging folder.
+    stage = tmp_path / "stage.yaml"
+    save_measurements(simulate_measurements(["incandescent", "warm_white_led"]), stage)
+    runs = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        out = tmp_path / sig.name
+        cmd = [sys.executable, "-m", "ocio_vp.cli", "solve", str(stage), "--out", str(out)]
+        cmd.append("--protect-emitters")
+        runs[sig] = (out, subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True))
+    deadline = time.monotonic() + 120
+    waiting = dict(runs)
+    while waiting and time.monotonic() < deadline:
+        for sig, (out, proc) in list(waiting.items()):
+            assert proc.poll() is None, "the solve ended before it was stopped"
+            if out.is_dir() and any(p.name.startswith(".ocio-vp-staging-") for p in out.iterdir()):
+                proc.send_signal(sig)
+                del waiting[sig]
+        time.sleep(0.005)
+    assert not waiting, "no staging folder appeared"
+    for sig, (out, proc) in runs.items():
+        _, err = proc.communicate(timeout=60)  # the helper process has ended too (pipe closed)
+        assert proc.returncode == 128 + sig.value, (sig, proc.returncode, err)
+        assert err.strip() == "ocio-vp solve: interrupted", err
+        left = sorted(p.name for p in out.iterdir()) if out.exists() else []
+        assert left == [], (sig, left)  # nothing was published, and no staging folder
+    assert not any(p.name.startswith(".ocio-vp") for p in tmp_path.rglob("*"))
+    assert os.path.isfile(stage)  # the input is untouched

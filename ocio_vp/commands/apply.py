@@ -10,7 +10,19 @@ from ocio_vp.choices import DEFAULT_FOOTAGE_ENCODING
 from ocio_vp.commands.common import warn
 from ocio_vp.commands.report import SOLUTIONS_HELP
 
-__all__ = ["add_parser", "post_correction_caveats", "run", "split_inputs"]
+__all__ = [
+    "FREE_SPACE_MARGIN",
+    "add_parser",
+    "check_free_space",
+    "post_correction_caveats",
+    "run",
+    "split_inputs",
+    "write_failure_error",
+]
+
+#: ``apply`` refuses to start when the output disk has less free space than this fraction of
+#: the frames' estimated size (their inputs' size): clearly too little, not a guess's margin.
+FREE_SPACE_MARGIN = 0.8
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -22,7 +34,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "frames, writing DIR/<frame name> (DIR/<environment>/<frame name> when "
         "several environments are given). Alpha, depth and AOV channels, metadata, data window "
         "and compression are kept. Frames already in DIR are skipped (resume); a bad frame is "
-        "reported and the others are still done (exit 2 at the end).",
+        "reported and the others are still done (exit 2 at the end). A write failure (disk "
+        "full, read-only, no permission) stops the run on one line naming the first frame not "
+        "written (exit 2); the frames written before stay, complete, and the same command "
+        "continues from there. A disk clearly too small for the frames is refused at the start.",
     )
     parser.add_argument(
         "inputs",
@@ -53,6 +68,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="the frames' encoding: linear (default) or a colour-science decoding name such as "
         "'ARRI LogC4', 'S-Log3', 'Log3G10' (as the capture file's encoding:); encoded frames "
         "are decoded, post-corrected exactly and encoded again",
+    )
+    parser.add_argument(
+        "--via",
+        choices=("model", "config"),
+        default="model",
+        help="how a non-linear Q (root-polynomial, emitter-protected) is computed: its exact "
+        "model (default), or the solution's config, the OCIO LUT chain every host runs (the "
+        "same pixels as Nuke or oiiotool; its agreement with the model is in solution.json; "
+        "speeds of both in docs/performance.md). A 3x3 Q is the config's matrix either way",
     )
     parser.add_argument(
         "--workers",
@@ -130,7 +154,7 @@ def run(args: argparse.Namespace) -> int:
     for folder in chosen.folders:
         for caveat in post_correction_caveats(load_solution(folder)):
             warn("apply", f"{folder.name}: {caveat}")
-        post = load_post_correction(folder, encoding)
+        post = load_post_correction(folder, encoding, via=args.via)
         out = Path(args.out) if len(chosen.folders) == 1 else Path(args.out) / folder.name
         tasks += [
             FrameTask(str(s), str(d), post, overwrite=args.overwrite, threads=threads)
@@ -139,6 +163,7 @@ def run(args: argparse.Namespace) -> int:
     _refuse_foreign([Path(task.dst) for task in tasks])
     if not args.overwrite:
         _refuse_other_solutions(tasks)
+    check_free_space(tasks)
     return _run_tasks(tasks, args, workers)
 
 
@@ -187,6 +212,8 @@ def _run_tasks(tasks: list, args: argparse.Namespace, workers: int) -> int:
     from ocio_vp.footage.stream import apply_frames
 
     counts = {"done": 0, "skipped": 0, "input-error": 0, "error": 0}
+    finished: set[int] = set()  # frames done or already there
+    write_error = None
     bar = progress(total=len(tasks), unit="frame", disable=args.no_progress or None, leave=True)
     with bar:
         if workers == 1 and not args.scheduler:
@@ -197,11 +224,21 @@ def _run_tasks(tasks: list, args: argparse.Namespace, workers: int) -> int:
             if isinstance(result, BaseException):  # a worker died: count it, keep going
                 counts["error"] += 1
                 bar.write(f"ocio-vp apply: error: {tasks[i].src}: {result}", file=sys.stderr)
+            elif result.status == "write-error":
+                write_error = result  # the disk or folder fails every later frame too: stop
+                break
             else:
                 counts[result.status] += 1
-                if result.status in ("input-error", "error"):
+                if result.status in ("done", "skipped"):
+                    finished.add(i)
+                elif result.status in ("input-error", "error"):
                     bar.write(f"ocio-vp apply: error: {result.message}", file=sys.stderr)
             bar.update(1)
+        close = getattr(results, "close", None)
+        if close is not None:
+            close()  # frames being written finish (complete, under their names); no new one
+    if write_error is not None:
+        raise write_failure_error(tasks, finished, write_error)
     failed = counts["input-error"] + counts["error"]
     print(
         f"{counts['done']} frame(s) written, {counts['skipped']} already done, "
@@ -210,3 +247,78 @@ def _run_tasks(tasks: list, args: argparse.Namespace, workers: int) -> int:
     if counts["error"]:
         return 1
     return 2 if counts["input-error"] else 0
+
+
+def write_failure_error(tasks: list, finished: set[int], failure) -> Exception:
+    """The one-line error that ends a run whose output could not be written (``failure``, a
+    ``write-error`` FrameResult): the first frame not written, how many are done (complete,
+    kept) and that the same command continues from there.
+
+    Frames still being written when the run stopped count as done when their output is there
+    now with this run's post-correction (a frame is renamed into place only once complete).
+    """
+    import os
+
+    from ocio_vp.errors import InputError
+    from ocio_vp.footage.sequences import output_solution
+
+    done = set(finished)
+    for i, task in enumerate(tasks):
+        if i not in done and os.path.lexists(task.dst):
+            if output_solution(task.dst) == (task.post_correction.solution or None):
+                done.add(i)
+    first = next((i for i in range(len(tasks)) if i not in done), None)
+    first_dst = tasks[first].dst if first is not None else failure.dst
+    where = "" if first_dst == failure.dst else f" (writing {os.path.basename(failure.dst)})"
+    return InputError(
+        f"not written: {failure.message}{where}; {len(done)} of {len(tasks)} frames done "
+        "(complete, kept), the others not: fix it, then the same command continues from here",
+        source=first_dst,
+    )
+
+
+def check_free_space(tasks: list, *, margin: float = FREE_SPACE_MARGIN) -> None:
+    """Refuse, before any frame is written, a run the output disk clearly cannot hold.
+
+    The outputs are estimated at the size of their inputs (same format and compression);
+    outputs already there that will be skipped need nothing, and one that will be replaced
+    gives its space back. The run is refused when the free space is below ``margin`` times
+    the estimate (a post-correction changes how frames compress a little, not by half).
+    """
+    import os
+    import shutil
+
+    from ocio_vp.errors import InputError
+
+    need: dict[int, tuple[int, str]] = {}  # device -> (bytes, a folder on it)
+    for task in tasks:
+        if os.path.lexists(task.dst) and not task.overwrite:
+            continue  # skipped (or refused before this check)
+        try:
+            size = os.path.getsize(task.src) - (
+                os.path.getsize(task.dst) if os.path.lexists(task.dst) else 0
+            )
+        except OSError:  # a missing input is reported by its frame
+            continue
+        folder = os.path.dirname(os.path.abspath(task.dst))
+        while not os.path.isdir(folder):
+            folder = os.path.dirname(folder)
+        device = os.stat(folder).st_dev
+        total, _ = need.get(device, (0, folder))
+        need[device] = (total + size, folder)
+    for total, folder in need.values():
+        free = shutil.disk_usage(folder).free
+        if free < margin * total:
+            raise InputError(
+                f"not enough free space: the frames need about {_size(total)}, "
+                f"{_size(free)} free; nothing was written",
+                source=folder,
+            )
+
+
+def _size(count: float) -> str:
+    for unit in ("bytes", "KiB", "MiB", "GiB"):
+        if count < 1024:
+            return f"{count:.0f} {unit}" if unit == "bytes" else f"{count:.1f} {unit}"
+        count /= 1024
+    return f"{count:.1f} TiB"

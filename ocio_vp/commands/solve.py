@@ -345,15 +345,17 @@ def _solve_and_write(args: argparse.Namespace, peak_nits: float, pool) -> list:
             measurements, environments, args.hdri, width=width
         )
         print("\n".join(notes))
-    solutions = _solve(measurements, environments, args)
+    solutions = _solve(measurements, environments, args, pool)
     solutions = [with_wall_encoding(s, args.wall_encoding, peak_nits=peak_nits) for s in solutions]
     solutions = [with_soft_clip(s, args.soft_clip) for s in solutions]
     hdri_files = [spec.partition("=")[2] or spec for spec in args.hdri]
     return write_solutions(solutions, args.out, inputs=[*args.measurements, *hdri_files], pool=pool)
 
 
-def _solve(measurements, environments, args: argparse.Namespace) -> list:
-    """Every environment, on a Dask cluster or here (with a progress bar on a terminal)."""
+def _solve(measurements, environments, args: argparse.Namespace, pool=None) -> list:
+    """Every environment, on a Dask cluster or here (with a progress bar on a terminal); with
+    the writing helper ``pool`` (:func:`ocio_vp.ocio.writer.writer_pool`), every other one there
+    while this process solves the rest, so both cores solve as both write."""
     from ocio_vp.correction.skin_spectra import stage_spectra
     from ocio_vp.errors import InputError
     from ocio_vp.pipeline import SolveOptions, solve_environment
@@ -377,5 +379,45 @@ def _solve(measurements, environments, args: argparse.Namespace) -> list:
         from ocio_vp.footage.distributed import solve_environments
 
         return solve_environments(measurements, environments, options, scheduler=args.scheduler)
+    if pool is not None and len(environments) >= SHARED_SOLVE_MIN:
+        return _solve_shared(measurements, environments, options, pool)
     bar = progress(environments, desc="solving", unit="environment")
     return [solve_environment(measurements, env, options) for env in bar]
+
+
+#: Environments from which ``solve`` shares the solving with its writing helper (fewer: the
+#: helper's own imports would cost more than it saves).
+SHARED_SOLVE_MIN = 8
+
+
+def _solve_shared(measurements, environments, options, pool) -> list:
+    """Odd-numbered environments solved by the helper process, the others here; in order. The
+    helper's results are the same solve (same code, same inputs); if it dies, its share is
+    solved here."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    from ocio_vp.pipeline import solve_environment
+
+    futures = {}
+    for i in range(1, len(environments), 2):
+        try:
+            futures[i] = pool.submit(solve_environment, measurements, environments[i], options)
+        except (BrokenProcessPool, RuntimeError):
+            break
+    solutions: list = [None] * len(environments)
+    with progress(total=len(environments), desc="solving", unit="environment") as bar:
+        try:
+            for i, env in enumerate(environments):
+                if i not in futures:
+                    solutions[i] = solve_environment(measurements, env, options)
+                    bar.update(1)
+            for i, future in futures.items():
+                try:
+                    solutions[i] = future.result()
+                except (BrokenProcessPool, RuntimeError):  # the helper died: solve it here
+                    solutions[i] = solve_environment(measurements, environments[i], options)
+                bar.update(1)
+        finally:
+            for future in futures.values():
+                future.cancel()
+    return solutions

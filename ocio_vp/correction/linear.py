@@ -339,17 +339,14 @@ def loo_root_polynomial(X: np.ndarray, P: np.ndarray, w: np.ndarray, degree: int
 
     Linear in its parameters, so the hat-matrix identity holds: patch j's held-out prediction
     is ``p_j - r_j / (1 - h_jj)`` (r_j the full fit's residual, h_jj its leverage), from one
-    SVD of the weighted expansion (colour-science's, as
-    :mod:`ocio_vp.correction.root_polynomial`); better conditioned than the 6x6 or 13x13
-    normal equations. A patch that alone decides a term (h_jj ~ 1) falls back to them.
+    SVD of the weighted expansion (:func:`ocio_vp.model.expansion.root_polynomial_expansion`,
+    colour-science's terms in its order, without importing colour-science: ~1 s of every
+    solve's start-up); better conditioned than the 6x6 or 13x13 normal equations. A patch
+    that alone decides a term (h_jj ~ 1) falls back to them.
     """
-    # Deferred: colour-science is heavy to import and only this model needs it here.
-    from colour.characterisation import polynomial_expansion_Finlayson2015
+    from ocio_vp.model.expansion import root_polynomial_expansion
 
-    E = np.asarray(
-        polynomial_expansion_Finlayson2015(X, degree, root_polynomial_expansion=True),
-        dtype=np.float64,
-    ).reshape(len(X), -1)
+    E = root_polynomial_expansion(np.asarray(X, dtype=np.float64), degree).reshape(len(X), -1)
     sw = np.sqrt(w)[:, None]
     U, s, vt = np.linalg.svd(E * sw, full_matrices=False)
     keep = s > 1e-13 * s[0]

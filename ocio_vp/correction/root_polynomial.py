@@ -24,7 +24,7 @@ https://doi.org/10.1109/TIP.2015.2405336
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import numpy as np
 
@@ -189,14 +189,40 @@ def bounded_loo_predictions(
     polynomial = loo_root_polynomial(*with_rows(X, P, w, rows), correction.degree)[: len(X)]
     linear = LOO_KERNELS["least-squares"](X, P, w, int(problem.white_patch))
     weights = np.zeros(len(X))
-    for j in np.flatnonzero(w > 0):
-        others = w.copy()
-        others[j] = 0.0
+    for j, domain in _loo_domains(problem, w):
         bounded = RootPolynomialCorrection(
-            correction.coefficients, correction.fallback, _domain(problem, others), correction.fade
+            correction.coefficients, correction.fallback, domain, correction.fade
         )
         weights[j] = bounded.weight(X[j])
     return linear + weights[:, None] * (polynomial - linear)
+
+
+def _loo_domains(problem: QProblem, w: np.ndarray) -> Iterator[tuple[int, FitDomain]]:
+    """(j, the domain of the fitted patches but j) for every fitted patch j.
+
+    Only the hull depends on which patches are fitted (the drive scale and the centre come from
+    the white patch), and leaving out a patch that is not a vertex of the full hull leaves the
+    hull as it is: those patches share the full domain, and only the few vertices are refitted,
+    so the cost grows with the chart, not with its square.
+    """
+    full = _domain(problem, w)
+    fitted = np.flatnonzero(w > 0)
+    u = problem.predicted[w > 0] @ full.to_drive.T  # as fit_domain computes the hull's points
+    total = u.sum(axis=-1)
+    chroma = np.full((len(u), 2), np.nan)
+    chroma[total > 0] = u[total > 0][:, [0, 2]] / total[total > 0, None]
+    points = np.round(chroma, 15)  # fit_domain's hull merges points equal to 15 decimals
+    vertices = {tuple(v) for v in full.hull}
+    counts: dict[tuple[float, float], int] = {}
+    for point in map(tuple, points):
+        counts[point] = counts.get(point, 0) + 1
+    for j, point in zip(fitted, map(tuple, points), strict=True):
+        if point in vertices and counts[point] == 1:
+            others = w.copy()
+            others[j] = 0.0
+            yield int(j), _domain(problem, others)
+        else:
+            yield int(j), full
 
 
 def _domain(problem: QProblem, weights: np.ndarray) -> FitDomain:

@@ -26,6 +26,7 @@ https://doi.org/10.1145/3543664.3543699
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import itertools
@@ -48,6 +49,7 @@ from ocio_vp.model.correction import correction_from_dict, correction_to_dict
 __all__ = [
     "OPTIMIZATIONS",
     "TRANSFORMS",
+    "VIA",
     "EncodedTransform",
     "FrameResult",
     "FrameTask",
@@ -59,6 +61,7 @@ __all__ = [
     "apply_in_place",
     "cpu_processor",
     "existing_output",
+    "frame_failure",
     "load_frame",
     "load_post_correction",
     "other_solution_reason",
@@ -68,6 +71,7 @@ __all__ = [
     "solution_identity",
     "store_frame",
     "transform_frame",
+    "write_failure",
 ]
 
 
@@ -93,13 +97,29 @@ class PostCorrection:
     solution: str = ""
 
 
-def load_post_correction(solution_dir: str | Path, encoding: str = "") -> PostCorrection:
+#: How ``apply`` computes a non-linear Q: its exact ``model`` (default) or the solution's
+#: ``config`` (the OCIO chain every host runs: LUT bakes of the model, their agreement with
+#: it recorded in ``solution.json``). A 3x3 Q is the config's matrix either way.
+VIA = ("model", "config")
+
+
+def load_post_correction(
+    solution_dir: str | Path, encoding: str = "", *, via: str = "model"
+) -> PostCorrection:
     """Read ``solution.json`` and its config; check that the named colorspaces exist.
 
     ``encoding``: the footage's encoding (a colour-science decoding name, ``linear`` or ``""``
-    for linear footage)."""
+    for linear footage). ``via``: see :data:`VIA`."""
     if encoding == "linear":
         encoding = ""
+    if via not in VIA:
+        raise InputError(f"expected one of {', '.join(VIA)}, got {via!r}", key="--via")
+    if via == "config" and encoding:
+        raise InputError(
+            "the config's chain takes linear footage; encoded footage is corrected with the "
+            "model (leave --via out)",
+            key="--via",
+        )
     import PyOpenColorIO as OCIO
 
     from ocio_vp.formats.solution import load_solution
@@ -137,11 +157,18 @@ def load_post_correction(solution_dir: str | Path, encoding: str = "") -> PostCo
             encoding,
             identity,
         )
-    if not solution.correction.linear:  # the exact model, not the config's LUT bake of it
+    if solution.correction.linear:
         return PostCorrection(
-            str(config_path), source, target, solution.environment, "model", model, "", identity
+            str(config_path), source, target, solution.environment, solution=identity
         )
-    return PostCorrection(str(config_path), source, target, solution.environment, solution=identity)
+    if via == "config":  # the config's LUT chains: the same pixels as every host, not the model
+        identity = f"{identity}, via config"
+        return PostCorrection(
+            str(config_path), source, target, solution.environment, solution=identity
+        )
+    return PostCorrection(  # the exact model, not the config's LUT bake of it
+        str(config_path), source, target, solution.environment, "model", model, "", identity
+    )
 
 
 def solution_identity(stage: str, environment: str, model: str, encoding: str = "") -> str:
@@ -212,25 +239,47 @@ class OcioTransform:
 
 @dataclass(frozen=True)
 class ModelTransform:
-    """A :class:`PixelTransform` applying a non-linear post-correction exactly, in float64
-    (:meth:`ocio_vp.model.correction.RootPolynomialCorrection.apply` and the other kinds).
+    """A :class:`PixelTransform` applying a non-linear post-correction exactly: the model's
+    formulas (:mod:`ocio_vp.model.correction`), evaluated band by band by
+    :func:`ocio_vp.model.pixels.pixel_function`.
 
-    Pixels are converted to float64 in bands of :attr:`band` pixels (bounded memory; 16384
-    pixels keep a band's temporaries in the CPU's cache, several times faster than larger
-    bands) and stored back in the buffer's own type (a half result that overflows becomes inf,
-    as OCIO's half output does). Roots are sign-preserving, as in the fit: 0 maps to 0, and a
-    negative channel gives a finite value continuous with the positive side.
+    Half buffers (EXR footage) are computed in float32: it agrees with the float64 model to
+    about 5e-7 of the pixel's largest channel, a thousandth of half's rounding step, so a
+    result differs from the float64 one rounded to half by at most one half step, and only
+    where that value lies within 5e-7 of a rounding midpoint. float32 buffers are computed in
+    float64 and rounded once. Each band of :attr:`band` pixels is copied into planes (bounded
+    memory, the band's temporaries stay in the CPU's cache) and stored back in the buffer's
+    own type (a half result that overflows becomes inf, as OCIO's half output does). Roots
+    are sign-preserving, as in the fit: 0 maps to 0, and a negative channel gives a finite
+    value continuous with the positive side.
     """
 
     correction: Any
     band: int = 1 << 14
 
+    @functools.cached_property
+    def functions(self) -> dict[Any, tuple[Any, Callable[[np.ndarray], np.ndarray]]]:
+        """Buffer type -> (arithmetic type, the pixel function in it)."""
+        from ocio_vp.model.pixels import pixel_function
+
+        return {
+            np.dtype(np.float16): (np.float32, pixel_function(self.correction, np.float32)),
+            np.dtype(np.float32): (np.float64, pixel_function(self.correction, np.float64)),
+        }
+
     def __call__(self, rgb: np.ndarray) -> None:
         flat = rgb.reshape(-1, 3)  # a view when rgb is C-contiguous (the protocol), else a copy
+        arithmetic, f = self.functions[flat.dtype]
+        planes = np.empty((3, min(self.band, len(flat))), dtype=arithmetic)
         for start in range(0, len(flat), self.band):
             block = flat[start : start + self.band]
+            X = planes[:, : len(block)]
+            for k in range(3):
+                np.copyto(X[k], block[:, k])
+            out = f(X)
             with np.errstate(over="ignore"):  # half overflow: inf, documented above
-                block[...] = self.correction.apply(block)
+                for k in range(3):
+                    np.copyto(block[:, k], out[k], casting="same_kind")
         if not np.shares_memory(flat, rgb):
             rgb[...] = flat.reshape(rgb.shape)
 
@@ -447,17 +496,23 @@ def store_frame(dst: str | Path, parts: list[tuple[Any, np.ndarray]]) -> None:
     Raises
     ------
     OSError
-        The output could not be written.
+        The output could not be written (disk full, read-only, no permission, a file where a
+        folder should be...): ``filename`` is ``dst`` (never the temporary name) and
+        ``strerror`` says why, in a few words.
     """
     dst = Path(dst)
-    dst.parent.mkdir(parents=True, exist_ok=True)
     # Same folder (same file system) for an atomic rename; the extension picks the format.
     tmp = dst.with_name(f".{dst.stem}.partial-{os.getpid()}{dst.suffix}")
     try:
+        dst.parent.mkdir(parents=True, exist_ok=True)
         _write_all(tmp, parts)
         os.replace(tmp, dst)
+    except OSError as exc:
+        reason = exc.strerror or str(exc).replace(f"{tmp}: ", "").replace(str(tmp), dst.name)
+        raise OSError(exc.errno, reason, str(dst)) from exc
     finally:
-        tmp.unlink(missing_ok=True)
+        with contextlib.suppress(OSError):  # a folder that cannot be listed: nothing to remove
+            tmp.unlink(missing_ok=True)
 
 
 def apply_file(src: str | Path, dst: str | Path, pc: PostCorrection, *, threads: int = 1) -> int:
@@ -489,7 +544,9 @@ class FrameTask:
 
 @dataclass(frozen=True)
 class FrameResult:
-    """What happened to one frame: ``status`` is done, skipped, input-error or error."""
+    """What happened to one frame: ``status`` is done, skipped, input-error (this frame's
+    input), write-error (the output could not be written: disk full, read-only, permissions;
+    ``message`` is the reason, without the path) or error (a bug)."""
 
     src: str
     dst: str
@@ -534,12 +591,28 @@ def run_task(task: FrameTask) -> FrameResult:
         return ended
     try:
         set_io_threads(task.threads)
-        apply_file(task.src, task.dst, task.post_correction, threads=task.threads)
-    except InputError as exc:
-        return FrameResult(task.src, task.dst, "input-error", str(exc))
-    except Exception as exc:  # a write failure, out of disk...: report it, go on
-        return FrameResult(task.src, task.dst, "error", f"{type(exc).__name__}: {exc}")
+        parts = load_frame(task.src)
+        transform_frame(parts, task.post_correction, threads=task.threads, source=task.src)
+    except Exception as exc:  # this frame's input (or a bug): reported, the others go on
+        return frame_failure(task, exc)
+    try:
+        store_frame(task.dst, parts)
+    except OSError as exc:  # out of disk, read-only...: the caller stops the run
+        return write_failure(task, exc)
     return FrameResult(task.src, task.dst, "done", seconds=time.perf_counter() - start)
+
+
+def frame_failure(task: FrameTask, exc: Exception) -> FrameResult:
+    """The result of a frame whose reading or transform raised ``exc``."""
+    if isinstance(exc, InputError):
+        return FrameResult(task.src, task.dst, "input-error", str(exc))
+    return FrameResult(task.src, task.dst, "error", f"{type(exc).__name__}: {exc}")
+
+
+def write_failure(task: FrameTask, exc: OSError) -> FrameResult:
+    """The result of a frame :func:`store_frame` could not write (``exc``)."""
+    reason = exc.strerror or str(exc) or type(exc).__name__
+    return FrameResult(task.src, task.dst, "write-error", " ".join(str(reason).split()))
 
 
 def set_io_threads(threads: int) -> None:

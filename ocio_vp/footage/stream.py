@@ -19,15 +19,16 @@ from collections.abc import Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
-from ocio_vp.errors import InputError
 from ocio_vp.footage.apply import (
     FrameResult,
     FrameTask,
     existing_output,
+    frame_failure,
     load_frame,
     set_io_threads,
     store_frame,
     transform_frame,
+    write_failure,
 )
 
 __all__ = ["HELD", "WRITERS", "apply_frames"]
@@ -36,12 +37,6 @@ __all__ = ["HELD", "WRITERS", "apply_frames"]
 WRITERS = 2
 #: The most frames held in memory at once: one being read, one transformed, the writers'.
 HELD = 2 + WRITERS
-
-
-def _failure(task: FrameTask, exc: Exception) -> FrameResult:
-    if isinstance(exc, InputError):
-        return FrameResult(task.src, task.dst, "input-error", str(exc))
-    return FrameResult(task.src, task.dst, "error", f"{type(exc).__name__}: {exc}")
 
 
 def _load(task: FrameTask) -> tuple[float, Any]:
@@ -53,14 +48,16 @@ def _load(task: FrameTask) -> tuple[float, Any]:
     try:
         return start, load_frame(task.src)
     except Exception as exc:  # reported in its result, the other frames go on
-        return start, _failure(task, exc)
+        return start, frame_failure(task, exc)
 
 
 def _store(task: FrameTask, start: float, parts: Any) -> FrameResult:
     try:
         store_frame(task.dst, parts)
-    except Exception as exc:  # out of disk, permissions...: reported, the others go on
-        return _failure(task, exc)
+    except OSError as exc:  # out of disk, permissions...: the run stops after this frame
+        return write_failure(task, exc)
+    except Exception as exc:  # a bug: reported, the others go on
+        return frame_failure(task, exc)
     return FrameResult(task.src, task.dst, "done", seconds=time.perf_counter() - start)
 
 
@@ -88,7 +85,7 @@ def apply_frames(tasks: Sequence[FrameTask], *, threads: int) -> Iterator[tuple[
             try:
                 transform_frame(parts, task.post_correction, threads=threads, source=task.src)
             except Exception as exc:  # no RGB in this frame...: reported, the others go on
-                yield i, _failure(task, exc)
+                yield i, frame_failure(task, exc)
                 continue
             while len(behind) >= WRITERS:  # bounded memory: wait for the oldest write
                 j, written = behind.popleft()

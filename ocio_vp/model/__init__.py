@@ -34,6 +34,7 @@ from ocio_vp.model.expansion import (
     root_polynomial_term_powers,
     root_polynomial_terms,
 )
+from ocio_vp.model.pixels import PixelFunction, pixel_function
 
 __all__ = [
     "DEFAULT_BRIGHT",
@@ -47,6 +48,7 @@ __all__ = [
     "ROOT_POLYNOMIAL_TERMS",
     "FitDomain",
     "MatrixCorrection",
+    "PixelFunction",
     "PostCorrection",
     "ProtectedCorrection",
     "ProtectionPoint",
@@ -57,6 +59,7 @@ __all__ = [
     "fit_domain",
     "matrix_invertible",
     "newton_inverse",
+    "pixel_function",
     "root_polynomial_expansion",
     "root_polynomial_jacobian",
     "root_polynomial_term_powers",

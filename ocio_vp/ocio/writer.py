@@ -133,14 +133,14 @@ def _write_into(stage: Path, solutions: Sequence[Solution], pool: Executor | Non
     for folder in folders:
         folder.mkdir()
     futures: dict[int, Future] = {}
-    if pool is not None and len(solutions) > 1:
-        for i in sorted(_share(solutions)):
-            try:
-                futures[i] = pool.submit(write_environment, solutions[i], folders[i])
-            except (BrokenProcessPool, RuntimeError):  # the helper died: write it here
-                break
     written: list = [None] * len(solutions)
-    try:
+    try:  # an interrupt while submitting still waits for what was submitted (finally)
+        if pool is not None and len(solutions) > 1:
+            for i in sorted(_share(solutions)):
+                try:
+                    futures[i] = pool.submit(write_environment, solutions[i], folders[i])
+                except (BrokenProcessPool, RuntimeError):  # the helper died: write it here
+                    break
         for i, solution in enumerate(solutions):
             if i not in futures:
                 written[i] = write_environment(solution, folders[i])
@@ -155,12 +155,22 @@ def _write_into(stage: Path, solutions: Sequence[Solution], pool: Executor | Non
                 shutil.rmtree(folders[i], ignore_errors=True)
                 folders[i].mkdir()
                 written[i] = write_environment(solutions[i], folders[i])
+    except KeyboardInterrupt:  # stopped (Ctrl-C, kill): the helper's bake is not waited for
+        _stop_helper(pool)
+        raise
     finally:
         # Nothing may still be writing into the staging folder once it is removed.
         for future in futures.values():
             future.cancel()
         wait(list(futures.values()))
     return written
+
+
+def _stop_helper(pool: Executor | None) -> None:
+    """End the helper process of ``pool`` now (its futures fail; the pool is broken)."""
+    for process in list((getattr(pool, "_processes", None) or {}).values()):
+        process.terminate()
+        process.join(5)
 
 
 def write_solutions(

@@ -58,6 +58,9 @@ def canonical_encoding(name: str, *, source: object = None, key: str | None = No
     """Return the canonical spelling of an encoding name (case-insensitive), or raise."""
     import difflib
 
+    if isinstance(name, str) and name.lower() == "linear":
+        return "linear"  # the default: no need to import colour-science (~1 s) to know it
+
     names = _encodings()
     by_lower = {n.lower(): n for n in names}
     if isinstance(name, str) and name.lower() in by_lower:

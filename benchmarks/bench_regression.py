@@ -1,0 +1,332 @@
+"""Whole commands as a user runs them, side by side with another checkout (last round's).
+
+Every row is a whole command in a fresh interpreter (``python -m ocio_vp.cli ...``, start-up
+included), run in rounds that interleave every command, so a load that drifts hits them all
+alike; a cell is the best wall time of its rounds, and the CPU time (user + system, the
+command's own processes) of that run. ``apply`` is judged against the I/O limit: a plain
+OpenImageIO read + write of the same frames in one process (``bench_apply``'s loop), as a
+ratio of speeds (plain time / command time) measured in the same rounds.
+
+The other checkout: set ``OCIO_VP_BASELINE_PYTHON`` to the Python of an environment where it
+is installed (the README says how to make one for last round's commit); without it
+the baseline columns say so. Each checkout solves its own calibration for its ``apply`` rows
+(solution files change between rounds); both read the same measurement files and frames.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from benchmarks import cached_bytecode, markdown_table
+
+#: The environment variable naming the baseline checkout's Python.
+BASELINE_ENV = "OCIO_VP_BASELINE_PYTHON"
+#: The commit the committed figures compare against (last round).
+BASELINE_COMMIT = "1631fec"
+
+
+@dataclasses.dataclass
+class Cell:
+    """Wall and CPU seconds of each round of one command."""
+
+    wall: list[float] = dataclasses.field(default_factory=list)
+    cpu: list[float] = dataclasses.field(default_factory=list)
+
+    def best(self) -> tuple[float, float]:
+        i = int(np.argmin(self.wall))
+        return self.wall[i], self.cpu[i]
+
+
+def _run(cmd: list[str], env: dict[str, str], cwd: Path) -> tuple[float, float]:
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=cwd)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if proc.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd[:6])}... exited {proc.returncode}: {proc.stderr[-400:]}")
+    return wall, after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
+
+
+_PLAIN = """
+import os, sys
+import OpenImageIO as oiio
+out = sys.argv[1]
+os.makedirs(out, exist_ok=True)
+for src in sys.argv[2:]:
+    inp = oiio.ImageInput.open(src)
+    spec = inp.spec()
+    pixels = inp.read_image(0, 0, 0, spec.nchannels, spec.format)
+    inp.close()
+    dst = os.path.join(out, os.path.basename(src))
+    output = oiio.ImageOutput.create(dst)
+    output.open(dst, spec)
+    output.write_image(pixels)
+    output.close()
+"""
+
+
+def _inputs(root: Path, quick: bool) -> dict[str, Path]:
+    """Measurement files (24 patches, 1000 patches, 150 environments) and 6 master frames."""
+    from benchmarks.bench_apply import write_frames
+    from benchmarks.bench_solve_scaling import _mixtures
+    from ocio_vp.formats.measurements import save_measurements
+    from ocio_vp.simulator.stage import simulate_measurements
+
+    rng = np.random.default_rng(7)
+    one = simulate_measurements(["incandescent"])
+    env = one.environments[0]
+    extra = _mixtures(rng, 976, 24)
+    srl = np.concatenate([one.SRL, np.einsum("kj,jab->kab", extra, one.SRL)])
+    target = np.concatenate([env.target_chart, extra @ env.target_chart])
+    srl[24:] *= 1 + 0.005 * rng.standard_normal(srl[24:].shape)
+    target[24:] *= 1 + 0.005 * rng.standard_normal(target[24:].shape)
+    chart = dataclasses.replace(
+        one, SRL=srl, environments=(dataclasses.replace(env, target_chart=target),)
+    )
+    names = ["incandescent", "direct_sun", "outdoor_shade", "indoor_daylight", "warm_white_led"]
+    six = simulate_measurements([*names, "rgb_led_white"])
+    count = 30 if quick else 150
+    many = []
+    for i in range(count):  # the paper's environments again, each chart with its own 1% noise
+        e = six.environments[i % len(six.environments)]
+        noisy = e.target_chart * (1 + 0.01 * rng.standard_normal(e.target_chart.shape))
+        many.append(dataclasses.replace(e, name=f"{e.name}_{i:03d}", target_chart=noisy))
+    files = {
+        "one": root / "one24.yaml",
+        "chart": root / "chart1000.yaml",
+        "many": root / f"env{count}.yaml",
+    }
+    save_measurements(one, files["one"])
+    save_measurements(chart, files["chart"])
+    save_measurements(dataclasses.replace(six, environments=tuple(many)), files["many"])
+    height, width = (1080, 2048) if quick else (2160, 4096)
+    files["master"] = write_frames(root / "master", 6, height, width)[0].parent
+    return files
+
+
+def _frames(root: Path, master: Path, count: int) -> list[Path]:
+    """``count`` distinct frame files (copies of the 6 masters), so each read is its own."""
+    folder = root / f"frames{count}"
+    folder.mkdir(exist_ok=True)
+    masters = sorted(master.glob("plate.*.exr"))
+    out = []
+    for i in range(count):
+        out.append(folder / f"plate.{1001 + i:04d}.exr")
+        shutil.copyfile(masters[i % len(masters)], out[-1])
+    return out
+
+
+def _commands(pythons, files, root: Path, frames: list[Path]) -> dict[tuple[str, str], list]:
+    """(row, checkout) -> command."""
+    pattern = str(frames[0].parent / "plate.####.exr")
+    out = {}
+    for who, py in pythons.items():
+        cli = [py, "-m", "ocio_vp.cli"]
+        calib = root / who
+        rows = [("3x3 Q (least squares)", "least-squares", [])]
+        rows.append(("default Q", "auto", []))
+        if who == "this":  # the option is new
+            rows.append(("default Q, `--via config`", "auto", ["--via", "config"]))
+        for label, method, extra in rows:
+            solution = calib / method / "incandescent"
+            folder = root / "o" / who / f"{method}{len(extra)}"
+            out[(f"`apply`, {label}", who)] = [
+                *cli, "apply", str(solution), pattern, "--out", str(folder),
+                "--overwrite", "--no-progress", *extra,
+            ]  # fmt: skip
+    return out
+
+
+def _solve_commands(pythons, files, root: Path) -> dict[tuple[str, str], list]:
+    out = {}
+    for who, py in pythons.items():
+        cli = [py, "-m", "ocio_vp.cli", "solve"]
+        o = str(root / "s" / who)
+        out[("`solve`, 24 patches, 1 environment, least squares", who)] = [
+            *cli, str(files["one"]), "--out", o, "--method", "least-squares",
+        ]  # fmt: skip
+        out[("`solve`, 24 patches, 1 environment, default", who)] = [
+            *cli, str(files["one"]), "--out", o,
+        ]  # fmt: skip
+        out[("`solve`, 1000 patches, least squares", who)] = [
+            *cli, str(files["chart"]), "--out", o, "--method", "least-squares",
+        ]  # fmt: skip
+        out[("`solve`, 1000 patches, default", who)] = [*cli, str(files["chart"]), "--out", o]
+        out[(f"`solve`, {files['many'].stem.removeprefix('env')} environments, default", who)] = [
+            *cli, str(files["many"]), "--out", o,
+        ]  # fmt: skip
+    return out
+
+
+def _rounds(commands: dict, rounds: int, env: dict, cwd: Path, warmup: bool = True) -> dict:
+    cells = {key: Cell() for key in commands}
+    for cmd in commands.values() if warmup else ():  # page cache, bytecode cache
+        _run(cmd, env, cwd)
+    for _ in range(rounds):
+        for key, cmd in commands.items():
+            wall, cpu = _run(cmd, env, cwd)
+            cells[key].wall.append(wall)
+            cells[key].cpu.append(cpu)
+    return cells
+
+
+def _fmt(seconds: float) -> str:
+    return f"{seconds:.2f} s"
+
+
+def _table(cells: dict, rows: list[str], plain: Cell | None, targets: dict[str, str]) -> str:
+    header = ["command", "this checkout: wall (CPU)", f"{BASELINE_COMMIT}: wall (CPU)"]
+    if plain is not None:
+        header += ["speed / plain read + write: this", BASELINE_COMMIT]
+    header.append("target")
+    body = []
+    for row in rows:
+        line = [row]
+        speeds = []
+        for who in ("this", "baseline"):
+            cell = cells.get((row, who))
+            if cell is None:
+                line.append("not run")
+                speeds.append("-")
+                continue
+            wall, cpu = cell.best()
+            line.append(f"{_fmt(wall)} ({_fmt(cpu)})")
+            if plain is not None:
+                speeds.append(f"{plain.best()[0] / wall:.2f}x")
+        if plain is not None:
+            line += speeds
+        line.append(targets.get(row, ""))
+        body.append(line)
+    return markdown_table(header, body)
+
+
+def _apply_section(pythons, files, root, env, count: int, rounds: int) -> str:
+    frames = _frames(root, files["master"], count)
+    commands = {("plain read + write", "this"): [
+        pythons["this"], "-c", _PLAIN, str(root / "o" / "plain"), *map(str, frames),
+    ]}  # fmt: skip
+    commands.update(_commands(pythons, files, root, frames))
+    load = os.getloadavg()[0]
+    # A long sequence runs once: its frames are in the page cache (just copied) and the
+    # bytecode cache is filled by the short one.
+    cells = _rounds(commands, rounds, env, root, warmup=count <= 8)
+    plain = cells.pop(("plain read + write", "this"))
+    agreement = _agreement(root / "o" / "this", frames[0].name)
+    rows = list(dict.fromkeys(row for row, _ in cells))
+    targets = {
+        "`apply`, 3x3 Q (least squares)": ">= 0.9x",
+        "`apply`, default Q": ">= 0.5x",
+        "`apply`, default Q, `--via config`": ">= 0.9x",
+    }
+    wall, cpu = plain.best()
+    return "\n".join(
+        [
+            f"### `apply` on {count} frames ({_frame_size(files)} half-float zip EXR), best of "
+            f"{rounds} rounds",
+            "",
+            f"Plain OpenImageIO read + write of the same frames: {_fmt(wall)} ({_fmt(cpu)} CPU). "
+            f"Load average (1 min) at the start: {load:.1f} on {os.cpu_count()} cores.",
+            "",
+            _table(cells, rows, plain, targets),
+            "",
+            agreement,
+        ]
+    )
+
+
+def _agreement(out: Path, name: str) -> str:
+    """How far ``--via config`` (the config's LUT chain) is from the exact model on a frame."""
+    import OpenImageIO as oiio
+
+    exact = oiio.ImageBuf(str(out / "auto0" / name)).get_pixels(oiio.FLOAT).astype(np.float64)
+    chain = oiio.ImageBuf(str(out / "auto2" / name)).get_pixels(oiio.FLOAT).astype(np.float64)
+    scale = np.maximum(np.abs(exact).max(axis=-1), 1e-3)
+    relative = np.abs(chain - exact).max(axis=-1) / scale
+    return (
+        f"- `--via config` against the exact model on {name} (half output): "
+        f"{np.percentile(relative, 99) * 100:.3g}% of the pixel's largest channel at the 99th "
+        f"percentile, {relative.max() * 100:.3g}% at worst; the model itself is computed in "
+        "float32 on half frames (within 5e-7 of float64, tested)."
+    )
+
+
+def _frame_size(files) -> str:
+    import OpenImageIO as oiio
+
+    spec = oiio.ImageInput.open(str(sorted(files["master"].glob("*.exr"))[0])).spec()
+    return f"{spec.width}x{spec.height}"
+
+
+def _solve_section(pythons, files, root, env, rounds: int) -> str:
+    commands = _solve_commands(pythons, files, root)
+    load = os.getloadavg()[0]
+    longest = {k: v for k, v in commands.items() if "environments" in k[0]}
+    small = {k: v for k, v in commands.items() if k not in longest}
+    cells = _rounds(small, rounds, env, root)
+    cells.update(_rounds(longest, 1, env, root, warmup=False))  # the longest: once
+    rows = list(dict.fromkeys(row for row, _ in commands))
+    many = files["many"].stem.removeprefix("env")
+    targets = {
+        "`solve`, 1000 patches, least squares": "<= 2 s",
+        "`solve`, 1000 patches, default": "<= 3 s",
+        f"`solve`, {many} environments, default": "<= 20 s" if many == "150" else "",
+    }
+    return "\n".join(
+        [
+            f"### `solve`, best of {rounds} rounds ({many} environments: one run)",
+            "",
+            f"Load average (1 min) at the start: {load:.1f} on {os.cpu_count()} cores.",
+            "",
+            _table(cells, rows, None, targets),
+        ]
+    )
+
+
+def _solve_calibrations(pythons, files, root: Path, env) -> None:
+    """Each checkout's own solutions of the incandescent environment, for its apply rows."""
+    for who, py in pythons.items():
+        for method in ("least-squares", "auto"):
+            cmd = [py, "-m", "ocio_vp.cli", "solve", str(files["one"]), "--out"]
+            _run([*cmd, str(root / who / method), "--method", method], env, root)
+
+
+def run(quick: bool = False) -> str:
+    baseline = os.environ.get(BASELINE_ENV)
+    pythons = {"this": sys.executable}
+    if baseline:
+        pythons["baseline"] = baseline = os.path.abspath(baseline)  # commands run elsewhere
+    with tempfile.TemporaryDirectory() as tmp, cached_bytecode() as env:
+        root = Path(tmp)
+        env = {**env, "PYTHONPATH": ""}  # each interpreter imports its own checkout
+        files = _inputs(root, quick)
+        _solve_calibrations(pythons, files, root, env)
+        parts = [
+            "## Whole commands against last round",
+            "",
+            __doc__.split("\n\n", 1)[1].replace("\n", " ").strip(),
+            "",
+            f"Baseline: {'`' + baseline + '`' if baseline else f'not run ({BASELINE_ENV} unset)'}.",
+            "",
+        ]
+        for count in (3,) if quick else (6, 48):
+            rounds = 1 if (quick or count > 8) else 3
+            parts += [_apply_section(pythons, files, root, env, count, rounds), ""]
+            shutil.rmtree(root / f"frames{count}")
+            shutil.rmtree(root / "o", ignore_errors=True)
+        parts += [_solve_section(pythons, files, root, env, 1 if quick else 2)]
+    return "\n".join(parts)
+
+
+if __name__ == "__main__":
+    print(run(quick="--quick" in sys.argv))
