@@ -15,7 +15,7 @@ import time
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
-__all__ = ["cached_bytecode", "fmt_ms", "markdown_table", "median_time"]
+__all__ = ["cached_bytecode", "fmt_ms", "markdown_table", "median_time", "replace_section"]
 
 
 def median_time(func: Callable[[], Any], *, repeats: int = 5, warmup: int = 1) -> float:
@@ -40,6 +40,30 @@ def markdown_table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
     lines = ["| " + " | ".join(map(str, header)) + " |", "|" + "---|" * len(header)]
     lines += ["| " + " | ".join(map(str, row)) + " |" for row in rows]
     return "\n".join(lines)
+
+
+def replace_section(document: str, section: str) -> str:
+    """``document`` with the section headed by ``section``'s first line (up to the next heading
+    of the same level, or the end) replaced by ``section``; appended when it has none.
+
+    >>> replace_section("# T\\n\\n## A\\nold\\n\\n## B\\nb\\n", "## A\\nnew\\n")
+    '# T\\n\\n## A\\nnew\\n\\n## B\\nb\\n'
+    >>> replace_section("# T\\n", "## A\\nnew\\n")
+    '# T\\n\\n## A\\nnew\\n'
+    """
+    heading = section.split("\n", 1)[0]
+    level = heading[: len(heading) - len(heading.lstrip("#"))] + " "
+    body = section.rstrip("\n") + "\n"
+    text = document.rstrip("\n")
+    if not text:
+        return body
+    lines = text.split("\n")
+    if heading not in lines:
+        return f"{text}\n\n{body}"
+    start = lines.index(heading)
+    end = next((i for i in range(start + 1, len(lines)) if lines[i].startswith(level)), len(lines))
+    tail = "\n".join(lines[end:])
+    return "\n".join(lines[:start]) + "\n" + body + (f"\n{tail}\n" if tail else "")
 
 
 @contextlib.contextmanager

@@ -313,7 +313,7 @@ def _solve_cell(stage, measurements, env, noise, seed, scene, with_curve) -> Sol
         "protect": _judge(scene, lit, auto.correction.apply),
     }
     solve = Solve(stage.camera_name, stage.led_description, env.name, noise, seed,
-                  str(auto.diagnostics.get("model", "auto")), judged)  # fmt: skip
+                  str(auto.diagnostics.model or "auto"), judged)  # fmt: skip
     if with_curve:
         _curve(scene, lit, auto.correction, judged["default"], solve.curve)
     return solve

@@ -106,7 +106,7 @@ def _solve_and_judge(results, stage, measurements, env, noise, method, held_out)
         results.failures[key].append(str(error))
         return
     results.seconds[method] += time.perf_counter() - start
-    results.models[(method, env.name)][solution.diagnostics.get("model", method)] += 1
+    results.models[(method, env.name)][solution.diagnostics.model or method] += 1
     for name, reflectances in held_out.items():
         errors = held_out_errors(
             stage,

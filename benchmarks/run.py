@@ -7,7 +7,9 @@ fails is reported in its section (with the error) and makes the command exit 1; 
 still run. ``--quick`` uses smaller inputs and fewer repeats (about 3 minutes on 2 cores). A module with a
 ``DOC`` attribute (e.g. ``bench_accuracy``: ``DOC = "accuracy.md"``) writes its own document,
 ``docs/<DOC>``, instead of a section of docs/performance.md. ``--skip accuracy`` regenerates
-docs/performance.md alone (every section of it, in one run).
+docs/performance.md alone (every section of it, in one run). A module with a ``SECTION_OF``
+attribute (``bench_skin``: ``SECTION_OF = "accuracy.md"``) puts its section into that document:
+after the owner's in the same run, or in place of its old copy in the file on disk.
 """
 
 from __future__ import annotations
@@ -131,6 +133,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--update regenerates the sections given with --only")
     sections = [header(args.quick)]
     own_docs: dict[str, str] = {}
+    sections_of: list[tuple[str, str]] = []  # (document, section) of SECTION_OF modules
     failed = 0
     for name in bench_modules(args.only, skip=args.skip):
         start = time.perf_counter()
@@ -144,8 +147,11 @@ def main(argv: list[str] | None = None) -> int:
         took = time.perf_counter() - start
         print(f"benchmarks: {name} done in {took:.1f} s", file=sys.stderr, flush=True)
         doc = getattr(sys.modules.get(f"benchmarks.{name}"), "DOC", None)
+        section_of = getattr(sys.modules.get(f"benchmarks.{name}"), "SECTION_OF", None)
         if doc and "FAILED" not in body[:200]:
             own_docs[doc] = f"{body}\n\n_(`{name}` took {took:.0f} s)_\n"
+        elif section_of and "FAILED" not in body[:200]:
+            sections_of.append((section_of, f"{body}\n\n_(`{name}` took {took:.0f} s)_\n"))
         else:
             sections.append(f"{body}\n\n_(`{name}` took {took:.0f} s)_\n")
     sections.append(
@@ -153,6 +159,12 @@ def main(argv: list[str] | None = None) -> int:
         + ", ".join(f"{v:.1f}" for v in os.getloadavg())
         + ".\n"
     )
+    from benchmarks import replace_section
+
+    for doc, section in sections_of:  # into this run's document, or the one on disk
+        path = ROOT / "docs" / doc
+        base = own_docs.get(doc) or (path.read_text(encoding="utf-8") if path.exists() else "")
+        own_docs[doc] = replace_section(base, section)
     text = "\n".join(sections)
     if args.update:
         target = Path(args.out or ROOT / "docs" / "performance.md")

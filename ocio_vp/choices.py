@@ -17,11 +17,13 @@ __all__ = [
     "DEFAULT_FOOTAGE_ENCODING",
     "DEFAULT_METHOD",
     "DEFAULT_PEAK_NITS",
+    "DEFAULT_PRIORITY",
     "DEFAULT_WALL_ENCODING",
     "DEFAULT_WHITE_PATCH",
     "EXPORT_TARGETS",
     "LINEAR_METHODS",
     "OPTIMIZATIONS",
+    "PRIORITIES",
     "Q_METHODS",
     "WALL_ENCODINGS",
     "BlackLevelMethod",
@@ -50,6 +52,12 @@ Q_METHODS = (
 LINEAR_METHODS = frozenset(Q_METHODS) - {"auto", "root-polynomial", "root-polynomial-3"}
 #: The simplest model the scene needs (``auto``); ``least-squares`` is the paper's eq. 5.
 DEFAULT_METHOD = "auto"
+
+#: What the default post-correction puts first (``solve --priority``, ``priority:`` per
+#: environment): ``general`` colours (never losing to least squares on skin), or ``skin``
+#: (faces first, general reflectances at a bounded cost: docs/skin.md).
+PRIORITIES = ("general", "skin")
+DEFAULT_PRIORITY = "general"
 
 #: In-frustum black-level offset: ``exact`` (``-M b``) or the paper's ``b / w_camera``.
 BlackLevelMethod = Literal["exact", "paper"]

@@ -39,13 +39,23 @@ from ocio_vp.calibration.panels import (
     panel_lights,
     panel_solutions,
 )
-from ocio_vp.choices import DEFAULT_BLACK_LEVEL, DEFAULT_METHOD, BlackLevelMethod
+from ocio_vp.choices import (
+    DEFAULT_BLACK_LEVEL,
+    DEFAULT_METHOD,
+    DEFAULT_PRIORITY,
+    PRIORITIES,
+    BlackLevelMethod,
+)
 from ocio_vp.correction.extrapolation import Extrapolation, extrapolation
 from ocio_vp.correction.guards import check_problem, singular_q_cause
 from ocio_vp.correction.outliers import Inconsistency, inconsistent_patches
 from ocio_vp.correction.perceptual import default_camera_to_xyz
 from ocio_vp.correction.problem import fit_least_squares
 from ocio_vp.correction.registry import QFit, QProblem, solve_post_correction
+from ocio_vp.correction.skin import chart_skin_samples, joined, patch_skin_samples
+from ocio_vp.correction.skin_figures import skin_figures
+from ocio_vp.correction.skin_priority import q_skin_priority
+from ocio_vp.correction.skin_spectra import StageSpectra, spectral_skin_samples
 from ocio_vp.correction.validation import CLOSED_FORM_METHODS, cross_validated_error
 from ocio_vp.errors import InputError
 from ocio_vp.fixtures.lighting import (
@@ -59,6 +69,7 @@ from ocio_vp.formats.measurements import Environment, Measurements
 from ocio_vp.formats.panel_solution import PanelSolution
 from ocio_vp.formats.panels import primary_panel
 from ocio_vp.formats.records import json_value
+from ocio_vp.formats.skin import SkinFigures
 from ocio_vp.formats.solution import Solution
 from ocio_vp.formats.synthesis import synthesis_to_dict, synthesis_warnings
 from ocio_vp.metrics import error_relative_to_white
@@ -85,7 +96,12 @@ class SolveOptions:
     fit every unclipped patch, even those inconsistent with the rest of the chart
     (:func:`ocio_vp.correction.outliers.inconsistent_patches`; otherwise excluded and named);
     ``protect_emitters``: the post-correction fades to the identity where no reflective surface
-    lit by the stage can be (:class:`ocio_vp.model.ProtectedCorrection`).
+    lit by the stage can be (:class:`ocio_vp.model.ProtectedCorrection`); ``priority``:
+    ``"skin"`` fits the default post-correction with faces first
+    (:mod:`ocio_vp.correction.skin_priority`; only with ``method="auto"``), ``"general"`` is
+    the default's own choice; an environment's ``priority`` in the measurements file wins;
+    ``spectra``: the panel's LED spectra and the camera's sensitivities (and location lights),
+    from which skin samples are computed too (:mod:`ocio_vp.correction.skin_spectra`).
     """
 
     method: str = DEFAULT_METHOD
@@ -94,8 +110,12 @@ class SolveOptions:
     fixtures: bool = True
     keep_all_patches: bool = False
     protect_emitters: bool = False
+    priority: str = DEFAULT_PRIORITY
+    spectra: StageSpectra | None = None
 
     def __post_init__(self) -> None:
+        if self.priority not in PRIORITIES:
+            raise ValueError(f"priority must be one of {PRIORITIES}, got {self.priority!r}")
         if self.black_level not in BLACK_LEVEL_METHODS:
             raise ValueError(
                 f"black_level must be one of {BLACK_LEVEL_METHODS}, got {self.black_level!r}"
@@ -122,10 +142,11 @@ def solve_environment(
     if lighting is not None and lighting.result.applied:
         problem = dataclasses.replace(problem, extra_light=lighting.extra_light)
     problem, excluded = _screen(problem, measurements, environment, options.keep_all_patches)
-    fit = _fit(problem, options.method, measurements, environment)
-    correction = fit.correction
-    if options.protect_emitters and not isinstance(correction, ProtectedCorrection):
-        correction = ProtectedCorrection(correction, problem.domain, problem.M, dark=DEFAULT_DARK)
+    problem = with_skin(problem, measurements.stage.skin_patches, options.spectra, environment.name)
+    priority = environment.priority or options.priority
+    fit = _fit(problem, options.method, measurements, environment, priority)
+    correction = _protected(fit.correction, problem, options)
+    skin = _skin_figures(problem, correction, priority, options)
     SL, M_calibrated = problem.SL, problem.M
     M = M_calibrated if fit.M is None else np.asarray(fit.M, dtype=np.float64)
     if lighting is not None:
@@ -146,6 +167,7 @@ def solve_environment(
         offset=offset, environment=environment, clipped=clipped, lighting=lighting,
         excluded=None if options.keep_all_patches else excluded,
     )  # fmt: skip
+    diagnostics = dataclasses.replace(diagnostics, skin=skin)
     linearity, panels = _panel_linearity(measurements), None
     if measurements.panels:
         panels, block, notes = _solve_panels(
@@ -174,6 +196,28 @@ def solve_environment(
         fixtures=None if lighting is None else fixtures_block(lighting),
         panels=panels,
     )
+
+
+def _protected(
+    correction: PostCorrection, problem: QProblem, options: SolveOptions
+) -> PostCorrection:
+    """``correction``, fading to the identity beyond the reflective solid with
+    ``protect_emitters``."""
+    if not options.protect_emitters or isinstance(correction, ProtectedCorrection):
+        return correction
+    return ProtectedCorrection(correction, problem.domain, problem.M, dark=DEFAULT_DARK)
+
+
+def _skin_figures(
+    problem: QProblem, correction: PostCorrection, priority: str, options: SolveOptions
+) -> SkinFigures | None:
+    """What the solve expects of skin; with skin first, beside the default's (solved again on
+    the same problem, protected alike)."""
+    default = None
+    if priority == "skin" and problem.skin is not None:
+        fit = solve_post_correction(problem, method="auto")
+        default = (fit.model, _protected(fit.correction, problem, options))
+    return skin_figures(problem, correction, priority, default)
 
 
 def _lighting(measurements: Measurements, problem: QProblem, method: str) -> FixtureLighting | None:
@@ -395,11 +439,50 @@ def _screen(
     return dataclasses.replace(problem, weights=weights), excluded
 
 
+def with_skin(
+    problem: QProblem,
+    named: tuple[int, ...] = (),
+    spectra: StageSpectra | None = None,
+    environment: str = "",
+) -> QProblem:
+    """``problem`` with its skin samples (:mod:`ocio_vp.correction.skin`) for the patches it
+    fits: the ``named`` skin patches; else virtual skin on a ColorChecker 24 (with the stage's
+    ``spectra``, skin computed from them too); else the patches of skin colour."""
+    active = problem.fit_weights > 0
+    target = np.asarray(problem.target, dtype=np.float64)
+    skin = None
+    if not named:
+        skin = chart_skin_samples(problem.SRL, target, active)
+    if skin is not None and spectra is not None and problem.extra_light is None:
+        exact = spectral_skin_samples(problem.SRL, target, active, spectra, environment)
+        skin = joined(skin, exact)
+    if skin is None:
+        skin = patch_skin_samples(problem.SRL, target, problem.white_patch, active, named)
+    return dataclasses.replace(problem, skin=skin)
+
+
 def _fit(
-    problem: QProblem, method: str, measurements: Measurements, environment: Environment
+    problem: QProblem,
+    method: str,
+    measurements: Measurements,
+    environment: Environment,
+    priority: str = DEFAULT_PRIORITY,
 ) -> QFit:
-    """Q by ``method``; a bad chart is reported at its place in the measurements file."""
+    """Q by ``method`` (skin first with ``priority="skin"``); a bad chart is reported at its
+    place in the measurements file."""
+    if priority == "skin" and method != "auto":
+        in_file = environment.priority is not None
+        raise InputError(
+            f"skin priority fits the default post-correction itself and cannot be combined "
+            f"with --method {method}: drop --method (or the priority)",
+            source=measurements.source if in_file else None,
+            key=_environment_key(measurements, environment, "priority")
+            if in_file
+            else "--priority",
+        )
     try:
+        if priority == "skin":
+            return q_skin_priority(problem)
         return solve_post_correction(problem, method=method)
     except InputError as error:
         raise _located(error, measurements, environment) from None

@@ -32,9 +32,12 @@ __all__ = [
 SPECTRAL_SHAPE = (380.0, 780.0, 5.0)
 DEFAULT_CAMERA = "Nikon 5100 (NPL)"
 #: Measured sensitivities shipped with ocio_vp (``ocio_vp/data/camera_sensitivities.json``, from
-#: the rawtoaces project's data; licences in ``ocio_vp/data/CAMERAS_LICENSE.md``), beside
-#: colour-science's ``MSDS_CAMERA_SENSITIVITIES``.
+#: the rawtoaces project's data, and :data:`VENDORED_CAMERA_FILES`; licences in
+#: ``ocio_vp/data/CAMERAS_LICENSE.md``), beside colour-science's ``MSDS_CAMERA_SENSITIVITIES``.
 VENDORED_CAMERAS = "data/camera_sensitivities.json"
+#: Every file of measured cameras shipped with ocio_vp: the rawtoaces file, then Weta's physlight
+#: cameras that it does not hold (Apache-2.0, same licence notice).
+VENDORED_CAMERA_FILES = (VENDORED_CAMERAS, "data/camera_sensitivities_physlight.json")
 
 
 def spectral_shape():
@@ -87,17 +90,17 @@ def camera_names() -> tuple[str, ...]:
 
 @functools.lru_cache(maxsize=1)
 def _vendored_cameras() -> dict[str, np.ndarray]:
-    """The cameras of :data:`VENDORED_CAMERAS`, (W, 3) each; the file is on the grid already."""
-    text = resources.files("ocio_vp").joinpath(VENDORED_CAMERAS).read_text(encoding="utf-8")
-    document = json.loads(text)
-    grid = document["wavelengths"]
-    if (grid["start"], grid["end"], grid["interval"]) != SPECTRAL_SHAPE:
-        raise RuntimeError(f"{VENDORED_CAMERAS} is not on the grid {SPECTRAL_SHAPE}")
+    """The cameras of :data:`VENDORED_CAMERA_FILES`, (W, 3) each; the files are on the grid."""
     cameras = {}
-    for name, record in document["cameras"].items():
-        values = np.asarray(record["RGB"], dtype=np.float64)
-        values.setflags(write=False)
-        cameras[name] = values
+    for path in VENDORED_CAMERA_FILES:
+        document = json.loads(resources.files("ocio_vp").joinpath(path).read_text(encoding="utf-8"))
+        grid = document["wavelengths"]
+        if (grid["start"], grid["end"], grid["interval"]) != SPECTRAL_SHAPE:
+            raise RuntimeError(f"{path} is not on the grid {SPECTRAL_SHAPE}")
+        for name, record in document["cameras"].items():
+            values = np.asarray(record["RGB"], dtype=np.float64)
+            values.setflags(write=False)
+            cameras[name] = values
     return cameras
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ocio_vp.correction.auto import SHRUNK_SE_FACTOR, _bounded_candidate, _choose
+from ocio_vp.correction.auto import SHRUNK_SE_FACTOR, _choose, bounded_candidate
 from ocio_vp.correction.extrapolation import MIN_NEGATIVE, MIN_RETAINED, saturation_probe
 from ocio_vp.model.correction import MatrixCorrection
 from ocio_vp.pipeline import post_correction_problem
@@ -48,7 +48,7 @@ def test_the_root_polynomial_is_judged_against_its_own_fallback() -> None:
     # candidate.
     m = paper_stage_measurements(["high_pressure_sodium"])
     problem = post_correction_problem(m, m.environments[0])
-    fit, why = _bounded_candidate(problem, "root-polynomial")
+    fit, why = bounded_candidate(problem, "root-polynomial")
     assert why is None and fit is not None
     white = problem.predicted[problem.white_patch]
     kept, negative = saturation_probe(fit.correction, white)

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from ocio_vp.calibration.equations import solve_M
+from ocio_vp.correction.auto import AUTO_SKIN_WEIGHT
 from ocio_vp.correction.linear import (
     AUTO_LADDER,
     MODEL_KERNELS,
@@ -29,9 +30,11 @@ from ocio_vp.correction.root_polynomial import (
     fit_root_polynomial,
     root_polynomial_expansion,
 )
+from ocio_vp.correction.skin import with_rows
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import chart_errors
-from ocio_vp.pipeline import DEFAULT_METHOD, solve_environment
+from ocio_vp.model.correction import RootPolynomialCorrection
+from ocio_vp.pipeline import DEFAULT_METHOD, solve_environment, with_skin
 from ocio_vp.simulator.data import ENVIRONMENTS
 from ocio_vp.simulator.stage import camera_rgb, simulate_measurements, spectral_stage
 from ocio_vp.simulator.truth import held_out_errors, held_out_reflectances, noisy_measurements
@@ -267,6 +270,7 @@ class TestAutoOnTheSimulator:
         )  # fmt: skip
         X, P = problem.predicted, problem.target
         alpha = choose_shrinkage(X, P, np.ones(24), 18)
+        rows = with_skin(problem).skin_rows(AUTO_SKIN_WEIGHT)
         for name in AUTO_LADDER:
             held = np.empty_like(P)
             for j in range(24):
@@ -277,13 +281,21 @@ class TestAutoOnTheSimulator:
                     G = (X * w[:, None]).T @ X
                     lam = alpha * np.trace(G) / 3
                     Q = np.linalg.solve(G + lam * np.eye(3), (X * w[:, None]).T @ P + lam * D).T
-                else:
-                    fit = solve_post_correction(
-                        dataclasses.replace(problem, weights=w), method=name
+                elif name == "root-polynomial":
+                    # auto's candidate is fitted to the skin samples too (made of every patch
+                    # and kept in each leave-one-out fit), bounded to the other patches'
+                    # domain at the fade chosen on all patches.
+                    C = fit_root_polynomial(*with_rows(X, P, w, rows), 2)
+                    Q = RootPolynomialCorrection(
+                        C,
+                        fit_least_squares(X, P, w),
+                        dataclasses.replace(problem, weights=w).domain,
+                        s.correction.fade,
                     )
-                    Q = fit.correction  # the bounded root-polynomial's own model
-                    if Q.kind == "root-polynomial":  # at the fade chosen on all patches
-                        Q = dataclasses.replace(Q, fade=s.correction.fade)
+                else:
+                    Q = solve_post_correction(
+                        dataclasses.replace(problem, weights=w), method=name
+                    ).correction
                 held[j] = Q.apply(X[j]) if hasattr(Q, "apply") else Q @ X[j]
             de = chart_errors(held, P, camera_to_xyz=default_camera_to_xyz()).delta_E_2000
             np.testing.assert_allclose(notes["cv_delta_e"][name], de.mean(), rtol=1e-9)

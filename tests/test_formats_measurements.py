@@ -87,3 +87,35 @@ def test_load_solution_reports_missing_keys(tmp_path) -> None:
     (tmp_path / "solution.json").write_text('{"format": "ocio-vp/solution", "version": 1}')
     with pytest.raises(InputError, match="missing required key 'stage'"):
         load_solution(tmp_path)
+
+
+def test_priority_and_skin_patches_round_trip(tmp_path) -> None:
+    data = make_measurements_dict()
+    data["stage"]["skin_patches"] = [0, 1]
+    data["environments"][0]["priority"] = "skin"
+    m = measurements_from_dict(data)
+    assert m.stage.skin_patches == (0, 1)
+    assert [e.priority for e in m.environments] == ["skin", None]
+    save_measurements(m, tmp_path / "m.yaml")
+    again = load_measurements(tmp_path / "m.yaml")
+    assert again.stage.skin_patches == (0, 1) and again.environments[0].priority == "skin"
+
+
+@pytest.mark.parametrize(
+    ("where", "value", "message"),
+    [
+        ("priority", "faces", r"environments\[0\]\.priority: expected one of general, skin"),
+        ("skin_patches", [0, 24], r"stage\.skin_patches\[1\]: index 24 is outside the 24"),
+        ("skin_patches", [1, 1], r"stage\.skin_patches: names a patch twice"),
+        ("skin_patches", "0,1", r"stage\.skin_patches: expected a list of patch indices"),
+    ],
+)
+def test_bad_priority_or_skin_patches_are_refused_on_one_line(where, value, message) -> None:
+    data = make_measurements_dict()
+    if where == "priority":
+        data["environments"][0]["priority"] = value
+    else:
+        data["stage"]["skin_patches"] = value
+    with pytest.raises(InputError, match=message) as error:
+        measurements_from_dict(data, source="m.yaml")
+    assert "\n" not in str(error.value)

@@ -29,7 +29,7 @@ DIAGNOSTICS_KEYS = [
     "lit_chart_error_clipped_drive", "lit_chart_error_baseline_clipped_drive",
     "charts_clipped_drive", "in_frustum_drive_range", "black_level_bounce",
     "clipped_patches", "N_equals_M", "identity_check", "patch_screening", "excluded_patches",
-    "model_description", "extrapolation",
+    "model_description", "extrapolation", "skin",
 ]  # fmt: skip
 
 

@@ -142,3 +142,25 @@ def test_report_prints_no_non_finite_number_and_a_singular_q_as_the_terminal(cal
     page = html.unescape((calib / "report" / "index.html").read_text())
     assert 'class="num">> 1e+12</td>' in page and "cond = > 1e+12" in page
     assert not re.findall(r"(?<![\w.])[-+]?(?:nan|inf|infinity)(?![\w(])", page, re.IGNORECASE)
+
+
+def test_report_skin_panel_shows_solution_json_figures(tmp_path):
+    """The skin panel reads each band's expectation and least squares' from solution.json."""
+    from ocio_vp.simulator.stage import paper_stage_measurements
+
+    m = paper_stage_measurements(("incandescent",))
+    write_solutions([solve_environment(m, m.environments[0], priority="skin")], tmp_path)
+    report = build_report([tmp_path], tmp_path / "report", dpi=20)
+    text = html.unescape(report.index.read_text(encoding="utf-8"))
+    skin = json.loads((tmp_path / "incandescent" / "solution.json").read_text())["diagnostics"][
+        "skin"
+    ]
+    start = text.index('<h2 id="skin">')
+    panel = text[start : text.index("</table>", start)]
+    assert "<td>incandescent</td><td>skin</td>" in panel
+    for band in skin["bands"]:
+        assert f"<th>{band['band']}</th>" in panel
+        assert f"{band['expected']:.2f} ({band['least_squares']:.2f})" in panel
+    ratio = skin["expected"] / skin["least_squares"]
+    assert f"{ratio:.2f}x" in panel and ratio < 1
+    assert f"the default ({skin['default']['model']}) expects skin" in text

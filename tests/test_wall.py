@@ -406,7 +406,8 @@ class TestWrittenConfig:
                 expected = drive
             # OCIO's sRGB is the moncurve (gamma 2.4, offset 0.055): IEC's within 1e-5. A linear
             # wall's drive above 1 goes through OCIO's fast log2 shaper, ~1e-5 *relative*.
-            atol = 2e-5 if encoding == "srgb" else 1e-5
+            # OCIO's ST 2084 near black (~0.2 cd/m2) is 2.6e-5 from colour-science's (measured).
+            atol = {"srgb": 2e-5, "pq": 5e-5}.get(encoding, 1e-5)
             np.testing.assert_allclose(
                 apply(processor(config, REFERENCE, name), c), expected, atol=atol, rtol=2e-5
             )

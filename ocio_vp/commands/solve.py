@@ -10,7 +10,9 @@ from ocio_vp.choices import (
     BLACK_LEVEL_METHODS,
     DEFAULT_BLACK_LEVEL,
     DEFAULT_PEAK_NITS,
+    DEFAULT_PRIORITY,
     DEFAULT_WALL_ENCODING,
+    PRIORITIES,
     WALL_ENCODINGS,
 )
 from ocio_vp.commands.common import add_method_argument, progress
@@ -62,6 +64,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "an LED channel, or needing negative light); by default it fades to the 3x3 there "
         "(docs/stability.md)",
     )
+    _add_skin_arguments(parser)
     parser.add_argument(
         "--black-level",
         choices=BLACK_LEVEL_METHODS,
@@ -169,6 +172,40 @@ def print_fixtures(solutions: Sequence) -> None:
             f"fixtures, {solution.environment}: {drives} (error Q cannot remove "
             f"{100 * notes.error_reduction:.0f}% lower; active limits: {limits})"
         )
+
+
+def _add_skin_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--priority`` and what skin may be computed from (docs/skin.md)."""
+    parser.add_argument(
+        "--priority",
+        choices=PRIORITIES,
+        default=DEFAULT_PRIORITY,
+        help="what the default post-correction puts first: general colours (default; it never "
+        "renders skin worse than least squares) or skin (faces first, general reflectances at "
+        "a bounded cost); an environment's own 'priority' in the measurements file wins "
+        "(docs/skin.md)",
+    )
+    parser.add_argument(
+        "--led-spectra",
+        metavar="FILE.csv",
+        help="the panel's measured LED spectra (wavelength in nm, then red, green, blue): skin "
+        "is then also computed from spectra, with --camera-sensitivities (default: skin from "
+        "the chart alone, docs/skin.md)",
+    )
+    parser.add_argument(
+        "--camera-sensitivities",
+        metavar="FILE.csv|NAME",
+        help="the camera's spectral sensitivities (wavelength in nm, then R, G, B) or a camera "
+        "of the bundled database (default: none; docs/skin.md)",
+    )
+    parser.add_argument(
+        "--location-light",
+        action="append",
+        default=[],
+        metavar="ENV=FILE.csv",
+        help="the measured light of an environment (wavelength in nm, then its power); "
+        "by default estimated from its target chart (repeat per environment)",
+    )
 
 
 def print_panels(solutions: Sequence) -> None:
@@ -319,14 +356,24 @@ def _solve(measurements, environments, args: argparse.Namespace, pool=None) -> l
     """Every environment, on a Dask cluster or here (with a progress bar on a terminal); with
     the writing helper ``pool`` (:func:`ocio_vp.ocio.writer.writer_pool`), every other one there
     while this process solves the rest, so both cores solve as both write."""
+    from ocio_vp.correction.skin_spectra import stage_spectra
+    from ocio_vp.errors import InputError
     from ocio_vp.pipeline import SolveOptions, solve_environment
 
+    spectra = stage_spectra(args.led_spectra, args.camera_sensitivities, args.location_light)
+    if spectra is not None:
+        names = {e.name for e in measurements.environments}
+        for name in spectra.lights:
+            if name not in names:
+                raise InputError(f"no environment named {name!r}", key="--location-light")
     options = SolveOptions(
         method=args.method,
         black_level=args.black_level,
         fixtures=not args.no_fixtures,
         keep_all_patches=args.keep_all_patches,
         protect_emitters=args.protect_emitters,
+        priority=args.priority,
+        spectra=spectra,
     )
     if args.scheduler:
         from ocio_vp.footage.distributed import solve_environments

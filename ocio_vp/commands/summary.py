@@ -33,6 +33,7 @@ SUMMARY_COLUMNS = (
     "shown M>N+Q",
     "CV",
     "LEDs in frame",
+    "skin",
     "drive<0",
     "clipped",
 )
@@ -42,7 +43,8 @@ LEGEND = (
     "lit by the wall, through M then after Q;\n  shown = the background in camera, through M "
     "then N + offset and Q; CV = leave-one-patch-out after Q ('-': not given by the method);\n"
     "  LEDs in frame = p95 ΔE2000 of the wall's own LEDs seen in frame (emitters: Q should "
-    "leave them alone), least squares in brackets."
+    "leave them alone), least squares in brackets;\n  skin = expected mean ΔE2000 on skin of "
+    "every lightness (the chart's skin samples), and its ratio to least squares'."
 )
 
 #: The model in a few words, by the correction's kind.
@@ -66,7 +68,9 @@ def model_words(solution: Solution) -> str:
         text = f"{model}, {words}"
     if solution.method != model and not model.startswith(solution.method):
         text = f"{solution.method}: {text}"
-    return text + (" + emitter guard" if protected else "")
+    skin = solution.diagnostics.skin
+    first = " (skin first)" if skin is not None and skin.priority == "skin" else ""
+    return text + first + (" + emitter guard" if protected else "")
 
 
 def _percent(per_channel) -> str:
@@ -114,6 +118,7 @@ def summary_row(solution: Solution) -> tuple[str, ...]:
         f"{_percent(errors.shown_baseline)}>{_percent(errors.shown)}",
         _percent(errors.cross_validated),
         _leds(d),
+        "-" if d.skin is None else d.skin.words(),
         ",".join("RGB"[c] for c in d.out_of_frustum_negative_channels or []) or "-",
         str(len(d.clipped_patches or [])),
     )

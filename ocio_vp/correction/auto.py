@@ -50,13 +50,22 @@ from ocio_vp.correction.linear import (
     problem_arrays,
     target_rank,
 )
+from ocio_vp.correction.perceptual import default_camera_to_xyz
 from ocio_vp.correction.problem import QFit, QProblem
 from ocio_vp.correction.root_polynomial import bounded_loo_predictions, make_q_root_polynomial
+from ocio_vp.correction.skin import skin_delta_e
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import error_relative_to_white
-from ocio_vp.model.correction import MatrixCorrection, RootPolynomialCorrection
+from ocio_vp.model.correction import MatrixCorrection, PostCorrection, RootPolynomialCorrection
 
-__all__ = ["DEGREE_3_EXCLUDED", "SHRUNK_SE_FACTOR", "q_auto"]
+__all__ = [
+    "AUTO_SKIN_WEIGHT",
+    "DEGREE_3_EXCLUDED",
+    "SHRUNK_SE_FACTOR",
+    "bounded_candidate",
+    "candidate_skin_errors",
+    "q_auto",
+]
 
 #: Said in every ``auto`` reason: why the richer root-polynomial is not a candidate.
 DEGREE_3_EXCLUDED = (
@@ -70,6 +79,20 @@ DEGREE_3_EXCLUDED = (
 #: carried to held-out reflectances less often than the other candidates' (docs/accuracy.md,
 #: "Beyond the chart": a shrunk 3x3 renders optimal colours better and reflectances worse).
 SHRUNK_SE_FACTOR = 2.0
+
+#: Weight of the skin samples in ``auto``'s root-polynomial candidate (relative to the chart's
+#: energy; :func:`ocio_vp.correction.skin.skin_rows`). Chosen on the training skin (half
+#: fitted, half judged) and the tuning cameras at 0.2 % and 1 % noise: 0.25 renders that skin
+#: ~0.8x least squares and general reflectances ~0.92x; 0.5 gains skin and loses the general
+#: margin, 0.1 loses to least squares on skin at 1 % noise (docs/skin.md).
+AUTO_SKIN_WEIGHT = 0.25
+
+#: A candidate is not taken when its mean ΔE2000 on the skin samples is above least squares' by
+#: more than this many standard errors of the paired per-sample differences: worse beyond the
+#: comparison's own noise (a root-polynomial within a hundredth of a ΔE of least squares on
+#: skin and 0.8 ΔE better on the chart is not refused for that hundredth).
+SKIN_SE_FACTOR = 1.0
+
 
 _NAMES = {"root-polynomial": "root-polynomial (degree 2, bounded)"}
 
@@ -139,13 +162,15 @@ def _singular_text(singular: np.ndarray) -> str:
     return ", ".join(relative_figure(v) for v in singular)
 
 
-def _bounded_candidate(problem: QProblem, name: str) -> tuple[QFit | None, str | None]:
+def bounded_candidate(
+    problem: QProblem, name: str, skin_weight: float = 0.0
+) -> tuple[QFit | None, str | None]:
     """The bounded root-polynomial fit and its held-out predictions' source; (None, why) when it
     is not a candidate: the chart does not constrain its terms, it folds among reflective
     colours whatever its fade, or it flips or collapses a bright saturated input that least
     squares does not."""
     try:
-        fit = make_q_root_polynomial(ROOT_POLYNOMIAL_DEGREES[name])(problem)
+        fit = make_q_root_polynomial(ROOT_POLYNOMIAL_DEGREES[name], skin_weight)(problem)
     except InputError as error:
         return None, f"{_label(name)} refused: {error.problem}"
     if fit.warnings:
@@ -209,6 +234,78 @@ def _choose(scores: dict[str, np.ndarray]) -> tuple[str, dict, list[str]]:
     )
 
 
+def candidate_skin_errors(
+    problem: QProblem, corrections: dict[str, PostCorrection]
+) -> dict[str, np.ndarray]:
+    """Each candidate's ΔE2000 on the problem's skin samples (:mod:`ocio_vp.correction.skin`),
+    through the sample camera's matrix; empty where the problem has no skin."""
+    lit = problem.skin_predicted
+    if lit is None or problem.skin is None or problem.skin.count == 0:
+        return {}
+    target = np.asarray(problem.target, dtype=np.float64)
+    camera = default_camera_to_xyz()
+    white = target[problem.white_patch]
+    corrected = np.stack([c.apply(lit) for c in corrections.values()])
+    errors = skin_delta_e(corrected, problem.skin.target, white, camera)
+    return dict(zip(corrections, errors, strict=True))
+
+
+def _skin_veto(skin: dict[str, np.ndarray]) -> tuple[set[str], list[str]]:
+    """The candidates that render the skin samples worse than least squares beyond the noise of
+    the comparison: their mean ΔE2000 above least squares' by more than
+    :data:`SKIN_SE_FACTOR` standard errors of the paired per-sample differences (and more than
+    :data:`~ocio_vp.correction.linear.AUTO_TIE`, rounding). Faces first: a model must not lose
+    on skin, however much it gains on the chart. Returns them and why, in words."""
+    if not skin:
+        return set(), []
+    base = skin["least-squares"]
+    reference = float(np.mean(base))
+    vetoed, words = set(), []
+    for name, errors in skin.items():
+        difference = errors - base
+        se = float(np.std(difference, ddof=1) / np.sqrt(len(difference))) if len(base) > 1 else 0.0
+        if float(np.mean(difference)) > max(AUTO_TIE, SKIN_SE_FACTOR * se):
+            vetoed.add(name)
+            words.append(
+                f"{_label(name)} is not taken: it renders skin worse than least squares (mean "
+                f"ΔE2000 {_g(float(np.mean(errors)))} against {_g(reference)} on the skin "
+                f"samples, by more than {SKIN_SE_FACTOR:g} standard error)"
+            )
+    return vetoed, words
+
+
+def _corrections(held, models, X, P, w, white, alpha) -> dict[str, PostCorrection]:
+    """Every candidate's post-correction fitted to all its patches, by name."""
+    return {
+        name: models[name].correction
+        if name in models
+        else MatrixCorrection(fit_model(name, X, P, w, white, alpha))
+        for name in held
+    }
+
+
+def _root_polynomial_candidates(
+    problem: QProblem, ladder: tuple[str, ...], held: dict[str, np.ndarray]
+) -> tuple[dict[str, QFit], list[str]]:
+    """The ladder's root-polynomial candidates (fitted to the skin samples too, with
+    :data:`AUTO_SKIN_WEIGHT`), their leave-one-out predictions added to ``held``, and why any
+    is not a candidate."""
+    models, excluded = {}, []
+    rows = problem.skin_rows(AUTO_SKIN_WEIGHT)
+    active = int(np.count_nonzero(problem.fit_weights > 0))
+    for name in (m for m in ladder if m in ROOT_POLYNOMIAL_DEGREES):
+        if active <= {2: 6, 3: 13}[ROOT_POLYNOMIAL_DEGREES[name]]:
+            continue
+        fit, why = bounded_candidate(problem, name, AUTO_SKIN_WEIGHT)
+        if fit is None:
+            excluded.append(why or "")
+            continue
+        models[name] = fit
+        assert isinstance(fit.correction, RootPolynomialCorrection)  # a bounded fit
+        held[name] = bounded_loo_predictions(problem, fit.correction, rows)
+    return models, excluded
+
+
 def q_auto(problem: QProblem) -> QFit:
     """The simplest model the scene needs, judged in leave-one-out ΔE2000 (module docstring).
 
@@ -247,21 +344,14 @@ def q_auto(problem: QProblem) -> QFit:
     held, alpha = ladder_predictions(
         [m for m in ladder if m not in ROOT_POLYNOMIAL_DEGREES], X, P, w, white
     )
-    models, excluded = {}, []
-    for name in (m for m in ladder if m in ROOT_POLYNOMIAL_DEGREES):
-        if int(np.count_nonzero(active)) <= {2: 6, 3: 13}[ROOT_POLYNOMIAL_DEGREES[name]]:
-            continue
-        models[name], why = _bounded_candidate(problem, name)
-        fit = models[name]
-        if why:
-            excluded.append(why)
-        else:  # a candidate: a bounded root-polynomial fit
-            assert fit is not None and isinstance(fit.correction, RootPolynomialCorrection)
-            held[name] = bounded_loo_predictions(problem, fit.correction)
+    models, excluded = _root_polynomial_candidates(problem, ladder, held)
     stacked, unit = patch_errors(np.stack(list(held.values())), P, w, white)
     scores = {name: e[active] for name, e in zip(held, stacked, strict=True)}
-    chosen, table, shrunk = _choose(scores)
-    excluded += shrunk
+    skin = candidate_skin_errors(problem, _corrections(held, models, X, P, w, white, alpha))
+    vetoed, veto_words = _skin_veto(skin)
+    chosen, _, shrunk = _choose({k: v for k, v in scores.items() if k not in vetoed})
+    table = choose_model(scores, AUTO_SE_FACTOR)[1]  # every candidate, for the reason
+    excluded += veto_words + shrunk
     reason = _auto_reason(chosen, table, AUTO_SE_FACTOR, "least-squares", unit)
     details |= {
         "metric": f"leave-one-patch-out {unit}",
@@ -273,6 +363,11 @@ def q_auto(problem: QProblem) -> QFit:
         "narrow_target": narrow,
         "excluded_candidates": excluded,
     }
+    if skin:
+        # Below 1e-6 a ΔE is rounding (digits that differ between machines): written as 0.
+        details["skin_delta_e"] = {
+            k: float(np.mean(v)) if np.mean(v) >= 1e-6 else 0.0 for k, v in skin.items()
+        }
     return _chosen_fit(
         chosen,
         X,

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ocio_vp.calibration.equations import predict_lit_chart
+from ocio_vp.correction.skin import SkinRows, SkinSamples, skin_rows
 from ocio_vp.model.correction import FitDomain, fit_domain
 
 if TYPE_CHECKING:
@@ -50,6 +51,32 @@ class QProblem:
     #: Reflectance of the white patch (sets the drive of a perfect white diffuser, the top of
     #: the reflective domain: :func:`ocio_vp.model.correction.fit_domain`).
     white_reflectance: float = 0.9
+    #: Skin as this stage and the location see it (:mod:`ocio_vp.correction.skin`); None where
+    #: the chart gives none.
+    skin: SkinSamples | None = None
+
+    @property
+    def drive(self) -> np.ndarray:
+        """(3,) ``M w_avg`` as the wall emits it: a negative channel clipped to 0."""
+        return np.clip(np.asarray(self.M, dtype=np.float64) @ self.w_avg, 0.0, None)
+
+    @property
+    def skin_predicted(self) -> np.ndarray | None:
+        """(k, 3) the skin samples lit as :attr:`predicted` lights the chart (None: no skin)."""
+        if self.skin is None:
+            return None
+        return self.skin.lit(self.beta, self.drive, self.extra_light)
+
+    def skin_rows(self, skin_weight: float) -> SkinRows | None:
+        """The skin samples as rows to fit beside the chart's
+        (:func:`ocio_vp.correction.skin.skin_rows`); None without samples or weight."""
+        lit = self.skin_predicted
+        if not skin_weight or lit is None or self.skin is None or self.skin.count == 0:
+            return None
+        target = np.asarray(self.target, dtype=np.float64)
+        return skin_rows(
+            lit, self.skin.target, target, self.fit_weights, self.white_patch, skin_weight
+        )
 
     @property
     def predicted(self) -> np.ndarray:
@@ -61,8 +88,7 @@ class QProblem:
         never sees (on the simulated sodium stages it doubles the held-out ΔE2000 of every
         method: docs/accuracy.md).
         """
-        drive = np.clip(np.asarray(self.M, dtype=np.float64) @ self.w_avg, 0.0, None)
-        lit = predict_lit_chart(self.SRL, self.beta, np.eye(3), drive)
+        lit = predict_lit_chart(self.SRL, self.beta, np.eye(3), self.drive)
         return lit if self.extra_light is None else lit + self.extra_light
 
     @property

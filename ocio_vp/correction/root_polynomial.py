@@ -31,6 +31,7 @@ import numpy as np
 from ocio_vp.correction.extrapolation import FADES, choose_fade
 from ocio_vp.correction.linear import LOO_KERNELS, loo_root_polynomial
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
+from ocio_vp.correction.skin import SkinRows, with_rows
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import error_relative_to_white
 from ocio_vp.model.correction import (
@@ -106,12 +107,19 @@ def fit_root_polynomial(X: np.ndarray, P: np.ndarray, w: np.ndarray, degree: int
     return CT.T
 
 
-def make_q_root_polynomial(degree: int = 2) -> Callable[[QProblem], QFit]:
-    """A registry method fitting a bounded root-polynomial Q of ``degree`` (module docstring)."""
+def make_q_root_polynomial(degree: int = 2, skin_weight: float = 0.0) -> Callable[[QProblem], QFit]:
+    """A registry method fitting a bounded root-polynomial Q of ``degree`` (module docstring).
+
+    ``skin_weight`` > 0 fits the polynomial to the problem's skin samples too
+    (:func:`ocio_vp.correction.skin.skin_rows`: their weight relative to the chart's); the
+    fallback stays the chart's least squares, so emitters and saturated colours beyond the
+    chart's domain are corrected as without skin.
+    """
 
     def q_root_polynomial_method(problem: QProblem) -> QFit:
         X, P, w = problem.predicted, problem.target, problem.fit_weights
-        C = fit_root_polynomial(X, P, w, degree)
+        rows = problem.skin_rows(skin_weight)
+        C = fit_root_polynomial(*with_rows(X, P, w, rows), degree)
         A = fit_least_squares(X, P, w)
         domain = problem.domain
         fade, tried = choose_fade(C, A, domain)
@@ -124,14 +132,18 @@ def make_q_root_polynomial(degree: int = 2) -> Callable[[QProblem], QFit]:
                 "prefer a 3x3 method for this environment"
             )
         correction = RootPolynomialCorrection(C, A, domain, fade)
+        anchored = "" if rows is None else f", fitted to {len(rows.x)} skin samples too"
+        details: dict = {"folds_by_fade": tried}
+        if rows is not None:
+            details["skin_weight"] = skin_weight
         return QFit(
             correction,
-            f"root-polynomial-{degree}",
-            f"root-polynomial regression of degree {degree} (Finlayson et al. 2015), bounded "
-            "to the chart's domain; Q is its 3x3 fallback",
-            cross_validated_error=_loo_error(problem, correction),
+            f"root-polynomial-{degree}" + ("" if rows is None else "-skin"),
+            f"root-polynomial regression of degree {degree} (Finlayson et al. 2015){anchored}, "
+            "bounded to the chart's domain; Q is its 3x3 fallback",
+            cross_validated_error=_loo_error(problem, correction, rows),
             warnings=tuple(warnings),
-            details={"folds_by_fade": tried},
+            details=details,
         )
 
     q_root_polynomial_method.__name__ = f"q_root_polynomial_{degree}"
@@ -163,15 +175,18 @@ def root_polynomial_loo_predictions(
     )
 
 
-def bounded_loo_predictions(problem: QProblem, correction: RootPolynomialCorrection) -> np.ndarray:
+def bounded_loo_predictions(
+    problem: QProblem, correction: RootPolynomialCorrection, rows: SkinRows | None = None
+) -> np.ndarray:
     """(n, 3) leave-one-patch-out predictions of a bounded root-polynomial Q, in closed form.
 
     Patch j: the polynomial and the least-squares 3x3 fitted without it (hat-matrix identities,
     :func:`~ocio_vp.correction.linear.loo_root_polynomial`), blended by the weight of x_j in the
-    domain of the other fitted patches, at the correction's fade.
+    domain of the other fitted patches, at the correction's fade. With skin ``rows`` fitted too,
+    they stay in every leave-one-out fit (a skin sample made from patch j keeps a little of it).
     """
     X, P, w = problem.predicted, np.asarray(problem.target, dtype=np.float64), problem.fit_weights
-    polynomial = loo_root_polynomial(X, P, w, correction.degree)
+    polynomial = loo_root_polynomial(*with_rows(X, P, w, rows), correction.degree)[: len(X)]
     linear = LOO_KERNELS["least-squares"](X, P, w, int(problem.white_patch))
     weights = np.zeros(len(X))
     for j, domain in _loo_domains(problem, w):
@@ -220,13 +235,15 @@ def _domain(problem: QProblem, weights: np.ndarray) -> FitDomain:
     )
 
 
-def _loo_error(problem: QProblem, correction: RootPolynomialCorrection) -> np.ndarray | None:
+def _loo_error(
+    problem: QProblem, correction: RootPolynomialCorrection, rows: SkinRows | None = None
+) -> np.ndarray | None:
     """(3,) the bounded model's leave-one-patch-out error (white-relative); None with no patch
     to spare."""
     w = problem.fit_weights
     if int(np.count_nonzero(w > 0)) <= ROOT_POLYNOMIAL_TERMS[correction.degree]:
         return None
-    held = bounded_loo_predictions(problem, correction)
+    held = bounded_loo_predictions(problem, correction, rows)
     if not np.all(np.isfinite(held)):
         return None
     return error_relative_to_white(held, problem.target, problem.white_patch, w)

@@ -15,6 +15,7 @@ import numpy as np
 
 from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.formats.records import Record, read_record, read_value
+from ocio_vp.formats.skin import SkinFigures
 from ocio_vp.model.footage_range import Agreement
 
 __all__ = [
@@ -368,6 +369,11 @@ class Diagnostics(Record):
         set of the camera range and over ``all``, and the ``worst_input``) and
         ``inverse_agreement`` (the same for the content through the Q^-1 chain and back through
         the model; null without Q^-1); only written for a non-linear post-correction.
+    skin
+        What the solve expects of skin (:class:`ocio_vp.formats.skin.SkinFigures`): mean
+        ΔE2000 on its skin samples for the post-correction and least squares, per lightness
+        band, the chart's beside them, and with skin first the default's; only written where
+        the chart gives skin samples (docs/skin.md).
     extra
         Keys of a loaded file that this version does not know, kept so they round-trip.
     present
@@ -414,6 +420,7 @@ class Diagnostics(Record):
     fixtures: FixturesNotes | None = None
     panels: PanelsNotes | None = None
     post_correction_ocio: PostCorrectionOCIO | None = None
+    skin: SkinFigures | None = None
     extra: dict[str, Any] = field(default_factory=dict)
     present: tuple[str, ...] | None = field(default=None, repr=False, compare=False)
 
@@ -423,6 +430,7 @@ class Diagnostics(Record):
         "fixtures",
         "panels",
         "post_correction_ocio",
+        "skin",
     )
 
     @classmethod

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from ocio_vp.choices import PRIORITIES
 from ocio_vp.errors import InputError, excerpt, format_key_path
 from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.fixtures import Fixture, fixtures_to_dict, parse_fixtures
@@ -113,6 +114,9 @@ class Stage:
     camera_colorspace: str | None = None
     #: Camera value at or above which a sample is clipped (optional; docs/stability.md).
     clip_level: float | None = None
+    #: Indices of the chart patches that stand for skin (optional; docs/skin.md): on a chart
+    #: other than the ColorChecker 24 they are the skin samples, found by colour otherwise.
+    skin_patches: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -125,6 +129,9 @@ class Environment:
     black_level: np.ndarray | None = None  # (3,) b_camera
     #: Set when the target chart was computed (``ocio-vp target-chart``), not photographed.
     synthesized: SynthesisRecord | None = None
+    #: ``general`` or ``skin`` (docs/skin.md): what this environment's default post-correction
+    #: puts first; None: as the command line says.
+    priority: str | None = None
     #: With ``panels``: the diffuse light each panel type delivers, ``{name: (3,)}`` (None: not
     #: given, e.g. to come from an HDRI), and each in-frustum type's b_camera.
     panel_w_avg: Mapping[str, np.ndarray] | None = None
@@ -423,6 +430,11 @@ def _check_white_patch(ctx: Validator, stage: Stage, n: int) -> None:
             ("stage", "white_patch"),
             f"index {excerpt(stage.white_patch)} is outside the {n} chart patches",
         )
+    for i, index in enumerate(stage.skin_patches):
+        if index >= n:
+            raise ctx.error(
+                ("stage", "skin_patches", i), f"index {index} is outside the {n} chart patches"
+            )
 
 
 def _measurements_with_panels(
@@ -479,6 +491,7 @@ def parse_stage(ctx: Validator, value: Any, *, calibration: bool = True) -> Stag
             "white_reflectance",
             "camera_colorspace",
             "clip_level",
+            "skin_patches",
         ),
     )
     name = ctx.name(stage["name"], (*key, "name"))
@@ -517,7 +530,20 @@ def parse_stage(ctx: Validator, value: Any, *, calibration: bool = True) -> Stag
         white_reflectance=reflectance,
         camera_colorspace=camera,
         clip_level=clip_level,
+        skin_patches=_skin_patches(ctx, stage.get("skin_patches", []), (*key, "skin_patches")),
     )
+
+
+def _skin_patches(ctx: Validator, value: Any, key: tuple[str | int, ...]) -> tuple[int, ...]:
+    """``stage.skin_patches``: distinct patch indices (checked against the chart later)."""
+    if not isinstance(value, list):
+        raise ctx.error(key, f"expected a list of patch indices, got {_kind(value)}")
+    for i, index in enumerate(value):
+        if isinstance(index, bool) or not isinstance(index, int) or index < 0:
+            raise ctx.error((*key, i), f"expected a patch index (0 or more), got {excerpt(index)}")
+    if len(set(value)) != len(value):
+        raise ctx.error(key, "names a patch twice")
+    return tuple(value)
 
 
 def _colourspace_problem(value: Any) -> tuple[str | None, str]:
@@ -562,7 +588,7 @@ def _parse_environments(
             raw,
             key,
             required=("name", "target_chart"),
-            optional=("w_avg", "black_level", "synthesized"),
+            optional=("w_avg", "black_level", "synthesized", "priority"),
         )
         name = ctx.name(env["name"], (*key, "name"))
         if name in seen:
@@ -573,8 +599,18 @@ def _parse_environments(
         target = ctx.signal(
             ctx.chart(env["target_chart"], (*key, "target_chart"), n), (*key, "target_chart")
         )
+        priority = env.get("priority")
+        if priority is not None and priority not in PRIORITIES:
+            raise ctx.error(
+                (*key, "priority"),
+                f"expected one of {', '.join(PRIORITIES)}, got {excerpt(priority)}",
+            )
         if panels:
-            environments.append(_panel_environment(ctx, env, key, name, target, panels))
+            environments.append(
+                dataclasses.replace(
+                    _panel_environment(ctx, env, key, name, target, panels), priority=priority
+                )
+            )
             continue
         w_avg = ctx.rgb(env["w_avg"], (*key, "w_avg")) if "w_avg" in env else None
         if w_avg is not None and not np.any(w_avg > 0):
@@ -590,6 +626,7 @@ def _parse_environments(
                 w_avg=w_avg,
                 black_level=black,
                 synthesized=synthesized,
+                priority=priority,
             )
         )
     return tuple(environments)
@@ -660,6 +697,8 @@ def measurements_to_dict(measurements: Measurements) -> dict[str, Any]:
         stage_dict["camera_colorspace"] = stage.camera_colorspace
     if stage.clip_level is not None:
         stage_dict["clip_level"] = stage.clip_level
+    if stage.skin_patches:
+        stage_dict["skin_patches"] = list(stage.skin_patches)
 
     def rows(array: np.ndarray) -> list[list[float]]:
         return [[float(v) for v in row] for row in np.asarray(array, dtype=np.float64)]
@@ -683,6 +722,8 @@ def measurements_to_dict(measurements: Measurements) -> dict[str, Any]:
             entry["black_level"] = panel_values_to_dict(env.panel_black_level)
         if env.synthesized is not None:
             entry["synthesized"] = synthesis_to_dict(env.synthesized)
+        if env.priority is not None:
+            entry["priority"] = env.priority
         data["environments"].append(entry)
     if measurements.ramps is not None and not measurements.panels:
         data["ramps"] = ramps_to_dict(measurements.ramps)

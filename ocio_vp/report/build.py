@@ -55,6 +55,7 @@ from ocio_vp.report.plots import (
     plot_error_bars,
     plot_linearity,
 )
+from ocio_vp.report.skin import skin_facts, skin_panel
 from ocio_vp.staging import publish_dir, staged_dir
 from ocio_vp.wall.softclip import soft_clip_knee
 
@@ -226,6 +227,7 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
     facts.insert(3, ("calibration panel", panel or "not recorded in solution.json (beta only)"))
     facts += _fixture_facts(s)
     facts += panel_facts(s)  # a stage of several panel types
+    facts += skin_facts(s)
     facts += _soft_clip_facts(s)
     notes = d.method_notes or {}
     rows = []
@@ -534,6 +536,7 @@ def build_report(
             summary=_summary(environments),
             summary_images=summary_images,
             sections=sections,
+            skin=skin_panel([e.solution for e in environments]),
             transforms=sorted({e.transform.description for e in environments}),
         )
         (folder / "index.html").write_text(html, encoding="utf-8")

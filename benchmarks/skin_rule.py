@@ -1,0 +1,185 @@
+"""How the skin rule's constants were chosen (training half only), and whether a solve's own
+skin expectation (``diagnostics.skin``) predicts measured skin (held-out half, report only).
+
+``tuning``: on the TRAINING skin, split in two by ITA order (one half makes the skin samples,
+the other judges), the tuning cameras of the accuracy benchmark (Nikon 5100, Sigma SDMerill,
+Canon EOS 5D Mark II, Nikon D810) and its three tuning LED sets, seven broadband environments
+and two noise levels: the root-polynomial fitted to chart and skin samples for each skin weight
+and combination ridge, as ratios to least squares on the judging half and on the RAW to ACES
+reflectances (general reflectances other than the skin benchmark's CES-99).
+
+``expectation``: on the HELD-OUT half of :mod:`benchmarks.skin_eval` (cameras, LED sets,
+skin no rule was chosen on), each solve's expected skin ratio to least squares against the
+ratio measured on held-out skin (after the rule was fixed: nothing is chosen here).
+
+Run: ``python -m benchmarks.skin_rule [--part tuning|expectation]`` (markdown on stdout; about
+a minute for the tuning part, two for the expectation).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+
+import numpy as np
+
+CAMERAS = (
+    "Nikon 5100 (NPL)",
+    "Sigma SDMerill (NPL)",
+    "Canon EOS 5D Mark II (rawtoaces)",
+    "Nikon D810 (rawtoaces)",
+)
+WEIGHTS = (0.25, 0.5, 1.0)
+RIDGES = (1e-5, 1e-4, 1e-3, 1e-2)
+NOISES = (0.002, 0.01)
+
+
+def _delta_e(stage, environment, correct, reflectances, problem) -> float:
+    import colour
+
+    from ocio_vp.simulator.truth import camera_matrix, held_out_colours
+
+    lit, target = held_out_colours(
+        stage, environment, M=problem.M, w_avg=problem.w_avg, reflectances=reflectances
+    )
+    _, white = held_out_colours(
+        stage,
+        environment,
+        M=problem.M,
+        w_avg=problem.w_avg,
+        reflectances=np.ones((1, reflectances.shape[1])),
+    )
+    matrix = camera_matrix(stage)
+    xyz_white = matrix @ white[0]
+    scale = 1.0 / xyz_white[1]
+    xy = colour.XYZ_to_xy(xyz_white * scale)
+    lab = [colour.XYZ_to_Lab(rgb @ matrix.T * scale, xy) for rgb in (target, correct(lit))]
+    return float(np.mean(colour.delta_E(*lab)))
+
+
+def tuning() -> str:
+    """The tuning table (module docstring)."""
+    from benchmarks.skin_eval import TUNING_LED_SETS, broadband_environments
+    from ocio_vp.correction import skin as skin_module
+    from ocio_vp.correction.problem import fit_least_squares
+    from ocio_vp.correction.root_polynomial import make_q_root_polynomial
+    from ocio_vp.model.correction import MatrixCorrection
+    from ocio_vp.pipeline import post_correction_problem
+    from ocio_vp.simulator.stage import simulate_measurements, spectral_stage
+    from ocio_vp.simulator.truth import held_out_reflectances, noisy_measurements
+    from ocio_vp.skin_data import training_skin
+
+    training = training_skin()
+    order = np.argsort(training.ita())
+    fit_half, judge_half = order[0::2], order[1::2]
+    fitting = dataclasses.replace(
+        training,
+        names=tuple(training.names[i] for i in fit_half),
+        reflectances=training.reflectances[fit_half],
+        bands=tuple(training.bands[i] for i in fit_half),
+    )
+    # General reflectances: the RAW to ACES set, not CES-99 (the skin benchmark's general set).
+    judged, general = training.reflectances[judge_half], held_out_reflectances()["rawtoaces"]
+    sums: dict[tuple, np.ndarray] = {}
+    for noise in NOISES:
+        for camera in CAMERAS:
+            for leds in TUNING_LED_SETS:
+                stage = spectral_stage(camera=camera, leds=leds)
+                clean = simulate_measurements(broadband_environments(), stage=stage)
+                measurements = noisy_measurements(clean, noise, np.random.default_rng(0))
+                for env in measurements.environments:
+                    base = post_correction_problem(measurements, env)
+                    Q = fit_least_squares(base.predicted, base.target, base.fit_weights)
+                    ls = [
+                        _delta_e(stage, env.name, MatrixCorrection(Q).apply, s, base)
+                        for s in (judged, general)
+                    ]
+                    for ridge in RIDGES:
+                        weights = skin_module.chart_skin_weights(
+                            skin_module.chart_reflectances(),
+                            fitting.reflectances,
+                            base.fit_weights > 0,
+                            ridge,
+                        )
+                        samples = dataclasses.replace(
+                            skin_module.chart_skin_samples(
+                                base.SRL, base.target, base.fit_weights > 0, fitting
+                            ),
+                            SRL=np.einsum("kj,jcl->kcl", weights, base.SRL),
+                            target=weights @ base.target,
+                            weights=weights,
+                        )
+                        problem = dataclasses.replace(base, skin=samples)
+                        for weight in WEIGHTS:
+                            fit = make_q_root_polynomial(2, weight)(problem).correction
+                            got = [
+                                _delta_e(stage, env.name, fit.apply, s, problem)
+                                for s in (judged, general)
+                            ]
+                            key = (noise, ridge, weight)
+                            sums[key] = sums.get(key, np.zeros(4)) + np.array([*got, *ls])
+    rows = [
+        "| noise | combination ridge | skin weight | skin / LS | RAW to ACES / LS |",
+        "|---|---|---|---|---|",
+    ]
+    for (noise, ridge, weight), s in sums.items():
+        rows.append(
+            f"| {noise:.1%} | {ridge:g} | {weight:g} | {s[0] / s[2]:.3f} | {s[1] / s[3]:.3f} |"
+        )
+    return "\n".join(rows)
+
+
+def expectation() -> str:
+    """Expected against measured skin ratios on the held-out half (module docstring)."""
+    from benchmarks.skin_eval import HELD_OUT_LEDS, broadband_environments, cameras_of, skin_set
+    from ocio_vp.pipeline import solve_environment
+    from ocio_vp.simulator.stage import simulate_measurements, spectral_stage
+    from ocio_vp.simulator.truth import held_out_errors, noisy_measurements
+
+    skin = skin_set("held-out").reflectances
+    out: dict[str, list[tuple[float, float]]] = {"general": [], "skin": []}
+    for camera in cameras_of("held-out"):
+        for leds in HELD_OUT_LEDS:
+            stage = spectral_stage(camera=camera, leds=leds)
+            clean = simulate_measurements(broadband_environments(), stage=stage)
+            measurements = noisy_measurements(clean, 0.005, np.random.default_rng(0))
+            for env in measurements.environments:
+                solved = {p: solve_environment(measurements, env, priority=p) for p in out}
+                ls = solve_environment(measurements, env, method="least-squares")
+                reference = held_out_errors(
+                    stage, env.name, M=ls.M, w_avg=ls.w_avg, Q=ls.Q, reflectances=skin
+                ).delta_E_2000.mean()
+                for priority, s in solved.items():
+                    measured = held_out_errors(
+                        stage, env.name, M=s.M, w_avg=s.w_avg, Q=s.Q, reflectances=skin,
+                        correct=s.correction.apply,
+                    ).delta_E_2000.mean()  # fmt: skip
+                    out[priority].append((s.diagnostics.skin.ratio, measured / reference))
+    rows = [
+        "| priority | solves | expected skin / LS (mean) | measured skin / LS (mean) | "
+        "correlation | solves where both say 'better than LS' or both 'not' |",
+        "|---|---|---|---|---|---|",
+    ]
+    for priority, pairs in out.items():
+        e, m = np.array(pairs).T
+        agree = np.mean((e < 1 - 1e-9) == (m < 1))
+        rows.append(
+            f"| {priority} | {len(e)} | {e.mean():.3f} | {m.mean():.3f} | "
+            f"{np.corrcoef(e, m)[0, 1]:.2f} | {agree:.0%} |"
+        )
+    return "\n".join(rows)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--part", choices=("tuning", "expectation"), action="append")
+    args = parser.parse_args(argv)
+    for part in args.part or ("tuning", "expectation"):
+        print(f"### {part}\n\n{globals()[part]()}\n")
+        sys.stdout.flush()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,101 @@
+"""The skin figures of a solve (``diagnostics.skin``: :class:`ocio_vp.formats.skin.SkinFigures`).
+
+Every figure is measured on the solve's own data: the problem's skin samples
+(:mod:`ocio_vp.correction.skin`) and chart, the chosen post-correction and the paper's least
+squares fitted to the same patches; with skin first also the default post-correction
+(``auto``), the wall's LEDs in frame through each (emitter damage) and the chart colours each
+in-frustum matrix ``N = M Q^-1`` drives outside the wall's range (the background).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ocio_vp.calibration.diagnostics import in_frustum_drive_range
+from ocio_vp.calibration.equations import condition_number
+from ocio_vp.correction.extrapolation import in_frame_led_damage
+from ocio_vp.correction.linear import patch_errors
+from ocio_vp.correction.problem import QProblem, fit_least_squares
+from ocio_vp.correction.skin import sample_camera_to_xyz, skin_delta_e
+from ocio_vp.formats.skin import ROUNDING, SkinBand, SkinDefault, SkinFigures
+from ocio_vp.model.correction import MatrixCorrection, PostCorrection
+from ocio_vp.skin_data import ITA_BANDS
+
+__all__ = ["skin_figures"]
+
+#: An in-frustum matrix is not formed from a Q less well conditioned than this (as N's solve).
+_MAX_CONDITION = 1e8
+
+
+def _figure(value: float) -> float:
+    """A ΔE2000 figure; below :data:`~ocio_vp.formats.skin.ROUNDING` it is rounding, whose
+    digits differ between machines: written as 0."""
+    value = float(value)
+    return 0.0 if abs(value) < ROUNDING else value
+
+
+def _background_outside(problem: QProblem, correction: PostCorrection) -> int:
+    """Chart colours ``N = M Q^-1`` drives outside [0, 1] (-1 where Q has no inverse)."""
+    Q = correction.matrix
+    if not condition_number(Q) < _MAX_CONDITION:
+        return -1
+    N = np.asarray(problem.M, dtype=np.float64) @ np.linalg.inv(Q)
+    drive = in_frustum_drive_range(
+        np.asarray(problem.target, dtype=np.float64),
+        M=problem.M,
+        matrix=N,
+        white_patch=problem.white_patch,
+    )
+    return int(drive.below_zero + drive.above_max)
+
+
+def skin_figures(
+    problem: QProblem,
+    correction: PostCorrection,
+    priority: str,
+    default: tuple[str, PostCorrection] | None = None,
+) -> SkinFigures | None:
+    """:class:`~ocio_vp.formats.skin.SkinFigures` of ``correction`` on ``problem`` (None
+    without skin samples); ``default``: the default's (model, correction) with skin first."""
+    lit, skin = problem.skin_predicted, problem.skin
+    if lit is None or skin is None or skin.count == 0:
+        return None
+    X, P, w = problem.predicted, np.asarray(problem.target, dtype=np.float64), problem.fit_weights
+    white = P[problem.white_patch]
+    camera = sample_camera_to_xyz()
+    least_squares = MatrixCorrection(fit_least_squares(X, P, w))
+    corrections = [correction, least_squares] + ([default[1]] if default else [])
+    errors = skin_delta_e(np.stack([c.apply(lit) for c in corrections]), skin.target, white, camera)
+    active = w > 0
+    chart = patch_errors(np.stack([c.apply(X) for c in corrections[:2]]), P, w, problem.white_patch)
+    band = np.asarray(skin.band)
+    bands = tuple(
+        SkinBand(
+            name,
+            int(np.sum(band == name)),
+            *(_figure(np.mean(e[band == name])) for e in errors[:2]),
+        )
+        for name, _ in ITA_BANDS
+        if np.any(band == name)
+    )
+    comparison = None
+    if default is not None:
+        comparison = SkinDefault(
+            model=default[0],
+            expected=_figure(np.mean(errors[2])),
+            led_damage=_figure(in_frame_led_damage(correction, problem.SL, white, camera)),
+            led_damage_default=_figure(in_frame_led_damage(default[1], problem.SL, white, camera)),
+            background_outside=_background_outside(problem, correction),
+            background_outside_default=_background_outside(problem, default[1]),
+        )
+    return SkinFigures(
+        priority=priority,
+        source=skin.source,
+        samples=skin.count,
+        expected=_figure(np.mean(errors[0])),
+        least_squares=_figure(np.mean(errors[1])),
+        chart=_figure(np.mean(chart[0][0][active])),
+        chart_least_squares=_figure(np.mean(chart[0][1][active])),
+        bands=bands,
+        default=comparison,
+    )

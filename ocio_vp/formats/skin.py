@@ -1,0 +1,90 @@
+"""``diagnostics.skin`` of ``solution.json``: what a solve expects faces to look like.
+
+Typed records, written and read as plain JSON (docs/solution.md, docs/skin.md). The figures are
+mean ΔE2000 on the solve's skin samples (:mod:`ocio_vp.correction.skin`) through the sample
+camera's RGB -> XYZ matrix, for the chosen post-correction and for the paper's least squares
+fitted to the same patches; the chart's mean ΔE2000 likewise (what general reflectances pay).
+With skin first, the default's figures beside them (what the priority cost or bought).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ocio_vp.formats.records import Record
+
+__all__ = ["ROUNDING", "SkinBand", "SkinDefault", "SkinFigures"]
+
+
+@dataclass(frozen=True)
+class SkinBand(Record):
+    """One lightness band (ITA°): its sample count and mean ΔE2000, this solve and least
+    squares."""
+
+    band: str
+    samples: int
+    expected: float
+    least_squares: float
+
+
+@dataclass(frozen=True)
+class SkinDefault(Record):
+    """The default post-correction on the same problem (written with skin first): its model,
+    its expected skin ΔE2000, the wall's LEDs in frame (p95 ΔE2000) through it and through this
+    solve, and the chart patches the in-frustum matrix drives outside [0, 1] for each."""
+
+    model: str
+    expected: float
+    led_damage: float
+    led_damage_default: float
+    background_outside: int
+    background_outside_default: int
+
+
+@dataclass(frozen=True)
+class SkinFigures(Record):
+    """What a solve expects of skin (module docstring).
+
+    ``priority``: ``general`` or ``skin``; ``source``: where the skin samples came from (in
+    words); ``expected`` / ``least_squares``: mean ΔE2000 over the samples; ``chart`` /
+    ``chart_least_squares``: mean ΔE2000 over the fitted chart patches; ``bands`` per lightness
+    band, lightest first; ``default`` with skin first, else None.
+    """
+
+    priority: str
+    source: str
+    samples: int
+    expected: float
+    least_squares: float
+    chart: float
+    chart_least_squares: float
+    bands: tuple[SkinBand, ...] = ()
+    default: SkinDefault | None = None
+
+    @property
+    def ratio(self) -> float:
+        """Expected skin ΔE2000 over least squares' (1 where least squares' is rounding)."""
+        return _ratio(self.expected, self.least_squares)
+
+    @property
+    def chart_ratio(self) -> float:
+        """The chart's mean ΔE2000 over least squares' (1 where that is rounding)."""
+        return _ratio(self.chart, self.chart_least_squares)
+
+    def words(self) -> str:
+        """``skin 1.2 ΔE (0.80x LS)``: the terminal's skin figure."""
+        return f"{_figure(self.expected)} ({self.ratio:.2f}x LS)"
+
+
+#: ΔE2000 below this is rounding (machine-dependent digits): printed as 0, ratios as 1.
+ROUNDING = 1e-6
+
+
+def _ratio(value: float, reference: float) -> float:
+    if reference < ROUNDING:
+        return 1.0 if value < ROUNDING else float("inf")
+    return value / reference
+
+
+def _figure(value: float) -> str:
+    return f"{value:.2f}" if value >= ROUNDING else "0"

@@ -1,0 +1,163 @@
+"""Measured human skin reflectances, their lightness bands (ITA°), and the cameras held out.
+
+A leaf module (numpy, :mod:`ocio_vp.spectra`; colour-science inside the functions). The data:
+
+- ``ocio_vp/data/skin_training.json``: the TRAINING half of NIST's *Reference Data Set of
+  Human Skin Reflectance* on the project grid. Fits, rules and constants may use it
+  (:func:`training_skin`).
+- ``benchmarks/data/skin_held_out.json``: the HELD-OUT half, outside the package on purpose:
+  only the skin benchmark reads it (``benchmarks/skin_eval.py``), never a fit.
+- ``ocio_vp/data/camera_sensitivities_physlight.json``: Weta's physlight cameras that the
+  rawtoaces file does not hold, each marked ``tuning`` or ``held-out``.
+
+The split is fixed in the files (rebuilt by ``benchmarks/make_skin_data.py``): within each ITA
+band, in order of ITA, subjects alternate training / held-out. Licences and sources:
+``ocio_vp/data/SKIN_LICENSE.md``.
+
+The Individual Typology Angle (Chardon, Cretois & Hourseau 1991):
+``ITA = atan((L* - 50) / b*) · 180/π``, from CIELAB under D65 (CIE 1931 2° observer).
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+from dataclasses import dataclass
+from importlib import resources
+
+import numpy as np
+
+from ocio_vp.spectra import SPECTRAL_SHAPE
+
+__all__ = [
+    "ITA_BANDS",
+    "SkinSet",
+    "band_of",
+    "ita_degrees",
+    "lab_d65",
+    "load_skin_file",
+    "physlight_camera_names",
+    "physlight_cameras",
+    "training_skin",
+]
+
+#: (name, lower bound in degrees, exclusive) from light to dark; the last band has no floor
+#: (Del Bino & Bernerd 2013's six categories).
+ITA_BANDS: tuple[tuple[str, float], ...] = (
+    ("very light", 55.0),
+    ("light", 41.0),
+    ("intermediate", 28.0),
+    ("tan", 10.0),
+    ("brown", -30.0),
+    ("dark", -np.inf),
+)
+
+TRAINING_FILE = "data/skin_training.json"
+PHYSLIGHT_FILE = "data/camera_sensitivities_physlight.json"
+
+
+@dataclass(frozen=True)
+class SkinSet:
+    """Skin reflectances on the grid: ``names`` (n,), ``reflectances`` (n, W), ``bands`` (n,)
+    as recorded by the split, ``split`` ('training' or 'held-out')."""
+
+    split: str
+    names: tuple[str, ...]
+    reflectances: np.ndarray
+    bands: tuple[str, ...]
+
+    def ita(self) -> np.ndarray:
+        """(n,) ITA° of each sample, computed from its spectrum."""
+        return ita_degrees(lab_d65(self.reflectances))
+
+    def in_band(self, band: str) -> np.ndarray:
+        """(k, W) the reflectances of one band."""
+        mask = np.array([b == band for b in self.bands], dtype=bool)
+        return self.reflectances[mask]
+
+
+def lab_d65(reflectances) -> np.ndarray:
+    """(..., 3) CIELAB of reflectances (..., W) on the grid under D65, CIE 1931 2° observer."""
+    import colour
+
+    from ocio_vp.spectra import align, spectral_shape
+
+    shape = spectral_shape()
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape)
+    d65 = align(colour.SDS_ILLUMINANTS["D65"])
+    weights = cmfs.values * d65[:, None]
+    XYZ = np.asarray(reflectances, dtype=np.float64) @ weights / weights[:, 1].sum()
+    white = np.ones(weights.shape[0]) @ weights / weights[:, 1].sum()
+    return colour.XYZ_to_Lab(XYZ, colour.XYZ_to_xy(white))
+
+
+def ita_degrees(lab) -> np.ndarray:
+    """(...,) Individual Typology Angle in degrees of CIELAB (..., 3): atan((L*-50)/b*)."""
+    lab = np.asarray(lab, dtype=np.float64)
+    return np.degrees(np.arctan2(lab[..., 0] - 50.0, lab[..., 2]))
+
+
+def band_of(ita: float) -> str:
+    """The name of the ITA band an angle falls in (a bound belongs to the darker band)."""
+    for name, floor in ITA_BANDS:
+        if ita > floor:
+            return name
+    return ITA_BANDS[-1][0]
+
+
+def load_skin_file(text: str) -> SkinSet:
+    """A :class:`SkinSet` from a skin JSON document (``ocio-vp/skin-reflectances``)."""
+    document = json.loads(text)
+    grid = document["wavelengths"]
+    if (grid["start"], grid["end"], grid["interval"]) != SPECTRAL_SHAPE:
+        raise RuntimeError(f"skin data is not on the grid {SPECTRAL_SHAPE}")
+    samples = document["samples"]
+    reflectances = np.array([s["reflectance"] for s in samples.values()], dtype=np.float64)
+    reflectances.setflags(write=False)
+    return SkinSet(
+        split=document["split"],
+        names=tuple(samples),
+        reflectances=reflectances,
+        bands=tuple(s["band"] for s in samples.values()),
+    )
+
+
+@functools.lru_cache(maxsize=1)
+def training_skin() -> SkinSet:
+    """The TRAINING skin (fits, rules and constants may use it; the benchmark judges on the
+    held-out half).
+
+    >>> skin = training_skin()
+    >>> skin.split, skin.reflectances.shape[1]
+    ('training', 81)
+    """
+    text = resources.files("ocio_vp").joinpath(TRAINING_FILE).read_text(encoding="utf-8")
+    return load_skin_file(text)
+
+
+@functools.lru_cache(maxsize=1)
+def _physlight() -> dict:
+    text = resources.files("ocio_vp").joinpath(PHYSLIGHT_FILE).read_text(encoding="utf-8")
+    document = json.loads(text)
+    grid = document["wavelengths"]
+    if (grid["start"], grid["end"], grid["interval"]) != SPECTRAL_SHAPE:
+        raise RuntimeError(f"{PHYSLIGHT_FILE} is not on the grid {SPECTRAL_SHAPE}")
+    return document["cameras"]
+
+
+def physlight_camera_names(split: str) -> tuple[str, ...]:
+    """Names of the physlight cameras of one split: 'tuning' or 'held-out'."""
+    return tuple(name for name, record in _physlight().items() if record["split"] == split)
+
+
+def physlight_cameras(split: str) -> dict[str, np.ndarray]:
+    """(W, 3) sensitivities of the physlight cameras of one split, by name.
+
+    >>> cameras = physlight_cameras("held-out")
+    >>> next(iter(cameras.values())).shape
+    (81, 3)
+    """
+    return {
+        name: np.asarray(_physlight()[name]["RGB"], dtype=np.float64)
+        for name in physlight_camera_names(split)
+    }

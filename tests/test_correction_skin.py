@@ -1,0 +1,178 @@
+"""Skin samples, the default's skin rule and ``--priority skin`` (ocio_vp.correction.skin*).
+
+Independent references: the simulator's spectral stage (camera RGB computed from spectra), the
+chart's own reflectances (a patch is its own combination), and least squares fitted here.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from ocio_vp.correction.skin import (
+    SKIN_CHART,
+    chart_reflectances,
+    chart_skin_samples,
+    chart_skin_weights,
+    patch_skin_samples,
+)
+from ocio_vp.errors import InputError
+from ocio_vp.pipeline import solve_environment
+from ocio_vp.skin_data import training_skin
+
+BROADBAND = ("warm_white_led", "incandescent", "indoor_daylight", "outdoor_shade", "direct_sun")
+
+
+@pytest.fixture(scope="module")
+def stage_and_measurements():
+    from ocio_vp.simulator.stage import paper_stage, simulate_measurements
+
+    stage = paper_stage()
+    return stage, simulate_measurements((*BROADBAND, "sodium_vapour"), stage=stage)
+
+
+@pytest.fixture(scope="module")
+def solved(stage_and_measurements):
+    """Every environment solved by default and with skin first (shared by the tests)."""
+    _, m = stage_and_measurements
+    return {
+        (env.name, priority): solve_environment(m, env, priority=priority)
+        for env in m.environments
+        for priority in ("general", "skin")
+    }
+
+
+class TestChartSkinWeights:
+    def test_a_chart_patch_is_its_own_combination(self):
+        chart = chart_reflectances()
+        active = np.ones(24, bool)
+        weights = chart_skin_weights(chart, chart[[0, 1, 11]], active)
+        # Ridge-regularised, so close to (not exactly) the unit vectors.
+        np.testing.assert_allclose(weights @ chart, chart[[0, 1, 11]], atol=0.01)
+        assert np.argmax(weights, axis=1).tolist() == [0, 1, 11]
+
+    def test_excluded_patches_get_no_weight(self):
+        active = np.ones(24, bool)
+        active[[0, 1, 5]] = False
+        weights = chart_skin_weights(chart_reflectances(), training_skin().reflectances, active)
+        assert np.all(weights[:, ~active] == 0)
+
+    def test_measured_skin_is_reproduced_from_the_chart(self):
+        skin = training_skin().reflectances
+        weights = chart_skin_weights(chart_reflectances(), skin, np.ones(24, bool))
+        # Visible range: the skin spectrum within a few % reflectance everywhere.
+        visible = slice(4, 65)  # 400-700 nm on the 5 nm grid from 380
+        assert np.max(np.abs(weights @ chart_reflectances() - skin)[:, visible]) < 0.05
+
+
+def test_virtual_skin_is_the_skin_the_stage_camera_sees(stage_and_measurements):
+    """Camera RGB is linear in reflectance: the chart combination of a skin that lies in the
+    chart's span is that skin as the stage photographs it (the simulator's spectra)."""
+    from ocio_vp.simulator.stage import SpectralStage
+
+    stage, m = stage_and_measurements
+    chart = chart_reflectances(SKIN_CHART)
+    stage = dataclasses.replace(stage, reflectances=chart)  # a chart whose spectra we know
+    rng = np.random.default_rng(1)
+    inside = rng.dirichlet(np.ones(24), size=4) @ chart  # skin-like reflectances in the span
+    skin_stage = SpectralStage(**{**vars(stage), "reflectances": inside})
+    training = dataclasses.replace(training_skin(), reflectances=inside, bands=("light",) * 4)
+    samples = chart_skin_samples(
+        stage.beta * stage.SRL_unscaled, np.ones((24, 3)), np.ones(24, bool), training
+    )
+    np.testing.assert_allclose(
+        samples.SRL, skin_stage.beta * skin_stage.SRL_unscaled, rtol=0.02, atol=1e-4
+    )
+
+
+def test_the_colorchecker_skin_patches_are_found_by_colour(stage_and_measurements):
+    _, m = stage_and_measurements
+    for env in m.environments[: len(BROADBAND)]:
+        samples = patch_skin_samples(m.SRL, env.target_chart, 18, np.ones(24, bool))
+        assert samples is not None and np.argmax(samples.weights, axis=1).tolist() == [0, 1]
+
+
+def test_the_default_never_expects_skin_worse_than_least_squares(solved):
+    """Worse only within the comparison's noise (a hundredth of a ΔE here), better overall."""
+    ratios = [solved[(name, "general")].diagnostics.skin.ratio for name in BROADBAND]
+    assert max(ratios) <= 1.001 and np.mean(ratios) < 0.95
+
+
+def test_skin_first_renders_the_samples_better_and_keeps_emitters(solved):
+    ratios = []
+    for name in BROADBAND:
+        skin = solved[(name, "skin")].diagnostics.skin
+        ratios.append(skin.ratio)
+        assert skin.chart_ratio <= 1.15
+        default = skin.default
+        assert default.led_damage <= 1.01 * default.led_damage_default + 1e-9, name
+        assert default.background_outside <= default.background_outside_default, name
+        assert skin.expected <= default.expected + 1e-6, name
+    assert np.mean(ratios) < 0.9
+
+
+def test_skin_first_is_safe_under_sodium(solved):
+    general = solved[("sodium_vapour", "general")]
+    skin = solved[("sodium_vapour", "skin")]
+    assert skin.diagnostics.model == general.diagnostics.model == "rank-1"
+    np.testing.assert_array_equal(skin.Q, general.Q)
+
+
+def test_skin_first_composes_with_the_emitter_guard(stage_and_measurements):
+    _, m = stage_and_measurements
+    s = solve_environment(m, m.environments[0], priority="skin", protect_emitters=True)
+    assert s.correction.kind == "protected"
+    skin = s.diagnostics.skin
+    assert skin.priority == "skin" and skin.ratio < 1.0
+    # Guarded alike, the wall's LEDs in frame move as little as by the default (within 1 %:
+    # inside the guard's fade the two fits differ a little).
+    assert skin.default.led_damage <= 1.01 * skin.default.led_damage_default
+
+
+def test_skin_first_with_another_method_is_refused_on_one_line(stage_and_measurements):
+    _, m = stage_and_measurements
+    with pytest.raises(InputError, match=r"--priority.*cannot be combined with --method") as e:
+        solve_environment(m, m.environments[0], method="least-squares", priority="skin")
+    assert "\n" not in str(e.value)
+
+
+def test_skin_from_spectra_is_the_skin_the_stage_camera_sees(stage_and_measurements):
+    """Given the stage's own LED spectra, camera and light, the skin samples are the simulator's
+    skin (up to the gains fitted through the chart's reference spectra, a different chart
+    measurement than the simulated one)."""
+    from ocio_vp.correction.skin_spectra import StageSpectra, spectral_skin_samples
+    from ocio_vp.simulator.stage import environment_spectrum
+
+    stage, m = stage_and_measurements
+    env = m.environment("incandescent")
+    light = environment_spectrum(stage, "incandescent")
+    spectra = StageSpectra(stage.leds, stage.camera, {"incandescent": light}, "the stage's")
+    samples = spectral_skin_samples(
+        m.SRL, env.target_chart, np.ones(24, bool), spectra, "incandescent"
+    )
+    skin = training_skin().reflectances
+    lit = stage.beta * np.einsum("wc,kw,wl->kcl", stage.camera, skin, stage.leds)
+    np.testing.assert_allclose(samples.SRL, lit, rtol=0.03)
+    np.testing.assert_allclose(samples.target, (skin * light) @ stage.camera, rtol=0.03)
+    assert "location light measured" in samples.source
+
+
+def test_a_bad_spectral_file_writes_nothing(stage_and_measurements, tmp_path, capsys):
+    from ocio_vp.cli import main
+    from ocio_vp.formats.measurements import save_measurements
+
+    _, m = stage_and_measurements
+    save_measurements(m, tmp_path / "m.yaml")
+    (tmp_path / "leds.csv").write_text("nm,red,green,blue\n400,1,1,1\n700,1,1,-1\n")
+    code = main(
+        ["solve", str(tmp_path / "m.yaml"), "--out", str(tmp_path / "out"),
+         "--led-spectra", str(tmp_path / "leds.csv"), "--camera-sensitivities", "Nikon 5100 (NPL)"]
+    )  # fmt: skip
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and not (tmp_path / "out").exists()
+    assert err.endswith(
+        "leds.csv: column 'wavelength': too few samples: 2 between 400 and 700 nm, need at least 16"
+    )
+    assert "\n" not in err
