@@ -1,0 +1,462 @@
+"""A config as plain data, and the one function that turns it into an OpenColorIO config.
+
+In the manner of OpenColorIO-Config-ACES (its ``ConfigData`` and ``generate_config``): what
+goes into a config (roles, colour spaces with their transforms, displays, views, view
+transforms, named transforms, looks, search path, descriptions) is held in small frozen records
+that import nothing from OpenColorIO, so two descriptions compare with ``==`` and tests compare
+data; :func:`build` is the only place that calls PyOpenColorIO to make a config from them.
+
+A transform is a :class:`Transform`: its OCIO class name, its parameters by OCIO setter name
+(``Matrix``, ``Src``, ``MinInValue``, ...; an enum value as :class:`Enum`), its children (a
+group's) and its direction. :func:`transform_record` reads one back from an OCIO transform (for
+the transforms taken from OCIO's built-in ACES config and from configs the tool loads).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import PyOpenColorIO as OCIO
+
+__all__ = [
+    "ColourSpace",
+    "ConfigData",
+    "Enum",
+    "Look",
+    "NamedTransform",
+    "Transform",
+    "View",
+    "ViewTransform",
+    "build",
+    "colour_space_record",
+    "file",
+    "group",
+    "matrix",
+    "transform_record",
+]
+
+
+@dataclass(frozen=True)
+class Enum:
+    """An OCIO enum value by its module-level name (``RANGE_CLAMP``, ``INTERP_LINEAR``)."""
+
+    name: str
+
+
+Value = str | float | bool | tuple[float, ...] | Enum
+
+
+@dataclass(frozen=True)
+class Transform:
+    """One OCIO transform as data: class name, parameters (setter name without ``set``, in the
+    order they are set), a group's children, and whether it runs inverted."""
+
+    type: str
+    params: tuple[tuple[str, Value], ...] = ()
+    children: tuple[Transform, ...] = ()
+    inverse: bool = False
+
+    def inverted(self) -> Transform:
+        """The same transform in the other direction."""
+        return dataclasses.replace(self, inverse=not self.inverse)
+
+
+#: Parameters each transform type carries, by OCIO getter/setter name. A parameter that may be
+#: unset is read only when OCIO says it is set (``_IS_SET``).
+PARAMS: dict[str, tuple[str, ...]] = {
+    "MatrixTransform": ("Matrix", "Offset"),
+    "FileTransform": ("Src", "CCCId", "Interpolation"),
+    "RangeTransform": ("Style", "MinInValue", "MaxInValue", "MinOutValue", "MaxOutValue"),
+    "LogCameraTransform": (
+        "Base",
+        "LinSideBreakValue",
+        "LogSideSlopeValue",
+        "LogSideOffsetValue",
+        "LinSideSlopeValue",
+        "LinSideOffsetValue",
+        "LinearSlopeValue",
+    ),
+    "LogAffineTransform": (
+        "Base",
+        "LogSideSlopeValue",
+        "LogSideOffsetValue",
+        "LinSideSlopeValue",
+        "LinSideOffsetValue",
+    ),
+    "LogTransform": ("Base",),
+    "ExponentTransform": ("Value", "NegativeStyle"),
+    "ExponentWithLinearTransform": ("Gamma", "Offset", "NegativeStyle"),
+    "BuiltinTransform": ("Style",),
+    "ColorSpaceTransform": ("Src", "Dst", "DataBypass"),
+    "GroupTransform": (),
+}
+_IS_SET = {
+    "MinInValue": "hasMinInValue",
+    "MaxInValue": "hasMaxInValue",
+    "MinOutValue": "hasMinOutValue",
+    "MaxOutValue": "hasMaxOutValue",
+    "LinearSlopeValue": "isLinearSlopeValueSet",
+}
+
+
+def matrix(m44: Iterable[float], offset: Iterable[float] = (0.0,) * 4, *, inverse: bool = False):
+    """A MatrixTransform record from a row-major 4x4 and a 4-offset."""
+    values = (("Matrix", tuple(float(v) for v in m44)), ("Offset", tuple(float(v) for v in offset)))
+    return Transform("MatrixTransform", values, inverse=inverse)
+
+
+def file(src: str) -> Transform:
+    """A FileTransform record (OCIO's default interpolation)."""
+    return Transform("FileTransform", (("Src", src),))
+
+
+def group(transforms: Iterable[Transform], *, inverse: bool = False) -> Transform:
+    """A GroupTransform record."""
+    return Transform("GroupTransform", children=tuple(transforms), inverse=inverse)
+
+
+def one(transforms: list[Transform]) -> Transform:
+    """The transform itself when there is one, else their group."""
+    return transforms[0] if len(transforms) == 1 else group(transforms)
+
+
+@dataclass(frozen=True)
+class ColourSpace:
+    """A colour space: ``to_reference`` / ``from_reference`` None where not given."""
+
+    name: str
+    family: str
+    description: str
+    encoding: str = ""
+    categories: tuple[str, ...] = ()
+    is_data: bool = False
+    to_reference: Transform | None = None
+    from_reference: Transform | None = None
+    display_referred: bool = False
+    aliases: tuple[str, ...] = ()
+    bit_depth: Enum = Enum("BIT_DEPTH_UNKNOWN")
+
+
+@dataclass(frozen=True)
+class NamedTransform:
+    name: str
+    family: str
+    description: str
+    forward: Transform | None
+    inverse: Transform | None = None
+    categories: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Look:
+    name: str
+    process_space: str
+    transform: Transform
+    description: str
+    inverse: Transform | None = None
+
+
+@dataclass(frozen=True)
+class ViewTransform:
+    name: str
+    description: str
+    from_reference: Transform
+
+
+@dataclass(frozen=True)
+class View:
+    """A view of a display: a colour space, or a view transform to a display colour space."""
+
+    display: str
+    name: str
+    colour_space: str
+    view_transform: str = ""
+    looks: str = ""
+
+
+@dataclass
+class ConfigData:
+    """Everything a config holds, in the order it is added (the serialized order)."""
+
+    name: str = ""
+    description: str = ""
+    version: tuple[int, int] = (2, 1)
+    search_path: str = ""
+    roles: dict[str, str] = field(default_factory=dict)
+    colour_spaces: list[ColourSpace] = field(default_factory=list)
+    named_transforms: list[NamedTransform] = field(default_factory=list)
+    looks: list[Look] = field(default_factory=list)
+    view_transforms: list[ViewTransform] = field(default_factory=list)
+    views: list[View] = field(default_factory=list)
+    active_displays: tuple[str, ...] = ()
+    active_views: tuple[str, ...] = ()
+
+    def colour_space(self, name: str) -> ColourSpace:
+        """The colour space called ``name`` (KeyError when there is none)."""
+        for cs in self.colour_spaces:
+            if cs.name == name:
+                return cs
+        raise KeyError(name)
+
+    def has_colour_space(self, name: str) -> bool:
+        return any(cs.name == name for cs in self.colour_spaces)
+
+    def displays(self) -> list[str]:
+        """Displays in the order their first view was added."""
+        return list(dict.fromkeys(v.display for v in self.views))
+
+    def view_names(self, display: str) -> list[str]:
+        return [v.name for v in self.views if v.display == display]
+
+
+def _enum(value: object) -> Value:
+    name = getattr(value, "name", None)
+    if name is not None and not isinstance(value, (str, float, int)):
+        return Enum(str(name))
+    if isinstance(value, (list, tuple)):
+        return tuple(float(v) for v in value)
+    return value  # type: ignore[return-value]
+
+
+def transform_record(transform: OCIO.Transform) -> Transform:
+    """The record of an OCIO transform of a type in :data:`PARAMS` (ValueError otherwise)."""
+    import PyOpenColorIO as OCIO
+
+    kind = type(transform).__name__
+    if kind not in PARAMS:
+        raise ValueError(f"no record for OCIO's {kind}")
+    params = []
+    for name in PARAMS[kind]:
+        is_set = _IS_SET.get(name)
+        if is_set is not None and not getattr(transform, is_set)():
+            continue
+        value = getattr(transform, f"get{name}")()
+        if name == "CCCId" and not value:
+            continue
+        params.append((name, _enum(value)))
+    children = tuple(transform_record(t) for t in transform) if kind == "GroupTransform" else ()
+    inverse = transform.getDirection() == OCIO.TRANSFORM_DIR_INVERSE
+    return Transform(kind, tuple(params), children, inverse)
+
+
+def colour_space_record(cs: OCIO.ColorSpace) -> ColourSpace:
+    """The record of an OCIO colour space (its name, family, encoding, description,
+    categories, data flag, reference side and both transforms)."""
+    import PyOpenColorIO as OCIO
+
+    def get(direction):
+        transform = cs.getTransform(direction)
+        return None if transform is None else transform_record(transform)
+
+    return ColourSpace(
+        name=cs.getName(),
+        family=cs.getFamily(),
+        description=cs.getDescription(),
+        encoding=cs.getEncoding(),
+        categories=tuple(cs.getCategories()),
+        is_data=cs.isData(),
+        to_reference=get(OCIO.COLORSPACE_DIR_TO_REFERENCE),
+        from_reference=get(OCIO.COLORSPACE_DIR_FROM_REFERENCE),
+        display_referred=cs.getReferenceSpaceType() == OCIO.REFERENCE_SPACE_DISPLAY,
+        aliases=tuple(cs.getAliases()),
+        bit_depth=Enum(cs.getBitDepth().name),
+    )
+
+
+def ocio_transform(record: Transform) -> OCIO.Transform:
+    """The OCIO transform of a record (every call a new object)."""
+    import PyOpenColorIO as OCIO
+
+    if record.type == "GroupTransform":
+        transform = OCIO.GroupTransform([ocio_transform(t) for t in record.children])
+    elif record.type == "LogCameraTransform":  # the one whose constructor needs a value
+        transform = OCIO.LogCameraTransform(linSideBreak=dict(record.params)["LinSideBreakValue"])
+    else:
+        transform = getattr(OCIO, record.type)()
+    for name, value in record.params:
+        setter = getattr(transform, f"set{name}")
+        setter(getattr(OCIO, value.name) if isinstance(value, Enum) else value)
+    if record.inverse:
+        transform.setDirection(OCIO.TRANSFORM_DIR_INVERSE)
+    return transform
+
+
+def _ocio_colour_space(record: ColourSpace) -> OCIO.ColorSpace:
+    import PyOpenColorIO as OCIO
+
+    reference = (
+        OCIO.REFERENCE_SPACE_DISPLAY if record.display_referred else (OCIO.REFERENCE_SPACE_SCENE)
+    )
+    cs = OCIO.ColorSpace(
+        referenceSpace=reference,
+        name=record.name,
+        family=record.family,
+        encoding=record.encoding,
+        description=record.description,
+        isData=record.is_data,
+        aliases=list(record.aliases),
+        bitDepth=getattr(OCIO, record.bit_depth.name),
+    )
+    for category in record.categories:
+        cs.addCategory(category)
+    for transform, direction in (
+        (record.to_reference, OCIO.COLORSPACE_DIR_TO_REFERENCE),
+        (record.from_reference, OCIO.COLORSPACE_DIR_FROM_REFERENCE),
+    ):
+        if transform is not None:
+            cs.setTransform(ocio_transform(transform), direction)
+    return cs
+
+
+def _add_named_transform(config: OCIO.Config, record: NamedTransform) -> None:
+    import PyOpenColorIO as OCIO
+
+    named = OCIO.NamedTransform(
+        name=record.name,
+        family=record.family,
+        description=record.description,
+        categories=list(record.categories),
+    )
+    if record.forward is not None:
+        named.setTransform(ocio_transform(record.forward), OCIO.TRANSFORM_DIR_FORWARD)
+    if record.inverse is not None:
+        named.setTransform(ocio_transform(record.inverse), OCIO.TRANSFORM_DIR_INVERSE)
+    config.addNamedTransform(named)
+
+
+def _add_look(config: OCIO.Config, record: Look) -> None:
+    import PyOpenColorIO as OCIO
+
+    look = OCIO.Look(
+        name=record.name,
+        processSpace=record.process_space,
+        transform=ocio_transform(record.transform),
+        description=record.description,
+    )
+    if record.inverse is not None:
+        look.setInverseTransform(ocio_transform(record.inverse))
+    config.addLook(look)
+
+
+def _add_view_transform(config: OCIO.Config, record: ViewTransform) -> None:
+    import PyOpenColorIO as OCIO
+
+    vt = OCIO.ViewTransform(
+        referenceSpace=OCIO.REFERENCE_SPACE_SCENE, name=record.name, description=record.description
+    )
+    vt.setTransform(ocio_transform(record.from_reference), OCIO.VIEWTRANSFORM_DIR_FROM_REFERENCE)
+    config.addViewTransform(vt)
+
+
+def build(data: ConfigData) -> OCIO.Config:
+    """The OCIO config of ``data``, validated (a config that does not validate raises
+    ``PyOpenColorIO.Exception``: a bug, never expected)."""
+    import PyOpenColorIO as OCIO
+
+    config = OCIO.Config()
+    config.setMajorVersion(data.version[0])
+    config.setMinorVersion(data.version[1])
+    config.setName(data.name)
+    config.setDescription(data.description)
+    if data.search_path:
+        config.setSearchPath(data.search_path)
+    for cs in data.colour_spaces:
+        config.addColorSpace(_ocio_colour_space(cs))
+    for named in data.named_transforms:
+        _add_named_transform(config, named)
+    for look in data.looks:
+        _add_look(config, look)
+    for vt in data.view_transforms:
+        _add_view_transform(config, vt)
+    for view in data.views:
+        if view.view_transform:
+            config.addDisplayView(
+                view.display, view.name, view.view_transform, view.colour_space, view.looks, "", ""
+            )
+        else:
+            config.addDisplayView(view.display, view.name, view.colour_space)
+    for role, space in data.roles.items():
+        config.setRole(role, space)
+    if data.active_displays:
+        config.setActiveDisplays(", ".join(data.active_displays))
+    if data.active_views:
+        config.setActiveViews(", ".join(data.active_views))
+    config.validate()
+    return config
+
+
+def config_record(config: OCIO.Config) -> ConfigData:
+    """The data of an OCIO config this module can describe (what :func:`build` makes)."""
+    import PyOpenColorIO as OCIO
+
+    every = (OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ALL)
+    named = []
+    for name in config.getNamedTransformNames(OCIO.NAMEDTRANSFORM_ALL):
+        nt = config.getNamedTransform(name)
+        forward = nt.getTransform(OCIO.TRANSFORM_DIR_FORWARD)
+        inverse = nt.getTransform(OCIO.TRANSFORM_DIR_INVERSE)
+        named.append(
+            NamedTransform(
+                name,
+                nt.getFamily(),
+                nt.getDescription(),
+                None if forward is None else transform_record(forward),
+                None if inverse is None else transform_record(inverse),
+                tuple(nt.getCategories()),
+            )
+        )
+    looks = []
+    for look in config.getLooks():
+        inverse = look.getInverseTransform()
+        looks.append(
+            Look(
+                look.getName(),
+                look.getProcessSpace(),
+                transform_record(look.getTransform()),
+                look.getDescription(),
+                None if inverse is None else transform_record(inverse),
+            )
+        )
+    views = [
+        View(
+            display,
+            view,
+            config.getDisplayViewColorSpaceName(display, view),
+            config.getDisplayViewTransformName(display, view),
+            config.getDisplayViewLooks(display, view),
+        )
+        for display in config.getDisplaysAll()
+        for view in config.getViews(OCIO.VIEW_DISPLAY_DEFINED, display)
+    ]
+    return ConfigData(
+        name=config.getName(),
+        description=config.getDescription(),
+        version=(config.getMajorVersion(), config.getMinorVersion()),
+        search_path=config.getSearchPath(),
+        roles=dict(config.getRoles()),
+        colour_spaces=[colour_space_record(cs) for cs in config.getColorSpaces(*every)],
+        named_transforms=named,
+        looks=looks,
+        view_transforms=[
+            ViewTransform(
+                vt.getName(),
+                vt.getDescription(),
+                transform_record(vt.getTransform(OCIO.VIEWTRANSFORM_DIR_FROM_REFERENCE)),
+            )
+            for vt in config.getViewTransforms()
+        ],
+        views=views,
+        active_displays=tuple(_names(config.getActiveDisplays())),
+        active_views=tuple(_names(config.getActiveViews())),
+    )
+
+
+def _names(value: object) -> list[str]:
+    """A name list as OCIO returns it (a comma-separated string before 2.5, an iterator)."""
+    if isinstance(value, str):
+        return [v.strip() for v in value.split(",") if v.strip()]
+    return list(value)  # type: ignore[call-overload]
