@@ -181,6 +181,7 @@ def test_invertibility_is_decided_once_by_the_model(solution, cond):
 
     from ocio_vp.calibration.equations import solve_N
     from ocio_vp.ocio.config import post_correction_transforms
+    from ocio_vp.ocio.description import ocio_transform
 
     rotation = np.linalg.qr(np.arange(1.0, 10.0).reshape(3, 3) + np.eye(3))[0]
     Q = rotation @ np.diag([1.0, 0.5, 1.0 / cond]) @ rotation.T
@@ -193,7 +194,8 @@ def test_invertibility_is_decided_once_by_the_model(solution, cond):
     _, inverse, note = post_correction_transforms(
         dataclasses.replace(solution, post_correction=correction)
     )
-    cpu = OCIO.Config.CreateRaw().getProcessor(inverse).getDefaultCPUProcessor()
+    processor = OCIO.Config.CreateRaw().getProcessor(ocio_transform(inverse))
+    cpu = processor.getDefaultCPUProcessor()
     columns = np.array([cpu.applyRGB([float(v) for v in e]) for e in np.eye(3)]).T
     if invertible:
         assert note == ""

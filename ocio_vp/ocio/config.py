@@ -17,6 +17,7 @@ Layout (names are module constants so other tools can rely on them):
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -27,7 +28,20 @@ from ocio_vp.calibration.diagnostics import is_identity, offset_is_negligible
 from ocio_vp.calibration.equations import condition_text
 from ocio_vp.formats.solution import Solution
 from ocio_vp.model.correction import MAX_CONDITION_INVERSE, truncated_pseudo_inverse
-from ocio_vp.ocio.matrix import format_matrix, matrix_transform
+from ocio_vp.ocio.description import (
+    ColourSpace,
+    ConfigData,
+    NamedTransform,
+    Transform,
+    View,
+    build,
+    clamp,
+    file,
+    group,
+    one,
+    transform_record,
+)
+from ocio_vp.ocio.matrix import format_matrix, matrix_record, matrix_transform
 from ocio_vp.ocio.softclip import soft_clip_text, soft_clip_transforms
 from ocio_vp.ocio.viewing import (
     add_acescct,
@@ -48,8 +62,10 @@ __all__ = [
     "REFERENCE",
     "ModelFiles",
     "build_config",
+    "config_data",
     "matrix_transform",
     "post_correction_transforms",
+    "wall_chains",
     "wall_signal_tail",
     "wall_tail",
     "write_config",
@@ -81,16 +97,23 @@ WORKING_SPACE_NAMES = {
 
 
 def _colorspace(
-    name: str, description: str, *, family: str, encoding: str = "scene-linear"
-) -> OCIO.ColorSpace:
-    cs = OCIO.ColorSpace(
-        referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
-        name=name,
-        family=f"{FAMILY}/{family}",
-        encoding=encoding,
-        description=description,
+    name: str,
+    description: str,
+    *,
+    family: str,
+    encoding: str = "scene-linear",
+    to_reference: Transform | None = None,
+    from_reference: Transform | None = None,
+) -> ColourSpace:
+    """A colour space of this tool's family ``ocio-vp/<family>``."""
+    return ColourSpace(
+        name,
+        f"{FAMILY}/{family}",
+        description,
+        encoding,
+        to_reference=to_reference,
+        from_reference=from_reference,
     )
-    return cs
 
 
 @dataclass(frozen=True)
@@ -104,55 +127,43 @@ class ModelFiles:
     note: str = ""
 
 
-def wall_transforms(
-    solution: Solution, model: ModelFiles | None = None
-) -> dict[str, tuple[list[OCIO.Transform], list[OCIO.Transform]]]:
-    """Reference -> drive transform chains for the two wall colorspaces, each with the chain of
-    the other direction (drive -> reference) given explicitly.
+Chains = tuple[list[Transform], list[Transform]]
+
+
+def wall_transforms(solution: Solution, model: ModelFiles | None = None) -> dict[str, Chains]:
+    """Reference -> drive transform chains (records) for the two wall colorspaces, each with
+    the chain of the other direction (drive -> reference) given explicitly.
 
     With ``model`` (a non-linear Q's sidecars) and N solved, the in-frustum drive is
     ``[SL]^-1 Q^-1(c)`` (the Q^-1 file, then the calibrated ``[SL]^-1``, which is M except for
     a method that lights with its own M) instead of the matrix N, and its other direction is
     ``Q([SL] d)`` ([SL]^-1 inverted, then the Q file): OCIO never inverts a LUT file.
 
-    The wall's tail (linearity LUT, signal encoding) is appended by :func:`build_config`.
+    The wall's tail (linearity LUT, signal encoding) is appended by :func:`config_data`.
     """
-    outer = [matrix_transform(solution.M)]
-    outer_back = [matrix_transform(solution.M, direction=OCIO.TRANSFORM_DIR_INVERSE)]
+    outer = [matrix_record(solution.M)]
+    outer_back = [matrix_record(solution.M, inverse=True)]
     # An offset the camera cannot see is left out (docs/stability.md); solution.json keeps it.
     offset = solution.black_level_offset
     if offset_is_negligible(offset, solution.SL):
         offset = None
-    inverse = OCIO.TRANSFORM_DIR_INVERSE
-    inner = [matrix_transform(solution.in_frustum_matrix, offset)]
-    inner_back = [matrix_transform(solution.in_frustum_matrix, offset, direction=inverse)]
+    inner = [matrix_record(solution.in_frustum_matrix, offset)]
+    inner_back = [matrix_record(solution.in_frustum_matrix, offset, inverse=True)]
     if model is not None and solution.N is not None:
         if model.q_inverse is None:
             raise ValueError("N is solved but the non-linear Q has no baked inverse")
         # N inverts Q for the calibrated wall, [SL]^-1, whatever M lights with (joint's M)
         calibrated = np.linalg.inv(np.asarray(solution.SL, dtype=np.float64))
-        inner = [OCIO.FileTransform(src=model.q_inverse), matrix_transform(calibrated, offset)]
-        inner_back = [
-            matrix_transform(calibrated, offset, direction=inverse),
-            OCIO.FileTransform(src=model.q),
-        ]
+        inner = [file(model.q_inverse), matrix_record(calibrated, offset)]
+        inner_back = [matrix_record(calibrated, offset, inverse=True), file(model.q)]
     return {OUT_OF_FRUSTUM: (outer, outer_back), IN_FRUSTUM: (inner, inner_back)}
-
-
-def _wall_signal_encoding(solution: Solution) -> str:
-    return WallEncoding.of(solution.linearity).ocio_encoding
-
-
-def _group(transforms: list[OCIO.Transform]) -> OCIO.Transform:
-    if len(transforms) == 1:
-        return transforms[0]
-    return OCIO.GroupTransform(transforms)
 
 
 def post_correction_transforms(
     solution: Solution, model: ModelFiles | None = None
-) -> tuple[OCIO.Transform, OCIO.Transform, str]:
-    """Q as OCIO transforms: (footage -> corrected, corrected -> footage, a note on the second).
+) -> tuple[Transform, Transform, str]:
+    """Q as transform records: (footage -> corrected, corrected -> footage, a note on the
+    second).
 
     Both directions are explicit, so a host asking for the other one (reference -> ``Stage
     Footage``, the named transform inverted) never makes OCIO invert a chain by itself (it
@@ -176,12 +187,12 @@ def post_correction_transforms(
             f"a {correction.kind} post-correction needs its LUT files (ocio_vp.ocio.bake); "
             "the config would otherwise carry only its 3x3"
         )
-    forward = matrix_transform(Q) if model is None else OCIO.FileTransform(src=model.q)
+    forward = matrix_record(Q) if model is None else file(model.q)
     if model is not None and model.q_inverse is not None:
         text = f"The inverse direction is the baked Q^-1 ({model.q_inverse})."
-        return forward, OCIO.FileTransform(src=model.q_inverse), text
+        return forward, file(model.q_inverse), text
     if correction.invertible and model is None:
-        return forward, matrix_transform(Q, direction=OCIO.TRANSFORM_DIR_INVERSE), ""
+        return forward, matrix_record(Q, inverse=True), ""
     pinv, rank = truncated_pseudo_inverse(Q)
     if model is not None:
         text = (
@@ -191,17 +202,17 @@ def post_correction_transforms(
             f"truncated pseudo-inverse {format_matrix(pinv)}, so that a host asking for it gets finite "
             "numbers at once; do not use it to undo the post-correction."
         )
-        return forward, matrix_transform(pinv), text
+        return forward, matrix_record(pinv), text
     text = (
         f"Q has rank {rank} at cond <= {MAX_CONDITION_INVERSE:g} (cond(Q) "
         f"{condition_text(float(np.linalg.cond(Q)))}): it cannot be inverted, so the inverse "
         "direction (reference -> Stage Footage, the inverse of the named transform) is Q's "
         f"truncated pseudo-inverse {format_matrix(pinv)}, bounded, not a true inverse."
     )
-    return forward, matrix_transform(pinv), text
+    return forward, matrix_record(pinv), text
 
 
-def wall_signal_tail(solution: Solution, extra: list[OCIO.Transform]) -> list[OCIO.Transform]:
+def wall_signal_tail(solution: Solution, extra: list[Transform]) -> list[Transform]:
     """``extra`` (the wall's LUT and encoding) between explicit clamps.
 
     Where the wall signal starts, drive below 0 is black and drive above the encoding's top
@@ -215,46 +226,76 @@ def wall_signal_tail(solution: Solution, extra: list[OCIO.Transform]) -> list[OC
         return []
     top = WallEncoding.of(solution.linearity).signal_top
     if top is None:
-        return [OCIO.RangeTransform(minInValue=0.0, minOutValue=0.0), *extra]
+        return [clamp(min_in=0.0, min_out=0.0), *extra]
     return [
-        OCIO.RangeTransform(minInValue=0.0, maxInValue=top, minOutValue=0.0, maxOutValue=top),
+        clamp(min_in=0.0, max_in=top, min_out=0.0, max_out=top),
         *extra,
-        OCIO.RangeTransform(minInValue=0.0, maxInValue=1.0, minOutValue=0.0, maxOutValue=1.0),
+        clamp(min_in=0.0, max_in=1.0, min_out=0.0, max_out=1.0),
     ]
 
 
-def wall_tail(
-    solution: Solution, extra: list[OCIO.Transform]
-) -> tuple[list[OCIO.Transform], list[OCIO.Transform]]:
+def wall_tail(solution: Solution, extra: list[Transform]) -> Chains:
     """(drive -> wall signal, wall signal -> drive): the soft clip when the solve asked for one
     (``linearity.soft_clip``, :mod:`ocio_vp.ocio.softclip`), then :func:`wall_signal_tail`;
     the other direction inverts the signal tail and then the soft clip, each explicitly. Both
     empty for a linear wall without LUT or soft clip (its drive stays affine)."""
     signal = wall_signal_tail(solution, extra)
-    undo = [OCIO.GroupTransform(signal, direction=OCIO.TRANSFORM_DIR_INVERSE)] if signal else []
+    undo = [group(signal, inverse=True)] if signal else []
     knee = soft_clip_knee(solution.linearity)
     if knee is None:
         return signal, undo
     clip, unclip = soft_clip_transforms(knee)
-    return clip + signal, undo + unclip
+    return [*map(transform_record, clip), *signal], [*undo, *map(transform_record, unclip)]
+
+
+def wall_chains(
+    solution: Solution, extra: dict[str, list[Transform]], model: ModelFiles | None
+) -> dict[str, Chains]:
+    """:func:`wall_transforms` with each wall colour space's tail (``extra``: its LUT and
+    encoding; :func:`wall_tail`) after it, and undone before the other direction."""
+    chains = wall_transforms(solution, model)
+    for name, (there, back) in chains.items():
+        tail, undo = wall_tail(solution, list(extra.get(name, [])))
+        if tail:
+            chains[name] = (there + tail, [*undo, *back])
+    return chains
 
 
 def build_config(
     solution: Solution,
     *,
-    extra_wall_transforms: dict[str, list[OCIO.Transform]] | None = None,
+    extra_wall_transforms: dict[str, list[Transform]] | None = None,
     search_path: str | None = None,
     model: ModelFiles | None = None,
 ) -> OCIO.Config:
-    """Build and validate the OCIO config for one solved environment.
+    """The validated OCIO config of one solved environment: :func:`config_data` built by
+    :func:`ocio_vp.ocio.description.build`."""
+    return build(
+        config_data(
+            solution,
+            extra_wall_transforms=extra_wall_transforms,
+            search_path=search_path,
+            model=model,
+        )
+    )
+
+
+def config_data(
+    solution: Solution,
+    *,
+    extra_wall_transforms: dict[str, list[Transform]] | None = None,
+    search_path: str | None = None,
+    model: ModelFiles | None = None,
+) -> ConfigData:
+    """What the config of one solved environment holds, as data.
 
     Parameters
     ----------
     solution
         The solved environment.
     extra_wall_transforms
-        Transforms appended (after the matrix) to the ``OUT_OF_FRUSTUM`` / ``IN_FRUSTUM``
-        chains, e.g. the panel-linearity LUT and the wall signal encoding.
+        Transform records appended (after the matrix) to the ``OUT_OF_FRUSTUM`` /
+        ``IN_FRUSTUM`` chains, e.g. the panel-linearity LUT and the wall signal encoding.
     search_path
         The config's search path for sidecar files (e.g. ``"luts"``).
     model
@@ -268,40 +309,36 @@ def build_config(
     ------
     ValueError
         A non-linear post-correction without ``model``.
-    PyOpenColorIO.Exception
-        If the config does not validate (never expected: that is a bug).
     """
     origin = _origin(solution)
-    config = _empty_config(solution, origin, search_path)
-    _add_camera_spaces(config, solution.camera_colorspace)
-    chains = wall_transforms(solution, model)
-    extra = extra_wall_transforms or {}
-    for name, (there, back) in chains.items():
-        tail, undo = wall_tail(solution, list(extra.get(name, [])))
-        if tail:
-            chains[name] = (there + tail, [*undo, *back])
-    config.addColorSpace(_out_of_frustum_space(solution, chains[OUT_OF_FRUSTUM], origin))
-    config.addColorSpace(_in_frustum_space(solution, chains[IN_FRUSTUM], origin, model))
-    _add_post_correction(config, solution, origin, model)
-    camera_to_aces = _set_roles(config, solution.camera_colorspace)
-    _add_displays(config, camera_to_aces)
-    set_categories(config)
-    config.validate()
-    return config
+    data = ConfigData(
+        name=f"ocio-vp_{solution.stage}_{solution.environment}",
+        description=f"ocio_vp calibration of {origin}. Q method: {solution.method} "
+        f"(model {solution.model}). LeGendre, Lepicovsky & Debevec, DigiPro 2022.",
+        search_path=search_path or "",
+    )
+    data.colour_spaces += _camera_spaces(solution.camera_colorspace)
+    chains = wall_chains(solution, extra_wall_transforms or {}, model)
+    data.colour_spaces.append(_out_of_frustum_space(solution, chains[OUT_OF_FRUSTUM], origin))
+    data.colour_spaces.append(_in_frustum_space(solution, chains[IN_FRUSTUM], origin, model))
+    _add_post_correction(data, solution, origin, model)
+    camera_to_aces = _set_roles(data, solution.camera_colorspace)
+    _add_displays(data, camera_to_aces)
+    set_categories(data)
+    return data
 
 
-def _add_displays(config: OCIO.Config, camera_to_aces: np.ndarray | None) -> None:
+def _add_displays(data: ConfigData, camera_to_aces: np.ndarray | None) -> None:
     """Monitor displays first (the viewer's default is a monitor view), then ``LED Wall``."""
     monitors = add_monitor_displays(
-        config, camera_to_aces, reference=REFERENCE, footage=POST_CORRECTION_COLORSPACE
+        data, camera_to_aces, reference=REFERENCE, footage=POST_CORRECTION_COLORSPACE
     )
-    config.addDisplayView(DISPLAY, VIEW_OUTER, OUT_OF_FRUSTUM)
-    config.addDisplayView(DISPLAY, VIEW_INNER, IN_FRUSTUM)
-    config.addDisplayView(DISPLAY, "Raw", RAW)
+    for view, space in ((VIEW_OUTER, OUT_OF_FRUSTUM), (VIEW_INNER, IN_FRUSTUM), ("Raw", RAW)):
+        data.views.append(View(DISPLAY, view, space))
     displays = [*dict.fromkeys(m.display for m in monitors), DISPLAY]
-    config.setActiveDisplays(", ".join(displays))
-    views = [v for d in displays[:-1] for v in config.getViews(d)]
-    config.setActiveViews(", ".join([*dict.fromkeys(views), VIEW_INNER, VIEW_OUTER, "Raw"]))
+    data.active_displays = tuple(displays)
+    views = [v for d in displays[:-1] for v in data.view_names(d)]
+    data.active_views = (*dict.fromkeys(views), VIEW_INNER, VIEW_OUTER, "Raw")
 
 
 def _origin(solution: Solution) -> str:
@@ -315,100 +352,102 @@ def _origin(solution: Solution) -> str:
     return origin
 
 
-def _empty_config(solution: Solution, origin: str, search_path: str | None) -> OCIO.Config:
-    """A v2.1 config named and described after the solve, with no colorspace yet."""
-    config = OCIO.Config()
-    config.setMajorVersion(2)
-    config.setMinorVersion(1)
-    config.setName(f"ocio-vp_{solution.stage}_{solution.environment}")
-    config.setDescription(
-        f"ocio_vp calibration of {origin}. Q method: {solution.method} "
-        f"(model {solution.model}). "
-        "LeGendre, Lepicovsky & Debevec, DigiPro 2022."
-    )
-    if search_path:
-        config.setSearchPath(search_path)
-    return config
-
-
-def _add_camera_spaces(config: OCIO.Config, camera: str | None) -> None:
+def _camera_spaces(camera: str | None) -> list[ColourSpace]:
     """The reference (camera native linear) and the raw data colorspace."""
     gamut_text = f" ({camera} primaries)" if camera else " (as measured; gamut not stated)"
-    config.addColorSpace(
-        _colorspace(
-            REFERENCE,
-            f"The camera's native linear RGB{gamut_text}: the space all calibration values were "
-            "measured in. Content for the LED wall is expected here.",
-            family="Camera",
-        )
+    reference = _colorspace(
+        REFERENCE,
+        f"The camera's native linear RGB{gamut_text}: the space all calibration values were "
+        "measured in. Content for the LED wall is expected here.",
+        family="Camera",
     )
     raw = _colorspace(RAW, "Data: no colour conversion.", family="Utility", encoding="data")
-    raw.setIsData(True)
-    config.addColorSpace(raw)
+    return [reference, dataclasses.replace(raw, is_data=True)]
 
 
-def _set_both(space: OCIO.ColorSpace, chains) -> None:
-    """Reference -> space, and space -> reference, both explicit."""
+def _wall_space(name: str, description: str, solution: Solution, chains: Chains) -> ColourSpace:
+    """A wall colour space: reference -> drive (``chains[0]``) and back, both explicit."""
     there, back = chains
-    space.setTransform(_group(there), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
-    space.setTransform(_group(back), OCIO.COLORSPACE_DIR_TO_REFERENCE)
+    return _colorspace(
+        name,
+        description,
+        family="LED Wall",
+        encoding=WallEncoding.of(solution.linearity).ocio_encoding,
+        from_reference=one(there),
+        to_reference=one(back),
+    )
 
 
-def _out_of_frustum_space(solution: Solution, chains, origin: str) -> OCIO.ColorSpace:
+def _out_of_frustum_space(solution: Solution, chains: Chains, origin: str) -> ColourSpace:
     """The panel drive for content outside the camera frustum: M, then the wall's tail."""
-    outer = _colorspace(
+    return _wall_space(
         OUT_OF_FRUSTUM,
         f"Panel drive for content OUTSIDE the camera frustum (lights the actors): M = [SL]^-1 "
         f"{format_matrix(solution.M)}{soft_clip_text(solution.linearity)}. {origin}.",
-        family="LED Wall",
-        encoding=_wall_signal_encoding(solution),
+        solution,
+        chains,
     )
-    _set_both(outer, chains)
-    return outer
+
+
+def in_frustum_text(
+    M: np.ndarray,
+    N: np.ndarray | None,
+    offset: np.ndarray | None,
+    N_reason: str | None,
+    *,
+    N_text: str | None = None,
+) -> str:
+    """What an in-frustum drive is: ``N_text`` (default N = M Q^-1) or, N not solved, M and why,
+    plus the black-level offset. The wall's and every other panel type's description."""
+    if N is None:
+        text = f"N NOT SOLVED ({N_reason}); M is used instead, {format_matrix(M)}"
+    else:
+        text = N_text or f"N = M Q^-1 {format_matrix(N)}"
+    if offset is not None:
+        text += f", plus black-level offset {format_matrix(offset[None])}"
+    return text
 
 
 def _in_frustum_text(solution: Solution, model: ModelFiles | None = None) -> str:
-    """What the in-frustum drive is: N, or M when N was not solved, plus the offset."""
+    """What the wall's in-frustum drive is: N, or M when N was not solved, plus the offset."""
+    N_text = None
     if solution.N is not None and model is not None:
-        text = (
+        N_text = (
             f"[SL]^-1 Q^-1(c), the baked inverse of the {solution.correction.kind} Q "
             f"({model.q_inverse}) then [SL]^-1 {format_matrix(np.linalg.inv(solution.SL))} (N = "
             f"[SL]^-1 Q^-1 for its 3x3 would be {format_matrix(solution.N)})"
         )
     elif solution.N is not None and is_identity(solution.Q):
-        text = f"N = M (Q is the identity, so no in-frustum change is needed) {format_matrix(solution.N)}"
-    elif solution.N is not None:
-        text = f"N = M Q^-1 {format_matrix(solution.N)}"
-    else:
-        reason = solution.diagnostics.N_reason or "Q is not invertible"
-        text = f"N NOT SOLVED ({reason}); M is used instead, {format_matrix(solution.M)}"
+        N_text = f"N = M (Q is the identity, so no in-frustum change is needed) {format_matrix(solution.N)}"
+    text = in_frustum_text(
+        solution.M,
+        solution.N,
+        solution.black_level_offset,
+        solution.diagnostics.N_reason or "Q is not invertible",
+        N_text=N_text,
+    )
     if solution.black_level_offset is not None:
-        text += (
-            f", plus black-level offset {format_matrix(solution.black_level_offset[None])} "
-            f"({solution.black_level_method})"
-        )
+        text += f" ({solution.black_level_method})"
         if offset_is_negligible(solution.black_level_offset, solution.SL):
             text += " - negligible (below 1e-5 of the wall's white), left out of this transform"
     return text
 
 
 def _in_frustum_space(
-    solution: Solution, chains, origin: str, model: ModelFiles | None = None
-) -> OCIO.ColorSpace:
+    solution: Solution, chains: Chains, origin: str, model: ModelFiles | None = None
+) -> ColourSpace:
     """The panel drive for the in-camera background: N (or M) and the offset, then the tail."""
-    inner = _colorspace(
+    return _wall_space(
         IN_FRUSTUM,
         f"Panel drive for content INSIDE the camera frustum (the in-camera background): "
         f"{_in_frustum_text(solution, model)}{soft_clip_text(solution.linearity)}. {origin}.",
-        family="LED Wall",
-        encoding=_wall_signal_encoding(solution),
+        solution,
+        chains,
     )
-    _set_both(inner, chains)
-    return inner
 
 
 def _add_post_correction(
-    config: OCIO.Config,
+    data: ConfigData,
     solution: Solution,
     origin: str,
     model: ModelFiles | None = None,
@@ -420,11 +459,10 @@ def _add_post_correction(
     approximation, printed for reference.
     """
     q_identity = is_identity(solution.Q) and model is None
-    method_model = solution.model
     reason = solution.diagnostics.model_reason
     q_text = (
         f"Post-correction Q {format_matrix(solution.Q)} for footage shot on the stage ({solution.method}, "
-        f"model {method_model}{': ' + reason if reason else ''}). {origin}."
+        f"model {solution.model}{': ' + reason if reason else ''}). {origin}."
     )
     if model is not None:
         q_text = (
@@ -437,29 +475,24 @@ def _add_post_correction(
     forward, inverse, inverse_text = post_correction_transforms(solution, model)
     if inverse_text:
         q_text += " " + inverse_text
-    footage = _colorspace(
-        POST_CORRECTION_COLORSPACE,
-        "Camera linear RGB as recorded on the stage; converting to the reference applies Q. "
-        + q_text,
-        family="Camera",
-    )
     if q_identity:
-        forward = inverse = OCIO.GroupTransform()
-    else:
-        footage.setTransform(forward, OCIO.COLORSPACE_DIR_TO_REFERENCE)
-        footage.setTransform(inverse, OCIO.COLORSPACE_DIR_FROM_REFERENCE)
-    config.addColorSpace(footage)
-    named = OCIO.NamedTransform(
-        name=POST_CORRECTION,
-        family=f"{FAMILY}/Post",
-        description=q_text,
-        forwardTransform=forward,
+        forward = inverse = group([])
+    data.colour_spaces.append(
+        _colorspace(
+            POST_CORRECTION_COLORSPACE,
+            "Camera linear RGB as recorded on the stage; converting to the reference applies Q. "
+            + q_text,
+            family="Camera",
+            to_reference=None if q_identity else forward,
+            from_reference=None if q_identity else inverse,
+        )
     )
-    named.setTransform(inverse, OCIO.TRANSFORM_DIR_INVERSE)
-    config.addNamedTransform(named)
+    data.named_transforms.append(
+        NamedTransform(POST_CORRECTION, f"{FAMILY}/Post", q_text, forward, inverse)
+    )
 
 
-def _set_roles(config: OCIO.Config, camera: str | None) -> np.ndarray | None:
+def _set_roles(data: ConfigData, camera: str | None) -> np.ndarray | None:
     """Every role on the reference, or on a working space when the camera gamut is known:
     then also the interchange roles, ACEScct as ``compositing_log`` and ``color_timing``
     (as in the ACES configs) and the camera's log spaces. Without a camera gamut there is no
@@ -478,21 +511,20 @@ def _set_roles(config: OCIO.Config, camera: str | None) -> np.ndarray | None:
     }
     camera_to_aces = None
     if camera:
-        working, aces_to_camera = _add_working_spaces(config, camera)
+        working, aces_to_camera = _add_working_spaces(data, camera)
         roles.update(working)
-        log = add_acescct(config, aces_to_camera)
+        log = add_acescct(data, aces_to_camera)
         roles[OCIO.ROLE_COMPOSITING_LOG] = log
         roles[OCIO.ROLE_COLOR_TIMING] = log
         add_camera_log_spaces(
-            config, camera, reference=REFERENCE, footage=POST_CORRECTION_COLORSPACE, family=FAMILY
+            data, camera, reference=REFERENCE, footage=POST_CORRECTION_COLORSPACE, family=FAMILY
         )
         camera_to_aces = np.linalg.inv(aces_to_camera)
-    for role, space in roles.items():
-        config.setRole(role, space)
+    data.roles.update(roles)
     return camera_to_aces
 
 
-def _add_working_spaces(config: OCIO.Config, camera: str) -> tuple[dict[str, str], np.ndarray]:
+def _add_working_spaces(data: ConfigData, camera: str) -> tuple[dict[str, str], np.ndarray]:
     """Add ACES2065-1, ACEScg and linear Rec.709, converted to the camera gamut (CAT02).
 
     Returns their roles and the ACES2065-1 -> camera matrix."""
@@ -507,14 +539,15 @@ def _add_working_spaces(config: OCIO.Config, camera: str) -> tuple[dict[str, str
         if key == "ACES2065-1":
             aces_to_camera = np.asarray(to_camera, dtype=np.float64)
         name = WORKING_SPACE_NAMES[key]
-        cs = _colorspace(
-            name,
-            f"{source.name} linear; to the reference ({camera}) by colour-science's "
-            "matrix_RGB_to_RGB with CAT02 adaptation.",
-            family="Working",
+        data.colour_spaces.append(
+            _colorspace(
+                name,
+                f"{source.name} linear; to the reference ({camera}) by colour-science's "
+                "matrix_RGB_to_RGB with CAT02 adaptation.",
+                family="Working",
+                to_reference=matrix_record(to_camera),
+            )
         )
-        cs.setTransform(matrix_transform(to_camera), OCIO.COLORSPACE_DIR_TO_REFERENCE)
-        config.addColorSpace(cs)
         if role:
             roles[role] = name
     # CIE XYZ (D65) lets OCIO 2.1+ hosts convert between this config and others.
@@ -525,14 +558,15 @@ def _add_working_spaces(config: OCIO.Config, camera: str) -> tuple[dict[str, str
         )
         @ target.matrix_RGB_to_XYZ
     )
-    xyz = _colorspace(
-        "CIE-XYZ-D65",
-        f"CIE 1931 XYZ, D65 white; from the reference by {camera}'s RGB-to-XYZ matrix with CAT02 "
-        "adaptation to D65 (colour-science).",
-        family="Utility",
+    data.colour_spaces.append(
+        _colorspace(
+            "CIE-XYZ-D65",
+            f"CIE 1931 XYZ, D65 white; from the reference by {camera}'s RGB-to-XYZ matrix with "
+            "CAT02 adaptation to D65 (colour-science).",
+            family="Utility",
+            from_reference=matrix_record(to_xyz),
+        )
     )
-    xyz.setTransform(matrix_transform(to_xyz), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
-    config.addColorSpace(xyz)
     roles["cie_xyz_d65_interchange"] = "CIE-XYZ-D65"
     return roles, aces_to_camera
 

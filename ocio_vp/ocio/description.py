@@ -32,6 +32,7 @@ __all__ = [
     "View",
     "ViewTransform",
     "build",
+    "clamp",
     "colour_space_record",
     "file",
     "group",
@@ -112,6 +113,20 @@ def matrix(m44: Iterable[float], offset: Iterable[float] = (0.0,) * 4, *, invers
 def file(src: str) -> Transform:
     """A FileTransform record (OCIO's default interpolation)."""
     return Transform("FileTransform", (("Src", src),))
+
+
+def clamp(
+    *,
+    min_in: float | None = None,
+    max_in: float | None = None,
+    min_out: float | None = None,
+    max_out: float | None = None,
+) -> Transform:
+    """A clamping RangeTransform record (a bound left None is open)."""
+    bounds = [("MinInValue", min_in), ("MaxInValue", max_in)]
+    bounds += [("MinOutValue", min_out), ("MaxOutValue", max_out)]
+    values = tuple((name, float(v)) for name, v in bounds if v is not None)
+    return Transform("RangeTransform", (("Style", Enum("RANGE_CLAMP")), *values))
 
 
 def group(transforms: Iterable[Transform], *, inverse: bool = False) -> Transform:

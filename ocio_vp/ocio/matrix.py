@@ -7,7 +7,10 @@ from collections.abc import Sequence
 import numpy as np
 import PyOpenColorIO as OCIO
 
-__all__ = ["format_matrix", "matrix_transform"]
+from ocio_vp.ocio import description
+from ocio_vp.ocio.description import Transform
+
+__all__ = ["format_matrix", "matrix_record", "matrix_transform"]
 
 
 def matrix_transform(
@@ -15,20 +18,33 @@ def matrix_transform(
     offset: Sequence[float] | np.ndarray | None = None,
     direction: OCIO.TransformDirection = OCIO.TRANSFORM_DIR_FORWARD,
 ) -> OCIO.MatrixTransform:
-    """An OCIO MatrixTransform computing ``matrix @ rgb + offset`` (alpha untouched).
+    """An OCIO MatrixTransform computing ``matrix @ rgb + offset`` (alpha untouched), as
+    :func:`matrix_record` writes it."""
+    m44, off = _m44(matrix, offset)
+    return OCIO.MatrixTransform(matrix=m44, offset=off, direction=direction)
+
+
+def matrix_record(
+    matrix: np.ndarray, offset: Sequence[float] | np.ndarray | None = None, *, inverse: bool = False
+) -> Transform:
+    """The MatrixTransform record (:mod:`ocio_vp.ocio.description`) of ``matrix @ rgb + offset``.
 
     Values are written to 12 significant digits, and an entry below 1e-12 of the largest as 0:
     the digits beyond are rounding of the solve (they differ between machines), and 1e-12 is
     far below any camera's precision.
     """
+    return description.matrix(*_m44(matrix, offset), inverse=inverse)
+
+
+def _m44(
+    matrix: np.ndarray, offset: Sequence[float] | np.ndarray | None
+) -> tuple[list[float], list[float]]:
     m44 = np.eye(4)
     m44[:3, :3] = _significant(np.asarray(matrix, dtype=np.float64))
     off = np.zeros(4)
     if offset is not None:
         off[:3] = _significant(np.asarray(offset, dtype=np.float64))
-    return OCIO.MatrixTransform(
-        matrix=[float(v) for v in m44.ravel()], offset=[float(v) for v in off], direction=direction
-    )
+    return [float(v) for v in m44.ravel()], [float(v) for v in off]
 
 
 def _significant(values: np.ndarray) -> np.ndarray:

@@ -24,8 +24,6 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 
-import PyOpenColorIO as OCIO
-
 from ocio_vp.formats.panel_solution import PanelSolution
 from ocio_vp.formats.solution import Solution
 from ocio_vp.ocio.config import (
@@ -36,10 +34,11 @@ from ocio_vp.ocio.config import (
     VIEW_INNER,
     VIEW_OUTER,
     ModelFiles,
+    in_frustum_text,
     ocio_names,
-    wall_tail,
-    wall_transforms,
+    wall_chains,
 )
+from ocio_vp.ocio.description import ColourSpace, ConfigData, View, one
 from ocio_vp.ocio.matrix import format_matrix
 from ocio_vp.ocio.softclip import soft_clip_text
 from ocio_vp.ocio.viewing import set_categories
@@ -83,7 +82,7 @@ class PanelOutputs:
     :class:`~ocio_vp.formats.panel_solution.PanelSolution` with its ``ocio`` names and
     ``linearity`` (LUT file) filled in, as solution.json records them."""
 
-    colorspaces: tuple[OCIO.ColorSpace, ...]
+    colorspaces: tuple[ColourSpace, ...]
     views: tuple[tuple[str, str], ...]
     files: dict[str, str] = field(default_factory=dict)
     panels: dict[str, PanelSolution] = field(default_factory=dict)
@@ -102,28 +101,9 @@ def _view(solution: Solution, panel: PanelSolution) -> Solution:
     )
 
 
-def _space(name: str, description: str, encoding: str, there: list, back: list) -> OCIO.ColorSpace:
-    """A panel type's colour space, reference -> drive (``there``) and back, both explicit."""
-    cs = OCIO.ColorSpace(
-        referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
-        name=name,
-        family=f"{FAMILY}/LED Wall",
-        encoding=encoding,
-        description=description,
-    )
-    for chain, direction in ((there, OCIO.COLORSPACE_DIR_FROM_REFERENCE),
-                             (back, OCIO.COLORSPACE_DIR_TO_REFERENCE)):  # fmt: skip
-        cs.setTransform(chain[0] if len(chain) == 1 else OCIO.GroupTransform(chain), direction)
-    return cs
-
-
 def _descriptions(solution: Solution, panel: PanelSolution) -> dict[str, str]:
     origin = f"stage {solution.stage!r}, environment {solution.environment!r}"
-    inner = f"N = M Q^-1 {format_matrix(panel.N)}"
-    if panel.N is None:
-        inner = f"N NOT SOLVED ({panel.N_reason}); M is used instead, {format_matrix(panel.M)}"
-    if panel.black_level_offset is not None:
-        inner += f", plus black-level offset {format_matrix(panel.black_level_offset[None])}"
+    inner = in_frustum_text(panel.M, panel.N, panel.black_level_offset, panel.N_reason)
     clip = soft_clip_text(panel.linearity)
     return {
         OUT_OF_FRUSTUM: f"Panel drive of panel type {panel.name!r} for content OUTSIDE the "
@@ -144,7 +124,10 @@ def panel_outputs(solution: Solution, model: ModelFiles | None = None) -> PanelO
         return None
     primary = next(p.name for p in solution.panels.values() if p.in_frustum)
     labels = panel_labels(list(solution.panels), primary)
-    spaces, views, files, panels = [], [], {}, {}
+    spaces: list[ColourSpace] = []
+    views: list[tuple[str, str]] = []
+    files: dict[str, str] = {}
+    panels: dict[str, PanelSolution] = {}
     top = ocio_names()
     for name, panel in solution.panels.items():
         if name == primary:
@@ -155,8 +138,7 @@ def panel_outputs(solution: Solution, model: ModelFiles | None = None) -> PanelO
         view = _view(solution, panel)
         wall = wall_outputs(view)  # this type's own linearity LUT and signal encoding
         files.update(wall.files)
-        chains = wall_transforms(view, model)
-        tail = wall.extra_wall_transforms or {}
+        chains = wall_chains(view, wall.extra_wall_transforms or {}, model)
         encoding = WallEncoding.of(wall.linearity).ocio_encoding
         names = _names(labels[name], panel.in_frustum)
         texts = _descriptions(solution, panel)
@@ -164,25 +146,26 @@ def panel_outputs(solution: Solution, model: ModelFiles | None = None) -> PanelO
         roles += [(IN_FRUSTUM, "in_frustum")] if panel.in_frustum else []
         for role, key in roles:
             there, back = chains[role]
-            signal, undo = wall_tail(view, list(tail.get(role, [])))
-            if signal:
-                there, back = there + signal, [*undo, *back]
-            spaces.append(_space(names[key], texts[role], encoding, there, back))
+            spaces.append(
+                ColourSpace(
+                    names[key],
+                    f"{FAMILY}/LED Wall",
+                    texts[role],
+                    encoding,
+                    from_reference=one(there),
+                    to_reference=one(back),
+                )
+            )
             views.append((names[f"view_{key}"], names[key]))
         panels[name] = dataclasses.replace(panel, linearity=wall.linearity, ocio=names)
     return PanelOutputs(tuple(spaces), tuple(views), files, panels)
 
 
-def add_panel_spaces(config: OCIO.Config, outputs: PanelOutputs) -> None:
+def add_panel_spaces(data: ConfigData, outputs: PanelOutputs) -> None:
     """Add the colour spaces and their views on the ``LED Wall`` display (and the categories
-    every colour space of the config has), then validate."""
-    for space in outputs.colorspaces:
-        config.addColorSpace(space)
-    for view, space in outputs.views:
-        config.addDisplayView(DISPLAY, view, space)
-    views = config.getActiveViews()  # a string before OCIO 2.5, an iterator since
-    active = [v.strip() for v in (views.split(",") if isinstance(views, str) else views)]
-    if active:  # none listed: every view is active
-        config.setActiveViews(", ".join([*active, *(view for view, _ in outputs.views)]))
-    set_categories(config)  # as the wall's: menus that filter by category list them
-    config.validate()
+    every colour space of the config has)."""
+    data.colour_spaces += outputs.colorspaces
+    data.views += [View(DISPLAY, view, space) for view, space in outputs.views]
+    if data.active_views:  # none listed: every view is active
+        data.active_views = (*data.active_views, *(view for view, _ in outputs.views))
+    set_categories(data)  # as the wall's: menus that filter by category list them

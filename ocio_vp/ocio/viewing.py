@@ -19,7 +19,7 @@ A per-environment config carries, beside the wall colour spaces and ``Stage Foot
 
 from __future__ import annotations
 
-import copy
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,7 +27,19 @@ import PyOpenColorIO as OCIO
 
 from ocio_vp.choices import DEFAULT_BASE_CONFIG
 from ocio_vp.ocio.camera_log import LogCurve, camera_log_for, log_transform
-from ocio_vp.ocio.matrix import matrix_transform
+from ocio_vp.ocio.description import (
+    ColourSpace,
+    ConfigData,
+    Look,
+    Transform,
+    View,
+    ViewTransform,
+    clamp,
+    colour_space_record,
+    group,
+    transform_record,
+)
+from ocio_vp.ocio.matrix import matrix_record
 
 __all__ = [
     "ACESCCT",
@@ -76,21 +88,17 @@ def camera_log_names(curve: LogCurve) -> tuple[str, str]:
     return f"Camera Native ({curve.short})", f"Stage Footage ({curve.short})"
 
 
-def footage_to_reference(footage: OCIO.ColorSpace) -> tuple[OCIO.Transform, OCIO.Transform | None]:
-    """``footage``'s conversion to the reference and its explicit inverse (None: OCIO's own),
-    as copies: the post-correction exactly as that colour space carries it."""
-    to_ref = footage.getTransform(OCIO.COLORSPACE_DIR_TO_REFERENCE)
-    from_ref = footage.getTransform(OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+def footage_to_reference(footage: ColourSpace) -> tuple[Transform, Transform | None]:
+    """``footage``'s conversion to the reference and its explicit inverse (None: OCIO's own):
+    the post-correction exactly as that colour space carries it."""
+    to_ref, from_ref = footage.to_reference, footage.from_reference
     if to_ref is None and from_ref is not None:  # only the other direction: OCIO inverts it
-        to_ref = copy.deepcopy(from_ref)
-        to_ref.setDirection(OCIO.TRANSFORM_DIR_INVERSE)
-        from_ref = None
-    forward = OCIO.GroupTransform() if to_ref is None else copy.deepcopy(to_ref)
-    return forward, None if from_ref is None else copy.deepcopy(from_ref)
+        to_ref, from_ref = dataclasses.replace(from_ref, inverse=True), None
+    return (group([]) if to_ref is None else to_ref), from_ref
 
 
 def add_camera_log_spaces(
-    config: OCIO.Config, camera: str | None, *, reference: str, footage: str, family: str
+    data: ConfigData, camera: str | None, *, reference: str, footage: str, family: str
 ) -> list[str]:
     """Add ``Camera Native (LogC4)`` and ``Stage Footage (LogC4)`` (for ``camera``'s log curve)
     and ACEScct; returns the names added (none without a known camera gamut)."""
@@ -98,31 +106,27 @@ def add_camera_log_spaces(
     if curve is None:
         return []
     native_name, footage_name = camera_log_names(curve)
-    native = OCIO.ColorSpace(
-        referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
+    encode = transform_record(log_transform(curve))
+    native = ColourSpace(
         name=native_name,
         family=f"{family}/Camera",
         encoding="log",
         description=f"{reference} encoded as {curve.name} ({camera}): footage after Q, in "
         "the camera's own log encoding (the DIT cart's log out).",
+        from_reference=encode,
     )
-    native.setTransform(log_transform(curve), OCIO.COLORSPACE_DIR_FROM_REFERENCE)
-    config.addColorSpace(native)
-    forward, inverse = footage_to_reference(config.getColorSpace(footage))
-    decode = log_transform(curve, OCIO.TRANSFORM_DIR_INVERSE)
-    stage = OCIO.ColorSpace(
-        referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
+    forward, inverse = footage_to_reference(data.colour_space(footage))
+    decode = transform_record(log_transform(curve, OCIO.TRANSFORM_DIR_INVERSE))
+    stage = ColourSpace(
         name=footage_name,
         family=f"{family}/Camera",
         encoding="log",
         description=f"Footage recorded on the stage in {curve.name} ({camera}): converting it to "
         f"{reference} decodes it and applies the post-correction, exactly as {footage!r}.",
+        to_reference=group([decode, forward]),
+        from_reference=None if inverse is None else group([inverse, encode]),
     )
-    stage.setTransform(OCIO.GroupTransform([decode, forward]), OCIO.COLORSPACE_DIR_TO_REFERENCE)
-    if inverse is not None:
-        group = OCIO.GroupTransform([inverse, log_transform(curve)])
-        stage.setTransform(group, OCIO.COLORSPACE_DIR_FROM_REFERENCE)
-    config.addColorSpace(stage)
+    data.colour_spaces += [native, stage]
     return [native_name, footage_name]
 
 
@@ -135,61 +139,54 @@ CATEGORIES = {
 }
 
 
-def set_categories(config: OCIO.Config) -> None:
+def set_categories(data: ConfigData) -> None:
     """Categories for every scene colour space that has none (by its family), and for the
     named transforms: so hosts that filter menus by category list them (and ociocheck is
     content)."""
-    for cs in config.getColorSpaces(OCIO.SEARCH_REFERENCE_SPACE_SCENE, OCIO.COLORSPACE_ALL):
-        if list(cs.getCategories()):
-            continue
-        family = cs.getFamily().split("/")[1] if "/" in cs.getFamily() else ""
-        for category in CATEGORIES.get(family, ("file-io",)):
-            cs.addCategory(category)
-        config.addColorSpace(cs)  # replaces the one of that name
-    for name in config.getNamedTransformNames(OCIO.NAMEDTRANSFORM_ALL):
-        named = config.getNamedTransform(name)
-        if not list(named.getCategories()):
-            named.addCategory("file-io")
-            config.addNamedTransform(named)
+
+    def categorised(cs: ColourSpace) -> ColourSpace:
+        if cs.categories or cs.display_referred:
+            return cs
+        family = cs.family.split("/")[1] if "/" in cs.family else ""
+        return dataclasses.replace(cs, categories=CATEGORIES.get(family, ("file-io",)))
+
+    data.colour_spaces = [categorised(cs) for cs in data.colour_spaces]
+    data.named_transforms = [
+        nt if nt.categories else dataclasses.replace(nt, categories=("file-io",))
+        for nt in data.named_transforms
+    ]
 
 
-def add_acescct(config: OCIO.Config, aces_to_camera: np.ndarray) -> str:
+def add_acescct(data: ConfigData, aces_to_camera: np.ndarray) -> str:
     """ACEScct (OCIO's builtin curve and AP1 -> AP0) then ACES2065-1 -> the camera gamut."""
-    aces = _aces_config()
-    source = aces.getColorSpace(ACESCCT)
-    cs = OCIO.ColorSpace(
-        referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
+    source = _aces_config().getColorSpace(ACESCCT)
+    to_ref = transform_record(source.getTransform(OCIO.COLORSPACE_DIR_TO_REFERENCE))
+    cs = ColourSpace(
         name=ACESCCT,
         family="ocio-vp/Working",
         encoding="log",
         description="ACEScct (ACES log for grading and compositing), as in OCIO's built-in ACES "
         "CG config, then ACES2065-1 to the camera gamut.",
+        to_reference=group([to_ref, matrix_record(aces_to_camera)]),
     )
-    to_ref = source.getTransform(OCIO.COLORSPACE_DIR_TO_REFERENCE)
-    cs.setTransform(
-        OCIO.GroupTransform([copy.deepcopy(to_ref), matrix_transform(aces_to_camera)]),
-        OCIO.COLORSPACE_DIR_TO_REFERENCE,
-    )
-    config.addColorSpace(cs)
+    data.colour_spaces.append(cs)
     return ACESCCT
 
 
-def _add_look(config: OCIO.Config, *, reference: str, footage: str) -> None:
-    forward, inverse = footage_to_reference(config.getColorSpace(footage))
-    look = OCIO.Look(
+def _look(data: ConfigData, *, reference: str, footage: str) -> Look:
+    forward, inverse = footage_to_reference(data.colour_space(footage))
+    return Look(
         name=POST_CORRECTION_LOOK,
-        processSpace=reference,
+        process_space=reference,
         transform=forward,
         description=f"The post-correction Q, exactly as {footage!r} -> {reference!r}: for "
         "monitor views of footage recorded on the stage (tagged as the reference).",
+        inverse=inverse,
     )
-    if inverse is not None:
-        look.setInverseTransform(inverse)
-    config.addLook(look)
 
 
 def add_monitor_displays(
-    config: OCIO.Config,
+    data: ConfigData,
     camera_to_aces: np.ndarray | None,
     *,
     reference: str,
@@ -201,84 +198,66 @@ def add_monitor_displays(
     after it; None (camera gamut unknown) shows the reference as Rec.709, un-tone-mapped.
     """
     aces = _aces_config()
-    _add_look(config, reference=reference, footage=footage)
+    data.looks.append(_look(data, reference=reference, footage=footage))
     added = set()
     for monitor in MONITORS:
-        display = aces.getColorSpace(monitor.display)
-        if config.getColorSpace(monitor.display) is None:
-            config.addColorSpace(_clamped_display(display))
+        if not data.has_colour_space(monitor.display):
+            display = colour_space_record(aces.getColorSpace(monitor.display))
+            data.colour_spaces.append(_clamped_display(display))
         view = monitor.view if camera_to_aces is not None else UNTONEMAPPED_VIEW
         if view not in added:
-            config.addViewTransform(_view_transform(aces, view, camera_to_aces))
+            data.view_transforms.append(_view_transform(aces, view, camera_to_aces))
             added.add(view)
-        config.addDisplayView(monitor.display, view, view, monitor.display, "", "", "")
-        config.addDisplayView(
-            monitor.display,
-            view + FOOTAGE_VIEW_SUFFIX,
-            view,
-            monitor.display,
-            POST_CORRECTION_LOOK,
-            "",
-            "",
+        data.views.append(View(monitor.display, view, monitor.display, view_transform=view))
+        data.views.append(
+            View(
+                monitor.display,
+                view + FOOTAGE_VIEW_SUFFIX,
+                monitor.display,
+                view_transform=view,
+                looks=POST_CORRECTION_LOOK,
+            )
         )
     return list(MONITORS)
 
 
-def _clamped_display(display: OCIO.ColorSpace) -> OCIO.ColorSpace:
-    """A copy of an ACES config display colour space; a PQ one with its negative signal
-    clamped to 0 in both directions.
+def _clamped_display(display: ColourSpace) -> ColourSpace:
+    """An ACES config display colour space; a PQ one with its negative signal clamped to 0 in
+    both directions.
 
     OCIO versions disagree on PQ below 0 (the builtin clamps negative values in 2.2 and 2.3 and
     mirrors them from 2.4 on): with the clamp, and the decode given explicitly, every version
     gives the same numbers. A negative display signal does not exist on the monitor, so nothing
     it shows changes; the SDR displays are kept exactly as the ACES config has them.
     """
-    copied = copy.deepcopy(display)
-    encode = display.getTransform(OCIO.COLORSPACE_DIR_FROM_REFERENCE)
-    if "ST2084" not in display.getName() or encode is None:
-        return copied
-    if display.getTransform(OCIO.COLORSPACE_DIR_TO_REFERENCE) is not None:
-        return copied
-    floor = OCIO.RangeTransform(minInValue=0.0, minOutValue=0.0)
-    decode = copy.deepcopy(encode)
-    decode.setDirection(OCIO.TRANSFORM_DIR_INVERSE)
-    copied.setTransform(
-        OCIO.GroupTransform([copy.deepcopy(encode), floor]), OCIO.COLORSPACE_DIR_FROM_REFERENCE
+    encode = display.from_reference
+    if "ST2084" not in display.name or encode is None or display.to_reference is not None:
+        return display
+    floor = clamp(min_in=0.0, min_out=0.0)
+    decode = dataclasses.replace(encode, inverse=True)
+    return dataclasses.replace(
+        display, from_reference=group([encode, floor]), to_reference=group([floor, decode])
     )
-    copied.setTransform(OCIO.GroupTransform([floor, decode]), OCIO.COLORSPACE_DIR_TO_REFERENCE)
-    return copied
 
 
-def _view_transform(aces, name: str, camera_to_aces) -> OCIO.ViewTransform:
+def _view_transform(aces, name: str, camera_to_aces) -> ViewTransform:
     if camera_to_aces is None:
         import colour
 
         rec709 = colour.RGB_COLOURSPACES["ITU-R BT.709"]
-        vt = OCIO.ViewTransform(
-            referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
-            name=name,
-            description="The camera gamut is not stated (set stage.camera_colorspace or solve "
+        # clamped to [0, 100] (10000 nits on the PQ monitor): there is no tone curve to bound it
+        bound = clamp(min_in=0.0, max_in=100.0, min_out=0.0, max_out=100.0)
+        return ViewTransform(
+            name,
+            "The camera gamut is not stated (set stage.camera_colorspace or solve "
             "--camera-colorspace): camera RGB is shown as if it were linear Rec.709, "
             "un-tone-mapped. Colours are only indicative.",
+            group([matrix_record(rec709.matrix_RGB_to_XYZ), bound]),
         )
-        # clamped to [0, 100] (10000 nits on the PQ monitor): there is no tone curve to bound it
-        clamp = OCIO.RangeTransform(
-            minInValue=0.0, maxInValue=100.0, minOutValue=0.0, maxOutValue=100.0
-        )
-        vt.setTransform(
-            OCIO.GroupTransform([matrix_transform(rec709.matrix_RGB_to_XYZ), clamp]),
-            OCIO.VIEWTRANSFORM_DIR_FROM_REFERENCE,
-        )
-        return vt
     source = aces.getViewTransform(name)
-    vt = OCIO.ViewTransform(
-        referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
-        name=name,
-        description=f"{source.getDescription().strip()}\n(after the camera gamut -> ACES2065-1)",
-    )
     builtin = source.getTransform(OCIO.VIEWTRANSFORM_DIR_FROM_REFERENCE)
-    vt.setTransform(
-        OCIO.GroupTransform([matrix_transform(camera_to_aces), copy.deepcopy(builtin)]),
-        OCIO.VIEWTRANSFORM_DIR_FROM_REFERENCE,
+    return ViewTransform(
+        name,
+        f"{source.getDescription().strip()}\n(after the camera gamut -> ACES2065-1)",
+        group([matrix_record(camera_to_aces), transform_record(builtin)]),
     )
-    return vt

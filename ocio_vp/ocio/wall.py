@@ -25,6 +25,7 @@ import PyOpenColorIO as OCIO
 from ocio_vp.formats.solution import Solution
 from ocio_vp.ocio.clf import clf_v3
 from ocio_vp.ocio.config import IN_FRUSTUM, OUT_OF_FRUSTUM
+from ocio_vp.ocio.description import Transform, file, transform_record
 from ocio_vp.wall.encoding import (
     CLF_FORMAT,
     DEFAULT_PEAK_NITS,
@@ -100,7 +101,7 @@ class WallOutputs:
     """Transforms to append to the wall colorspaces, sidecar files (relative path -> text),
     the config search path, and the ``linearity`` block as it goes into ``solution.json``."""
 
-    extra_wall_transforms: dict[str, list] | None = None
+    extra_wall_transforms: dict[str, list[Transform]] | None = None
     search_path: str | None = None
     files: dict[str, str] = field(default_factory=dict)
     linearity: dict[str, Any] | None = None
@@ -136,14 +137,12 @@ def wall_outputs(solution: Solution) -> WallOutputs:
             **lut_accuracy(linearity, lut),
         }
 
-    def chain() -> list:  # fresh objects for each colorspace
-        lut = [] if lut_name is None else [OCIO.FileTransform(src=lut_name)]
-        return wall.ocio_transforms() + lut
-
-    if not chain():
+    chain = [transform_record(t) for t in wall.ocio_transforms()]
+    chain += [] if lut_name is None else [file(lut_name)]
+    if not chain:
         return WallOutputs(linearity=linearity)
     return WallOutputs(
-        extra_wall_transforms={OUT_OF_FRUSTUM: chain(), IN_FRUSTUM: chain()},
+        extra_wall_transforms={OUT_OF_FRUSTUM: chain, IN_FRUSTUM: chain},
         search_path=LUT_DIR if files else None,
         files=files,
         linearity=linearity,

@@ -27,7 +27,8 @@ from pathlib import Path
 from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import Solution, solution_to_json
 from ocio_vp.ocio.bake import model_outputs
-from ocio_vp.ocio.config import ModelFiles, build_config, ocio_names, write_config
+from ocio_vp.ocio.config import ModelFiles, config_data, ocio_names, write_config
+from ocio_vp.ocio.description import build
 from ocio_vp.ocio.panels import add_panel_spaces, panel_outputs
 from ocio_vp.ocio.wall import wall_outputs
 from ocio_vp.staging import publish_dirs, staged_dir
@@ -57,14 +58,15 @@ def write_environment(solution: Solution, directory: Path) -> Solution:
         files.update(panels.files)
         search_path = LUT_DIR if files else search_path
         solution = dataclasses.replace(solution, panels=panels.panels)
-    config = build_config(
+    data = config_data(
         solution,
         extra_wall_transforms=wall.extra_wall_transforms,
         search_path=search_path,
         model=model,
     )
     if panels is not None:
-        add_panel_spaces(config, panels)
+        add_panel_spaces(data, panels)
+    config = build(data)
     for relative, text in files.items():
         (directory / relative).parent.mkdir(parents=True, exist_ok=True)
         (directory / relative).write_text(text, encoding="utf-8")
