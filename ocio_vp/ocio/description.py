@@ -209,6 +209,10 @@ class ConfigData:
     views: list[View] = field(default_factory=list)
     active_displays: tuple[str, ...] = ()
     active_views: tuple[str, ...] = ()
+    #: Context variables and their defaults (the config's ``environment`` section).
+    environment: dict[str, str] = field(default_factory=dict)
+    #: The colour space of the file rules' default rule ("": OCIO's, the ``default`` role).
+    default_rule: str = ""
 
     def colour_space(self, name: str) -> ColourSpace:
         """The colour space called ``name`` (KeyError when there is none)."""
@@ -367,9 +371,10 @@ def _add_view_transform(config: OCIO.Config, record: ViewTransform) -> None:
     config.addViewTransform(vt)
 
 
-def build(data: ConfigData) -> OCIO.Config:
+def build(data: ConfigData, *, validate: bool = True) -> OCIO.Config:
     """The OCIO config of ``data``, validated (a config that does not validate raises
-    ``PyOpenColorIO.Exception``: a bug, never expected)."""
+    ``PyOpenColorIO.Exception``: a bug, never expected). ``validate=False`` only for a part
+    that is merged into another config (which is validated then)."""
     import PyOpenColorIO as OCIO
 
     config = OCIO.Config()
@@ -396,11 +401,18 @@ def build(data: ConfigData) -> OCIO.Config:
             config.addDisplayView(view.display, view.name, view.colour_space)
     for role, space in data.roles.items():
         config.setRole(role, space)
+    if data.default_rule:
+        rules = config.getFileRules()
+        rules.setDefaultRuleColorSpace(data.default_rule)
+        config.setFileRules(rules)
+    for name, default in data.environment.items():
+        config.addEnvironmentVar(name, default)
     if data.active_displays:
         config.setActiveDisplays(", ".join(data.active_displays))
     if data.active_views:
         config.setActiveViews(", ".join(data.active_views))
-    config.validate()
+    if validate:
+        config.validate()
     return config
 
 

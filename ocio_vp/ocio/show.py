@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import contextlib
 import copy
+import dataclasses
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
@@ -41,6 +42,19 @@ from ocio_vp.ocio.config import (
     POST_CORRECTION,
     POST_CORRECTION_COLORSPACE,
     REFERENCE,
+)
+from ocio_vp.ocio.description import (
+    ColourSpace,
+    ConfigData,
+    Look,
+    NamedTransform,
+    Transform,
+    View,
+    build,
+    colour_space_record,
+    config_record,
+    group,
+    transform_record,
 )
 from ocio_vp.ocio.viewing import (
     ACES_CG_CONFIG,
@@ -102,30 +116,38 @@ def load_base_config(base: str) -> OCIO.Config:
     return config
 
 
-def _own_spaces(config: OCIO.Config) -> list[OCIO.ColorSpace]:
+def _own_spaces(config: ConfigData) -> list[ColourSpace]:
     families = tuple(f"{FAMILY}/{family}" for family in ENVIRONMENT_FAMILIES)
     return [
         cs
-        for cs in config.getColorSpaces(OCIO.SEARCH_REFERENCE_SPACE_SCENE, OCIO.COLORSPACE_ALL)
-        if cs.getFamily() in families or cs.getFamily().startswith(tuple(f + "/" for f in families))
+        for cs in config.colour_spaces
+        if not cs.display_referred
+        and (cs.family in families or cs.family.startswith(tuple(f + "/" for f in families)))
     ]
 
 
-def _base_to_reference(base: OCIO.Config) -> OCIO.GroupTransform:
+def _base_to_reference(base: OCIO.Config) -> Transform:
     """The base's ``aces_interchange`` space -> the base's reference (empty when equal)."""
-    aces = base.getColorSpace(base.getRoleColorSpace(AP0_ROLE))
-    to_ref = aces.getTransform(OCIO.COLORSPACE_DIR_TO_REFERENCE)
-    if to_ref is not None:
-        return OCIO.GroupTransform([copy.deepcopy(to_ref)])
-    from_ref = aces.getTransform(OCIO.COLORSPACE_DIR_FROM_REFERENCE)
-    if from_ref is None:
-        return OCIO.GroupTransform()
-    group = OCIO.GroupTransform([copy.deepcopy(from_ref)])
-    group.setDirection(OCIO.TRANSFORM_DIR_INVERSE)
-    return group
+    aces = _record(base.getColorSpace(base.getRoleColorSpace(AP0_ROLE)))
+    if aces.to_reference is not None:
+        return group([aces.to_reference])
+    if aces.from_reference is None:
+        return group([])
+    return group([aces.from_reference], inverse=True)
 
 
-def _camera_to_reference(env: ShowEnvironment, aces_to_base: OCIO.GroupTransform):
+def _record(cs: OCIO.ColorSpace) -> ColourSpace:
+    """The base's colour space as data; one whose transforms have no record is refused."""
+    try:
+        return colour_space_record(cs)
+    except ValueError as error:
+        raise InputError(
+            f"the base config's {cs.getName()!r}: {error} (a show config copies it)",
+            key="--base-config",
+        ) from None
+
+
+def _camera_to_reference(env: ShowEnvironment, aces_to_base: Transform) -> Transform:
     """The environment's reference (its camera gamut) -> the base's reference."""
     config = env.config
     if not config.hasRole(AP0_ROLE):
@@ -136,130 +158,115 @@ def _camera_to_reference(env: ShowEnvironment, aces_to_base: OCIO.GroupTransform
             key="SOLUTION",
         )
     link = config.getProcessor(REFERENCE, config.getRoleColorSpace(AP0_ROLE))
-    return OCIO.GroupTransform([link.createGroupTransform(), copy.deepcopy(aces_to_base)])
+    return group([transform_record(link.createGroupTransform()), aces_to_base])
 
 
-def _inverse(transform: OCIO.Transform) -> OCIO.Transform:
-    inverse = copy.deepcopy(transform)
-    forward = inverse.getDirection() == OCIO.TRANSFORM_DIR_FORWARD
-    inverse.setDirection(OCIO.TRANSFORM_DIR_INVERSE if forward else OCIO.TRANSFORM_DIR_FORWARD)
-    return inverse
+def _renamed(transform: Transform, names: dict[str, str]) -> Transform:
+    """``transform`` with its ColorSpaceTransforms naming the environment's spaces."""
+    if transform.type == "GroupTransform":
+        children = tuple(_renamed(t, names) for t in transform.children)
+        return dataclasses.replace(transform, children=children)
+    if transform.type != "ColorSpaceTransform":
+        return transform
+    params = tuple(
+        (
+            key,
+            names.get(value, value) if key in ("Src", "Dst") and isinstance(value, str) else value,
+        )
+        for key, value in transform.params
+    )
+    return dataclasses.replace(transform, params=params)
 
 
-def _renamed(transform: OCIO.Transform, names: dict[str, str]) -> OCIO.Transform:
-    """A copy of ``transform`` whose ColorSpaceTransforms name the environment's spaces."""
-    transform = copy.deepcopy(transform)
-    stack = [transform]
-    while stack:
-        node = stack.pop()
-        if isinstance(node, OCIO.GroupTransform):
-            stack.extend(node)
-        elif isinstance(node, OCIO.ColorSpaceTransform):
-            node.setSrc(names.get(node.getSrc(), node.getSrc()))
-            node.setDst(names.get(node.getDst(), node.getDst()))
-    return transform
-
-
-def _environment_spaces(env: ShowEnvironment, aces_to_base) -> list[OCIO.ColorSpace]:
+def _environment_spaces(env: ShowEnvironment, aces_to_base: Transform) -> list[ColourSpace]:
     """The environment's own colour spaces, converted from the base's reference."""
     to_base = _camera_to_reference(env, aces_to_base)
-    own = _own_spaces(env.config)
-    names = {cs.getName(): environment_space(cs.getName(), env.name) for cs in own}
+    own = _own_spaces(config_record(env.config))
+    names = {cs.name: environment_space(cs.name, env.name) for cs in own}
     spaces = []
     for cs in own:
-        new = copy.deepcopy(cs)
-        new.setName(names[cs.getName()])
-        new.setFamily(f"{FAMILY}/Environments/{env.name}")
-        new.setDescription(f"[{env.name}] {cs.getDescription()}")
-        for alias in list(new.getAliases()):
-            new.removeAlias(alias)
-        to_ref = cs.getTransform(OCIO.COLORSPACE_DIR_TO_REFERENCE)
-        from_ref = cs.getTransform(OCIO.COLORSPACE_DIR_FROM_REFERENCE)
+        to_ref, from_ref = cs.to_reference, cs.from_reference
         if to_ref is None and from_ref is None:  # the environment's reference itself
-            new.setTransform(copy.deepcopy(to_base), OCIO.COLORSPACE_DIR_TO_REFERENCE)
-        if to_ref is not None:
-            group = OCIO.GroupTransform([_renamed(to_ref, names), copy.deepcopy(to_base)])
-            new.setTransform(group, OCIO.COLORSPACE_DIR_TO_REFERENCE)
-        if from_ref is not None:
-            group = OCIO.GroupTransform([_inverse(to_base), _renamed(from_ref, names)])
-            new.setTransform(group, OCIO.COLORSPACE_DIR_FROM_REFERENCE)
-        spaces.append(new)
+            new_to: Transform | None = to_base
+        else:
+            new_to = None if to_ref is None else group([_renamed(to_ref, names), to_base])
+        new_from = (
+            None if from_ref is None else group([to_base.inverted(), _renamed(from_ref, names)])
+        )
+        spaces.append(
+            dataclasses.replace(
+                cs,
+                name=names[cs.name],
+                family=f"{FAMILY}/Environments/{env.name}",
+                description=f"[{env.name}] {cs.description}",
+                aliases=(),
+                to_reference=new_to,
+                from_reference=new_from,
+            )
+        )
     return spaces
 
 
-def _switched_space(name: str, template: OCIO.ColorSpace, aces: str, aces_to_base):
+def _switched_space(name: str, template: ColourSpace, aces: str, aces_to_base: Transform):
     """``name``, converting to ``<name> [$VP_ENVIRONMENT]`` through the base's ACES space."""
     switched = environment_space(name, f"${CONTEXT_VARIABLE}")
-    cs = OCIO.ColorSpace(
-        referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
-        name=name,
-        family=template.getFamily(),
-        encoding=template.getEncoding(),
-        description=f"{name} of the environment ${CONTEXT_VARIABLE} names (context variable; "
+    return ColourSpace(
+        name,
+        template.family,
+        f"{name} of the environment ${CONTEXT_VARIABLE} names (context variable; "
         f"default in this config's environment section): {name} [<environment>].",
+        template.encoding,
+        categories=template.categories,
+        to_reference=group([_space_transform(switched, aces), aces_to_base]),
+        from_reference=group([aces_to_base.inverted(), _space_transform(aces, switched)]),
     )
-    for category in template.getCategories():
-        cs.addCategory(category)
-    cs.setTransform(
-        OCIO.GroupTransform(
-            [OCIO.ColorSpaceTransform(src=switched, dst=aces), copy.deepcopy(aces_to_base)]
-        ),
-        OCIO.COLORSPACE_DIR_TO_REFERENCE,
-    )
-    cs.setTransform(
-        OCIO.GroupTransform(
-            [_inverse(aces_to_base), OCIO.ColorSpaceTransform(src=aces, dst=switched)]
-        ),
-        OCIO.COLORSPACE_DIR_FROM_REFERENCE,
-    )
-    return cs
 
 
-def _overlay(base: OCIO.Config, environments: Sequence[ShowEnvironment]) -> OCIO.Config:
-    """The config of everything the show adds to the base (merged into it afterwards)."""
-    overlay = OCIO.Config()
-    overlay.setMajorVersion(2)
-    overlay.setMinorVersion(1)
+def _space_transform(src: str, dst: str) -> Transform:
+    return Transform("ColorSpaceTransform", (("Src", src), ("Dst", dst), ("DataBypass", True)))
+
+
+def _overlay(base: OCIO.Config, environments: Sequence[ShowEnvironment]) -> ConfigData:
+    """Everything the show adds to the base, as data (merged into it afterwards)."""
     aces = base.getRoleColorSpace(AP0_ROLE)
-    overlay.addColorSpace(copy.deepcopy(base.getColorSpace(aces)))
-    overlay.setRole(AP0_ROLE, aces)
-    rules = overlay.getFileRules()
-    rules.setDefaultRuleColorSpace(aces)
-    overlay.setFileRules(rules)
+    overlay = ConfigData(
+        colour_spaces=[_record(base.getColorSpace(aces))],
+        roles={AP0_ROLE: aces},
+        default_rule=aces,
+        environment={CONTEXT_VARIABLE: environments[0].name},
+        search_path="luts",
+    )
     aces_to_base = _base_to_reference(base)
-    shared: dict[str, OCIO.ColorSpace] | None = None
+    shared: dict[str, ColourSpace] | None = None
     for env in environments:
-        own = {cs.getName(): cs for cs in _own_spaces(env.config)}
+        own = {cs.name: cs for cs in _own_spaces(config_record(env.config))}
         shared = own if shared is None else {k: v for k, v in shared.items() if k in own}
-        for cs in _environment_spaces(env, aces_to_base):
-            overlay.addColorSpace(cs)
+        overlay.colour_spaces += _environment_spaces(env, aces_to_base)
     for name, template in (shared or {}).items():
-        overlay.addColorSpace(_switched_space(name, template, aces, aces_to_base))
-    overlay.addEnvironmentVar(CONTEXT_VARIABLE, environments[0].name)
-    overlay.setSearchPath("luts")
-    q = OCIO.ColorSpaceTransform(src=POST_CORRECTION_COLORSPACE, dst=REFERENCE)
-    overlay.addNamedTransform(
-        OCIO.NamedTransform(
-            name=POST_CORRECTION,
-            family=f"{FAMILY}/Post",
-            description=f"The post-correction Q of the environment ${CONTEXT_VARIABLE} names: "
+        overlay.colour_spaces.append(_switched_space(name, template, aces, aces_to_base))
+    q = _space_transform(POST_CORRECTION_COLORSPACE, REFERENCE)
+    overlay.named_transforms.append(
+        NamedTransform(
+            POST_CORRECTION,
+            f"{FAMILY}/Post",
+            f"The post-correction Q of the environment ${CONTEXT_VARIABLE} names: "
             f"{POST_CORRECTION_COLORSPACE} -> {REFERENCE} of that environment.",
-            forwardTransform=q,
-            categories=["file-io"],
+            q,
+            categories=("file-io",),
         )
     )
-    overlay.addLook(
-        OCIO.Look(
-            name=POST_CORRECTION_LOOK,
-            processSpace=REFERENCE,
-            transform=copy.deepcopy(q),
-            description=f"The post-correction Q of the environment ${CONTEXT_VARIABLE} names, "
+    overlay.looks.append(
+        Look(
+            POST_CORRECTION_LOOK,
+            REFERENCE,
+            q,
+            f"The post-correction Q of the environment ${CONTEXT_VARIABLE} names, "
             "for monitor views of footage recorded on the stage.",
         )
     )
     first = environments[0].config
     for view in first.getViews(DISPLAY):
-        overlay.addDisplayView(DISPLAY, view, first.getDisplayViewColorSpaceName(DISPLAY, view))
+        overlay.views.append(View(DISPLAY, view, first.getDisplayViewColorSpaceName(DISPLAY, view)))
     return overlay
 
 
@@ -396,7 +403,8 @@ def build_show_config(
     """
     _check_environments(environments)
     base_config = load_base_config(base)
-    overlay = _overlay(base_config, environments)
+    # the overlay names the base's spaces (Raw, displays) it does not hold: validated merged
+    overlay = build(_overlay(base_config, environments), validate=False)
     merge = has_config_merger() if use_merger is None else use_merger
     merged = merge_by_ocio(base_config, overlay) if merge else merge_by_api(base_config, overlay)
     names = ", ".join(env.name for env in environments)
