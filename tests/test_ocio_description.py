@@ -18,6 +18,7 @@ from ocio_vp.ocio.description import (
     ocio_transform,
     transform_record,
 )
+from ocio_vp.ocio.matrix import matrix_record
 
 SAMPLES = sorted(
     (Path(__file__).resolve().parent.parent / "sample_configs").glob("*/*/config.ocio")
@@ -62,3 +63,32 @@ def test_an_unknown_transform_type_is_refused():
 def test_an_incomplete_description_is_refused_by_validation():
     with pytest.raises(OCIO.Exception):
         build(ConfigData(name="x"))  # no colour space, no role: OCIO's validate() raises
+
+
+def test_the_environment_config_is_its_description_built():
+    """What config_data says is exactly what the written config holds: compared as data."""
+    from ocio_vp.formats.solution import load_solution
+    from ocio_vp.ocio.config import config_data
+
+    solution = load_solution(SAMPLES[0].parent)
+    data = config_data(solution)
+    assert config_record(build(data)) == data
+    assert data.colour_space("Stage Footage").to_reference == matrix_record(solution.Q)
+    inner = data.colour_space("LED Wall - Inner Frustum")
+    assert inner.from_reference == matrix_record(solution.N, solution.black_level_offset)
+    assert "N NOT SOLVED" not in inner.description
+
+
+def test_a_base_config_with_a_transform_without_record_is_refused(tmp_path):
+    from ocio_vp.errors import InputError
+    from ocio_vp.ocio.show import ShowEnvironment, build_show_config
+
+    base = OCIO.Config.CreateRaw()
+    aces = OCIO.ColorSpace(name="aces", toReference=OCIO.CDLTransform(slope=[1.1] * 3))
+    base.addColorSpace(aces)
+    base.setRole("aces_interchange", "aces")
+    path = tmp_path / "base.ocio"
+    path.write_text(base.serialize(), encoding="utf-8")
+    env = ShowEnvironment("a", OCIO.Config.CreateFromFile(str(SAMPLES[0])))
+    with pytest.raises(InputError, match="CDLTransform"):
+        build_show_config([env], str(path))
