@@ -1,5 +1,5 @@
-"""OpenColorIO output: the config of one environment, the wall colorspaces' LUT and encoding
-tail, and the all-or-nothing writer of ``OUT/<environment>/``.
+"""OpenColorIO output: the config of one environment (as data, then built), the wall
+colorspaces' LUT and encoding tail, and the all-or-nothing writer of ``OUT/<environment>/``.
 """
 
 from ocio_vp.ocio.config import (
@@ -11,9 +11,11 @@ from ocio_vp.ocio.config import (
     RAW,
     REFERENCE,
     build_config,
+    config_data,
     matrix_transform,
     write_config,
 )
+from ocio_vp.ocio.description import ConfigData, build
 from ocio_vp.ocio.wall import (
     WallOutputs,
     encoding_transforms,
@@ -33,8 +35,11 @@ __all__ = [
     "POST_CORRECTION_COLORSPACE",
     "RAW",
     "REFERENCE",
+    "ConfigData",
     "WallOutputs",
+    "build",
     "build_config",
+    "config_data",
     "encoding_transforms",
     "lut_transform",
     "matrix_transform",

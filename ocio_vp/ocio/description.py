@@ -224,10 +224,6 @@ class ConfigData:
     def has_colour_space(self, name: str) -> bool:
         return any(cs.name == name for cs in self.colour_spaces)
 
-    def displays(self) -> list[str]:
-        """Displays in the order their first view was added."""
-        return list(dict.fromkeys(v.display for v in self.views))
-
     def view_names(self, display: str) -> list[str]:
         return [v.name for v in self.views if v.display == display]
 
