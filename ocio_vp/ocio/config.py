@@ -39,7 +39,6 @@ from ocio_vp.ocio.description import (
     file,
     group,
     one,
-    transform_record,
 )
 from ocio_vp.ocio.matrix import format_matrix, matrix_record, matrix_transform
 from ocio_vp.ocio.softclip import soft_clip_text, soft_clip_transforms
@@ -245,7 +244,7 @@ def wall_tail(solution: Solution, extra: list[Transform]) -> Chains:
     if knee is None:
         return signal, undo
     clip, unclip = soft_clip_transforms(knee)
-    return [*map(transform_record, clip), *signal], [*undo, *map(transform_record, unclip)]
+    return [*clip, *signal], [*undo, *unclip]
 
 
 def wall_chains(

@@ -1,4 +1,4 @@
-"""The wall drive's soft clip (:mod:`ocio_vp.wall.softclip`) as OCIO transforms, both ways.
+"""The wall drive's soft clip (:mod:`ocio_vp.wall.softclip`) as OCIO transform records, both ways.
 
 The curve ``f(d) = 1 - (1 - k) exp(-(d - k) / (1 - k))`` above the knee ``k``, the identity
 below, is exactly OCIO's ``LogCameraTransform`` (OCIO 2.0 on; a CLF ``Log`` node, styles
@@ -20,34 +20,31 @@ from __future__ import annotations
 
 import math
 
-import PyOpenColorIO as OCIO
-
+from ocio_vp.ocio.description import Transform, clamp
 from ocio_vp.wall.softclip import INVERSE_CAP, check_knee, soft_clip_knee
 
 __all__ = ["soft_clip_text", "soft_clip_transforms"]
 
 
-def _curve(knee: float, direction) -> OCIO.LogCameraTransform:
+def _curve(knee: float, *, inverse: bool) -> Transform:
     span = 1.0 - knee
-    return OCIO.LogCameraTransform(
-        linSideBreak=[knee] * 3,
-        base=math.e,
-        logSideSlope=[-span] * 3,
-        logSideOffset=[knee] * 3,
-        linSideSlope=[-1.0 / span] * 3,
-        linSideOffset=[1.0 / span] * 3,
-        direction=direction,
-    )
+    values = {
+        "Base": math.e,
+        "LinSideBreakValue": knee,
+        "LogSideSlopeValue": -span,
+        "LogSideOffsetValue": knee,
+        "LinSideSlopeValue": -1.0 / span,
+        "LinSideOffsetValue": 1.0 / span,
+    }
+    params = tuple((k, v if k == "Base" else (v,) * 3) for k, v in values.items())
+    return Transform("LogCameraTransform", params, inverse=inverse)
 
 
-def soft_clip_transforms(knee: float) -> tuple[list, list]:
-    """(drive -> clipped drive, clipped drive -> drive) transform lists for ``knee``."""
+def soft_clip_transforms(knee: float) -> tuple[list[Transform], list[Transform]]:
+    """(drive -> clipped drive, clipped drive -> drive) transform records for ``knee``."""
     check_knee(knee)
-    cap = OCIO.RangeTransform(maxInValue=INVERSE_CAP, maxOutValue=INVERSE_CAP)
-    return (
-        [_curve(knee, OCIO.TRANSFORM_DIR_INVERSE)],
-        [cap, _curve(knee, OCIO.TRANSFORM_DIR_FORWARD)],
-    )
+    cap = clamp(max_in=INVERSE_CAP, max_out=INVERSE_CAP)
+    return [_curve(knee, inverse=True)], [cap, _curve(knee, inverse=False)]
 
 
 def soft_clip_text(linearity) -> str:
