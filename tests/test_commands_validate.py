@@ -112,7 +112,39 @@ def test_patterns_of_another_solve_are_refused(day, tmp_path, capsys):
     )
     assert code == 2 and not out.exists()
     err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and "made from another solve" in err
+    assert len(err.splitlines()) == 1 and "made from another solution" in err
+    # what differs is named: the model (the environment is the same one)
+    assert "model least-squares (here diagonal)" in err and "environment" not in err
+
+
+def test_a_resolve_marks_the_validation_stale(day, tmp_path, capsys):
+    import shutil
+
+    calib = tmp_path / "calib"
+    shutil.copytree(day / "calib", calib)
+    out = calib / ENV / "validation"
+    code = main(
+        [
+            "validate",
+            str(calib / ENV),
+            str(day / "take" / "A001.####.exr"),
+            "--sequence",
+            str(day / "check" / "sequence.yaml"),
+            "--out",
+            str(out),
+        ]
+    )
+    assert code == 0
+    stage = str(day / "stage.yaml")
+    capsys.readouterr()
+    # the same solve again: the same solution, the verdict still holds
+    assert main(["solve", stage, "--out", str(calib), "--method", "least-squares"]) == 0
+    assert "stale" not in capsys.readouterr().err
+    assert main(["solve", stage, "--out", str(calib), "--method", "diagonal"]) == 0
+    stale = [x for x in capsys.readouterr().err.splitlines() if x.startswith("warning: stale")]
+    assert len(stale) == 1 and f"{out} validated an earlier solution of {ENV}" in stale[0]
+    assert "model diagonal" in stale[0] and "ocio-vp validate" in stale[0]
+    assert (out / "validation.json").exists()  # kept, and named
 
 
 def test_a_calibration_sequence_is_not_a_validation_one(day, tmp_path, capsys):

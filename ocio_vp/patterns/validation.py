@@ -124,7 +124,10 @@ def validation_sequence(environment_dir: str | Path, options: PatternOptions) ->
             builder.sync()
     builder.sync()
     builder.lead("lead_out")
+    from ocio_vp.formats.provenance import solution_identity
+
     digest = hashlib.sha256(source.read_bytes()).hexdigest()
+    identity = solution_identity(folder)
     validation = Validation(
         environment=solution.environment,
         stage=solution.stage,
@@ -132,5 +135,7 @@ def validation_sequence(environment_dir: str | Path, options: PatternOptions) ->
         in_frustum=solution.ocio["in_frustum"],
         reference=solution.ocio["reference"],
         content_scale=scale,
+        model=identity.model,
+        solved=identity.solved,
     )
     return builder.build(validation=validation)
