@@ -576,11 +576,8 @@ def _diagnostics(
     ]
     if n_reason:
         warnings.append(f"N not solved: {n_reason}")
-    if np.any(drive < 0):
-        warnings.append(
-            "the out-of-frustum drive M w_avg has a negative channel: this light is outside the "
-            "LED gamut and the wall will clip it"
-        )
+    # M w_avg below zero (light outside the LEDs' gamut) is a note, not a warning: the
+    # terminal says it from ``out_of_frustum_negative_channels`` (commands/summary.py).
     method = options.method
     stability, stability_warnings = stability_diagnostics(
         problem,

@@ -138,9 +138,10 @@ def _stale_validations(folder: Path, current: str) -> list[str]:
     lines = []
     for path in sorted(folder.rglob(VALIDATION_FILE)):
         record = _read_json(path) or {}
-        if record.get("format") != "ocio-vp/validation" or "exports" in path.relative_to(
-            folder
-        ).parts:
+        if (
+            record.get("format") != "ocio-vp/validation"
+            or "exports" in path.relative_to(folder).parts
+        ):
             continue
         if record.get("solution_sha256") != current:
             lines.append(
