@@ -89,16 +89,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="in-frustum panel albedo for the black level (default 0.04; 0 for none)",
     )
     parser.add_argument("--name", default=None, help="stage name (default simulated-stage)")
-    parser.add_argument(
-        "--wall-gain",
-        type=float,
-        default=4.0,
-        metavar="G",
-        help="the wall's full-drive white in units of the location's white, i.e. where the "
-        "camera's exposure puts the wall's peak: 4 (the default, as a stage engineer sets a "
-        "stage up) leaves content white two stops below it; 1 puts the wall's peak at the "
-        "location's white, so content white clips",
-    )
+    _add_wall_gain(parser)
     _add_ceiling_options(parser)
     parser.add_argument(
         "--fixture",
@@ -114,6 +105,21 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="list the known environments and exit (no --out needed)",
     )
     parser.set_defaults(func=run)
+
+
+def _add_wall_gain(parser: argparse.ArgumentParser) -> None:
+    from ocio_vp.choices import SAMPLE_WALL_GAIN
+
+    parser.add_argument(
+        "--wall-gain",
+        type=float,
+        default=SAMPLE_WALL_GAIN,
+        metavar="G",
+        help="the wall's full-drive white in units of the location's white, i.e. where the "
+        f"camera's exposure puts the wall's peak: {SAMPLE_WALL_GAIN:g} (the default, as a stage "
+        "engineer sets a stage up) leaves content white two stops below it; 1 puts the wall's "
+        "peak at the location's white, so content white clips",
+    )
 
 
 def _add_take_options(parser: argparse.ArgumentParser) -> None:

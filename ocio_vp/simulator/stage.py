@@ -49,6 +49,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ocio_vp.choices import SAMPLE_WALL_GAIN
 from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import Environment, Measurements, PanelGeometry, Stage
 from ocio_vp.simulator.data import (
@@ -254,11 +255,11 @@ def white_reflectance(stage: SpectralStage) -> float:
     return round(float(green @ stage.reflectances[stage.white_patch] / green.sum()), 4)
 
 
-#: The sample stage's :attr:`SpectralStage.wall_gain`: the camera is exposed so the wall's
-#: full-drive white is two stops above the location's white, as a stage engineer sets a stage
-#: up, so content white needs at most ~60% of any channel's peak (without it, 165-233% in red)
-#: and highlights keep two stops (docs/headroom.md).
-SAMPLE_WALL_GAIN = 4.0
+#: The sample stage's :attr:`SpectralStage.wall_gain` (:data:`ocio_vp.choices.SAMPLE_WALL_GAIN`):
+#: the camera is exposed so the wall's full-drive white is two stops above the location's
+#: white, as a stage engineer sets a stage up, so content white needs at most ~60% of any
+#: channel's peak (without it, 165-233% in red) and highlights keep two stops
+#: (docs/headroom.md).
 
 
 def paper_stage(wall_gain: float = SAMPLE_WALL_GAIN) -> SpectralStage:
