@@ -137,6 +137,9 @@ def test_sample_file_solves_with_the_cli(tmp_path, capsys):
         ]
     )
     assert code == 0
+    # the simulated file states no wall encoding (no take): the assumption is said once
+    out = capsys.readouterr().out
+    assert out.count("states no wall encoding") == 1 and "linear drive assumed" in out
     for env in ("direct_sun", "sodium_vapour"):
         assert (tmp_path / env / "config.ocio").read_bytes() == (
             SAMPLES / SAMPLE_NAME / env / "config.ocio"
