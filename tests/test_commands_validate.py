@@ -73,7 +73,24 @@ def test_a_good_calibration_passes(day, capsys):
     # observed: mean 0.3, p95 0.5 -- the noise of the plates the calibration came from
     assert stats["p95"] < 1.0 and stats["mean"] < 0.6
     shown = [p for p in report["patches"] if p["shown"]]
-    assert stats["patches_judged"] == len(shown) >= 12
+    # every patch is judged: those N would drive outside the LEDs' gamut are shown pulled
+    # towards grey, their intent recomputed (before: 14 of 24)
+    assert stats["patches_judged"] == len(shown) == 24
+    from ocio_vp.formats.solution import load_solution
+    from ocio_vp.patterns.sequence import load_sequence
+    from ocio_vp.patterns.validation import GAMUT_MARGIN, in_frustum_light
+
+    pulled = dict(load_sequence(day / "check" / "sequence.yaml").validation.pulled)
+    assert pulled and all(0 <= k < 1 for k in pulled.values())
+    assert {int(j) for j in report["pulled_into_gamut"]} == set(pulled)
+    light = in_frustum_light(
+        load_solution(day / "calib" / ENV), np.array([p["intended"] for p in report["patches"]])
+    )
+    assert light.min() >= GAMUT_MARGIN - 1e-9 and light.max() <= 1 - GAMUT_MARGIN + 1e-9
+    # people read patches numbered from 1, with names; the file keeps 0-based indices
+    assert f"{len(pulled)} patch(es) need light outside the LEDs' gamut" in printed
+    worst = stats["worst_patch"]
+    assert f"({worst['index'] + 1} {worst['name'].partition(' (')[2][:-1]})" in printed
     assert max(p["delta_e2000"] for p in shown) == stats["max"]
     # the post-correction is Q (least squares): corrected = Q measured, from solution.json
     Q = np.array(json.loads((day / "calib" / ENV / "solution.json").read_text())["Q"])

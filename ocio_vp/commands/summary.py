@@ -186,7 +186,7 @@ def _gamut_notes(solutions: Sequence[Any]) -> list[str]:
             text = (
                 f"{below} chart colour(s) need light outside the LEDs' gamut in-frustum after N "
                 f"({with_M} with M): the wall shows them clipped, as any calibration of these "
-                "LEDs would"
+                "LEDs would (validation shows them pulled into the gamut)"
             )
             where.setdefault(text, []).append(s.environment)
         if d.get("out_of_frustum_negative_channels"):

@@ -128,7 +128,9 @@ def run(args: argparse.Namespace) -> int:
         "take": Path(args.take).name,
     }
     with staged_dir(final.resolve().parent) as stage:
-        lines = write_validation(result, reading, stage / "out", sources=sources)
+        lines = write_validation(
+            result, reading, stage / "out", sources=sources, pulled=sequence.validation.pulled
+        )
         publish_dir(stage / "out", final, inputs=[args.environment, args.sequence, take_folder])
     for warning in reading.warnings:
         warn("validate", warning)

@@ -95,6 +95,8 @@ class Validation:
     #: was written (UTC, ISO 8601): what a refusal names when the solve has changed since.
     model: str | None = None
     solved: str | None = None
+    #: Patches pulled into the wall's gamut: (chart index, saturation kept in [0, 1)).
+    pulled: tuple[tuple[int, float], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -238,16 +240,23 @@ def _patch(ctx: Validator, raw: Any, i: int, previous_last: int) -> Patch:
 def _validation(ctx: Validator, raw: Any) -> Validation:
     keys = ("environment", "stage", "solution_sha256", "in_frustum", "reference")
     optional = ("model", "solved")
-    entry = ctx.mapping(raw, ("validation",), keys, ("content_scale", *optional))
+    entry = ctx.mapping(raw, ("validation",), keys, ("content_scale", "pulled", *optional))
     for name in (*keys, *(k for k in optional if k in entry)):
         if not isinstance(entry[name], str) or not entry[name]:
             raise ctx.error(("validation", name), "expected a non-empty text")
     scale = ctx.number(
         entry.get("content_scale", 1.0), ("validation", "content_scale"), strict=True
     )
+    pulled = entry.get("pulled") or {}
+    if not isinstance(pulled, dict) or not all(
+        isinstance(k, int) and isinstance(v, (int, float)) and 0 <= v <= 1
+        for k, v in pulled.items()
+    ):
+        raise ctx.error(("validation", "pulled"), "expected {chart index: saturation kept}")
     return Validation(
         **{name: entry[name] for name in keys},
         content_scale=scale,
+        pulled=tuple((int(k), float(v)) for k, v in pulled.items()),
         **{name: entry.get(name) for name in optional},
     )
 
@@ -389,6 +398,7 @@ def sequence_to_dict(sequence: PatternSequence) -> dict[str, Any]:
             "in_frustum": v.in_frustum,
             "reference": v.reference,
             "content_scale": v.content_scale,
+            **({"pulled": {j: k for j, k in v.pulled}} if v.pulled else {}),
             **({"model": v.model} if v.model else {}),
             **({"solved": v.solved} if v.solved else {}),
         }
