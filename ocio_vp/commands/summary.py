@@ -195,6 +195,9 @@ def _gamut_notes(solutions: Sequence[Any]) -> list[str]:
                 "wall lights the actors with the nearest colour it can make"
             )
             where.setdefault(text, []).append(s.environment)
+    for s in solutions:  # optional measurements the file did not give
+        for text in s.diagnostics.get("assumed") or []:
+            where.setdefault(text, []).append(s.environment)
     return [f"note: {', '.join(names)}: {text}" for text, names in where.items()]
 
 
