@@ -205,6 +205,7 @@ def stability_diagnostics(
         warnings.append(
             f"{len(clipped)} chart patch(es) clipped and left out of the fit: "
             + ", ".join(patch_label(j, len(target)) for j in clipped)
+            + "; shoot the chart plates darker to use them"
         )
     # Chart colours N drives below zero are a fact of the LEDs' gamut, not a warning: the
     # terminal names them as a note from ``in_frustum_drive_range`` (commands/summary.py).
