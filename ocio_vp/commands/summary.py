@@ -180,8 +180,9 @@ def _gamut_notes(solutions: Sequence[Any]) -> list[str]:
     where: dict[str, list[str]] = {}
     for s in solutions:
         d = s.diagnostics
-        ranges = d.get("in_frustum_drive_range") or {}
-        below, with_M = ranges.get("below_zero"), ranges.get("below_zero_with_M")
+        ranges = d.in_frustum_drive_range
+        below = None if ranges is None else ranges.below_zero
+        with_M = None if ranges is None else ranges.below_zero_with_M
         if s.N is not None and below and with_M is not None and below > with_M:
             text = (
                 f"{below} chart colour(s) need light outside the LEDs' gamut in-frustum after N "
@@ -189,14 +190,14 @@ def _gamut_notes(solutions: Sequence[Any]) -> list[str]:
                 "LEDs would (validation shows them pulled into the gamut)"
             )
             where.setdefault(text, []).append(s.environment)
-        if d.get("out_of_frustum_negative_channels"):
+        if d.out_of_frustum_negative_channels:
             text = (
                 "this light is outside the LEDs' gamut (M w_avg has a negative channel): the "
                 "wall lights the actors with the nearest colour it can make"
             )
             where.setdefault(text, []).append(s.environment)
     for s in solutions:  # optional measurements the file did not give
-        for text in s.diagnostics.get("assumed") or []:
+        for text in s.diagnostics.assumed or []:
             where.setdefault(text, []).append(s.environment)
     return [f"note: {', '.join(names)}: {text}" for text, names in where.items()]
 

@@ -113,7 +113,7 @@ def into_gamut(solution: Solution, content: np.ndarray) -> tuple[np.ndarray, np.
     validation judges what the wall can show. Patches inside keep ``k = 1``; a patch whose grey
     is outside too (darker than the black-level offset allows) is left as it is, not shown."""
     content = np.asarray(content, dtype=np.float64)
-    white = int(solution.diagnostics.get("white_patch") or 18)
+    white = int(solution.diagnostics.white_patch)
     white = white if 0 <= white < len(content) else int(np.argmax(content.sum(axis=1)))
     tint = content[white] / max(float(content[white].sum()), 1e-12)
 
