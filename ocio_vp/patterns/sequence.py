@@ -254,10 +254,15 @@ def _validation(ctx: Validator, raw: Any) -> Validation:
     ):
         raise ctx.error(("validation", "pulled"), "expected {chart index: saturation kept}")
     return Validation(
-        **{name: entry[name] for name in keys},
+        environment=entry["environment"],
+        stage=entry["stage"],
+        solution_sha256=entry["solution_sha256"],
+        in_frustum=entry["in_frustum"],
+        reference=entry["reference"],
         content_scale=scale,
         pulled=tuple((int(k), float(v)) for k, v in pulled.items()),
-        **{name: entry.get(name) for name in optional},
+        model=entry.get("model"),
+        solved=entry.get("solved"),
     )
 
 

@@ -243,6 +243,7 @@ def _measure_take(capture: Capture, document: dict[str, Any], on_take) -> TakeRe
     pattern size from its ``sequence.yaml`` in ``stage`` (they travel on to the solve)."""
     from ocio_vp.formats.wall_state import stage_with_sequence
 
+    assert capture.take is not None  # the caller measures a take only when there is one
     reading = measure_take(capture.take, source=capture.source, on_progress=on_take)
     document.update(take_sections(reading))
     document["stage"] = stage_with_sequence(
