@@ -45,10 +45,8 @@ LEGEND = (
     "then N + offset and Q; CV = leave-one-patch-out after Q ('-': not given by the method);\n"
     "  LEDs in frame = p95 ΔE2000 by which Q changes the wall's own LEDs seen in frame "
     "(least squares in brackets): a Q fitted to reflective colours moves saturated emitters "
-    "a lot,
-  tens to ~140 on narrow-band LEDs even when the stage is healthy; it matters only "
-    "with LEDs, screens or practicals in frame: then solve --protect-emitters;
-  skin = "
+    "a lot,\n  tens to ~140 on narrow-band LEDs even when the stage is healthy; it matters only "
+    "with LEDs, screens or practicals in frame: then solve --protect-emitters;\n  skin = "
     "expected mean ΔE2000 on skin of every lightness (the chart's skin samples), and its ratio "
     "to least squares'."
 )
