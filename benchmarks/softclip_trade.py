@@ -3,7 +3,8 @@
     python -m benchmarks.softclip_trade [--write docs/headroom.md]
 
 Two simulated stages, each solved by least squares for its seven environments: the sample
-stage (``paper_stage()``, ``sample_configs/``) and a stage of narrower LEDs (620/530/465 nm)
+stage with its wall's peak at the location's white (``paper_stage(wall_gain=1.0)``: no
+headroom, so content white already needs more than the peak, the case a soft clip is for) and a stage of narrower LEDs (620/530/465 nm)
 filmed by another camera. Content, in camera RGB with content white = (1, 1, 1): the chart's
 24 reflectances under the environment (white-balanced to content white), 12 saturated hues
 (HSV saturation 0.9) and a blue sky (CIE daylight at 20000 K, balanced like the chart), each at
@@ -53,7 +54,11 @@ def stages():
         leds=((620.0, 18.0), (530.0, 30.0), (465.0, 20.0)),
         name="narrow-led-stage",
     )
-    return {"sample stage (paper_stage)": paper_stage(), "narrow LEDs, Nikon 5100": other}
+    # wall_gain 1: the wall's peak at the location's white, the stage without headroom.
+    return {
+        "sample stage (paper_stage)": paper_stage(wall_gain=1.0),
+        "narrow LEDs, Nikon 5100": other,
+    }
 
 
 def content_colours(stage, environment) -> tuple[np.ndarray, list[str]]:

@@ -25,6 +25,7 @@ __all__ = [
     "OPTIMIZATIONS",
     "PRIORITIES",
     "Q_METHODS",
+    "SAMPLE_WALL_GAIN",
     "WALL_ENCODINGS",
     "BlackLevelMethod",
 ]
@@ -69,6 +70,10 @@ WALL_ENCODINGS = ("linear", "gamma2.4", "srgb", "pq")
 DEFAULT_WALL_ENCODING = "linear"
 #: Luminance (cd/m2) of drive 1.0 on a PQ wall when none is given.
 DEFAULT_PEAK_NITS = 1000.0
+#: The simulated sample stage's wall: its full-drive white is this many times the location's
+#: white (``simulate --wall-gain``): content white two stops below the peak, as a stage
+#: engineer sets a stage up.
+SAMPLE_WALL_GAIN = 4.0
 
 #: ``ocio-vp export --target`` values: per environment, then ``all`` of those, then ``show`` (one
 #: config for every given environment, on a base config).

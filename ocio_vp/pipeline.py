@@ -122,6 +122,29 @@ class SolveOptions:
             )
 
 
+def _assumed(measurements: Measurements, environment: Environment) -> list[str]:
+    """What the solve assumes for optional measurements the file does not give (stated in
+    ``diagnostics.assumed`` and on the terminal)."""
+    from ocio_vp.correction.outliers import patch_name
+
+    out = []
+    stage = measurements.stage
+    if not stage.white_patch_stated:
+        name = patch_name(stage.white_patch, measurements.n_patches).partition(" (")[2][:-1]
+        out.append(
+            f"no stage.white_patch: patch {stage.white_patch + 1} {name} (index "
+            f"{stage.white_patch}) assumed to be the chart's white; state it if the chart is "
+            "another one or turned"
+        )
+    if environment.black_level is None:
+        out.append(
+            "no black_level: no in-frustum black-level offset, so the stage's light bounced "
+            "off the dark panels is not cancelled (the wall's black reads lifted in camera); "
+            "shoot the black-level plate (docs/capture.md)"
+        )
+    return out
+
+
 def solve_environment(
     measurements: Measurements,
     environment: Environment,
@@ -168,6 +191,9 @@ def solve_environment(
         excluded=None if options.keep_all_patches else excluded,
     )  # fmt: skip
     diagnostics = dataclasses.replace(diagnostics, skin=skin)
+    assumed = _assumed(measurements, environment)
+    if assumed:
+        diagnostics = dataclasses.replace(diagnostics, assumed=assumed)
     linearity, panels = _panel_linearity(measurements), None
     if measurements.panels:
         panels, block, notes = _solve_panels(
@@ -576,11 +602,8 @@ def _diagnostics(
     ]
     if n_reason:
         warnings.append(f"N not solved: {n_reason}")
-    if np.any(drive < 0):
-        warnings.append(
-            "the out-of-frustum drive M w_avg has a negative channel: this light is outside the "
-            "LED gamut and the wall will clip it"
-        )
+    # M w_avg below zero (light outside the LEDs' gamut) is a note, not a warning: the
+    # terminal says it from ``out_of_frustum_negative_channels`` (commands/summary.py).
     method = options.method
     stability, stability_warnings = stability_diagnostics(
         problem,

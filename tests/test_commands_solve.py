@@ -266,3 +266,29 @@ def test_solving_shared_with_the_helper_gives_the_same_solutions_in_order(tmp_pa
     assert [solution_to_json(s) for s in again] == plain
     assert [s.environment for s in shared] == [e.name for e in m.environments]
     assert dataclasses.is_dataclass(shared[0])
+
+
+def test_missing_optional_measurements_are_stated(tmp_path, capsys) -> None:
+    """No black_level, no stage.white_patch: the terminal and solution.json say what was
+    assumed; a file that gives both says nothing of the kind."""
+    data = make_measurements_dict(environments=1, black_level=False)
+    data["stage"].pop("white_patch", None)
+    out = tmp_path / "calib"
+    args = ["--method", "least-squares", "--out"]
+    assert main(["solve", str(_write(tmp_path, data)), *args, str(out)]) == 0
+    printed = capsys.readouterr().out
+    assumed = json.loads((out / "env_0" / "solution.json").read_text())["diagnostics"]["assumed"]
+    assert len(assumed) == 2
+    assert "no stage.white_patch: patch 19 white 9.5 (.05 D) (index 18)" in assumed[0]
+    assert assumed[1].startswith("no black_level: no in-frustum black-level offset")
+    for text in assumed:
+        assert f"note: env_0: {text}" in printed
+    full = make_measurements_dict(environments=1)
+    full["stage"]["white_patch"] = 18
+    assert (
+        main(["solve", str(_write(tmp_path, full, "full.yaml")), *args, str(tmp_path / "f")]) == 0
+    )
+    solution = json.loads((tmp_path / "f" / "env_0" / "solution.json").read_text())
+    printed = capsys.readouterr().out
+    assert "assumed" not in solution["diagnostics"] and "no black_level" not in printed
+    assert "no stage.white_patch" not in printed

@@ -73,7 +73,24 @@ def test_a_good_calibration_passes(day, capsys):
     # observed: mean 0.3, p95 0.5 -- the noise of the plates the calibration came from
     assert stats["p95"] < 1.0 and stats["mean"] < 0.6
     shown = [p for p in report["patches"] if p["shown"]]
-    assert stats["patches_judged"] == len(shown) >= 12
+    # every patch is judged: those N would drive outside the LEDs' gamut are shown pulled
+    # towards grey, their intent recomputed (before: 14 of 24)
+    assert stats["patches_judged"] == len(shown) == 24
+    from ocio_vp.formats.solution import load_solution
+    from ocio_vp.patterns.sequence import load_sequence
+    from ocio_vp.patterns.validation import GAMUT_MARGIN, in_frustum_light
+
+    pulled = dict(load_sequence(day / "check" / "sequence.yaml").validation.pulled)
+    assert pulled and all(0 <= k < 1 for k in pulled.values())
+    assert {int(j) for j in report["pulled_into_gamut"]} == set(pulled)
+    light = in_frustum_light(
+        load_solution(day / "calib" / ENV), np.array([p["intended"] for p in report["patches"]])
+    )
+    assert light.min() >= GAMUT_MARGIN - 1e-9 and light.max() <= 1 - GAMUT_MARGIN + 1e-9
+    # people read patches numbered from 1, with names; the file keeps 0-based indices
+    assert f"{len(pulled)} patch(es) need light outside the LEDs' gamut" in printed
+    worst = stats["worst_patch"]
+    assert f"({worst['index'] + 1} {worst['name'].partition(' (')[2][:-1]})" in printed
     assert max(p["delta_e2000"] for p in shown) == stats["max"]
     # the post-correction is Q (least squares): corrected = Q measured, from solution.json
     Q = np.array(json.loads((day / "calib" / ENV / "solution.json").read_text())["Q"])
@@ -112,7 +129,39 @@ def test_patterns_of_another_solve_are_refused(day, tmp_path, capsys):
     )
     assert code == 2 and not out.exists()
     err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and "made from another solve" in err
+    assert len(err.splitlines()) == 1 and "made from another solution" in err
+    # what differs is named: the model (the environment is the same one)
+    assert "model least-squares (here diagonal)" in err and "environment" not in err
+
+
+def test_a_resolve_marks_the_validation_stale(day, tmp_path, capsys):
+    import shutil
+
+    calib = tmp_path / "calib"
+    shutil.copytree(day / "calib", calib)
+    out = calib / ENV / "validation"
+    code = main(
+        [
+            "validate",
+            str(calib / ENV),
+            str(day / "take" / "A001.####.exr"),
+            "--sequence",
+            str(day / "check" / "sequence.yaml"),
+            "--out",
+            str(out),
+        ]
+    )
+    assert code == 0
+    stage = str(day / "stage.yaml")
+    capsys.readouterr()
+    # the same solve again: the same solution, the verdict still holds
+    assert main(["solve", stage, "--out", str(calib), "--method", "least-squares"]) == 0
+    assert "stale" not in capsys.readouterr().err
+    assert main(["solve", stage, "--out", str(calib), "--method", "diagonal"]) == 0
+    stale = [x for x in capsys.readouterr().err.splitlines() if x.startswith("warning: stale")]
+    assert len(stale) == 1 and f"{out} validated an earlier solution of {ENV}" in stale[0]
+    assert "model diagonal" in stale[0] and "ocio-vp validate" in stale[0]
+    assert (out / "validation.json").exists()  # kept, and named
 
 
 def test_a_calibration_sequence_is_not_a_validation_one(day, tmp_path, capsys):

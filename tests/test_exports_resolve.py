@@ -135,10 +135,17 @@ class TestCube:
             main(["export", str(exported[0]), "--target", "resolve", "--out", str(tmp_path)]) == 0
         )
         out = capsys.readouterr().out
-        assert out.count("worst error") == 3
-        files = read_manifest(tmp_path / "env_0" / "resolve")["files"]
-        worst = files["wall_in_frustum_33.cube"]["accuracy"]["max_error"]
-        assert f"wall_in_frustum_33.cube: worst error {worst:.2g} <= limit" in out
+        # one line per target: the Resolve file for footage (a linear Q: its cube) and where
+        # the rest is; every file's accuracy is in the manifest
+        assert len(out.splitlines()) == 1, out
+        manifest = read_manifest(tmp_path / "env_0" / "resolve")
+        worst = manifest["files"]["post_correction_Q_33.cube"]["accuracy"]["max_error"]
+        assert worst <= 1 / 1023 and manifest["resolve_file"]["file"] == "post_correction_Q_33.cube"
+        assert (
+            f"the Resolve file for footage: post_correction_Q_33.cube (worst error {worst:.2g} "
+            in out
+        )
+        assert "wall_in_frustum_33.cube" in manifest["files"]
 
     def test_bad_cube_size_exits_2(self, exported, tmp_path, capsys):
         code = main(["export", str(exported[0]), "--out", str(tmp_path / "o"), "--cube-size", "1"])
@@ -334,3 +341,6 @@ def test_clf_and_dctl_agree_with_the_model_over_the_camera_range(model_exports, 
     assert "post_correction_Q.dctl" in carriage["note"]
     accuracy = manifest["files"]["post_correction_Q.clf"]["accuracy"]
     assert accuracy["delta_E_2000_vs_model"]["worst"]["all"] <= 2.0
+    # no cube of a non-linear Q meets the limit here: the DCTL is named as the Resolve file
+    assert "post_correction_Q_17.cube" in manifest["not_written"]
+    assert manifest["resolve_file"]["file"] == "post_correction_Q.dctl"

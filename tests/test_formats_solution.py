@@ -30,6 +30,7 @@ DIAGNOSTICS_KEYS = [
     "charts_clipped_drive", "in_frustum_drive_range", "black_level_bounce",
     "clipped_patches", "N_equals_M", "identity_check", "patch_screening", "excluded_patches",
     "model_description", "extrapolation", "skin",
+    "assumed",  # the test file gives no stage.white_patch: what the solve assumed is stated
 ]  # fmt: skip
 
 

@@ -153,11 +153,10 @@ def exported_matrix(tmp_path_factory) -> list[Path]:
     from ocio_vp.cli import main
 
     root = tmp_path_factory.mktemp("compat")
-    # Matrices only: least squares for the demo's stage file, then auto's rank-1 Q for sodium
-    # (auto's root-polynomial elsewhere would make LUTs, tested in test_ocio_root_polynomial).
-    demo = ["demo", "--out", str(root / "demo"), "--no-report", "--method", "least-squares"]
-    assert main(demo) == 0
-    stage = root / "demo" / "paper_stage.yaml"
+    # Matrices only: auto's rank-1 Q for sodium, least squares for the PQ wall (auto's
+    # root-polynomial elsewhere would make LUTs, tested in test_ocio_root_polynomial). The
+    # demo's stage file is the committed sample (tests/test_simulator_samples.py keeps it so).
+    stage = Path(__file__).resolve().parent.parent / "sample_configs" / "paper_stage.yaml"
     sodium = ["solve", str(stage), "--out", str(root / "auto"), "--environment", "sodium_vapour"]
     assert main(sodium) == 0
     ramps = root / "ramps.yaml"

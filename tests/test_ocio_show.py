@@ -164,7 +164,8 @@ def test_environment_without_a_camera_gamut_is_refused(tmp_path, capsys):
     args = ["export", str(tmp_path / "c"), "--target", "show", "--out", str(tmp_path / "x")]
     assert main(args) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "--camera-colorspace" in err
+    assert err.count("\n") == 1 and "--camera-colorspace NAME" in err
+    assert "stage.camera_colorspace: NAME" in err  # the exact flag and key
     assert not (tmp_path / "x" / "show").exists()
 
 

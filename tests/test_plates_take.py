@@ -166,6 +166,47 @@ def test_the_wall_file_solves_with_a_charts_file(measured, tmp_path, other_stage
     np.testing.assert_allclose(solution["M"], np.linalg.inv(other_stage.SL), rtol=0.01, atol=0.01)
 
 
+@pytest.mark.parametrize("measured", ["PQ 16-bit TIFF"], indirect=True)
+def test_a_pq_take_is_solved_as_pq_without_a_flag(measured, tmp_path, other_stage, capsys):
+    """sequence.yaml (PQ, 1000 nits) -> measure -> the measurements file -> solve: the configs
+    send PQ with no --wall-encoding; a flag or a merged file that contradicts it is refused."""
+    from ocio_vp.formats.measurements import measurements_to_dict, save_measurements_document
+    from ocio_vp.simulator.stage import simulate_measurements
+
+    _, folder, data = measured
+    assert {k: data["stage"][k] for k in ("wall_encoding", "peak_nits", "pattern_size")} == {
+        "wall_encoding": "pq",
+        "peak_nits": 1000.0,
+        "pattern_size": [64, 36],
+    }
+    charts = measurements_to_dict(simulate_measurements(["direct_sun"], stage=other_stage))
+    del charts["primaries"]
+    charts["stage"] = {k: charts["stage"][k] for k in ("name", "calibration_panel")}
+    path = tmp_path / "charts.yaml"
+    save_measurements_document(charts, path)
+    out = tmp_path / "calib"
+    args = ["solve", str(folder / "wall.yaml"), str(path), "--method", "least-squares"]
+    capsys.readouterr()
+    assert main([*args, "--out", str(out)]) == 0
+    assert "states no wall encoding" not in capsys.readouterr().out
+    solution = read_document(out / "direct_sun" / "solution.json")[0]
+    assert solution["linearity"]["wall_encoding"] == {"name": "pq", "peak_nits": 1000.0}
+    config = (out / "direct_sun" / "config.ocio").read_text()
+    assert "ST-2084" in config or "PQ" in config
+    for flag, value in (("--wall-encoding", "linear"), ("--peak-nits", "1500")):
+        assert main([*args, "--out", str(tmp_path / "x"), flag, value]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and f"{flag}: " in err and "contradicts" in err, err
+        assert not (tmp_path / "x").exists()
+    # the same value is no contradiction
+    assert main([*args, "--out", str(tmp_path / "y"), "--wall-encoding", "pq"]) == 0
+    # a charts file that says the wall played something else is refused when merged
+    charts["stage"]["wall_encoding"] = "linear"
+    save_measurements_document(charts, path)
+    assert main([*args, "--out", str(tmp_path / "z")]) == 2
+    assert "stage.wall_encoding: also given in" in capsys.readouterr().err
+
+
 def _measure_fails(capture: Path, capsys) -> str:
     out = capture.parent / "wall.yaml"
     assert main(["measure", str(capture), "--out", str(out)]) == 2

@@ -82,11 +82,13 @@ class TestCameraRGB:
         np.testing.assert_allclose(measurements.SL, direct, rtol=RTOL)
 
     def test_wall_white_is_d65_with_green_one(self, stage, measurements):
+        # the wall's full-drive white is D65, two stops above the location's white (green 1)
         w_camera = measurements.SL.sum(axis=1)
         d65 = measurements.SL @ np.ones(3)
-        assert w_camera[1] == pytest.approx(1.0, rel=1e-12)
+        assert stage.wall_gain == 4.0
+        assert w_camera[1] == pytest.approx(stage.wall_gain, rel=1e-12)
         direct = simulate_measurements(["d65"], stage=stage).environments[0].w_avg
-        np.testing.assert_allclose(d65, direct, rtol=1e-12)
+        np.testing.assert_allclose(d65 / stage.wall_gain, direct, rtol=1e-12)
 
 
 class TestBeta:

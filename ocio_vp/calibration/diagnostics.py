@@ -205,13 +205,10 @@ def stability_diagnostics(
         warnings.append(
             f"{len(clipped)} chart patch(es) clipped and left out of the fit: "
             + ", ".join(patch_label(j, len(target)) for j in clipped)
+            + "; shoot the chart plates darker to use them"
         )
-    if N is not None and in_range.below_zero > in_range_M.below_zero:
-        warnings.append(
-            f"N drives {in_range.below_zero} chart colour(s) below zero in-frustum (M: "
-            f"{in_range_M.below_zero}, same black-level offset): Q's inverse pushes them "
-            "outside the LED gamut"
-        )
+    # Chart colours N drives below zero are a fact of the LEDs' gamut, not a warning: the
+    # terminal names them as a note from ``in_frustum_drive_range`` (commands/summary.py).
     block = {
         "model": fit.model or method,
         "model_reason": fit.reason,

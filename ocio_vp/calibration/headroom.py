@@ -159,7 +159,8 @@ def _negative_warning(scale: ContentScale) -> str:
     return (
         f"warning: {scale.environment}: content white needs negative drive in {channels}: the "
         "wall cannot take light away, so that channel shows 0 and white is tinted; the LEDs "
-        "cannot reach this environment's white (see the solve's LED gamut warning)"
+        "cannot reach this environment's white (see the note on the LEDs' gamut); render content "
+        "white inside the LEDs' gamut, or accept the tint"
     )
 
 

@@ -54,7 +54,9 @@ def run(args: argparse.Namespace) -> int:
         stage, written = _simulate_and_write(out, args.method, pool)
     print(
         f"simulated stage: {stage.camera_name}, {stage.led_description}, {stage.chart_name}, "
-        f"beta {stage.beta:.5f}, panel albedo {stage.panel_albedo}"
+        f"beta {stage.beta:.5f}, panel albedo {stage.panel_albedo}; the camera exposed so the "
+        f"wall's full white is {stage.wall_gain:g}x the location's white (content white "
+        f"{_stops(stage.wall_gain)} below the wall's peak, as a stage engineer sets it up)"
     )
     print_summary(written)
     print(spectral_check(stage, written))
@@ -113,3 +115,10 @@ def spectral_check(stage, solutions) -> str:
         f"checked on the simulated spectra: the table's figures agree within {gap} "
         f"percentage points (largest: {where})"
     )
+
+
+def _stops(gain: float) -> str:
+    """``'2 stops'`` for a gain of 4 (at most two decimals)."""
+    import math
+
+    return f"{math.log2(gain):.3g} stops"

@@ -9,7 +9,7 @@ import sys
 from ocio_vp.choices import DEFAULT_BASE_CONFIG, EXPORT_TARGETS
 from ocio_vp.commands.report import SOLUTIONS_HELP
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "export_line", "run"]
 
 #: The per-environment targets ``all`` stands for.
 TARGETS = EXPORT_TARGETS[: EXPORT_TARGETS.index("all")]
@@ -81,17 +81,23 @@ def run(args: argparse.Namespace) -> int:
         base_config=args.base_config,
     )
     for result in results:
-        print(f"{result.environment}: {result.target} -> {result.folder}")
-        for name, error in result.summary.get("cubes", {}).items():
-            print(
-                f"  {name}: worst error {error['max_error']:.2g} <= limit "
-                f"{error['limit']:.2g} ({error['shaper']} shaper; trilinear and tetrahedral, "
-                f"content [0, 1] and [{error['input_range'][0]:g}, {error['input_range'][1]:g}])"
-            )
-        for name, reason in result.summary.get("not_written", {}).items():
-            print(f"  {name}: not written: {reason}")
-        if result.summary.get("post_correction"):
-            print(f"  post-correction: {result.summary['post_correction']}")
+        print(export_line(result))
     for failure in results.failures:
         print(f"not exported: {failure.reason}", file=sys.stderr)
     return 0
+
+
+def export_line(result) -> str:
+    """One line per environment and target: where it went and what to use (each target's
+    files, accuracies and the files not written, with why, are in its folder's manifest)."""
+    summary = result.summary
+    head = f"{result.environment}: {result.target} -> {result.folder}"
+    if summary.get("line"):
+        return f"{head}: {summary['line']}"
+    cubes, not_written = summary.get("cubes") or {}, summary.get("not_written") or {}
+    for name, error in cubes.items():
+        return f"{head}: {name}, worst error {error['max_error']:.2g} <= limit {error['limit']:.2g}"
+    for name, reason in not_written.items():
+        return f"{head}: {name} not written ({reason.split(';')[0]})"[:300]
+    files = summary.get("files") or [v for k, v in summary.items() if k in ("script", "config")]
+    return f"{head}: {', '.join(str(f) for f in files[:5])}" if files else head

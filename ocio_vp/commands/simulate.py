@@ -89,6 +89,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="in-frustum panel albedo for the black level (default 0.04; 0 for none)",
     )
     parser.add_argument("--name", default=None, help="stage name (default simulated-stage)")
+    _add_wall_gain(parser)
     _add_ceiling_options(parser)
     parser.add_argument(
         "--fixture",
@@ -104,6 +105,21 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         help="list the known environments and exit (no --out needed)",
     )
     parser.set_defaults(func=run)
+
+
+def _add_wall_gain(parser: argparse.ArgumentParser) -> None:
+    from ocio_vp.choices import SAMPLE_WALL_GAIN
+
+    parser.add_argument(
+        "--wall-gain",
+        type=float,
+        default=SAMPLE_WALL_GAIN,
+        metavar="G",
+        help="the wall's full-drive white in units of the location's white, i.e. where the "
+        f"camera's exposure puts the wall's peak: {SAMPLE_WALL_GAIN:g} (the default, as a stage "
+        "engineer sets a stage up) leaves content white two stops below it; 1 puts the wall's "
+        "peak at the location's white, so content white clips",
+    )
 
 
 def _add_take_options(parser: argparse.ArgumentParser) -> None:
@@ -209,7 +225,10 @@ def run(args: argparse.Namespace) -> int:
     except OSError as error:
         raise InputError(f"cannot write: {error.strerror}", source=args.out, key="--out") from None
     names = ", ".join(e.name for e in measurements.environments)
-    print(f"wrote {args.out}: stage {measurements.stage.name}, environments {names}")
+    print(
+        f"wrote {args.out}: stage {measurements.stage.name}, environments {names}; the wall's "
+        f"full white is {stage.wall_gain:g}x the location's white (--wall-gain)"
+    )
     if args.plates is not None:
         capture = _write_plates(measurements, args)
         print(f"wrote {capture} and its plates; next: ocio-vp measure {capture} --out FILE.yaml")

@@ -26,6 +26,7 @@ __all__ = [
     "print_linearity",
     "print_panels",
     "run",
+    "wall_encoding",
 ]
 
 PEAK_NITS_DEFAULT = DEFAULT_PEAK_NITS
@@ -130,17 +131,20 @@ def _add_wall_arguments(parser: argparse.ArgumentParser) -> None:
         "--wall-encoding",
         choices=WALL_ENCODINGS,
         type=str.lower,
-        default=DEFAULT_WALL_ENCODING,
+        default=None,
         help="signal the wall colorspaces output (after M/N and the linearity LUT): linear "
-        "drive (default), gamma 2.4, sRGB (IEC 61966-2-1) or SMPTE ST 2084 PQ "
-        "(see docs/linearity.md)",
+        "drive, gamma 2.4, sRGB (IEC 61966-2-1) or SMPTE ST 2084 PQ (docs/linearity.md). "
+        "Default: stage.wall_encoding of the measurements file (measure copies it from the "
+        "take's sequence.yaml), else linear, said once; a value contradicting the file is "
+        "refused",
     )
     parser.add_argument(
         "--peak-nits",
         type=float,
         default=None,
-        help="with --wall-encoding pq only: luminance (cd/m2) of drive 1.0, the level of the "
-        f"measured primaries (default: {PEAK_NITS_DEFAULT:g})",
+        help="with a PQ wall only: luminance (cd/m2) of drive 1.0, the level of the measured "
+        "primaries (default: stage.peak_nits of the measurements file, else "
+        f"{PEAK_NITS_DEFAULT:g}); a value contradicting the file is refused",
     )
     parser.add_argument(
         "--soft-clip",
@@ -285,15 +289,8 @@ def run(args: argparse.Namespace) -> int:
     from ocio_vp.errors import InputError
     from ocio_vp.ocio.writer import writer_pool
 
-    # An option that would be ignored is a mistake: said at once, nothing written.
-    if args.peak_nits is not None and args.wall_encoding != "pq":
-        raise InputError(
-            f"applies only to a PQ wall (--wall-encoding pq), not {args.wall_encoding}",
-            key="--peak-nits",
-        )
-    peak_nits = PEAK_NITS_DEFAULT if args.peak_nits is None else args.peak_nits
-    if not 0 < peak_nits <= 10000:
-        raise InputError(f"expected 0 < cd/m2 <= 10000, got {peak_nits:g}", key="--peak-nits")
+    if args.peak_nits is not None and not 0 < args.peak_nits <= 10000:
+        raise InputError(f"expected 0 < cd/m2 <= 10000, got {args.peak_nits:g}", key="--peak-nits")
     if args.soft_clip is not None and not 0.0 < args.soft_clip < 1.0:
         raise InputError(
             f"expected a knee in (0, 1), a fraction of full drive, got {args.soft_clip:g}",
@@ -303,7 +300,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("applies only with --hdri", key="--hdri-width")
     # The writing helper starts first, so that its imports overlap loading and solving.
     with writer_pool(args.method, protect_emitters=args.protect_emitters) as pool:
-        written = _solve_and_write(args, peak_nits, pool)
+        written = _solve_and_write(args, pool)
     print_summary(written)
     print_fixtures(written)
     print_panels(written)
@@ -318,7 +315,43 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _solve_and_write(args: argparse.Namespace, peak_nits: float, pool) -> list:
+def wall_encoding(args: argparse.Namespace, measurements) -> tuple[str, float]:
+    """(encoding, peak nits) of the wall: the measurements file's (``stage.wall_encoding``,
+    ``peak_nits``: what the wall was sent while it was measured), the command line's where the
+    file says nothing, linear drive where neither does (said once). A flag contradicting the
+    file, or ``--peak-nits`` for a wall that is not PQ, is refused on one line."""
+    from ocio_vp.errors import InputError
+
+    stated = measurements.stage.wall
+    source = measurements.source or "the measurements file"
+    if stated.encoding and args.wall_encoding and args.wall_encoding != stated.encoding:
+        raise InputError(
+            f"{args.wall_encoding} contradicts stage.wall_encoding {stated.describe()} of "
+            f"{source} (what the wall played while it was measured): leave the flag out, or "
+            "correct the file if the wall really played another signal",
+            key="--wall-encoding",
+        )
+    encoding = args.wall_encoding or stated.encoding
+    if encoding is None:
+        encoding = DEFAULT_WALL_ENCODING
+        if not (measurements.panels and all(p.encoding for p in measurements.panels)):
+            print(
+                f"note: {source} states no wall encoding (a wall measured from plates): "
+                f"{encoding} drive assumed; give stage.wall_encoding or --wall-encoding"
+            )
+    if args.peak_nits is not None and encoding != "pq":
+        raise InputError(f"applies only to a PQ wall, this one is {encoding}", key="--peak-nits")
+    peak = args.peak_nits if args.peak_nits is not None else stated.peak_nits
+    if stated.peak_nits is not None and peak != stated.peak_nits:
+        raise InputError(
+            f"{peak:g} contradicts stage.peak_nits {stated.peak_nits:g} of {source}: leave the "
+            "flag out, or correct the file",
+            key="--peak-nits",
+        )
+    return encoding, PEAK_NITS_DEFAULT if peak is None else float(peak)
+
+
+def _solve_and_write(args: argparse.Namespace, pool) -> list:
     """Load, solve every environment asked for, and write them to ``args.out``."""
     from ocio_vp.errors import InputError
     from ocio_vp.formats.measurements import with_camera_colorspace
@@ -345,8 +378,9 @@ def _solve_and_write(args: argparse.Namespace, peak_nits: float, pool) -> list:
             measurements, environments, args.hdri, width=width
         )
         print("\n".join(notes))
+    encoding, peak_nits = wall_encoding(args, measurements)
     solutions = _solve(measurements, environments, args, pool)
-    solutions = [with_wall_encoding(s, args.wall_encoding, peak_nits=peak_nits) for s in solutions]
+    solutions = [with_wall_encoding(s, encoding, peak_nits=peak_nits) for s in solutions]
     solutions = [with_soft_clip(s, args.soft_clip) for s in solutions]
     hdri_files = [spec.partition("=")[2] or spec for spec in args.hdri]
     return write_solutions(solutions, args.out, inputs=[*args.measurements, *hdri_files], pool=pool)

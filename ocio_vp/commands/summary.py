@@ -4,7 +4,8 @@
   wall's: they do not vary by environment);
 - one line of figures per environment, the model in a few words (the reasons are in
   ``solution.json``'s ``diagnostics.model_reason`` and the report);
-- each distinct note once;
+- each distinct note once (facts of the stage no one can change on set, such as chart colours
+  outside the LEDs' gamut, are notes on stdout, not warnings);
 - every warning on stderr, one line each, the same warning of several environments once with
   their names (``2>log`` catches them all).
 
@@ -42,9 +43,12 @@ LEGEND = (
     "errors in % of the target white (mean |camera RGB - target| over R, G, B): lit = the chart "
     "lit by the wall, through M then after Q;\n  shown = the background in camera, through M "
     "then N + offset and Q; CV = leave-one-patch-out after Q ('-': not given by the method);\n"
-    "  LEDs in frame = p95 ΔE2000 of the wall's own LEDs seen in frame (emitters: Q should "
-    "leave them alone), least squares in brackets;\n  skin = expected mean ΔE2000 on skin of "
-    "every lightness (the chart's skin samples), and its ratio to least squares'."
+    "  LEDs in frame = p95 ΔE2000 by which Q changes the wall's own LEDs seen in frame "
+    "(least squares in brackets): a Q fitted to reflective colours moves saturated emitters "
+    "a lot,\n  tens to ~140 on narrow-band LEDs even when the stage is healthy; it matters only "
+    "with LEDs, screens or practicals in frame: then solve --protect-emitters;\n  skin = "
+    "expected mean ΔE2000 on skin of every lightness (the chart's skin samples), and its ratio "
+    "to least squares'."
 )
 
 #: The model in a few words, by the correction's kind.
@@ -164,7 +168,36 @@ def summary_lines(solutions: Sequence[Any]) -> tuple[list[str], list[str]]:
         "why each model: solution.json (diagnostics.model_reason) and the report; "
         "`ocio-vp report DIR` draws them"
     )
-    return out, _grouped(solutions)
+    return out + _gamut_notes(solutions), _grouped(solutions)
+
+
+def _gamut_notes(solutions: Sequence[Any]) -> list[str]:
+    """The LEDs' gamut, once per fact with the environments it concerns: chart colours the
+    wall cannot show in-frustum, and light outside the gamut out of the frustum (from
+    ``diagnostics.in_frustum_drive_range`` and ``out_of_frustum_negative_channels``)."""
+    where: dict[str, list[str]] = {}
+    for s in solutions:
+        d = s.diagnostics
+        ranges = d.in_frustum_drive_range
+        below = None if ranges is None else ranges.below_zero
+        with_M = None if ranges is None else ranges.below_zero_with_M
+        if s.N is not None and below and with_M is not None and below > with_M:
+            text = (
+                f"{below} chart colour(s) need light outside the LEDs' gamut in-frustum after N "
+                f"({with_M} with M): the wall shows them clipped, as any calibration of these "
+                "LEDs would (validation shows them pulled into the gamut)"
+            )
+            where.setdefault(text, []).append(s.environment)
+        if d.out_of_frustum_negative_channels:
+            text = (
+                "this light is outside the LEDs' gamut (M w_avg has a negative channel): the "
+                "wall lights the actors with the nearest colour it can make"
+            )
+            where.setdefault(text, []).append(s.environment)
+    for s in solutions:  # optional measurements the file did not give
+        for text in s.diagnostics.assumed or []:
+            where.setdefault(text, []).append(s.environment)
+    return [f"note: {', '.join(names)}: {text}" for text, names in where.items()]
 
 
 def print_summary(

@@ -67,12 +67,16 @@ def _check_sequence(sequence, environment_dir) -> None:
             "--validate ENVIRONMENT",
             source=sequence.source,
         )
+    from ocio_vp.formats.provenance import SolutionIdentity, solution_identity
+
     path = Path(environment_dir) / "solution.json"
     digest = hashlib.sha256(path.read_bytes()).hexdigest()
     if digest != v.solution_sha256:
+        made = SolutionIdentity(v.environment, v.model or "?", v.solved or "?")
+        differs = made.differences(solution_identity(environment_dir))
         raise InputError(
-            f"made from another solve of {v.environment!r} than {path} (its sha256 differs): "
-            "write the validation patterns again from this solve and film them",
+            f"made from another solution: {differs}; write the patterns again from this solve "
+            "and film them",
             source=sequence.source,
             key="validation.solution_sha256",
         )
@@ -124,7 +128,9 @@ def run(args: argparse.Namespace) -> int:
         "take": Path(args.take).name,
     }
     with staged_dir(final.resolve().parent) as stage:
-        lines = write_validation(result, reading, stage / "out", sources=sources)
+        lines = write_validation(
+            result, reading, stage / "out", sources=sources, pulled=sequence.validation.pulled
+        )
         publish_dir(stage / "out", final, inputs=[args.environment, args.sequence, take_folder])
     for warning in reading.warnings:
         warn("validate", warning)

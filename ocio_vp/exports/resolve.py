@@ -14,7 +14,9 @@
   (:mod:`ocio_vp.exports.cube`): in practice the affine transforms (Q; walls without a
   linearity LUT or encoding). A wall chain with a clip or a curve gets no cube; the manifest
   says why and points to its CLF.
-- ``manifest.json``: every file with its accuracy, every file not written with the reason.
+- ``manifest.json``: every file with its accuracy, every file not written with the reason,
+  and ``resolve_file``: *the* file to grade footage with in Resolve (the post-correction's cube
+  where it meets the limit, else the exact DCTL) and why.
 """
 
 from __future__ import annotations
@@ -269,6 +271,7 @@ def write_resolve(
     text, accuracy = _q_dctl(solution)
     dctl.write_text(text, encoding="utf-8")
     files[dctl.name] = {"kind": "dctl", "accuracy": accuracy}
+    footage = resolve_file(files, size=cubes.size)
     manifest = {
         "format": "ocio-vp/resolve-export",
         "version": 1,
@@ -278,6 +281,7 @@ def write_resolve(
         "post_correction": carriage,
         "files": files,
         "not_written": not_written,
+        "resolve_file": footage,
     }
     (folder / MANIFEST).write_text(
         json.dumps(manifest, indent=2, allow_nan=False) + "\n", encoding="utf-8"
@@ -288,4 +292,26 @@ def write_resolve(
         "cubes": written,
         "not_written": not_written,
         "post_correction": None if carriage is None else carriage["note"],
+        "line": f"the Resolve file for footage: {footage['file']} ({footage['why']}); every "
+        "file and its accuracy: manifest.json",
+    }
+
+
+def resolve_file(files: dict[str, dict[str, Any]], *, size: int) -> dict[str, str]:
+    """*The* file to post-correct footage with in Resolve: the post-correction's cube when it
+    was written (it met the limit; a cube runs everywhere in Resolve), else the DCTL (the
+    model itself, exact).
+
+    >>> resolve_file({"post_correction_Q_33.cube": {"accuracy": {"max_error": 2e-7}}}, size=33)
+    {'file': 'post_correction_Q_33.cube', 'why': 'worst error 2e-07 of the exact Q, limit 1/1023'}
+    >>> resolve_file({}, size=33)["file"]
+    'post_correction_Q.dctl'
+    """
+    cube = f"post_correction_Q_{size}.cube"
+    if cube in files:
+        worst = files[cube]["accuracy"]["max_error"]
+        return {"file": cube, "why": f"worst error {worst:.2g} of the exact Q, limit 1/1023"}
+    return {
+        "file": "post_correction_Q.dctl",
+        "why": f"the exact model; no {size}^3 cube of this Q meets 1/1023",
     }

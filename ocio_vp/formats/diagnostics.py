@@ -374,6 +374,10 @@ class Diagnostics(Record):
         ΔE2000 on its skin samples for the post-correction and least squares, per lightness
         band, the chart's beside them, and with skin first the default's; only written where
         the chart gives skin samples (docs/skin.md).
+    assumed
+        What the solve assumed for optional measurements the file did not give, one sentence
+        each (no ``black_level``: no in-frustum offset; no ``stage.white_patch``: patch 19);
+        only written when something was assumed.
     extra
         Keys of a loaded file that this version does not know, kept so they round-trip.
     present
@@ -421,6 +425,9 @@ class Diagnostics(Record):
     panels: PanelsNotes | None = None
     post_correction_ocio: PostCorrectionOCIO | None = None
     skin: SkinFigures | None = None
+    #: What the solve assumed for optional measurements the file did not give (no
+    #: ``black_level`` for the environment, no ``stage.white_patch``), one sentence each.
+    assumed: list[str] | None = None
     extra: dict[str, Any] = field(default_factory=dict)
     present: tuple[str, ...] | None = field(default=None, repr=False, compare=False)
 
@@ -431,6 +438,7 @@ class Diagnostics(Record):
         "panels",
         "post_correction_ocio",
         "skin",
+        "assumed",
     )
 
     @classmethod

@@ -33,6 +33,7 @@ from ocio_vp.formats.panels import (
     primary_panel,
 )
 from ocio_vp.formats.synthesis import SynthesisRecord, parse_synthesis, synthesis_to_dict
+from ocio_vp.formats.wall_state import WALL_STATE_KEYS, WallState, parse_wall_state
 from ocio_vp.wall.linearity import CHANNELS, parse_ramps, ramps_to_dict
 
 __all__ = [
@@ -117,6 +118,11 @@ class Stage:
     #: Indices of the chart patches that stand for skin (optional; docs/skin.md): on a chart
     #: other than the ColorChecker 24 they are the skin samples, found by colour otherwise.
     skin_patches: tuple[int, ...] = ()
+    #: The wall's encoding, peak and pattern size while it was measured (``sequence.yaml``
+    #: through ``measure``; :mod:`ocio_vp.formats.wall_state`): what ``solve`` uses.
+    wall: WallState = field(default_factory=WallState)
+    #: False when the file gives no ``white_patch`` (patch 18 assumed; solve says so).
+    white_patch_stated: bool = True
 
 
 @dataclass(frozen=True)
@@ -492,6 +498,7 @@ def parse_stage(ctx: Validator, value: Any, *, calibration: bool = True) -> Stag
             "camera_colorspace",
             "clip_level",
             "skin_patches",
+            *WALL_STATE_KEYS,
         ),
     )
     name = ctx.name(stage["name"], (*key, "name"))
@@ -531,6 +538,8 @@ def parse_stage(ctx: Validator, value: Any, *, calibration: bool = True) -> Stag
         camera_colorspace=camera,
         clip_level=clip_level,
         skin_patches=_skin_patches(ctx, stage.get("skin_patches", []), (*key, "skin_patches")),
+        wall=parse_wall_state(ctx, stage, key),
+        white_patch_stated="white_patch" in stage,
     )
 
 
@@ -691,7 +700,8 @@ def measurements_to_dict(measurements: Measurements) -> dict[str, Any]:
         stage_dict["calibration_panel"] = panel
     if stage.beta is not None:
         stage_dict["beta"] = stage.beta
-    stage_dict["white_patch"] = stage.white_patch
+    if stage.white_patch_stated:
+        stage_dict["white_patch"] = stage.white_patch
     stage_dict["white_reflectance"] = stage.white_reflectance
     if stage.camera_colorspace is not None:
         stage_dict["camera_colorspace"] = stage.camera_colorspace
@@ -699,6 +709,7 @@ def measurements_to_dict(measurements: Measurements) -> dict[str, Any]:
         stage_dict["clip_level"] = stage.clip_level
     if stage.skin_patches:
         stage_dict["skin_patches"] = list(stage.skin_patches)
+    stage_dict |= stage.wall.to_dict()
 
     def rows(array: np.ndarray) -> list[list[float]]:
         return [[float(v) for v in row] for row in np.asarray(array, dtype=np.float64)]

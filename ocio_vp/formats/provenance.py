@@ -1,11 +1,14 @@
 """Which solution an export or a report was made from, and which ones a re-solve left stale.
 
 Each export folder holds :data:`SOURCE_FILE` (the sha256 of the ``solution.json`` it was made
-from, the environment and its model), and a report's ``report.json`` lists the sha256 of each
-solution it shows. A second ``solve`` into the same folder keeps an environment's ``exports/``
-and ``report/`` (:func:`ocio_vp.staging.publish_dirs` carries nested output folders over, so
-the config Unreal points at is still there) and :func:`stale_outputs` names every one made
-from a different solution than the one now in the folder.
+from, the environment and its model), a report's ``report.json`` lists the sha256 of each
+solution it shows, and a validation's ``validation.json`` the sha256 of the solution its
+patterns were made from. A second ``solve`` into the same folder keeps an environment's
+``exports/``, ``report/`` and ``validation/`` (:func:`ocio_vp.staging.publish_dirs` carries
+nested output folders over, so the config Unreal points at is still there) and
+:func:`stale_outputs` names every one made from a different solution than the one now in the
+folder (a re-solve with another method, or of a re-measured stage: the measurements file's
+sha256 is part of the solution).
 """
 
 from __future__ import annotations
@@ -13,11 +16,14 @@ from __future__ import annotations
 import hashlib
 import json
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 __all__ = [
     "SOURCE_FILE",
+    "SolutionIdentity",
+    "solution_identity",
     "solution_sha256",
     "source_record",
     "stale_outputs",
@@ -27,6 +33,7 @@ __all__ = [
 SOURCE_FILE = ".ocio-vp-source.json"
 SOLUTION_FILE = "solution.json"
 REPORT_MANIFEST = "report.json"
+VALIDATION_FILE = "validation.json"
 
 
 def solution_sha256(folder: str | Path) -> str:
@@ -35,6 +42,54 @@ def solution_sha256(folder: str | Path) -> str:
         return hashlib.sha256((Path(folder) / SOLUTION_FILE).read_bytes()).hexdigest()
     except OSError:
         return ""
+
+
+@dataclass(frozen=True)
+class SolutionIdentity:
+    """What names a solution to a person: its environment, model and when it was written."""
+
+    environment: str
+    model: str
+    solved: str
+
+    def differences(self, other: SolutionIdentity) -> str:
+        """``"environment 'a' (here 'b'), model x (here y)"``: what differs between
+        ``self`` (recorded earlier) and ``other`` (now), or what is left when only the values do.
+
+        >>> a = SolutionIdentity("direct_sun", "least-squares", "2026-12-07T08:40:00Z")
+        >>> b = SolutionIdentity("incandescent", "diagonal", "2026-12-07T09:05:00Z")
+        >>> a.differences(b)
+        "environment 'direct_sun' (here 'incandescent'), model least-squares (here diagonal), solved 2026-12-07T08:40:00Z (here 2026-12-07T09:05:00Z)"
+        >>> a.differences(a)
+        'same environment, model and time, other values (another measurements file?)'
+        """
+        parts = [
+            f"{name} {mine} (here {theirs})"
+            for name, mine, theirs in (
+                ("environment", repr(self.environment), repr(other.environment)),
+                ("model", self.model, other.model),
+                ("solved", self.solved, other.solved),
+            )
+            if mine != theirs and "?" not in (mine, theirs)
+        ]
+        return ", ".join(parts) or (
+            "same environment, model and time, other values (another measurements file?)"
+        )
+
+
+def solution_identity(folder: str | Path) -> SolutionIdentity:
+    """The :class:`SolutionIdentity` of ``folder/solution.json`` ("?" where unreadable); the
+    time is the file's modification time, UTC to the second."""
+    from datetime import datetime, timezone
+
+    path = Path(folder) / SOLUTION_FILE
+    data = _read_json(path) or {}
+    try:
+        stamp = datetime.fromtimestamp(path.stat().st_mtime, tz=timezone.utc)
+        solved = stamp.strftime("%Y-%m-%dT%H:%M:%SZ")
+    except OSError:
+        solved = "?"
+    return SolutionIdentity(str(data.get("environment") or "?"), _model(Path(folder)), solved)
 
 
 def source_record(folder: str | Path, environment: str, model: str) -> str:
@@ -77,6 +132,27 @@ def _stale_exports(folder: Path, current: str) -> list[str]:
     return lines
 
 
+def _stale_validations(folder: Path, current: str) -> list[str]:
+    """Validations inside an environment folder (``calib/<env>/validation``, any depth but
+    the exports') judged against another solution than the one now there."""
+    lines = []
+    for path in sorted(folder.rglob(VALIDATION_FILE)):
+        record = _read_json(path) or {}
+        if (
+            record.get("format") != "ocio-vp/validation"
+            or "exports" in path.relative_to(folder).parts
+        ):
+            continue
+        if record.get("solution_sha256") != current:
+            lines.append(
+                f"stale: {path.parent} validated an earlier solution of {folder.name} (now "
+                f"model {_model(folder)}): its verdict says nothing about this one; write the "
+                f"validation patterns again (ocio-vp patterns --validate {folder}), film them "
+                "and run ocio-vp validate"
+            )
+    return lines
+
+
 def _stale_reports(out: Path, folders: Sequence[Path], current: dict[str, str]) -> list[str]:
     lines = []
     reports = [out / "report", *(f / "report" for f in folders)]
@@ -99,12 +175,13 @@ def _stale_reports(out: Path, folders: Sequence[Path], current: dict[str, str]) 
 
 
 def stale_outputs(out: str | Path, environments: Sequence[str]) -> list[str]:
-    """One line per export or report in the solve folder ``out`` made from another solution
-    of ``environments`` than the one now written there."""
+    """One line per export, report or validation in the solve folder ``out`` made from
+    another solution of ``environments`` than the one now written there."""
     out = Path(out)
     folders = [out / env for env in environments]
     current = {folder.name: solution_sha256(folder) for folder in folders}
     lines = []
     for folder in folders:
         lines += _stale_exports(folder, current[folder.name])
+        lines += _stale_validations(folder, current[folder.name])
     return lines + _stale_reports(out, folders, current)

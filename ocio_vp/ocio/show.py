@@ -152,9 +152,9 @@ def _camera_to_reference(env: ShowEnvironment, aces_to_base: Transform) -> Trans
     config = env.config
     if not config.hasRole(AP0_ROLE):
         raise InputError(
-            f"environment {env.name!r}: its config has no {AP0_ROLE} role (the camera gamut was "
-            "not stated), so it cannot join a show config; solve again with "
-            "--camera-colorspace NAME",
+            f"environment {env.name!r}: no camera gamut (no {AP0_ROLE} role), so it cannot join "
+            "a show config: add stage.camera_colorspace: NAME to the capture or measurements "
+            "file, or solve again with --camera-colorspace NAME",
             key="SOLUTION",
         )
     link = config.getProcessor(REFERENCE, config.getRoleColorSpace(AP0_ROLE))

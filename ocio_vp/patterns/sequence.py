@@ -91,6 +91,12 @@ class Validation:
     in_frustum: str
     reference: str
     content_scale: float = 1.0
+    #: The solve's model (``diagnostics.model`` or ``method``) and when its ``solution.json``
+    #: was written (UTC, ISO 8601): what a refusal names when the solve has changed since.
+    model: str | None = None
+    solved: str | None = None
+    #: Patches pulled into the wall's gamut: (chart index, saturation kept in [0, 1)).
+    pulled: tuple[tuple[int, float], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -233,14 +239,31 @@ def _patch(ctx: Validator, raw: Any, i: int, previous_last: int) -> Patch:
 
 def _validation(ctx: Validator, raw: Any) -> Validation:
     keys = ("environment", "stage", "solution_sha256", "in_frustum", "reference")
-    entry = ctx.mapping(raw, ("validation",), keys, ("content_scale",))
-    for name in keys:
+    optional = ("model", "solved")
+    entry = ctx.mapping(raw, ("validation",), keys, ("content_scale", "pulled", *optional))
+    for name in (*keys, *(k for k in optional if k in entry)):
         if not isinstance(entry[name], str) or not entry[name]:
             raise ctx.error(("validation", name), "expected a non-empty text")
     scale = ctx.number(
         entry.get("content_scale", 1.0), ("validation", "content_scale"), strict=True
     )
-    return Validation(**{name: entry[name] for name in keys}, content_scale=scale)
+    pulled = entry.get("pulled") or {}
+    if not isinstance(pulled, dict) or not all(
+        isinstance(k, int) and isinstance(v, (int, float)) and 0 <= v <= 1
+        for k, v in pulled.items()
+    ):
+        raise ctx.error(("validation", "pulled"), "expected {chart index: saturation kept}")
+    return Validation(
+        environment=entry["environment"],
+        stage=entry["stage"],
+        solution_sha256=entry["solution_sha256"],
+        in_frustum=entry["in_frustum"],
+        reference=entry["reference"],
+        content_scale=scale,
+        pulled=tuple((int(k), float(v)) for k, v in pulled.items()),
+        model=entry.get("model"),
+        solved=entry.get("solved"),
+    )
 
 
 def _checked_patches(ctx: Validator, raw: Any, first_frame: int) -> tuple[Patch, ...]:
@@ -380,6 +403,9 @@ def sequence_to_dict(sequence: PatternSequence) -> dict[str, Any]:
             "in_frustum": v.in_frustum,
             "reference": v.reference,
             "content_scale": v.content_scale,
+            **({"pulled": {j: k for j, k in v.pulled}} if v.pulled else {}),
+            **({"model": v.model} if v.model else {}),
+            **({"solved": v.solved} if v.solved else {}),
         }
     data["patches"] = patches
     return data

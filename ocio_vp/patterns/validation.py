@@ -12,7 +12,10 @@ should read its content again (``ocio-vp validate``). Layout::
 
 ``black`` is content 0 through the config (the in-frustum offset, clipped at 0 by the wall).
 The chart is scaled (``content_scale``, recorded) so that its white patch asks the wall for
-:data:`WHITE_DRIVE` of full drive: a location's camera values have any exposure, the wall
+:data:`WHITE_DRIVE` of full drive, and a patch that would need light outside the LEDs' gamut
+after N is pulled into it (:func:`into_gamut`: towards the grey of its brightness, its
+intent recomputed, ``validation.pulled`` recording how much saturation it kept), so every
+patch the sequence shows can be judged: a location's camera values have any exposure, the wall
 shows content at the DP's exposure, and a post-correction and N are linear in the content
 (the root-polynomial Q is exposure-invariant too). The wall's encoding and peak come from the
 solve (``linearity.wall_encoding``).
@@ -32,7 +35,16 @@ from ocio_vp.patterns.design import PatternOptions, SequenceBuilder
 from ocio_vp.patterns.sequence import PatternSequence, Validation
 from ocio_vp.wall.encoding import WallEncoding
 
-__all__ = ["WHITE_DRIVE", "content_scale", "validation_sequence", "wall_encoding_of", "wall_signal"]
+__all__ = [
+    "GAMUT_MARGIN",
+    "WHITE_DRIVE",
+    "content_scale",
+    "in_frustum_light",
+    "into_gamut",
+    "validation_sequence",
+    "wall_encoding_of",
+    "wall_signal",
+]
 
 #: The chart's white patch is shown at this fraction of full drive (headroom for saturated
 #: patches whose drive exceeds the white's in one channel).
@@ -74,6 +86,55 @@ def content_scale(solution: Solution, target: np.ndarray) -> float:
     return float(f"{WHITE_DRIVE / peak:.4g}")
 
 
+def in_frustum_light(solution: Solution, content: np.ndarray) -> np.ndarray:
+    """(n, 3) the light (linear drive) the config asks the wall for: ``N(c) + offset``, with
+    a non-linear post-correction's exact ``N(c) = M Q^-1(c)`` where N is solved."""
+    content = np.asarray(content, dtype=np.float64)
+    correction = solution.correction
+    if solution.N is not None and not correction.linear:
+        light = correction.inverse(content) @ solution.M.T
+    else:
+        light = content @ solution.in_frustum_matrix.T
+    return light + solution.in_frustum_offset
+
+
+#: A pulled patch's light stays this far inside [0, 1] of full drive (the wall's black and peak
+#: are where linearity LUTs and encodings are least exact).
+GAMUT_MARGIN = 0.005
+
+
+def into_gamut(solution: Solution, content: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(content the wall can show in-frustum, the saturation kept per patch in [0, 1]).
+
+    A patch whose in-frustum light (N(c) + offset, :func:`in_frustum_light`) leaves [GAMUT_MARGIN, 1 - GAMUT_MARGIN] in some channel is mixed with
+    the grey of the same R + G + B in the chart white's colour, ``g + k (c - g)``, with the
+    largest ``k`` (bisection, 1e-4) that brings its light inside: the colour the wall comes
+    closest to at that hue and brightness. The intent of the patch is then this colour, so
+    validation judges what the wall can show. Patches inside keep ``k = 1``; a patch whose grey
+    is outside too (darker than the black-level offset allows) is left as it is, not shown."""
+    content = np.asarray(content, dtype=np.float64)
+    white = int(solution.diagnostics.white_patch)
+    white = white if 0 <= white < len(content) else int(np.argmax(content.sum(axis=1)))
+    tint = content[white] / max(float(content[white].sum()), 1e-12)
+
+    def inside(c: np.ndarray) -> np.ndarray:
+        light = in_frustum_light(solution, c)
+        return np.all((light >= GAMUT_MARGIN) & (light <= 1.0 - GAMUT_MARGIN), axis=1)
+
+    grey = content.sum(axis=1, keepdims=True) * tint
+    kept = np.ones(len(content))
+    out = content.copy()
+    todo = ~inside(content) & inside(grey)
+    lo, hi = np.zeros(len(content)), np.ones(len(content))
+    for _ in range(14):  # 2^-14 < 1e-4
+        mid = (lo + hi) / 2
+        ok = inside(grey + mid[:, None] * (content - grey))
+        lo, hi = np.where(ok, mid, lo), np.where(ok, hi, mid)
+    kept[todo] = lo[todo]
+    out[todo] = grey[todo] + lo[todo, None] * (content[todo] - grey[todo])
+    return out, kept
+
+
 def validation_sequence(environment_dir: str | Path, options: PatternOptions) -> PatternSequence:
     """The validation sequence of one solved environment (see the module docstring).
 
@@ -105,7 +166,7 @@ def validation_sequence(environment_dir: str | Path, options: PatternOptions) ->
     options = dataclasses.replace(options, encoding=encoding, peak_nits=peak)
     config = folder / (solution.ocio.get("config") or "config.ocio")
     scale = content_scale(solution, target)
-    target = target * scale
+    target, kept = into_gamut(solution, target * scale)
     signals = wall_signal(config, solution, np.vstack([np.zeros((1, 3)), target]))
     drives = WallEncoding.of(solution.linearity).decode(signals)
     if not np.all(np.isfinite(drives)):
@@ -124,7 +185,10 @@ def validation_sequence(environment_dir: str | Path, options: PatternOptions) ->
             builder.sync()
     builder.sync()
     builder.lead("lead_out")
+    from ocio_vp.formats.provenance import solution_identity
+
     digest = hashlib.sha256(source.read_bytes()).hexdigest()
+    identity = solution_identity(folder)
     validation = Validation(
         environment=solution.environment,
         stage=solution.stage,
@@ -132,5 +196,8 @@ def validation_sequence(environment_dir: str | Path, options: PatternOptions) ->
         in_frustum=solution.ocio["in_frustum"],
         reference=solution.ocio["reference"],
         content_scale=scale,
+        pulled=tuple((j, float(f"{k:.4g}")) for j, k in enumerate(kept) if k < 1.0),
+        model=identity.model,
+        solved=identity.solved,
     )
     return builder.build(validation=validation)

@@ -238,6 +238,20 @@ def take_sections(reading: TakeReading) -> dict[str, Any]:
     return out
 
 
+def _measure_take(capture: Capture, document: dict[str, Any], on_take) -> TakeReading:
+    """Measure the take into ``document``: its sections, and the wall's encoding, peak and
+    pattern size from its ``sequence.yaml`` in ``stage`` (they travel on to the solve)."""
+    from ocio_vp.formats.wall_state import stage_with_sequence
+
+    assert capture.take is not None  # the caller measures a take only when there is one
+    reading = measure_take(capture.take, source=capture.source, on_progress=on_take)
+    document.update(take_sections(reading))
+    document["stage"] = stage_with_sequence(
+        document["stage"], reading.sequence, source=capture.source
+    )
+    return reading
+
+
 def measure_capture(
     capture: Capture, *, detect: Any = None, on_step: Any = None, on_take: Any = None
 ) -> MeasureResult:
@@ -268,8 +282,7 @@ def measure_capture(
     document: dict[str, Any] = {"format": FORMAT, "version": VERSION, "stage": dict(capture.stage)}
     reading = None
     if capture.take is not None:
-        reading = measure_take(capture.take, source=capture.source, on_progress=on_take)
-        document.update(take_sections(reading))
+        reading = _measure_take(capture, document, on_take)
 
     def chart(shot: ChartShot) -> np.ndarray:
         sampling, found = _sample_chart(capture, shot, detect)

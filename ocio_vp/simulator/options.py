@@ -125,6 +125,7 @@ def stage_options_from_args(args: argparse.Namespace) -> dict[str, Any]:
         options["panel_albedo"] = None if args.albedo == 0 else args.albedo
     if args.name is not None:
         options["name"] = args.name
+    options["wall_gain"] = args.wall_gain
     return options
 
 

@@ -5,7 +5,8 @@
 ``method="least-squares"``, so a change of the library's default method does not change
 them). Regenerate with ``python -m ocio_vp.simulator.samples sample_configs``.
 Generation is deterministic: same code and libraries, same bytes (the test that checks the
-committed copy also accepts float differences below 1e-9, from another BLAS build).
+committed copy also accepts rounding from another BLAS build or CPU, each number at the
+tolerance its quantity deserves: ``tests/test_simulator_samples.py``).
 """
 
 from __future__ import annotations

@@ -49,6 +49,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ocio_vp.choices import SAMPLE_WALL_GAIN
 from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import Environment, Measurements, PanelGeometry, Stage
 from ocio_vp.simulator.data import (
@@ -105,6 +106,10 @@ class SpectralStage:
     camera_name: str = DEFAULT_CAMERA
     chart_name: str = DEFAULT_CHART
     led_description: str = ""
+    #: The wall's full-drive white in units of the location's white (a perfect white diffuser
+    #: reads green = 1 under every environment; the wall at drive [1, 1, 1] reads green =
+    #: ``wall_gain``): how far above content white the camera's exposure puts the wall's peak.
+    wall_gain: float = 1.0
 
     @property
     def SL(self) -> np.ndarray:
@@ -173,6 +178,7 @@ def spectral_stage(
     beta: float | None = None,
     panel_albedo: float | None = DEFAULT_PANEL_ALBEDO,
     name: str = "simulated-stage",
+    wall_gain: float = 1.0,
 ) -> SpectralStage:
     """Build a :class:`SpectralStage` from colour-science datasets.
 
@@ -222,10 +228,13 @@ def spectral_stage(
         raise InputError(
             f"these LEDs cannot mix to D65 for this camera (gains {gains.round(4)})", key="leds"
         )
+    if not (np.isfinite(wall_gain) and 0.0 < wall_gain <= 1e4):
+        raise InputError(f"expected 0 < gain <= 10000, got {wall_gain!r}", key="wall_gain")
     return SpectralStage(
         name=name,
         camera=sensitivities,
-        leds=raw_leds * gains,
+        leds=raw_leds * gains * wall_gain,
+        wall_gain=float(wall_gain),
         reflectances=reflectances,
         panel=panel,
         beta=float(beta),
@@ -246,9 +255,17 @@ def white_reflectance(stage: SpectralStage) -> float:
     return round(float(green @ stage.reflectances[stage.white_patch] / green.sum()), 4)
 
 
-def paper_stage() -> SpectralStage:
-    """The default simulated stage (see the module docstring), named ``paper-stage``."""
-    return spectral_stage(name="paper-stage")
+#: The sample stage's :attr:`SpectralStage.wall_gain` (:data:`ocio_vp.choices.SAMPLE_WALL_GAIN`):
+#: the camera is exposed so the wall's full-drive white is two stops above the location's
+#: white, as a stage engineer sets a stage up, so content white needs at most ~60% of any
+#: channel's peak (without it, 165-233% in red) and highlights keep two stops
+#: (docs/headroom.md).
+
+
+def paper_stage(wall_gain: float = SAMPLE_WALL_GAIN) -> SpectralStage:
+    """The default simulated stage (see the module docstring), named ``paper-stage``, its wall's
+    peak two stops above content white (:data:`SAMPLE_WALL_GAIN`)."""
+    return spectral_stage(name="paper-stage", wall_gain=wall_gain)
 
 
 def _check_camera_tells_leds_apart(SL: np.ndarray) -> None:

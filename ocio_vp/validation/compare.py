@@ -30,6 +30,7 @@ import numpy as np
 from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import Solution
 from ocio_vp.patterns.sequence import PatternSequence
+from ocio_vp.patterns.validation import in_frustum_light
 from ocio_vp.plates.take import TakeReading
 from ocio_vp.wall.softclip import forward as soft_clip
 from ocio_vp.wall.softclip import soft_clip_knee
@@ -55,18 +56,6 @@ def post_correct(solution: Solution) -> Callable[[np.ndarray], np.ndarray]:
     """The post-correction the solve prescribes for footage, as a function of camera RGB
     (``solution.correction``: the typed model, :mod:`ocio_vp.model`)."""
     return solution.correction.apply
-
-
-def in_frustum_light(solution: Solution, content: np.ndarray) -> np.ndarray:
-    """(n, 3) the light (linear drive) the config asks the wall for: ``N(c) + offset``, with
-    a non-linear post-correction's exact ``N(c) = M Q^-1(c)`` where N is solved."""
-    content = np.asarray(content, dtype=np.float64)
-    correction = solution.correction
-    if solution.N is not None and not correction.linear:
-        light = correction.inverse(content) @ solution.M.T
-    else:
-        light = content @ solution.in_frustum_matrix.T
-    return light + solution.in_frustum_offset
 
 
 def expected_camera(solution: Solution, light: np.ndarray) -> np.ndarray:

@@ -23,15 +23,34 @@ VALIDATION_FORMAT = "ocio-vp/validation"
 SHEET = "take.png"
 
 
-def summary_lines(result: ValidationResult, reading: TakeReading) -> list[str]:
-    """What ``ocio-vp validate`` prints: the figures, the verdict, what was left out."""
+def label(patch) -> str:
+    """How people read a patch: numbered from 1 on the chart, with its name (``'14 green'``);
+    files keep the 0-based ``index``."""
+    name = patch.name.partition(" (")[2][:-1]  # "patch 13 (green)" -> "green"
+    return f"{patch.index + 1} {name}".strip()
+
+
+def label_of(index: int, result: ValidationResult) -> str:
+    """:func:`label` of the patch with chart index ``index``."""
+    for p in result.patches:
+        if p.index == index:
+            return label(p)
+    return str(index + 1)
+
+
+def summary_lines(
+    result: ValidationResult, reading: TakeReading, pulled: tuple[tuple[int, float], ...] = ()
+) -> list[str]:
+    """What ``ocio-vp validate`` prints: the figures, the verdict, what was pulled into the
+    wall's gamut (``pulled``: the sequence's ``validation.pulled``) or left out."""
     worst = result.worst
     how = "after post-correction" if result.post_corrected else "as recorded (N not solved: no Q)"
     lines = [
-        f"validation of {result.environment} (stage {result.stage}): {len(result.patches)} chart "
-        f"patches in camera {how}, {len(reading.numbers)} frames",
+        f"validation of {result.environment} (stage {result.stage}): {len(result.judged)} of "
+        f"{len(result.patches)} chart patches judged in camera {how}, {len(reading.numbers)} "
+        "frames",
         f"  ΔE2000 mean {result.mean:.2f}, p95 {result.p95:.2f}, worst {worst.delta_e:.2f} "
-        f"({worst.name})"
+        f"({label(worst)})"
         + (
             f"; the solve's own model predicted mean {result.predicted_mean:.2f}"
             if result.predicted_mean is not None
@@ -44,9 +63,15 @@ def summary_lines(result: ValidationResult, reading: TakeReading) -> list[str]:
         f"  {verdict}: p95 {result.p95:.2f} {relation} {result.threshold:g} (threshold, "
         "docs/validation.md)"
     )
+    if pulled:
+        listed = ", ".join(f"{label_of(j, result)} {100 * k:.0f}%" for j, k in pulled)
+        lines.append(
+            f"  {len(pulled)} patch(es) need light outside the LEDs' gamut after N: shown and "
+            f"judged pulled towards grey (saturation kept): {listed}"
+        )
     hidden = [p for p in result.patches if not p.shown]
     if hidden:
-        listed = ", ".join(f"{p.index} ({p.delta_e:.1f}/{p.expected_delta_e:.1f})" for p in hidden)
+        listed = ", ".join(f"{label(p)} {p.delta_e:.1f}/{p.expected_delta_e:.1f}" for p in hidden)
         lines.append(
             f"  {len(hidden)} patch(es) need light outside the wall's gamut at this exposure, not "
             f"judged (ΔE2000 measured/expected from the gamut alone): {listed}"
@@ -131,8 +156,8 @@ def _swatches(result: ValidationResult) -> str:
         parts.append(
             f'<rect x="{x}" y="{y + size // 2}" width="{size}" height="{size // 2}" fill="{hex_colour(bottom)}"/>'
         )
-        label = f"{p.index}: {p.delta_e:.2f}" + ("" if p.shown else " (not shown)")
-        parts.append(f'<text x="{x}" y="{y + size + 14}">{escape(label)}</text>')
+        text = f"{p.index + 1}: {p.delta_e:.2f}" + ("" if p.shown else " (not shown)")
+        parts.append(f'<text x="{x}" y="{y + size + 14}">{escape(text)}</text>')
     parts.append("</svg>")
     return "\n".join(parts)
 
@@ -165,7 +190,12 @@ def _markup(text: str):
 
 
 def write_validation(
-    result: ValidationResult, reading: TakeReading, folder: str | Path, *, sources: dict[str, Any]
+    result: ValidationResult,
+    reading: TakeReading,
+    folder: str | Path,
+    *,
+    sources: dict[str, Any],
+    pulled: tuple[tuple[int, float], ...] = (),
 ) -> list[str]:
     """Write ``validation.json``, ``index.html`` and the contact sheet into ``folder`` (new or
     staged); returns the terminal's lines."""
@@ -173,8 +203,10 @@ def write_validation(
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    lines = summary_lines(result, reading)
+    lines = summary_lines(result, reading, pulled)
     document = validation_document(result, reading, sources=sources)
+    if pulled:
+        document["pulled_into_gamut"] = {str(j): k for j, k in pulled}
     (folder / "validation.json").write_text(
         json.dumps(document, indent=2, allow_nan=False) + "\n", "utf-8"
     )

@@ -1,0 +1,110 @@
+"""What the wall was sent while it was measured, carried from ``sequence.yaml`` to the solve.
+
+``ocio-vp patterns`` writes the wall's signal encoding, its peak (PQ) and the frames' size into
+``sequence.yaml``; ``ocio-vp measure`` copies them from a take's sequence into the ``stage``
+section of the measurements file (a capture file may state them for a wall measured from
+plates), and ``ocio-vp solve`` uses them, so a PQ wall filmed as PQ is solved as PQ without a
+flag to remember. Keys of ``stage`` (all optional; docs/measurements.md)::
+
+    wall_encoding: pq          # linear | gamma2.4 | srgb | pq
+    peak_nits: 1000            # with pq only: cd/m2 of drive 1.0
+    pattern_size: [3840, 2160] # the frames the wall played, width x height
+
+A stage of several panel types gives ``encoding`` and ``peak_nits`` per type instead
+(:mod:`ocio_vp.formats.panels`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from ocio_vp.choices import WALL_ENCODINGS
+from ocio_vp.errors import InputError, excerpt
+
+__all__ = ["WALL_STATE_KEYS", "WallState", "parse_wall_state", "stage_with_sequence"]
+
+#: The ``stage`` keys this module owns, in file order.
+WALL_STATE_KEYS = ("wall_encoding", "peak_nits", "pattern_size")
+_MAX_SIZE = 65536
+
+
+@dataclass(frozen=True)
+class WallState:
+    """The wall's signal encoding, peak and pattern size as a measurements file states them
+    (None: not stated, e.g. a wall measured from plates)."""
+
+    encoding: str | None = None
+    peak_nits: float | None = None
+    pattern_size: tuple[int, int] | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``stage`` keys (only the stated ones)."""
+        out: dict[str, Any] = {}
+        if self.encoding is not None:
+            out["wall_encoding"] = self.encoding
+        if self.peak_nits is not None:
+            out["peak_nits"] = self.peak_nits
+        if self.pattern_size is not None:
+            out["pattern_size"] = list(self.pattern_size)
+        return out
+
+    def describe(self) -> str:
+        """``'pq at 1000 cd/m2'``, ``'linear'`` or ``'not stated'``."""
+        if self.encoding is None:
+            return "not stated"
+        peak = f" at {self.peak_nits:g} cd/m2" if self.peak_nits is not None else ""
+        return f"{self.encoding}{peak}"
+
+
+def parse_wall_state(ctx: Any, stage: Mapping[str, Any], key: tuple[str | int, ...]) -> WallState:
+    """The :class:`WallState` of a ``stage`` mapping (``ctx``: the file's Validator)."""
+    encoding = stage.get("wall_encoding")
+    if encoding is not None and encoding not in WALL_ENCODINGS:
+        raise ctx.error(
+            (*key, "wall_encoding"),
+            f"unknown encoding {excerpt(encoding)}; expected one of: {', '.join(WALL_ENCODINGS)}",
+        )
+    peak = None
+    if encoding == "pq":
+        if "peak_nits" not in stage:
+            raise ctx.error((*key, "peak_nits"), "a pq wall needs its peak (cd/m2 of drive 1.0)")
+        peak = ctx.number(stage["peak_nits"], (*key, "peak_nits"), strict=True, maximum=10000.0)
+    elif "peak_nits" in stage:
+        raise ctx.error((*key, "peak_nits"), "only with wall_encoding: pq")
+    size = stage.get("pattern_size")
+    if size is not None:
+        ok = (
+            isinstance(size, list)
+            and len(size) == 2
+            and all(isinstance(v, int) and not isinstance(v, bool) for v in size)
+            and all(0 < v <= _MAX_SIZE for v in size)
+        )
+        if not ok:
+            raise ctx.error(
+                (*key, "pattern_size"), f"expected [width, height] in pixels, got {excerpt(size)}"
+            )
+        size = (int(size[0]), int(size[1]))
+    return WallState(encoding, None if peak is None else float(peak), size)
+
+
+def stage_with_sequence(stage: Mapping[str, Any], sequence: Any, *, source: str) -> dict[str, Any]:
+    """``stage`` (a capture file's section) with the wall state of the take's ``sequence``
+    (a :class:`~ocio_vp.patterns.sequence.PatternSequence`) added; a capture file that states
+    another encoding or peak than the sequence the wall played is refused."""
+    take = WallState(
+        sequence.encoding,
+        None if sequence.peak_nits is None else float(sequence.peak_nits),
+        (int(sequence.size[0]), int(sequence.size[1])),
+    )
+    for name, value in take.to_dict().items():
+        if name in stage and stage[name] != value:
+            raise InputError(
+                f"the capture file says {excerpt(stage[name])}, the take's sequence.yaml "
+                f"{excerpt(value)} (the wall played {take.describe()}): state what the wall "
+                "played, or leave the key out",
+                source=source,
+                key=f"stage.{name}",
+            )
+    return {**stage, **take.to_dict()}
