@@ -27,6 +27,7 @@ __all__ = [
     "FrameStats",
     "band_rows",
     "chunk_rows",
+    "frame_stats",
     "list_take_frames",
     "read_frame_stats",
     "take_threads",
@@ -150,7 +151,8 @@ def band_rows(
     return out
 
 
-def _stats(pixels: np.ndarray, clip: float | None) -> FrameStats:
+def frame_stats(pixels: np.ndarray, clip: float | None) -> FrameStats:
+    """:class:`FrameStats` of linear RGB ``pixels`` (..., 3); ``clip`` the clip level if known."""
     flat = pixels.reshape(-1, 3).astype(np.float64)
     peak = flat.max(axis=0)
     return FrameStats(
@@ -204,7 +206,7 @@ def _read_frame(
         raise InputError("NaN/Inf pixels in the wall region", source=path)
     if info.encoding != "linear":
         pixels = linearise(pixels, info.encoding)
-    return _stats(pixels, clip)
+    return frame_stats(pixels, clip)
 
 
 def take_threads() -> int:

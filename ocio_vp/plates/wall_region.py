@@ -15,7 +15,7 @@ stays (nearly) the same, so the wall is where the picture changes most over the 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -35,15 +35,20 @@ INSET = 0.05
 MIN_SIZE = 8
 
 
-def _reduced(info: PlateInfo, factor: int) -> np.ndarray:
-    """The frame block-averaged by ``factor`` (whole blocks only), read in bands of rows."""
+Reader = Callable[[tuple[int, int, int, int]], np.ndarray]
+
+
+def _reduced(info: PlateInfo, factor: int, read: Reader | None = None) -> np.ndarray:
+    """The frame block-averaged by ``factor`` (whole blocks only), read in bands of rows
+    (by ``read(box)`` when given, else from ``info.path``)."""
     cells_x, cells_y = info.width // factor, info.height // factor
     out = np.empty((cells_y, cells_x, 3), dtype=np.float64)
     band = max(1, (1 << 21) // max(1, info.width * factor * 3)) * factor
     for cy in range(0, cells_y, max(1, band // factor)):
         cy1 = min(cells_y, cy + max(1, band // factor))
         y0, y1 = info.y + cy * factor, info.y + cy1 * factor
-        pixels = read_region(info, (info.x, y0, info.x + cells_x * factor, y1))
+        box = (info.x, y0, info.x + cells_x * factor, y1)
+        pixels = read(box) if read is not None else read_region(info, box)
         blocks = pixels.reshape(cy1 - cy, factor, cells_x, factor, 3)
         out[cy:cy1] = blocks.mean(axis=(1, 3), dtype=np.float64)
     return out
@@ -95,9 +100,16 @@ def largest_rectangle(mask: np.ndarray) -> tuple[int, int, int, int] | None:
 
 
 def find_wall(
-    paths: Sequence[Path], info: PlateInfo, *, source: object = None
+    paths: Sequence[Path],
+    info: PlateInfo,
+    *,
+    source: object = None,
+    frames: tuple[int, Callable[[int], Reader]] | None = None,
 ) -> tuple[int, int, int, int]:
     """The wall's region ``(x0, y0, x1, y1)`` in pixels (see the module docstring).
+
+    ``frames``: for a take that is not one file a frame (a movie), its frame count and a
+    function giving frame ``k``'s ``read(box)``; ``paths`` is then not read.
 
     Raises
     ------
@@ -105,12 +117,16 @@ def find_wall(
         When no part of the picture changes, or the part that does is too small.
     """
     factor = max(1, -(-max(info.width, info.height) // GRID))
-    picks = np.unique(np.linspace(0, len(paths) - 1, min(SAMPLES, len(paths))).round().astype(int))
-    frames = []
+    count = len(paths) if frames is None else frames[0]
+    picks = np.unique(np.linspace(0, count - 1, min(SAMPLES, count)).round().astype(int))
+    reduced = []
     for k in picks:
+        if frames is not None:
+            reduced.append(_reduced(info, factor, frames[1](int(k))))
+            continue
         frame_info = info if k == 0 else dataclasses.replace(info, path=str(paths[k]))
-        frames.append(_reduced(frame_info, factor))
-    mask = wall_mask(np.stack(frames))
+        reduced.append(_reduced(frame_info, factor))
+    mask = wall_mask(np.stack(reduced))
     rect = largest_rectangle(mask)
     hint = "give the take's region: [x0, y0, x1, y1] in the capture file"
     if rect is None:
