@@ -286,8 +286,12 @@ def open_movie(
     last = None if out_point is None else parse_point(out_point, rate, timecode, "take.out", path)
     if last is not None and last < first:
         raise _error(f"take.out (frame {last}) is before take.in (frame {first})", path, None)
-    if frames and first >= frames:
-        raise _error(f"take.in is frame {first}, but the movie has {frames} frames", path)
+    for key, point in (("take.in", first), ("take.out", last)):
+        if frames and point is not None and point >= frames:
+            raise _error(
+                f"{key} is frame {point}, but the movie has {frames} frames (0 to {frames - 1})",
+                path,
+            )
     return replace(info, first=first, last=last)
 
 

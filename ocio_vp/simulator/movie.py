@@ -4,7 +4,7 @@
 (same options, same noise), encodes them with a camera log curve (any colour-science
 encoding, ``ARRI LogC3`` by default), converts R'G'B' to 10-bit Y'CbCr with colour-science's
 ``RGB_to_YCbCr`` (the matrix and range asked for; 4:2:2 chroma as the mean of each pixel
-pair), and encodes with FFmpeg's ``prores_ks`` through PyAV: ProRes 4444 (profile 4) or 422 HQ
+pair, rounded once, as a camera's processing does), and encodes with FFmpeg's ``prores_ks`` through PyAV: ProRes 4444 (profile 4) or 422 HQ
 (profile 3). The stream is colour-tagged (matrix, range, Rec.709 primaries and transfer, as
 cameras tag log ProRes) unless ``tags=False`` (a movie whose stream says nothing, for the
 refusal), and carries a start timecode.
@@ -35,19 +35,17 @@ _AV_RANGE = {"legal": 1, "full": 2}
 
 
 def _ycbcr(encoded: np.ndarray, matrix: str, range_: str) -> np.ndarray:
-    """10-bit integer Y'CbCr (h, w, 3) of R'G'B' in [0, 1]."""
+    """10-bit Y'CbCr code values (h, w, 3), not yet rounded, of R'G'B' in [0, 1]."""
     import colour
 
-    return np.asarray(
-        colour.RGB_to_YCbCr(
-            np.clip(encoded, 0.0, 1.0),
-            K=colour.WEIGHTS_YCBCR[_WEIGHTS[matrix]],
-            out_bits=10,
-            out_legal=range_ == "legal",
-            out_int=True,
-        ),
-        dtype=np.uint16,
+    normalised = colour.RGB_to_YCbCr(
+        np.clip(encoded, 0.0, 1.0),
+        K=colour.WEIGHTS_YCBCR[_WEIGHTS[matrix]],
+        out_bits=10,
+        out_legal=range_ == "legal",
+        out_int=False,
     )
+    return np.asarray(normalised, dtype=np.float64) * 1023.0
 
 
 def _frame(ycc: np.ndarray, pix_fmt: str):  # -> av.VideoFrame
@@ -56,12 +54,12 @@ def _frame(ycc: np.ndarray, pix_fmt: str):  # -> av.VideoFrame
     height, width, _ = ycc.shape
     frame = av.VideoFrame(width, height, pix_fmt)
     for k, plane in enumerate(frame.planes):
-        values = ycc[..., k].astype(np.float64)
+        values = ycc[..., k]
         if plane.width != width:  # 4:2:2: each chroma sample the mean of its pixel pair
-            values = values.reshape(height, width // 2, 2).mean(axis=2)
+            values = values.reshape(height, width // 2, 2).mean(axis=2)  # rounded once, below
         stride = plane.line_size // 2
         padded = np.zeros((plane.height, stride), dtype=np.uint16)
-        padded[:, : plane.width] = np.round(values).astype(np.uint16)
+        padded[:, : plane.width] = np.clip(np.round(values), 0, 1023).astype(np.uint16)
         plane.update(padded.tobytes())
     return frame
 
