@@ -68,7 +68,7 @@ def write_movie(
     sequence: PatternSequence,
     SL: np.ndarray,
     path: str | Path,
-    options: TakeOptions = TakeOptions(),
+    options: TakeOptions | None = None,
     *,
     codec: str = "prores4444",
     encoding: str = "ARRI LogC3",
@@ -82,6 +82,7 @@ def write_movie(
     import av
     import colour
 
+    options = options if options is not None else TakeOptions()
     encoder, profile, pix_fmt = MOVIE_CODECS[codec]
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
