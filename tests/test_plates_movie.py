@@ -224,3 +224,18 @@ def test_movie_keys_are_only_for_movies(tmp_path, capsys):
     assert "take.matrix" in line and "only for a movie take" in line
     capture = _capture(tmp_path, "A001.mov", range="studio")
     assert "expected one of legal, full" in _refused(capture, capsys)
+
+
+@pytest.mark.parametrize("encoding", ["ARRI LogC3", "ARRI LogC4", "S-Log3", "sRGB", "Gamma 2.4"])
+def test_the_decoding_table_against_colour_science(encoding):
+    """Within 2e-5 relative above 1e-4 linear (the worst: a curve's cut between its linear
+    toe and its log part, where a table step straddles the kink); observed 1.2e-5 (S-Log3)."""
+    from ocio_vp.plates.movie import decode_log
+    from ocio_vp.plates.reader import linearise
+
+    low = 0.0 if encoding == "Gamma 2.4" else -0.3  # a pure power has no negative values
+    codes = np.concatenate([np.linspace(low, 1.6, 20001), np.random.default_rng(1).random(5000)])
+    table, exact = decode_log(codes, encoding), linearise(codes, encoding)
+    judged = np.abs(exact) > 1e-4
+    assert np.max(np.abs(table - exact)[judged] / np.abs(exact[judged])) < 2e-5
+    assert np.max(np.abs(table - exact)[~judged]) < 1e-9

@@ -13,8 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ocio_vp.plates.take import BANDS, TakeReading
-from ocio_vp.plates.take_reader import band_rows, chunk_rows
+from ocio_vp.plates.take import TakeReading, rows_read
 
 __all__ = ["write_contact_sheet"]
 
@@ -59,8 +58,7 @@ def _draw_frame(ax, reading: TakeReading) -> None:
             linewidth=1.5,
         )
     )
-    chunk = 2 if reading.movie is not None else chunk_rows(reading.paths[0])
-    for ya, yb in band_rows(reading.info, reading.region, BANDS, chunk):
+    for ya, yb in rows_read(reading.info, reading.region, reading.movie)[1]:
         ax.plot(
             [(x0 - ox) / step, (x1 - ox) / step],
             [(ya + yb) / 2 / step] * 2,

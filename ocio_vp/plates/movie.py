@@ -22,6 +22,7 @@ refused.
 
 from __future__ import annotations
 
+import functools
 import re
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
@@ -35,14 +36,19 @@ from ocio_vp.plates.reader import PlateInfo, linearise
 from ocio_vp.plates.take_reader import FrameStats, frame_stats
 
 __all__ = [
+    "BAND_PIXELS",
     "MATRICES",
     "MOVIE_SUFFIXES",
     "RANGES",
     "MovieInfo",
+    "decode_frame",
+    "decode_log",
     "is_movie",
+    "movie_rows",
     "open_movie",
     "parse_point",
     "read_movie_frame",
+    "reduced_frame",
     "scan_movie",
     "ycbcr_to_rgb",
 ]
@@ -329,49 +335,73 @@ def ycbcr_to_rgb(
     return out
 
 
-def _plane(frame, index: int, height: int, width: int, bits: int) -> np.ndarray:
+def _plane(frame, index: int, bits: int) -> np.ndarray:
+    """A plane of a decoded frame as a 2-D integer array, read in place (no copy)."""
     plane = frame.planes[index]
     dtype = np.uint16 if bits > 8 else np.uint8
     data = np.frombuffer(plane, dtype=dtype)
-    return data.reshape(height, plane.line_size // data.itemsize)[:, :width]
+    return data.reshape(plane.height, plane.line_size // data.itemsize)[:, : plane.width]
+
+
+def _chroma(plane: np.ndarray, box, sub: tuple[int, int]) -> np.ndarray:
+    """A subsampled chroma plane's samples over ``box``, each repeated onto its luma pixels."""
+    x0, y0, x1, y1 = box
+    sx, sy = sub
+    if sub == (1, 1):
+        return plane[y0:y1, x0:x1]
+    part = plane[y0 // sy : (y1 - 1) // sy + 1, x0 // sx : (x1 - 1) // sx + 1]
+    part = np.repeat(np.repeat(part, sy, axis=0), sx, axis=1)
+    return part[y0 - y0 // sy * sy :][: y1 - y0, x0 - x0 // sx * sx :][:, : x1 - x0]
 
 
 def frame_rgb(frame, info: MovieInfo, box: tuple[int, int, int, int]) -> np.ndarray:
     """R'G'B' float32 (rows, columns, 3) of ``box`` (x0, y0, x1, y1) of a decoded frame."""
     x0, y0, x1, y1 = box
-    sx, sy = info.subsampling
-    cw, ch = -(-info.width // sx), -(-info.height // sy)
-    planes = [
-        _plane(frame, 0, info.height, info.width, info.bits),
-        _plane(
-            frame,
-            1,
-            ch if not info.rgb else info.height,
-            cw if not info.rgb else info.width,
-            info.bits,
-        ),
-        _plane(
-            frame,
-            2,
-            ch if not info.rgb else info.height,
-            cw if not info.rgb else info.width,
-            info.bits,
-        ),
-    ]
+    planes = [_plane(frame, k, info.bits) for k in range(3)]
     if info.rgb:  # planar G, B, R
         g, b, r = (p[y0:y1, x0:x1] for p in planes)
-        full = float((1 << info.bits) - 1)
-        rgb = np.stack([r, g, b], axis=-1).astype(np.float32) / np.float32(full)
+        rgb = np.stack([r, g, b], axis=-1).astype(np.float32)
         if info.range == "legal":
             scale = float(1 << (info.bits - 8))
-            rgb = (rgb * np.float32(full) - np.float32(16 * scale)) / np.float32(219 * scale)
-        return rgb
+            return (rgb - np.float32(16 * scale)) / np.float32(219 * scale)
+        return rgb / np.float32((1 << info.bits) - 1)
     luma = planes[0][y0:y1, x0:x1]
-    rows = np.arange(y0, y1) // sy
-    cols = np.arange(x0, x1) // sx
-    cb = planes[1][rows[:, None], cols[None, :]]
-    cr = planes[2][rows[:, None], cols[None, :]]
+    cb = _chroma(planes[1], box, info.subsampling)
+    cr = _chroma(planes[2], box, info.subsampling)
     return ycbcr_to_rgb(luma, cb, cr, bits=info.bits, matrix=info.matrix, range_=info.range)
+
+
+#: The decoding table's domain and size (:func:`decode_log`).
+_TABLE = (-0.25, 1.5, 2**16 + 1)
+
+
+@functools.lru_cache(maxsize=8)
+def _table(encoding: str) -> tuple[np.ndarray, np.ndarray]:
+    lo, hi, size = _TABLE
+    codes = np.linspace(lo, hi, size)
+    with np.errstate(invalid="ignore"):  # a pure power has no negative values: NaN there
+        return codes, linearise(codes, encoding)
+
+
+def decode_log(values: np.ndarray, encoding: str) -> np.ndarray:
+    """Linear values of encoded R'G'B' (float64): colour-science's decoding sampled at 65,537
+    evenly spaced points over [-0.25, 1.5] and interpolated linearly (within 2e-5 of it,
+    relative, above 1e-4 linear: tests/test_plates_movie.py); values outside the table are
+    decoded directly, as are those next to a value the curve does not
+    define (a pure power's negative side). ``linear`` returns the values as float64."""
+    values = np.asarray(values)
+    if encoding == "linear":
+        return values.astype(np.float64)
+    codes, linear = _table(encoding)
+    lo, hi, size = _TABLE
+    position = (values.astype(np.float64) - lo) * ((size - 1) / (hi - lo))
+    index = np.clip(position.astype(np.int64), 0, size - 2)
+    fraction = position - index
+    out = linear[index] + fraction * (linear[index + 1] - linear[index])
+    outside = (values < lo) | (values > hi) | ~np.isfinite(out)
+    if np.any(outside):
+        out[outside] = linearise(values[outside], encoding)
+    return out
 
 
 def _decoded(info: MovieInfo, container, stream) -> Iterator[tuple[int, object]]:
@@ -434,21 +464,23 @@ def scan_movie(
     on_frame: Callable[[], None] | None = None,
 ) -> tuple[np.ndarray, list[FrameStats], list[FrameStats]]:
     """One pass over the movie: (frame numbers, the signal band's stats, the measuring bands'
-    stats) of every frame from ``info.first`` to ``info.last``."""
+    stats) of every frame from ``info.first`` to ``info.last``. Per frame, the rows are
+    converted and decoded together, in one call."""
     x0, _, x1, _ = region
     numbers, signal, bands = [], [], []
+    split = sum(b - a for a, b in signal_rows)
     container, stream = _stream(info)
     try:
         for index, frame in _decoded(info, container, stream):
-            parts = {}
-            for ya, yb in {*signal_rows, *rows}:
-                pixels = frame_rgb(frame, info, (x0, ya, x1, yb))
-                parts[(ya, yb)] = (
-                    linearise(pixels, info.encoding) if info.encoding != "linear" else pixels
+            parts = [frame_rgb(frame, info, (x0, ya, x1, yb)) for ya, yb in (*signal_rows, *rows)]
+            pixels = decode_log(np.concatenate(parts, axis=0), info.encoding)
+            if not np.all(np.isfinite(pixels)):
+                raise _error(
+                    f"NaN/Inf in frame {index} after decoding (check take.encoding)", info.path
                 )
             numbers.append(index)
-            signal.append(_joined(parts, signal_rows, clip=None))
-            bands.append(_joined(parts, rows, clip=clip))
+            signal.append(frame_stats(pixels[:split], None))
+            bands.append(frame_stats(pixels[split:], clip))
             if on_frame is not None:
                 on_frame()
     finally:
@@ -456,44 +488,90 @@ def scan_movie(
     return np.array(numbers, dtype=np.float64), signal, bands
 
 
-def _joined(parts, rows, *, clip: float | None) -> FrameStats:
-    pixels = np.concatenate([parts[r] for r in rows], axis=0)
-    if not np.all(np.isfinite(pixels)):
-        raise InputError("NaN/Inf after decoding the wall region (check take.encoding)")
-    return frame_stats(pixels, clip)
+#: A band of a movie's rows holds at least this many pixels (a 4K wall: two rows).
+BAND_PIXELS = 2048
+
+
+def movie_rows(region: tuple[int, int, int, int], bands: int) -> list[tuple[int, int]]:
+    """``bands`` bands of an even number of rows (at least two, at least
+    :data:`BAND_PIXELS` pixels), spread evenly over ``region``, starting on even rows (a
+    4:2:0 chroma row covers each pair); all the region's rows when that is less. A movie is
+    decoded whole anyway, so a band needs no more rows than the statistics do.
+
+    Examples
+    --------
+    >>> movie_rows((0, 10, 3000, 50), 4)
+    [(10, 12), (22, 24), (34, 36), (48, 50)]
+    >>> movie_rows((0, 10, 100, 50), 4)
+    [(10, 50)]
+    """
+    x0, y0, x1, y1 = region
+    height = max(2, -(-BAND_PIXELS // max(1, x1 - x0)))
+    height += height % 2
+    first, last = y0 + (y0 % 2), y1 - height
+    if bands * height >= y1 - y0 or last < first:
+        return [(y0, y1)]
+    starts = np.unique(np.linspace(first, last, bands).round().astype(int) // 2 * 2)
+    return [(int(s), int(s) + height) for s in starts]
+
+
+def decode_frame(info: MovieInfo, index: int):  # -> av.VideoFrame
+    """Frame ``index`` (0 = the file's first), found by seeking (a keyframe at or before it,
+    then decoding forward)."""
+    container, stream = _stream(info)
+    try:
+        target, tick = None, 0.0
+        if stream.time_base:
+            tick = float(1 / (info.rate * stream.time_base))
+            target = int((stream.start_time or 0) + round(index * tick))
+            container.seek(target, stream=stream, backward=True, any_frame=False)
+        everything = replace(info, first=0, last=None, frames=0)
+        for number, frame in _decoded(everything, container, stream):
+            if target is None and number == index:
+                return frame
+            if target is not None and frame.pts is not None and frame.pts >= target - tick / 2:
+                return frame
+    finally:
+        container.close()
+    raise _error(f"cannot decode frame {index}", info.path)
 
 
 def read_movie_frame(
     info: MovieInfo, index: int
 ) -> Callable[[tuple[int, int, int, int]], np.ndarray]:
-    """Decode frame ``index`` (0 = the file's first) by seeking, and return a reader of its
-    linear R'G'B' in a box (for finding the wall and the contact sheet)."""
-    container, stream = _stream(info)
-    try:
-        target = None
-        if stream.time_base:
-            tick = 1 / (info.rate * stream.time_base)
-            start = stream.start_time or 0
-            target = int(start + round(index * tick))
-            container.seek(target, stream=stream, backward=True, any_frame=False)
-        chosen = None
-        for number, frame in _decoded(
-            replace(info, first=0, last=None, frames=0), container, stream
-        ):
-            if target is None:
-                if number == index:
-                    chosen = frame
-                    break
-            elif frame.pts is not None and frame.pts >= target - tick / 2:
-                chosen = frame
-                break
-    finally:
-        container.close()
-    if chosen is None:
-        raise _error(f"cannot decode frame {index}", info.path)
+    """A reader of frame ``index``'s linear RGB in a box (the contact sheet's picture)."""
+    frame = decode_frame(info, index)
+    return lambda box: decode_log(frame_rgb(frame, info, box), info.encoding)
 
-    def read(box: tuple[int, int, int, int]) -> np.ndarray:
-        pixels = frame_rgb(chosen, info, box)
-        return linearise(pixels, info.encoding) if info.encoding != "linear" else pixels
 
-    return read
+#: Pixels averaged per cell and axis by :func:`reduced_frame`.
+_CELL_SAMPLES = 4
+
+
+def reduced_frame(info: MovieInfo, index: int, factor: int) -> np.ndarray:
+    """Frame ``index`` on a grid of ``factor`` x ``factor`` cells, (cells_y, cells_x, 3) linear
+    RGB: each cell the mean code values of a few pixels spread inside it, then converted
+    (for finding the wall; not for measuring)."""
+    frame = decode_frame(info, index)
+    cells_x, cells_y = info.width // factor, info.height // factor
+    n = min(factor, _CELL_SAMPLES)
+    offsets = (np.arange(n) * factor) // n + (factor // n) // 2
+    ys = (np.arange(cells_y)[:, None] * factor + offsets[None, :]).ravel()
+    xs = (np.arange(cells_x)[:, None] * factor + offsets[None, :]).ravel()
+    sx, sy = (1, 1) if info.rgb else info.subsampling
+    planes = []
+    for k in range(3):
+        plane = _plane(frame, k, info.bits)
+        rows, cols = (ys, xs) if k == 0 or info.rgb else (ys // sy, xs // sx)
+        values = plane[rows][:, cols].astype(np.float32)
+        planes.append(values.reshape(cells_y, n, cells_x, n).mean(axis=(1, 3)))
+    if info.rgb:
+        g, b, r = planes
+        full = float((1 << info.bits) - 1)
+        rgb = np.stack([r, g, b], axis=-1) / np.float32(full)
+        if info.range == "legal":
+            scale = float(1 << (info.bits - 8))
+            rgb = (rgb * np.float32(full) - np.float32(16 * scale)) / np.float32(219 * scale)
+    else:
+        rgb = ycbcr_to_rgb(*planes, bits=info.bits, matrix=info.matrix, range_=info.range)
+    return decode_log(rgb, info.encoding)

@@ -33,7 +33,15 @@ import numpy as np
 from ocio_vp.errors import InputError
 from ocio_vp.patterns.sequence import MEASURED_KINDS, Patch, PatternSequence
 from ocio_vp.plates.alignment import GUARD, Alignment, align_take, kept_frames
-from ocio_vp.plates.movie import MovieInfo, is_movie, open_movie, read_movie_frame, scan_movie
+from ocio_vp.plates.movie import (
+    MovieInfo,
+    is_movie,
+    movie_rows,
+    open_movie,
+    read_movie_frame,
+    reduced_frame,
+    scan_movie,
+)
 from ocio_vp.plates.reader import PlateInfo, check_box, linearise, read_region
 from ocio_vp.plates.take_reader import (
     FrameStats,
@@ -52,6 +60,7 @@ __all__ = [
     "TakeReading",
     "TakeRef",
     "measure_take",
+    "rows_read",
 ]
 
 #: Bands of rows read per kept frame (each a whole number of the file's chunks).
@@ -225,10 +234,19 @@ def _patch_frames(measured, alignment: Alignment, numbers: np.ndarray, source, k
     return windows, kept
 
 
-def _signal_rows(info: PlateInfo, region: tuple[int, int, int, int], chunk: int):
-    """The one band of rows at the region's middle the alignment reads."""
-    rows = band_rows(info, region, 1, chunk)
-    return rows[:1]
+def rows_read(
+    info: PlateInfo, region: tuple[int, int, int, int], movie: MovieInfo | None
+) -> tuple[list[tuple[int, int]], list[tuple[int, int]]]:
+    """(the band of rows at the region's middle the alignment reads, the :data:`BANDS` bands
+    read in each kept frame): whole chunks of an image file; a few rows of a movie
+    (:func:`ocio_vp.plates.movie.movie_rows`)."""
+    if movie is not None:
+        middle = movie_rows(region, 1)[0]
+        centre = (region[1] + region[3] - (middle[1] - middle[0])) // 4 * 2
+        centre = min(max(centre, region[1]), region[3] - (middle[1] - middle[0]))
+        return [(centre, centre + middle[1] - middle[0])], movie_rows(region, BANDS)
+    chunk = chunk_rows(info.path)
+    return band_rows(info, region, 1, chunk)[:1], band_rows(info, region, BANDS, chunk)
 
 
 @dataclass(frozen=True)
@@ -265,10 +283,8 @@ def _open_frames(
 def _scan(take, frames, region, clip, on_progress, source) -> _Scan:
     """The pass over every frame (see :class:`_Scan`)."""
     numbers, paths, info, movie = frames
-    chunk = 2 if movie is not None else chunk_rows(paths[0])
     tick = (lambda: on_progress("frame", 1)) if on_progress else None
-    rows = band_rows(info, region, BANDS, chunk)
-    signal_rows = _signal_rows(info, region, chunk)
+    signal_rows, rows = rows_read(info, region, movie)
     if movie is not None:
         if on_progress:
             on_progress("decoding", len(numbers))
@@ -327,7 +343,7 @@ def measure_take(
     if region is None:
         reader = None
         if movie is not None:
-            reader = (len(numbers), lambda k: read_movie_frame(movie, int(numbers[k])))
+            reader = (len(numbers), lambda k, f: reduced_frame(movie, int(numbers[k]), f))
         where = f"{source}: {take.key}" if source else None
         region = find_wall(paths, info, source=where, frames=reader)
     else:

@@ -35,20 +35,15 @@ INSET = 0.05
 MIN_SIZE = 8
 
 
-Reader = Callable[[tuple[int, int, int, int]], np.ndarray]
-
-
-def _reduced(info: PlateInfo, factor: int, read: Reader | None = None) -> np.ndarray:
-    """The frame block-averaged by ``factor`` (whole blocks only), read in bands of rows
-    (by ``read(box)`` when given, else from ``info.path``)."""
+def _reduced(info: PlateInfo, factor: int) -> np.ndarray:
+    """The frame block-averaged by ``factor`` (whole blocks only), read in bands of rows."""
     cells_x, cells_y = info.width // factor, info.height // factor
     out = np.empty((cells_y, cells_x, 3), dtype=np.float64)
     band = max(1, (1 << 21) // max(1, info.width * factor * 3)) * factor
     for cy in range(0, cells_y, max(1, band // factor)):
         cy1 = min(cells_y, cy + max(1, band // factor))
         y0, y1 = info.y + cy * factor, info.y + cy1 * factor
-        box = (info.x, y0, info.x + cells_x * factor, y1)
-        pixels = read(box) if read is not None else read_region(info, box)
+        pixels = read_region(info, (info.x, y0, info.x + cells_x * factor, y1))
         blocks = pixels.reshape(cy1 - cy, factor, cells_x, factor, 3)
         out[cy:cy1] = blocks.mean(axis=(1, 3), dtype=np.float64)
     return out
@@ -104,12 +99,13 @@ def find_wall(
     info: PlateInfo,
     *,
     source: object = None,
-    frames: tuple[int, Callable[[int], Reader]] | None = None,
+    frames: tuple[int, Callable[[int, int], np.ndarray]] | None = None,
 ) -> tuple[int, int, int, int]:
     """The wall's region ``(x0, y0, x1, y1)`` in pixels (see the module docstring).
 
     ``frames``: for a take that is not one file a frame (a movie), its frame count and a
-    function giving frame ``k``'s ``read(box)``; ``paths`` is then not read.
+    function giving frame ``k`` already reduced, ``reduced(k, factor)`` (cells_y, cells_x,
+    3); ``paths`` is then not read.
 
     Raises
     ------
@@ -122,7 +118,7 @@ def find_wall(
     reduced = []
     for k in picks:
         if frames is not None:
-            reduced.append(_reduced(info, factor, frames[1](int(k))))
+            reduced.append(np.asarray(frames[1](int(k), factor), dtype=np.float64))
             continue
         frame_info = info if k == 0 else dataclasses.replace(info, path=str(paths[k]))
         reduced.append(_reduced(frame_info, factor))
