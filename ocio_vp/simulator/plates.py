@@ -210,7 +210,9 @@ class PlateOptions:
     ``take``: film the wall playing the patterns in one take (:mod:`ocio_vp.simulator.take`)
     for [SL] and the ramps, instead of photographing each primary; ``take_format``: ``exr``
     (linear half-float frames) or a camera movie (``prores4444``, ``prores422``: ARRI LogC3,
-    Rec.709 legal range, :mod:`ocio_vp.simulator.movie`).
+    Rec.709 legal range, :mod:`ocio_vp.simulator.movie`); ``lit_format``: the lit-chart plates
+    as ``exr`` or as camera raw, ``dng`` (the Bayer mosaic, the sensor clipping at 1.0 camera
+    unit as the take does, :mod:`ocio_vp.simulator.raw`).
     """
 
     vignetting: float = 0.05
@@ -221,6 +223,7 @@ class PlateOptions:
     seed: int = 0
     take: Any = None
     take_format: str = "exr"
+    lit_format: str = "exr"
 
 
 def _grid(patches: int) -> tuple[int, int]:
@@ -407,7 +410,7 @@ def _capture_document(
                 "encoding": MOVIE_ENCODING,
             }
     document["lit_chart"] = {
-        c: {"plate": f"lit_{c}.exr", "corners": CHART_CORNERS.tolist()}
+        c: {"plate": f"lit_{c}.{options.lit_format}", "corners": CHART_CORNERS.tolist()}
         for c in ("red", "green", "blue")
     }
     environments = []
@@ -455,7 +458,13 @@ def write_capture(
     (folder / "footage").mkdir(parents=True, exist_ok=True)
     names = set()
     for name, image in _plates(measurements, options):
-        write_plate(folder / name, image)
+        if options.lit_format == "dng" and name.startswith("lit_"):
+            from ocio_vp.simulator.raw import write_dng
+
+            name = name.removesuffix(".exr") + ".dng"
+            write_dng(folder / name, image)
+        else:
+            write_plate(folder / name, image)
         names.add(name)
         if bar is not None:
             bar.update(1)
