@@ -239,3 +239,55 @@ def test_the_decoding_table_against_colour_science(encoding):
     judged = np.abs(exact) > 1e-4
     assert np.max(np.abs(table - exact)[judged] / np.abs(exact[judged])) < 2e-5
     assert np.max(np.abs(table - exact)[~judged]) < 1e-9
+
+
+@pytest.mark.parametrize(("pix_fmt", "sub"), [("yuv420p10le", (2, 2)), ("yuv422p10le", (2, 1))])
+def test_subsampled_chroma_lands_on_its_pixels(pix_fmt, sub):
+    """A decoded 4:2:0 / 4:2:2 frame built from known planes: every pixel of an odd box gets
+    the chroma sample covering it (colour-science converts the expected codes)."""
+    import av
+    import colour
+
+    from ocio_vp.plates.movie import MovieInfo, frame_rgb
+
+    width, height = 36, 20
+    rng = np.random.default_rng(7)
+    frame = av.VideoFrame(width, height, pix_fmt)
+    planes = []
+    for plane in frame.planes:
+        values = rng.integers(100, 900, size=(plane.height, plane.line_size // 2)).astype(np.uint16)
+        plane.update(values.tobytes())
+        planes.append(values[:, : plane.width])
+    info = MovieInfo(
+        path=Path("x.mov"), codec="test", pix_fmt=pix_fmt, width=width, height=height, bits=10,
+        rgb=False, subsampling=sub, matrix="rec2020", range="legal", tags_from="stream",
+        rate=Fraction(25), frames=1, first=0, last=None, timecode=None, encoding="linear",
+    )  # fmt: skip
+    x0, y0, x1, y1 = 3, 5, 30, 17
+    ys, xs = np.mgrid[y0:y1, x0:x1]
+    codes = np.stack(
+        [
+            planes[0][ys, xs],
+            planes[1][ys // sub[1], xs // sub[0]],
+            planes[2][ys // sub[1], xs // sub[0]],
+        ],
+        axis=-1,
+    )
+    expected = colour.YCbCr_to_RGB(
+        codes, K=colour.WEIGHTS_YCBCR["ITU-R BT.2020"], in_bits=10, in_legal=True, in_int=True
+    )
+    np.testing.assert_allclose(frame_rgb(frame, info, (x0, y0, x1, y1)), expected, atol=2e-6)
+
+
+def test_a_pixel_format_ocio_vp_does_not_read_is_refused(tmp_path):
+    import av
+
+    path = tmp_path / "rgb.mov"
+    with av.open(str(path), "w", format="mov") as container:
+        stream = container.add_stream("png", rate=25)
+        stream.width, stream.height, stream.pix_fmt = 16, 8, "rgb24"
+        frame = av.VideoFrame.from_ndarray(np.zeros((8, 16, 3), np.uint8), format="rgb24")
+        for packet in [*stream.encode(frame), *stream.encode()]:
+            container.mux(packet)
+    with pytest.raises(InputError, match="pixel format 'rgb24' is not a planar"):
+        open_movie(path, encoding=None)
