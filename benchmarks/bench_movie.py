@@ -201,10 +201,16 @@ def _report(size, count, distinct, write_s, megabytes, runs, memory) -> str:
         a, b = (r["total"] for r in runs[mode])
         lines.append(f"| {label} | {a:.1f} | {b:.1f} | {1000 * best / count:.1f} |")
     white = runs["measure"][0]["white"]
+    pairs = ", ".join(
+        f"{m['total'] / p['total']:.2f}x"
+        for p, m in zip(runs["plain"], runs["measure"], strict=True)
+    )
     lines += [
         "",
         f"- Measuring costs **{measure / plain:.2f}x** decoding alone (best of two each, side by "
-        "side in this run; target: at most 1.25x).",
+        f"side in this run; target: at most 1.25x); run by run (each measure against the decode "
+        f"just before it): {pairs}. The machine is shared: the spread between two runs of the "
+        "same thing is the noise of this figure.",
         f"- Checked: the dropped frame is found ({runs['measure'][0]['steps']}), white reads "
         f"{', '.join(f'{v:.4f}' for v in white)} (simulated: "
         f"{', '.join(f'{v:.4f}' for v in SL.sum(axis=1))}).",

@@ -109,3 +109,38 @@ def test_a_file_libraw_cannot_read_is_refused_on_one_line(tmp_path, capsys):
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and "bad.nef" in lines[0] and "LibRaw" in lines[0]
     assert not out.exists()
+
+
+def test_raw_plates_with_a_named_camera_gamut_are_refused(lit_chart, capsys):
+    """stage.camera_colorspace puts the measurements in an encoding gamut; a raw plate is
+    sensor RGB and the file says nothing to bring it there: one line naming the plate's key."""
+    folder, _ = lit_chart
+    capture = {
+        "format": "ocio-vp/capture",
+        "version": 1,
+        "stage": {"name": "s", "beta": 0.2, "camera_colorspace": "ARRI Wide Gamut 4"},
+        "lit_chart": {
+            c: {"plate": "lit_red.dng" if c == "green" else "lit_red.exr",
+                "corners": CHART_CORNERS.tolist()}
+            for c in ("red", "green", "blue")
+        },
+    }  # fmt: skip
+    (folder / "gamut.yaml").write_text(yaml.safe_dump(capture))
+    out = folder / "gamut_out.yaml"
+    assert main(["measure", str(folder / "gamut.yaml"), "--out", str(out)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and "lit_chart.green" in lines[0] and "sensor RGB" in lines[0]
+    assert not out.exists()
+
+
+def test_detection_reads_a_raw_plate_as_measured(lit_chart):
+    """`corners: detect` on the DNG finds what it finds on the EXR (the detector sees the same
+    picture: the raw plate as ocio-vp measures it, not as OpenImageIO would develop it)."""
+    pytest.importorskip("colour_checker_detection")
+    from ocio_vp.plates.detection import detect_chart_corners
+
+    folder, _ = lit_chart
+    exr = detect_chart_corners(open_plate(folder / "lit_red.exr"))
+    dng = detect_chart_corners(open_plate(folder / "lit_red.dng"))
+    # 1 % of the width (observed 3.3 px; the detector itself is ~28 px off the true corners)
+    assert np.max(np.abs(dng - exr)) < 6.0

@@ -20,6 +20,7 @@ import yaml
 
 from ocio_vp.formats.measurements import CHANNELS, Validator, parse_stage, read_document
 from ocio_vp.plates.movie import MATRICES, RANGES, is_movie
+from ocio_vp.plates.raw import is_raw
 from ocio_vp.plates.reader import canonical_encoding, plate_path
 from ocio_vp.plates.statistics import ROBUST_MEAN_METHODS
 from ocio_vp.plates.take import TakeRef
@@ -295,7 +296,7 @@ def capture_from_dict(
     environments: tuple[EnvironmentCapture, ...] = ()
     if "environments" in top:
         environments = _environments(ctx, top["environments"], where, panels)
-    return Capture(
+    capture = Capture(
         stage=dict(top["stage"]),
         rows=rows,
         columns=columns,
@@ -310,6 +311,27 @@ def capture_from_dict(
         take=_take(ctx, top["take"], base) if "take" in top else None,
         panels=panels,
     )
+    _check_one_camera_space(ctx, capture)
+    return capture
+
+
+def _check_one_camera_space(ctx: Validator, capture: Capture) -> None:
+    """Raw plates are sensor RGB; with ``stage.camera_colorspace`` the rest of the file (and
+    the configs) is in that encoding gamut, and nothing in the file says how to bring the
+    sensor's RGB there: refuse rather than mix two spaces in [SL], [SRL]_j and p_j."""
+    camera = capture.stage.get("camera_colorspace")
+    if not camera:
+        return
+    shots: list[ChartShot | RegionShot] = [*capture.primaries.values(), *capture.charts()]
+    shots += [e.black_level for e in capture.environments if e.black_level is not None]
+    for shot in shots:
+        if any(is_raw(p) for p in shot.plate.paths):
+            raise ctx.error(
+                shot.key,
+                f"a camera raw plate is sensor RGB, but stage.camera_colorspace says the "
+                f"measurements are in {camera}: shoot this chart with the cinema camera, or "
+                "develop the raw into that gamut (no other processing) and give the result",
+            )
 
 
 _TAKE_KEYS = ("region", "encoding", "layer", "clip_level", "in", "out", "matrix", "range")
