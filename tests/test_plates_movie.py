@@ -291,3 +291,51 @@ def test_a_pixel_format_ocio_vp_does_not_read_is_refused(tmp_path):
             container.mux(packet)
     with pytest.raises(InputError, match="pixel format 'rgb24' is not a planar"):
         open_movie(path, encoding=None)
+
+
+@pytest.mark.parametrize(
+    ("encoder", "pix_fmt", "name", "options"),
+    [
+        ("dnxhd", "yuv422p10le", "dnxhr.mxf", {"profile": "dnxhr_hqx"}),
+        ("libx265", "yuv420p10le", "hevc.mp4", {"x265-params": "lossless=1:log-level=error"}),
+    ],
+)
+def test_dnxhr_in_mxf_and_10_bit_hevc_decode_at_their_codes(
+    tmp_path, encoder, pix_fmt, name, options
+):
+    """Rec.2020-tagged 10-bit DNxHR HQX in MXF and lossless H.265 Main 10 in MP4, flat frames of
+    known codes: every frame read back as colour-science converts those codes."""
+    import av
+    import colour
+
+    from ocio_vp.plates.movie import scan_movie
+
+    path = tmp_path / name
+    codes = [(400 + 3 * k, 500 + k, 600 - 2 * k) for k in range(12)]
+    with av.open(str(path), "w") as container:
+        stream = container.add_stream(encoder, rate=25)
+        stream.width, stream.height, stream.pix_fmt = 256, 144, pix_fmt
+        stream.options = options
+        ctx = stream.codec_context
+        ctx.colorspace, ctx.color_range, ctx.color_primaries, ctx.color_trc = 9, 1, 9, 14
+        for k, code in enumerate(codes):
+            frame = av.VideoFrame(256, 144, pix_fmt)
+            for plane, value in zip(frame.planes, code, strict=True):
+                plane.update(np.full(plane.buffer_size // 2, value, np.uint16).tobytes())
+            frame.pts = k
+            for packet in stream.encode(frame):
+                container.mux(packet)
+        for packet in stream.encode():
+            container.mux(packet)
+    info = open_movie(path, encoding=None)
+    assert (info.matrix, info.range, info.tags_from) == ("rec2020", "legal", "stream")
+    numbers, signal, _ = scan_movie(info, (8, 8, 248, 136), [(60, 64)], [(10, 12)], clip=None)
+    expected = colour.YCbCr_to_RGB(
+        np.array(codes),
+        K=colour.WEIGHTS_YCBCR["ITU-R BT.2020"],
+        in_bits=10,
+        in_legal=True,
+        in_int=True,
+    )
+    assert numbers.tolist() == list(range(12))
+    np.testing.assert_allclose([s.mean for s in signal], expected, atol=1e-5)
