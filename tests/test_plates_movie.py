@@ -158,6 +158,14 @@ def test_in_and_out_points_measure_the_same_part(filmed, readings):
     )
     data = _measure(capture)
     np.testing.assert_allclose(_SL(data), _SL(readings["prores4444"]), rtol=1e-6, atol=1e-9)
+    samples, _ = read_document(capture.with_suffix(".out.overlays") / "samples.json")
+    movie = samples["take"]["movie"]
+    assert (movie["matrix"], movie["range"], movie["matrix_and_range_from"]) == (
+        "rec709",
+        "legal",
+        "capture file",
+    )
+    assert movie["start_timecode"] == "10:00:00:00" and samples["take"]["frame_count"] == 786
 
 
 def _refused(capture: Path, capsys) -> str:

@@ -447,10 +447,12 @@ def _decoded(info: MovieInfo, container, stream) -> Iterator[tuple[int, object]]
         )
 
 
-def _stream(info: MovieInfo):
+def _stream(info: MovieInfo, threads: str = "AUTO"):
+    """The movie opened for decoding: ``AUTO`` (frame threads) for a pass over many frames,
+    ``SLICE`` for one frame (frame threads would decode several ahead before returning it)."""
     container = _open(info.path)
     stream = container.streams.video[0]
-    stream.thread_type = "AUTO"
+    stream.thread_type = threads
     return container, stream
 
 
@@ -518,7 +520,7 @@ def movie_rows(region: tuple[int, int, int, int], bands: int) -> list[tuple[int,
 def decode_frame(info: MovieInfo, index: int):  # -> av.VideoFrame
     """Frame ``index`` (0 = the file's first), found by seeking (a keyframe at or before it,
     then decoding forward)."""
-    container, stream = _stream(info)
+    container, stream = _stream(info, "SLICE")
     try:
         target, tick = None, 0.0
         if stream.time_base:
@@ -563,7 +565,7 @@ def reduced_frame(info: MovieInfo, index: int, factor: int) -> np.ndarray:
     for k in range(3):
         plane = _plane(frame, k, info.bits)
         rows, cols = (ys, xs) if k == 0 or info.rgb else (ys // sy, xs // sx)
-        values = plane[rows][:, cols].astype(np.float32)
+        values = plane[np.ix_(rows, cols)].astype(np.float32)
         planes.append(values.reshape(cells_y, n, cells_x, n).mean(axis=(1, 3)))
     if info.rgb:
         g, b, r = planes
