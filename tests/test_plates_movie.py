@@ -32,7 +32,7 @@ TAKE = TakeOptions(
     fps=25.0, preroll=1.0, dropped=(300,), flicker=0.02, noise=0.01, size=(96, 54), seed=11
 )
 STAGE = {"name": "movie-stage", "calibration_panel": {"width": 1.0, "height": 1.0, "distance": 1.0}}
-PATTERNS = PatternOptions(size=(64, 36), hold=8)
+PATTERNS = PatternOptions(size=(64, 36), hold=8, steps=9)  # 595 camera frames
 
 
 @pytest.fixture(scope="module")
@@ -97,7 +97,7 @@ def test_every_ramp_step_above_2_percent_matches_within_its_own_level(readings, 
         level = reference[:, k] / reference[-1, k]
         bright = level > 0.02
         relative = np.abs(movie[bright, k] - reference[bright, k]) / reference[bright, k]
-        assert bright.sum() >= 12 and np.all(relative < bound), (channel, relative)
+        assert bright.sum() >= 7 and np.all(relative < bound), (channel, relative)
 
 
 def test_the_movie_header(filmed):
@@ -154,7 +154,7 @@ def test_in_and_out_points_measure_the_same_part(filmed, readings):
         encoding="ARRI LogC3",
         matrix="Rec.709",
         range="legal",
-        **{"in": "10:00:00:05", "out": 790},
+        **{"in": "10:00:00:05", "out": 585},
     )
     data = _measure(capture)
     np.testing.assert_allclose(_SL(data), _SL(readings["prores4444"]), rtol=1e-6, atol=1e-9)
@@ -165,7 +165,7 @@ def test_in_and_out_points_measure_the_same_part(filmed, readings):
         "legal",
         "capture file",
     )
-    assert movie["start_timecode"] == "10:00:00:00" and samples["take"]["frame_count"] == 786
+    assert movie["start_timecode"] == "10:00:00:00" and samples["take"]["frame_count"] == 581
 
 
 def _refused(capture: Path, capsys) -> str:
