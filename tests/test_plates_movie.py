@@ -83,7 +83,7 @@ def _SL(data: dict) -> np.ndarray:
 def test_SL_from_prores_matches_the_exr_take(readings, codec, bound):
     reference, movie = _SL(readings["exr"]), _SL(readings[codec])
     error = np.abs(movie - reference).max(axis=0) / np.abs(reference).max(axis=0)
-    assert np.all(error < bound), error  # observed: 0.15 % (4444), 0.2 % (422)
+    assert np.all(error < bound), error  # observed: 0.09 % (4444), 0.10 % (422)
 
 
 @pytest.mark.parametrize(("codec", "bound"), [("prores4444", 0.01), ("prores422", 0.01)])
@@ -97,6 +97,7 @@ def test_every_ramp_step_above_2_percent_matches_within_its_own_level(readings, 
         level = reference[:, k] / reference[-1, k]
         bright = level > 0.02
         relative = np.abs(movie[bright, k] - reference[bright, k]) / reference[bright, k]
+        # observed: within 0.48 % (4444), 0.54 % (422)
         assert bright.sum() >= 7 and np.all(relative < bound), (channel, relative)
 
 
