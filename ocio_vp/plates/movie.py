@@ -28,6 +28,7 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from fractions import Fraction
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -404,7 +405,7 @@ def decode_log(values: np.ndarray, encoding: str) -> np.ndarray:
     return out
 
 
-def _decoded(info: MovieInfo, container, stream) -> Iterator[tuple[int, object]]:
+def _decoded(info: MovieInfo, container, stream) -> Iterator[tuple[int, Any]]:
     """(frame number, frame) of every frame from ``info.first`` to ``info.last``, checking the
     frame grid (VFR refused) and mapping FFmpeg's errors to one-line refusals."""
     import av
