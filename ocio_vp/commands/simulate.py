@@ -147,6 +147,21 @@ def _add_take_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--take-fps", type=float, default=25.0, help="the simulated camera's frame rate for takes"
     )
+    parser.add_argument(
+        "--take-format",
+        choices=("exr", "prores4444", "prores422"),
+        default="exr",
+        help="with --plates: the take as linear half-float EXR frames (DIR/take/A001.####.exr), "
+        "or as a camera would record it, DIR/take/A001.mov: ProRes 4444 or 422 HQ, 10-bit, "
+        "ARRI LogC3, Rec.709 legal range, colour-tagged (default: exr)",
+    )
+    parser.add_argument(
+        "--lit-format",
+        choices=("exr", "dng"),
+        default="exr",
+        help="with --plates: the lit-chart plates as linear half-float EXR, or as camera raw "
+        "DNG (the simulated Bayer mosaic, 14-bit, the sensor clipping at 1.0) (default: exr)",
+    )
 
 
 def _add_ceiling_options(parser: argparse.ArgumentParser) -> None:
@@ -245,6 +260,10 @@ def _check_take_options(args: argparse.Namespace) -> None:
         raise InputError("give --film SEQUENCE and --take DIR together", key="--film/--take")
     if args.sequence is not None and args.plates is None:
         raise InputError("only with --plates (the take it films)", key="--sequence")
+    if args.take_format != "exr" and args.plates is None:
+        raise InputError("only with --plates (the take it writes)", key="--take-format")
+    if args.lit_format != "exr" and args.plates is None:
+        raise InputError("only with --plates (the plates it writes)", key="--lit-format")
     if args.take_fps != 25.0 and args.plates is None and args.film is None:
         raise InputError("only with --plates or --film", key="--take-fps")
     if not 1 <= args.take_fps <= 1000:
@@ -365,7 +384,12 @@ def _write_plates(measurements, args: argparse.Namespace):
 
     final = Path(args.plates)
     options = PlateOptions(
-        vignetting=args.vignetting, noise=args.noise, seed=args.seed, take=_take_options(args)
+        vignetting=args.vignetting,
+        noise=args.noise,
+        seed=args.seed,
+        take=_take_options(args),
+        take_format=args.take_format,
+        lit_format=args.lit_format,
     )
     sequence = ref = None
     inputs = []

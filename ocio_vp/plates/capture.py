@@ -9,6 +9,7 @@ every key. Plate paths are relative to the capture file.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,6 +19,8 @@ import numpy as np
 import yaml
 
 from ocio_vp.formats.measurements import CHANNELS, Validator, parse_stage, read_document
+from ocio_vp.plates.movie import MATRICES, RANGES, is_movie
+from ocio_vp.plates.raw import is_raw
 from ocio_vp.plates.reader import canonical_encoding, plate_path
 from ocio_vp.plates.statistics import ROBUST_MEAN_METHODS
 from ocio_vp.plates.take import TakeRef
@@ -293,7 +296,7 @@ def capture_from_dict(
     environments: tuple[EnvironmentCapture, ...] = ()
     if "environments" in top:
         environments = _environments(ctx, top["environments"], where, panels)
-    return Capture(
+    capture = Capture(
         stage=dict(top["stage"]),
         rows=rows,
         columns=columns,
@@ -308,9 +311,31 @@ def capture_from_dict(
         take=_take(ctx, top["take"], base) if "take" in top else None,
         panels=panels,
     )
+    _check_one_camera_space(ctx, capture)
+    return capture
 
 
-_TAKE_KEYS = ("region", "encoding", "layer", "clip_level")
+def _check_one_camera_space(ctx: Validator, capture: Capture) -> None:
+    """Raw plates are sensor RGB; with ``stage.camera_colorspace`` the rest of the file (and
+    the configs) is in that encoding gamut, and nothing in the file says how to bring the
+    sensor's RGB there: refuse rather than mix two spaces in [SL], [SRL]_j and p_j."""
+    camera = capture.stage.get("camera_colorspace")
+    if not camera:
+        return
+    shots: list[ChartShot | RegionShot] = [*capture.primaries.values(), *capture.charts()]
+    shots += [e.black_level for e in capture.environments if e.black_level is not None]
+    for shot in shots:
+        if any(is_raw(p) for p in shot.plate.paths):
+            raise ctx.error(
+                shot.key,
+                f"a camera raw plate is sensor RGB, but stage.camera_colorspace says the "
+                f"measurements are in {camera}: shoot this chart with the cinema camera, or "
+                "develop the raw into that gamut (no other processing) and give the result",
+            )
+
+
+_TAKE_KEYS = ("region", "encoding", "layer", "clip_level", "in", "out", "matrix", "range")
+_MOVIE_KEYS = ("in", "out", "matrix", "range")
 
 
 def _take(ctx: Validator, value: Any, base: Path) -> TakeRef:
@@ -319,8 +344,18 @@ def _take(ctx: Validator, value: Any, base: Path) -> TakeRef:
     for name in ("frames", "sequence"):
         if not isinstance(raw[name], str) or not raw[name]:
             raise ctx.error(("take", name), "expected a path relative to the capture file")
-    if raw["frames"].count("#") == 0:
-        raise ctx.error(("take", "frames"), "expected a frame pattern, e.g. take/A001.####.exr")
+    movie = is_movie(raw["frames"])
+    if not movie and raw["frames"].count("#") == 0:
+        raise ctx.error(
+            ("take", "frames"),
+            "expected a frame pattern, e.g. take/A001.####.exr, or a movie (.mov, .mp4, .mxf)",
+        )
+    for name in _MOVIE_KEYS:
+        if name in raw and not movie:
+            raise ctx.error(("take", name), "only for a movie take (.mov, .mp4, .mxf)")
+    points = {n: _movie_point(ctx, raw[n], n) for n in ("in", "out") if n in raw}
+    matrix = _movie_choice(ctx, raw, "matrix", MATRICES)
+    range_ = _movie_choice(ctx, raw, "range", RANGES)
     encoding = raw.get("encoding")
     if encoding is not None:
         encoding = canonical_encoding(encoding, source=ctx.source, key="take.encoding")
@@ -338,7 +373,34 @@ def _take(ctx: Validator, value: Any, base: Path) -> TakeRef:
         encoding=encoding,
         layer=layer,
         clip_level=clip,
+        in_point=points.get("in"),
+        out_point=points.get("out"),
+        matrix=matrix,
+        range=range_,
     )
+
+
+def _movie_point(ctx: Validator, value: Any, name: str) -> int | str:
+    """``take.in``/``take.out``: a frame number (0 = the movie's first frame) or a timecode."""
+    if isinstance(value, int) and not isinstance(value, bool) and value >= 0:
+        return value
+    if isinstance(value, str) and re.fullmatch(r"\d{1,2}:\d{2}:\d{2}:\d{2,3}", value.strip()):
+        return value.strip()
+    raise ctx.error(
+        ("take", name), "expected a frame number (0 = first frame) or a timecode HH:MM:SS:FF"
+    )
+
+
+def _movie_choice(ctx: Validator, raw: Mapping[str, Any], name: str, allowed) -> str | None:
+    """``take.matrix`` / ``take.range``: one of ``allowed`` (case and punctuation ignored,
+    ``bt709`` = ``rec709``)."""
+    if name not in raw:
+        return None
+    value = raw[name]
+    text = re.sub(r"[^a-z0-9]", "", str(value).lower()).replace("itur", "").replace("bt", "rec")
+    if text in allowed:
+        return text
+    raise ctx.error(("take", name), f"expected one of {', '.join(allowed)}, got {value!r}")
 
 
 def _wall_shots(

@@ -9,14 +9,11 @@ the sync marks in yellow. Drawn with matplotlib (Agg).
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import numpy as np
 
-from ocio_vp.plates.reader import read_region
-from ocio_vp.plates.take import BANDS, TakeReading
-from ocio_vp.plates.take_reader import band_rows, chunk_rows
+from ocio_vp.plates.take import TakeReading, rows_read
 
 __all__ = ["write_contact_sheet"]
 
@@ -35,10 +32,10 @@ def _thumbnail(reading: TakeReading) -> tuple[np.ndarray, int, int]:
     info = reading.info
     step = max(1, -(-info.width // _THUMB_WIDTH))
     rows = []
+    read = reading.frame_reader(index)
     for y in range(info.y, info.y + info.height, step * 64):
         y1 = min(y + step * 64, info.y + info.height)
-        frame_info = dataclasses.replace(info, path=str(reading.paths[index]))
-        band = read_region(frame_info, (info.x, y, info.x + info.width, y1))
+        band = read((info.x, y, info.x + info.width, y1))
         rows.append(band[::step, ::step])
     image = np.concatenate(rows, axis=0)
     return tone_map(image, white=float(np.max(brightest.mean)) * 1.1), step, frame
@@ -61,8 +58,7 @@ def _draw_frame(ax, reading: TakeReading) -> None:
             linewidth=1.5,
         )
     )
-    chunk = chunk_rows(reading.paths[0])
-    for ya, yb in band_rows(reading.info, reading.region, BANDS, chunk):
+    for ya, yb in rows_read(reading.info, reading.region, reading.movie)[1]:
         ax.plot(
             [(x0 - ox) / step, (x1 - ox) / step],
             [(ya + yb) / 2 / step] * 2,

@@ -39,7 +39,13 @@ def _working_image(info: PlateInfo) -> np.ndarray:
     import OpenImageIO as oiio
 
     height = max(1, round(_WORKING_WIDTH * info.height / info.width))
-    buf = oiio.ImageBuf(info.path)
+    if info.file_format.startswith("raw ("):  # camera raw: as measured, not as OIIO develops it
+        from ocio_vp.plates.reader import read_region
+
+        buf = oiio.ImageBuf(oiio.ImageSpec(info.width, info.height, 3, oiio.FLOAT))
+        buf.set_pixels(oiio.ROI(0, info.width, 0, info.height), read_region(info, info.box))
+    else:
+        buf = oiio.ImageBuf(info.path)
     roi = oiio.ROI(0, _WORKING_WIDTH, 0, height, 0, 1, 0, buf.nchannels)
     small = oiio.ImageBufAlgo.resize(buf, roi=roi)
     pixels = small.get_pixels(oiio.FLOAT)

@@ -460,9 +460,25 @@ def samples_document(
 def take_document(reading: TakeReading, where: Any = str) -> dict[str, Any]:
     """The take's alignment and every patch's frames and statistics (``samples.json``)."""
     a = reading.alignment
+    movie = reading.movie
+    decoded = {}
+    if movie is not None:  # how the movie's pixels became R'G'B' (and who said so)
+        decoded = {
+            "movie": {
+                "codec": movie.codec,
+                "pixel_format": movie.pix_fmt,
+                "matrix": movie.matrix,
+                "range": movie.range,
+                "matrix_and_range_from": movie.tags_from,
+                "frame_rate": str(movie.rate),
+                "start_timecode": movie.timecode,
+                "encoding": movie.encoding,
+            }
+        }
     return {
         "frames": where(reading.take.frames),
         "sequence": where(reading.take.sequence),
+        **decoded,
         "contact_sheet": TAKE_SHEET,
         "region": list(reading.region),
         "region_found": reading.region_found,

@@ -8,7 +8,9 @@ that cover the region), as float32. Nothing converts a whole plate to float64.
 Pixel coordinates follow OpenImageIO: origin at the top-left of the display window, x to the
 right, y down, pixel ``(x, y)`` covers ``[x, x+1) x [y, y+1)`` (its centre is at ``+0.5``).
 
-Linear plates (OpenEXR half/float, DPX, 16-bit TIFF) are used as they are. Display-referred
+Linear plates (OpenEXR half/float, DPX, 16-bit TIFF) are used as they are; camera raw plates
+(DNG, CR3, NEF, ARW, RAF, ...) are read by LibRaw as camera-native linear RGB
+(:mod:`ocio_vp.plates.raw`). Display-referred
 plates (8 bits per sample, or PNG/JPEG/WebP/HEIF of any depth) are refused unless the caller
 states their encoding, which is then decoded to linear on the region only (see
 :data:`ENCODINGS`).
@@ -24,6 +26,7 @@ import numpy as np
 
 from ocio_vp.errors import InputError
 from ocio_vp.formats.documents import check_regular_file
+from ocio_vp.plates.raw import is_raw
 
 __all__ = [
     "DISPLAY_FORMATS",
@@ -187,6 +190,8 @@ def open_plate(
         Missing or unreadable file, no R/G/B channels, a display-referred plate without encoding.
     """
     source = str(path)
+    if is_raw(source):
+        return _open_raw(source, encoding)
     inp = _open_input(source)
     try:
         if subimage and not inp.seek_subimage(subimage, 0):
@@ -238,6 +243,34 @@ def open_plate(
     )
 
 
+def _open_raw(source: str, encoding: str | None) -> PlateInfo:
+    """A camera raw plate's header (:mod:`ocio_vp.plates.raw`): linear by definition."""
+    from ocio_vp.plates.raw import DEFAULT_DEMOSAIC, raw_mosaic
+
+    if encoding not in (None, "linear"):
+        raise InputError(
+            f"a camera raw plate is linear sensor data: remove its encoding ({encoding!r})",
+            source=source,
+        )
+    raw = raw_mosaic(source)
+    height, width = raw.mosaic.shape
+    return PlateInfo(
+        path=source,
+        file_format=f"raw (LibRaw, {DEFAULT_DEMOSAIC} demosaic)",
+        x=0,
+        y=0,
+        width=int(width),
+        height=int(height),
+        channel_names=("R", "G", "B"),
+        rgb=(0, 1, 2),
+        bits=16,
+        is_float=False,
+        tile_width=0,
+        tile_height=0,
+        encoding="linear",
+    )
+
+
 def check_box(info: PlateInfo, box: tuple[int, int, int, int], *, what: str = "region") -> None:
     """Raise :class:`InputError` unless ``box`` (x0, y0, x1, y1) is non-empty and inside."""
     x0, y0, x1, y1 = box
@@ -271,6 +304,10 @@ def read_region(
 
     info = plate if isinstance(plate, PlateInfo) else open_plate(plate, encoding=encoding)
     check_box(info, box)
+    if info.file_format.startswith("raw ("):
+        from ocio_vp.plates.raw import read_raw
+
+        return read_raw(info.path, tuple(int(v) for v in box))  # type: ignore[arg-type]
     x0, y0, x1, y1 = (int(v) for v in box)
     ch0, ch1 = min(info.rgb), max(info.rgb) + 1
     select = [c - ch0 for c in info.rgb]

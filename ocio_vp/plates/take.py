@@ -33,7 +33,16 @@ import numpy as np
 from ocio_vp.errors import InputError
 from ocio_vp.patterns.sequence import MEASURED_KINDS, Patch, PatternSequence
 from ocio_vp.plates.alignment import GUARD, Alignment, align_take, kept_frames
-from ocio_vp.plates.reader import PlateInfo, check_box, linearise
+from ocio_vp.plates.movie import (
+    MovieInfo,
+    is_movie,
+    movie_rows,
+    open_movie,
+    read_movie_frame,
+    reduced_frame,
+    scan_movie,
+)
+from ocio_vp.plates.reader import PlateInfo, check_box, linearise, read_region
 from ocio_vp.plates.take_reader import (
     FrameStats,
     band_rows,
@@ -51,6 +60,7 @@ __all__ = [
     "TakeReading",
     "TakeRef",
     "measure_take",
+    "rows_read",
 ]
 
 #: Bands of rows read per kept frame (each a whole number of the file's chunks).
@@ -79,6 +89,12 @@ class TakeRef:
     layer: str | None = None
     clip_level: float | None = None
     key: str = "take"
+    #: A movie's part to measure (frame numbers from 0, or timecode) and the Y'CbCr matrix
+    #: and range when the stream does not declare them (:mod:`ocio_vp.plates.movie`).
+    in_point: int | str | None = None
+    out_point: int | str | None = None
+    matrix: str | None = None
+    range: str | None = None
 
 
 @dataclass(frozen=True)
@@ -112,6 +128,15 @@ class TakeReading:
     warnings: tuple[str, ...] = ()
     clip_level: float | None = None
     paths: tuple[Path, ...] = field(default=(), repr=False)
+    #: The movie the take was read from (``paths`` is then that one file), else None.
+    movie: MovieInfo | None = None
+
+    def frame_reader(self, index: int) -> Callable[[tuple[int, int, int, int]], np.ndarray]:
+        """``read(box)`` of the frame at position ``index`` of :attr:`numbers` (linear RGB)."""
+        if self.movie is not None:
+            return read_movie_frame(self.movie, int(self.numbers[index]))
+        frame = dataclasses.replace(self.info, path=str(self.paths[index]))
+        return lambda box: read_region(frame, box)
 
     @property
     def black(self) -> np.ndarray:
@@ -209,10 +234,86 @@ def _patch_frames(measured, alignment: Alignment, numbers: np.ndarray, source, k
     return windows, kept
 
 
-def _signal_rows(info: PlateInfo, region: tuple[int, int, int, int], chunk: int):
-    """The one band of rows at the region's middle the alignment reads."""
-    rows = band_rows(info, region, 1, chunk)
-    return rows[:1]
+def rows_read(
+    info: PlateInfo, region: tuple[int, int, int, int], movie: MovieInfo | None
+) -> tuple[list[tuple[int, int]], list[tuple[int, int]]]:
+    """(the band of rows at the region's middle the alignment reads, the :data:`BANDS` bands
+    read in each kept frame): whole chunks of an image file; a few rows of a movie
+    (:func:`ocio_vp.plates.movie.movie_rows`)."""
+    if movie is not None:
+        middle = movie_rows(region, 1)[0]
+        centre = (region[1] + region[3] - (middle[1] - middle[0])) // 4 * 2
+        centre = min(max(centre, region[1]), region[3] - (middle[1] - middle[0]))
+        return [(centre, centre + middle[1] - middle[0])], movie_rows(region, BANDS)
+    chunk = chunk_rows(info.path)
+    return band_rows(info, region, 1, chunk)[:1], band_rows(info, region, BANDS, chunk)
+
+
+@dataclass(frozen=True)
+class _Scan:
+    """What one pass over the take gave: frame numbers, the alignment's per-frame signal, and
+    a function giving the measuring bands' stats of frames by position (reading them then,
+    for a sequence of files; kept from the pass, for a movie)."""
+
+    numbers: np.ndarray
+    signal: np.ndarray
+    bands: Callable[[np.ndarray], list[FrameStats]]
+
+
+def _open_frames(
+    take: TakeRef, source
+) -> tuple[np.ndarray, list[Path], PlateInfo, MovieInfo | None]:
+    """The take's frame numbers, files, header and (for a movie) the movie's header."""
+    if not is_movie(take.frames):
+        numbers, paths = _take_frames(take, source)
+        return numbers, paths, open_take(paths[0], encoding=take.encoding, layer=take.layer), None
+    movie = open_movie(
+        take.frames,
+        encoding=take.encoding,
+        matrix=take.matrix,
+        range_=take.range,
+        in_point=take.in_point,
+        out_point=take.out_point,
+    )
+    end = movie.last + 1 if movie.last is not None else max(movie.frames, movie.first + 1)
+    numbers = np.arange(movie.first, end, dtype=np.float64)
+    return numbers, [take.frames], movie.plate_info(), movie
+
+
+def _scan(take, frames, region, clip, on_progress, source) -> _Scan:
+    """The pass over every frame (see :class:`_Scan`)."""
+    numbers, paths, info, movie = frames
+    tick = (lambda: on_progress("frame", 1)) if on_progress else None
+    signal_rows, rows = rows_read(info, region, movie)
+    if movie is not None:
+        if on_progress:
+            on_progress("decoding", len(numbers))
+        numbers, signal_stats, band_stats = scan_movie(
+            movie, region, signal_rows, rows, clip=clip, on_frame=tick
+        )
+        if len(numbers) < 8:
+            raise InputError(
+                f"the take has {len(numbers)} frames: too short to hold the sequence",
+                source=source,
+                key=take.key,
+            )
+        return _Scan(
+            numbers,
+            np.array([s.mean for s in signal_stats]),
+            lambda wanted: [band_stats[i] for i in wanted.tolist()],
+        )
+    if on_progress:
+        on_progress("aligning", len(paths))
+    signal_stats = read_frame_stats(paths, info, region, signal_rows, on_frame=tick)
+
+    def bands(wanted: np.ndarray) -> list[FrameStats]:
+        if on_progress:
+            on_progress("measuring", len(wanted))
+        return read_frame_stats(
+            [paths[i] for i in wanted], info, region, rows, clip=clip, on_frame=tick
+        )
+
+    return _Scan(numbers, np.array([s.mean for s in signal_stats]), bands)
 
 
 def measure_take(
@@ -224,7 +325,8 @@ def measure_take(
     """Measure ``take`` against its sequence (see the module docstring).
 
     ``on_progress(stage, frames)`` is called before each pass over frames ("aligning",
-    "measuring") with the number of frames it will read, then with ("frame", 1) per frame.
+    "measuring"; "decoding" for a movie's one pass) with the number of frames it will read,
+    then with ("frame", 1) per frame.
 
     Raises
     ------
@@ -235,33 +337,25 @@ def measure_take(
     from ocio_vp.plates.wall_region import find_wall
 
     sequence = load_sequence(take.sequence)
-    numbers, paths = _take_frames(take, source)
-    info = open_take(paths[0], encoding=take.encoding, layer=take.layer)
+    frames = _open_frames(take, source)
+    numbers, paths, info, movie = frames
     region = take.region
     if region is None:
-        region = find_wall(paths, info, source=f"{source}: {take.key}" if source else None)
+        reader = None
+        if movie is not None:
+            reader = (len(numbers), lambda k, f: reduced_frame(movie, int(numbers[k]), f))
+        where = f"{source}: {take.key}" if source else None
+        region = find_wall(paths, info, source=where, frames=reader)
     else:
         check_box(info, region)
-    chunk = chunk_rows(paths[0])
-    tick = (lambda: on_progress("frame", 1)) if on_progress else None
-    if on_progress:
-        on_progress("aligning", len(paths))
-    signal_stats = read_frame_stats(
-        paths, info, region, _signal_rows(info, region, chunk), on_frame=tick
-    )
-    signal = np.array([s.mean for s in signal_stats])
+    clip = _clip_level(info, take.clip_level)
+    scan = _scan(take, frames, region, clip, on_progress, source)
+    numbers, signal = scan.numbers, scan.signal
     alignment = align_take(signal, numbers, sequence, source=source)
     measured = [p for p in sequence.patches if p.kind in MEASURED_KINDS]
     windows, kept = _patch_frames(measured, alignment, numbers, source, take.key)
     wanted = np.unique(np.concatenate(list(kept.values())))
-    clip = _clip_level(info, take.clip_level)
-    if on_progress:
-        on_progress("measuring", len(wanted))
-    rows = band_rows(info, region, BANDS, chunk)
-    stats = read_frame_stats(
-        [paths[i] for i in wanted], info, region, rows, clip=clip, on_frame=tick
-    )
-    by_index = dict(zip(wanted.tolist(), stats, strict=True))
+    by_index = dict(zip(wanted.tolist(), scan.bands(wanted), strict=True))
     floor = 2e-3 * float(np.max(np.percentile(signal, 99.5, axis=0)))
     patches = {
         p.name: _reading(
@@ -286,6 +380,7 @@ def measure_take(
         patches=patches,
         clip_level=clip,
         paths=tuple(paths),
+        movie=movie,
     )
     _check_exposure(reading, by_index, kept, source)
     return dataclasses.replace(reading, warnings=tuple(_alignment_notes(reading)))

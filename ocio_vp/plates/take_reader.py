@@ -27,6 +27,7 @@ __all__ = [
     "FrameStats",
     "band_rows",
     "chunk_rows",
+    "frame_stats",
     "list_take_frames",
     "read_frame_stats",
     "take_threads",
@@ -150,18 +151,21 @@ def band_rows(
     return out
 
 
-def _stats(pixels: np.ndarray, clip: float | None) -> FrameStats:
-    flat = pixels.reshape(-1, 3).astype(np.float64)
-    peak = flat.max(axis=0)
+def frame_stats(pixels: np.ndarray, clip: float | None) -> FrameStats:
+    """:class:`FrameStats` of linear RGB ``pixels`` (..., 3); ``clip`` the clip level if known.
+    The channels are laid out one after the other first: reductions over a contiguous axis are
+    ~10x faster than over a strided one (it matters at a movie's frame rate)."""
+    channels = np.ascontiguousarray(np.asarray(pixels, dtype=np.float64).reshape(-1, 3).T)
+    peak = channels.max(axis=1)
     return FrameStats(
-        count=int(flat.shape[0]),
-        total=flat.sum(axis=0),
-        squares=np.einsum("ij,ij->j", flat, flat),
+        count=int(channels.shape[1]),
+        total=channels.sum(axis=1),
+        squares=np.einsum("ij,ij->i", channels, channels),
         peak=peak,
-        at_peak=np.count_nonzero(flat >= peak - 1e-6 * np.abs(peak), axis=0),
+        at_peak=np.count_nonzero(channels >= (peak - 1e-6 * np.abs(peak))[:, None], axis=1),
         at_clip=np.zeros(3, np.int64)
         if clip is None
-        else np.count_nonzero(flat >= clip * (1 - 1e-6), axis=0),
+        else np.count_nonzero(channels >= clip * (1 - 1e-6), axis=1),
     )
 
 
@@ -204,7 +208,7 @@ def _read_frame(
         raise InputError("NaN/Inf pixels in the wall region", source=path)
     if info.encoding != "linear":
         pixels = linearise(pixels, info.encoding)
-    return _stats(pixels, clip)
+    return frame_stats(pixels, clip)
 
 
 def take_threads() -> int:

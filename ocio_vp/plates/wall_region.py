@@ -15,7 +15,7 @@ stays (nearly) the same, so the wall is where the picture changes most over the 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -95,9 +95,17 @@ def largest_rectangle(mask: np.ndarray) -> tuple[int, int, int, int] | None:
 
 
 def find_wall(
-    paths: Sequence[Path], info: PlateInfo, *, source: object = None
+    paths: Sequence[Path],
+    info: PlateInfo,
+    *,
+    source: object = None,
+    frames: tuple[int, Callable[[int, int], np.ndarray]] | None = None,
 ) -> tuple[int, int, int, int]:
     """The wall's region ``(x0, y0, x1, y1)`` in pixels (see the module docstring).
+
+    ``frames``: for a take that is not one file a frame (a movie), its frame count and a
+    function giving frame ``k`` already reduced, ``reduced(k, factor)`` (cells_y, cells_x,
+    3); ``paths`` is then not read.
 
     Raises
     ------
@@ -105,12 +113,16 @@ def find_wall(
         When no part of the picture changes, or the part that does is too small.
     """
     factor = max(1, -(-max(info.width, info.height) // GRID))
-    picks = np.unique(np.linspace(0, len(paths) - 1, min(SAMPLES, len(paths))).round().astype(int))
-    frames = []
+    count = len(paths) if frames is None else frames[0]
+    picks = np.unique(np.linspace(0, count - 1, min(SAMPLES, count)).round().astype(int))
+    reduced = []
     for k in picks:
+        if frames is not None:
+            reduced.append(np.asarray(frames[1](int(k), factor), dtype=np.float64))
+            continue
         frame_info = info if k == 0 else dataclasses.replace(info, path=str(paths[k]))
-        frames.append(_reduced(frame_info, factor))
-    mask = wall_mask(np.stack(frames))
+        reduced.append(_reduced(frame_info, factor))
+    mask = wall_mask(np.stack(reduced))
     rect = largest_rectangle(mask)
     hint = "give the take's region: [x0, y0, x1, y1] in the capture file"
     if rect is None:

@@ -208,7 +208,11 @@ class PlateOptions:
     """How the simulated camera shoots: lens fall-off, noise, flat-field and footage frames.
 
     ``take``: film the wall playing the patterns in one take (:mod:`ocio_vp.simulator.take`)
-    for [SL] and the ramps, instead of photographing each primary.
+    for [SL] and the ramps, instead of photographing each primary; ``take_format``: ``exr``
+    (linear half-float frames) or a camera movie (``prores4444``, ``prores422``: ARRI LogC3,
+    Rec.709 legal range, :mod:`ocio_vp.simulator.movie`); ``lit_format``: the lit-chart plates
+    as ``exr`` or as camera raw, ``dng`` (the Bayer mosaic, the sensor clipping at 1.0 camera
+    unit as the take does, :mod:`ocio_vp.simulator.raw`).
     """
 
     vignetting: float = 0.05
@@ -218,6 +222,8 @@ class PlateOptions:
     footage_frames: int = 3
     seed: int = 0
     take: Any = None
+    take_format: str = "exr"
+    lit_format: str = "exr"
 
 
 def _grid(patches: int) -> tuple[int, int]:
@@ -397,8 +403,14 @@ def _capture_document(
         }
     else:
         document["take"] = {"frames": f"{TAKE_FOLDER}/{TAKE_NAME}", "sequence": sequence_ref}
+        if options.take_format != "exr":
+            document["take"] = {
+                "frames": f"{TAKE_FOLDER}/{TAKE_MOVIE}",
+                "sequence": sequence_ref,
+                "encoding": MOVIE_ENCODING,
+            }
     document["lit_chart"] = {
-        c: {"plate": f"lit_{c}.exr", "corners": CHART_CORNERS.tolist()}
+        c: {"plate": f"lit_{c}.{options.lit_format}", "corners": CHART_CORNERS.tolist()}
         for c in ("red", "green", "blue")
     }
     environments = []
@@ -446,7 +458,13 @@ def write_capture(
     (folder / "footage").mkdir(parents=True, exist_ok=True)
     names = set()
     for name, image in _plates(measurements, options):
-        write_plate(folder / name, image)
+        if options.lit_format == "dng" and name.startswith("lit_"):
+            from ocio_vp.simulator.raw import write_dng
+
+            name = name.removesuffix(".exr") + ".dng"
+            write_dng(folder / name, image)
+        else:
+            write_plate(folder / name, image)
         names.add(name)
         if bar is not None:
             bar.update(1)
@@ -473,6 +491,9 @@ def write_capture(
 #: Where the take goes in the plates folder, and its frames' names.
 TAKE_FOLDER = "take"
 TAKE_NAME = "A001.####.exr"
+#: The take as a camera movie (``PlateOptions.take_format``), and the log curve it is in.
+TAKE_MOVIE = "A001.mov"
+MOVIE_ENCODING = "ARRI LogC3"
 
 
 def practice_sequence() -> Any:
@@ -494,6 +515,20 @@ def _film_patterns(measurements, folder: Path, options: PlateOptions, sequence, 
         path = write_sequence_folder(practice_sequence(), folder / "patterns")
         sequence, ref = load_sequence(path), "patterns/sequence.yaml"
     on_frame = None if bar is None else (lambda: bar.update(1))
+    if options.take_format != "exr":
+        from ocio_vp.simulator.movie import write_movie
+
+        path = folder / TAKE_FOLDER / TAKE_MOVIE
+        write_movie(
+            sequence,
+            measurements.SL,
+            path,
+            options.take,
+            codec=options.take_format,
+            encoding=MOVIE_ENCODING,
+            on_frame=on_frame,
+        )
+        return ref
     write_take(sequence, measurements.SL, folder / TAKE_FOLDER, options.take, on_frame=on_frame)
     return ref
 
