@@ -249,7 +249,9 @@ def _half_frame(Q, src: np.ndarray, repeats: int) -> tuple[list, str]:
     return rows, text
 
 
-_CHILD = textwrap.dedent(
+#: ``python -c CHILD plain|apply OUT ARGS...``: a plain OpenImageIO read + write of each frame
+#: (the I/O limit) or ``ocio-vp apply``; prints its VmHWM in KiB and the exit code.
+CHILD = textwrap.dedent(
     """
     import os, sys
     mode, out, *rest = sys.argv[1:]
@@ -304,7 +306,7 @@ def _timed(cmd: list[str], runs: Runs, env: dict[str, str]) -> None:
 def _commands(post, frames: list[Path], root: Path, with_tools: bool) -> dict[str, list[str]]:
     solution = str(Path(post.config).parent)
     pattern = str(frames[0].parent / "plate.####.exr")
-    child = [sys.executable, "-c", _CHILD]
+    child = [sys.executable, "-c", CHILD]
     commands = {
         "plain OpenImageIO read + write (the I/O limit)": [
             *child,

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks import cached_bytecode, markdown_table
+from benchmarks.bench_apply import CHILD
 
 #: The environment variable naming the baseline checkout's Python.
 BASELINE_ENV = "OCIO_VP_BASELINE_PYTHON"
@@ -56,24 +57,6 @@ def _run(cmd: list[str], env: dict[str, str], cwd: Path) -> tuple[float, float]:
     if proc.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd[:6])}... exited {proc.returncode}: {proc.stderr[-400:]}")
     return wall, after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
-
-
-_PLAIN = """
-import os, sys
-import OpenImageIO as oiio
-out = sys.argv[1]
-os.makedirs(out, exist_ok=True)
-for src in sys.argv[2:]:
-    inp = oiio.ImageInput.open(src)
-    spec = inp.spec()
-    pixels = inp.read_image(0, 0, 0, spec.nchannels, spec.format)
-    inp.close()
-    dst = os.path.join(out, os.path.basename(src))
-    output = oiio.ImageOutput.create(dst)
-    output.open(dst, spec)
-    output.write_image(pixels)
-    output.close()
-"""
 
 
 def _inputs(root: Path, quick: bool) -> dict[str, Path]:
@@ -214,7 +197,7 @@ def _table(cells: dict, rows: list[str], plain: Cell | None, targets: dict[str, 
 def _apply_section(pythons, files, root, env, count: int, rounds: int) -> str:
     frames = _frames(root, files["master"], count)
     commands = {("plain read + write", "this"): [
-        pythons["this"], "-c", _PLAIN, str(root / "o" / "plain"), *map(str, frames),
+        pythons["this"], "-c", CHILD, "plain", str(root / "o" / "plain"), *map(str, frames),
     ]}  # fmt: skip
     commands.update(_commands(pythons, files, root, frames))
     load = os.getloadavg()[0]
