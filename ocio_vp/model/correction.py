@@ -144,8 +144,8 @@ PROTECTION = ProtectionPoint(
     negative=(0.2, 0.5),
     emitters=0.15,
     worst_emitters=0.30,
-    reflectances=0.89,
-    worst_reflectances=0.95,
+    reflectances=0.91,
+    worst_reflectances=0.97,
 )
 #: ``--protect-emitters``: the brightness fade (:attr:`ProtectionPoint.bright`).
 DEFAULT_BRIGHT = PROTECTION.bright
