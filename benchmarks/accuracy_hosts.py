@@ -188,6 +188,9 @@ def hosts_section(quick: bool, methods: Sequence[str], progress=None) -> str:
         [
             "## Host agreement: `apply` against the config's processor",
             "",
+            "This section alone: `python -m benchmarks.bench_accuracy --hosts-only --out "
+            "docs/accuracy.md` (replaces only this section; a few minutes).",
+            "",
             "Each solve written by the product's writer (`ocio_vp.ocio.writer.write_environment`) "
             "and read back as `apply` reads it; the same float32 pixels through `apply`'s pixel "
             "transform (the exact model for a non-linear Q) and through the written config's "

@@ -20,11 +20,13 @@ Then the bad-patch study (:func:`outlier_study`): false alarms of the screening
 (:func:`ocio_vp.correction.outliers.inconsistent_patches`) on clean charts, and what one or two
 corrupted patches do to the corrected held-out colours with and without it, against the noise
 floor; ``--screening-only`` runs it alone (``--quick``: both cameras, default LEDs, the paper's
-environments, 3 draws; about 20 s).
+environments, 3 draws; about 20 s). ``--hosts-only`` runs the host agreement alone (a few
+minutes).
 
-Run alone: ``python -m benchmarks.bench_accuracy [--quick] [--screening-only] [--methods ...]
-[--out FILE]``; by ``python -m benchmarks.run`` it writes ``docs/accuracy.md``. With
-``--screening-only``, ``--out`` naming an existing document replaces only its bad-patch section.
+Run alone: ``python -m benchmarks.bench_accuracy [--quick] [--screening-only | --hosts-only]
+[--methods ...] [--out FILE]``; by ``python -m benchmarks.run`` it writes ``docs/accuracy.md``.
+With ``--screening-only`` or ``--hosts-only``, ``--out`` naming an existing document replaces
+only that section (the rest, the skin section included, is kept as it is).
 """
 
 from __future__ import annotations
@@ -366,13 +368,25 @@ def main(argv=None) -> int:
         help="only the bad-patch study (--quick: both cameras, default LEDs, 3 draws); with "
         "--out naming an existing document, only its bad-patch section is replaced",
     )
+    parser.add_argument(
+        "--hosts-only",
+        action="store_true",
+        help="only the host agreement (apply against the written config); with --out naming an "
+        "existing document, only its host-agreement section is replaced",
+    )
     args = parser.parse_args(argv)
+    if args.screening_only and args.hosts_only:
+        parser.error("--screening-only and --hosts-only each run one section: give one")
     if args.screening_only:
         text = screening_section(args.quick)
+    elif args.hosts_only:
+        from benchmarks.accuracy_hosts import hosts_section
+
+        text = hosts_section(args.quick, config(args.quick, args.methods).methods, _progress)
     else:
         text = run(quick=args.quick, methods=args.methods)
     if args.out:
-        if args.screening_only:
+        if args.screening_only or args.hosts_only:
             text = _with_section(args.out, text)
         with open(args.out, "w", encoding="utf-8") as handle:
             handle.write(text + "\n")
@@ -382,9 +396,9 @@ def main(argv=None) -> int:
 
 
 def _with_section(path: str, section: str) -> str:
-    """The document at ``path`` with its bad-patch section (from its heading to the next
-    heading of the same level, or the end) replaced by ``section``; ``section`` alone when the
-    file or the section does not exist yet."""
+    """The document at ``path`` with the section under ``section``'s heading (from that heading
+    to the next heading of the same level, or the end) replaced by ``section``; ``section``
+    alone when the file or the section does not exist yet."""
     heading = section.split("\n", 1)[0]
     try:
         with open(path, encoding="utf-8") as handle:
