@@ -25,13 +25,14 @@ from __future__ import annotations
 import tempfile
 from collections import defaultdict
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from benchmarks import markdown_table
 
-__all__ = ["PROTECT", "host_agreement", "hosts_config", "hosts_section"]
+__all__ = ["PROTECT", "WorstPixel", "host_agreement", "hosts_config", "hosts_section"]
 
 #: The label of ``--method auto --protect-emitters`` beside the registry's methods.
 PROTECT = "auto --protect-emitters"
@@ -86,17 +87,106 @@ def _outputs(directory: Path, pixels: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return applied[0].astype(np.float64), configured[0].astype(np.float64)
 
 
-def _delta_e(a: np.ndarray, b: np.ndarray, matrix: np.ndarray, white: np.ndarray) -> np.ndarray:
+def _lab(x: np.ndarray, matrix: np.ndarray, white: np.ndarray) -> np.ndarray:
+    """CIELAB of camera RGB ``x`` through ``matrix``, the scene white at Y = 1 its reference."""
     import colour
 
     white_xyz = white @ matrix.T
     scale = 1.0 / white_xyz[1]
-    xy = colour.XYZ_to_xy(white_xyz * scale)
-    lab = [colour.XYZ_to_Lab(x @ matrix.T * scale, xy) for x in (a, b)]
-    return np.asarray(colour.delta_E(*lab, method="CIE 2000"))
+    return np.asarray(colour.XYZ_to_Lab(x @ matrix.T * scale, colour.XYZ_to_xy(white_xyz * scale)))
 
 
-def _one(stage, measurements, env, method: str, reflectances) -> tuple[np.ndarray, np.ndarray]:
+def _delta_e(a: np.ndarray, b: np.ndarray, matrix: np.ndarray, white: np.ndarray) -> np.ndarray:
+    import colour
+
+    return np.asarray(
+        colour.delta_E(_lab(a, matrix, white), _lab(b, matrix, white), method="CIE 2000")
+    )
+
+
+@dataclass(frozen=True)
+class WorstPixel:
+    """A cell's worst pixel, and what the model does there: its kind (:data:`KINDS`), its
+    luminance relative to the scene white's, ``apply``'s and the config's outputs (camera RGB)
+    and, where the model is (or holds) a bounded root-polynomial, the pixel's gauge in its
+    chart's domain, the fade's (start, end) and the polynomial's weight there; with the emitter
+    protection, its weight there (1: the inner model, 0: the identity)."""
+
+    camera: str
+    delta_e: float
+    kind: str
+    luminance: float
+    applied: tuple[float, float, float]
+    configured: tuple[float, float, float]
+    lightness: tuple[float, float]
+    gauge: float | None = None
+    fade: tuple[float, float] | None = None
+    weight: float | None = None
+    protection: float | None = None
+
+    def miss(self) -> tuple[str, float]:
+        """(channel, relative miss) of the channel the config misses most (of those above 1 %
+        of the pixel's largest)."""
+        a, c = np.asarray(self.applied), np.asarray(self.configured)
+        relative = np.abs(c - a) / np.maximum(np.abs(a), 1e-300)
+        relative[np.abs(a) < 0.01 * np.abs(a).max()] = 0.0
+        k = int(np.argmax(relative))
+        return "RGB"[k], float(relative[k])
+
+    def describe(self) -> str:
+        channel, relative = self.miss()
+        text = (
+            f"{self.kind} at {self.luminance:.2g}x the white's luminance ({self.camera}): "
+            f"ΔE2000 {self.delta_e:.2f}, the config {100 * relative:.2g} % off `apply` in "
+            f"{channel}"
+        )
+        if min(self.lightness) < 0:
+            text += (
+                f"; its L* {self.lightness[0]:.3g} (`apply`) and {self.lightness[1]:.3g} (config) "
+                "through the camera's matrix: no colour CIELAB defines (L* >= 0), so its "
+                "ΔE2000 is no perceptual figure"
+            )
+        if self.protection is not None:
+            text += f"; the emitter protection's weight {self.protection:.2g}"
+        if self.gauge is None or self.fade is None or self.weight is None:
+            return text
+        place = "inside" if self.fade[0] < self.gauge < self.fade[1] else "outside"
+        return (
+            f"{text}; gauge {self.gauge:.2f}, {place} the fade from {self.fade[0]:g} to "
+            f"{self.fade[1]:g} (the polynomial's weight {self.weight:.2g})"
+        )
+
+
+def _worst_pixel(camera, solution, pixels, kinds, applied, configured, errors, matrix, white):
+    from ocio_vp.model.correction import ProtectedCorrection, RootPolynomialCorrection
+
+    i = int(np.argmax(errors))
+    luminance = float((applied[i] @ matrix.T)[1] / (white @ matrix.T)[1])
+    polynomial = solution.correction
+    x = pixels[i : i + 1].astype(np.float64)
+    place: dict = {}
+    if isinstance(polynomial, ProtectedCorrection):
+        place["protection"] = float(polynomial.weight(x)[0])
+        polynomial = polynomial.inner
+    if isinstance(polynomial, RootPolynomialCorrection) and polynomial.domain is not None:
+        place |= {
+            "gauge": float(polynomial.domain.gauge(x)[0]),
+            "fade": tuple(polynomial.fade),
+            "weight": float(polynomial.weight(x)[0]),
+        }
+    lightness = (
+        float(_lab(applied[i], matrix, white)[0]),
+        float(_lab(configured[i], matrix, white)[0]),
+    )
+    return WorstPixel(
+        camera, float(errors[i]), KINDS[int(kinds[i])], luminance,
+        tuple(applied[i].tolist()), tuple(configured[i].tolist()), lightness, **place,
+    )  # fmt: skip
+
+
+def _one(stage, measurements, env, method: str, reflectances):
+    """(ΔE2000 per pixel, pixel kinds, the worst pixel, whether CIELAB defines the pixel: L* >= 0
+    in both outputs) of one cell on one stage."""
     from ocio_vp.ocio.writer import write_environment
     from ocio_vp.pipeline import solve_environment
     from ocio_vp.simulator.stage import camera_rgb, environment_spectrum
@@ -109,16 +199,24 @@ def _one(stage, measurements, env, method: str, reflectances) -> tuple[np.ndarra
     pixels, kinds = _pixels(stage, env.name, solution, reflectances)
     with tempfile.TemporaryDirectory(prefix="ocio_vp_hosts_") as folder:
         write_environment(solution, Path(folder))
-        applied, configured = _outputs(Path(folder), pixels)
+        applied, configured = _outputs(Path(folder), pixels.copy())
     white = camera_rgb(stage, environment_spectrum(stage, env.name))
-    return _delta_e(applied, configured, camera_matrix(stage), white), kinds
+    matrix = camera_matrix(stage)
+    errors = _delta_e(applied, configured, matrix, white)
+    worst = _worst_pixel(
+        stage.camera_name, solution, pixels, kinds, applied, configured, errors, matrix, white
+    )
+    defined = (_lab(applied, matrix, white)[:, 0] >= 0) & (
+        _lab(configured, matrix, white)[:, 0] >= 0
+    )
+    return errors, kinds, worst, defined
 
 
 def host_agreement(
     quick: bool, methods: Sequence[str], progress: Callable[[str], None] | None = None
-) -> tuple[dict, dict, float]:
-    """({(method, environment): (ΔE2000, pixel kind) arrays}, {(method, environment): refused
-    reason}, seconds)."""
+) -> tuple[dict, dict, dict, float]:
+    """({(method, environment): (ΔE2000, pixel kind, CIELAB defines the pixel) arrays},
+    {(method, environment): refused reason}, {(method, environment): its worst pixel}, seconds)."""
     import time
 
     from benchmarks.bench_accuracy import GENERAL_SETS, Results, _simulate
@@ -132,6 +230,7 @@ def host_agreement(
     reflectances = np.vstack([sets[name] for name in GENERAL_SETS])
     errors: dict = defaultdict(list)
     refused: dict = {}
+    worsts: dict[tuple[str, str], WorstPixel] = {}
     for camera in cameras:
         for leds in led_sets:
             stage = spectral_stage(camera=camera, leds=leds)
@@ -140,18 +239,21 @@ def host_agreement(
                 m = noisy_measurements(clean, noise, np.random.default_rng([seed, 31]))
                 for env in m.environments:
                     for method in (*methods, PROTECT):
+                        key = (method, env.name)
                         try:
-                            errors[(method, env.name)].append(_one(stage, m, env, method,
-                                                                   reflectances))  # fmt: skip
+                            *cell, worst, defined = _one(stage, m, env, method, reflectances)
                         except InputError as error:
-                            refused[(method, env.name)] = error.problem
+                            refused[key] = error.problem
+                            continue
+                        errors[key].append((*cell, defined))
+                        if key not in worsts or worst.delta_e > worsts[key].delta_e:
+                            worsts[key] = worst
             if progress:
                 progress(f"hosts: {camera} done")
     pooled = {
-        k: (np.concatenate([e for e, _ in v]), np.concatenate([kind for _, kind in v]))
-        for k, v in errors.items()
+        k: tuple(np.concatenate(parts) for parts in zip(*v, strict=True)) for k, v in errors.items()
     }
-    return pooled, refused, time.perf_counter() - start
+    return pooled, refused, worsts, time.perf_counter() - start
 
 
 def _cell(errors: np.ndarray) -> str:
@@ -159,10 +261,10 @@ def _cell(errors: np.ndarray) -> str:
 
 
 def hosts_section(quick: bool, methods: Sequence[str], progress=None) -> str:
-    errors, refused, seconds = host_agreement(quick, methods, progress)
+    errors, refused, worsts, seconds = host_agreement(quick, methods, progress)
     cameras, led_sets, environments, noise, seeds = hosts_config(quick)
     names = [*methods, PROTECT]
-    rows, misses = [], []
+    rows, misses, explained = [], [], []
     for env in environments:
         cells = []
         for method in names:
@@ -173,6 +275,12 @@ def hosts_section(quick: bool, methods: Sequence[str], progress=None) -> str:
             cells.append(_cell(e))
             if np.percentile(e, 99) > P99_TARGET or np.max(e) > WORST_TARGET:
                 misses.append(f"`{method}` / {env}")
+                if method in ("auto", PROTECT):
+                    defined = e[errors[(method, env)][2]]
+                    explained.append(
+                        f"- `{method}` / {env}: {worsts[(method, env)].describe()}. Over the "
+                        f"cell's pixels CIELAB defines (L* >= 0): {_cell(defined)}."
+                    )
         rows.append((env, *cells))
     table = markdown_table(["environment", *[f"`{m}`" for m in names]], rows)
     by_kind = []
@@ -205,6 +313,22 @@ def hosts_section(quick: bool, methods: Sequence[str], progress=None) -> str:
             "",
             "Outside the target: " + (", ".join(misses) + "." if misses else "none."),
             "",
+            *(
+                [
+                    "The default's cells outside the target, at their worst pixel: its kind and "
+                    "luminance, how far the config is from `apply` there and, where the model "
+                    "holds a bounded root-polynomial, the pixel's gauge (where its colour lies in "
+                    "the chart's domain: 1 on the hull's edge) against the fade (where the model "
+                    "blends the polynomial into its 3x3; the blend creases along the rays through "
+                    "the hull's corners, which the LUT's cells cross diagonally). A miss of the "
+                    "same relative size weighs more ΔE2000 the brighter the pixel.",
+                    "",
+                    *explained,
+                    "",
+                ]
+                if explained
+                else []
+            ),
             "By kind of pixel, every environment above pooled (99th percentile / worst):",
             "",
             kinds_table,
