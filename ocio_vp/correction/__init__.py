@@ -54,6 +54,28 @@ from ocio_vp.correction.linear import (
     q_white_preserving,
     target_rank,
 )
+from ocio_vp.correction.outliers import (
+    COLORCHECKER_NAMES,
+    MAX_EXCLUDED,
+    MAX_EXCLUDED_FRACTION,
+    OUTLIER_FLOOR,
+    OUTLIER_RELATIVE,
+    OUTLIER_RELATIVE_NARROW,
+    OUTLIER_Z,
+    Inconsistency,
+    inconsistent_patches,
+    patch_name,
+    patch_scores,
+)
+from ocio_vp.correction.perceptual import (
+    PERCEPTUAL_METRICS,
+    default_camera_to_xyz,
+    make_q_perceptual,
+    mean_delta_e,
+    normalising_white,
+    patch_delta_e,
+    q_perceptual,
+)
 from ocio_vp.correction.problem import (
     QFit,
     QProblem,
@@ -64,6 +86,7 @@ from ocio_vp.correction.registry import (
     q_least_squares,
     solve_post_correction,
 )
+from ocio_vp.correction.root_polynomial import DEPRECATED as _DEPRECATED
 from ocio_vp.correction.root_polynomial import (
     ROOT_POLYNOMIAL_TERMS,
     apply_root_polynomial,
@@ -83,6 +106,9 @@ from ocio_vp.correction.validation import (
     cross_validated_error,
     held_out_predictions,
 )
+from ocio_vp.deprecation import deprecated_names
+
+__getattr__ = deprecated_names(__name__, _DEPRECATED)
 
 __all__ = [
     "AUTO_LADDER",

@@ -32,10 +32,12 @@ from ocio_vp.correction.extrapolation import FADES, choose_fade
 from ocio_vp.correction.linear import LOO_KERNELS, loo_root_polynomial
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
 from ocio_vp.correction.skin import SkinRows, with_rows
+from ocio_vp.deprecation import deprecated_names
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import error_relative_to_white
 from ocio_vp.model.correction import (
     FitDomain,
+    MatrixCorrection,
     RootPolynomialCorrection,
     fit_domain,
 )
@@ -350,3 +352,22 @@ def _line_search(C, t, y, r, norm, todo, dy, halvings: int = 30) -> np.ndarray:
     rows = np.flatnonzero(found)
     y[done], r[done], norm[done] = trials[rows, k], r_trials[rows, k], n_trials[rows, k]
     return rest[~found]
+
+
+def _post_correction(Q: np.ndarray, notes: dict | None) -> Callable[[np.ndarray], np.ndarray]:
+    """The deprecated ``post_correction(Q, notes)``: the correction a solve's ``Q`` and method
+    notes described (a root-polynomial, unbounded, when the notes carry one, else Q)."""
+    model = (notes or {}).get("root_polynomial")
+    if model is not None:
+        return RootPolynomialCorrection(model["coefficients"], Q).apply
+    return MatrixCorrection(Q).apply
+
+
+#: Names that left this module (:mod:`ocio_vp.deprecation`).
+DEPRECATED = {
+    "post_correction": (
+        "Solution.post_correction.apply (ocio_vp.model: correction_from_dict)",
+        lambda: _post_correction,
+    )
+}
+__getattr__ = deprecated_names(__name__, DEPRECATED)

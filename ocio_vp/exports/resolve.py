@@ -30,6 +30,7 @@ import numpy as np
 import PyOpenColorIO as OCIO
 
 from ocio_vp.correction.root_polynomial import root_polynomial_term_powers
+from ocio_vp.deprecation import deprecated_names
 from ocio_vp.exports.cube import CUBE_LIMIT, fit_cube
 from ocio_vp.exports.source import (
     DEFAULT_CUBES,
@@ -57,6 +58,14 @@ __all__ = [
 ]
 
 MANIFEST = "manifest.json"
+
+__getattr__ = deprecated_names(
+    __name__,
+    {
+        name: (f"ocio_vp.exports.source.{name}", f"ocio_vp.exports.source:{name}")
+        for name in ("DEFAULT_CUBE_SIZE", "DEFAULT_CUBE_RANGE")
+    },
+)
 
 
 def resolve_transforms(source: ExportSource) -> dict[str, tuple[str, str, str]]:

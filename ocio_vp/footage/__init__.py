@@ -2,6 +2,8 @@
 over a local pool or a Dask cluster.
 """
 
+from ocio_vp.deprecation import deprecated_names
+from ocio_vp.footage.apply import DEPRECATED as _DEPRECATED
 from ocio_vp.footage.apply import (
     OPTIMIZATIONS,
     TRANSFORMS,
@@ -35,6 +37,8 @@ from ocio_vp.footage.sequences import (
     parse_frame_range,
 )
 from ocio_vp.footage.stream import apply_frames
+
+__getattr__ = deprecated_names(__name__, _DEPRECATED)
 
 __all__ = [
     "OPTIMIZATIONS",

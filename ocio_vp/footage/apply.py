@@ -42,6 +42,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from ocio_vp.choices import OPTIMIZATIONS  # OCIO optimisation levels (bench_ocio_optim)
+from ocio_vp.deprecation import deprecated_names
 from ocio_vp.errors import InputError
 from ocio_vp.footage.sequences import MARK, SOLUTION_MARK, foreign_output_error, output_solution
 from ocio_vp.model.correction import correction_from_dict, correction_to_dict
@@ -622,3 +623,21 @@ def set_io_threads(threads: int) -> None:
 
     oiio.attribute("threads", max(1, threads))
     oiio.attribute("exr_threads", max(1, threads))
+
+
+def _root_polynomial_transform(coefficients: Any, band: int = 1 << 14) -> ModelTransform:
+    """The deprecated ``RootPolynomialTransform(coefficients, band)``: the unbounded
+    root-polynomial ``C e(x)`` as a :class:`ModelTransform`."""
+    from ocio_vp.model.correction import RootPolynomialCorrection
+
+    return ModelTransform(RootPolynomialCorrection(coefficients, np.eye(3)), band)
+
+
+#: Names that left this module (:mod:`ocio_vp.deprecation`).
+DEPRECATED = {
+    "RootPolynomialTransform": (
+        "ModelTransform(RootPolynomialCorrection(...)) (ocio_vp.model)",
+        lambda: _root_polynomial_transform,
+    )
+}
+__getattr__ = deprecated_names(__name__, DEPRECATED)

@@ -7,6 +7,7 @@ report): matrices as 3x3 row-major lists, ``N`` null when it was not solved (the
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 from collections.abc import Mapping
@@ -16,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from ocio_vp.deprecation import warn_deprecated
 from ocio_vp.errors import InputError, excerpt
 from ocio_vp.formats.diagnostics import Diagnostics
 from ocio_vp.formats.documents import read_document
@@ -105,6 +107,38 @@ class Solution:
     @property
     def in_frustum_offset(self) -> np.ndarray:
         return np.zeros(3) if self.black_level_offset is None else self.black_level_offset
+
+
+_dataclass_init = Solution.__init__
+
+
+@functools.wraps(_dataclass_init)
+def _init(self: Solution, *args: Any, Q: Any = None, **kwargs: Any) -> None:
+    """Solution's constructor, still taking the deprecated ``Q`` (keyword, or positional where
+    ``post_correction`` now is): the post-correction's matrix, now derived from it. A ``Q``
+    alone becomes a matrix correction; beside ``post_correction`` it must be its matrix."""
+    given = list(args)
+    if len(given) > 7 and not isinstance(given[7], PostCorrection):
+        Q, given[7] = given[7], None
+    if Q is not None:
+        warn_deprecated("Solution(Q=...)", "Solution(post_correction=MatrixCorrection(Q))")
+        Q = np.asarray(Q, dtype=np.float64)
+        correction = given[7] if len(given) > 7 else kwargs.get("post_correction")
+        if correction is None:
+            correction = MatrixCorrection(Q)
+        elif (relative := q_difference(Q, correction.matrix)) > Q_TOLERANCE:
+            raise ValueError(
+                f"Q differs from post_correction's matrix by {relative:.2g} relative (more "
+                f"than {Q_TOLERANCE:g}); Q is derived from post_correction: leave Q out"
+            )
+        if len(given) > 7:
+            given[7] = correction
+        else:
+            kwargs["post_correction"] = correction
+    _dataclass_init(self, *given, **kwargs)
+
+
+Solution.__init__ = _init  # type: ignore[method-assign]
 
 
 def solution_to_dict(solution: Solution) -> dict[str, Any]:
@@ -338,11 +372,16 @@ def _post_correction(data: dict[str, Any], Q: np.ndarray, source: str) -> PostCo
 Q_TOLERANCE = 1e-9
 
 
+def q_difference(Q: np.ndarray, matrix: np.ndarray) -> float:
+    """Largest difference of ``Q`` from ``matrix``, relative to ``matrix``'s largest entry."""
+    scale = max(float(np.max(np.abs(matrix))), np.finfo(np.float64).tiny)
+    return float(np.max(np.abs(Q - matrix))) / scale
+
+
 def _check_Q(Q: np.ndarray, matrix: np.ndarray, source: str) -> None:
     """Refuse a ``Q`` that is not its ``post_correction``'s matrix (Q is derived from it: an
     edited Q would reach the readers of Q but not ``apply`` and ``validate``)."""
-    scale = max(float(np.max(np.abs(matrix))), np.finfo(np.float64).tiny)
-    relative = float(np.max(np.abs(Q - matrix))) / scale
+    relative = q_difference(Q, matrix)
     if relative > Q_TOLERANCE:
         raise InputError(
             f"differs from post_correction's matrix by {relative:.2g} relative (more than "

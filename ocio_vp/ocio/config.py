@@ -26,6 +26,7 @@ import PyOpenColorIO as OCIO
 
 from ocio_vp.calibration.diagnostics import is_identity, offset_is_negligible
 from ocio_vp.calibration.equations import condition_text
+from ocio_vp.deprecation import deprecated_names
 from ocio_vp.formats.solution import Solution
 from ocio_vp.model.correction import MAX_CONDITION_INVERSE, truncated_pseudo_inverse
 from ocio_vp.ocio.description import (
@@ -81,6 +82,28 @@ VIEW_OUTER = "Outer Frustum"
 VIEW_INNER = "Inner Frustum"
 CONFIG_FILENAME = "config.ocio"
 FAMILY = "ocio-vp"
+
+
+def _wall_signal_encodings() -> dict[str, str]:
+    from ocio_vp.choices import WALL_ENCODINGS
+
+    return {name: WallEncoding(name).ocio_encoding for name in WALL_ENCODINGS}
+
+
+__getattr__ = deprecated_names(
+    __name__,
+    {
+        "WALL_SIGNAL_ENCODINGS": (
+            "ocio_vp.wall.WallEncoding(name).ocio_encoding",
+            _wall_signal_encodings,
+        ),
+        "MAX_CONDITION_Q_FOR_N": (
+            "ocio_vp.calibration.MAX_CONDITION_Q_FOR_N",
+            "ocio_vp.calibration:MAX_CONDITION_Q_FOR_N",
+        ),
+    },
+)
+
 
 #: Working spaces added when the stage names its camera gamut, and the OCIO role each takes.
 WORKING_SPACES = {

@@ -1,0 +1,135 @@
+"""Names that left the public API still work for one release, with a DeprecationWarning that
+names the replacement and the release that removes them (ocio_vp.deprecation)."""
+
+from __future__ import annotations
+
+import importlib
+
+import numpy as np
+import pytest
+
+from ocio_vp.deprecation import REMOVED_IN
+from ocio_vp.formats import Solution
+from ocio_vp.model import MatrixCorrection, RootPolynomialCorrection
+from ocio_vp.model.expansion import apply_root_polynomial
+
+#: (module, old name, words the warning must contain, where the value now lives)
+ALIASES = [
+    ("ocio_vp.ocio.config", "MAX_CONDITION_Q_FOR_N", "ocio_vp.calibration", "ocio_vp.calibration"),
+    ("ocio_vp.exports.resolve", "DEFAULT_CUBE_SIZE", "exports.source", "ocio_vp.exports.source"),
+    ("ocio_vp.exports.resolve", "DEFAULT_CUBE_RANGE", "exports.source", "ocio_vp.exports.source"),
+    ("ocio_vp.ocio.root_polynomial", "RootPolynomialOutputs", "ModelOutputs", None),
+    ("ocio_vp.ocio.root_polynomial", "root_polynomial_outputs", "model_outputs", None),
+]
+RNG = np.random.default_rng(39)
+C = np.hstack([np.diag([1.1, 0.9, 1.0]), 0.05 * RNG.standard_normal((3, 3))])  # degree 2
+
+
+def _old(module: str, name: str, words: str) -> object:
+    with pytest.warns(DeprecationWarning, match=f"{module}.{name}.*{REMOVED_IN}.*{words}"):
+        return getattr(importlib.import_module(module), name)
+
+
+@pytest.mark.parametrize(("module", "name", "words", "home"), ALIASES)
+def test_alias_warns_and_is_the_new_object(module, name, words, home) -> None:
+    value = _old(module, name, words)
+    if home is not None:
+        assert value is getattr(importlib.import_module(home), name)
+    else:
+        assert value is getattr(importlib.import_module("ocio_vp.ocio.bake"), words)
+
+
+def test_unknown_name_is_still_an_attribute_error() -> None:
+    import ocio_vp.ocio.root_polynomial as old
+
+    with pytest.raises(AttributeError, match="LUT_SIZE"):
+        old.LUT_SIZE  # noqa: B018 (a bake constant that changed meaning: no alias)
+
+
+def test_wall_signal_encodings_agree_with_wall_encoding() -> None:
+    from ocio_vp.wall import WallEncoding
+
+    table = _old("ocio_vp.ocio.config", "WALL_SIGNAL_ENCODINGS", "WallEncoding")
+    # the values 1631fec's table held, written out
+    assert table == {
+        "linear": "scene-linear",
+        "gamma2.4": "sdr-video",
+        "srgb": "sdr-video",
+        "pq": "hdr-video",
+    }
+    assert all(WallEncoding(n).ocio_encoding == e for n, e in table.items())
+
+
+@pytest.mark.parametrize("module", ["ocio_vp.correction", "ocio_vp.correction.root_polynomial"])
+def test_post_correction_function(module) -> None:
+    post_correction = _old(module, "post_correction", "Solution.post_correction")
+    Q = np.array([[1.2, -0.1, 0.0], [0.0, 0.9, 0.1], [0.05, 0.0, 1.0]])
+    rgb = RNG.random((5, 3))
+    np.testing.assert_allclose(post_correction(Q, None)(rgb), rgb @ Q.T, rtol=1e-15)
+    notes = {"root_polynomial": {"degree": 2, "coefficients": C.tolist()}}
+    np.testing.assert_allclose(
+        post_correction(Q, notes)(rgb), apply_root_polynomial(C, rgb), rtol=1e-15
+    )
+
+
+@pytest.mark.parametrize("module", ["ocio_vp.footage", "ocio_vp.footage.apply"])
+def test_root_polynomial_transform(module) -> None:
+    make = _old(module, "RootPolynomialTransform", "ModelTransform")
+    rgb = RNG.random((4, 3))
+    pixels = rgb.astype(np.float32)
+    make(C)(pixels)  # in place, float32 buffer computed in float64
+    np.testing.assert_allclose(pixels, apply_root_polynomial(C, rgb.astype(np.float32)), rtol=1e-6)
+
+
+def test_correction_public_names_all_resolve() -> None:
+    """``from ocio_vp.correction import *`` (every name of ``__all__`` importable)."""
+    import ocio_vp.correction as correction
+
+    assert [n for n in correction.__all__ if not hasattr(correction, n)] == []
+
+
+_FIELDS = dict(
+    stage="s",
+    environment="e",
+    method="least-squares",
+    beta=1.0,
+    w_avg=np.ones(3),
+    SL=np.eye(3),
+    M=np.eye(3),
+    N=None,
+    black_level_offset=None,
+    black_level_method=None,
+)
+Q = np.array([[1.1, 0.02, 0.0], [0.01, 0.95, 0.03], [0.0, 0.04, 1.02]])
+
+
+def test_solution_Q_keyword_alone_is_a_matrix_correction() -> None:
+    with pytest.warns(DeprecationWarning, match=rf"Solution\(Q=\.\.\.\).*{REMOVED_IN}"):
+        solution = Solution(Q=Q, **_FIELDS)
+    assert isinstance(solution.post_correction, MatrixCorrection)
+    np.testing.assert_array_equal(solution.Q, Q)
+
+
+def test_solution_Q_positional_where_post_correction_is() -> None:
+    values = list(_FIELDS.values())
+    with pytest.warns(DeprecationWarning, match="Solution"):
+        solution = Solution(*values[:7], Q, *values[7:])
+    np.testing.assert_array_equal(solution.post_correction.matrix, Q)
+
+
+def test_solution_Q_matching_the_correction_is_accepted_with_a_warning() -> None:
+    correction = RootPolynomialCorrection(C, Q)
+    with pytest.warns(DeprecationWarning, match="Solution"):
+        solution = Solution(Q=Q * (1 + 1e-12), post_correction=correction, **_FIELDS)
+    assert solution.post_correction is correction
+
+
+def test_solution_Q_disagreeing_with_the_correction_is_refused() -> None:
+    edited = Q.copy()
+    edited[0, 0] += 1e-6
+    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="differs from"):
+        Solution(Q=edited, post_correction=MatrixCorrection(Q), **_FIELDS)
+
+
+def test_solution_without_Q_does_not_warn() -> None:
+    Solution(post_correction=MatrixCorrection(Q), **_FIELDS)  # warnings are errors in the suite
