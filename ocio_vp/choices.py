@@ -12,6 +12,7 @@ from typing import Literal
 
 __all__ = [
     "BLACK_LEVEL_METHODS",
+    "CONTEXT_VARIABLE",
     "DEFAULT_BASE_CONFIG",
     "DEFAULT_BLACK_LEVEL",
     "DEFAULT_FOOTAGE_ENCODING",
@@ -20,12 +21,14 @@ __all__ = [
     "DEFAULT_PRIORITY",
     "DEFAULT_WALL_ENCODING",
     "DEFAULT_WHITE_PATCH",
+    "ENVIRONMENT_TARGETS",
     "EXPORT_TARGETS",
     "LINEAR_METHODS",
     "OPTIMIZATIONS",
     "PRIORITIES",
     "Q_METHODS",
     "SAMPLE_WALL_GAIN",
+    "SHOW_TARGETS",
     "WALL_ENCODINGS",
     "BlackLevelMethod",
 ]
@@ -75,9 +78,16 @@ DEFAULT_PEAK_NITS = 1000.0
 #: engineer sets a stage up.
 SAMPLE_WALL_GAIN = 4.0
 
+#: Export targets written per environment (``OUT/<environment>/<target>/``).
+ENVIRONMENT_TARGETS = ("unreal", "nuke", "resolve", "lights", "dit")
+#: Targets written once for all the given environments (``OUT/<target>/``).
+SHOW_TARGETS = ("show",)
 #: ``ocio-vp export --target`` values: per environment, then ``all`` of those, then ``show`` (one
 #: config for every given environment, on a base config).
-EXPORT_TARGETS = ("unreal", "nuke", "resolve", "lights", "dit", "all", "show")
+EXPORT_TARGETS = (*ENVIRONMENT_TARGETS, "all", *SHOW_TARGETS)
+#: The OCIO context variable that picks the environment in the show config, Nuke's OCIO nodes
+#: and Unreal's OCIO assets.
+CONTEXT_VARIABLE = "VP_ENVIRONMENT"
 #: The show config's default base: OCIO's built-in ACES CG config (every OCIO from 2.2 on).
 DEFAULT_BASE_CONFIG = "ocio://cg-config-v1.0.0_aces-v1.3_ocio-v2.1"
 

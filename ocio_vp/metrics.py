@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.spectra import spectral_shape, wavelengths
 
 __all__ = [
@@ -106,7 +107,9 @@ _CMFS = "CIE 1931 2 Degree Standard Observer"
 WHITE_FLOOR = 0.01
 
 
-def white_scale(target: ArrayLike, white_patch: int = 18, weights: ArrayLike | None = None):
+def white_scale(
+    target: ArrayLike, white_patch: int = DEFAULT_WHITE_PATCH, weights: ArrayLike | None = None
+):
     """(..., 3) per-channel denominators for white-relative errors.
 
     The target white patch, each channel floored at ``WHITE_FLOOR`` times its brightest channel;
@@ -126,7 +129,10 @@ def white_scale(target: ArrayLike, white_patch: int = 18, weights: ArrayLike | N
 
 
 def error_relative_to_white(
-    predicted: ArrayLike, target: ArrayLike, white_patch: int = 18, weights: ArrayLike | None = None
+    predicted: ArrayLike,
+    target: ArrayLike,
+    white_patch: int = DEFAULT_WHITE_PATCH,
+    weights: ArrayLike | None = None,
 ) -> np.ndarray:
     """Mean absolute error per channel, relative to the target white patch (paper, Fig. 11).
 
@@ -268,7 +274,7 @@ def chart_errors(
     target: ArrayLike,
     *,
     camera_to_xyz: ArrayLike,
-    white_patch: int = 18,
+    white_patch: int = DEFAULT_WHITE_PATCH,
 ) -> ChartErrors:
     """Errors of ``predicted`` against ``target`` (both (n, 3) camera RGB).
 

@@ -19,6 +19,8 @@ def test_every_choice_is_the_librarys():
     assert {WallEncoding(name).ocio_encoding for name in WALL_ENCODINGS} == {
         "scene-linear", "sdr-video", "hdr-video",
     }  # fmt: skip
+    assert tuple(EXPORT_TARGETS) == choices.ENVIRONMENT_TARGETS  # a writer for each
+    assert SHOW_TARGETS is choices.SHOW_TARGETS  # defined once
     assert (*EXPORT_TARGETS, "all", *SHOW_TARGETS) == choices.EXPORT_TARGETS
     assert tuple(OPTIMIZATIONS) == choices.OPTIMIZATIONS
 

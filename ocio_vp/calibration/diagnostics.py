@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.calibration.equations import condition_number, in_frustum_drive, predict_lit_chart
+from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.formats.diagnostics import ClippedCharts, Diagnostics, DriveRange, IdentityCheck
 from ocio_vp.metrics import error_relative_to_white, patch_label, white_scale
 
@@ -40,7 +41,10 @@ __all__ = [
 
 
 def residuals_per_patch(
-    predicted: ArrayLike, target: ArrayLike, white_patch: int = 18, weights: ArrayLike | None = None
+    predicted: ArrayLike,
+    target: ArrayLike,
+    white_patch: int = DEFAULT_WHITE_PATCH,
+    weights: ArrayLike | None = None,
 ) -> np.ndarray:
     """(n, 3) signed residuals ``predicted - target`` relative to the target white."""
     predicted = np.asarray(predicted, dtype=np.float64)
@@ -65,7 +69,7 @@ def in_frustum_drive_range(
     M: ArrayLike,
     matrix: ArrayLike,
     offset: ArrayLike | None = None,
-    white_patch: int = 18,
+    white_patch: int = DEFAULT_WHITE_PATCH,
     max_drive: float = 1.0,
 ) -> DriveRange:
     """How many chart colours the in-frustum matrix would drive outside ``[0, max_drive]``.

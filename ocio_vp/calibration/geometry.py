@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import Environment, Measurements, PanelGeometry
 from ocio_vp.formats.panels import PanelType, primary_panel
@@ -138,7 +139,7 @@ def stage_beta(measurements: Measurements) -> float:
 
 
 def w_avg_from_white_patch(
-    target_chart: ArrayLike, white_patch: int = 18, white_reflectance: float = 0.9
+    target_chart: ArrayLike, white_patch: int = DEFAULT_WHITE_PATCH, white_reflectance: float = 0.9
 ) -> np.ndarray:
     """The diffuse integral w_avg from the target chart's white patch (paper, Section 3.3).
 

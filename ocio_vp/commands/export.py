@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ocio_vp.choices import DEFAULT_BASE_CONFIG, EXPORT_TARGETS
+from ocio_vp.choices import CONTEXT_VARIABLE, DEFAULT_BASE_CONFIG, EXPORT_TARGETS
 from ocio_vp.commands.report import SOLUTIONS_HELP
 
 __all__ = ["add_parser", "export_line", "run"]
@@ -34,7 +34,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "meets the cube accuracy limit); all: every target "
         "above that applies (default: all); show: OUT/show/config.ocio, one config for all the "
         "given environments on --base-config, the environment chosen by the context variable "
-        "VP_ENVIRONMENT (needs --out)",
+        f"{CONTEXT_VARIABLE} (needs --out)",
     )
     parser.add_argument(
         "--base-config",

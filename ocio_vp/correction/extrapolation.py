@@ -41,6 +41,7 @@ from ocio_vp.model.correction import (
     PostCorrection,
     RootPolynomialCorrection,
 )
+from ocio_vp.model.footage_range import EMITTER_LEVELS
 
 __all__ = [
     "FADES",
@@ -60,8 +61,6 @@ __all__ = [
 FADES = ((1.0, 1.5), (0.75, 1.5), (0.5, 1.5))
 #: Points of the reflective solid the fold check samples (a fixed quasi-random set).
 FOLD_SAMPLES = 4096
-#: Brightness of the in-frame LEDs, relative to the white patch's luminance.
-LED_LEVELS = (0.25, 1.0, 4.0)
 
 
 def _halton(n: int, base: int) -> np.ndarray:
@@ -131,7 +130,7 @@ def saturation_probe(correction: PostCorrection, white: np.ndarray) -> tuple[flo
 
 
 def _led_colours(SL: np.ndarray, white: np.ndarray, camera_to_xyz: np.ndarray) -> np.ndarray:
-    """The wall's primaries and pairwise mixes as camera RGB, at :data:`LED_LEVELS` of the
+    """The wall's primaries and pairwise mixes as camera RGB, at :data:`EMITTER_LEVELS` of the
     white patch's luminance."""
     SL = np.asarray(SL, dtype=np.float64)
     mixes = [SL[:, k] for k in range(3)]
@@ -141,7 +140,7 @@ def _led_colours(SL: np.ndarray, white: np.ndarray, camera_to_xyz: np.ndarray) -
     white_y = float(white @ camera_to_xyz[1])
     keep = luminance > 0
     unit = colours[keep] / luminance[keep, None] * white_y
-    return np.vstack([unit * level for level in LED_LEVELS])
+    return np.vstack([unit * level for level in EMITTER_LEVELS])
 
 
 def in_frame_led_damage(

@@ -28,6 +28,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
 from ocio_vp.model.correction import MatrixCorrection
 
@@ -96,7 +97,7 @@ def patch_delta_e(
     target: ArrayLike,
     *,
     camera_to_xyz: ArrayLike | None = None,
-    white_patch: int = 18,
+    white_patch: int = DEFAULT_WHITE_PATCH,
     weights: ArrayLike | None = None,
     metric: str = "CIE 2000",
 ) -> np.ndarray:
@@ -124,7 +125,7 @@ def mean_delta_e(
     target: ArrayLike,
     *,
     camera_to_xyz: ArrayLike,
-    white_patch: int = 18,
+    white_patch: int = DEFAULT_WHITE_PATCH,
     metric: str = "CIE 2000",
     weights: ArrayLike | None = None,
 ) -> float:

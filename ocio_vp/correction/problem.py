@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ocio_vp.calibration.equations import predict_lit_chart
+from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.correction.skin import SkinRows, SkinSamples, skin_rows
 from ocio_vp.model.correction import FitDomain, fit_domain
 
@@ -43,7 +44,7 @@ class QProblem:
     M: np.ndarray
     w_avg: np.ndarray
     target: np.ndarray
-    white_patch: int = 18
+    white_patch: int = DEFAULT_WHITE_PATCH
     weights: np.ndarray | None = None
     #: (n, 3) light on the chart beyond eq. 3's (practical fixtures, a changed wall drive:
     #: :mod:`ocio_vp.fixtures.lighting`); None for the wall alone.

@@ -18,6 +18,7 @@ from typing import Any
 
 import PyOpenColorIO as OCIO
 
+from ocio_vp.choices import SHOW_TARGETS
 from ocio_vp.errors import InputError
 from ocio_vp.exports.dit import has_camera_log, write_dit
 from ocio_vp.exports.escape import inside
@@ -55,8 +56,6 @@ EXPORT_TARGETS: dict[str, Callable[[ExportSource, Path, CubeOptions], dict[str, 
     "dit": write_dit,
 }
 
-#: Targets written once for all the given environments (``OUT/<target>/``), not per environment.
-SHOW_TARGETS = ("show",)
 
 MAX_CUBE_SIZE = 129
 

@@ -23,11 +23,11 @@ from ocio_vp.ocio.show import (
     has_config_merger,
 )
 from ocio_vp.staging import publish_dirs, staged_dir
+from ocio_vp.wall.encoding import LUT_DIR
 
 __all__ = ["SHOW_FOLDER", "write_show"]
 
 SHOW_FOLDER = "show"
-LUT_FOLDER = "luts"
 
 
 def _copy_sidecars(sources: Sequence[ExportSource], folder: Path) -> list[str]:
@@ -65,12 +65,12 @@ def write_show(
     with staged_dir(out) as stage:
         folder = stage / SHOW_FOLDER
         folder.mkdir()
-        luts = _copy_sidecars(sources, folder / LUT_FOLDER)
+        luts = _copy_sidecars(sources, folder / LUT_DIR)
         (folder / "config.ocio").write_text(config.serialize(), encoding="utf-8")
         publish_dirs([(folder, out / SHOW_FOLDER)])
     return {
         "config": f"{SHOW_FOLDER}/config.ocio",
-        "luts": [f"{LUT_FOLDER}/{name}" for name in luts],
+        "luts": [f"{LUT_DIR}/{name}" for name in luts],
         "environments": [env.name for env in environments],
         "default_environment": environments[0].name,
         "context_variable": CONTEXT_VARIABLE,

@@ -25,6 +25,7 @@ from typing import Any
 import PyOpenColorIO as OCIO
 
 from ocio_vp.calibration.headroom import content_scale
+from ocio_vp.choices import CONTEXT_VARIABLE
 from ocio_vp.errors import InputError
 from ocio_vp.exports.panels import panel_notes, with_panel_assignments
 from ocio_vp.exports.source import (
@@ -248,7 +249,7 @@ def write_unreal(
         source=mapping["content_working_space"],
         out_of_frustum=names["out_of_frustum"],
         in_frustum=names["in_frustum"],
-        context={"VP_ENVIRONMENT": solution.environment},
+        context={CONTEXT_VARIABLE: solution.environment},
     )
     (folder / SCRIPT_FILE).write_text(script, encoding="utf-8")
     files = [config_rel, ocioz.name, "UNREAL.md", MAPPING_FILE, SCRIPT_FILE]

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from ocio_vp.choices import PRIORITIES
+from ocio_vp.choices import DEFAULT_WHITE_PATCH, PRIORITIES
 from ocio_vp.errors import InputError, excerpt, format_key_path
 from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.fixtures import Fixture, fixtures_to_dict, parse_fixtures
@@ -110,7 +110,7 @@ class Stage:
     name: str
     panel: PanelGeometry | None = None
     beta: float | None = None
-    white_patch: int = 18
+    white_patch: int = DEFAULT_WHITE_PATCH
     white_reflectance: float = 0.9
     camera_colorspace: str | None = None
     #: Camera value at or above which a sample is clipped (optional; docs/stability.md).
@@ -512,7 +512,7 @@ def parse_stage(ctx: Validator, value: Any, *, calibration: bool = True) -> Stag
                     (*key, field_name),
                     "with panels, each panel type gives its own calibration_panel or beta",
                 )
-    white_patch = stage.get("white_patch", 18)
+    white_patch = stage.get("white_patch", DEFAULT_WHITE_PATCH)
     if isinstance(white_patch, bool) or not isinstance(white_patch, int):
         raise ctx.error((*key, "white_patch"), f"expected a patch index, got {_kind(white_patch)}")
     # A "white" patch reflecting under 1% is a mistake (and would blow w_avg up).

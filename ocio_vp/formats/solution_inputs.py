@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from ocio_vp.choices import ENVIRONMENT_TARGETS
 from ocio_vp.errors import InputError
 
 __all__ = ["SolutionFolders", "generated_kind", "solution_folders"]
@@ -21,7 +22,6 @@ __all__ = ["SolutionFolders", "generated_kind", "solution_folders"]
 SOLUTION_FILE = "solution.json"
 #: File formats of ours that may sit in a solve output folder (the demo writes one there).
 _OUR_FORMATS = {"ocio-vp/measurements": "a measurements file", "ocio-vp/capture": "a capture file"}
-_EXPORT_TARGETS = ("unreal", "nuke", "resolve", "lights", "dit")
 
 
 @dataclass(frozen=True)
@@ -54,7 +54,7 @@ def generated_kind(path: Path) -> str | None:
     if path.is_dir():
         if (path / "index.html").is_file() and (path / "img").is_dir():
             return "a report folder"
-        if path.name == "exports" or any((path / t).is_dir() for t in _EXPORT_TARGETS):
+        if path.name == "exports" or any((path / t).is_dir() for t in ENVIRONMENT_TARGETS):
             return "an export folder"
         if path.name.endswith(".overlays"):
             return "an overlay folder"

@@ -60,7 +60,9 @@ EXPOSURES = (1.0 / 16.0, 4.0)
 NEAR_BLACK = (2.0**-10, 2.0**-6)
 #: Highlights: the lit white up to this many times, the surfaces from 4 times up to it.
 HDR = 16.0
-#: Emitters' luminance, relative to the white's.
+#: Self-luminous colours in frame (narrow-band emitters, the wall's own LEDs): their luminance
+#: relative to the white's (a perfect white diffuser under the real light). Every check of
+#: emitters uses these levels (simulator, extrapolation, footage range).
 EMITTER_LEVELS = (0.25, 1.0, 4.0)
 #: Sensor noise relative to the white's largest channel: read noise (sigma at black) and the
 #: shot-noise coefficient (``sigma^2 += SHOT_NOISE^2 w |x|``).

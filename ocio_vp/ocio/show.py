@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 import PyOpenColorIO as OCIO
 
+from ocio_vp.choices import CONTEXT_VARIABLE
 from ocio_vp.errors import InputError
 from ocio_vp.ocio.config import (
     DISPLAY,
@@ -61,6 +62,7 @@ from ocio_vp.ocio.viewing import (
     FOOTAGE_VIEW_SUFFIX,
     POST_CORRECTION_LOOK,
 )
+from ocio_vp.wall.encoding import LUT_DIR
 
 __all__ = [
     "CONTEXT_VARIABLE",
@@ -74,7 +76,6 @@ __all__ = [
     "merge_by_api",
 ]
 
-CONTEXT_VARIABLE = "VP_ENVIRONMENT"
 DEFAULT_BASE_CONFIG = ACES_CG_CONFIG
 #: Families (after ``ocio-vp/``) of an environment config's own colour spaces.
 ENVIRONMENT_FAMILIES = ("LED Wall", "Camera")
@@ -234,7 +235,7 @@ def _overlay(base: OCIO.Config, environments: Sequence[ShowEnvironment]) -> Conf
         roles={AP0_ROLE: aces},
         default_rule=aces,
         environment={CONTEXT_VARIABLE: environments[0].name},
-        search_path="luts",
+        search_path=LUT_DIR,
     )
     aces_to_base = _base_to_reference(base)
     shared: dict[str, ColourSpace] | None = None

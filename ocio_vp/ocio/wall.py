@@ -23,11 +23,10 @@ import numpy as np
 import PyOpenColorIO as OCIO
 
 from ocio_vp.formats.solution import Solution
-from ocio_vp.ocio.clf import clf_v3
+from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
 from ocio_vp.ocio.config import IN_FRUSTUM, OUT_OF_FRUSTUM
 from ocio_vp.ocio.description import Transform, file, transform_record
 from ocio_vp.wall.encoding import (
-    CLF_FORMAT,
     DEFAULT_PEAK_NITS,
     LINEAR_HEADROOM,
     LOG_SHAPER_KNEE,

@@ -30,6 +30,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from ocio_vp.metrics import camera_delta_E_2000
+from ocio_vp.model.footage_range import EMITTER_LEVELS
 from ocio_vp.simulator.stage import SpectralStage, camera_rgb, environment_spectrum
 from ocio_vp.spectra import align, spectral_shape, wavelengths
 
@@ -49,8 +50,6 @@ __all__ = [
 EMITTER_PEAKS = tuple(float(p) for p in range(420, 681, 10))
 #: Their full width at half maximum (nm): a typical coloured LED.
 EMITTER_FWHM = 20.0
-#: Their luminance relative to the scene's white (a perfect white diffuser under the real light).
-EMITTER_LEVELS = (0.25, 1.0, 4.0)
 #: Band edges (nm) of the optimal colours: every band between two of them is one band-pass
 #: reflectance; every band between two inner edges (not 380 or 780) is also one band-stop.
 OPTIMAL_EDGES = (380.0, *(float(e) for e in range(400, 701, 20)), 780.0)

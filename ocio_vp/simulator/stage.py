@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ocio_vp.choices import SAMPLE_WALL_GAIN
+from ocio_vp.choices import DEFAULT_WHITE_PATCH, SAMPLE_WALL_GAIN
 from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import Environment, Measurements, PanelGeometry, Stage
 from ocio_vp.simulator.data import (
@@ -102,7 +102,7 @@ class SpectralStage:
     panel: PanelGeometry | None
     beta: float
     panel_albedo: float | None = None
-    white_patch: int = 18
+    white_patch: int = DEFAULT_WHITE_PATCH
     camera_name: str = DEFAULT_CAMERA
     chart_name: str = DEFAULT_CHART
     led_description: str = ""

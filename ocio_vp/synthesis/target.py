@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import Environment, Measurements
 from ocio_vp.formats.synthesis import SynthesisRecord
@@ -113,7 +114,7 @@ def synthesize_target(
     camera: CameraModel,
     reflectances: ArrayLike,
     *,
-    white_patch: int = 18,
+    white_patch: int = DEFAULT_WHITE_PATCH,
     white_reflectance: float = 0.9,
     method: str = "auto",
     spectrum: ArrayLike | None = None,

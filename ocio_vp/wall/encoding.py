@@ -71,7 +71,6 @@ LOG_SHAPER_KNEE = 1e-4
 #: <= 4095 entries: the LUT stays a 1D texture on GPU hosts (OCIO's limit for 1D textures).
 LUT_SIZE = 4095
 LUT_DIR = "luts"
-CLF_FORMAT = "Academy/ASC Common LUT Format"
 #: Levels (fraction of drive 1.0) the LUT's accuracy is reported over: ``max_error`` is the
 #: worst relative error from 0.2% of peak up, the bands say where it is.
 ACCURACY_BANDS = ((0.001, 0.002), (0.002, 0.02), (0.02, 1.0))
