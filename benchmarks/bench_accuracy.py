@@ -98,7 +98,7 @@ def _solve_and_judge(results, stage, measurements, env, noise, method, held_out)
     from ocio_vp.errors import InputError
     from ocio_vp.pipeline import solve_environment
     from ocio_vp.simulator.extremes import emitter_errors
-    from ocio_vp.simulator.truth import camera_matrix, held_out_errors
+    from ocio_vp.simulator.truth import camera_matrix, solution_held_out_errors
 
     key = (method, env.name, noise)
     start = time.perf_counter()
@@ -110,15 +110,7 @@ def _solve_and_judge(results, stage, measurements, env, noise, method, held_out)
     results.seconds[method] += time.perf_counter() - start
     results.models[(method, env.name)][solution.diagnostics.model or method] += 1
     for name, reflectances in held_out.items():
-        errors = held_out_errors(
-            stage,
-            env.name,
-            M=solution.M,
-            w_avg=solution.w_avg,
-            Q=solution.Q,
-            reflectances=reflectances,
-            correct=solution.correction.apply,
-        )
+        errors = solution_held_out_errors(stage, env.name, solution, reflectances)
         if name in GENERAL_SETS:
             results.de2000[key].append(errors.delta_E_2000)
             results.itp[key].append(errors.delta_E_ITP)

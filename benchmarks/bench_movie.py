@@ -23,7 +23,6 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
 import time
@@ -32,21 +31,19 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.child import run_child
+
 SIZE_4K = (3840, 2160)
 SIZE_HD = (1920, 1080)
 SL = np.array([[0.5, 0.08, 0.01], [0.2, 0.6, 0.08], [0.02, 0.1, 0.55]])
 CAMERA_FPS = 25
 ENCODING = "ARRI LogC3"
 
+#: Run by :func:`benchmarks.child.run_child` (``hwm()`` is its prelude's).
 _CHILD = r"""
 import json, sys, time
 mode, movie, sequence = sys.argv[1], sys.argv[2], sys.argv[3]
 from pathlib import Path
-
-def hwm():
-    for line in open("/proc/self/status"):
-        if line.startswith("VmHWM"):
-            return int(line.split()[1]) * 1024
 
 import av, numpy as np
 from ocio_vp.plates.take import TakeRef, measure_take
@@ -146,13 +143,7 @@ def _write_movie(sequence, path: Path, size: tuple[int, int]) -> tuple[int, int]
 
 
 def _child(mode: str, movie: Path, sequence) -> dict:
-    run = subprocess.run(
-        [sys.executable, "-c", _CHILD, mode, str(movie), str(sequence.source)],
-        check=True,
-        capture_output=True,
-        text=True,
-    )
-    return json.loads(run.stdout)
+    return json.loads(run_child(_CHILD, mode, str(movie), str(sequence.source)))
 
 
 def run(quick: bool = False) -> str:

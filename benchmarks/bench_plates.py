@@ -12,7 +12,6 @@ measured one.
 from __future__ import annotations
 
 import json
-import subprocess
 import sys
 import tempfile
 import time
@@ -20,20 +19,18 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.child import run_child
+
 WIDTH, HEIGHT = 7680, 4320  # 8K UHD
 QUICK = (1920, 1080)
 
+#: Run by :func:`benchmarks.child.run_child` (``hwm()`` is its prelude's).
 _CHILD = r"""
 import json, sys, time
 import numpy as np
 mode, path, corners = sys.argv[1], sys.argv[2], np.array(json.loads(sys.argv[3]))
 import OpenImageIO as oiio
 from ocio_vp.plates.sampling import sample_chart
-
-def hwm():  # this process's own peak RSS in bytes
-    for line in open("/proc/self/status"):
-        if line.startswith("VmHWM"):
-            return int(line.split()[1]) * 1024
 
 sample_chart(np.zeros((64, 64, 3), np.float32), [[0, 0], [64, 0], [64, 64], [0, 64]], 4, 6)
 base = hwm()  # after imports (and every lazy import sampling does)
@@ -76,13 +73,8 @@ def _write_plate(path: Path, width: int, height: int, corners: np.ndarray) -> No
 
 
 def _child(mode: str, path: Path, corners: np.ndarray) -> tuple[float, float, float]:
-    result = subprocess.run(
-        [sys.executable, "-c", _CHILD, mode, str(path), json.dumps(corners.tolist())],
-        check=True,
-        capture_output=True,
-        text=True,
-    )
-    peak, base, elapsed, value = (float(v) for v in result.stdout.split())
+    result = run_child(_CHILD, mode, str(path), json.dumps(corners.tolist()))
+    peak, base, elapsed, value = (float(v) for v in result.split())
     assert abs(value - 0.18) < 0.002, value
     return peak, base, elapsed
 

@@ -17,13 +17,14 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
+
+from benchmarks.child import run_child
 
 SIZE_4K = (4096, 2160)
 SIZE_HD = (1920, 1080)
@@ -32,15 +33,11 @@ REAL_TIME_FRAMES = 4300
 SL = np.array([[0.5, 0.08, 0.01], [0.2, 0.6, 0.08], [0.02, 0.1, 0.55]])
 CAMERA_FPS = 25.0
 
+#: Run by :func:`benchmarks.child.run_child` (``hwm()`` is its prelude's).
 _CHILD = r"""
 import json, sys, time
 mode, frames, sequence = sys.argv[1], sys.argv[2], sys.argv[3]
 from pathlib import Path
-
-def hwm():
-    for line in open("/proc/self/status"):
-        if line.startswith("VmHWM"):
-            return int(line.split()[1]) * 1024
 
 import numpy as np, OpenImageIO as oiio
 from ocio_vp.plates.take import TakeRef, measure_take
@@ -116,13 +113,7 @@ def _write_take(sequence, folder: Path, size: tuple[int, int]) -> int:
 
 
 def _child(mode: str, folder: Path, sequence) -> dict:
-    run = subprocess.run(
-        [sys.executable, "-c", _CHILD, mode, str(folder / "A001.####.exr"), str(sequence.source)],
-        check=True,
-        capture_output=True,
-        text=True,
-    )
-    return json.loads(run.stdout)
+    return json.loads(run_child(_CHILD, mode, str(folder / "A001.####.exr"), str(sequence.source)))
 
 
 def _default_kept_fraction() -> tuple[float, int]:

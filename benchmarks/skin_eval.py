@@ -202,7 +202,7 @@ def _judge(stage, measurements, env, variant: Variant, samples) -> SkinRow:
     from ocio_vp.pipeline import solve_environment
     from ocio_vp.simulator.evaluate import evaluate_solution
     from ocio_vp.simulator.extremes import emitter_errors
-    from ocio_vp.simulator.truth import camera_matrix, held_out_errors
+    from ocio_vp.simulator.truth import camera_matrix, solution_held_out_errors
 
     skin, general = samples
     start = time.perf_counter()
@@ -215,15 +215,7 @@ def _judge(stage, measurements, env, variant: Variant, samples) -> SkinRow:
     seconds = time.perf_counter() - start
 
     def errors(reflectances):
-        return held_out_errors(
-            stage,
-            env.name,
-            M=solution.M,
-            w_avg=solution.w_avg,
-            Q=solution.Q,
-            reflectances=reflectances,
-            correct=solution.correction.apply,
-        ).delta_E_2000
+        return solution_held_out_errors(stage, env.name, solution, reflectances).delta_E_2000
 
     emitted, _ = emitter_errors(
         stage, env.name, solution.correction.apply, camera_to_xyz=camera_matrix(stage)

@@ -69,3 +69,29 @@ def test_noise_touches_every_photographed_value_by_its_level() -> None:
     ])  # fmt: skip
     assert np.all(ratios != 1.0)
     assert 0.008 < np.std(ratios - 1) < 0.012
+
+
+def test_a_solutions_held_out_errors_use_its_drive_and_its_correction() -> None:
+    from ocio_vp.formats import Solution
+    from ocio_vp.model import MatrixCorrection
+    from ocio_vp.simulator.truth import solution_held_out_errors
+
+    stage = paper_stage()
+    w_avg = camera_rgb(stage, environment_spectrum(stage, "rgb_led_white"))
+    M = np.linalg.inv(stage.SL)
+    skin = held_out_reflectances()["skin"]
+    gain = np.diag([1.1, 1.0, 0.95])
+
+    def solution(Q: np.ndarray) -> Solution:
+        return Solution(
+            stage="s", environment="rgb_led_white", method="least-squares", beta=1.0,
+            w_avg=w_avg, SL=stage.SL, M=M, post_correction=MatrixCorrection(Q), N=None,
+            black_level_offset=None, black_level_method=None,
+        )  # fmt: skip
+
+    exact = solution_held_out_errors(stage, "rgb_led_white", solution(np.eye(3)), skin)
+    assert np.max(exact.delta_E_2000) < 1e-6  # the perfect solve above, through its Solution
+    got = solution_held_out_errors(stage, "rgb_led_white", solution(gain), skin)
+    want = held_out_errors(stage, "rgb_led_white", M=M, w_avg=w_avg, Q=gain, reflectances=skin)
+    np.testing.assert_array_equal(got.delta_E_2000, want.delta_E_2000)
+    assert np.all(got.delta_E_2000 > 0.1)

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ocio_vp.formats.measurements import Measurements
+from ocio_vp.formats.solution import Solution
 from ocio_vp.metrics import camera_to_xyz_matrix, chart_errors
 from ocio_vp.model.footage_range import FootageRange, footage_range
 from ocio_vp.simulator.data import chart_reflectances
@@ -41,6 +42,7 @@ __all__ = [
     "held_out_errors",
     "held_out_reflectances",
     "narrow_band_emitters",
+    "solution_held_out_errors",
     "noisy_measurements",
     "stage_footage_range",
 ]
@@ -221,6 +223,22 @@ def held_out_errors(
         corrected, target, camera_to_xyz=camera_matrix(stage), white_patch=len(target) - 1
     )
     return HeldOutErrors(errors.delta_E_2000[:-1], errors.delta_E_ITP[:-1])
+
+
+def solution_held_out_errors(
+    stage: SpectralStage, environment, solution: Solution, reflectances: np.ndarray
+) -> HeldOutErrors:
+    """:func:`held_out_errors` of a solve: its M and w_avg light the samples, its
+    post-correction corrects them."""
+    return held_out_errors(
+        stage,
+        environment,
+        M=solution.M,
+        w_avg=solution.w_avg,
+        Q=solution.Q,
+        reflectances=reflectances,
+        correct=solution.correction.apply,
+    )
 
 
 def narrow_band_emitters(stage: SpectralStage, environment) -> np.ndarray:

@@ -1,0 +1,26 @@
+"""A measuring child process: a fresh interpreter, so that its peak memory is the measured
+work's alone.
+
+Its code starts with :data:`PRELUDE`, which defines ``hwm()``: the process's own peak resident
+set size in bytes, ``VmHWM`` from ``/proc/self/status`` (not ``ru_maxrss``: on Linux that
+survives the exec that started the interpreter, so it would include the parent's).
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+PRELUDE = """
+def hwm():
+    for line in open("/proc/self/status"):
+        if line.startswith("VmHWM"):
+            return int(line.split()[1]) * 1024
+"""
+
+
+def run_child(code: str, *args: str) -> str:
+    """Run :data:`PRELUDE` + ``code`` with ``sys.argv[1:] = args``; its standard output."""
+    return subprocess.run(
+        [sys.executable, "-c", PRELUDE + code, *args], check=True, capture_output=True, text=True
+    ).stdout
