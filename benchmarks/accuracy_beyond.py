@@ -648,20 +648,40 @@ def beyond_config(quick: bool):
     return TUNING, REPORT, VALIDATION, tuple(ENVIRONMENTS), (0.002, 0.005, 0.01), 2
 
 
-def protection_figures(solves: Sequence[Solve]):
-    """The :class:`~ocio_vp.model.correction.ProtectionPoint` of the ``protect`` variant as
-    measured on ``solves``: per-environment ratios to least squares, mean and worst."""
-    from ocio_vp.model.correction import PROTECTION, ProtectionPoint
+@dataclass(frozen=True)
+class ProtectionFigures:
+    """What the default protection point trades on a set of solves: per environment, the
+    protected default's p95 ΔE2000 on narrow-band emitters and its mean ΔE2000 on held-out
+    reflectances, each over least squares'; averaged over the environments (``emitters``,
+    ``reflectances``) and in the worst one (``worst_*``)."""
 
+    emitters: float
+    worst_emitters: float
+    reflectances: float
+    worst_reflectances: float
+
+    def describe(self) -> str:
+        """The default point and its measured trade-off in one sentence (docs/accuracy.md;
+        tests/test_model_correction.py reads it back)."""
+        from ocio_vp.model.correction import PROTECTION
+
+        return (
+            f"{PROTECTION.setting()}: on the benchmark's unseen stages, emitter damage "
+            f"{self.emitters:.2f}x least squares' (worst environment {self.worst_emitters:.2f}x), "
+            f"held-out reflectances {self.reflectances:.2f}x least squares' (worst "
+            f"{self.worst_reflectances:.2f}x) (docs/accuracy.md)"
+        )
+
+
+def protection_figures(solves: Sequence[Solve]) -> ProtectionFigures:
+    """The default protection point's :class:`ProtectionFigures` as measured on ``solves``."""
     ratios = np.asarray(
         [
             (s.ratio("emitters", "protect"), s.ratio("reflectances", "protect"))
             for s in (summarise(v) for v in _groups(solves, lambda s: (s.environment,)).values())
         ]
     )
-    return ProtectionPoint(
-        PROTECTION.bright,
-        PROTECTION.negative,
+    return ProtectionFigures(
         emitters=round(float(ratios[:, 0].mean()), 2),
         worst_emitters=round(float(ratios[:, 0].max()), 2),
         reflectances=round(float(ratios[:, 1].mean()), 2),

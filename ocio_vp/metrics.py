@@ -31,8 +31,10 @@ colour differences in television.
 from __future__ import annotations
 
 import functools
+import json
 import os
 from dataclasses import dataclass
+from importlib import resources
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -43,7 +45,7 @@ from ocio_vp.spectra import spectral_shape, wavelengths
 __all__ = [
     "COLORCHECKER_NAMES",
     "ITP_WHITE_NITS",
-    "SAMPLE_CAMERA_TO_XYZ",
+    "SAMPLE_MATRIX_FILE",
     "WHITE_FLOOR",
     "ChartErrors",
     "camera_delta_E_2000",
@@ -52,6 +54,7 @@ __all__ = [
     "delta_E_2000",
     "error_relative_to_white",
     "patch_label",
+    "sample_camera_to_xyz",
     "training_rgb_xyz",
     "white_scale",
 ]
@@ -339,17 +342,23 @@ def camera_delta_E_2000(
     return np.asarray(colour.delta_E(lab[0], lab[1], method="CIE 2000"))
 
 
-#: :func:`camera_to_xyz_matrix` of the sample camera (``ocio_vp.spectra.DEFAULT_CAMERA``, under
-#: D65), written out so that code writing files (the OCIO config's agreement check) needs no
-#: colour-science; ``tests/test_metrics.py`` checks it against the fit.
-SAMPLE_CAMERA_TO_XYZ = np.array(
-    [
-        [1.175937912022459, 0.18740115341315514, 0.07828249928974618],
-        [0.46818955373939086, 0.9721658230598503, -0.29600542599689184],
-        [0.14763589265679136, -0.36631353850047915, 1.5902201930558895],
-    ]
-)
-SAMPLE_CAMERA_TO_XYZ.setflags(write=False)
+#: The file holding :func:`sample_camera_to_xyz` (inside the package), written by
+#: ``python -m benchmarks.make_sample_matrix``.
+SAMPLE_MATRIX_FILE = "data/sample_camera_to_xyz.json"
+
+
+@functools.lru_cache(maxsize=1)
+def sample_camera_to_xyz() -> np.ndarray:
+    """:func:`camera_to_xyz_matrix` of the sample camera (``ocio_vp.spectra.DEFAULT_CAMERA``,
+    under D65), read from :data:`SAMPLE_MATRIX_FILE` so that code writing files (the OCIO
+    config's agreement check) needs no colour-science; ``tests/test_metrics.py`` checks it
+    against the fit. Read-only."""
+    document = json.loads(
+        resources.files("ocio_vp").joinpath(SAMPLE_MATRIX_FILE).read_text(encoding="utf-8")
+    )
+    matrix = np.array(document["camera_to_xyz"], dtype=np.float64)
+    matrix.setflags(write=False)
+    return matrix
 
 
 def _lab(xyz: np.ndarray, white: np.ndarray) -> np.ndarray:

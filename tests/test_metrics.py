@@ -184,11 +184,13 @@ def test_delta_E_2000_is_colour_sciences():
 
 
 def test_sample_camera_matrix_is_the_fit():
-    from ocio_vp.metrics import SAMPLE_CAMERA_TO_XYZ
+    # ocio_vp/data/sample_camera_to_xyz.json, written by python -m benchmarks.make_sample_matrix
+    from ocio_vp.metrics import sample_camera_to_xyz
     from ocio_vp.spectra import camera_sensitivities
 
     fitted = camera_to_xyz_matrix(camera_sensitivities())
-    np.testing.assert_allclose(SAMPLE_CAMERA_TO_XYZ, fitted, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(sample_camera_to_xyz(), fitted, rtol=1e-9, atol=1e-12)
+    assert not sample_camera_to_xyz().flags.writeable
 
 
 #: Sharma, Wu & Dalal (2005), CIEDE2000 test data: (Lab 1, Lab 2, ΔE00), pairs 1, 2, 3, 7,

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -272,13 +273,24 @@ class TestProtectionPoint:
         protected = ProtectedCorrection(MatrixCorrection(np.eye(3)), domain, np.eye(3))
         assert (protected.bright, protected.negative) == (PROTECTION.bright, PROTECTION.negative)
 
-    def test_docs_state_the_measured_trade_off_the_record_carries(self) -> None:
-        # python -m benchmarks.bench_accuracy writes the protect variant's figures on the report
-        # stages as PROTECTION.describe() words them; a run that moves them makes it stale.
+    def test_docs_measured_the_default_point(self) -> None:
+        # python -m benchmarks.bench_accuracy measures the protect variant on the report stages
+        # and writes its trade-off into docs/accuracy.md: the figures live there alone, measured
+        # at the point the code now has (a point changed since makes the document stale).
         text = ACCURACY.read_text(encoding="utf-8")
-        assert f"Default point (`ocio_vp.model.PROTECTION`): {PROTECTION.describe()}." in text
-        assert 0 < PROTECTION.emitters <= PROTECTION.worst_emitters <= 0.5
-        assert 0 < PROTECTION.reflectances <= PROTECTION.worst_reflectances <= 1.05
+        figure = r"(\d+\.\d+)x"
+        found = re.search(
+            rf"Default point \(`ocio_vp.model.PROTECTION`\): {re.escape(PROTECTION.setting())}: "
+            rf"on the benchmark's unseen stages, emitter damage {figure} least squares' \(worst "
+            rf"environment {figure}\), held-out reflectances {figure} least squares' \(worst "
+            rf"{figure}\)",
+            text,
+        )
+        assert found is not None
+        emitters, worst_emitters, reflectances, worst_reflectances = map(float, found.groups())
+        # the issue's criteria PE and PR, as the benchmark judges them
+        assert 0 < emitters <= worst_emitters <= 0.5
+        assert 0 < reflectances <= worst_reflectances <= 1.05
 
     def test_the_setting_in_words(self) -> None:
         assert PROTECTION.setting().startswith(

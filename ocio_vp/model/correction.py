@@ -103,50 +103,23 @@ def protection_words(bright: tuple[float, float], negative: tuple[float, float])
 
 @dataclass(frozen=True)
 class ProtectionPoint:
-    """The default point of ``solve --protect-emitters`` and what it trades, as measured.
-
-    ``bright``: the brightness (largest drive-relative channel, 1 = a perfect white diffuser)
-    where the fade to the identity starts and ends; ``negative``: the negative drive (most
-    negative drive channel over the largest) where it starts and ends. The figures are the
-    accuracy benchmark's on stages nothing was tuned on (``python -m benchmarks.bench_accuracy``,
-    docs/accuracy.md, "The trade-off of --protect-emitters"): per environment, the protected
-    default's p95 ΔE2000 on narrow-band emitters and its mean ΔE2000 on held-out reflectances,
-    each over least squares'; averaged over the environments (``emitters``, ``reflectances``)
-    and in the worst one (``worst_*``). tests/test_model_correction.py checks that
-    docs/accuracy.md states the same figures.
-    """
+    """A point of ``solve --protect-emitters``: ``bright``, the brightness (largest
+    drive-relative channel, 1 = a perfect white diffuser) where the fade to the identity starts
+    and ends; ``negative``, the negative drive (most negative drive channel over the largest)
+    where it starts and ends."""
 
     bright: tuple[float, float]
     negative: tuple[float, float]
-    emitters: float
-    worst_emitters: float
-    reflectances: float
-    worst_reflectances: float
 
     def setting(self) -> str:
         """The point in words, as :meth:`ProtectedCorrection.protection` words any point."""
         return protection_words(self.bright, self.negative)
 
-    def describe(self) -> str:
-        """The point and its measured trade-off in one sentence."""
-        return (
-            f"{self.setting()}: on the benchmark's unseen stages, emitter damage "
-            f"{self.emitters:.2f}x least squares' (worst environment {self.worst_emitters:.2f}x), "
-            f"held-out reflectances {self.reflectances:.2f}x least squares' (worst "
-            f"{self.worst_reflectances:.2f}x) (docs/accuracy.md)"
-        )
-
 
 #: ``--protect-emitters``' default point, chosen on the benchmark's tuning stages by the rule
-#: in docs/accuracy.md; its figures are the report stages'.
-PROTECTION = ProtectionPoint(
-    bright=(1.1, 2.0),
-    negative=(0.2, 0.5),
-    emitters=0.15,
-    worst_emitters=0.30,
-    reflectances=0.91,
-    worst_reflectances=0.97,
-)
+#: in docs/accuracy.md. What it trades is measured there ("The trade-off of
+#: --protect-emitters", written by ``python -m benchmarks.bench_accuracy``), not here.
+PROTECTION = ProtectionPoint(bright=(1.1, 2.0), negative=(0.2, 0.5))
 #: ``--protect-emitters``: the brightness fade (:attr:`ProtectionPoint.bright`).
 DEFAULT_BRIGHT = PROTECTION.bright
 #: ``--protect-emitters``: the negative-drive fade (:attr:`ProtectionPoint.negative`).

@@ -58,7 +58,7 @@ import PyOpenColorIO as OCIO
 from ocio_vp.errors import InputError
 from ocio_vp.formats.diagnostics import PostCorrectionOCIO
 from ocio_vp.formats.solution import Solution
-from ocio_vp.metrics import SAMPLE_CAMERA_TO_XYZ
+from ocio_vp.metrics import sample_camera_to_xyz
 from ocio_vp.model.correction import PostCorrection, ProtectedCorrection, newton_inverse
 from ocio_vp.model.footage_range import Agreement, agreement, calibration_footage_range
 from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
@@ -727,7 +727,7 @@ def model_outputs(solution: Solution) -> ModelOutputs | None:
     lit, target = charts.lit_baseline, charts.target
     footage = calibration_footage_range(
         lit_chart=lit, white_patch=white, target_white=target[white], SL=solution.SL,
-        camera_to_xyz=SAMPLE_CAMERA_TO_XYZ,
+        camera_to_xyz=sample_camera_to_xyz(),
     )  # fmt: skip
     forward = forward_chain(correction, lit[white], np.vstack([lit, target]))
     lut = bake(_model_function(correction), forward)

@@ -42,8 +42,8 @@ __all__ = [
     "held_out_errors",
     "held_out_reflectances",
     "narrow_band_emitters",
-    "solution_held_out_errors",
     "noisy_measurements",
+    "solution_held_out_errors",
     "stage_footage_range",
 ]
 

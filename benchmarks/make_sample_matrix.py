@@ -1,0 +1,38 @@
+"""Rebuild ``ocio_vp/data/sample_camera_to_xyz.json`` (run by hand when the fit or the sample
+camera changes)::
+
+    python -m benchmarks.make_sample_matrix
+
+The file holds :func:`ocio_vp.metrics.camera_to_xyz_matrix` of the sample camera
+(``ocio_vp.spectra.DEFAULT_CAMERA``, under D65): code that writes files (the OCIO config's
+agreement check) reads it instead of fitting, so it needs no colour-science.
+``tests/test_metrics.py`` checks the file against the fit.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ocio_vp.metrics import SAMPLE_MATRIX_FILE, camera_to_xyz_matrix
+from ocio_vp.spectra import DEFAULT_CAMERA, camera_sensitivities
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def main() -> None:
+    matrix = camera_to_xyz_matrix(camera_sensitivities(DEFAULT_CAMERA), illuminant="D65")
+    document = {
+        "camera": DEFAULT_CAMERA,
+        "illuminant": "D65",
+        "written_by": "python -m benchmarks.make_sample_matrix",
+        # 12 significant digits: the fit's own digits, not the last bits of its arithmetic
+        "camera_to_xyz": [[float(f"{v:.12g}") for v in row] for row in matrix],
+    }
+    path = ROOT / "ocio_vp" / SAMPLE_MATRIX_FILE
+    path.write_text(json.dumps(document, indent=1) + "\n", encoding="utf-8")
+    print(f"wrote {path}")
+
+
+if __name__ == "__main__":
+    main()
