@@ -101,7 +101,7 @@ def test_a_good_calibration_passes(day, capsys):
         if not p["shown"]:
             assert abs(p["delta_e2000"] - p["expected_delta_e2000"]) < 1.0
     html = (out / "index.html").read_text()
-    assert "PASS" in html and "take.png" in html and (out / "take.png").exists()
+    assert "PASS" in html and "take.svg" in html and (out / "take.svg").exists()
 
 
 def test_a_failed_threshold_is_exit_status_3(day, tmp_path, capsys):

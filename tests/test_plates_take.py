@@ -136,7 +136,15 @@ def test_the_wall_only_file_and_its_overlays(measured):
     assert take["sync_marks_found"] == [0, 1, 2, 3, 4]
     (step,) = take["steps"]  # the dropped frame, found in the red ramp
     assert step["camera_frames"] == -1 and 149 <= step["player_frame"] <= 352
-    assert (folder / "wall.overlays" / "take.png").stat().st_size > 10_000
+    sheet = (folder / "wall.overlays" / take["contact_sheet"]).read_text()
+    # the contact sheet shows every frame averaged (a dot) and left out (a cross), and names
+    # every patch, as samples.json records them
+    kept = sum(len(p["frames"]) for p in take["patches"])
+    rejected = sum(len(p["rejected"]) for p in take["patches"])
+    assert sheet.count('class="kept"') == kept > 0
+    assert sheet.count('class="rejected"') == rejected
+    assert all(f">{p['name']}</text>" in sheet for p in take["patches"])
+    assert sheet.count("<image ") == 1 and sheet.count('class="region"') == 1
     x0, y0, x1, y1 = take["region"]  # inside the wall (20-85% x 15-80% of 96x54)
     assert x0 >= 0.2 * 96 and x1 <= 0.85 * 96 and y0 >= 0.15 * 54 and y1 <= 0.8 * 54
     assert (x1 - x0) * (y1 - y0) > 0.5 * (0.65 * 96) * (0.65 * 54)

@@ -218,9 +218,10 @@ def test_same_input_same_bytes_and_short_numbers(report, tmp_path):
         assert not re.search(r"\d\.\d{3}", re.sub(r">[^<]*<", "><", text))  # coordinates: 0.01
 
 
-def test_the_report_does_not_use_matplotlib():
-    # matplotlib was 90% of a demo's report time; the figures are written as SVG directly.
-    for source in (ROOT / "ocio_vp" / "report").glob("*.py"):
+def test_no_figure_uses_matplotlib():
+    # One way to draw figures: ocio_vp/svg.py, 80-90x quicker than matplotlib on the report's
+    # figures and 30x on the take's contact sheet (docs/report.md, benchmarks/bench_figures.py).
+    for source in (ROOT / "ocio_vp").rglob("*.py"):
         for node in ast.walk(ast.parse(source.read_text())):
             names = [a.name for a in node.names] if isinstance(node, ast.Import) else []
             names += [node.module or ""] if isinstance(node, ast.ImportFrom) else []

@@ -80,7 +80,9 @@ def run(args: argparse.Namespace) -> int:
             + "; solve it with the other files, docs/measurements.md)"
         )
     )
-    sheet = " and take.png" if result.take is not None else ""
+    from ocio_vp.plates.contact_sheet import SHEET
+
+    sheet = f" and {SHEET}" if result.take is not None else ""
     print(
         f"wrote {args.out}{kind} ({len(result.plates)} plates sampled); overlays{sheet} in {folder}"
     )

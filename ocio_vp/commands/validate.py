@@ -135,5 +135,7 @@ def run(args: argparse.Namespace) -> int:
     for warning in reading.warnings:
         warn("validate", warning)
     print("\n".join(lines))
-    print(f"wrote {final}/validation.json, index.html and take.png")
+    from ocio_vp.plates.contact_sheet import SHEET
+
+    print(f"wrote {final}/validation.json, index.html and {SHEET}")
     return 0 if result.passed else FAILED_STATUS

@@ -1,25 +1,33 @@
 """The take's contact sheet: which frames went to which patch, and the region measured.
 
-One PNG (``<measurements>.overlays/take.png``): a frame of the take (the white patch, or the
-brightest one) with the wall's region outlined and the rows read marked; under it, the take's
-per-frame R, G, B (log scale) over time in a few strips, each measured patch's span shaded
-with its name, the frames averaged as dots, frames left out as unstable as red crosses, and
-the sync marks in yellow. Drawn with matplotlib (Agg).
+One SVG (``<measurements>.overlays/take.svg``, drawn with :mod:`ocio_vp.svg`): a frame of the
+take (the white patch, or the brightest one) with the wall's region outlined and the rows read
+marked; under it, the take's per-frame R, G, B (log scale) over time in a few strips, each
+measured patch's span shaded with its name, the frames averaged as dots, frames left out as
+unstable as red crosses, and the sync marks in yellow.
 """
 
 from __future__ import annotations
 
+import math
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from ocio_vp.plates.take import TakeReading, rows_read
+from ocio_vp.svg import Axes, Canvas
 
-__all__ = ["write_contact_sheet"]
+__all__ = ["SHEET", "write_contact_sheet"]
+
+#: The contact sheet's file name (beside the overlays of ``measure``, in a validation folder).
+SHEET = "take.svg"
 
 _THUMB_WIDTH = 640
 _FRAMES_PER_STRIP = 400
 _COLOURS = ("#d62728", "#2ca02c", "#1f77b4")
+#: Layout in points: margins of the page, gap between panels, the frame's share of the height.
+_LEFT, _RIGHT, _TOP, _BOTTOM, _GAP, _FRAME_SHARE = 50.0, 20.0, 45.0, 30.0, 28.0, 2.2
 
 
 def _thumbnail(reading: TakeReading) -> tuple[np.ndarray, int, int]:
@@ -41,108 +49,119 @@ def _thumbnail(reading: TakeReading) -> tuple[np.ndarray, int, int]:
     return tone_map(image, white=float(np.max(brightest.mean)) * 1.1), step, frame
 
 
-def _draw_frame(ax, reading: TakeReading) -> None:
-    import matplotlib.patches as mpatches
+def _png(image: np.ndarray) -> bytes:
+    from ocio_vp.plates.overlay import write_png
 
+    with tempfile.TemporaryDirectory(prefix="ocio-vp-sheet-") as folder:
+        path = Path(folder) / "frame.png"
+        write_png(path, image)
+        return path.read_bytes()
+
+
+def _draw_frame(
+    canvas: Canvas, box: tuple[float, float, float, float], reading: TakeReading
+) -> None:
     image, step, frame = _thumbnail(reading)
-    ax.imshow(image, interpolation="nearest")
+    bx, by, bw, bh = box
+    scale = min(bw / image.shape[1], bh / image.shape[0])  # points per thumbnail pixel
+    w, h = image.shape[1] * scale, image.shape[0] * scale
+    x, y = bx + (bw - w) / 2, by + (bh - h) / 2
+    canvas.image(x, y, w, h, _png(image))
     x0, y0, x1, y1 = reading.region
     ox, oy = reading.info.x, reading.info.y
-    ax.add_patch(
-        mpatches.Rectangle(
-            ((x0 - ox) / step - 0.5, (y0 - oy) / step - 0.5),
-            (x1 - x0) / step,
-            (y1 - y0) / step,
-            fill=False,
-            edgecolor="#00e000",
-            linewidth=1.5,
-        )
-    )
+    k = scale / step  # points per frame pixel
+    canvas.rect(
+        x + (x0 - ox) * k, y + (y0 - oy) * k, (x1 - x0) * k, (y1 - y0) * k,
+        fill="none", stroke="#00e000", stroke_width=1.5, class_="region",
+    )  # fmt: skip
     for ya, yb in rows_read(reading.info, reading.region, reading.movie)[1]:
-        ax.plot(
-            [(x0 - ox) / step, (x1 - ox) / step],
-            [(ya + yb) / 2 / step] * 2,
-            color="#ffd000",
-            lw=0.6,
-        )
+        row = y + ((ya + yb) / 2 - oy) * k
+        canvas.line(x + (x0 - ox) * k, row, x + (x1 - ox) * k, row, stroke="#ffd000",
+                    stroke_width=0.6, class_="row-read")  # fmt: skip
     how = "found automatically" if reading.region_found else "given"
-    ax.set_title(
-        f"frame {frame}: wall region {list(reading.region)} ({how}); yellow: rows read", fontsize=8
-    )
-    ax.set_axis_off()
+    canvas.text(
+        x + w / 2, y - 6, f"frame {frame}: wall region {list(reading.region)} ({how}); "
+        "yellow: rows read", size=8,
+    )  # fmt: skip
 
 
-def _draw_strip(ax, reading: TakeReading, lo: float, hi: float, floor: float) -> None:
-    numbers, signal = reading.numbers, reading.signal
-    inside = (numbers >= lo) & (numbers < hi)
-    for c in range(3):
-        ax.plot(numbers[inside], np.maximum(signal[inside, c], floor), color=_COLOURS[c], lw=0.7)
-    ax.set_yscale("log")
-    ax.set_xlim(lo, hi)
-    ax.set_ylim(floor, float(np.max(signal)) * 2)
-    for patch in reading.sequence.of_kind("sync"):
+def _spans(axes: Axes, reading: TakeReading, lo: float, hi: float) -> None:
+    """The sync marks (yellow) and the measured patches (grey, alternating) behind the data."""
+    _, y0, _, h = axes.box
+    for sync in reading.sequence.of_kind("sync"):
         a, b = (
-            float(v) for v in reading.alignment.to_camera(np.array([patch.first, patch.last + 1.0]))
+            float(v) for v in reading.alignment.to_camera(np.array([sync.first, sync.last + 1.0]))
         )
         if b > lo and a < hi:
-            ax.axvspan(a, b, color="#ffe680", alpha=0.5, lw=0)
-    for k, reading_patch in enumerate(reading.patches.values()):
-        a, b = reading_patch.window
+            a, b = max(a, lo), min(b, hi)
+            axes.canvas.rect(axes.x(a), y0, axes.x(b) - axes.x(a), h, fill="#ffe680",
+                             fill_opacity=0.5, class_="sync")  # fmt: skip
+    for k, patch in enumerate(reading.patches.values()):
+        a, b = patch.window
         if b < lo or a >= hi:
             continue
-        ax.axvspan(a, b, color=("#d8d8d8", "#ececec")[k % 2], lw=0)
-        ax.text(
-            (a + b) / 2,
-            floor * 1.5,
-            reading_patch.name,
-            rotation=90,
-            fontsize=4.5,
-            ha="center",
-            va="bottom",
-        )
-        kept = np.isin(numbers, reading_patch.frames)
-        ax.plot(
-            numbers[kept], np.maximum(np.max(signal[kept], axis=1), floor), ".", ms=1.5, color="k"
-        )
-        bad = np.isin(numbers, reading_patch.rejected)
-        if np.any(bad):
-            ax.plot(
-                numbers[bad], np.maximum(np.max(signal[bad], axis=1), floor), "x", ms=3, color="r"
-            )
-    ax.tick_params(labelsize=6)
+        a, b = max(a, lo), min(b, hi)
+        axes.canvas.rect(axes.x(a), y0, axes.x(b) - axes.x(a), h,
+                         fill=("#d8d8d8", "#ececec")[k % 2], class_="patch")  # fmt: skip
+        axes.canvas.text(axes.x((a + b) / 2), y0 + h - 3, patch.name, size=4.5,
+                         anchor="start", valign="center", rotate=-90)  # fmt: skip
+
+
+def _draw_strip(axes: Axes, reading: TakeReading, floor: float) -> None:
+    """One strip of the take's signal (log10 on the axes' linear scale)."""
+    lo, hi = axes.xlim
+    numbers, signal = reading.numbers, reading.signal
+    inside = (numbers >= lo) & (numbers < hi)
+    _spans(axes, reading, lo, hi)
+    log = np.log10(np.maximum(signal, floor))
+    clip = axes.clip()
+    for c in range(3):
+        axes.canvas.polyline(axes.x(numbers[inside]), axes.y(log[inside, c]),
+                             stroke=_COLOURS[c], stroke_width=0.7, clip_path=clip)  # fmt: skip
+    top = np.max(log, axis=1)
+    for patch in reading.patches.values():
+        kept = inside & np.isin(numbers, patch.frames)
+        for x, y in zip(axes.x(numbers[kept]), axes.y(top[kept]), strict=True):
+            axes.canvas.circle(x, y, 0.75, fill="black", class_="kept")
+        bad = inside & np.isin(numbers, patch.rejected)
+        for x, y in zip(axes.x(numbers[bad]), axes.y(top[bad]), strict=True):
+            axes.canvas.text(x, y, "\u00d7", size=6, valign="center", fill="red", class_="rejected")
+    x0, _, _, _ = axes.box
+    for decade in range(math.ceil(axes.ylim[0]), math.floor(axes.ylim[1]) + 1):
+        y = float(axes.y(float(decade)))
+        axes.canvas.line(x0 - 3.5, y, x0, y, stroke="black", stroke_width=0.8)
+        axes.canvas.text(x0 - 5, y, f"1e{decade}", size=6, anchor="end", valign="center")
+    axes.xticks(size=6)
+    axes.frame()
 
 
 def write_contact_sheet(reading: TakeReading, path: str | Path) -> None:
-    """Draw the contact sheet of ``reading`` into ``path`` (PNG)."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    from matplotlib.figure import Figure
-
+    """Draw the contact sheet of ``reading`` into ``path`` (SVG)."""
     first, last = float(reading.numbers[0]), float(reading.numbers[-1]) + 1
     strips = max(1, int(np.ceil((last - first) / _FRAMES_PER_STRIP)))
-    figure = Figure(figsize=(16, 4 + 1.8 * strips), dpi=100)
-    grid = figure.add_gridspec(1 + strips, 1, height_ratios=[2.2] + [1] * strips)
-    _draw_frame(figure.add_subplot(grid[0]), reading)
+    canvas = Canvas(16, 4 + 1.8 * strips, 100, label="contact sheet of the take")
+    width = canvas.width - _LEFT - _RIGHT
+    unit = (canvas.height - _TOP - _BOTTOM - _GAP * strips) / (_FRAME_SHARE + strips)
+    _draw_frame(canvas, (_LEFT, _TOP, width, _FRAME_SHARE * unit), reading)
     floor = 1e-4 * float(np.max(reading.signal))
-    width = (last - first) / strips
+    ylim = (math.log10(floor), math.log10(float(np.max(reading.signal)) * 2))
+    span = (last - first) / strips
     for k in range(strips):
-        _draw_strip(
-            figure.add_subplot(grid[1 + k]),
-            reading,
-            first + k * width,
-            first + (k + 1) * width,
-            floor,
-        )
+        y = _TOP + (_FRAME_SHARE + k) * unit + _GAP * (k + 1)
+        xlim = (first + k * span, first + (k + 1) * span)
+        axes = Axes(canvas, (_LEFT, y, width, unit), xlim, ylim, name=f"strip{k}")
+        _draw_strip(axes, reading, floor)
     a = reading.alignment
     steps = "; ".join(
         f"{abs(n)} frame(s) {'dropped' if n < 0 else 'repeated'} near {T:g}" for T, n in a.steps
     )
-    figure.suptitle(
+    canvas.text(
+        canvas.width / 2,
+        18,
         f"{Path(str(reading.take.frames)).name}: {len(reading.numbers)} frames; "
         f"{a.rate:.5f} camera frames per player frame; sync marks {len(a.marks_found)} of "
         f"{a.marks_expected}; {a.changes_used} patch changes timed"
         + (f"; {steps}" if steps else ""),
-        fontsize=9,
+        size=9,
     )
-    figure.savefig(str(path), format="png", metadata={"Software": None})
+    canvas.write(Path(path))

@@ -28,6 +28,7 @@ from ocio_vp.formats.measurements import (
     measurements_from_dict,
 )
 from ocio_vp.plates.capture import Capture, ChartShot, PlateRef, RegionShot
+from ocio_vp.plates.contact_sheet import SHEET
 from ocio_vp.plates.reader import PlateInfo, open_plate, read_region
 from ocio_vp.plates.sampling import ChartSamples, patch_labels, sample_chart, sample_region
 from ocio_vp.plates.take import TakeReading, measure_take
@@ -41,8 +42,6 @@ __all__ = [
 ]
 
 _OVERLAY_MARGIN = 16
-#: The take's contact sheet, in the overlay folder.
-TAKE_SHEET = "take.png"
 
 
 @dataclass(frozen=True)
@@ -479,7 +478,7 @@ def take_document(reading: TakeReading, where: Any = str) -> dict[str, Any]:
         "frames": where(reading.take.frames),
         "sequence": where(reading.take.sequence),
         **decoded,
-        "contact_sheet": TAKE_SHEET,
+        "contact_sheet": SHEET,
         "region": list(reading.region),
         "region_found": reading.region_found,
         "frame_count": len(reading.numbers),
@@ -538,7 +537,7 @@ def write_measure_outputs(
         if result.take is not None:
             from ocio_vp.plates.contact_sheet import write_contact_sheet
 
-            write_contact_sheet(result.take, staged / TAKE_SHEET)
+            write_contact_sheet(result.take, staged / SHEET)
         text = json.dumps(samples_document(result, relative_to=folder), indent=2) + "\n"
         write_file_atomically(staged / "samples.json", text)
         if result.measurements is not None:

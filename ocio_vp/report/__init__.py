@@ -35,7 +35,7 @@ from ocio_vp.report.plots import (
     plot_error_bars,
     plot_linearity,
 )
-from ocio_vp.report.svg import Axes, Canvas, nice_ticks
+from ocio_vp.svg import Axes, Canvas, nice_ticks
 
 __all__ = [
     "CHART_KEYS",

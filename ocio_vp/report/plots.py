@@ -1,4 +1,4 @@
-"""The report's figures as SVG (:mod:`ocio_vp.report.svg`, no matplotlib): the paper's
+"""The report's figures as SVG (:mod:`ocio_vp.svg`, no matplotlib): the paper's
 comparison charts, its Fig. 11 error bars, per-patch ΔE, and the panel linearity curves.
 
 Every plot function writes one SVG file and returns the numbers it drew (colours, bar heights,
@@ -25,7 +25,7 @@ import numpy as np
 
 from ocio_vp.formats.solution import Solution
 from ocio_vp.report.data import EnvironmentData, patch_names
-from ocio_vp.report.svg import Axes, Canvas, data_limits, hex_colours, num, subplot_boxes
+from ocio_vp.svg import Axes, Canvas, data_limits, hex_colours, num, subplot_boxes
 
 __all__ = [
     "ChartPlot",

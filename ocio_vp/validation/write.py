@@ -14,13 +14,13 @@ from typing import Any
 
 import numpy as np
 
+from ocio_vp.plates.contact_sheet import SHEET
 from ocio_vp.plates.take import TakeReading
 from ocio_vp.validation.compare import ValidationResult
 
 __all__ = ["VALIDATION_FORMAT", "summary_lines", "validation_document", "write_validation"]
 
 VALIDATION_FORMAT = "ocio-vp/validation"
-SHEET = "take.png"
 
 
 def label(patch) -> str:
@@ -135,7 +135,7 @@ def validation_document(
 def _swatches(result: ValidationResult) -> str:
     """An SVG: per patch, the intended colour (top) and the post-corrected measurement
     (bottom), as sRGB through the same camera-to-display matrix, with its ΔE2000."""
-    from ocio_vp.report.svg import escape, hex_colour
+    from ocio_vp.svg import escape, hex_colour
 
     intended = np.array([p.intended for p in result.patches])
     matrix = result.display_matrix

@@ -8,7 +8,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from ocio_vp.report.svg import (
+from ocio_vp.svg import (
     Axes,
     Canvas,
     escape,
