@@ -5,7 +5,9 @@ included), run in rounds that interleave every command, so a load that drifts hi
 alike; a cell is the best wall time of its rounds, and the CPU time (user + system, the
 command's own processes) of that run. ``apply`` is judged against the I/O limit: a plain
 OpenImageIO read + write of the same frames in one process (``bench_apply``'s loop), as a
-ratio of speeds (plain time / command time) measured in the same rounds.
+ratio of speeds (plain time / command time) measured in the same rounds; a long sequence runs
+one round, each command right after a plain read + write of its own, so that the load's drift
+over the minutes of the round falls on both sides of each ratio.
 
 The other checkout: set ``OCIO_VP_BASELINE_PYTHON`` to the Python of an environment where it
 is installed (the README says how to make one for last round's commit); without it
@@ -219,7 +221,8 @@ def _table(
     return markdown_table(header, body)
 
 
-def _apply_section(pythons, files, root, env, count: int, rounds: int) -> str:
+def _apply_section(pythons, files, root, env, count: int, rounds: int) -> tuple[str, dict]:
+    """The section's text, and (row, checkout) -> CPU seconds a frame (of the best run)."""
     frames = _frames(root, files["master"], count)
     commands = {("plain read + write", "this"): [
         pythons["this"], "-c", CHILD, "plain", str(root / "o" / "plain"), *map(str, frames),
@@ -255,7 +258,9 @@ def _apply_section(pythons, files, root, env, count: int, rounds: int) -> str:
             f"{_fmt(walls[0])} to {_fmt(walls[-1])} over the round (each speed below is against "
             "the plain run just before the command)"
         )
-    return "\n".join(
+    per_frame = {key: cell.best()[1] / count for key, cell in cells.items()}
+    per_frame[plain_key] = cpu / count
+    text = "\n".join(
         [
             f"### `apply` on {count} frames ({_frame_size(files)} half-float zip EXR), {how}",
             "",
@@ -267,6 +272,24 @@ def _apply_section(pythons, files, root, env, count: int, rounds: int) -> str:
             "",
             agreement,
         ]
+    )
+    return text, per_frame
+
+
+def _per_frame_line(short: tuple[int, dict], long: tuple[int, dict]) -> str:
+    """CPU a frame on the long sequence against the short one, per command: the load changes
+    wall times far more than the CPU a frame costs, so a cost growing with the length of the
+    sequence shows here even on a busy machine."""
+    (n, few), (m, many) = short, long
+    ratios = [
+        f"{row.strip('`').removeprefix('apply`, ')} {many[(row, who)] / few[(row, who)]:.2f}x"
+        + ("" if who == "this" else f" ({BASELINE_COMMIT})")
+        for row, who in many
+        if (row, who) in few
+    ]
+    return (
+        f"- CPU a frame on {m} frames / on {n} frames, each command (a cost that grew with the "
+        f"sequence's length would show here, whatever the load): {'; '.join(ratios)}."
     )
 
 
@@ -344,11 +367,16 @@ def run(quick: bool = False) -> str:
             f"Baseline: {'`' + baseline + '`' if baseline else f'not run ({BASELINE_ENV} unset)'}.",
             "",
         ]
+        costs = []
         for count in (3,) if quick else (6, 48):
             rounds = 1 if (quick or count > 8) else 3
-            parts += [_apply_section(pythons, files, root, env, count, rounds), ""]
+            text, per_frame = _apply_section(pythons, files, root, env, count, rounds)
+            costs.append((count, per_frame))
+            parts += [text, ""]
             shutil.rmtree(root / f"frames{count}")
             shutil.rmtree(root / "o", ignore_errors=True)
+        if len(costs) == 2:
+            parts[-1:] = [_per_frame_line(*costs), ""]
         parts += [_solve_section(pythons, files, root, env, 1 if quick else 2)]
     return "\n".join(parts)
 
