@@ -282,7 +282,7 @@ def _per_frame_line(short: tuple[int, dict], long: tuple[int, dict]) -> str:
     sequence shows here even on a busy machine."""
     (n, few), (m, many) = short, long
     ratios = [
-        f"{row.strip('`').removeprefix('apply`, ')} {many[(row, who)] / few[(row, who)]:.2f}x"
+        f"{row.removeprefix('`apply`, ')} {many[(row, who)] / few[(row, who)]:.2f}x"
         + ("" if who == "this" else f" ({BASELINE_COMMIT})")
         for row, who in many
         if (row, who) in few
