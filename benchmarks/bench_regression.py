@@ -5,7 +5,9 @@ included), run in rounds that interleave every command, so a load that drifts hi
 alike; a cell is the best wall time of its rounds, and the CPU time (user + system, the
 command's own processes) of that run. ``apply`` is judged against the I/O limit: a plain
 OpenImageIO read + write of the same frames in one process (``bench_apply``'s loop), as a
-ratio of speeds (plain time / command time) measured in the same rounds.
+ratio of speeds (plain time / command time) measured in the same rounds; a long sequence runs
+one round, each command right after a plain read + write of its own, so that the load's drift
+over the minutes of the round falls on both sides of each ratio.
 
 The other checkout: set ``OCIO_VP_BASELINE_PYTHON`` to the Python of an environment where it
 is installed (the README says how to make one for last round's commit); without it
@@ -164,11 +166,35 @@ def _rounds(commands: dict, rounds: int, env: dict, cwd: Path, warmup: bool = Tr
     return cells
 
 
+def _paired(commands: dict, plain_key, env: dict, cwd: Path) -> tuple[dict, dict]:
+    """One round where every command runs right after its own plain read + write: (cells,
+    row -> the plain run just before it). On a shared machine the load drifts over a long
+    sequence's round (minutes a command); a ratio to one plain run at the start of the round
+    then measures where in the round a command ran more than the command (the 48-frame
+    rows of a loaded run got slower in the order they ran, whichever checkout or Q)."""
+    plain_cmd = commands[plain_key]
+    cells, plains = {}, {}
+    for key, cmd in commands.items():
+        if key == plain_key:
+            continue
+        plain_wall, plain_cpu = _run(plain_cmd, env, cwd)
+        plains[key] = Cell([plain_wall], [plain_cpu])
+        wall, cpu = _run(cmd, env, cwd)
+        cells[key] = Cell([wall], [cpu])
+    return cells, plains
+
+
 def _fmt(seconds: float) -> str:
     return f"{seconds:.2f} s"
 
 
-def _table(cells: dict, rows: list[str], plain: Cell | None, targets: dict[str, str]) -> str:
+def _table(
+    cells: dict,
+    rows: list[str],
+    plain: Cell | None,
+    targets: dict[str, str],
+    plains: dict | None = None,
+) -> str:
     header = ["command", "this checkout: wall (CPU)", f"{BASELINE_COMMIT}: wall (CPU)"]
     if plain is not None:
         header += ["speed / plain read + write: this", BASELINE_COMMIT]
@@ -186,7 +212,8 @@ def _table(cells: dict, rows: list[str], plain: Cell | None, targets: dict[str, 
             wall, cpu = cell.best()
             line.append(f"{_fmt(wall)} ({_fmt(cpu)})")
             if plain is not None:
-                speeds.append(f"{plain.best()[0] / wall:.2f}x")
+                reference = (plains or {}).get((row, who), plain)
+                speeds.append(f"{reference.best()[0] / wall:.2f}x")
         if plain is not None:
             line += speeds
         line.append(targets.get(row, ""))
@@ -194,17 +221,25 @@ def _table(cells: dict, rows: list[str], plain: Cell | None, targets: dict[str, 
     return markdown_table(header, body)
 
 
-def _apply_section(pythons, files, root, env, count: int, rounds: int) -> str:
+def _apply_section(pythons, files, root, env, count: int, rounds: int) -> tuple[str, dict]:
+    """The section's text, and (row, checkout) -> CPU seconds a frame (of the best run)."""
     frames = _frames(root, files["master"], count)
     commands = {("plain read + write", "this"): [
         pythons["this"], "-c", CHILD, "plain", str(root / "o" / "plain"), *map(str, frames),
     ]}  # fmt: skip
     commands.update(_commands(pythons, files, root, frames))
     load = os.getloadavg()[0]
-    # A long sequence runs once: its frames are in the page cache (just copied) and the
-    # bytecode cache is filled by the short one.
-    cells = _rounds(commands, rounds, env, root, warmup=count <= 8)
-    plain = cells.pop(("plain read + write", "this"))
+    plain_key = ("plain read + write", "this")
+    plains = None
+    if count <= 8:
+        cells = _rounds(commands, rounds, env, root)
+        plain = cells.pop(plain_key)
+    else:  # once, each command after its own plain run (frames in the page cache: just copied)
+        cells, plains = _paired(commands, plain_key, env, root)
+        plain = Cell(
+            [w for c in plains.values() for w in c.wall],
+            [u for c in plains.values() for u in c.cpu],
+        )
     agreement = _agreement(root / "o" / "this", frames[0].name)
     rows = list(dict.fromkeys(row for row, _ in cells))
     targets = {
@@ -213,18 +248,48 @@ def _apply_section(pythons, files, root, env, count: int, rounds: int) -> str:
         "`apply`, default Q, `--via config`": ">= 0.9x",
     }
     wall, cpu = plain.best()
-    return "\n".join(
+    if plains is None:
+        how = f"best of {rounds} rounds"
+        plain_text = f"{_fmt(wall)} ({_fmt(cpu)} CPU)"
+    else:
+        how = "one round, each command right after its own plain read + write"
+        walls = sorted(plain.wall)
+        plain_text = (
+            f"{_fmt(walls[0])} to {_fmt(walls[-1])} over the round (each speed below is against "
+            "the plain run just before the command)"
+        )
+    per_frame = {key: cell.best()[1] / count for key, cell in cells.items()}
+    per_frame[plain_key] = cpu / count
+    text = "\n".join(
         [
-            f"### `apply` on {count} frames ({_frame_size(files)} half-float zip EXR), best of "
-            f"{rounds} rounds",
+            f"### `apply` on {count} frames ({_frame_size(files)} half-float zip EXR), {how}",
             "",
-            f"Plain OpenImageIO read + write of the same frames: {_fmt(wall)} ({_fmt(cpu)} CPU). "
-            f"Load average (1 min) at the start: {load:.1f} on {os.cpu_count()} cores.",
+            f"Plain OpenImageIO read + write of the same frames: {plain_text}. "
+            f"Load average (1 min) at the start: {load:.1f} on {os.cpu_count()} cores, at the "
+            f"end: {os.getloadavg()[0]:.1f}.",
             "",
-            _table(cells, rows, plain, targets),
+            _table(cells, rows, plain, targets, plains),
             "",
             agreement,
         ]
+    )
+    return text, per_frame
+
+
+def _per_frame_line(short: tuple[int, dict], long: tuple[int, dict]) -> str:
+    """CPU a frame on the long sequence against the short one, per command: the load changes
+    wall times far more than the CPU a frame costs, so a cost growing with the length of the
+    sequence shows here even on a busy machine."""
+    (n, few), (m, many) = short, long
+    ratios = [
+        f"{row.removeprefix('`apply`, ')} {many[(row, who)] / few[(row, who)]:.2f}x"
+        + ("" if who == "this" else f" ({BASELINE_COMMIT})")
+        for row, who in many
+        if (row, who) in few
+    ]
+    return (
+        f"- CPU a frame on {m} frames / on {n} frames, each command (a cost that grew with the "
+        f"sequence's length would show here, whatever the load): {'; '.join(ratios)}."
     )
 
 
@@ -302,11 +367,16 @@ def run(quick: bool = False) -> str:
             f"Baseline: {'`' + baseline + '`' if baseline else f'not run ({BASELINE_ENV} unset)'}.",
             "",
         ]
+        costs = []
         for count in (3,) if quick else (6, 48):
             rounds = 1 if (quick or count > 8) else 3
-            parts += [_apply_section(pythons, files, root, env, count, rounds), ""]
+            text, per_frame = _apply_section(pythons, files, root, env, count, rounds)
+            costs.append((count, per_frame))
+            parts += [text, ""]
             shutil.rmtree(root / f"frames{count}")
             shutil.rmtree(root / "o", ignore_errors=True)
+        if len(costs) == 2:
+            parts[-1:] = [_per_frame_line(*costs), ""]
         parts += [_solve_section(pythons, files, root, env, 1 if quick else 2)]
     return "\n".join(parts)
 

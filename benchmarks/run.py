@@ -208,7 +208,8 @@ def update_sections(document: str, sections: list[str], quick: bool) -> str:
     parts = ["## " + part for part in parts]
     closing = ""
     if parts and "\nLoad average" in parts[-1]:
-        body, _, tail = parts[-1].partition("\nLoad average")
+        # The document's closing line is its last one: a section may have load lines too.
+        body, _, tail = parts[-1].rpartition("\nLoad average")
         parts[-1], closing = body.rstrip("\n") + "\n", "Load average" + tail
     elif not parts and "\nLoad average" in head:
         head, _, tail = head.partition("\nLoad average")

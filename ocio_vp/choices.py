@@ -19,6 +19,7 @@ __all__ = [
     "DEFAULT_METHOD",
     "DEFAULT_PEAK_NITS",
     "DEFAULT_PRIORITY",
+    "DEFAULT_VALIDATION_THRESHOLD",
     "DEFAULT_WALL_ENCODING",
     "DEFAULT_WHITE_PATCH",
     "ENVIRONMENT_TARGETS",
@@ -97,3 +98,7 @@ DEFAULT_FOOTAGE_ENCODING = "linear"
 
 #: OCIO optimisation levels ``apply`` accepts.
 OPTIMIZATIONS = ("lossless", "default", "good", "draft")
+
+#: ``ocio-vp validate``: pass when the 95th percentile of ΔE2000 over the shown patches is at
+#: most this (docs/validation.md says why 3).
+DEFAULT_VALIDATION_THRESHOLD = 3.0

@@ -98,14 +98,20 @@ def output_lock(folder: str | os.PathLike[str]) -> Iterator[None]:
         finally:
             _release(key)
         return
-    fd = os.open(key, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    busy = "another ocio-vp run is writing into this folder; wait for it to finish"
+    try:
+        fd = os.open(key, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except OSError:  # removed since it was made: by another run that gave it up
+        raise InputError(busy, source=folder) from None
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        # The lock is on the folder opened above: if another run removed (or replaced) the
+        # folder meanwhile, the lock guards nothing that anyone else will write into.
+        if not os.path.samestat(os.fstat(fd), os.stat(key)):
+            raise OSError("replaced")
     except OSError:
         os.close(fd)
-        raise InputError(
-            "another ocio-vp run is writing into this folder; wait for it to finish", source=folder
-        ) from None
+        raise InputError(busy, source=folder) from None
     _LOCKS[key] = (fd, 1)
     try:
         yield
@@ -124,18 +130,22 @@ def _release(key: str) -> None:
 def _make_dirs(folder: Path) -> list[Path]:
     """Create ``folder`` and missing parents; return the ones created, deepest first."""
     missing = [p for p in (folder, *folder.parents) if not os.path.lexists(p)]
+    created: list[Path] = []
     for path in reversed(missing):
         try:
             path.mkdir()
-        except FileExistsError:
+        except FileExistsError:  # another run made it meanwhile: it is not ours to remove
             if not path.is_dir():
+                _remove_empty(reversed(created))
                 raise InputError(f"exists and is not a folder; {_MOVE_HINT}", source=path) from None
+            continue
         except OSError as error:
-            _remove_empty(missing)
+            _remove_empty(reversed(created))
             raise InputError(
                 f"cannot create output folder: {error.strerror}", source=path
             ) from None
-    return missing
+        created.append(path)
+    return created[::-1]
 
 
 def _remove_empty(folders: Iterable[Path]) -> None:
@@ -211,25 +221,26 @@ def staged_dir(parent: str | os.PathLike[str]) -> Iterator[Path]:
     if os.path.lexists(parent) and not parent.is_dir():
         raise InputError(f"exists and is not a folder; {_MOVE_HINT}", source=parent)
     created = _make_dirs(parent)
-    try:
-        with output_lock(parent):
-            # Named and registered before it exists: a stop signal arriving just as the folder
-            # is made still finds it (mkdtemp's name would be lost if it came before returning).
-            stage = parent / f".ocio-vp-staging-{os.getpid()}-{secrets.token_hex(6)}"
-            _LIVE_STAGES.add(stage)
+    # Folders this call created are removed only while it holds the lock: a run that finds the
+    # folder locked leaves it to the run that holds it (removing it under that run made its
+    # staging folder fail, and a third run could then lock a new folder of the same name).
+    with output_lock(parent):
+        # Named and registered before it exists: a stop signal arriving just as the folder
+        # is made still finds it (mkdtemp's name would be lost if it came before returning).
+        stage = parent / f".ocio-vp-staging-{os.getpid()}-{secrets.token_hex(6)}"
+        _LIVE_STAGES.add(stage)
+        try:
             try:
-                try:
-                    stage.mkdir(mode=0o700)
-                except OSError as error:
-                    raise InputError(f"cannot write: {error.strerror}", source=parent) from None
-                stage.chmod(default_mode(folder=True))  # it may itself be published
-                yield stage
-            finally:
-                shutil.rmtree(stage, ignore_errors=True)
-                if not os.path.lexists(stage):  # else a straggler wrote into it: atexit
-                    _LIVE_STAGES.discard(stage)
-    finally:
-        _remove_empty(created)
+                stage.mkdir(mode=0o700)
+            except OSError as error:
+                raise InputError(f"cannot write: {error.strerror}", source=parent) from None
+            stage.chmod(default_mode(folder=True))  # it may itself be published
+            yield stage
+        finally:
+            shutil.rmtree(stage, ignore_errors=True)
+            if not os.path.lexists(stage):  # else a straggler wrote into it: atexit
+                _LIVE_STAGES.discard(stage)
+            _remove_empty(created)
 
 
 def _files(folder: Path) -> list[str]:
@@ -417,14 +428,14 @@ def write_output_file(
         check_file_replaceable(path, raw)
     parent = Path(path).parent
     created = _make_dirs(parent)
-    try:
-        with output_lock(parent):
+    with output_lock(parent):  # created folders removed under the lock (see staged_dir)
+        try:
             if not replace:
                 check_file_replaceable(path, raw)
             write_file_atomically(path, raw)
-    except BaseException:
-        _remove_empty(created)
-        raise
+        except BaseException:
+            _remove_empty(created)
+            raise
 
 
 def write_file_atomically(path: str | os.PathLike[str], data: bytes | str) -> None:

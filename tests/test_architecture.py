@@ -212,13 +212,17 @@ LIGHT_PATHS = {
 
 @pytest.mark.parametrize("path", sorted(LIGHT_PATHS))
 def test_commands_do_not_import_heavy_libraries_they_do_not_use(path):
+    # colour.plotting's stand-in (ocio_vp/__init__.py: colour-science not loaded) is no import.
     code = (
-        f"import sys; {LIGHT_PATHS[path]}; print(sorted({{m.split('.')[0] for m in sys.modules}}))"
+        f"import sys; {LIGHT_PATHS[path]}; print(sorted({{m.split('.')[0] for m, v in "
+        "sys.modules.items() if type(v).__name__ != '_DeferredModule'}))"
     )
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert run.returncode == 0, run.stderr.strip().splitlines()[-1:]
     loaded = set(ast.literal_eval(run.stdout))
     assert not loaded & set(HEAVY), sorted(loaded & set(HEAVY))
+    if path == "parser":  # ``ocio-vp --help`` and every start: not even numpy (~0.2 s)
+        assert "numpy" not in loaded
 
 
 def test_the_package_exports_load_on_first_use():
@@ -256,3 +260,23 @@ def test_tests_mirror_the_package():
         t.name for t in tests if t.stem != "test_architecture" and not _tested_source(t.stem)
     ]
     assert not unmatched, f"name these after the module or subpackage they test: {unmatched}"
+
+
+def test_colour_science_loads_without_its_plotting_until_that_is_used():
+    """Every solve imports colour-science (ΔE2000, camera data); its ``__init__`` would import
+    ``colour.plotting`` and matplotlib's pyplot (~0.3 s), which ocio_vp never uses. After
+    ``import ocio_vp`` they load on first use only, and then they are the real ones."""
+    code = (
+        "import sys, ocio_vp, colour; before = 'matplotlib' in sys.modules; "
+        "d = colour.delta_E([50, 2, 3], [51, 2, 4]); "
+        "from colour.plotting import plot_single_colour_swatch as f; "
+        "print([before, 'matplotlib' in sys.modules, f.__module__, "
+        "sys.modules['colour.plotting'] is colour.plotting, type(colour.plotting).__name__, "
+        "float(d)])"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr.strip().splitlines()[-1:]
+    before, after, module, same, kind, delta_e = ast.literal_eval(run.stdout)
+    assert (before, after, same, kind) == (False, True, True, "module")
+    assert module.startswith("colour.plotting")
+    assert delta_e > 0

@@ -68,3 +68,80 @@ def test_a_stopped_solve_leaves_no_staging_folder(tmp_path):
         assert left == [], (sig, left)  # nothing was published, and no staging folder
     assert not any(p.name.startswith(".ocio-vp") for p in tmp_path.rglob("*"))
     assert os.path.isfile(stage)  # the input is untouched
+
+
+def _held_elsewhere(folder):
+    """Lock ``folder`` as another process's ``output_lock`` would (flock is per open file, so
+    a second descriptor in this process conflicts like another process); returns the fd."""
+    import fcntl
+    import os
+
+    fd = os.open(folder, os.O_RDONLY)
+    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    return fd
+
+
+def test_a_run_refused_by_the_lock_leaves_the_folder_it_made(tmp_path, monkeypatch):
+    """Two solves into one new folder: both find it missing, one makes it, the other locks it
+    first. The one refused must not remove the folder (it made it, but the other run is now
+    writing there): removing it under that run made the other's staging folder fail, so every
+    run of ``test_concurrent_solves_never_mix`` could fail (its flake), and a third run could
+    lock a new folder of the same name and mix outputs."""
+    import os
+
+    import pytest
+
+    from ocio_vp import staging
+    from ocio_vp.errors import InputError
+
+    out = tmp_path / "out"
+    real = staging._make_dirs
+    fds = []
+
+    def made_then_locked_by_another(folder):
+        created = real(folder)
+        fds.append(_held_elsewhere(folder))  # the other run locks it between mkdir and lock
+        return created
+
+    monkeypatch.setattr(staging, "_make_dirs", made_then_locked_by_another)
+    try:
+        with pytest.raises(InputError, match="another ocio-vp run"):
+            with staging.staged_dir(out):
+                pass
+        assert out.is_dir()  # still there for the run that holds it
+    finally:
+        for fd in fds:
+            os.close(fd)
+    monkeypatch.setattr(staging, "_make_dirs", real)
+    with staging.staged_dir(out) as stage:  # free again: a run writes, its stage goes
+        assert stage.parent == out
+    assert list(out.iterdir()) == []
+
+
+def test_a_lock_on_a_folder_removed_meanwhile_is_refused(tmp_path, monkeypatch):
+    """The folder is removed (and made again) by another run between opening and locking it:
+    the lock would be on a folder nobody else writes into, so the run stops on one line."""
+    import fcntl
+
+    import pytest
+
+    from ocio_vp import staging
+    from ocio_vp.errors import InputError
+
+    out = tmp_path / "out"
+    out.mkdir()
+
+    class Meanwhile:
+        LOCK_EX, LOCK_NB = fcntl.LOCK_EX, fcntl.LOCK_NB
+
+        @staticmethod
+        def flock(fd, flags):
+            out.rmdir()
+            out.mkdir()
+            fcntl.flock(fd, flags)
+
+    monkeypatch.setattr(staging, "fcntl", Meanwhile)
+    with pytest.raises(InputError, match="another ocio-vp run"):
+        with staging.output_lock(out):
+            pass
+    assert staging._LOCKS == {}

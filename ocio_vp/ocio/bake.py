@@ -48,6 +48,7 @@ on the camera range of :mod:`ocio_vp.model.footage_range`, stored in ``solution.
 
 from __future__ import annotations
 
+import functools
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -701,9 +702,17 @@ class ModelOutputs:
 
 def chart_content(chart: np.ndarray) -> np.ndarray:
     """The target chart and random positive mixtures of its patches (the inverse's content)."""
-    rng = np.random.default_rng(5)
-    mixtures = rng.dirichlet(np.full(len(chart), 0.3), 2000) @ chart
+    mixtures = _mixture_weights(len(chart)) @ chart
     return np.vstack([chart, mixtures / mixtures.max(axis=1, keepdims=True)])
+
+
+@functools.lru_cache(maxsize=4)
+def _mixture_weights(patches: int) -> np.ndarray:
+    """(2000, patches) fixed random mixture weights: the same for every environment of a
+    stage, so drawn once per process rather than once per environment."""
+    weights = np.random.default_rng(5).dirichlet(np.full(patches, 0.3), 2000)
+    weights.setflags(write=False)
+    return weights
 
 
 def model_outputs(solution: Solution) -> ModelOutputs | None:

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ocio_vp.choices import DEFAULT_VALIDATION_THRESHOLD
 from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import Solution
 from ocio_vp.patterns.sequence import PatternSequence
@@ -47,7 +48,7 @@ __all__ = [
 ]
 
 #: Pass when the 95th percentile of ΔE2000 over the shown patches is at most this.
-DEFAULT_THRESHOLD = 3.0
+DEFAULT_THRESHOLD = DEFAULT_VALIDATION_THRESHOLD
 #: In-frustum light this far outside [0, 1] (fraction of full drive) counts as not shown.
 GAMUT_TOLERANCE = 1e-3
 
