@@ -13,8 +13,6 @@ it loads) took longer than post-correcting six 4K frames.
 from __future__ import annotations
 
 import importlib
-import sys
-import types
 from typing import TYPE_CHECKING, Any
 
 __version__ = "0.1.0"
@@ -95,27 +93,3 @@ def __getattr__(name: str) -> Any:
 
 def __dir__() -> list[str]:
     return sorted([*globals(), *_EXPORTS])
-
-
-class _DeferredModule(types.ModuleType):
-    """Stands in ``sys.modules`` for a module not loaded yet; the first use of any of its
-    attributes loads the real module (which replaces it there) and answers from it."""
-
-    def __getattr__(self, attribute: str) -> Any:
-        if sys.modules.get(self.__name__) is self:
-            del sys.modules[self.__name__]
-        return getattr(importlib.import_module(self.__name__), attribute)
-
-
-def _defer_colour_plotting() -> None:
-    """colour-science's ``__init__`` (0.4.x) imports ``colour.plotting``, and with it
-    matplotlib's pyplot: ~30% of ``import colour``, which every solve pays for ΔE2000 and
-    its camera data; ocio_vp never plots with it (the report draws its own SVG). Until
-    something uses ``colour.plotting``, a stand-in takes its place; the first attribute read
-    from it imports the real one. Nothing changes if colour is already imported."""
-    name = "colour.plotting"
-    if "colour" not in sys.modules and name not in sys.modules:
-        sys.modules[name] = _DeferredModule(name)
-
-
-_defer_colour_plotting()

@@ -13,8 +13,9 @@ import functools
 import importlib
 import os
 import sys
+import types
 from collections.abc import Sequence
-from typing import NoReturn
+from typing import Any, NoReturn
 
 from ocio_vp import __version__
 from ocio_vp.commands.common import HelpFormatter
@@ -108,8 +109,32 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class _DeferredModule(types.ModuleType):
+    """Stands in ``sys.modules`` for a module not loaded yet; the first use of any of its
+    attributes loads the real module (which replaces it there) and answers from it."""
+
+    def __getattr__(self, attribute: str) -> Any:
+        if sys.modules.get(self.__name__) is self:
+            del sys.modules[self.__name__]
+        return getattr(importlib.import_module(self.__name__), attribute)
+
+
+def _defer_colour_plotting() -> None:
+    """colour-science's ``__init__`` (0.4.x) imports ``colour.plotting``, and with it
+    matplotlib's pyplot: ~30% of ``import colour``, which every solve pays for ΔE2000 and
+    its camera data; ocio_vp never plots with it (the report draws its own SVG). Until
+    something uses ``colour.plotting``, a stand-in takes its place; the first attribute read
+    from it imports the real one. Nothing changes if colour is already imported. Called by
+    :func:`main` only: ``import ocio_vp`` in someone else's process leaves their modules alone."""
+    name = "colour.plotting"
+    if "colour" not in sys.modules and name not in sys.modules:
+        sys.modules[name] = _DeferredModule(name)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     from ocio_vp.staging import stop_on_signals
+
+    _defer_colour_plotting()
 
     parser = build_parser()
     args = parser.parse_args(argv)

@@ -264,10 +264,15 @@ def test_tests_mirror_the_package():
 
 def test_colour_science_loads_without_its_plotting_until_that_is_used():
     """Every solve imports colour-science (ΔE2000, camera data); its ``__init__`` would import
-    ``colour.plotting`` and matplotlib's pyplot (~0.3 s), which ocio_vp never uses. After
-    ``import ocio_vp`` they load on first use only, and then they are the real ones."""
+    ``colour.plotting`` and matplotlib's pyplot (~0.3 s), which ocio_vp never uses. In the
+    command (``ocio_vp.cli.main`` defers them) they load on first use only, and then they are
+    the real ones; ``import ocio_vp`` alone changes nothing in someone else's process."""
+    plain = "import sys, ocio_vp; print('colour.plotting' in sys.modules)"
+    run = subprocess.run([sys.executable, "-c", plain], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0 and run.stdout.strip() == "False", run.stderr
     code = (
-        "import sys, ocio_vp, colour; before = 'matplotlib' in sys.modules; "
+        "import sys; from ocio_vp.cli import _defer_colour_plotting; _defer_colour_plotting(); "
+        "import colour; before = 'matplotlib' in sys.modules; "
         "d = colour.delta_E([50, 2, 3], [51, 2, 4]); "
         "from colour.plotting import plot_single_colour_swatch as f; "
         "print([before, 'matplotlib' in sys.modules, f.__module__, "
