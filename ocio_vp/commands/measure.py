@@ -50,17 +50,14 @@ def run(args: argparse.Namespace) -> int:
     check_not_input((args.out, overlays), [capture.source, *capture.plate_paths()])
     check_replaceable(overlays)
     check_file_replaceable(args.out)
-    detect = None
-    if any(shot.corners is None for shot in capture.charts()):
-        from ocio_vp.plates.detection import detector
+    from ocio_vp.plates.detection import DetectionError
 
-        detect = detector(source=capture.source)
     take_bar = TakeProgress()
     with progress(total=measure_steps(capture), desc="measuring", unit="plate") as bar:
         try:
-            result = measure_capture(
-                capture, detect=detect, on_step=lambda: bar.update(1), on_take=take_bar
-            )
+            result = measure_capture(capture, on_step=lambda: bar.update(1), on_take=take_bar)
+        except DetectionError as error:
+            raise detection_failed(error, overlays) from None
         finally:
             take_bar.close()
     folder = write_measure_outputs(result, args.out, overlays=args.overlays)
@@ -87,6 +84,23 @@ def run(args: argparse.Namespace) -> int:
         f"wrote {args.out}{kind} ({len(result.plates)} plates sampled); overlays{sheet} in {folder}"
     )
     return 0
+
+
+def detection_failed(error, overlays) -> Exception:
+    """Publish the failed search's overlay alone in the overlay folder
+    (``<plate>.detection.png``; nothing else is written) and return the one-line error
+    naming it."""
+    from ocio_vp.errors import InputError
+    from ocio_vp.plates.detection import detection_overlay
+    from ocio_vp.plates.overlay import write_png
+    from ocio_vp.staging import publish_dir, staged_dir
+
+    path = overlays / f"{error.name}.detection.png"
+    with staged_dir(overlays.parent) as staged:
+        write_png(staged / path.name, detection_overlay(error.detection))
+        publish_dir(staged, overlays)
+    return InputError(f"{error.problem}; what was searched: {path}", source=error.source,
+                      key=error.key)  # fmt: skip
 
 
 class TakeProgress:

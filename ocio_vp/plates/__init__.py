@@ -16,6 +16,9 @@ from ocio_vp.plates.capture import (
     save_capture_document,
 )
 from ocio_vp.plates.detection import (
+    Detection,
+    DetectionError,
+    detect_chart,
     detect_chart_corners,
     detector,
 )
@@ -71,6 +74,8 @@ __all__ = [
     "Capture",
     "ChartSamples",
     "ChartShot",
+    "Detection",
+    "DetectionError",
     "EnvironmentCapture",
     "MeasureResult",
     "PatchReading",
@@ -85,6 +90,7 @@ __all__ = [
     "capture_from_dict",
     "chart_box",
     "clip_levels",
+    "detect_chart",
     "detect_chart_corners",
     "detector",
     "find_wall",

@@ -68,7 +68,8 @@ class PlateRef:
 
 @dataclass(frozen=True)
 class ChartShot:
-    """A chart on a plate; ``corners`` (4, 2) TL, TR, BR, BL, or ``None`` to auto-detect."""
+    """A chart on a plate; ``corners`` (4, 2) TL, TR, BR, BL, or ``None`` to detect them (the
+    file gives no ``corners``, or ``corners: detect``)."""
 
     plate: PlateRef
     corners: np.ndarray | None
@@ -232,10 +233,10 @@ def _corners(ctx: Validator, value: Any, key: tuple[str | int, ...]) -> np.ndarr
 def _chart(
     ctx: Validator, value: Any, key: tuple[str | int, ...], where: _Where, name: str
 ) -> ChartShot:
-    raw = ctx.mapping(value, key, required=("plate", "corners"), optional=_PLATE_KEYS)
+    raw = ctx.mapping(value, key, required=("plate",), optional=(*_PLATE_KEYS, "corners"))
     return ChartShot(
         plate=_plate(ctx, raw, key, where, name),
-        corners=_corners(ctx, raw["corners"], (*key, "corners")),
+        corners=_corners(ctx, raw.get("corners", DETECT), (*key, "corners")),
         key=key,
     )
 

@@ -29,6 +29,7 @@ from ocio_vp.formats.measurements import (
 )
 from ocio_vp.plates.capture import Capture, ChartShot, PlateRef, RegionShot
 from ocio_vp.plates.contact_sheet import SHEET
+from ocio_vp.plates.detection import Detection
 from ocio_vp.plates.reader import PlateInfo, open_plate, read_region
 from ocio_vp.plates.sampling import ChartSamples, patch_labels, sample_chart, sample_region
 from ocio_vp.plates.take import TakeReading, measure_take
@@ -58,6 +59,8 @@ class PlateSampling:
     detected: bool = False
     grid: tuple[int, int] = (0, 0)  # rows, columns of a chart
     inset: float = 0.0
+    #: The search that found the corners (``None`` when the capture file gave them).
+    detection: Detection | None = None
 
 
 @dataclass(frozen=True)
@@ -109,15 +112,21 @@ def _sample_chart(
     from ocio_vp.errors import format_key_path
 
     key = format_key_path(*shot.key)
+    detection = None
     try:
         infos = _open(shot.plate)
         corners, found = shot.corners, None
         if corners is None:
-            if detect is None:
-                raise InputError(
-                    "corners: detect needs ocio-vp[detect] installed", source=infos[0].path
+            from ocio_vp.plates.detection import DetectionError, detect_chart
+
+            detection = (detect or detect_chart)(
+                infos[0], rows=capture.rows, columns=capture.columns
+            )
+            if detection.corners is None:
+                raise DetectionError(
+                    detection, source=infos[0].path, key=key, name=shot.plate.name
                 )
-            corners = found = detect(infos[0], rows=capture.rows, columns=capture.columns)
+            corners = found = detection.corners
         samples = sample_chart(
             list(infos),
             corners,
@@ -129,6 +138,8 @@ def _sample_chart(
             **capture.sampling,
         )
     except InputError as error:
+        if detection is not None and detection.corners is None:
+            raise  # already names the plate and key, and carries the search for its overlay
         raise _named(error, shot.plate, key) from None
     labels = tuple(f"patch {j}" for j in range(capture.rows * capture.columns))
     sampling = PlateSampling(
@@ -141,6 +152,7 @@ def _sample_chart(
         detected=found is not None,
         grid=(capture.rows, capture.columns),
         inset=capture.inset,
+        detection=detection,
     )
     return sampling, found
 
@@ -261,8 +273,9 @@ def measure_capture(
     capture
         A validated capture file.
     detect
-        ``detect(plate_info, rows=, columns=) -> (4, 2) corners`` for charts whose corners
-        are ``detect`` (see :mod:`ocio_vp.plates.detection`); ``None`` makes them an error.
+        ``detect(plate_info, rows=, columns=) -> Detection`` for charts given without corners
+        (default :func:`ocio_vp.plates.detection.detect_chart`); a chart not found raises
+        :class:`~ocio_vp.plates.detection.DetectionError`, which carries the search.
     on_step
         Called with no argument after each step (the primaries, each chart, each black level):
         :func:`measure_steps` of them in all, for a progress bar.
@@ -436,6 +449,7 @@ def samples_document(
                 "frames": s.frames,
                 "corners": None if sampling.corners is None else sampling.corners.tolist(),
                 "detected": sampling.detected,
+                **_detection_record(sampling),
                 "samples": [
                     {
                         "label": sampling.labels[j],
@@ -454,6 +468,21 @@ def samples_document(
     if result.take is not None:
         out["take"] = take_document(result.take, where)
     return out
+
+
+def _detection_record(sampling: PlateSampling) -> dict[str, Any]:
+    """How a chart's corners were found (``samples.json``), when they were searched for."""
+    found = sampling.detection
+    if found is None:
+        return {}
+    return {
+        "detection": {
+            "overlay": f"{sampling.name}.detection.png",
+            "patches_found": found.patches_found,
+            "grid_residual_px": round(found.residual, 2),
+            "working_scale": found.scale,
+        }
+    }
 
 
 def take_document(reading: TakeReading, where: Any = str) -> dict[str, Any]:
@@ -534,6 +563,11 @@ def write_measure_outputs(
     with staged_dir(folder.parent) as staged:
         for sampling in result.plates:
             write_png(staged / f"{sampling.name}.png", _overlay(sampling))
+            if sampling.detection is not None:
+                from ocio_vp.plates.detection import detection_overlay
+
+                image = detection_overlay(sampling.detection)
+                write_png(staged / f"{sampling.name}.detection.png", image)
         if result.take is not None:
             from ocio_vp.plates.contact_sheet import write_contact_sheet
 

@@ -27,6 +27,7 @@ from ocio_vp.formats.measurements import Measurements
 
 __all__ = [
     "CHART_CORNERS",
+    "DEGRADATIONS",
     "PATCH_GAP",
     "PLATE_SIZE",
     "PlateOptions",
@@ -46,6 +47,22 @@ PLATE_SIZE = (600, 400)
 CHART_CORNERS = np.array([[128.0, 82.0], [478.0, 104.0], [466.0, 322.0], [140.0, 306.0]])
 #: Black border between patches, as a fraction of a cell (``measure``'s default inset is 0.25).
 PATCH_GAP = 0.08
+#: Degraded chart plates (keyword arguments of :func:`render_chart`, on top of the plates'
+#: usual 1 % noise and 5 % fall-off) that chart detection must see through, by name.
+DEGRADATIONS: dict[str, dict[str, Any]] = {
+    # Defocus: a Gaussian of 2.5 pixels' standard deviation (a patch is ~50 pixels across).
+    "blur": {"blur": 2.5},
+    # Five times the plates' noise: 5 % relative and 0.2 % of white absolute, per pixel.
+    "noise": {"noise": 0.05, "read_noise": 0.002},
+    # A chart at 45 degrees or so: its far side 40 % shorter than its near side.
+    "perspective": {
+        "corners": np.array([[90.0, 60.0], [500.0, 130.0], [500.0, 280.0], [90.0, 350.0]])
+    },
+    # Half the light lost at the frame's corners (1 - 0.5 (r / r_corner)^2).
+    "vignetting": {"vignetting": 0.5},
+    # A stand in front of the chart covering most of two bottom-row patches and part of a third.
+    "occlusion": {"occluder": (300.0, 250.0, 420.0, 340.0)},
+}
 #: Where the panel (primaries) and the dark in-frustum panel (black level) are on their plates.
 PANEL_REGION = (180, 100, 420, 300)
 
@@ -107,6 +124,9 @@ def render_chart(
     highlight: int | None = None,
     highlight_value: float = 8.0,
     highlight_radius: float = 3.5,
+    blur: float = 0.0,
+    occluder: tuple[float, float, float, float] | None = None,
+    occluder_value: float = 0.02,
     seed: int = 0,
 ) -> np.ndarray:
     """(h, w, 3) float32 linear plate of a chart whose patches have ``values`` (rows*columns, 3).
@@ -114,6 +134,10 @@ def render_chart(
     ``vignetting`` v: gain ``1 - v (r / r_corner)^2``. ``noise``: relative Gaussian std;
     ``read_noise``: absolute std. ``highlight``: index of a patch that gets a clipped disc
     (a specular glint) of ``highlight_value`` and ``highlight_radius`` pixels at its centre.
+    ``occluder``: a rectangle ``(x0, y0, x1, y1)`` (pixels) in front of the chart, of flat
+    ``occluder_value`` (a stand, a hand). ``blur``: the lens's defocus, a Gaussian of that
+    standard deviation in pixels, before the sensor's noise. :data:`DEGRADATIONS` names the
+    amounts the detection tests use.
     """
     width, height = size
     values = np.asarray(values, dtype=np.float64)
@@ -130,6 +154,15 @@ def render_chart(
     image = np.full((height, width, 3), background, dtype=np.float64)
     image[inside & ~on_patch] = 0.005  # the chart's black frame
     image[on_patch] = values[(row * columns + col)[on_patch]]
+    if occluder is not None:
+        x0, y0, x1, y1 = occluder
+        image[(xs + 0.5 >= x0) & (xs + 0.5 < x1) & (ys + 0.5 >= y0) & (ys + 0.5 < y1)] = (
+            occluder_value
+        )
+    if blur > 0:
+        from scipy.ndimage import gaussian_filter
+
+        image = gaussian_filter(image, (blur, blur, 0), mode="nearest")
     image = _sensor(image, vignetting=vignetting, noise=noise, read_noise=read_noise, seed=seed)
     if highlight is not None:
         r, c = divmod(highlight, columns)
