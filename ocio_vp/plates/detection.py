@@ -163,10 +163,11 @@ def _candidates(image: np.ndarray, bright: float) -> _Candidates:
         gx, gy = ndimage.sobel(smooth, axis=1) / 8, ndimage.sobel(smooth, axis=0) / 8
         grad = np.maximum(grad, np.hypot(gx, gy))
     threshold = max(0.08, 6 * float(np.median(grad)))
-    labels, n = ndimage.label(grad < threshold)  # type: ignore[misc]
+    labels, n = ndimage.label(grad < threshold)
     index = np.arange(1, n + 1)
     area = ndimage.sum_labels(np.ones_like(grad), labels, index)
-    ys, xs = np.mgrid[0 : grad.shape[0], 0 : grad.shape[1]]
+    h, w = image.shape[:2]
+    ys, xs = np.mgrid[0:h, 0:w]
     sx, sy = ndimage.sum_labels(xs, labels, index), ndimage.sum_labels(ys, labels, index)
     sxx = ndimage.sum_labels(xs * xs, labels, index)
     syy = ndimage.sum_labels(ys * ys, labels, index)
