@@ -99,8 +99,8 @@ def detection_failed(error, overlays) -> Exception:
     with staged_dir(overlays.parent) as staged:
         write_png(staged / path.name, detection_overlay(error.detection))
         publish_dir(staged, overlays)
-    return InputError(f"{error.problem}; what was searched: {path}", source=error.source,
-                      key=error.key)  # fmt: skip
+    where = f"{overlays.name}/{path.name}"  # beside --out: short, so the line keeps it
+    return InputError(f"{error.problem}; searched: {where}", source=error.source, key=error.key)
 
 
 class TakeProgress:

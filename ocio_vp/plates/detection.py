@@ -52,11 +52,11 @@ __all__ = [
 WORKING_WIDTH = 1600
 #: The smallest patch pitch (plate pixels) a found chart may have: below it the patches leave
 #: too few pixels to sample after the inset.
-MIN_PATCH_PIXELS = 10
+MIN_PATCH_PIXELS = 12
 #: Smallest share of the candidates' patches a grid needs, and smallest count.
 _MIN_MEMBERS = 8
 #: What the search tells a user to do instead (the capture file's key).
-INSTEAD = "give the chart's corners: [[x, y] x 4] (TL, TR, BR, BL of the patch grid, pixels)"
+INSTEAD = "give its corners: [[x, y] x 4], TL TR BR BL"
 
 
 @dataclass(frozen=True)
@@ -424,13 +424,13 @@ def _orient(image, H, ij, centres, rows, columns) -> tuple[np.ndarray | None, st
         elif full:
             scored.append((-float(corners[0].sum()), corners))
     if not scored:
-        return None, "a grid of patches, but not the chart's layout (or not all of it)"
+        return None, "a grid of patches, not the chart's layout (or not all of it)"
     scored.sort(key=lambda s: -s[0])
     score, corners = scored[0]
     if checker and score < 0.5:
         return (
             None,
-            "a grid of patches, but no neutral row (white to black) where a ColorChecker 24 has it",
+            "no neutral row where a ColorChecker 24 has one",
         )
     return corners, ""
 
@@ -454,65 +454,100 @@ def _jacobian(H: np.ndarray, point: np.ndarray) -> np.ndarray:
 # -- the search --------------------------------------------------------------------------------
 
 
+def _small_grid(image: np.ndarray, bright: float, rows: int, columns: int) -> float | None:
+    """The pitch (working pixels) of a grid of patches too small to be found as it is, found
+    on the image enlarged 3x (so the smoothing and edges no longer swallow its patches)."""
+    from scipy import ndimage
+
+    if image.shape[1] > WORKING_WIDTH // 2:  # keep the enlarged search bounded
+        return None
+    c = _candidates(ndimage.zoom(image, (2, 2, 1), order=1), bright)
+    found = _lattice(c, rows, columns) if len(c.areas) >= 4 else None
+    if found is None or len(found[1]) < min(_MIN_MEMBERS, rows * columns):
+        return None
+    fitted = _grid_fit(found[0], c.centres[found[1]], c.areas[found[1]])
+    if fitted is None:
+        return None
+    pitch = np.sqrt(abs(np.linalg.det(_jacobian(fitted[0], found[0].mean(axis=0))))) / 2
+    return float(pitch) if pitch < MIN_PATCH_PIXELS else None
+
+
+@dataclass(frozen=True)
+class _Grid:
+    """A grid found: its homography (lattice -> working pixels), lattice coordinates, member
+    candidates and their RMS residual (working pixels)."""
+
+    H: np.ndarray
+    ij: np.ndarray
+    members: np.ndarray
+    rms: float
+
+
+def _fit_grid(c: _Candidates, ij: np.ndarray, members: np.ndarray) -> _Grid | None:
+    """The grid fitted to its members, refitted without those far off it (a patch partly
+    covered has its centre moved)."""
+    for _ in range(2):
+        fitted = _grid_fit(ij, c.centres[members], c.areas[members])
+        if fitted is None:
+            return None
+        H, centres = fitted
+        residual = np.linalg.norm(_project(H, ij.astype(float)) - centres, axis=1)
+        keep = residual < max(0.5, 5 * float(np.median(residual)))
+        if keep.all() or keep.sum() < _MIN_MEMBERS:
+            break
+        ij, members = ij[keep], members[keep]
+    return _Grid(H, ij, members, float(np.sqrt(np.mean(residual**2))))
+
+
+def _search(image: np.ndarray, f: int, rows: int, columns: int):
+    """(corners in working pixels or None, reason, detail, candidates, grid or None)."""
+    bright = float(np.percentile(image.mean(axis=2), 99))
+    c = _candidates(image, bright)
+    found = _lattice(c, rows, columns) if len(c.areas) >= 4 else None
+    if found is None or len(found[1]) < min(_MIN_MEMBERS, rows * columns):
+        small = _small_grid(image, bright, rows, columns)
+        if small is not None:
+            detail = f"patches {small * f:.1f} px apart, need {MIN_PATCH_PIXELS}"
+            return None, "too small", detail, c, None
+        n = 0 if found is None else len(found[1])
+        return None, "not found", f"{n} patches in a grid, {len(c.areas)} patch-like", c, None
+    grid = _fit_grid(c, *found)
+    if grid is None:
+        return None, "not found", "the patches found do not span a grid", c, None
+    pitch = f * np.sqrt(abs(np.linalg.det(_jacobian(grid.H, grid.ij.mean(axis=0)))))
+    if pitch < MIN_PATCH_PIXELS:
+        detail = f"patches {pitch:.1f} px apart, need {MIN_PATCH_PIXELS}"
+        return None, "too small", detail, c, grid
+    corners, why = _orient(image, grid.H, grid.ij, c.centres[grid.members], rows, columns)
+    return corners, "not found", why, c, grid
+
+
 def detect_chart(info: PlateInfo, *, rows: int = 4, columns: int = 6) -> Detection:
     """Search a plate for a chart of ``rows`` x ``columns`` patches (see the module docstring)."""
     image, f = _working_image(info)
     lum = image.mean(axis=2)
-    bright = float(np.percentile(lum, 99))
-    noise = _noise(lum)
-
-    def fail(reason: str, detail: str, c: _Candidates | None = None, used=None) -> Detection:
-        labels = np.zeros(lum.shape, np.int32) if c is None else c.labels
-        members = np.zeros(0 if c is None else len(c.areas), bool)
-        if used is not None:
-            members[used] = True
-        return Detection(None, reason, detail, image.astype(np.float32), f, labels, members)
-
+    bright, noise = float(np.percentile(lum, 99)), _noise(lum)
+    empty = np.zeros(lum.shape, np.int32)
     if not bright > 10 * noise or not bright > 0:
-        return fail("too dark", f"the plate's bright level is {bright / max(noise, 1e-30):.3g}x "
-                    "its noise; expose the chart brighter")  # fmt: skip
+        detail = f"bright level {bright / max(noise, 1e-30):.2g}x the noise, need 10x"
+        return Detection(None, "too dark", detail, image.astype(np.float32), f, empty, np.zeros(0))
     if rows < 2 or columns < 2:
-        return fail("not found", f"a {rows} x {columns} strip has no grid to find")
-    c = _candidates(image, bright)
-    found = _lattice(c, rows, columns) if len(c.areas) >= 4 else None
-    clipped = _clipped_share(image)
-    if found is None or len(found[1]) < min(_MIN_MEMBERS, rows * columns):
-        used = None if found is None else found[1]
-        if clipped > 0.02:
-            return fail("clipped", f"{100 * clipped:.0f} % of the plate at its maximum; "
-                        "expose the chart darker", c, used)  # fmt: skip
-        if len(c.areas) >= 12 and np.median(c.areas) * f * f < MIN_PATCH_PIXELS**2 / 2:
-            return fail("too small", "only tiny patch-like regions; frame the chart larger", c)
-        n = 0 if found is None else len(found[1])
-        return fail("not found", f"{n} patches in a grid, {len(c.areas)} patch-like regions", c,
-                    used)  # fmt: skip
-    ij, members = found
-    fitted = _grid_fit(ij, c.centres[members], c.areas[members])
-    if fitted is None:
-        return fail("not found", "the patches found do not span a grid", c, members)
-    H, centres = fitted
-    residual = np.linalg.norm(_project(H, ij.astype(float)) - centres, axis=1)
-    keep = residual < max(0.5, 5 * float(np.median(residual)))
-    if keep.sum() >= _MIN_MEMBERS and not keep.all():  # a covered patch's centre is biased
-        ij, members = ij[keep], members[keep]
-        fitted = _grid_fit(ij, c.centres[members], c.areas[members])
-        if fitted is None:
-            return fail("not found", "the patches found do not span a grid", c, members)
-        H, centres = fitted
-        residual = np.linalg.norm(_project(H, ij.astype(float)) - centres, axis=1)
-    pitch = f * np.sqrt(abs(np.linalg.det(_jacobian(H, ij.mean(axis=0)))))
-    if pitch < MIN_PATCH_PIXELS:
-        return fail("too small", f"patches {pitch:.1f} pixels apart, need {MIN_PATCH_PIXELS}; "
-                    "frame the chart larger", c, members)  # fmt: skip
-    corners, why = _orient(image, H, ij, c.centres[members], rows, columns)
-    if corners is None:
-        return fail("not found", why, c, members)
+        detail = f"a {rows} x {columns} strip has no grid to find"
+        return Detection(None, "not found", detail, image.astype(np.float32), f, empty, np.zeros(0))
+    corners, reason, detail, c, grid = _search(image, f, rows, columns)
     used = np.zeros(len(c.areas), bool)
-    used[members] = True
+    if grid is not None:
+        used[grid.members] = True
+    if corners is None:
+        clipped = _clipped_share(image)
+        if reason == "not found" and clipped > 0.02:
+            reason = "clipped"
+            detail = f"{100 * clipped:.0f} % of the plate at its maximum"
+        return Detection(None, reason, detail, image.astype(np.float32), f, c.labels, used)
+    assert grid is not None  # corners come from a grid
     plate = corners * f + [info.x, info.y]
-    rms = float(np.sqrt(np.mean(residual**2)) * f)
-    detail = f"{len(members)} of {rows * columns} patches, grid residual {rms:.2g} px"
-    return Detection(plate, None, detail, image.astype(np.float32), f, c.labels, used, rms)
+    detail = f"{len(grid.members)} of {rows * columns} patches, grid residual {grid.rms * f:.2g} px"
+    return Detection(plate, None, detail, image.astype(np.float32), f, c.labels, used, grid.rms * f)
 
 
 def detect_chart_corners(info: PlateInfo, *, rows: int = 4, columns: int = 6) -> np.ndarray:
