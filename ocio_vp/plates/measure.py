@@ -123,9 +123,7 @@ def _sample_chart(
                 infos[0], rows=capture.rows, columns=capture.columns
             )
             if detection.corners is None:
-                raise DetectionError(
-                    detection, source=infos[0].path, key=key, name=shot.plate.name
-                )
+                raise DetectionError(detection, source=infos[0].path, key=key, name=shot.plate.name)
             corners = found = detection.corners
         samples = sample_chart(
             list(infos),
