@@ -136,11 +136,11 @@ def test_raw_plates_with_a_named_camera_gamut_are_refused(lit_chart, capsys):
 def test_detection_reads_a_raw_plate_as_measured(lit_chart):
     """`corners: detect` on the DNG finds what it finds on the EXR (the detector sees the same
     picture: the raw plate as ocio-vp measures it, not as OpenImageIO would develop it)."""
-    pytest.importorskip("colour_checker_detection")
     from ocio_vp.plates.detection import detect_chart_corners
 
     folder, _ = lit_chart
     exr = detect_chart_corners(open_plate(folder / "lit_red.exr"))
     dng = detect_chart_corners(open_plate(folder / "lit_red.dng"))
-    # 1 % of the width (observed 3.3 px; the detector itself is ~28 px off the true corners)
-    assert np.max(np.abs(dng - exr)) < 6.0
+    # superpixel moves a patch's edges by up to a pixel: its centre by a fraction of one
+    assert np.max(np.abs(exr - CHART_CORNERS)) < 0.5
+    assert np.max(np.abs(dng - CHART_CORNERS)) < 1.0
