@@ -151,7 +151,7 @@ def test_upward_imports_finds_a_planted_one():
 
 
 def test_the_graph_sees_in_function_imports():
-    # ocio_vp.plates.detection imports colour_checker_detection lazily; the graph must at least
+    # ocio_vp.plates.detection imports scipy lazily; the graph must at least
     # see the ocio_vp imports of a function body (pipeline.py imports the wall lazily, say).
     edges = sum(len(v) for v in import_graph().values())
     assert edges > 100
