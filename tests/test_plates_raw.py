@@ -8,6 +8,8 @@ the EXR's patch values within 0.5 %: the truth is the EXR plate (the issue's cri
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 import yaml
@@ -130,7 +132,107 @@ def test_raw_plates_with_a_named_camera_gamut_are_refused(lit_chart, capsys):
     assert main(["measure", str(folder / "gamut.yaml"), "--out", str(out)]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and "lit_chart.green" in lines[0] and "sensor RGB" in lines[0]
+    assert "raw.to_camera" in lines[0]  # what to add
     assert not out.exists()
+
+
+def _gamut_capture(folder, name, raw=None, camera="ARRI Wide Gamut 4"):
+    """Lit charts: green from the DNG, red and blue from the EXR, in ``camera``."""
+    stage = {"name": "s", "beta": 0.2}
+    if camera:
+        stage["camera_colorspace"] = camera
+    capture = {
+        "format": "ocio-vp/capture",
+        "version": 1,
+        "stage": stage,
+        "lit_chart": {
+            c: {"plate": "lit_red.dng" if c == "green" else "lit_red.exr",
+                "corners": CHART_CORNERS.tolist()}
+            for c in ("red", "green", "blue")
+        },
+    }  # fmt: skip
+    if raw is not None:
+        capture["raw"] = raw
+    path = folder / f"{name}.yaml"
+    path.write_text(yaml.safe_dump(capture))
+    return path
+
+
+def _measured(path, out):
+    """[SRL] (24, 3, 3) of the lit charts a capture file measured, and its samples.json."""
+    assert main(["measure", str(path), "--out", str(out), "--no-write-back"]) == 0
+    samples = json.loads((out.parent / f"{out.stem}.overlays" / "samples.json").read_text())
+    lit = yaml.safe_load(out.read_text())["lit_chart"]
+    return np.stack([np.array(lit[c]) for c in ("red", "green", "blue")], axis=2), samples
+
+
+def test_a_given_matrix_brings_the_raw_plate_into_the_camera_gamut(lit_chart, tmp_path):
+    """raw.to_camera as a matrix: the DNG's patches, as sensor RGB, times that matrix (the
+    EXR plates are untouched), and samples.json says which conversion and demosaic were used."""
+    folder, _ = lit_chart
+    # Cross-talk only: a red-lit chart's near-black channels stay positive (the measurements
+    # file refuses negative chart values, which a matrix with negative terms can give).
+    M = [[0.9, 0.08, 0.02], [0.05, 0.9, 0.05], [0.01, 0.09, 0.9]]
+    SRL, samples = _measured(
+        _gamut_capture(folder, "matrix", {"to_camera": M}), tmp_path / "matrix.yaml"
+    )
+    sensor = sample_chart(str(folder / "lit_red.dng"), CHART_CORNERS, clip_level=1.0).means
+    np.testing.assert_allclose(SRL[:, :, 1], sensor @ np.array(M).T, rtol=1e-6, atol=1e-9)
+    exr = sample_chart(str(folder / "lit_red.exr"), CHART_CORNERS).means
+    np.testing.assert_allclose(SRL[:, :, 0], exr, rtol=1e-6)
+    green = next(p for p in samples["plates"] if p["key"] == "lit_chart.green")
+    assert green["demosaic"] == "superpixel"
+    assert green["to_camera"]["from"] == "the capture file's raw.to_camera"
+    assert green["to_camera"]["matrix"] == M
+    red = next(p for p in samples["plates"] if p["key"] == "lit_chart.red")
+    assert "to_camera" not in red and "demosaic" not in red
+
+
+def test_the_dng_colour_matrix_brings_the_raw_plate_into_the_camera_gamut(lit_chart, tmp_path):
+    """raw.to_camera: dng. The simulated DNG's ColorMatrix1 is the identity under D65, so its
+    sensor RGB is read as XYZ and the conversion is colour-science's XYZ -> ARRI Wide Gamut 4
+    (white D65: no adaptation)."""
+    import colour
+
+    folder, _ = lit_chart
+    # Pale colours (all channels within 30 % of each other): inside the gamut once converted.
+    values = 0.3 * np.random.default_rng(3).uniform(0.7, 1.0, (24, 3))
+    write_plate(tmp_path / "lit_red.exr", render_chart(values, noise=0.01, seed=2))
+    write_dng(tmp_path / "lit_red.dng", render_chart(values, noise=0.01, seed=2))
+    path = _gamut_capture(tmp_path, "dng", {"to_camera": "dng", "demosaic": "linear"})
+    SRL, samples = _measured(path, tmp_path / "dng_out.yaml")
+    box = (0, 0, 600, 400)
+    sensor = sample_chart(read_raw(tmp_path / "lit_red.dng", box, "linear"), CHART_CORNERS).means
+    awg4 = colour.RGB_COLOURSPACES["ARRI Wide Gamut 4"].matrix_XYZ_to_RGB
+    np.testing.assert_allclose(SRL[:, :, 1], sensor @ awg4.T, rtol=1e-5, atol=1e-9)
+    green = next(p for p in samples["plates"] if p["key"] == "lit_chart.green")
+    assert green["demosaic"] == "linear" and "ColorMatrix (D65)" in green["to_camera"]["from"]
+
+
+@pytest.mark.parametrize(
+    ("raw", "camera", "plate", "expected"),
+    [
+        ({"to_camera": "dng"}, None, "lit_red.dng", "needs stage.camera_colorspace"),
+        ({"to_camera": [[1, 0, 0], [0, 1, 0], [1, 0, 0]]}, "ARRI Wide Gamut 4", "a.dng",
+         "singular"),
+        ({"to_camera": "dng"}, "ARRI Wide Gamut 4", "a.nef", "not a DNG"),
+        ({"demosaic": "magic"}, None, "a.dng", "expected one of superpixel"),
+    ],
+)  # fmt: skip
+def test_bad_raw_options_are_refused_by_key(raw, camera, plate, expected):
+    from ocio_vp.plates.capture import capture_from_dict
+
+    stage = {"name": "s", "beta": 0.2} | ({"camera_colorspace": camera} if camera else {})
+    document = {
+        "format": "ocio-vp/capture",
+        "version": 1,
+        "stage": stage,
+        "raw": raw,
+        "lit_chart": {c: {"plate": plate} for c in ("red", "green", "blue")},
+    }
+    with pytest.raises(InputError, match=expected) as caught:
+        capture_from_dict(document, source="c.yaml")
+    assert "raw" in str(caught.value) or "lit_chart" in str(caught.value)
 
 
 def test_detection_reads_a_raw_plate_as_measured(lit_chart):

@@ -20,7 +20,7 @@ import yaml
 
 from ocio_vp.formats.measurements import CHANNELS, Validator, parse_stage, read_document
 from ocio_vp.plates.movie import MATRICES, RANGES, is_movie
-from ocio_vp.plates.raw import is_raw
+from ocio_vp.plates.raw import DEFAULT_DEMOSAIC, DEMOSAIC_METHODS, is_raw
 from ocio_vp.plates.reader import canonical_encoding, plate_path
 from ocio_vp.plates.statistics import ROBUST_MEAN_METHODS
 from ocio_vp.plates.take import TakeRef
@@ -33,6 +33,7 @@ __all__ = [
     "EnvironmentCapture",
     "PanelCapture",
     "PlateRef",
+    "RawOptions",
     "RegionShot",
     "capture_from_dict",
     "load_capture",
@@ -114,6 +115,19 @@ class PanelCapture:
 
 
 @dataclass(frozen=True)
+class RawOptions:
+    """The capture file's ``raw`` section: how camera raw plates are developed.
+
+    ``demosaic``: the method (:data:`ocio_vp.plates.raw.DEMOSAIC_METHODS`); ``to_camera``: the
+    3x3 matrix from sensor RGB to ``stage.camera_colorspace``, ``"dng"`` (each DNG's own
+    ColorMatrix, :func:`ocio_vp.plates.raw.sensor_to_camera`) or ``None`` (sensor RGB as read).
+    """
+
+    demosaic: str = DEFAULT_DEMOSAIC
+    to_camera: np.ndarray | str | None = None
+
+
+@dataclass(frozen=True)
 class Capture:
     """A validated capture file. ``primaries`` (plates) or ``take`` gives the wall; sections
     the file leaves out are empty (the measurements file written is then a part, merged at
@@ -134,6 +148,8 @@ class Capture:
     #: The panel types of a capture file with ``panels`` (``primaries`` and ``lit_chart`` are
     #: then empty); empty otherwise.
     panels: tuple[PanelCapture, ...] = ()
+    #: How raw plates are developed (the ``raw`` section).
+    raw: RawOptions = field(default_factory=RawOptions)
 
     def charts(self) -> list[ChartShot]:
         """Every chart shot, lit charts first."""
@@ -311,9 +327,41 @@ def capture_from_dict(
         sha256=sha256,
         take=_take(ctx, top["take"], base) if "take" in top else None,
         panels=panels,
+        raw=_raw_options(ctx, top.get("raw", {}), top["stage"]),
     )
     _check_one_camera_space(ctx, capture)
     return capture
+
+
+def _raw_options(ctx: Validator, value: Any, stage: Mapping[str, Any]) -> RawOptions:
+    """``raw``: ``demosaic`` (default superpixel) and ``to_camera`` (a 3x3 matrix or ``dng``,
+    only with ``stage.camera_colorspace``)."""
+    raw = ctx.mapping(value, ("raw",), (), ("demosaic", "to_camera"))
+    demosaic = raw.get("demosaic", DEFAULT_DEMOSAIC)
+    if demosaic not in DEMOSAIC_METHODS:
+        raise ctx.error(("raw", "demosaic"), f"expected one of {', '.join(DEMOSAIC_METHODS)}")
+    to_camera = raw.get("to_camera")
+    if to_camera is None:
+        return RawOptions(demosaic)
+    if not stage.get("camera_colorspace"):
+        raise ctx.error(
+            ("raw", "to_camera"), "needs stage.camera_colorspace (the gamut it converts to)"
+        )
+    if to_camera == "dng":
+        return RawOptions(demosaic, "dng")
+    if not isinstance(to_camera, list) or len(to_camera) != 3:
+        raise ctx.error(("raw", "to_camera"), "expected a 3x3 matrix [[r], [g], [b]] or 'dng'")
+    rows = []
+    for i, row in enumerate(to_camera):
+        if not isinstance(row, list) or len(row) != 3:
+            raise ctx.error(("raw", "to_camera", i), "expected a row of 3 numbers")
+        rows.append([ctx.number(v, ("raw", "to_camera", i, k), minimum=-np.inf)
+                     for k, v in enumerate(row)])  # fmt: skip
+    matrix = np.array(rows, dtype=np.float64)
+    condition = np.linalg.cond(matrix)
+    if not np.isfinite(condition) or condition > 1e6:
+        raise ctx.error(("raw", "to_camera"), f"singular matrix (condition number {condition:.3g})")
+    return RawOptions(demosaic, matrix)
 
 
 def _check_one_camera_space(ctx: Validator, capture: Capture) -> None:
@@ -325,14 +373,23 @@ def _check_one_camera_space(ctx: Validator, capture: Capture) -> None:
         return
     shots: list[ChartShot | RegionShot] = [*capture.primaries.values(), *capture.charts()]
     shots += [e.black_level for e in capture.environments if e.black_level is not None]
+    shots += [r for p in capture.panels for r in p.primaries.values()]
+    shots += [r for e in capture.environments for r in (e.panel_black_level or {}).values()]
+    to_camera = capture.raw.to_camera
     for shot in shots:
-        if any(is_raw(p) for p in shot.plate.paths):
+        raws = [p for p in shot.plate.paths if is_raw(p)]
+        if raws and to_camera is None:
             raise ctx.error(
                 shot.key,
                 f"a camera raw plate is sensor RGB, but stage.camera_colorspace says the "
-                f"measurements are in {camera}: shoot this chart with the cinema camera, or "
-                "develop the raw into that gamut (no other processing) and give the result",
+                f"measurements are in {camera}: give raw.to_camera (the 3x3 sensor-to-"
+                f"{camera} matrix, or dng for the DNG's ColorMatrix)",
             )
+        if isinstance(to_camera, str) and any(p.suffix.lower() != ".dng" for p in raws):
+            raise ctx.error(
+                shot.key, "raw.to_camera: dng reads a DNG's ColorMatrix; this raw plate is "
+                "not a DNG: give raw.to_camera as a 3x3 matrix"
+            )  # fmt: skip
 
 
 _TAKE_KEYS = ("region", "encoding", "layer", "clip_level", "in", "out", "matrix", "range")
@@ -460,6 +517,7 @@ def _header(ctx: Validator, data: Any) -> Mapping[str, Any]:
             "sampling",
             "flat_field",
             "take",
+            "raw",
             *(() if panels else ("primaries", "lit_chart", "environments")),
         ),
     )

@@ -8,6 +8,7 @@ measurements file, an overlay PNG per plate and ``samples.json`` all together or
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 from collections.abc import Mapping
@@ -30,6 +31,7 @@ from ocio_vp.formats.measurements import (
 from ocio_vp.plates.capture import Capture, ChartShot, PlateRef, RegionShot
 from ocio_vp.plates.contact_sheet import SHEET
 from ocio_vp.plates.detection import Detection
+from ocio_vp.plates.raw import CameraSpace
 from ocio_vp.plates.reader import PlateInfo, open_plate, read_region
 from ocio_vp.plates.sampling import ChartSamples, patch_labels, sample_chart, sample_region
 from ocio_vp.plates.take import TakeReading, measure_take
@@ -61,6 +63,8 @@ class PlateSampling:
     inset: float = 0.0
     #: The search that found the corners (``None`` when the capture file gave them).
     detection: Detection | None = None
+    #: The conversion of a raw plate's sensor RGB to the camera gamut, when one was applied.
+    camera_space: CameraSpace | None = None
 
 
 @dataclass(frozen=True)
@@ -80,8 +84,10 @@ class MeasureResult:
     take: TakeReading | None = None
 
 
-def _open(ref: PlateRef) -> tuple[PlateInfo, ...]:
-    infos = tuple(open_plate(p, encoding=ref.encoding, layer=ref.layer) for p in ref.paths)
+def _open(ref: PlateRef, demosaic: str | None = None) -> tuple[PlateInfo, ...]:
+    infos = tuple(
+        open_plate(p, encoding=ref.encoding, layer=ref.layer, demosaic=demosaic) for p in ref.paths
+    )
     first = infos[0]
     for info in infos[1:]:
         if info.box != first.box:
@@ -100,6 +106,28 @@ def _flat(ref: PlateRef) -> dict[str, Any]:
     return {"flat_field": [str(p) for p in ref.flat_field], "encoding": ref.encoding}
 
 
+def _camera_space(capture: Capture, info: PlateInfo) -> CameraSpace | None:
+    """How a raw plate's sensor RGB becomes the camera gamut's (``raw.to_camera``), if asked."""
+    from ocio_vp.plates.raw import sensor_to_camera
+
+    to_camera = capture.raw.to_camera
+    if to_camera is None or info.demosaic is None:  # not asked, or not a raw plate
+        return None
+    if isinstance(to_camera, str):  # "dng": the file's own ColorMatrix
+        return sensor_to_camera(info.path, str(capture.stage["camera_colorspace"]))
+    return CameraSpace(to_camera, "the capture file's raw.to_camera")
+
+
+def _in_camera_space(samples: ChartSamples, space: CameraSpace | None) -> ChartSamples:
+    """``samples`` with means (and spreads, channels taken as independent) in the camera
+    gamut; clipping and outliers were judged on the sensor's values, as read."""
+    if space is None:
+        return samples
+    M = space.matrix
+    spreads = np.sqrt(np.square(samples.spreads) @ np.square(M).T)
+    return dataclasses.replace(samples, means=samples.means @ M.T, spreads=spreads)
+
+
 def _named(error: InputError, ref: PlateRef, key: str) -> InputError:
     """The same error, naming the plate and the capture-file key."""
     source = error.source or ref.label
@@ -114,7 +142,8 @@ def _sample_chart(
     key = format_key_path(*shot.key)
     detection = None
     try:
-        infos = _open(shot.plate)
+        infos = _open(shot.plate, capture.raw.demosaic)
+        space = _camera_space(capture, infos[0])
         corners, found = shot.corners, None
         if corners is None:
             from ocio_vp.plates.detection import DetectionError, detect_chart
@@ -135,6 +164,7 @@ def _sample_chart(
             **_flat(shot.plate),
             **capture.sampling,
         )
+        samples = _in_camera_space(samples, space)
     except InputError as error:
         if detection is not None and detection.corners is None:
             raise  # already names the plate and key, and carries the search for its overlay
@@ -151,6 +181,7 @@ def _sample_chart(
         grid=(capture.rows, capture.columns),
         inset=capture.inset,
         detection=detection,
+        camera_space=space,
     )
     return sampling, found
 
@@ -166,7 +197,11 @@ def _sample_regions(
         groups.setdefault(shot.plate, []).append((label, shot))
     out = []
     for ref, members in groups.items():
-        infos = _open(ref)
+        infos = _open(ref, capture.raw.demosaic)
+        try:
+            space = _camera_space(capture, infos[0])
+        except InputError as error:
+            raise _named(error, ref, format_key_path(*members[0][1].key)) from None
         rows = []
         for _label, shot in members:
             try:
@@ -199,6 +234,7 @@ def _sample_regions(
             frames=rows[0].frames,
             clip_level=rows[0].clip_level,
         )
+        stacked = _in_camera_space(stacked, space)
         out.append(
             PlateSampling(
                 name=ref.name if len(members) > 1 else members[0][1].plate.name,
@@ -207,6 +243,7 @@ def _sample_regions(
                 samples=stacked,
                 labels=tuple(label for label, _ in members),
                 regions=tuple(shot.region for _, shot in members),
+                camera_space=space,
             )
         )
     return out
@@ -448,6 +485,7 @@ def samples_document(
                 "corners": None if sampling.corners is None else sampling.corners.tolist(),
                 "detected": sampling.detected,
                 **_detection_record(sampling),
+                **_raw_record(sampling),
                 "samples": [
                     {
                         "label": sampling.labels[j],
@@ -465,6 +503,20 @@ def samples_document(
     out: dict[str, Any] = {"format": "ocio-vp/samples", "version": 1, "plates": plates}
     if result.take is not None:
         out["take"] = take_document(result.take, where)
+    return out
+
+
+def _raw_record(sampling: PlateSampling) -> dict[str, Any]:
+    """A raw plate's demosaicing and conversion to the camera gamut (``samples.json``)."""
+    info = sampling.infos[0]
+    if info.demosaic is None:
+        return {}
+    out: dict[str, Any] = {"demosaic": info.demosaic}
+    space = sampling.camera_space
+    out["to_camera"] = None if space is None else {
+        "from": space.source,
+        "matrix": np.round(space.matrix, 6).tolist(),
+    }  # fmt: skip
     return out
 
 

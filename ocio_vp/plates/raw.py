@@ -30,7 +30,17 @@ import numpy as np
 
 from ocio_vp.errors import InputError
 
-__all__ = ["DEMOSAIC_METHODS", "RAW_SUFFIXES", "RawMosaic", "is_raw", "raw_mosaic", "read_raw"]
+__all__ = [
+    "DEMOSAIC_METHODS",
+    "RAW_SUFFIXES",
+    "CameraSpace",
+    "RawMosaic",
+    "dng_colour_matrix",
+    "is_raw",
+    "raw_mosaic",
+    "read_raw",
+    "sensor_to_camera",
+]
 
 #: File name endings read as camera raw.
 RAW_SUFFIXES = frozenset(
@@ -184,3 +194,105 @@ def read_raw(
     image = _developed(raw.path, (info.st_mtime_ns, info.st_size), method)
     x0, y0, x1, y1 = box
     return image[y0:y1, x0:x1]
+
+
+# -- one camera space: sensor RGB -> the cinema camera's encoding gamut -------------------------
+
+#: DNG tags (DNG 1.4 specification): ColorMatrix1/2 (XYZ -> camera native, SRATIONAL x 9) and
+#: CalibrationIlluminant1/2 (EXIF LightSource codes).
+_COLOR_MATRIX = (50721, 50722)
+_ILLUMINANT = (50778, 50779)
+#: EXIF LightSource codes with a CIE illuminant colour-science knows (others: give a matrix).
+_LIGHT_SOURCES = {17: "A", 20: "D55", 21: "D65", 22: "D75", 23: "D50"}
+
+
+@dataclass(frozen=True)
+class CameraSpace:
+    """How a raw plate's sensor RGB becomes the camera gamut's RGB (``stage.camera_colorspace``):
+    ``matrix`` (3x3, applied to column vectors of sensor RGB) and where it came from."""
+
+    matrix: np.ndarray
+    source: str
+
+
+def _tiff_tags(path: str, wanted: set[int]) -> dict[int, tuple[float, ...]]:
+    """Numeric values of the ``wanted`` tags of a TIFF/DNG file's first IFD (SHORT, LONG,
+    RATIONAL, SRATIONAL)."""
+    import struct
+
+    sizes = {3: 2, 4: 4, 5: 8, 8: 2, 9: 4, 10: 8}
+    out: dict[int, tuple[float, ...]] = {}
+    with open(path, "rb") as fh:
+        head = fh.read(8)
+        if len(head) < 8 or head[:2] not in (b"II", b"MM"):
+            raise InputError("not a TIFF-based raw file (DNG): no colour matrix", source=path)
+        order = "<" if head[:2] == b"II" else ">"
+        fh.seek(struct.unpack(order + "I", head[4:8])[0])
+        (count,) = struct.unpack(order + "H", fh.read(2))
+        entries = [struct.unpack(order + "HHI4s", fh.read(12)) for _ in range(min(count, 4096))]
+        for tag, kind, n, value in entries:
+            if tag not in wanted or kind not in sizes or n > 64:
+                continue
+            size = sizes[kind] * n
+            if size > 4:
+                fh.seek(struct.unpack(order + "I", value)[0])
+                value = fh.read(size)
+            if kind in (5, 10):
+                code = order + ("%di" if kind == 10 else "%dI") % (2 * n)
+                pairs = struct.unpack(code, value[:size])
+                if any(d == 0 for d in pairs[1::2]):
+                    raise InputError(f"DNG tag {tag} has a zero denominator", source=path)
+                out[tag] = tuple(a / b for a, b in zip(pairs[0::2], pairs[1::2], strict=True))
+            else:
+                code = order + {3: "H", 4: "I", 8: "h", 9: "i"}[kind] * n
+                out[tag] = tuple(float(v) for v in struct.unpack(code, value[:size]))
+    return out
+
+
+def dng_colour_matrix(path: str | os.PathLike[str]) -> tuple[np.ndarray, str]:
+    """The DNG's XYZ -> camera matrix (3, 3) and its calibration illuminant's name: the
+    ColorMatrix calibrated under D65 when there is one, else the first."""
+    path = str(path)
+    try:
+        tags = _tiff_tags(path, {*_COLOR_MATRIX, *_ILLUMINANT})
+    except OSError as error:
+        raise InputError(f"cannot read: {error.strerror}", source=path) from None
+    found = []
+    for matrix_tag, light_tag in zip(_COLOR_MATRIX, _ILLUMINANT, strict=True):
+        if len(tags.get(matrix_tag, ())) == 9:
+            light = int(tags.get(light_tag, (0,))[0])
+            found.append((np.array(tags[matrix_tag]).reshape(3, 3), light))
+    if not found:
+        raise InputError("the DNG has no 3-colour ColorMatrix: give raw.to_camera", source=path)
+    matrix, light = next((f for f in found if f[1] == 21), found[0])
+    if light not in _LIGHT_SOURCES:
+        raise InputError(
+            f"the DNG's ColorMatrix is calibrated under light source {light}, not a CIE "
+            "illuminant ocio-vp knows (A, D50, D55, D65, D75): give raw.to_camera",
+            source=path,
+        )
+    return matrix, _LIGHT_SOURCES[light]
+
+
+def sensor_to_camera(path: str | os.PathLike[str], colourspace: str) -> CameraSpace:
+    """The DNG's sensor RGB -> ``colourspace`` RGB: the inverse of its ColorMatrix (camera ->
+    XYZ under its calibration illuminant), CAT02 to the gamut's white, colour-science's XYZ ->
+    RGB of the gamut. The DNG's normalisation stays: camera values (1.0 = the raw white level)
+    whose neutral under the illuminant peaks at 1 map to Y = 1."""
+    import colour
+
+    matrix, illuminant = dng_colour_matrix(path)
+    condition = np.linalg.cond(matrix)
+    if not np.isfinite(condition) or condition > 1e6:
+        raise InputError(
+            f"the DNG's ColorMatrix cannot be inverted (condition number {condition:.3g})",
+            source=path,
+        )
+    space = colour.RGB_COLOURSPACES[colourspace]
+    white = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"][illuminant]
+    adapt = colour.adaptation.matrix_chromatic_adaptation_VonKries(
+        colour.xy_to_XYZ(white), colour.xy_to_XYZ(space.whitepoint), transform="CAT02"
+    )
+    to_camera = np.asarray(space.matrix_XYZ_to_RGB) @ adapt @ np.linalg.inv(matrix)
+    source = f"the DNG's ColorMatrix ({illuminant}) inverted, CAT02, XYZ to {space.name}"
+    return CameraSpace(to_camera.astype(np.float64), source)

@@ -110,6 +110,8 @@ class PlateInfo:
     tile_height: int
     encoding: str
     subimage: int = 0
+    #: A camera raw plate's demosaicing method (:data:`ocio_vp.plates.raw.DEMOSAIC_METHODS`).
+    demosaic: str | None = None
 
     @property
     def box(self) -> tuple[int, int, int, int]:
@@ -169,6 +171,7 @@ def open_plate(
     encoding: str | None = None,
     layer: str | None = None,
     subimage: int = 0,
+    demosaic: str | None = None,
 ) -> PlateInfo:
     """Open a plate's header, find its R, G, B channels and check it can be measured.
 
@@ -183,6 +186,8 @@ def open_plate(
         The EXR layer whose ``.R``, ``.G``, ``.B`` to use when there are several.
     subimage
         The subimage (EXR part) to read.
+    demosaic
+        A camera raw plate's demosaicing method (default ``superpixel``; ignored otherwise).
 
     Raises
     ------
@@ -191,7 +196,7 @@ def open_plate(
     """
     source = str(path)
     if is_raw(source):
-        return _open_raw(source, encoding)
+        return _open_raw(source, encoding, demosaic)
     inp = _open_input(source)
     try:
         if subimage and not inp.seek_subimage(subimage, 0):
@@ -243,10 +248,11 @@ def open_plate(
     )
 
 
-def _open_raw(source: str, encoding: str | None) -> PlateInfo:
+def _open_raw(source: str, encoding: str | None, demosaic: str | None) -> PlateInfo:
     """A camera raw plate's header (:mod:`ocio_vp.plates.raw`): linear by definition."""
     from ocio_vp.plates.raw import DEFAULT_DEMOSAIC, raw_mosaic
 
+    demosaic = demosaic or DEFAULT_DEMOSAIC
     if encoding not in (None, "linear"):
         raise InputError(
             f"a camera raw plate is linear sensor data: remove its encoding ({encoding!r})",
@@ -256,7 +262,7 @@ def _open_raw(source: str, encoding: str | None) -> PlateInfo:
     height, width = raw.mosaic.shape
     return PlateInfo(
         path=source,
-        file_format=f"raw (LibRaw, {DEFAULT_DEMOSAIC} demosaic)",
+        file_format=f"raw (LibRaw, {demosaic} demosaic)",
         x=0,
         y=0,
         width=int(width),
@@ -268,6 +274,7 @@ def _open_raw(source: str, encoding: str | None) -> PlateInfo:
         tile_width=0,
         tile_height=0,
         encoding="linear",
+        demosaic=demosaic,
     )
 
 
@@ -305,9 +312,10 @@ def read_region(
     info = plate if isinstance(plate, PlateInfo) else open_plate(plate, encoding=encoding)
     check_box(info, box)
     if info.file_format.startswith("raw ("):
-        from ocio_vp.plates.raw import read_raw
+        from ocio_vp.plates.raw import DEFAULT_DEMOSAIC, read_raw
 
-        return read_raw(info.path, tuple(int(v) for v in box))  # type: ignore[arg-type]
+        method = info.demosaic or DEFAULT_DEMOSAIC
+        return read_raw(info.path, tuple(int(v) for v in box), method)  # type: ignore[arg-type]
     x0, y0, x1, y1 = (int(v) for v in box)
     ch0, ch1 = min(info.rgb), max(info.rgb) + 1
     select = [c - ch0 for c in info.rgb]
