@@ -184,10 +184,8 @@ def open_plate(
         display-referred plates (8-bit, PNG, JPEG ...): state their encoding instead.
     layer
         The EXR layer whose ``.R``, ``.G``, ``.B`` to use when there are several.
-    subimage
-        The subimage (EXR part) to read.
-    demosaic
-        A camera raw plate's demosaicing method (default ``superpixel``; ignored otherwise).
+    subimage, demosaic
+        The subimage (EXR part) to read; a raw plate's demosaicing (default ``superpixel``).
 
     Raises
     ------
