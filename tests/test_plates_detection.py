@@ -118,7 +118,8 @@ def test_a_failure_says_why_and_what_to_give_instead(tmp_path, reason, options):
     with pytest.raises(DetectionError) as caught:
         detect_chart_corners(info)
     message = str(caught.value)
-    assert f": {reason} (" in message and "corners" in message and "\n" not in message
+    assert f": {reason}: chart not found" in message and "corners" in message
+    assert "\n" not in message
     assert caught.value.detection.image.shape[:2] == (400, 600)
 
 

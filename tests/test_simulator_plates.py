@@ -11,7 +11,7 @@ import yaml
 
 from ocio_vp.cli import main
 from ocio_vp.formats.measurements import load_measurements
-from ocio_vp.plates.capture import load_capture
+from ocio_vp.plates.capture import capture_from_dict, load_capture
 from ocio_vp.plates.measure import measure_capture
 from ocio_vp.simulator.plates import (
     CHART_CORNERS,
@@ -61,6 +61,19 @@ def test_measure_gives_back_the_simulated_values(tmp_path, truth):
     np.testing.assert_allclose(measured.SL, truth.SL, rtol=0.003)
     np.testing.assert_allclose(got.black_level, env.black_level, rtol=0.01)
     np.testing.assert_allclose(got.w_avg, env.w_avg, rtol=1e-12)  # copied through
+    # The same plates with no corners in the capture file: every chart found by itself.
+    document = yaml.safe_load(capture.read_text())
+    for shot in [*document["lit_chart"].values(), document["environments"][0]["target_chart"]]:
+        del shot["corners"]
+    result = measure_capture(capture_from_dict(document, source=str(capture)))
+    assert len(result.detected) == 4
+    for corners in result.detected.values():
+        assert np.max(np.abs(corners - CHART_CORNERS)) < 0.5
+    again = result.measurements
+    np.testing.assert_allclose(again.SRL, measured.SRL, rtol=2e-3, atol=1e-4 * truth.SRL.max())
+    np.testing.assert_allclose(
+        again.environments[0].target_chart, got.target_chart, rtol=2e-3, atol=1e-4
+    )
 
 
 @pytest.fixture

@@ -100,7 +100,7 @@ def detection_failed(error, overlays) -> Exception:
         write_png(staged / path.name, detection_overlay(error.detection))
         publish_dir(staged, overlays)
     where = f"{overlays.name}/{path.name}"  # beside --out: short, so the line keeps it
-    return InputError(f"{error.problem}; searched: {where}", source=error.source, key=error.key)
+    return InputError(f"{error.problem}; overlay: {where}", source=error.source, key=error.key)
 
 
 class TakeProgress:

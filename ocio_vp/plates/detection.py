@@ -56,7 +56,7 @@ MIN_PATCH_PIXELS = 12
 #: Smallest share of the candidates' patches a grid needs, and smallest count.
 _MIN_MEMBERS = 8
 #: What the search tells a user to do instead (the capture file's key).
-INSTEAD = "give its corners: [[x, y] x 4], TL TR BR BL"
+INSTEAD = "give its corners [[x, y] x 4]"
 
 
 @dataclass(frozen=True)
@@ -90,7 +90,7 @@ class Detection:
 
     def message(self) -> str:
         """One line: the reason and what to give instead."""
-        return f"chart not detected: {self.reason} ({self.detail}); {INSTEAD}"
+        return f"{self.reason}: chart not found, {INSTEAD} ({self.detail})"
 
 
 class DetectionError(InputError):
@@ -507,7 +507,7 @@ def _search(image: np.ndarray, f: int, rows: int, columns: int):
     if found is None or len(found[1]) < min(_MIN_MEMBERS, rows * columns):
         small = _small_grid(image, bright, rows, columns)
         if small is not None:
-            detail = f"patches {small * f:.1f} px apart, need {MIN_PATCH_PIXELS}"
+            detail = f"{small * f:.1f} px pitch, need {MIN_PATCH_PIXELS}"
             return None, "too small", detail, c, None
         n = 0 if found is None else len(found[1])
         return None, "not found", f"{n} patches in a grid, {len(c.areas)} patch-like", c, None
@@ -516,7 +516,7 @@ def _search(image: np.ndarray, f: int, rows: int, columns: int):
         return None, "not found", "the patches found do not span a grid", c, None
     pitch = f * np.sqrt(abs(np.linalg.det(_jacobian(grid.H, grid.ij.mean(axis=0)))))
     if pitch < MIN_PATCH_PIXELS:
-        detail = f"patches {pitch:.1f} px apart, need {MIN_PATCH_PIXELS}"
+        detail = f"{pitch:.1f} px pitch, need {MIN_PATCH_PIXELS}"
         return None, "too small", detail, c, grid
     corners, why = _orient(image, grid.H, grid.ij, c.centres[grid.members], rows, columns)
     return corners, "not found", why, c, grid
