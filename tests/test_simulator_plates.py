@@ -18,6 +18,7 @@ from ocio_vp.simulator.plates import (
     PlateOptions,
     homography,
     plate_count,
+    raw_clip_note,
     render_chart,
     write_capture,
 )
@@ -127,3 +128,21 @@ def test_plate_options_without_plates_warn(tmp_path, capsys):
     args = ["simulate", "--out", str(tmp_path / "t.yaml"), "--environment", ENVIRONMENT]
     assert main([*args, "--noise", "0.02"]) == 0
     assert "--noise has no effect without --plates" in capsys.readouterr().err
+
+
+def test_the_location_charts_above_the_raw_clip_are_named(truth):
+    """With --lit-format dng the location charts stay EXR; simulate says why when one would
+    pass the DNG sensor's 1.0 clip (sodium vapour's reaches 2.5 on the README's stage)."""
+    import dataclasses
+
+    dng = PlateOptions(lit_format="dng")
+    assert truth.environments[0].target_chart.max() < 1.0
+    assert raw_clip_note(truth, dng) is None
+    env = dataclasses.replace(
+        truth.environments[0], target_chart=truth.environments[0].target_chart * 3
+    )
+    bright = dataclasses.replace(truth, environments=(env,))
+    note = raw_clip_note(bright, dng)
+    peak = 3 * truth.environments[0].target_chart.max()
+    assert note is not None and f"{ENVIRONMENT}'s brightest patch is {peak:.2g}" in note
+    assert raw_clip_note(bright, PlateOptions()) is None  # EXR lit charts: nothing to say

@@ -379,7 +379,7 @@ def _write_plates(measurements, args: argparse.Namespace):
     from pathlib import Path
 
     from ocio_vp.patterns.sequence import load_sequence
-    from ocio_vp.simulator.plates import PlateOptions, plate_count, write_capture
+    from ocio_vp.simulator.plates import PlateOptions, plate_count, raw_clip_note, write_capture
     from ocio_vp.staging import publish_dir, staged_dir
 
     final = Path(args.plates)
@@ -411,4 +411,7 @@ def _write_plates(measurements, args: argparse.Namespace):
                 sequence_ref=ref,
             )
         publish_dir(stage / "plates", final, inputs=inputs)
+    note = raw_clip_note(measurements, options)
+    if note is not None:
+        print(note)
     return final / "capture.yaml"

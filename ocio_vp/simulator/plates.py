@@ -34,6 +34,7 @@ __all__ = [
     "homography",
     "plate_count",
     "practice_sequence",
+    "raw_clip_note",
     "render_chart",
     "render_regions",
     "vignetting_gain",
@@ -519,6 +520,22 @@ def write_capture(
         encoding="utf-8",
     )
     return path
+
+
+def raw_clip_note(measurements: Measurements, options: PlateOptions) -> str | None:
+    """With the lit charts as DNG: why the location charts stay EXR, when one of them would
+    pass the raw sensor's clip (1.0 camera unit) at the simulated exposure; else ``None``."""
+    if options.lit_format != "dng" or not measurements.environments:
+        return None
+    peaks = {e.name: float(np.max(e.target_chart)) for e in measurements.environments}
+    name = max(peaks, key=lambda n: peaks[n])
+    if peaks[name] <= 1.0:
+        return None
+    lit = float(np.max(measurements.SRL))
+    return (
+        f"note: the location charts stay EXR: {name}'s brightest patch is {peaks[name]:.2g} "
+        f"camera units, above the DNG sensor's clip (1.0; the lit charts peak at {lit:.2g})"
+    )
 
 
 #: Where the take goes in the plates folder, and its frames' names.
