@@ -127,19 +127,13 @@ def test_a_failure_says_why_and_what_to_give_instead(tmp_path, reason, options):
 
 
 def _capture(tmp_path, charts, **target_options):
-    """A charts-only capture file (lit charts and one environment) with no corners given."""
-    lit = {}
-    for k, channel in enumerate(("red", "green", "blue")):
-        values = charts["lit_blue"][:, [2, 0, 1][k]][:, None] * [1.0, 0.5, 0.2]
-        write_plate(tmp_path / f"lit_{channel}.exr", render_chart(values, seed=k, **SENSOR))
-        lit[channel] = {"plate": f"lit_{channel}.exr"}
+    """A charts-only capture file (one environment's target chart) with no corners given."""
     target = render_chart(charts["target"], seed=9, **(SENSOR | target_options))
     write_plate(tmp_path / "park.exr", target)
     document = {
         "format": "ocio-vp/capture",
         "version": 1,
         "stage": {"name": "test_stage", "beta": 0.05},
-        "lit_chart": lit,
         "environments": [{"name": "park", "target_chart": {"plate": "park.exr"}}],
     }
     path = tmp_path / "capture.yaml"
@@ -147,18 +141,26 @@ def _capture(tmp_path, charts, **target_options):
     return path
 
 
-def test_measure_finds_the_charts_and_records_the_corners(tmp_path, charts, capsys):
+def test_measure_finds_the_chart_and_records_the_corners(tmp_path, charts, capsys):
     capture = _capture(tmp_path, charts)
     out = tmp_path / "charts.yaml"
     assert main(["measure", str(capture), "--out", str(out)]) == 0
-    assert "wrote 4 detected chart corner set(s)" in capsys.readouterr().out
+    assert "wrote 1 detected chart corner set(s)" in capsys.readouterr().out
     written = yaml.safe_load(capture.read_text())
     corners = np.array(written["environments"][0]["target_chart"]["corners"])
     assert np.max(np.abs(corners - CHART_CORNERS)) < 0.5
     samples = json.loads((tmp_path / "charts.overlays" / "samples.json").read_text())
-    target = next(p for p in samples["plates"] if p["key"] == "environments[0].target_chart")
-    assert target["detected"] and target["detection"]["patches_found"] == 24
+    target = samples["plates"][0]
+    assert target["key"] == "environments[0].target_chart" and target["detected"]
+    assert target["detection"]["patches_found"] == 24
     assert (tmp_path / "charts.overlays" / target["detection"]["overlay"]).is_file()
+    # A second run reads the corners written back: no search, the same numbers.
+    again = tmp_path / "again.yaml"
+    assert main(["measure", str(capture), "--out", str(again)]) == 0
+    assert "detected" not in capsys.readouterr().out
+    first = yaml.safe_load(out.read_text())["environments"][0]["target_chart"]
+    second = yaml.safe_load(again.read_text())["environments"][0]["target_chart"]
+    np.testing.assert_allclose(second, first, rtol=1e-4)
 
 
 def test_measure_refuses_on_one_line_with_the_overlay_only(tmp_path, charts, capsys):

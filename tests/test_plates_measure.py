@@ -320,28 +320,3 @@ def test_detect_corners_written_back(tmp_path, truth):
     written = with_corners(document, {("lit_chart", "red"): found})
     assert written["lit_chart"]["red"]["corners"] == np.round(found, 2).tolist()
     assert document["lit_chart"]["red"]["corners"] == "detect"  # the input is not modified
-
-
-def test_detect_through_the_command(tmp_path, truth, capsys):
-    """`corners: detect` in a capture: found, used, and written back into the capture file."""
-    capture = write_capture(tmp_path / "plates", truth)
-    document = yaml.safe_load(capture.read_text())
-    frontal = np.array([[100.0, 80.0], [500.0, 90.0], [495.0, 350.0], [105.0, 345.0]])
-    image = render_chart(truth.SRL[:, :, 1], corners=frontal, noise=NOISE, read_noise=READ_NOISE)
-    write_plate(tmp_path / "plates" / "frontal.exr", image)
-    document["lit_chart"]["green"] = {"plate": "plates/frontal.exr", "corners": "detect"}
-    document["lit_chart"]["green"]["flat_field"] = None  # rendered without vignetting
-    capture.write_text(yaml.safe_dump(document, sort_keys=False))
-    out = tmp_path / "stage.yaml"
-    assert main(["measure", str(capture), "--out", str(out)]) == 0
-    assert "detected chart corner" in capsys.readouterr().out
-    written = yaml.safe_load(capture.read_text())["lit_chart"]["green"]["corners"]
-    assert np.max(np.abs(np.array(written) - frontal)) < 0.5
-    measured = load_measurements(out).SRL[:, :, 1]
-    white = truth.SRL[:, :, 1].max()
-    assert np.max(np.abs(measured - truth.SRL[:, :, 1])) / white < 0.005
-    # A second run reads the written corners: no detection, same numbers.
-    assert main(["measure", str(capture), "--out", str(tmp_path / "again.yaml")]) == 0
-    assert "detected" not in capsys.readouterr().out
-    again = load_measurements(tmp_path / "again.yaml").SRL[:, :, 1]
-    np.testing.assert_allclose(again, measured, rtol=1e-4)
