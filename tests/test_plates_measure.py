@@ -106,11 +106,11 @@ def _solve_all(measurements):
     }
 
 
-def _deviation_in_sigmas(result, truth) -> dict[str, np.ndarray]:
+def _deviation_in_sigmas(result, truth, n_draws: int = 200) -> dict[str, np.ndarray]:
     """(measured - exact) / sigma for M, Q, N of each environment (27 numbers each).
 
     sigma: each measured value has a standard error spread / sqrt(pixels) (estimated from the
-    plates themselves, flat-field noise included). 200 Monte-Carlo draws of the exact
+    plates themselves, flat-field noise included). ``n_draws`` Monte-Carlo draws of the exact
     measurements perturbed by those errors give the spread of M, Q, N (plus 1e-12 for elements
     that do not vary).
     """
@@ -132,7 +132,7 @@ def _deviation_in_sigmas(result, truth) -> dict[str, np.ndarray]:
     rng = np.random.default_rng(1)
     draws: dict[str, list[np.ndarray]] = {name: [] for name in exact}
     base = measurements_to_dict(truth)
-    for _ in range(200):
+    for _ in range(n_draws):
         doc = json.loads(json.dumps(base))
         doc["primaries"] = {
             c: (truth.SL[:, k] + se_SL[:, k] * rng.standard_normal(3)).tolist()
@@ -230,8 +230,11 @@ class TestMeasureCommand:
         document = yaml.safe_load(capture_file.read_text())
         document["flat_field"] = None
         result = measure_capture(capture_from_dict(document, source=str(capture_file)))
-        worst = max(np.max(np.abs(d)) for d in _deviation_in_sigmas(result, truth).values())
-        assert worst > 20
+        # 40 draws size the bound well enough here (worst observed: 300 sigmas with 200 draws,
+        # 331 with 40): a quarter of the Monte-Carlo solves.
+        deviations = _deviation_in_sigmas(result, truth, n_draws=40).values()
+        worst = max(np.max(np.abs(d)) for d in deviations)
+        assert worst > 20, worst
 
 
 class TestBadInput:
