@@ -333,8 +333,8 @@ def _lattice(c: _Candidates, rows: int, columns: int) -> tuple[np.ndarray, np.nd
         members = _grow(c, seed, a, b)
         ij = np.array(list(members))
         ij -= ij.min(axis=0)
-        span = tuple(ij.max(axis=0) + 1)
-        if sorted(span) > sorted((rows, columns)) or max(span) > max(rows, columns):
+        short, long = sorted(ij.max(axis=0) + 1)
+        if short > min(rows, columns) or long > max(rows, columns):  # larger than the chart
             continue
         if best is None or len(members) > len(best[1]):
             best = ij, np.array(list(members.values()))
@@ -530,10 +530,14 @@ def detect_chart(info: PlateInfo, *, rows: int = 4, columns: int = 6) -> Detecti
     empty = np.zeros(lum.shape, np.int32)
     if not bright > 10 * noise or not bright > 0:
         detail = f"bright level {bright / max(noise, 1e-30):.2g}x the noise, need 10x"
-        return Detection(None, "too dark", detail, image.astype(np.float32), f, empty, np.zeros(0))
+        return Detection(
+            None, "too dark", detail, image.astype(np.float32), f, empty, np.zeros(0, bool)
+        )
     if rows < 2 or columns < 2:
         detail = f"a {rows} x {columns} strip has no grid to find"
-        return Detection(None, "not found", detail, image.astype(np.float32), f, empty, np.zeros(0))
+        return Detection(
+            None, "not found", detail, image.astype(np.float32), f, empty, np.zeros(0, bool)
+        )
     corners, reason, detail, c, grid = _search(image, f, rows, columns)
     used = np.zeros(len(c.areas), bool)
     if grid is not None:
