@@ -73,6 +73,8 @@ def test_occluded_patches_are_left_out_of_the_grid(tmp_path, charts):
     found = detect_chart(_plate(tmp_path, "t", charts["target"], **DEGRADATIONS["occlusion"]))
     # The occluder covers patches 21, 22 and part of 20 and of the two above (15, 16).
     assert found.corners is not None and 18 <= found.patches_found <= 21
+    assert {21, 22}.isdisjoint(found.seen) and len(found.seen) == found.patches_found
+    assert set(range(15)) <= set(found.seen)
 
 
 @pytest.mark.parametrize("turn", [1, 2, 3])

@@ -79,6 +79,9 @@ class Detection:
     regions: np.ndarray = field(repr=False)
     members: np.ndarray
     residual: float = float("nan")
+    #: Indices of the chart's patches found as patches (the others were covered, or as dark as
+    #: the chart's frame: their samples are the corners' extrapolation, check the overlay).
+    seen: tuple[int, ...] = ()
 
     @property
     def found(self) -> bool:
@@ -522,6 +525,19 @@ def _search(image: np.ndarray, f: int, rows: int, columns: int):
     return corners, "not found", why, c, grid
 
 
+def _cells(corners: np.ndarray, points: np.ndarray, rows: int, columns: int) -> tuple[int, ...]:
+    """The chart patches (reading order) holding ``points`` (plate pixels)."""
+    from ocio_vp.plates.sampling import grid_homography
+
+    G = grid_homography(corners, rows, columns)
+    if not np.linalg.cond(G) < 1e12:
+        return ()
+    uv = _project(np.linalg.inv(G), points)
+    col, row = np.floor(uv[:, 0]).astype(int), np.floor(uv[:, 1]).astype(int)
+    inside = (col >= 0) & (col < columns) & (row >= 0) & (row < rows)
+    return tuple(sorted({int(v) for v in (row * columns + col)[inside]}))
+
+
 def detect_chart(info: PlateInfo, *, rows: int = 4, columns: int = 6) -> Detection:
     """Search a plate for a chart of ``rows`` x ``columns`` patches (see the module docstring)."""
     image, f = _working_image(info)
@@ -550,8 +566,10 @@ def detect_chart(info: PlateInfo, *, rows: int = 4, columns: int = 6) -> Detecti
         return Detection(None, reason, detail, image.astype(np.float32), f, c.labels, used)
     assert grid is not None  # corners come from a grid
     plate = corners * f + [info.x, info.y]
+    seen = _cells(plate, c.centres[grid.members] * f + [info.x, info.y], rows, columns)
     detail = f"{len(grid.members)} of {rows * columns} patches, grid residual {grid.rms * f:.2g} px"
-    return Detection(plate, None, detail, image.astype(np.float32), f, c.labels, used, grid.rms * f)
+    image32 = image.astype(np.float32)
+    return Detection(plate, None, detail, image32, f, c.labels, used, grid.rms * f, seen)
 
 
 def detect_chart_corners(info: PlateInfo, *, rows: int = 4, columns: int = 6) -> np.ndarray:

@@ -369,6 +369,13 @@ def measure_capture(
         check_measurements_part(document, source=capture.source)
     warnings = [] if reading is None else list(reading.warnings)
     for sampling in plates:
+        found = sampling.detection
+        if found is not None and len(found.seen) < len(sampling.labels):
+            unseen = sorted(set(range(len(sampling.labels))) - set(found.seen))
+            warnings.append(
+                f"{sampling.plate.label}: patches {', '.join(map(str, unseen))} not seen by the "
+                "chart detection (covered, or as dark as the chart's frame): check the overlay"
+            )
         for index in np.flatnonzero(sampling.samples.flagged):
             flags = ", ".join(sampling.samples.flag_names(int(index)))
             warnings.append(f"{sampling.plate.label}: {sampling.labels[index]}: {flags}")
@@ -529,6 +536,7 @@ def _detection_record(sampling: PlateSampling) -> dict[str, Any]:
         "detection": {
             "overlay": f"{sampling.name}.detection.png",
             "patches_found": found.patches_found,
+            "patches_not_seen": sorted(set(range(len(sampling.labels))) - set(found.seen)),
             "grid_residual_px": round(found.residual, 2),
             "working_scale": found.scale,
         }
