@@ -368,6 +368,13 @@ def measure_capture(
     else:
         check_measurements_part(document, source=capture.source)
     warnings = [] if reading is None else list(reading.warnings)
+    warnings += _plate_warnings(plates)
+    return MeasureResult(measurements, tuple(plates), detected, tuple(warnings), document, reading)
+
+
+def _plate_warnings(plates: list[PlateSampling]) -> list[str]:
+    """Per plate: patches a detected chart's grid was found without, and flagged samples."""
+    warnings = []
     for sampling in plates:
         found = sampling.detection
         if found is not None and len(found.seen) < len(sampling.labels):
@@ -379,7 +386,7 @@ def measure_capture(
         for index in np.flatnonzero(sampling.samples.flagged):
             flags = ", ".join(sampling.samples.flag_names(int(index)))
             warnings.append(f"{sampling.plate.label}: {sampling.labels[index]}: {flags}")
-    return MeasureResult(measurements, tuple(plates), detected, tuple(warnings), document, reading)
+    return warnings
 
 
 def _environment(env, chart, black_level) -> dict[str, Any]:
