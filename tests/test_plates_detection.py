@@ -145,8 +145,11 @@ def _capture(tmp_path, charts, **target_options):
 
 def test_measure_finds_the_chart_and_records_the_corners(tmp_path, charts, capsys):
     capture = _capture(tmp_path, charts)
+    before = capture.read_text()
     out = tmp_path / "charts.yaml"
     assert main(["measure", str(capture), "--out", str(out)]) == 0
+    assert capture.read_text() == before  # an input: left alone unless asked
+    assert main(["measure", str(capture), "--out", str(out), "--write-corners"]) == 0
     assert "wrote 1 detected chart corner set(s)" in capsys.readouterr().out
     written = yaml.safe_load(capture.read_text())
     corners = np.array(written["environments"][0]["target_chart"]["corners"])

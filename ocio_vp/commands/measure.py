@@ -27,10 +27,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "--overlays", default=None, help="overlay folder (default: next to --out, STEM.overlays)"
     )
     parser.add_argument(
-        "--no-write-back",
+        "--write-corners",
         action="store_true",
-        help="do not write auto-detected chart corners back into the capture file",
+        help="write auto-detected chart corners back into the capture file (rewritten: its "
+        "comments are lost); by default the capture file is left alone and the corners are "
+        "recorded in the overlay folder's samples.json",
     )
+    # Earlier versions wrote the corners back by default; their opt-out is the default now.
+    parser.add_argument("--no-write-back", action="store_true", help=argparse.SUPPRESS)
     parser.set_defaults(func=run)
 
 
@@ -61,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
         finally:
             take_bar.close()
     folder = write_measure_outputs(result, args.out, overlays=args.overlays)
-    if result.detected and not args.no_write_back:
+    if result.detected and args.write_corners:
         save_capture_document(with_corners(capture.document, result.detected), capture.source)
         print(f"wrote {len(result.detected)} detected chart corner set(s) to {capture.source}")
     for warning in result.warnings:
