@@ -13,7 +13,10 @@ exhaust memory:
 - duplicate mapping keys are errors in YAML and JSON (the last one silently winning hides
   typos and edits gone wrong);
 - integers too long to be a float64 are errors, not ``OverflowError``/int-string-limit
-  tracebacks.
+  tracebacks;
+- a YAML document holds JSON's values only (:data:`~ocio_vp.jsontypes.JsonValue`): a date is
+  kept as its text, and keys that are not text, ``!!binary``, ``!!set``, ``!!omap`` and
+  ``!!pairs`` are errors, so what a file holds has one type whichever of the two it is.
 """
 
 from __future__ import annotations
@@ -23,7 +26,6 @@ import json
 import os
 import stat
 from pathlib import Path
-from typing import Any
 
 import yaml
 from yaml.composer import Composer
@@ -31,6 +33,7 @@ from yaml.constructor import ConstructorError, SafeConstructor
 from yaml.resolver import Resolver
 
 from ocio_vp.errors import InputError, excerpt
+from ocio_vp.jsontypes import JsonObject, JsonValue
 
 try:  # libyaml's scanner and parser are much faster; the composer below stays in Python.
     from yaml._yaml import CParser
@@ -66,7 +69,7 @@ MAX_INT_DIGITS = 309
 class _LimitError(yaml.YAMLError):
     """A bound of this module was exceeded (reported like a YAML syntax error)."""
 
-    def __init__(self, problem: str, mark: Any = None) -> None:
+    def __init__(self, problem: str, mark: yaml.Mark | None = None) -> None:
         super().__init__(problem)
         self.problem = problem
         self.problem_mark = mark
@@ -89,7 +92,7 @@ class _BoundedLoader(Composer, *_PARSERS, SafeConstructor, Resolver):  # type: i
         self._depth = 0
         self._values = 0
 
-    def compose_node(self, parent: Any, index: Any) -> Any:
+    def compose_node(self, parent: yaml.Node | None, index: int) -> yaml.Node | None:
         mark = self.peek_event().start_mark
         self._depth += 1
         self._values += 1
@@ -97,21 +100,28 @@ class _BoundedLoader(Composer, *_PARSERS, SafeConstructor, Resolver):  # type: i
             raise _LimitError(f"nested deeper than {MAX_DEPTH} levels", mark)
         if self._values > MAX_YAML_VALUES:
             raise _LimitError(f"more than {MAX_YAML_VALUES} values (use JSON for more)", mark)
+        alias = self.check_event(yaml.AliasEvent)  # checked where it was defined
         try:
-            return super().compose_node(parent, index)
+            node = super().compose_node(parent, index)
         finally:
             self._depth -= 1
+        if isinstance(node, yaml.MappingNode) and not alias:
+            _check_keys(node)
+        return node
 
-    def construct_document(self, node: Any) -> Any:
+    def construct_document(self, node: yaml.Node) -> JsonValue:
         _check_expansion(node)
         return super().construct_document(node)
 
-    def construct_mapping(self, node: Any, deep: bool = False) -> Any:
-        if isinstance(node, yaml.MappingNode):
-            _check_duplicate_keys(node)
-        return super().construct_mapping(node, deep=deep)
+    def construct_timestamp_text(self, node: yaml.ScalarNode) -> str:
+        return str(node.value)
 
-    def construct_yaml_int(self, node: Any) -> int:
+    def construct_not_json(self, node: yaml.Node) -> None:
+        raise _LimitError(
+            f"{node.tag.rsplit(':', 1)[-1]} values are not supported", node.start_mark
+        )
+
+    def construct_yaml_int(self, node: yaml.ScalarNode) -> int:
         text = str(node.value)
         if sum(c.isalnum() for c in text) > MAX_INT_DIGITS:
             raise _LimitError(
@@ -121,13 +131,22 @@ class _BoundedLoader(Composer, *_PARSERS, SafeConstructor, Resolver):  # type: i
 
 
 _BoundedLoader.add_constructor("tag:yaml.org,2002:int", _BoundedLoader.construct_yaml_int)
+# A date stays the text it was written as (what JSON gives for the same value).
+_BoundedLoader.add_constructor(
+    "tag:yaml.org,2002:timestamp", _BoundedLoader.construct_timestamp_text
+)
+for _tag in ("binary", "set", "omap", "pairs"):
+    _BoundedLoader.add_constructor(f"tag:yaml.org,2002:{_tag}", _BoundedLoader.construct_not_json)
 
 
-def _check_duplicate_keys(node: yaml.MappingNode) -> None:
+def _check_keys(node: yaml.MappingNode) -> None:
+    """Refuse duplicate keys and keys that are not text (``1:``, ``null:``, ``yes:``)."""
     seen: dict[tuple[str, str], int] = {}
     for key_node, _ in node.value:
         if not isinstance(key_node, yaml.ScalarNode) or key_node.tag.endswith(":merge"):
             continue
+        if not key_node.tag.endswith(":str"):
+            raise _LimitError(f"key {excerpt(key_node.value)} is not text", key_node.start_mark)
         ident = (key_node.tag, key_node.value)
         line = key_node.start_mark.line + 1
         if ident in seen:
@@ -138,12 +157,12 @@ def _check_duplicate_keys(node: yaml.MappingNode) -> None:
         seen[ident] = line
 
 
-def _check_expansion(root: Any) -> None:
+def _check_expansion(root: yaml.Node) -> None:
     """Refuse a node graph whose alias-expanded size exceeds :data:`MAX_YAML_VALUES`."""
     sizes: dict[int, int] = {}
     active: set[int] = set()
 
-    def size(node: Any, depth: int) -> int:
+    def size(node: yaml.Node, depth: int) -> int:
         ident = id(node)
         if ident in sizes:
             return sizes[ident]
@@ -170,8 +189,8 @@ def _check_expansion(root: Any) -> None:
     size(root, 0)
 
 
-def _json_object(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
-    out: dict[str, Any] = {}
+def _json_object(pairs: list[tuple[str, JsonValue]]) -> JsonObject:
+    out: JsonObject = {}
     for key, value in pairs:
         if key in out:
             raise ValueError(f"duplicate key {excerpt(key)}")
@@ -230,7 +249,7 @@ def read_bounded(
     return data
 
 
-def parse_document(raw: bytes, *, json_format: bool, source: object) -> Any:
+def parse_document(raw: bytes, *, json_format: bool, source: object) -> JsonValue:
     """Parse YAML (or JSON when ``json_format``) bytes under this module's limits."""
     try:
         text = raw.decode("utf-8")
@@ -254,7 +273,7 @@ def parse_document(raw: bytes, *, json_format: bool, source: object) -> Any:
         loader.dispose()
 
 
-def _parse_json(text: str, source: object) -> Any:
+def _parse_json(text: str, source: object) -> JsonValue:
     try:
         return json.loads(text, object_pairs_hook=_json_object, parse_int=_json_int)
     except json.JSONDecodeError as error:
@@ -267,7 +286,7 @@ def _parse_json(text: str, source: object) -> Any:
         raise InputError(f"invalid JSON: {error}", source=source) from None
 
 
-def read_document(path: str | Path) -> tuple[Any, str]:
+def read_document(path: str | Path) -> tuple[JsonValue, str]:
     """Read a YAML or JSON file; returns the parsed data and the sha256 of its bytes.
 
     JSON is recognised by the ``.json`` suffix; anything else is read as YAML (JSON is valid

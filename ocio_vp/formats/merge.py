@@ -16,9 +16,8 @@ merges them here, before anything is solved:
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 from ocio_vp.errors import InputError, excerpt
 from ocio_vp.formats.measurements import (
@@ -29,6 +28,7 @@ from ocio_vp.formats.measurements import (
     measurements_from_dict,
     read_document,
 )
+from ocio_vp.jsontypes import JsonObject, JsonValue
 
 __all__ = ["load_measurement_files", "merge_measurement_documents"]
 
@@ -46,13 +46,14 @@ def _conflict(key: str, first: str, second: str) -> InputError:
 
 
 def _merge_named(
-    merged: dict[str, Any], owners: dict[str, str], section: str, items: Any, source: str
+    merged: JsonObject, owners: dict[str, str], section: str, items: JsonValue, source: str
 ) -> None:
     """Join list ``section`` by ``name``: new names appended, repeated ones must be equal."""
     entries = merged.setdefault(section, [])
-    index = {entry["name"]: i for i, entry in enumerate(entries)}
+    assert isinstance(entries, list) and isinstance(items, list)  # a checked part's sections
+    index = {_name(entry): i for i, entry in enumerate(entries)}
     for item in items:
-        name = item["name"]
+        name = _name(item)
         key = f"{section}[name={name}]"
         if name not in index:
             index[name] = len(entries)
@@ -62,9 +63,12 @@ def _merge_named(
             raise _conflict(f"{section} {excerpt(name)}", owners[key], source)
 
 
-def merge_measurement_documents(
-    documents: Sequence[tuple[Mapping[str, Any], str]],
-) -> dict[str, Any]:
+def _name(entry: JsonValue) -> str:
+    assert isinstance(entry, dict) and isinstance(entry["name"], str)  # checked by the part
+    return entry["name"]
+
+
+def merge_measurement_documents(documents: Sequence[tuple[JsonObject, str]]) -> JsonObject:
     """One measurements document from several (``(document, source)`` pairs, each valid on
     its own as a part); see the module docstring.
 
@@ -73,7 +77,7 @@ def merge_measurement_documents(
     InputError
         A key given twice with different values, naming the second file and both.
     """
-    merged: dict[str, Any] = {}
+    merged: JsonObject = {}
     owners: dict[str, str] = {}
     for document, source in documents:
         for key, value in document.items():
@@ -81,6 +85,7 @@ def merge_measurement_documents(
                 merged.setdefault(key, value)
             elif key == "stage":
                 stage = merged.setdefault("stage", {})
+                assert isinstance(stage, dict) and isinstance(value, dict)  # checked parts
                 for name, item in value.items():
                     if name in stage and stage[name] != item:
                         raise _conflict(f"stage.{name}", owners[f"stage.{name}"], source)
@@ -115,7 +120,8 @@ def load_measurement_files(given: Sequence[str | Path]) -> Measurements:
     paths = [Path(p) for p in given]
     if len(set(paths)) != len(paths):
         raise InputError("the same measurements file is given twice", source=paths[0])
-    documents, digests = [], []
+    documents: list[tuple[JsonObject, str]] = []
+    digests: list[str] = []
     held: dict[str, list[str]] = {}
     for path in paths:
         data, digest = read_document(path)
@@ -128,6 +134,7 @@ def load_measurement_files(given: Sequence[str | Path]) -> Measurements:
             )
         for section in check_measurements_part(data, source=str(path)):
             held.setdefault(section, []).append(path.name)
+        assert isinstance(data, dict)  # check_measurements_part refuses anything else
         documents.append((data, str(path)))
         digests.append(digest)
     missing = [s for s in REQUIRED_SECTIONS if s not in held]
