@@ -1,17 +1,22 @@
 """The types of JSON data: what a document reader returns and what a ``*_to_dict`` writes.
 
-``JsonValue`` is exactly what :func:`json.loads` produces (YAML input is held to the same
-values by :mod:`ocio_vp.formats.documents`); code that reads one narrows it with
-``isinstance`` before use, so a wrong shape in a file is found where the file is read.
+``JsonValue`` is what :func:`json.loads` produces (YAML input is held to the same values by
+:mod:`ocio_vp.formats.documents`); code that reads one narrows it with ``isinstance`` before
+use, so a wrong shape in a file is found where the file is read. Its containers are read-only
+(``Sequence``, ``Mapping``), so a ``list[float]`` or a ``dict[str, list[float]]`` built by a
+writer is one as it is; numpy values are not (convert them, e.g. ``.tolist()``).
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from typing import TypeAlias, Union
 
-__all__ = ["JsonObject", "JsonScalar", "JsonValue"]
+__all__ = ["JsonMapping", "JsonObject", "JsonScalar", "JsonValue"]
 
-JsonScalar: TypeAlias = Union[None, bool, int, float, str]
-JsonValue: TypeAlias = Union[JsonScalar, "list[JsonValue]", "dict[str, JsonValue]"]
-#: A JSON object (a mapping with text keys), the top level of every ocio-vp file.
+JsonScalar: TypeAlias = bool | int | float | str | None
+JsonValue: TypeAlias = Union[JsonScalar, "Sequence[JsonValue]", "Mapping[str, JsonValue]"]
+#: A JSON object being built (a mapping with text keys), the top level of every ocio-vp file.
 JsonObject: TypeAlias = "dict[str, JsonValue]"
+#: A JSON object only read.
+JsonMapping: TypeAlias = "Mapping[str, JsonValue]"

@@ -123,6 +123,8 @@ def panel_type_beta(panel: PanelType) -> float:
     """beta of one panel type of a file with ``panels``: its ``beta`` wins over its geometry."""
     if panel.beta is not None:
         return float(panel.beta)
+    if panel.panel is None:  # the parser requires calibration_panel or beta
+        raise ValueError(f"panel type {panel.name!r} has neither beta nor calibration_panel")
     return panel_beta(panel.panel)
 
 

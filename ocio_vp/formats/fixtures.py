@@ -27,9 +27,14 @@ its ``lit_chart``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+from ocio_vp.jsontypes import JsonObject, JsonValue
+
+if TYPE_CHECKING:  # measurements imports this module
+    from ocio_vp.formats.measurements import Validator
 
 __all__ = ["DMX_MODES", "DmxPatch", "Fixture", "fixtures_to_dict", "parse_fixtures"]
 
@@ -46,7 +51,7 @@ class DmxPatch:
     address: int
     mode: str
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> JsonObject:
         return {"universe": self.universe, "address": self.address, "mode": self.mode}
 
 
@@ -69,7 +74,7 @@ class Fixture:
         return np.moveaxis(self.lit_chart, 0, 2) / self.reference_drive
 
 
-def _parse_one(ctx: Any, value: Any, key: tuple, n: int) -> Fixture:
+def _parse_one(ctx: Validator, value: JsonValue, key: tuple, n: int) -> Fixture:
     entry = ctx.mapping(
         value,
         key,
@@ -103,13 +108,13 @@ def _parse_one(ctx: Any, value: Any, key: tuple, n: int) -> Fixture:
     return Fixture(name, channels, reference, chart, max_drive, pixel_mapped, direct, dmx)
 
 
-def _integer(ctx: Any, value: Any, key: tuple, low: int, high: int) -> int:
+def _integer(ctx: Validator, value: JsonValue, key: tuple, low: int, high: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
         raise ctx.error(key, f"expected an integer {low}..{high}, got {value!r}"[:200])
     return value
 
 
-def _parse_dmx(ctx: Any, value: Any, key: tuple, channels: int) -> DmxPatch:
+def _parse_dmx(ctx: Validator, value: JsonValue, key: tuple, channels: int) -> DmxPatch:
     entry = ctx.mapping(value, key, required=("universe", "address", "mode"))
     universe = _integer(ctx, entry["universe"], (*key, "universe"), 0, MAX_UNIVERSE)
     address = _integer(ctx, entry["address"], (*key, "address"), 1, 512)
@@ -125,7 +130,7 @@ def _parse_dmx(ctx: Any, value: Any, key: tuple, channels: int) -> DmxPatch:
     return DmxPatch(universe, address, mode)
 
 
-def parse_fixtures(ctx: Any, value: Any, n: int) -> tuple[Fixture, ...]:
+def parse_fixtures(ctx: Validator, value: JsonValue, n: int) -> tuple[Fixture, ...]:
     """Validate the ``fixtures`` list (``n`` chart patches).
 
     ``ctx`` is the measurements file's :class:`~ocio_vp.formats.measurements.Validator`, so every
@@ -141,11 +146,11 @@ def parse_fixtures(ctx: Any, value: Any, n: int) -> tuple[Fixture, ...]:
     return fixtures
 
 
-def fixtures_to_dict(fixtures: tuple[Fixture, ...]) -> list[dict[str, Any]]:
+def fixtures_to_dict(fixtures: tuple[Fixture, ...]) -> list[JsonObject]:
     """The inverse of :func:`parse_fixtures` (plain Python types)."""
     out = []
     for f in fixtures:
-        entry: dict[str, Any] = {
+        entry: JsonObject = {
             "name": f.name,
             "channels": list(f.channels),
             "reference_drive": float(f.reference_drive),

@@ -34,6 +34,7 @@ from ocio_vp.formats.panels import (
 )
 from ocio_vp.formats.synthesis import SynthesisRecord, parse_synthesis, synthesis_to_dict
 from ocio_vp.formats.wall_state import WALL_STATE_KEYS, WallState, parse_wall_state
+from ocio_vp.jsontypes import JsonMapping, JsonObject, JsonValue
 from ocio_vp.wall.linearity import CHANNELS, parse_ramps, ramps_to_dict
 
 __all__ = [
@@ -202,7 +203,7 @@ class Validator:
 
     def mapping(
         self,
-        value: Any,
+        value: JsonValue,
         key: tuple[str | int, ...],
         required: tuple[str, ...],
         optional: tuple[str, ...] = (),
@@ -226,7 +227,7 @@ class Validator:
         return value
 
     def calibration(
-        self, value: Mapping[str, Any], key: tuple[str | int, ...]
+        self, value: JsonMapping, key: tuple[str | int, ...]
     ) -> tuple[PanelGeometry | None, float | None]:
         """``calibration_panel`` and/or ``beta`` of a mapping (the stage, or a panel type):
         the lit-chart setup that gives beta; one of them is required."""
@@ -260,7 +261,7 @@ class Validator:
 
     def number(
         self,
-        value: Any,
+        value: JsonValue,
         key: tuple[str | int, ...],
         *,
         minimum: float = 0.0,
@@ -285,7 +286,7 @@ class Validator:
 
     def rgb(
         self,
-        value: Any,
+        value: JsonValue,
         key: tuple[str | int, ...],
         *,
         minimum: float = 0.0,
@@ -303,7 +304,7 @@ class Validator:
         )
         return out
 
-    def chart(self, value: Any, key: tuple[str | int, ...], n: int | None) -> np.ndarray:
+    def chart(self, value: JsonValue, key: tuple[str | int, ...], n: int | None) -> np.ndarray:
         if not isinstance(value, (list, tuple)) or not value:
             raise self.error(key, f"expected a list of [r, g, b] patches, got {_kind(value)}")
         if n is not None and len(value) != n:
@@ -319,7 +320,7 @@ class Validator:
             )
         return values
 
-    def name(self, value: Any, key: tuple[str | int, ...]) -> str:
+    def name(self, value: JsonValue, key: tuple[str | int, ...]) -> str:
         if not isinstance(value, str) or not SAFE_NAME.match(value):
             raise self.error(
                 key,
@@ -329,7 +330,7 @@ class Validator:
         return value
 
 
-def _kind(value: Any) -> str:
+def _kind(value: JsonValue) -> str:
     if isinstance(value, (list, tuple)):
         return f"a list of {len(value)}"
     if value is None:
@@ -337,7 +338,7 @@ def _kind(value: Any) -> str:
     return f"{type(value).__name__} {excerpt(value)}"
 
 
-def check_safe_name(value: Any, *, source: object = None, key: str | None = None) -> str:
+def check_safe_name(value: JsonValue, *, source: object = None, key: str | None = None) -> str:
     """Return ``value`` if it is a safe environment/stage name, else raise :class:`InputError`."""
     return Validator(str(source) if source else "input").name(value, (key or "name",))
 
@@ -346,7 +347,7 @@ def check_safe_name(value: Any, *, source: object = None, key: str | None = None
 
 
 def measurements_from_dict(
-    data: Any, *, source: str = "<measurements>", sha256: str | None = None
+    data: JsonValue, *, source: str = "<measurements>", sha256: str | None = None
 ) -> Measurements:
     """Validate a parsed measurements document and return :class:`Measurements`.
 
@@ -371,7 +372,7 @@ def measurements_from_dict(
     )
 
 
-def check_measurements_part(data: Any, *, source: str = "<measurements>") -> tuple[str, ...]:
+def check_measurements_part(data: JsonValue, *, source: str = "<measurements>") -> tuple[str, ...]:
     """Validate a measurements document that may hold only some sections: a wall file
     (``primaries``, ``ramps``) or a charts file (``lit_chart``, ``environments``), which
     ``ocio-vp solve`` merges (:mod:`ocio_vp.formats.merge`). Returns the sections it holds.
@@ -386,10 +387,10 @@ def check_measurements_part(data: Any, *, source: str = "<measurements>") -> tup
         measurements_from_dict(data, source=source)
         return (*(name for name in SECTIONS if name in data), "primaries", "lit_chart")
     _parse_sections(Validator(source), data, partial=True)
-    return tuple(name for name in SECTIONS if name in data)
+    return tuple(name for name in SECTIONS if isinstance(data, dict) and name in data)
 
 
-def _parse_sections(ctx: Validator, data: Any, *, partial: bool) -> dict[str, Any]:
+def _parse_sections(ctx: Validator, data: JsonValue, *, partial: bool) -> dict[str, Any]:
     """Every section present, validated (all of :data:`REQUIRED_SECTIONS` unless ``partial``)."""
     required = ("format", "version", "stage") + (() if partial else REQUIRED_SECTIONS)
     optional = (REQUIRED_SECTIONS if partial else ()) + ("ramps", "fixtures")
@@ -421,7 +422,7 @@ def _parse_sections(ctx: Validator, data: Any, *, partial: bool) -> dict[str, An
     return out
 
 
-def _check_header(ctx: Validator, top: Mapping[str, Any]) -> None:
+def _check_header(ctx: Validator, top: JsonMapping) -> None:
     if top["format"] != FORMAT:
         raise ctx.error(("format",), f"expected {FORMAT!r}, got {excerpt(top['format'])}")
     if top["version"] != VERSION or isinstance(top["version"], bool):
@@ -444,7 +445,7 @@ def _check_white_patch(ctx: Validator, stage: Stage, n: int) -> None:
 
 
 def _measurements_with_panels(
-    ctx: Validator, data: Mapping[str, Any], sha256: str | None
+    ctx: Validator, data: JsonMapping, sha256: str | None
 ) -> Measurements:
     """A file with ``panels`` (:mod:`ocio_vp.formats.panels`): several panel types."""
     top = ctx.mapping(
@@ -479,7 +480,7 @@ def _measurements_with_panels(
     )
 
 
-def parse_stage(ctx: Validator, value: Any, *, calibration: bool = True) -> Stage:
+def parse_stage(ctx: Validator, value: JsonValue, *, calibration: bool = True) -> Stage:
     """Validate a ``stage`` section (also used by the capture file, which copies it).
 
     ``calibration=False`` (a file with ``panels``): the stage gives no ``calibration_panel`` or
@@ -543,19 +544,21 @@ def parse_stage(ctx: Validator, value: Any, *, calibration: bool = True) -> Stag
     )
 
 
-def _skin_patches(ctx: Validator, value: Any, key: tuple[str | int, ...]) -> tuple[int, ...]:
+def _skin_patches(ctx: Validator, value: JsonValue, key: tuple[str | int, ...]) -> tuple[int, ...]:
     """``stage.skin_patches``: distinct patch indices (checked against the chart later)."""
     if not isinstance(value, list):
         raise ctx.error(key, f"expected a list of patch indices, got {_kind(value)}")
+    indices: list[int] = []
     for i, index in enumerate(value):
         if isinstance(index, bool) or not isinstance(index, int) or index < 0:
             raise ctx.error((*key, i), f"expected a patch index (0 or more), got {excerpt(index)}")
-    if len(set(value)) != len(value):
+        indices.append(index)
+    if len(set(indices)) != len(indices):
         raise ctx.error(key, "names a patch twice")
-    return tuple(value)
+    return tuple(indices)
 
 
-def _colourspace_problem(value: Any) -> tuple[str | None, str]:
+def _colourspace_problem(value: JsonValue) -> tuple[str | None, str]:
     """(colour-science's name of ``value``, or None and what is wrong with it)."""
     import colour
 
@@ -567,7 +570,7 @@ def _colourspace_problem(value: Any) -> tuple[str | None, str]:
     return None, f"unknown colour space {excerpt(value)} (colour.RGB_COLOURSPACES){hint}"
 
 
-def _check_colourspace(ctx: Validator, value: Any, key: tuple[str | int, ...]) -> str:
+def _check_colourspace(ctx: Validator, value: JsonValue, key: tuple[str | int, ...]) -> str:
     name, problem = _colourspace_problem(value)
     if name is None:
         raise ctx.error(key, problem)
@@ -585,7 +588,7 @@ def with_camera_colorspace(measurements: Measurements, value: str, *, key: str) 
 
 
 def _parse_environments(
-    ctx: Validator, value: Any, n: int | None, panels: tuple[PanelType, ...] = ()
+    ctx: Validator, value: JsonValue, n: int | None, panels: tuple[PanelType, ...] = ()
 ) -> tuple[Environment, ...]:
     if not isinstance(value, list) or not value:
         raise ctx.error(("environments",), f"expected a non-empty list, got {_kind(value)}")
@@ -643,7 +646,7 @@ def _parse_environments(
 
 def _panel_environment(
     ctx: Validator,
-    env: Mapping[str, Any],
+    env: JsonMapping,
     key: tuple[str | int, ...],
     name: str,
     target: np.ndarray,
@@ -685,12 +688,12 @@ def load_measurements(path: str | Path) -> Measurements:
     return measurements_from_dict(data, source=str(path), sha256=sha256)
 
 
-def measurements_to_dict(measurements: Measurements) -> dict[str, Any]:
+def measurements_to_dict(measurements: Measurements) -> JsonObject:
     """The inverse of :func:`measurements_from_dict` (plain Python types, file key order)."""
     stage = measurements.stage
-    stage_dict: dict[str, Any] = {"name": stage.name}
+    stage_dict: JsonObject = {"name": stage.name}
     if stage.panel is not None:
-        panel = {
+        panel: JsonObject = {
             "width": stage.panel.width,
             "height": stage.panel.height,
             "distance": stage.panel.distance,
@@ -711,18 +714,18 @@ def measurements_to_dict(measurements: Measurements) -> dict[str, Any]:
         stage_dict["skin_patches"] = list(stage.skin_patches)
     stage_dict |= stage.wall.to_dict()
 
-    def rows(array: np.ndarray) -> list[list[float]]:
+    def rows(array: np.ndarray) -> list[JsonValue]:
         return [[float(v) for v in row] for row in np.asarray(array, dtype=np.float64)]
 
-    data: dict[str, Any] = {"format": FORMAT, "version": VERSION, "stage": stage_dict}
+    data: JsonObject = {"format": FORMAT, "version": VERSION, "stage": stage_dict}
     if measurements.panels:
         data["panels"] = panels_to_dict(measurements.panels)
     else:
         data["primaries"] = {c: rows(measurements.SL.T)[k] for k, c in enumerate(CHANNELS)}
         data["lit_chart"] = {c: rows(measurements.SRL[:, :, k]) for k, c in enumerate(CHANNELS)}
-    data["environments"] = []
+    environments: list[JsonValue] = []
     for env in measurements.environments:
-        entry: dict[str, Any] = {"name": env.name, "target_chart": rows(env.target_chart)}
+        entry: JsonObject = {"name": env.name, "target_chart": rows(env.target_chart)}
         if env.w_avg is not None:
             entry["w_avg"] = rows(env.w_avg[None])[0]
         if env.panel_w_avg is not None:
@@ -735,7 +738,8 @@ def measurements_to_dict(measurements: Measurements) -> dict[str, Any]:
             entry["synthesized"] = synthesis_to_dict(env.synthesized)
         if env.priority is not None:
             entry["priority"] = env.priority
-        data["environments"].append(entry)
+        environments.append(entry)
+    data["environments"] = environments
     if measurements.ramps is not None and not measurements.panels:
         data["ramps"] = ramps_to_dict(measurements.ramps)
     if measurements.fixtures:
@@ -756,7 +760,7 @@ def save_measurements(
 
 
 def save_measurements_document(
-    data: Mapping[str, Any], path: str | Path, *, replace: bool = False
+    data: JsonMapping, path: str | Path, *, replace: bool = False
 ) -> None:
     """Write a measurements document (complete or a part, already validated) like
     :func:`save_measurements`."""

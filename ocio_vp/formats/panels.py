@@ -35,13 +35,17 @@ from __future__ import annotations
 import difflib
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ocio_vp.choices import WALL_ENCODINGS
 from ocio_vp.errors import InputError, excerpt, format_key_path
-from ocio_vp.wall.linearity import CHANNELS, parse_ramps, ramps_to_dict
+from ocio_vp.jsontypes import JsonMapping, JsonObject, JsonValue
+from ocio_vp.wall.linearity import CHANNELS, Ramp, parse_ramps, ramps_to_dict
+
+if TYPE_CHECKING:  # measurements imports this module
+    from ocio_vp.formats.measurements import PanelGeometry, Validator
 
 __all__ = [
     "PANEL_KEYS",
@@ -92,9 +96,9 @@ class PanelType:
     in_frustum: bool
     SL: np.ndarray
     SRL: np.ndarray
-    panel: Any = None
+    panel: PanelGeometry | None = None
     beta: float | None = None
-    ramps: Mapping[str, Any] | None = None
+    ramps: Mapping[str, Ramp] | None = None
     regions: tuple[PanelRegion, ...] = ()
     encoding: str | None = None
     peak_nits: float | None = None
@@ -105,13 +109,15 @@ def primary_panel(panels: tuple[PanelType, ...]) -> PanelType:
     return next(p for p in panels if p.in_frustum)
 
 
-def _kind(value: Any) -> str:
+def _kind(value: JsonValue) -> str:
     if isinstance(value, (list, tuple)):
         return f"a list of {len(value)}"
     return f"{type(value).__name__} {excerpt(value)}"
 
 
-def _pair(ctx: Any, value: Any, key: tuple, low: float, high: float) -> tuple[float, float]:
+def _pair(
+    ctx: Validator, value: JsonValue, key: tuple, low: float, high: float
+) -> tuple[float, float]:
     if not isinstance(value, (list, tuple)) or len(value) != 2:
         raise ctx.error(key, f"expected [min, max] in degrees, got {_kind(value)}")
     a, b = (ctx.number(v, (*key, i), minimum=low, maximum=high) for i, v in enumerate(value))
@@ -120,7 +126,7 @@ def _pair(ctx: Any, value: Any, key: tuple, low: float, high: float) -> tuple[fl
     return a, b
 
 
-def _region(ctx: Any, value: Any, key: tuple) -> PanelRegion:
+def _region(ctx: Validator, value: JsonValue, key: tuple) -> PanelRegion:
     raw = ctx.mapping(value, key, required=("elevation",), optional=("azimuth",))
     elevation = _pair(ctx, raw["elevation"], (*key, "elevation"), -90.0, 90.0)
     azimuth = (-180.0, 180.0)
@@ -129,7 +135,7 @@ def _region(ctx: Any, value: Any, key: tuple) -> PanelRegion:
     return PanelRegion(elevation, azimuth)
 
 
-def _regions(ctx: Any, value: Any, key: tuple) -> tuple[PanelRegion, ...]:
+def _regions(ctx: Validator, value: JsonValue, key: tuple) -> tuple[PanelRegion, ...]:
     """One ``{elevation, azimuth}`` box or a non-empty list of them."""
     if isinstance(value, list):
         if not value:
@@ -138,7 +144,7 @@ def _regions(ctx: Any, value: Any, key: tuple) -> tuple[PanelRegion, ...]:
     return (_region(ctx, value, key),)
 
 
-def _encoding(ctx: Any, entry: Mapping[str, Any], key: tuple) -> tuple[str | None, float | None]:
+def _encoding(ctx: Validator, entry: JsonMapping, key: tuple) -> tuple[str | None, float | None]:
     encoding = entry.get("encoding")
     if encoding is not None and encoding not in WALL_ENCODINGS:
         raise ctx.error(
@@ -153,7 +159,7 @@ def _encoding(ctx: Any, entry: Mapping[str, Any], key: tuple) -> tuple[str | Non
     return encoding, peak
 
 
-def _ramps(ctx: Any, value: Any, key: tuple) -> Mapping[str, Any]:
+def _ramps(ctx: Validator, value: JsonValue, key: tuple) -> Mapping[str, Any]:
     """``parse_ramps`` with its errors placed under ``panels[i].ramps``."""
     try:
         return parse_ramps(value, source=ctx.source)
@@ -162,7 +168,7 @@ def _ramps(ctx: Any, value: Any, key: tuple) -> Mapping[str, Any]:
         raise InputError(error.problem, source=ctx.source, key=f"{where}.{error.key}") from None
 
 
-def _parse_one(ctx: Any, value: Any, key: tuple, n: int | None) -> PanelType:
+def _parse_one(ctx: Validator, value: JsonValue, key: tuple, n: int | None) -> PanelType:
     required, optional = PANEL_KEYS
     entry = ctx.mapping(value, key, required=required, optional=optional)
     name = ctx.name(entry["name"], (*key, "name"))
@@ -191,7 +197,7 @@ def _parse_one(ctx: Any, value: Any, key: tuple, n: int | None) -> PanelType:
     return PanelType(name, in_frustum, SL, SRL, panel, beta, ramps, regions, encoding, peak)
 
 
-def parse_panels(ctx: Any, value: Any) -> tuple[PanelType, ...]:
+def parse_panels(ctx: Validator, value: JsonValue) -> tuple[PanelType, ...]:
     """Validate the ``panels`` list: safe, unique names, the same number of chart patches in
     every ``lit_chart``, at least one in-frustum type, regions that do not overlap."""
     if not isinstance(value, list) or not value:
@@ -224,8 +230,8 @@ def parse_panels(ctx: Any, value: Any) -> tuple[PanelType, ...]:
 
 
 def parse_panel_values(
-    ctx: Any,
-    value: Any,
+    ctx: Validator,
+    value: JsonValue,
     key: tuple,
     panels: tuple[PanelType, ...],
     *,
@@ -274,18 +280,18 @@ def _rows(array: np.ndarray) -> list[list[float]]:
     return [[float(v) for v in row] for row in np.asarray(array, dtype=np.float64)]
 
 
-def _region_dict(region: PanelRegion) -> dict[str, Any]:
-    out: dict[str, Any] = {"elevation": list(region.elevation)}
+def _region_dict(region: PanelRegion) -> JsonObject:
+    out: JsonObject = {"elevation": list(region.elevation)}
     if region.azimuth != (-180.0, 180.0):
         out["azimuth"] = list(region.azimuth)
     return out
 
 
-def panels_to_dict(panels: tuple[PanelType, ...]) -> list[dict[str, Any]]:
+def panels_to_dict(panels: tuple[PanelType, ...]) -> list[JsonObject]:
     """The inverse of :func:`parse_panels` (plain Python types, file key order)."""
     out = []
     for p in panels:
-        entry: dict[str, Any] = {"name": p.name, "in_frustum": p.in_frustum}
+        entry: JsonObject = {"name": p.name, "in_frustum": p.in_frustum}
         if p.panel is not None:
             geometry = {"width": p.panel.width, "height": p.panel.height}
             geometry["distance"] = p.panel.distance
@@ -309,6 +315,6 @@ def panels_to_dict(panels: tuple[PanelType, ...]) -> list[dict[str, Any]]:
     return out
 
 
-def panel_values_to_dict(values: Mapping[str, np.ndarray]) -> dict[str, list[float]]:
+def panel_values_to_dict(values: Mapping[str, np.ndarray]) -> JsonObject:
     """``{name: [r, g, b]}`` of per-panel values (plain floats)."""
     return {name: [float(v) for v in rgb] for name, rgb in values.items()}

@@ -8,9 +8,13 @@ rest: unknown keys, wrong types and empty texts are errors naming the key path.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
+
+from ocio_vp.jsontypes import JsonObject, JsonValue
+
+if TYPE_CHECKING:  # measurements imports this module
+    from ocio_vp.formats.measurements import Validator
 
 __all__ = [
     "SYNTHESIS_SOURCES",
@@ -50,7 +54,7 @@ class SynthesisRecord:
     warnings: tuple[str, ...] = ()
 
 
-def _text(ctx: Any, value: Any, key: tuple[str | int, ...]) -> str:
+def _text(ctx: Validator, value: JsonValue, key: tuple[str | int, ...]) -> str:
     if not isinstance(value, str) or not value.strip() or len(value) > _MAX_TEXT:
         raise ctx.error(key, f"expected a non-empty text of at most {_MAX_TEXT} characters")
     if "\n" in value or "\r" in value:
@@ -58,7 +62,9 @@ def _text(ctx: Any, value: Any, key: tuple[str | int, ...]) -> str:
     return value
 
 
-def _texts(ctx: Any, value: Any, key: tuple[str | int, ...], *, empty: bool) -> tuple[str, ...]:
+def _texts(
+    ctx: Validator, value: JsonValue, key: tuple[str | int, ...], *, empty: bool
+) -> tuple[str, ...]:
     if not isinstance(value, list) or (not value and not empty):
         raise ctx.error(
             key, "expected a non-empty list of texts" if not empty else "expected a list"
@@ -66,7 +72,9 @@ def _texts(ctx: Any, value: Any, key: tuple[str | int, ...], *, empty: bool) -> 
     return tuple(_text(ctx, v, (*key, i)) for i, v in enumerate(value))
 
 
-def parse_synthesis(ctx: Any, value: Any, key: tuple[str | int, ...]) -> SynthesisRecord:
+def parse_synthesis(
+    ctx: Validator, value: JsonValue, key: tuple[str | int, ...]
+) -> SynthesisRecord:
     """Validate an environment's ``synthesized`` mapping (``ctx``: a measurements ``Validator``)."""
     raw = ctx.mapping(value, key, required=_REQUIRED, optional=_OPTIONAL)
     source = raw["source"]
@@ -94,9 +102,9 @@ def parse_synthesis(ctx: Any, value: Any, key: tuple[str | int, ...]) -> Synthes
     )
 
 
-def synthesis_to_dict(record: SynthesisRecord) -> dict[str, Any]:
+def synthesis_to_dict(record: SynthesisRecord) -> JsonObject:
     """The record as plain types, in file key order (optional keys only when set)."""
-    data: Mapping[str, Any] = {
+    data: JsonObject = {
         "source": record.source,
         "hdri": record.hdri,
         "colorspace": record.colorspace,

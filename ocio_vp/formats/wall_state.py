@@ -16,9 +16,14 @@ A stage of several panel types gives ``encoding`` and ``peak_nits`` per type ins
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
+
+from ocio_vp.jsontypes import JsonMapping, JsonObject
+
+if TYPE_CHECKING:  # measurements imports this module
+    from ocio_vp.formats.measurements import Validator
+    from ocio_vp.patterns.sequence import PatternSequence
 
 from ocio_vp.choices import WALL_ENCODINGS
 from ocio_vp.errors import InputError, excerpt
@@ -39,9 +44,9 @@ class WallState:
     peak_nits: float | None = None
     pattern_size: tuple[int, int] | None = None
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> JsonObject:
         """The ``stage`` keys (only the stated ones)."""
-        out: dict[str, Any] = {}
+        out: JsonObject = {}
         if self.encoding is not None:
             out["wall_encoding"] = self.encoding
         if self.peak_nits is not None:
@@ -58,7 +63,7 @@ class WallState:
         return f"{self.encoding}{peak}"
 
 
-def parse_wall_state(ctx: Any, stage: Mapping[str, Any], key: tuple[str | int, ...]) -> WallState:
+def parse_wall_state(ctx: Validator, stage: JsonMapping, key: tuple[str | int, ...]) -> WallState:
     """The :class:`WallState` of a ``stage`` mapping (``ctx``: the file's Validator)."""
     encoding = stage.get("wall_encoding")
     if encoding is not None and encoding not in WALL_ENCODINGS:
@@ -74,22 +79,24 @@ def parse_wall_state(ctx: Any, stage: Mapping[str, Any], key: tuple[str | int, .
     elif "peak_nits" in stage:
         raise ctx.error((*key, "peak_nits"), "only with wall_encoding: pq")
     size = stage.get("pattern_size")
+    pattern_size = None
     if size is not None:
-        ok = (
-            isinstance(size, list)
-            and len(size) == 2
-            and all(isinstance(v, int) and not isinstance(v, bool) for v in size)
-            and all(0 < v <= _MAX_SIZE for v in size)
-        )
-        if not ok:
+        pixels = [
+            v
+            for v in (size if isinstance(size, list) else ())
+            if isinstance(v, int) and not isinstance(v, bool) and 0 < v <= _MAX_SIZE
+        ]
+        if not (isinstance(size, list) and len(size) == len(pixels) == 2):
             raise ctx.error(
                 (*key, "pattern_size"), f"expected [width, height] in pixels, got {excerpt(size)}"
             )
-        size = (int(size[0]), int(size[1]))
-    return WallState(encoding, None if peak is None else float(peak), size)
+        pattern_size = (pixels[0], pixels[1])
+    return WallState(encoding, None if peak is None else float(peak), pattern_size)
 
 
-def stage_with_sequence(stage: Mapping[str, Any], sequence: Any, *, source: str) -> dict[str, Any]:
+def stage_with_sequence(
+    stage: JsonMapping, sequence: PatternSequence, *, source: str
+) -> JsonObject:
     """``stage`` (a capture file's section) with the wall state of the take's ``sequence``
     (a :class:`~ocio_vp.patterns.sequence.PatternSequence`) added; a capture file that states
     another encoding or peak than the sequence the wall played is refused."""

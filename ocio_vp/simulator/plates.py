@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.formats.measurements import Measurements
+from ocio_vp.jsontypes import JsonObject, JsonValue
 
 __all__ = [
     "CHART_CORNERS",
@@ -377,7 +378,7 @@ def _panel_capture(measurements: Measurements, names: set[str]) -> dict:
     """The ``panels`` list and ``environments`` of a capture document (paths relative)."""
     from ocio_vp.formats.panels import panel_values_to_dict, panels_to_dict
 
-    panels = []
+    panels: list[JsonValue] = []
     for entry in panels_to_dict(measurements.panels):
         name = entry["name"]
         entry["primaries"] = {
@@ -389,13 +390,13 @@ def _panel_capture(measurements: Measurements, names: set[str]) -> dict:
             for c in ("red", "green", "blue")
         }
         panels.append(entry)
-    environments = []
+    environments: list[JsonValue] = []
     for env in measurements.environments:
         entry = {
             "name": env.name,
             "target_chart": {"plate": f"{env.name}.exr", "corners": CHART_CORNERS.tolist()},
         }
-        black = {
+        black: JsonObject = {
             name: {"plate": f"{env.name}_{name}_black.exr", "region": list(PANEL_REGION)}
             for name in (env.panel_black_level or {})
             if f"{env.name}_{name}_black.exr" in names
