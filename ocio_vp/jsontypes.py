@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import TypeAlias, Union
 
-__all__ = ["JsonMapping", "JsonObject", "JsonScalar", "JsonValue"]
+__all__ = ["JsonMapping", "JsonObject", "JsonScalar", "JsonValue", "YamlValue"]
 
 JsonScalar: TypeAlias = bool | int | float | str | None
 JsonValue: TypeAlias = Union[JsonScalar, "Sequence[JsonValue]", "Mapping[str, JsonValue]"]
@@ -20,3 +20,8 @@ JsonValue: TypeAlias = Union[JsonScalar, "Sequence[JsonValue]", "Mapping[str, Js
 JsonObject: TypeAlias = "dict[str, JsonValue]"
 #: A JSON object only read.
 JsonMapping: TypeAlias = "Mapping[str, JsonValue]"
+#: A value ocio-vp writes as YAML: JSON's, and mappings keyed by integers (chart indices).
+#: Read back, an integer key is its text, as JSON would have it.
+YamlValue: TypeAlias = Union[
+    JsonScalar, "Sequence[YamlValue]", "Mapping[str, YamlValue]", "Mapping[int, YamlValue]"
+]

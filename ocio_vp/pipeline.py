@@ -65,10 +65,11 @@ from ocio_vp.fixtures.lighting import (
     light_with_fixtures,
 )
 from ocio_vp.formats.diagnostics import Charts, Diagnostics, PanelsNotes
+from ocio_vp.formats.linearity import Linearity
 from ocio_vp.formats.measurements import Environment, Measurements
 from ocio_vp.formats.panel_solution import PanelSolution
 from ocio_vp.formats.panels import primary_panel
-from ocio_vp.formats.records import json_value
+from ocio_vp.formats.records import json_object
 from ocio_vp.formats.skin import SkinFigures
 from ocio_vp.formats.solution import Solution
 from ocio_vp.formats.synthesis import synthesis_to_dict, synthesis_warnings
@@ -360,7 +361,7 @@ def _solve_panels(
     N: np.ndarray | None,
     n_reason: str | None,
     offset: np.ndarray | None,
-    linearity: dict | None,
+    linearity: Linearity | None,
 ) -> tuple[dict[str, PanelSolution], PanelsNotes, list[str]]:
     """solution.json's ``panels`` block, the diagnostics' and the warnings: every type's M,
     N and offset for the in-frustum ones (the first one's are the top-level ones), each
@@ -405,7 +406,7 @@ def _solve_panels(
     return panels, block, warnings
 
 
-def _type_linearity(measurements: Measurements, index: int) -> dict | None:
+def _type_linearity(measurements: Measurements, index: int) -> Linearity | None:
     """A panel type's ``linearity`` block from its own ramps (None without ramps and without
     an ``encoding`` of its own, which it records as ``wall_encoding``)."""
     from ocio_vp.wall.linearity import fit_linearity
@@ -420,11 +421,11 @@ def _type_linearity(measurements: Measurements, index: int) -> dict | None:
             raise InputError(error.problem, source=error.source, key=key) from None
     if panel.encoding is None:
         return linearity
-    linearity = dict(linearity or {"measured": False, "model": "linear (assumed)"})
+    from ocio_vp.formats.linearity import assumed_linearity
     from ocio_vp.wall.encoding import WallEncoding
 
-    linearity["wall_encoding"] = WallEncoding(panel.encoding, panel.peak_nits).to_dict()
-    return linearity
+    wall = WallEncoding(panel.encoding, panel.peak_nits)
+    return (linearity or assumed_linearity()).updated(wall_encoding=wall)
 
 
 def _located(error: InputError, measurements: Measurements, environment: Environment):
@@ -637,7 +638,7 @@ def _diagnostics(
         displayed_chart_error_baseline=error(charts.displayed_baseline),
         displayed_chart_error=error(charts.displayed_corrected),
         out_of_frustum_drive=drive,
-        method_notes=json_value(fit.notes),
+        method_notes=json_object(fit.notes),
         warnings=warnings + stability_warnings + synthesized_warnings,
         charts=charts,
         **stability,
@@ -650,7 +651,7 @@ def _diagnostics(
     )
 
 
-def _panel_linearity(measurements: Measurements) -> dict | None:
+def _panel_linearity(measurements: Measurements) -> Linearity | None:
     """The ``linearity`` block from the ``ramps`` section (None when there is none)."""
     if measurements.panels:
         first = primary_panel(measurements.panels)

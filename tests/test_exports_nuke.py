@@ -165,7 +165,7 @@ class TestNukeScript:
             tmp_path / "o" / "env_0" / "nuke",
             tmp_path / "o" / "env_1" / "nuke",
         ]
-        json.dumps([r.summary for r in results])  # summaries are plain data
+        json.dumps([r.summary.to_dict() for r in results])  # summaries are plain data
         script = tmp_path / "o" / "env_1" / "nuke" / "env_1.nk"
         knobs = dict(parse_nk(script, tmp_path))
         expected = tmp_path / "o" / "env_1" / "nuke" / "config" / "config.ocio"

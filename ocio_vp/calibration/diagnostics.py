@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -24,7 +24,13 @@ from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.formats.diagnostics import ClippedCharts, Diagnostics, DriveRange, IdentityCheck
 from ocio_vp.metrics import error_relative_to_white, patch_label, white_scale
 
+if TYPE_CHECKING:
+    from ocio_vp.correction.problem import QFit, QProblem
+
 __all__ = [
+    "ClippedDriveFields",
+    "OutOfFrustumDrive",
+    "StabilityFields",
     "SummaryErrors",
     "black_level_bounce",
     "clipped_drive_lit",
@@ -52,7 +58,42 @@ def residuals_per_patch(
     return (predicted - target) / white_scale(target, white_patch, weights)
 
 
-def out_of_frustum_drive(M: ArrayLike, w_avg: ArrayLike) -> dict[str, Any]:
+@dataclass(frozen=True)
+class OutOfFrustumDrive:
+    """The lighting drive ``M w_avg`` (eq. 3), its channels below zero and the drive the wall
+    emits (clipped at 0)."""
+
+    drive: np.ndarray
+    negative_channels: list[int]
+    clipped_drive: np.ndarray
+
+
+class ClippedDriveFields(TypedDict):
+    """The :class:`~ocio_vp.formats.diagnostics.Diagnostics` fields of the clipped drive."""
+
+    charts_clipped_drive: ClippedCharts | None
+    lit_chart_error_baseline_clipped_drive: np.ndarray | None
+    lit_chart_error_clipped_drive: np.ndarray | None
+
+
+class StabilityFields(ClippedDriveFields):
+    """The stability fields of :class:`~ocio_vp.formats.diagnostics.Diagnostics`
+    (:func:`stability_diagnostics`)."""
+
+    model: str | None
+    model_reason: str | None
+    rank_target: int | None
+    cross_validated_error: np.ndarray | None
+    residuals_per_patch: np.ndarray
+    out_of_frustum_negative_channels: list[int]
+    in_frustum_drive_range: DriveRange
+    black_level_bounce: np.ndarray | None
+    clipped_patches: list[int]
+    N_equals_M: bool
+    identity_check: IdentityCheck | None
+
+
+def out_of_frustum_drive(M: ArrayLike, w_avg: ArrayLike) -> OutOfFrustumDrive:
     """The lighting drive ``M w_avg`` (eq. 3) and the channels the wall cannot emit (< 0).
 
     A negative channel means the environment's light is outside the LED gamut: the wall clips
@@ -60,7 +101,7 @@ def out_of_frustum_drive(M: ArrayLike, w_avg: ArrayLike) -> dict[str, Any]:
     """
     drive = np.asarray(M, dtype=np.float64) @ np.asarray(w_avg, dtype=np.float64)
     negative = [int(c) for c in np.flatnonzero(drive < 0)]
-    return {"drive": drive, "negative_channels": negative, "clipped_drive": np.clip(drive, 0, None)}
+    return OutOfFrustumDrive(drive, negative, np.clip(drive, 0, None))
 
 
 def in_frustum_drive_range(
@@ -136,7 +177,9 @@ def identity_check(Q: ArrayLike, SL: ArrayLike, N: ArrayLike | None) -> Identity
     return IdentityCheck(max_abs_error=error, bound=float(bound))
 
 
-def clipped_drive_lit(problem: Any, Q: ArrayLike, drive: dict[str, Any]) -> dict[str, Any]:
+def clipped_drive_lit(
+    problem: QProblem, Q: ArrayLike, drive: OutOfFrustumDrive
+) -> ClippedDriveFields:
     """The lit chart as the wall really lights it when ``M w_avg`` has a negative channel.
 
     The wall cannot emit negative light: it clips the drive to 0, so the chart is lit by eq. 3
@@ -145,24 +188,27 @@ def clipped_drive_lit(problem: Any, Q: ArrayLike, drive: dict[str, Any]) -> dict
     ``lit_chart_error_baseline_clipped_drive`` and ``lit_chart_error_clipped_drive``; all None
     when the drive is not clipped (the eq. 3 charts are then what the wall shows).
     """
-    keys = ("charts_clipped_drive", "lit_chart_error_baseline_clipped_drive")
-    out: dict[str, Any] = dict.fromkeys((*keys, "lit_chart_error_clipped_drive"))
-    if not drive["negative_channels"]:
-        return out
-    lit = predict_lit_chart(problem.SRL, problem.beta, np.eye(3), drive["clipped_drive"])
-    if getattr(problem, "extra_light", None) is not None:  # the stage's other panel types
+    if not drive.negative_channels:
+        return ClippedDriveFields(
+            charts_clipped_drive=None,
+            lit_chart_error_baseline_clipped_drive=None,
+            lit_chart_error_clipped_drive=None,
+        )
+    lit = predict_lit_chart(problem.SRL, problem.beta, np.eye(3), drive.clipped_drive)
+    if problem.extra_light is not None:  # the stage's other panel types
         lit = lit + problem.extra_light
     charts = ClippedCharts(lit_baseline=lit, lit_corrected=lit @ np.asarray(Q, dtype=np.float64).T)
     args = (problem.target, problem.white_patch, problem.fit_weights)
-    out["charts_clipped_drive"] = charts
-    out["lit_chart_error_baseline_clipped_drive"] = error_relative_to_white(lit, *args)
-    out["lit_chart_error_clipped_drive"] = error_relative_to_white(charts.lit_corrected, *args)
-    return out
+    return ClippedDriveFields(
+        charts_clipped_drive=charts,
+        lit_chart_error_baseline_clipped_drive=error_relative_to_white(lit, *args),
+        lit_chart_error_clipped_drive=error_relative_to_white(charts.lit_corrected, *args),
+    )
 
 
 def stability_diagnostics(
-    problem: Any,
-    fit: Any,
+    problem: QProblem,
+    fit: QFit,
     *,
     method: str,
     M: np.ndarray,
@@ -173,7 +219,7 @@ def stability_diagnostics(
     corrected: np.ndarray,
     clipped: list[int],
     cross_validated: np.ndarray | None = None,
-) -> tuple[dict[str, Any], list[str]]:
+) -> tuple[StabilityFields, list[str]]:
     """The stability part of ``solution.json`` diagnostics, and the warnings it raises.
 
     Keys: ``model`` and ``model_reason`` (what was fitted and why), ``cond_SL`` warnings,
@@ -213,24 +259,24 @@ def stability_diagnostics(
         )
     # Chart colours N drives below zero are a fact of the LEDs' gamut, not a warning: the
     # terminal names them as a note from ``in_frustum_drive_range`` (commands/summary.py).
-    block = {
-        "model": fit.model or method,
-        "model_reason": fit.reason,
-        "rank_target": fit.target_rank,
+    block = StabilityFields(
+        **clipped_drive_lit(problem, Q, drive),
+        model=fit.model or method,
+        model_reason=fit.reason,
+        rank_target=fit.target_rank,
         # None for an iterative method that does not report its own leave-one-out error:
         # re-solving it once per patch would multiply the solve time by n.
-        "cross_validated_error": None if cv is None else np.asarray(cv, dtype=np.float64),
-        "residuals_per_patch": residuals_per_patch(corrected, target, white, weights),
-        "out_of_frustum_negative_channels": drive["negative_channels"],
-        **clipped_drive_lit(problem, Q, drive),
-        "in_frustum_drive_range": in_range,
-        "black_level_bounce": None
+        cross_validated_error=None if cv is None else np.asarray(cv, dtype=np.float64),
+        residuals_per_patch=residuals_per_patch(corrected, target, white, weights),
+        out_of_frustum_negative_channels=drive.negative_channels,
+        in_frustum_drive_range=in_range,
+        black_level_bounce=None
         if black_level is None
         else black_level_bounce(black_level, problem.SL),
-        "clipped_patches": clipped,
-        "N_equals_M": N is not None and bool(np.array_equal(N, M)),
-        "identity_check": identity_check(Q, problem.SL, N),
-    }
+        clipped_patches=clipped,
+        N_equals_M=N is not None and bool(np.array_equal(N, M)),
+        identity_check=identity_check(Q, problem.SL, N),
+    )
     return block, warnings
 
 

@@ -42,6 +42,7 @@ from ocio_vp.calibration.equations import (
 from ocio_vp.calibration.geometry import panel_type_beta
 from ocio_vp.errors import InputError
 from ocio_vp.formats.diagnostics import InFrustumMatch, TypeMatch
+from ocio_vp.formats.linearity import Linearity
 from ocio_vp.formats.measurements import Measurements
 from ocio_vp.formats.panel_solution import PanelSolution
 from ocio_vp.formats.panels import PanelType
@@ -263,7 +264,7 @@ def panel_solutions(
     lights: Sequence[PanelLight],
     drives: Mapping[str, InFrustumDrive],
     shares: Mapping[str, float],
-    linearity: Mapping[str, dict[str, Any] | None],
+    linearity: Mapping[str, Linearity | None],
 ) -> dict[str, PanelSolution]:
     """solution.json's ``panels`` block: every type's M, w_avg, drive and share; N and the
     black-level offset for the in-frustum ones."""

@@ -5,9 +5,13 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import TYPE_CHECKING
 
 from ocio_vp.choices import CONTEXT_VARIABLE, DEFAULT_BASE_CONFIG, EXPORT_TARGETS
 from ocio_vp.commands.report import SOLUTIONS_HELP
+
+if TYPE_CHECKING:  # the exports import OCIO: not at start-up
+    from ocio_vp.exports import ExportResult
 
 __all__ = ["add_parser", "export_line", "run"]
 
@@ -87,17 +91,16 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def export_line(result) -> str:
+def export_line(result: ExportResult) -> str:
     """One line per environment and target: where it went and what to use (each target's
     files, accuracies and the files not written, with why, are in its folder's manifest)."""
     summary = result.summary
     head = f"{result.environment}: {result.target} -> {result.folder}"
-    if summary.get("line"):
-        return f"{head}: {summary['line']}"
-    cubes, not_written = summary.get("cubes") or {}, summary.get("not_written") or {}
-    for name, error in cubes.items():
-        return f"{head}: {name}, worst error {error['max_error']:.2g} <= limit {error['limit']:.2g}"
-    for name, reason in not_written.items():
+    if summary.line:
+        return f"{head}: {summary.line}"
+    for name, error in summary.cubes.items():
+        return f"{head}: {name}, worst error {error.max_error:.2g} <= limit {error.limit:.2g}"
+    for name, reason in summary.not_written.items():
         return f"{head}: {name} not written ({reason.split(';')[0]})"[:300]
-    files = summary.get("files") or [v for k, v in summary.items() if k in ("script", "config")]
-    return f"{head}: {', '.join(str(f) for f in files[:5])}" if files else head
+    files = summary.files
+    return f"{head}: {', '.join(files[:5])}" if files else head

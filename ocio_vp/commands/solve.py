@@ -168,7 +168,7 @@ def print_fixtures(solutions: Sequence) -> None:
             print(f"fixtures, {solution.environment}: off ({reason})")
             continue
         drives = "; ".join(
-            f"{name} " + " ".join(f"{c}={block['drive'][c]:.3f}" for c in block["channels"])
+            f"{name} " + " ".join(f"{c}={block.drive[c]:.3f}" for c in block.channels)
             for name, block in solution.fixtures.items()
         )
         limits = ", ".join(notes.active_limits) or "none"
@@ -243,19 +243,19 @@ def print_panels(solutions: Sequence) -> None:
 def print_linearity(solutions: Sequence) -> None:
     """The panel-linearity summary, once: every environment shares the stage's ramps."""
     for s in solutions:
-        linearity = s.linearity or {}
-        if not linearity.get("measured"):
+        linearity = s.linearity
+        if linearity is None or not linearity.measured:
             continue
-        print(f"linearity: {linearity['summary']}")
-        for note in linearity.get("notes", []):
+        print(f"linearity: {linearity.summary}")
+        for note in linearity.notes or []:
             print(f"  {note}")
-        lut = linearity.get("lut")
+        lut = linearity.lut
         if lut:
             print(
-                f"  LUT {lut['file']}: {lut['entries']} entries, {lut['domain']}; error vs the "
-                f"exact inverse {100 * lut['max_error']:.2g}% of the level or less above 0.2% of peak"
+                f"  LUT {lut.file}: {lut.entries} entries, {lut.domain}; error vs the "
+                f"exact inverse {100 * lut.max_error:.2g}% of the level or less above 0.2% of peak"
             )
-        for warning in linearity.get("warnings", []):
+        for warning in linearity.warnings or []:
             print(f"warning: {warning}")
         return
 

@@ -14,7 +14,6 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import PyOpenColorIO as OCIO
 
@@ -31,6 +30,7 @@ from ocio_vp.exports.source import (
     DEFAULT_CUBE_SIZE,
     CubeOptions,
     ExportSource,
+    ExportSummary,
     load_export_source,
 )
 from ocio_vp.exports.unreal import write_unreal
@@ -48,7 +48,7 @@ __all__ = [
 
 #: Target name -> writer(source, folder, cubes) -> summary (cubes: what a writer that bakes a
 #: .cube uses; the others take it and ignore it).
-EXPORT_TARGETS: dict[str, Callable[[ExportSource, Path, CubeOptions], dict[str, Any]]] = {
+EXPORT_TARGETS: dict[str, Callable[[ExportSource, Path, CubeOptions], ExportSummary]] = {
     "unreal": write_unreal,
     "nuke": write_nuke,
     "resolve": write_resolve,
@@ -65,7 +65,7 @@ class ExportResult:
     environment: str
     target: str
     folder: Path
-    summary: dict[str, Any]
+    summary: ExportSummary
 
 
 @dataclass(frozen=True)
@@ -223,9 +223,8 @@ def _export_show(sources, report: ExportReport, out, base_config) -> ExportResul
             key="SOLUTION",
         )
     summary = write_show(sources, Path(out), base_config=base_config)
-    return ExportResult(
-        ", ".join(summary["environments"]), "show", Path(out) / SHOW_FOLDER, summary
-    )
+    environments = ", ".join(s.solution.environment for s in sources)
+    return ExportResult(environments, "show", Path(out) / SHOW_FOLDER, summary)
 
 
 def _source_text(source: ExportSource) -> str:

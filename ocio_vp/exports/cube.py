@@ -22,14 +22,24 @@ shaper; then no cube is written and the caller says why and points to the exact 
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import PyOpenColorIO as OCIO
 
-__all__ = ["CUBE_LIMIT", "SHAPERS", "CubeResult", "bake_cube", "cube_error", "fit_cube"]
+from ocio_vp.jsontypes import JsonObject
+
+__all__ = [
+    "CUBE_LIMIT",
+    "SHAPERS",
+    "CubeAccuracy",
+    "CubeResult",
+    "bake_cube",
+    "cube_error",
+    "fit_cube",
+]
 
 #: Largest accepted error: one code value of a 10-bit signal (absolute up to 1.0, relative above).
 CUBE_LIMIT = 1.0 / 1023.0
@@ -41,12 +51,44 @@ SAMPLES = 40000
 
 
 @dataclass(frozen=True)
+class CubeAccuracy:
+    """A baked cube's measured error (:func:`cube_error`) and, once tried by :func:`fit_cube`,
+    its shaper, size and the limit it was held to."""
+
+    samples_per_box: int
+    input_range: tuple[float, float]
+    #: ``<box>_<interpolation>`` (content_0_1 / input_range, trilinear / tetrahedral): worst error.
+    boxes: dict[str, float]
+    max_error: float
+    worst_input: tuple[float, ...]
+    evaluated_with: str
+    shaper: str | None = None
+    cube_size: int | None = None
+    limit: float | None = None
+
+    @property
+    def content_error(self) -> float:
+        """The worst error over content in [0, 1] (either interpolation)."""
+        return max(self.boxes["content_0_1_trilinear"], self.boxes["content_0_1_tetrahedral"])
+
+    def to_dict(self) -> JsonObject:
+        """The ``accuracy`` of a cube in the manifests (keys in this order)."""
+        out: JsonObject = {"samples_per_box": self.samples_per_box,
+                           "input_range": list(self.input_range), **self.boxes,
+                           "max_error": self.max_error, "worst_input": list(self.worst_input),
+                           "evaluated_with": self.evaluated_with}  # fmt: skip
+        if self.shaper is not None:
+            out.update(shaper=self.shaper, cube_size=self.cube_size, limit=self.limit)
+        return out
+
+
+@dataclass(frozen=True)
 class CubeResult:
     """The outcome of :func:`fit_cube`: the file (None when not written) and its accuracy."""
 
     path: Path | None
     shaper: str | None
-    errors: dict[str, Any]
+    errors: CubeAccuracy | None
     reason: str | None = None
 
 
@@ -121,13 +163,13 @@ def cube_error(
     input_range: tuple[float, float],
     samples: int = SAMPLES,
     seed: int = 0,
-) -> dict[str, Any]:
+) -> CubeAccuracy:
     """Worst ``|cube - exact| / max(1, |exact|)`` by interpolation and box (see the module
     docstring), with the input where the worst one occurs."""
     lo, hi = (float(v) for v in input_range)
     rng = np.random.default_rng(seed)
     raw = OCIO.Config.CreateRaw()
-    report: dict[str, Any] = {"samples_per_box": samples, "input_range": [lo, hi]}
+    boxes: dict[str, float] = {}
     worst, worst_input = -1.0, np.zeros(3)  # every sample's error >= 0 replaces it
     for box, (a, b) in (("content_0_1", (max(lo, 0.0), min(hi, 1.0))), ("input_range", (lo, hi))):
         rgb = rng.uniform(a, b, size=(samples, 3))
@@ -139,13 +181,17 @@ def cube_error(
                 1.0, np.abs(exact)
             )
             per_sample = error.max(axis=1)
-            report[f"{box}_{name}"] = float(per_sample.max())
+            boxes[f"{box}_{name}"] = float(per_sample.max())
             if per_sample.max() > worst:
                 worst, worst_input = float(per_sample.max()), rgb[int(np.argmax(per_sample))]
-    report["max_error"] = worst
-    report["worst_input"] = [float(v) for v in worst_input]
-    report["evaluated_with"] = f"OpenColorIO {OCIO.__version__} (.cube reader vs the processor)"
-    return report
+    return CubeAccuracy(
+        samples_per_box=samples,
+        input_range=(lo, hi),
+        boxes=boxes,
+        max_error=worst,
+        worst_input=tuple(float(v) for v in worst_input),
+        evaluated_with=f"OpenColorIO {OCIO.__version__} (.cube reader vs the processor)",
+    )
 
 
 def fit_cube(
@@ -162,21 +208,25 @@ def fit_cube(
     Trial files get their own names (OCIO caches files by path for the whole process) and are
     removed; ``path`` exists afterwards only when a cube met the limit.
     """
-    best: dict[str, Any] | None = None
+    best: CubeAccuracy | None = None
     for shaper in SHAPERS:
         trial = path.with_name(f".{path.stem}.{shaper}.trial.cube")
         try:
             bake_cube(processor, trial, size=size, input_range=input_range, shaper=shaper,
                       title=title)  # fmt: skip
         except ValueError as error:
-            return CubeResult(None, None, {}, reason=str(error))
-        errors = cube_error(processor, trial, input_range=input_range)
-        errors.update(shaper=shaper, cube_size=size, limit=limit)
-        if errors["max_error"] <= limit:
+            return CubeResult(None, None, None, reason=str(error))
+        errors = dataclasses.replace(
+            cube_error(processor, trial, input_range=input_range),
+            shaper=shaper,
+            cube_size=size,
+            limit=limit,
+        )
+        if errors.max_error <= limit:
             trial.replace(path)
             return CubeResult(path, shaper, errors)
         trial.unlink()
-        if best is None or errors["max_error"] < best["max_error"]:
+        if best is None or errors.max_error < best.max_error:
             best = errors
     assert best is not None
     return CubeResult(
@@ -184,7 +234,7 @@ def fit_cube(
         None,
         best,
         reason=f"a {size}^3 cube cannot follow this transform's clip or curve: the best bake "
-        f"({best['shaper']} shaper) is off by {best['max_error']:.3g} (content in [0, 1]: "
-        f"{max(best['content_0_1_trilinear'], best['content_0_1_tetrahedral']):.3g}) at input "
-        f"{[round(v, 4) for v in best['worst_input']]}, over the limit {limit:.3g} (1/1023)",
+        f"({best.shaper} shaper) is off by {best.max_error:.3g} (content in [0, 1]: "
+        f"{best.content_error:.3g}) at input "
+        f"{[round(v, 4) for v in best.worst_input]}, over the limit {limit:.3g} (1/1023)",
     )

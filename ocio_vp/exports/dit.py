@@ -14,11 +14,10 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
 
 from ocio_vp.errors import InputError
 from ocio_vp.exports.cube import CUBE_LIMIT, fit_cube
-from ocio_vp.exports.source import DEFAULT_CUBES, CubeOptions, ExportSource
+from ocio_vp.exports.source import DEFAULT_CUBES, CubeOptions, ExportSource, ExportSummary
 from ocio_vp.ocio.camera_log import camera_log_for
 from ocio_vp.ocio.viewing import camera_log_names
 
@@ -35,7 +34,9 @@ def has_camera_log(source: ExportSource) -> bool:
     return curve is not None and source.config.getColorSpace(camera_log_names(curve)[1]) is not None
 
 
-def write_dit(source: ExportSource, folder: Path, cubes: CubeOptions = DEFAULT_CUBES) -> dict:
+def write_dit(
+    source: ExportSource, folder: Path, cubes: CubeOptions = DEFAULT_CUBES
+) -> ExportSummary:
     """Write the log-in log-out cube (where it meets the limit) and ``dit.json``."""
     solution = source.solution
     curve = camera_log_for(solution.camera_colorspace)
@@ -53,6 +54,11 @@ def write_dit(source: ExportSource, folder: Path, cubes: CubeOptions = DEFAULT_C
         input_range=LOG_RANGE,
         title=f"ocio-vp DIT {solution.environment}: {footage} -> {native}",
     )
+    not_written = (
+        None
+        if result.path is not None
+        else f"{result.reason}; use the config's {footage!r} -> {native!r} (exact)"
+    )
     manifest = {
         "format": "ocio-vp/dit-export",
         "version": 1,
@@ -63,18 +69,14 @@ def write_dit(source: ExportSource, folder: Path, cubes: CubeOptions = DEFAULT_C
         "to": native,
         "cube_limit": CUBE_LIMIT,
         "cube": name if result.path is not None else None,
-        "accuracy": result.errors if result.path is not None else None,
-        "not_written": None
-        if result.path is not None
-        else f"{result.reason}; use the config's {footage!r} -> {native!r} (exact)",
+        "accuracy": None
+        if result.errors is None or result.path is None
+        else result.errors.to_dict(),
+        "not_written": not_written,
     }
     (folder / DIT_MANIFEST).write_text(
         json.dumps(manifest, indent=2, allow_nan=False) + "\n", encoding="utf-8"
     )
-    summary: dict[str, Any] = {"files": [DIT_MANIFEST]}
-    if result.path is not None:
-        summary["files"].append(name)
-        summary["cubes"] = {name: result.errors}
-    else:
-        summary["not_written"] = {name: manifest["not_written"]}
-    return summary
+    if result.path is not None and result.errors is not None:
+        return ExportSummary(files=(DIT_MANIFEST, name), cubes={name: result.errors})
+    return ExportSummary(files=(DIT_MANIFEST,), not_written={name: str(not_written)})

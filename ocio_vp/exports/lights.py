@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
 
 from ocio_vp.errors import InputError
-from ocio_vp.exports.source import DEFAULT_CUBES, CubeOptions, ExportSource
+from ocio_vp.exports.source import DEFAULT_CUBES, CubeOptions, ExportSource, ExportSummary
 from ocio_vp.fixtures.dmx import content_matrix, dmx_csv, dmx_rows
+from ocio_vp.jsontypes import JsonObject
 
 __all__ = ["write_lights"]
 
@@ -26,7 +26,9 @@ ASSUMPTIONS = (
 )
 
 
-def write_lights(source: ExportSource, folder: Path, cubes: CubeOptions = DEFAULT_CUBES) -> dict:
+def write_lights(
+    source: ExportSource, folder: Path, cubes: CubeOptions = DEFAULT_CUBES
+) -> ExportSummary:
     """Write ``lights.json`` and ``lights.csv`` into ``folder``."""
     solution = source.solution
     if not solution.fixtures:
@@ -35,10 +37,10 @@ def write_lights(source: ExportSource, folder: Path, cubes: CubeOptions = DEFAUL
     for name, block in solution.fixtures.items():
         channel_rows = dmx_rows(name, block)
         rows += channel_rows
-        entry: dict[str, Any] = {"name": name, "dmx": block.get("dmx"), "channels": channel_rows}
-        if block.get("pixel_mapped"):
-            drives = [block["drive"][c] for c in block["channels"]]
-            entry["content_matrix"] = content_matrix(drives, solution.w_avg, block["max_drive"])
+        dmx = None if block.dmx is None else block.dmx.to_dict()
+        entry: JsonObject = {"name": name, "dmx": dmx, "channels": channel_rows}
+        if block.pixel_mapped:
+            entry["content_matrix"] = content_matrix(block.drives, solution.w_avg, block.max_drive)
         fixtures.append(entry)
     document = {
         "stage": solution.stage,
@@ -48,4 +50,4 @@ def write_lights(source: ExportSource, folder: Path, cubes: CubeOptions = DEFAUL
     }
     (folder / "lights.json").write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
     (folder / "lights.csv").write_text(dmx_csv(rows), encoding="utf-8")
-    return {"json": "lights.json", "csv": "lights.csv", "channels": len(rows)}
+    return ExportSummary()  # the line names no file, as for every fixture export

@@ -34,6 +34,7 @@ from ocio_vp.exports.source import (
     DEFAULT_CUBES,
     CubeOptions,
     ExportSource,
+    ExportSummary,
     copy_config,
     post_correction_carriage,
 )
@@ -100,7 +101,9 @@ def render_nuke_script(
     )
 
 
-def write_nuke(source: ExportSource, folder: Path, cubes: CubeOptions = DEFAULT_CUBES) -> dict:
+def write_nuke(
+    source: ExportSource, folder: Path, cubes: CubeOptions = DEFAULT_CUBES
+) -> ExportSummary:
     """Write ``<environment>.nk`` and ``config/`` into ``folder`` (paths relative to the
     script, so the folder can be moved)."""
     solution = source.solution
@@ -117,8 +120,8 @@ def write_nuke(source: ExportSource, folder: Path, cubes: CubeOptions = DEFAULT_
         config_path=config_path,
         names=source.names,
         q_lut=q_lut,
-        model_note=None if carriage is None else carriage["note"],
+        model_note=None if carriage is None else carriage.note,
     )
     script = folder / f"{solution.environment}.nk"
     script.write_text(text, encoding="utf-8")
-    return {"script": script.name, "config": config_path}
+    return ExportSummary(files=(script.name, config_path))

@@ -19,11 +19,12 @@ ocio-vp does not know the nDisplay configuration's viewport and node names: each
 
 from __future__ import annotations
 
-from typing import Any
+from dataclasses import dataclass
 
 from ocio_vp.formats.solution import Solution
+from ocio_vp.jsontypes import JsonObject, JsonValue
 
-__all__ = ["PANEL_VERSIONS", "panel_assignments", "panel_notes", "with_panel_assignments"]
+__all__ = ["PANEL_VERSIONS", "PanelAssignments", "panel_assignments", "panel_notes"]
 
 ROOT_CONFIG = "ADisplayClusterRootActor config data (UDisplayClusterConfigurationData)"
 CAMERA = "UDisplayClusterICVFXCameraComponent"
@@ -37,7 +38,9 @@ PANEL_VERSIONS = (
 )
 
 
-def _profile(ui: str, owner: str, prop: str, source: str, destination: str, role: str) -> dict:
+def _profile(
+    ui: str, owner: str, prop: str, source: str, destination: str, role: str
+) -> JsonObject:
     return {
         "ui": ui,
         "owner": owner,
@@ -54,13 +57,22 @@ def _profile(ui: str, owner: str, prop: str, source: str, destination: str, role
     }
 
 
-def panel_assignments(solution: Solution, source: str) -> dict[str, Any]:
-    """The other panel types' part of ``unreal_ocio.json``: colour spaces and display views
-    the configuration asset must offer, and one per-viewport (and, in frustum, per-node)
-    profile per type. Empty lists for a stage of one panel type."""
+@dataclass(frozen=True)
+class PanelAssignments:
+    """The other panel types' part of ``unreal_ocio.json``: colour spaces and display views the
+    configuration asset must offer, and their profiles (all empty for one panel type)."""
+
+    color_spaces: list[str]
+    display_views: list[JsonValue]
+    assignments: list[JsonValue]
+
+
+def panel_assignments(solution: Solution, source: str) -> PanelAssignments:
+    """One per-viewport (and, in frustum, per-node) profile per other panel type, with the
+    colour spaces and display views they need."""
     spaces: list[str] = []
-    views: list[dict[str, str]] = []
-    assignments: list[dict[str, Any]] = []
+    views: list[JsonValue] = []
+    assignments: list[JsonValue] = []
     panels = solution.panels or {}
     primary = next((p.name for p in panels.values() if p.in_frustum), None)
     display = solution.ocio.get("display")
@@ -96,20 +108,7 @@ def panel_assignments(solution: Solution, source: str) -> dict[str, Any]:
                     f"{name}.in_frustum",
                 )
             )
-    return {"color_spaces": spaces, "display_views": views, "assignments": assignments}
-
-
-def with_panel_assignments(mapping: dict[str, Any], solution: Solution, source: str) -> dict:
-    """``unreal_ocio.json``'s mapping with the other panel types' colour spaces, views and
-    profiles added (unchanged for a stage of one panel type)."""
-    panels = panel_assignments(solution, source)
-    if panels["assignments"]:
-        asset = mapping["configuration_asset"]
-        asset["desired_color_spaces"] += panels["color_spaces"]
-        asset["desired_display_views"] += panels["display_views"]
-        mapping["assignments"] += panels["assignments"]
-        mapping["panel_types_checked"] = PANEL_VERSIONS
-    return mapping
+    return PanelAssignments(spaces, views, assignments)
 
 
 def panel_notes(solution: Solution) -> list[str]:

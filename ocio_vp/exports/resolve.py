@@ -22,7 +22,7 @@
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -31,15 +31,18 @@ import PyOpenColorIO as OCIO
 
 from ocio_vp.correction.root_polynomial import root_polynomial_term_powers
 from ocio_vp.deprecation import deprecated_names
-from ocio_vp.exports.cube import CUBE_LIMIT, fit_cube
+from ocio_vp.exports.cube import CUBE_LIMIT, CubeAccuracy, fit_cube
 from ocio_vp.exports.source import (
     DEFAULT_CUBES,
+    Carriage,
     CubeOptions,
     ExportSource,
+    ExportSummary,
     post_correction_carriage,
 )
 from ocio_vp.exports.templating import render_template
 from ocio_vp.formats.solution import Solution
+from ocio_vp.jsontypes import JsonObject, JsonValue
 from ocio_vp.model.correction import (
     PostCorrection,
     ProtectedCorrection,
@@ -131,7 +134,7 @@ def _term_expression(powers: Sequence[int], root: int) -> str:
     return product if root == 1 else f"signed_root({product}, {root}.0f)"
 
 
-def _model_context(correction: PostCorrection) -> dict[str, Any]:
+def _model_context(correction: PostCorrection) -> JsonObject:
     """The template's values for a correction (:mod:`ocio_vp.model`): its 3x3, and the
     polynomial, domain and emitter protection it has."""
     protect = None
@@ -146,7 +149,7 @@ def _model_context(correction: PostCorrection) -> dict[str, Any]:
             "floor": correction.floor,
         }
     model = unprotected(correction)
-    context: dict[str, Any] = {
+    context: JsonObject = {
         "matrix": model.matrix.tolist(),
         "terms": [],
         "edges": [],
@@ -204,7 +207,7 @@ def _q_dctl(solution: Solution) -> tuple[str, str]:
 
 def _cube_entry(
     source: ExportSource, folder: Path, stem: str, clf: str, *, size: int, input_range
-) -> tuple[str, dict[str, Any] | None, str | None]:
+) -> tuple[str, CubeAccuracy | None, str | None]:
     """Bake one transform's cube; returns (file name, accuracy or None, reason not written,
     naming the file to use instead)."""
     src, dst, _ = resolve_transforms(source)[stem]
@@ -232,7 +235,7 @@ def _cube_entry(
     return name, None, f"{result.reason}; {instead}"
 
 
-def _clf_accuracy(stem: str, solution: Solution, carriage: dict[str, Any] | None) -> Any:
+def _clf_accuracy(stem: str, solution: Solution, carriage: Carriage | None) -> JsonValue:
     """A CLF's accuracy: exact (OCIO's own serialisation of the config's matrices and curves),
     or, where it holds a non-linear Q's LUT chain, the chain's measured agreement with the
     exact model (ΔE2000; the DCTL is the exact alternative)."""
@@ -240,7 +243,12 @@ def _clf_accuracy(stem: str, solution: Solution, carriage: dict[str, Any] | None
         return "exact"
     block = solution.diagnostics.post_correction_ocio
     if stem == "post_correction_Q":
-        return {"delta_E_2000_vs_model": carriage["agreement"], "note": carriage["note"]}
+        return {
+            "delta_E_2000_vs_model": None
+            if carriage.agreement is None
+            else carriage.agreement.to_dict(),
+            "note": carriage.note,
+        }
     if solution.N is None:  # the in-frustum drive is M: no LUT chain in it
         return "exact"
     return {
@@ -256,12 +264,13 @@ def write_resolve(
     source: ExportSource,
     folder: Path,
     cubes: CubeOptions = DEFAULT_CUBES,
-) -> dict[str, Any]:
+) -> ExportSummary:
     """Write the CLFs, the Q DCTL, the cubes that meet :data:`CUBE_LIMIT` and ``manifest.json``
     (every file with its accuracy, every file not written with the reason)."""
     folder.mkdir(parents=True, exist_ok=True)
     solution, config = source.solution, source.config
-    files: dict[str, dict[str, Any]] = {}
+    files: dict[str, JsonObject] = {}
+    baked: dict[str, CubeAccuracy] = {}
     not_written: dict[str, str] = {}
     carriage = post_correction_carriage(solution)
     for stem, (src, dst, description) in resolve_transforms(source).items():
@@ -275,19 +284,20 @@ def write_resolve(
         if errors is None:
             not_written[name] = reason or "not written"
         else:
-            files[name] = {"kind": "cube", "from": src, "to": dst, "accuracy": errors}
+            files[name] = {"kind": "cube", "from": src, "to": dst, "accuracy": errors.to_dict()}
+            baked[name] = errors
     dctl = folder / "post_correction_Q.dctl"
     text, accuracy = _q_dctl(solution)
     dctl.write_text(text, encoding="utf-8")
     files[dctl.name] = {"kind": "dctl", "accuracy": accuracy}
-    footage = resolve_file(files, size=cubes.size)
+    footage = resolve_file({k: v.max_error for k, v in baked.items()}, size=cubes.size)
     manifest = {
         "format": "ocio-vp/resolve-export",
         "version": 1,
         "stage": solution.stage,
         "environment": solution.environment,
         "cube_limit": CUBE_LIMIT,
-        "post_correction": carriage,
+        "post_correction": None if carriage is None else carriage.to_dict(),
         "files": files,
         "not_written": not_written,
         "resolve_file": footage,
@@ -295,30 +305,28 @@ def write_resolve(
     (folder / MANIFEST).write_text(
         json.dumps(manifest, indent=2, allow_nan=False) + "\n", encoding="utf-8"
     )
-    written = {k: v["accuracy"] for k, v in files.items() if v["kind"] == "cube"}
-    return {
-        "files": [*files, MANIFEST],
-        "cubes": written,
-        "not_written": not_written,
-        "post_correction": None if carriage is None else carriage["note"],
-        "line": f"the Resolve file for footage: {footage['file']} ({footage['why']}); every "
+    return ExportSummary(
+        files=(*files, MANIFEST),
+        line=f"the Resolve file for footage: {footage['file']} ({footage['why']}); every "
         "file and its accuracy: manifest.json",
-    }
+        cubes=baked,
+        not_written=not_written,
+    )
 
 
-def resolve_file(files: dict[str, dict[str, Any]], *, size: int) -> dict[str, str]:
+def resolve_file(cube_errors: Mapping[str, float], *, size: int) -> dict[str, str]:
     """*The* file to post-correct footage with in Resolve: the post-correction's cube when it
     was written (it met the limit; a cube runs everywhere in Resolve), else the DCTL (the
-    model itself, exact).
+    model itself, exact). ``cube_errors``: each cube written and its worst error.
 
-    >>> resolve_file({"post_correction_Q_33.cube": {"accuracy": {"max_error": 2e-7}}}, size=33)
+    >>> resolve_file({"post_correction_Q_33.cube": 2e-7}, size=33)
     {'file': 'post_correction_Q_33.cube', 'why': 'worst error 2e-07 of the exact Q, limit 1/1023'}
     >>> resolve_file({}, size=33)["file"]
     'post_correction_Q.dctl'
     """
     cube = f"post_correction_Q_{size}.cube"
-    if cube in files:
-        worst = files[cube]["accuracy"]["max_error"]
+    if cube in cube_errors:
+        worst = cube_errors[cube]
         return {"file": cube, "why": f"worst error {worst:.2g} of the exact Q, limit 1/1023"}
     return {
         "file": "post_correction_Q.dctl",

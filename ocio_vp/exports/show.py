@@ -11,16 +11,13 @@ from __future__ import annotations
 import shutil
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 from ocio_vp.errors import InputError
-from ocio_vp.exports.source import ExportSource, sidecar_dirs
+from ocio_vp.exports.source import ExportSource, ExportSummary, sidecar_dirs
 from ocio_vp.ocio.show import (
-    CONTEXT_VARIABLE,
     DEFAULT_BASE_CONFIG,
     ShowEnvironment,
     build_show_config,
-    has_config_merger,
 )
 from ocio_vp.staging import publish_dirs, staged_dir
 from ocio_vp.wall.encoding import LUT_DIR
@@ -57,23 +54,15 @@ def _copy_sidecars(sources: Sequence[ExportSource], folder: Path) -> list[str]:
 
 def write_show(
     sources: Sequence[ExportSource], out: Path, *, base_config: str | None = None
-) -> dict[str, Any]:
-    """Write ``out/show/`` for ``sources``; returns a summary (files, environments, base)."""
+) -> ExportSummary:
+    """Write ``out/show/`` for ``sources``."""
     base = base_config or DEFAULT_BASE_CONFIG
     environments = [ShowEnvironment(s.solution.environment, s.config) for s in sources]
     config = build_show_config(environments, base)
     with staged_dir(out) as stage:
         folder = stage / SHOW_FOLDER
         folder.mkdir()
-        luts = _copy_sidecars(sources, folder / LUT_DIR)
+        _copy_sidecars(sources, folder / LUT_DIR)
         (folder / "config.ocio").write_text(config.serialize(), encoding="utf-8")
         publish_dirs([(folder, out / SHOW_FOLDER)])
-    return {
-        "config": f"{SHOW_FOLDER}/config.ocio",
-        "luts": [f"{LUT_DIR}/{name}" for name in luts],
-        "environments": [env.name for env in environments],
-        "default_environment": environments[0].name,
-        "context_variable": CONTEXT_VARIABLE,
-        "base_config": base,
-        "merged_by": "OCIO ConfigMerger" if has_config_merger() else "the OCIO API",
-    }
+    return ExportSummary(files=(f"{SHOW_FOLDER}/config.ocio",))

@@ -9,15 +9,18 @@ loaded and checked before anything is exported.
 from __future__ import annotations
 
 import shutil
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import PyOpenColorIO as OCIO
 
 from ocio_vp.errors import InputError
+from ocio_vp.exports.cube import CubeAccuracy
 from ocio_vp.formats.measurements import check_safe_name
 from ocio_vp.formats.solution import Solution, load_solution
+from ocio_vp.jsontypes import JsonObject
+from ocio_vp.model.footage_range import Agreement
 
 #: Cube lattice size and input range (camera RGB) of every exported .cube.
 DEFAULT_CUBE_SIZE = 33
@@ -39,13 +42,33 @@ __all__ = [
     "DEFAULT_CUBES",
     "DEFAULT_CUBE_RANGE",
     "DEFAULT_CUBE_SIZE",
+    "Carriage",
     "CubeOptions",
     "ExportSource",
+    "ExportSummary",
     "copy_config",
     "load_export_source",
     "post_correction_carriage",
     "sidecar_dirs",
 ]
+
+
+@dataclass(frozen=True)
+class ExportSummary:
+    """What an export target wrote, for its line on the terminal (every file, accuracy and
+    reason not written is in the target's folder, in its manifest)."""
+
+    #: The files to name on the line.
+    files: tuple[str, ...] = ()
+    #: The whole line, when the target says it itself.
+    line: str | None = None
+    cubes: Mapping[str, CubeAccuracy] = field(default_factory=dict)
+    not_written: Mapping[str, str] = field(default_factory=dict)
+
+    def to_dict(self) -> JsonObject:
+        return {"files": list(self.files), "line": self.line,
+                "cubes": {k: v.to_dict() for k, v in self.cubes.items()},
+                "not_written": dict(self.not_written)}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -148,7 +171,24 @@ def copy_config(source: ExportSource, destination: Path) -> Path:
     return target
 
 
-def post_correction_carriage(solution: Solution) -> dict[str, Any] | None:
+@dataclass(frozen=True)
+class Carriage:
+    """How the config carries a non-linear post-correction (:func:`post_correction_carriage`)."""
+
+    kind: str
+    agreement: Agreement | None
+    beyond: list[str] | None
+    exact: list[str]
+    note: str
+
+    def to_dict(self) -> JsonObject:
+        """The ``post_correction_carriage`` block of the exports' JSON files."""
+        agreement = None if self.agreement is None else self.agreement.to_dict()
+        return {"kind": self.kind, "agreement": agreement, "beyond": self.beyond,
+                "exact": self.exact, "note": self.note}  # fmt: skip
+
+
+def post_correction_carriage(solution: Solution) -> Carriage | None:
     """How the config, and every file made from it, carries a non-linear post-correction; None
     for a matrix (carried exactly everywhere).
 
@@ -169,8 +209,7 @@ def post_correction_carriage(solution: Solution) -> dict[str, Any] | None:
     head = f"The {correction.kind} Q is carried by the OCIO config and its CLFs as a LUT chain"
     if measured is None:
         note = f"{head} whose agreement with the model was not measured (an older solve)"
-        return {"kind": correction.kind, "agreement": None, "beyond": None, "exact": exact,
-                "note": f"{note}; exact: {', '.join(exact)}."}  # fmt: skip
+        return Carriage(correction.kind, None, None, exact, f"{note}; exact: {', '.join(exact)}.")
     p99, worst = measured.p99, measured.worst
     beyond = [
         k for k in p99 if k != "all" and (p99[k] > AGREEMENT_P99 or worst[k] > AGREEMENT_WORST)
@@ -187,5 +226,4 @@ def post_correction_carriage(solution: Solution) -> dict[str, Any] | None:
         )
     else:
         note += f"; exact: {', '.join(exact)}"
-    return {"kind": correction.kind, "agreement": measured.to_dict(), "beyond": beyond, "exact": exact,
-            "note": note + "."}  # fmt: skip
+    return Carriage(correction.kind, measured, beyond, exact, note + ".")

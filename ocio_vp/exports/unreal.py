@@ -20,23 +20,24 @@ from __future__ import annotations
 import json
 import zipfile
 from pathlib import Path
-from typing import Any
 
 import PyOpenColorIO as OCIO
 
 from ocio_vp.calibration.headroom import content_scale
 from ocio_vp.choices import CONTEXT_VARIABLE
 from ocio_vp.errors import InputError
-from ocio_vp.exports.panels import panel_notes, with_panel_assignments
+from ocio_vp.exports.panels import PANEL_VERSIONS, panel_assignments, panel_notes
 from ocio_vp.exports.source import (
     DEFAULT_CUBES,
     CubeOptions,
     ExportSource,
+    ExportSummary,
     copy_config,
     post_correction_carriage,
 )
 from ocio_vp.exports.templating import render_template
 from ocio_vp.exports.unreal_script import SCRIPT_FILE, render_unreal_script
+from ocio_vp.jsontypes import JsonObject, JsonValue
 from ocio_vp.ocio.config import WORKING_SPACE_NAMES
 
 __all__ = ["MAPPING_FILE", "unreal_mapping", "write_ocioz", "write_unreal"]
@@ -98,15 +99,30 @@ def write_ocioz(config_path: Path, archive_path: Path) -> Path:
     return archive_path
 
 
-def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> dict[str, Any]:
+def _content_space(source: ExportSource) -> tuple[str, list[str]]:
+    """The colour space content is rendered in (Unreal's working space when the config has
+    it, else the camera's native linear RGB) and the alternatives the config offers."""
+    has_working = source.config.getColorSpace(UNREAL_WORKING_SPACE) is not None
+    content = UNREAL_WORKING_SPACE if has_working else source.names["reference"]
+    alternatives = [ACESCG] if has_working and source.config.getColorSpace(ACESCG) else []
+    return content, alternatives
+
+
+def _desired_spaces(source: ExportSource, content: str) -> list[str]:
+    """The colour spaces the OpenColorIO Configuration asset must offer."""
+    names = source.names
+    panels = panel_assignments(source.solution, content)
+    return [content, names["out_of_frustum"], names["in_frustum"], *panels.color_spaces]
+
+
+def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> JsonObject:
     """The machine-readable assignment of colorspaces to nDisplay's OCIO slots."""
     names = source.names
     solution = source.solution
-    has_working = source.config.getColorSpace(UNREAL_WORKING_SPACE) is not None
-    content = UNREAL_WORKING_SPACE if has_working else names["reference"]
-    alternatives = [ACESCG] if has_working and source.config.getColorSpace(ACESCG) else []
+    content, alternatives = _content_space(source)
+    carriage = post_correction_carriage(solution)
 
-    def slot(ui: str, owner: str, prop: str, destination: str, role: str) -> dict[str, Any]:
+    def slot(ui: str, owner: str, prop: str, destination: str, role: str) -> JsonObject:
         return {
             "ui": ui,
             "owner": owner,
@@ -121,7 +137,14 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> dict[str
             "role": role,
         }
 
-    mapping = {
+    panels = panel_assignments(solution, content)  # a stage's other panel types
+    views: list[JsonValue] = []
+    if "display" in names:
+        views += [
+            {"display": names["display"], "view": names["view_out_of_frustum"]},
+            {"display": names["display"], "view": names["view_in_frustum"]},
+        ]
+    return {
         "format": "ocio-vp/unreal-ocio",
         "version": 2,
         "stage": solution.stage,
@@ -133,13 +156,8 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> dict[str
         "configuration_asset": {
             "class": "UOpenColorIOConfiguration",
             "configuration_file": config,
-            "desired_color_spaces": [content, names["out_of_frustum"], names["in_frustum"]],
-            "desired_display_views": [
-                {"display": names["display"], "view": names["view_out_of_frustum"]},
-                {"display": names["display"], "view": names["view_in_frustum"]},
-            ]
-            if "display" in names
-            else [],
+            "desired_color_spaces": _desired_spaces(source, content),
+            "desired_display_views": views + panels.display_views,
         },
         "content_working_space_alternatives": alternatives,
         "unreal_versions": UNREAL_VERSIONS,
@@ -170,13 +188,14 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> dict[str
                 names["in_frustum"],
                 "in_frustum",
             ),
+            *panels.assignments,
         ],
         "post_correction": names["post_correction"],
-        "post_correction_carriage": post_correction_carriage(solution),
+        "post_correction_carriage": None if carriage is None else carriage.to_dict(),
         "N_solved": solution.N is not None,
         "content_scale": content_scale(solution).to_dict(),
+        **({"panel_types_checked": PANEL_VERSIONS} if panels.assignments else {}),
     }
-    return with_panel_assignments(mapping, solution, content)  # a stage's other panel types
 
 
 def _inverse_note(solution) -> str | None:
@@ -196,7 +215,7 @@ def _inverse_note(solution) -> str | None:
 
 def write_unreal(
     source: ExportSource, folder: Path, cubes: CubeOptions = DEFAULT_CUBES
-) -> dict[str, Any]:
+) -> ExportSummary:
     """Write ``config/``, ``<environment>.ocioz``, ``UNREAL.md`` and ``unreal_ocio.json``."""
     solution = source.solution
     copied = copy_config(source, folder / "config")
@@ -207,7 +226,9 @@ def write_unreal(
         json.dumps(mapping, indent=2, allow_nan=False) + "\n", encoding="utf-8"
     )
     names = source.names
-    if mapping["content_working_space"] == names["reference"]:
+    content, alternatives = _content_space(source)
+    carriage = post_correction_carriage(solution)
+    if content == names["reference"]:
         note = (
             "The config has no working spaces (the stage did not name its camera gamut), so "
             "the source is the camera's native linear RGB: render content in that space."
@@ -215,9 +236,9 @@ def write_unreal(
     else:
         note = (
             "The source is Unreal's default working space; use "
-            + (" or ".join(f"`{a}`" for a in mapping["content_working_space_alternatives"]))
+            + (" or ".join(f"`{a}`" for a in alternatives))
             + " instead if the project renders in it."
-            if mapping["content_working_space_alternatives"]
+            if alternatives
             else "The source is Unreal's default working space."
         )
     text = render_template(
@@ -227,8 +248,8 @@ def write_unreal(
         mapping_file=MAPPING_FILE,
         config=config_rel,
         ocioz=ocioz.name,
-        source=mapping["content_working_space"],
-        desired=mapping["configuration_asset"]["desired_color_spaces"],
+        source=content,
+        desired=_desired_spaces(source, content),
         out_of_frustum=names["out_of_frustum"],
         in_frustum=names["in_frustum"],
         post_correction=names["post_correction"],
@@ -237,7 +258,7 @@ def write_unreal(
         n_reason=solution.diagnostics.N_reason or "Q is not invertible",
         content_scale=content_scale(solution).lines(),
         panel_notes=panel_notes(solution),
-        model_note=(mapping["post_correction_carriage"] or {}).get("note"),
+        model_note=None if carriage is None else carriage.note,
         inverse_note=_inverse_note(solution),
     )
     (folder / "UNREAL.md").write_text(text, encoding="utf-8")
@@ -246,11 +267,11 @@ def write_unreal(
         stage=solution.stage,
         environment=solution.environment,
         config_name=copied.name,
-        source=mapping["content_working_space"],
+        source=content,
         out_of_frustum=names["out_of_frustum"],
         in_frustum=names["in_frustum"],
         context={CONTEXT_VARIABLE: solution.environment},
     )
     (folder / SCRIPT_FILE).write_text(script, encoding="utf-8")
     files = [config_rel, ocioz.name, "UNREAL.md", MAPPING_FILE, SCRIPT_FILE]
-    return {"files": files, "mapping": mapping}
+    return ExportSummary(files=tuple(files))

@@ -16,6 +16,7 @@ import numpy as np
 from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.formats.records import Record, read_record, read_value
 from ocio_vp.formats.skin import SkinFigures
+from ocio_vp.jsontypes import JsonMapping, JsonObject
 from ocio_vp.model.footage_range import Agreement
 
 __all__ = [
@@ -442,7 +443,7 @@ class Diagnostics(Record):
     )
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> Diagnostics:
+    def from_dict(cls, data: JsonMapping) -> Diagnostics:
         """The block as read from ``solution.json``: every value typed; missing keys keep
         their defaults (and stay missing when written), unknown ones are kept in ``extra``.
         The ``root_polynomial_ocio`` block of the versions before ``post_correction_ocio``

@@ -14,9 +14,10 @@ exhaust memory:
   typos and edits gone wrong);
 - integers too long to be a float64 are errors, not ``OverflowError``/int-string-limit
   tracebacks;
-- a YAML document holds JSON's values only (:data:`~ocio_vp.jsontypes.JsonValue`): a date is
-  kept as its text, and keys that are not text, ``!!binary``, ``!!set``, ``!!omap`` and
-  ``!!pairs`` are errors, so what a file holds has one type whichever of the two it is.
+- a YAML document holds JSON's values only (:data:`~ocio_vp.jsontypes.JsonValue`): a date, and
+  an integer key, are kept as their text; other keys that are not text (``null``, ``yes``, a
+  number with a point), ``!!binary``, ``!!set``, ``!!omap`` and ``!!pairs`` are errors, so what
+  a file holds has one type whichever of the two it is.
 """
 
 from __future__ import annotations
@@ -145,7 +146,9 @@ def _check_keys(node: yaml.MappingNode) -> None:
     for key_node, _ in node.value:
         if not isinstance(key_node, yaml.ScalarNode) or key_node.tag.endswith(":merge"):
             continue
-        if not key_node.tag.endswith(":str"):
+        if key_node.tag.endswith(":int"):  # read as its text, as JSON has every key
+            key_node.tag = "tag:yaml.org,2002:str"
+        elif not key_node.tag.endswith(":str"):
             raise _LimitError(f"key {excerpt(key_node.value)} is not text", key_node.start_mark)
         ident = (key_node.tag, key_node.value)
         line = key_node.start_mark.line + 1

@@ -19,12 +19,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
 from ocio_vp.errors import InputError, excerpt
+from ocio_vp.formats.linearity import Linearity, read_linearity
 from ocio_vp.formats.measurements import check_safe_name
+from ocio_vp.formats.records import json_object
+from ocio_vp.jsontypes import JsonMapping, JsonObject, JsonValue
 
 __all__ = ["PanelSolution", "panel_solutions_from_dict", "panel_solutions_to_dict"]
 
@@ -54,7 +56,7 @@ class PanelSolution:
     N: np.ndarray | None = None
     N_reason: str | None = None
     black_level_offset: np.ndarray | None = None
-    linearity: dict[str, Any] | None = None
+    linearity: Linearity | None = None
     ocio: dict[str, str] = field(default_factory=dict)
 
     @property
@@ -63,15 +65,11 @@ class PanelSolution:
         return self.M if self.N is None else self.N
 
 
-def _list(value: Any) -> Any:
-    return value.tolist() if isinstance(value, np.ndarray) else value
-
-
-def panel_solutions_to_dict(panels: Mapping[str, PanelSolution]) -> dict[str, Any]:
-    """The ``panels`` block (numpy arrays left for solution.json's own conversion)."""
-    out = {}
+def panel_solutions_to_dict(panels: Mapping[str, PanelSolution]) -> JsonObject:
+    """The ``panels`` block."""
+    out: JsonObject = {}
     for name, p in panels.items():
-        entry: dict[str, Any] = {
+        entry = {
             "in_frustum": p.in_frustum,
             "SL": p.SL,
             "M": p.M,
@@ -83,11 +81,11 @@ def panel_solutions_to_dict(panels: Mapping[str, PanelSolution]) -> dict[str, An
         if p.in_frustum:
             entry.update(N=p.N, N_reason=p.N_reason, black_level_offset=p.black_level_offset)
         entry.update(linearity=p.linearity, ocio=dict(p.ocio))
-        out[name] = entry
+        out[name] = json_object(entry)
     return out
 
 
-def _array(entry: Mapping[str, Any], key: str, shape: tuple[int, ...], where: str, source: str):
+def _array(entry: JsonMapping, key: str, shape: tuple[int, ...], where: str, source: str):
     value = entry.get(key)
     try:
         array = np.asarray(value, dtype=np.float64)
@@ -98,11 +96,11 @@ def _array(entry: Mapping[str, Any], key: str, shape: tuple[int, ...], where: st
     return array
 
 
-def _one(name: str, entry: Any, source: str) -> PanelSolution:
+def _one(name: str, entry: JsonValue, source: str) -> PanelSolution:
     key = f"panels.{name}"
     if not isinstance(entry, Mapping) or not isinstance(entry.get("in_frustum"), bool):
         raise InputError("expected a mapping with in_frustum true or false", source=source, key=key)
-    in_frustum = entry["in_frustum"]
+    in_frustum = entry["in_frustum"] is True
 
     def array(field_name: str, shape: tuple[int, ...], optional: bool = False):
         if optional and entry.get(field_name) is None:
@@ -120,9 +118,11 @@ def _one(name: str, entry: Any, source: str) -> PanelSolution:
                 f"expected a number in [0, 1], got {number!r}", source=source, key=where
             )
         numbers[field_name] = float(number)
-    linearity, ocio, reason = entry.get("linearity"), entry.get("ocio") or {}, entry.get("N_reason")
-    if linearity is not None and not isinstance(linearity, dict):
-        raise InputError("expected a mapping", source=source, key=f"{key}.linearity")
+    ocio, reason = entry.get("ocio") or {}, entry.get("N_reason")
+    try:
+        linearity = read_linearity(entry.get("linearity"), f"{key}.linearity")
+    except InputError as error:
+        raise InputError(error.problem, source=source, key=error.key) from None
     if not isinstance(ocio, dict) or not all(isinstance(v, str) for v in ocio.values()):
         raise InputError("expected names (text) only", source=source, key=f"{key}.ocio")
     if reason is not None and not isinstance(reason, str):
@@ -144,7 +144,7 @@ def _one(name: str, entry: Any, source: str) -> PanelSolution:
     )
 
 
-def panel_solutions_from_dict(block: Any, source: str) -> dict[str, PanelSolution] | None:
+def panel_solutions_from_dict(block: JsonValue, source: str) -> dict[str, PanelSolution] | None:
     """The ``panels`` block of a loaded solution.json (None when absent)."""
     if block is None:
         return None

@@ -18,7 +18,8 @@ import json
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+
+from ocio_vp.jsontypes import JsonObject
 
 __all__ = [
     "SOURCE_FILE",
@@ -104,7 +105,7 @@ def source_record(folder: str | Path, environment: str, model: str) -> str:
     return json.dumps(record, indent=2) + "\n"
 
 
-def _read_json(path: Path) -> dict[str, Any] | None:
+def _read_json(path: Path) -> JsonObject | None:
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
@@ -160,11 +161,14 @@ def _stale_reports(out: Path, folders: Sequence[Path], current: dict[str, str]) 
         manifest = _read_json(report / REPORT_MANIFEST)
         if manifest is None:
             continue
-        shas = manifest.get("solution_sha256") or {}
+        shas = manifest.get("solution_sha256")
+        shown = manifest.get("environments")
         names = [
             env
-            for env in manifest.get("environments", [])
-            if env in current and shas.get(env) != current[env]
+            for env in (shown if isinstance(shown, list) else [])
+            if isinstance(env, str)
+            and env in current
+            and (shas.get(env) if isinstance(shas, dict) else None) != current[env]
         ]
         if names:
             lines.append(

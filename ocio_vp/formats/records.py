@@ -20,8 +20,9 @@ from typing import Any, ClassVar, TypeVar
 import numpy as np
 
 from ocio_vp.errors import InputError, excerpt
+from ocio_vp.jsontypes import JsonObject, JsonValue
 
-__all__ = ["Record", "json_value", "read_record", "read_value"]
+__all__ = ["Record", "json_object", "json_value", "read_record", "read_value"]
 
 R = TypeVar("R")
 
@@ -193,7 +194,12 @@ _SCALARS: dict[Any, Any] = {
 }
 
 
-def json_value(value: Any) -> Any:
+def json_object(mapping: Mapping[str, Any]) -> JsonObject:
+    """``mapping`` as a JSON object (its values converted by :func:`json_value`)."""
+    return {str(k): json_value(v) for k, v in mapping.items()}
+
+
+def json_value(value: Any) -> JsonValue:
     """``value`` as JSON types (numpy values and records converted). A non-finite float is
     written as null (NaN) or the string "inf"/"-inf": only cond_Q of a singular Q should ever be
     one (docs/stability.md; tests/test_pipeline.py and benchmarks/sweep.py look for any other).

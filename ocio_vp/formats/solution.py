@@ -21,13 +21,16 @@ from ocio_vp.deprecation import warn_deprecated
 from ocio_vp.errors import InputError, excerpt
 from ocio_vp.formats.diagnostics import Diagnostics
 from ocio_vp.formats.documents import read_document
+from ocio_vp.formats.fixtures import DmxPatch
+from ocio_vp.formats.linearity import Linearity, read_linearity
 from ocio_vp.formats.measurements import check_safe_name
 from ocio_vp.formats.panel_solution import (
     PanelSolution,
     panel_solutions_from_dict,
     panel_solutions_to_dict,
 )
-from ocio_vp.formats.records import json_value
+from ocio_vp.formats.records import Record, json_object, read_record
+from ocio_vp.jsontypes import JsonMapping, JsonObject, JsonValue
 from ocio_vp.model.correction import (
     MatrixCorrection,
     PostCorrection,
@@ -41,6 +44,27 @@ __all__ = ["SOLUTION_FORMAT", "Diagnostics", "Solution", "load_solution", "solut
 SOLUTION_FORMAT = "ocio-vp/solution"
 #: Largest magnitude a number in a solution.json may have (far beyond any solved stage).
 MAX_SOLUTION_VALUE = 1e30
+
+
+@dataclass(frozen=True)
+class FixtureDrive(Record):
+    """One practical fixture's block of ``solution.json`` (``fixtures.<name>``): its channels,
+    the drive of each (units of its ``reference_drive``; DMX level = drive / ``max_drive``),
+    whether it is pixel-mapped and its DMX patch."""
+
+    OMIT_NONE = ("dmx",)
+
+    channels: tuple[str, ...]
+    drive: Mapping[str, float]
+    reference_drive: float | None = None
+    max_drive: float = 1.0
+    pixel_mapped: bool = False
+    dmx: DmxPatch | None = None
+
+    @property
+    def drives(self) -> list[float]:
+        """The drives in channel order."""
+        return [self.drive[c] for c in self.channels]
 
 
 @dataclass(frozen=True)
@@ -80,8 +104,8 @@ class Solution:
     measurements_sha256: str | None = None
     camera_colorspace: str | None = None
     ocio: dict[str, str] = field(default_factory=dict)
-    linearity: dict[str, Any] | None = None
-    fixtures: dict[str, Any] | None = None
+    linearity: Linearity | None = None
+    fixtures: Mapping[str, FixtureDrive] | None = None
     panels: Mapping[str, PanelSolution] | None = None
 
     @property
@@ -141,8 +165,8 @@ def _init(self: Solution, *args: Any, Q: Any = None, **kwargs: Any) -> None:
 Solution.__init__ = _init  # type: ignore[method-assign]
 
 
-def solution_to_dict(solution: Solution) -> dict[str, Any]:
-    return json_value(
+def solution_to_dict(solution: Solution) -> JsonObject:
+    return json_object(
         {
             "format": SOLUTION_FORMAT,
             "version": 1,
@@ -177,7 +201,7 @@ def solution_to_json(solution: Solution) -> str:
     return json.dumps(solution_to_dict(solution), indent=2, allow_nan=False) + "\n"
 
 
-def _matrix(data: dict[str, Any], key: str, source: str, optional: bool = False) -> Any:
+def _matrix(data: JsonMapping, key: str, source: str, optional: bool = False) -> Any:
     value = data.get(key)
     if value is None and optional:
         return None
@@ -187,16 +211,22 @@ def _matrix(data: dict[str, Any], key: str, source: str, optional: bool = False)
     return array
 
 
-def _fixtures(data: dict[str, Any], source: str) -> dict[str, Any] | None:
+def _fixtures(data: JsonMapping, source: str) -> dict[str, FixtureDrive] | None:
     block = data.get("fixtures")
     if block is None:
         return None
     if not isinstance(block, dict):
         raise InputError("expected a mapping", source=source, key="fixtures")
+    fixtures = {}
     for name, entry in block.items():
-        ok = isinstance(entry, dict) and isinstance(entry.get("channels"), list)
-        drive = entry.get("drive") if ok else None
-        if not (ok and isinstance(drive, dict) and set(drive) == set(entry["channels"])):
+        channels = entry.get("channels") if isinstance(entry, dict) else None
+        drive = entry.get("drive") if isinstance(entry, dict) else None
+        if not (
+            isinstance(channels, list)
+            and all(isinstance(c, str) for c in channels)
+            and isinstance(drive, dict)
+            and set(drive) == set(channels)
+        ):
             raise InputError(
                 "expected channels and a drive for each", source=source, key=f"fixtures.{name}"
             )
@@ -213,10 +243,14 @@ def _fixtures(data: dict[str, Any], source: str) -> dict[str, Any] | None:
                 source=source,
                 key=f"fixtures.{name}.dmx",
             )
-    return block
+        try:
+            fixtures[name] = read_record(FixtureDrive, entry, f"fixtures.{name}")
+        except InputError as error:
+            raise InputError(error.problem, source=source, key=error.key) from None
+    return fixtures
 
 
-def _finite_array(value: Any, shape: tuple[int, ...]) -> np.ndarray | None:
+def _finite_array(value: JsonValue, shape: tuple[int, ...]) -> np.ndarray | None:
     """``value`` as a finite float64 array of ``shape``, or None when it is not one."""
     if not isinstance(value, list):
         return None
@@ -231,7 +265,7 @@ def _finite_array(value: Any, shape: tuple[int, ...]) -> np.ndarray | None:
     return array
 
 
-def _rgb(data: dict[str, Any], key: str, source: str, optional: bool = False) -> Any:
+def _rgb(data: JsonMapping, key: str, source: str, optional: bool = False) -> Any:
     value = data.get(key)
     if value is None and optional:
         return None
@@ -241,7 +275,7 @@ def _rgb(data: dict[str, Any], key: str, source: str, optional: bool = False) ->
     return array
 
 
-def _text(data: dict[str, Any], key: str, source: str, *, name: bool = False) -> str | None:
+def _text(data: JsonMapping, key: str, source: str, *, name: bool = False) -> str | None:
     """An optional string field; ``name`` ones must also be safe folder/OCIO names."""
     value = data.get(key)
     if value is None and not name:
@@ -255,12 +289,12 @@ def _text(data: dict[str, Any], key: str, source: str, *, name: bool = False) ->
     return value
 
 
-def _name(data: dict[str, Any], key: str, source: str) -> str:
+def _name(data: JsonMapping, key: str, source: str) -> str:
     """A required name: safe as a folder and an OCIO name."""
     return check_safe_name(data.get(key), source=source, key=key)
 
 
-def _mapping(data: dict[str, Any], key: str, source: str) -> dict[str, Any]:
+def _mapping(data: JsonMapping, key: str, source: str) -> JsonObject:
     value = data.get(key)
     if value is None:
         return {}
@@ -269,7 +303,7 @@ def _mapping(data: dict[str, Any], key: str, source: str) -> dict[str, Any]:
     return value
 
 
-def _read(path: Path) -> dict[str, Any]:
+def _read(path: Path) -> JsonObject:
     source = str(path)
     if not os.path.lexists(path):
         raise InputError("no solution.json here; run `ocio-vp solve` first", source=source)
@@ -299,13 +333,12 @@ def load_solution(path: str | Path) -> Solution:
             f"expected a number in (0, 1], got {excerpt(beta)}", source=source, key="beta"
         )
     measurements = _mapping(data, "measurements", source)
-    linearity = data.get("linearity")
-    if linearity is not None and not isinstance(linearity, dict):
-        raise InputError(
-            f"expected a mapping, got {excerpt(linearity)}", source=source, key="linearity"
-        )
-    ocio = _mapping(data, "ocio", source)
-    if not all(isinstance(k, str) and isinstance(v, str) for k, v in ocio.items()):
+    try:
+        linearity = read_linearity(data.get("linearity"))
+    except InputError as error:
+        raise InputError(error.problem, source=source, key=error.key) from None
+    ocio = {k: v for k, v in _mapping(data, "ocio", source).items() if isinstance(v, str)}
+    if len(ocio) != len(_mapping(data, "ocio", source)):
         raise InputError("expected names (text) only", source=source, key="ocio")
     Q = _matrix(data, "Q", source)
     try:
@@ -335,13 +368,14 @@ def load_solution(path: str | Path) -> Solution:
     )
 
 
-def _old_root_polynomial(data: dict[str, Any]) -> Any:
+def _old_root_polynomial(data: JsonMapping) -> JsonValue:
     """Where files written before the ``post_correction`` block kept a root-polynomial model."""
-    notes = data.get("diagnostics", {}).get("method_notes") or {}
+    diagnostics = data.get("diagnostics")
+    notes = diagnostics.get("method_notes") if isinstance(diagnostics, dict) else None
     return notes.get("root_polynomial") if isinstance(notes, dict) else None
 
 
-def _post_correction(data: dict[str, Any], Q: np.ndarray, source: str) -> PostCorrection:
+def _post_correction(data: JsonMapping, Q: np.ndarray, source: str) -> PostCorrection:
     """The ``post_correction`` block; a file written before it existed gets its model back from
     where those versions kept it (a root-polynomial's coefficients in
     ``diagnostics.method_notes``, applied unbounded as they were), otherwise Q as a matrix."""
@@ -354,7 +388,9 @@ def _post_correction(data: dict[str, Any], Q: np.ndarray, source: str) -> PostCo
         old = _old_root_polynomial(data)
         if old is None:
             return MatrixCorrection(Q)
-        return RootPolynomialCorrection(old["coefficients"], Q)
+        if not isinstance(old, dict):
+            raise TypeError("expected a mapping")
+        return RootPolynomialCorrection(np.asarray(old["coefficients"], dtype=np.float64), Q)
     except InputError as error:
         if error.source is not None:
             raise

@@ -49,12 +49,12 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.errors import InputError
+from ocio_vp.jsontypes import JsonObject, JsonValue
 from ocio_vp.model.expansion import (
     ROOT_POLYNOMIAL_TERMS,
     apply_root_polynomial,
@@ -181,14 +181,30 @@ def _fade_out(t: np.ndarray) -> np.ndarray:
     return 1.0 - smoothstep(t)
 
 
-def _matrix(value: Any, key: str) -> np.ndarray:
+def _array(value: JsonValue) -> np.ndarray:
+    """A JSON list of numbers as float64 (TypeError/ValueError when it is not one)."""
+    return np.asarray(value, dtype=np.float64)
+
+
+def _number(value: JsonValue) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError(f"expected a number, got {value!r:.40}")
+    return float(value)
+
+
+def _two(value: JsonValue) -> tuple[float, float]:
+    low, high = _array(value).reshape(2)
+    return float(low), float(high)
+
+
+def _matrix(value: ArrayLike, key: str) -> np.ndarray:
     array = np.asarray(value, dtype=np.float64)
     if array.shape != (3, 3) or not np.all(np.isfinite(array)):
         raise InputError(f"expected a finite 3x3 matrix, got shape {array.shape}", key=key)
     return array
 
 
-def _pair(value: Any, key: str) -> tuple[float, float]:
+def _pair(value: ArrayLike, key: str) -> tuple[float, float]:
     low, high = (float(v) for v in np.asarray(value, dtype=np.float64).reshape(2))
     if not (np.isfinite(low) and np.isfinite(high) and 0.0 <= low < high):
         raise InputError(f"expected [start, end] with 0 <= start < end, got {value!r}", key=key)
@@ -265,7 +281,7 @@ class FitDomain:
         top = np.maximum(d.max(axis=-1), floor)
         return np.where(top > 0, -d.min(axis=-1) / np.where(top > 0, top, 1.0), np.inf)
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> JsonObject:
         return {
             "to_drive": self.to_drive.tolist(),
             "hull": self.hull.tolist(),
@@ -273,9 +289,11 @@ class FitDomain:
         }
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> FitDomain:
+    def from_dict(cls, data: JsonValue) -> FitDomain:
         try:
-            return cls(data["to_drive"], data["hull"], data["centre"])
+            if not isinstance(data, Mapping):
+                raise TypeError("expected a mapping")
+            return cls(_array(data["to_drive"]), _array(data["hull"]), _array(data["centre"]))
         except (KeyError, TypeError, ValueError) as error:
             raise InputError(f"malformed domain ({error})", key="post_correction.domain") from None
 
@@ -401,7 +419,7 @@ class MatrixCorrection:
         rank = "" if self.invertible else ", rank-deficient: no inverse"
         return f"3x3 matrix{rank}"
 
-    def parameters(self) -> dict[str, Any]:
+    def parameters(self) -> JsonObject:
         return {"Q": self.Q.tolist()}
 
 
@@ -490,7 +508,7 @@ class RootPolynomialCorrection:
         )
         return f"root-polynomial degree {self.degree}, {bound}"
 
-    def parameters(self) -> dict[str, Any]:
+    def parameters(self) -> JsonObject:
         return {
             "degree": self.degree,
             "terms": root_polynomial_terms(self.degree),
@@ -588,7 +606,7 @@ class ProtectedCorrection:
         """Where the identity takes over, in words."""
         return protection_words(self.bright, self.negative)
 
-    def parameters(self) -> dict[str, Any]:
+    def parameters(self) -> JsonObject:
         return {
             "inner": correction_to_dict(self.inner),
             "drive_matrix": self.drive_matrix.tolist(),
@@ -695,7 +713,7 @@ def _newton_step(function, x: np.ndarray, residual: np.ndarray, fallback: np.nda
 # solution.json
 
 
-def correction_to_dict(correction: PostCorrection) -> dict[str, Any]:
+def correction_to_dict(correction: PostCorrection) -> JsonObject:
     """The ``post_correction`` block: ``kind``, ``parameters`` and ``domain``."""
     domain = getattr(correction, "domain", None)
     return {
@@ -705,7 +723,7 @@ def correction_to_dict(correction: PostCorrection) -> dict[str, Any]:
     }
 
 
-def correction_from_dict(data: Mapping[str, Any]) -> PostCorrection:
+def correction_from_dict(data: JsonValue) -> PostCorrection:
     """A :data:`PostCorrection` from its ``post_correction`` block (InputError when malformed)."""
     if not isinstance(data, Mapping):
         raise InputError("expected a mapping", key="post_correction")
@@ -715,18 +733,21 @@ def correction_from_dict(data: Mapping[str, Any]) -> PostCorrection:
     domain = None if data.get("domain") is None else FitDomain.from_dict(data["domain"])
     try:
         if kind in ("matrix", "rank-deficient"):
-            return MatrixCorrection(parameters["Q"], domain)
+            return MatrixCorrection(_array(parameters["Q"]), domain)
         if kind == "root-polynomial":
             return RootPolynomialCorrection(
-                parameters["coefficients"],
-                parameters["fallback"],
+                _array(parameters["coefficients"]),
+                _array(parameters["fallback"]),
                 domain,
-                tuple(parameters.get("fade", DEFAULT_FADE)),
+                _two(parameters.get("fade", list(DEFAULT_FADE))),
             )
         if kind == "protected":
             if domain is None:
                 raise InputError("a protected correction needs its domain", key="post_correction")
-            inner = correction_from_dict({**parameters["inner"], "domain": data.get("domain")})
+            block = parameters["inner"]
+            if not isinstance(block, Mapping):
+                raise TypeError("inner: expected a mapping")
+            inner = correction_from_dict({**block, "domain": data.get("domain")})
             if isinstance(inner, ProtectedCorrection):
                 raise InputError(
                     "a protected correction cannot protect another",
@@ -735,10 +756,10 @@ def correction_from_dict(data: Mapping[str, Any]) -> PostCorrection:
             return ProtectedCorrection(
                 inner,
                 domain,
-                parameters["drive_matrix"],
-                tuple(parameters["bright"]),
-                tuple(parameters["negative"]),
-                float(parameters.get("dark", 0.0)),  # files before it: no dark floor
+                _array(parameters["drive_matrix"]),
+                _two(parameters["bright"]),
+                _two(parameters["negative"]),
+                _number(parameters.get("dark", 0.0)),  # files before it: no dark floor
             )
     except InputError as error:
         key = error.key or ""

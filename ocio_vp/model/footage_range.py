@@ -36,6 +36,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ocio_vp.jsontypes import JsonObject
+
 __all__ = [
     "EMITTER_LEVELS",
     "EXPOSURES",
@@ -201,7 +203,7 @@ class Agreement:
     def within(self, p99: float, worst: float) -> bool:
         return self.overall[0] <= p99 and self.overall[1] <= worst
 
-    def to_dict(self) -> dict[str, object]:
+    def to_dict(self) -> JsonObject:
         return {
             "p99": dict(self.p99),
             "worst": dict(self.worst),

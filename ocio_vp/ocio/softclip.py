@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 
+from ocio_vp.formats.linearity import Linearity
 from ocio_vp.ocio.description import Transform, clamp
 from ocio_vp.wall.softclip import INVERSE_CAP, check_knee, soft_clip_knee
 
@@ -47,7 +48,7 @@ def soft_clip_transforms(knee: float) -> tuple[list[Transform], list[Transform]]
     return [_curve(knee, inverse=True)], [cap, _curve(knee, inverse=False)]
 
 
-def soft_clip_text(linearity) -> str:
+def soft_clip_text(linearity: Linearity | None) -> str:
     """What a wall colour space's description adds for a soft clip ("" without one)."""
     knee = soft_clip_knee(linearity)
     if knee is None:

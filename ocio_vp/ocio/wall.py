@@ -17,11 +17,11 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 import PyOpenColorIO as OCIO
 
+from ocio_vp.formats.linearity import Linearity, LutFile
 from ocio_vp.formats.solution import Solution
 from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
 from ocio_vp.ocio.config import IN_FRUSTUM, OUT_OF_FRUSTUM
@@ -30,6 +30,7 @@ from ocio_vp.wall.encoding import (
     DEFAULT_PEAK_NITS,
     LINEAR_HEADROOM,
     LOG_SHAPER_KNEE,
+    LUT_ACCURACY,
     LUT_DIR,
     LinearityLut,
     WallEncoding,
@@ -103,7 +104,7 @@ class WallOutputs:
     extra_wall_transforms: dict[str, list[Transform]] | None = None
     search_path: str | None = None
     files: dict[str, str] = field(default_factory=dict)
-    linearity: dict[str, Any] | None = None
+    linearity: Linearity | None = None
 
 
 def wall_outputs(solution: Solution) -> WallOutputs:
@@ -111,13 +112,11 @@ def wall_outputs(solution: Solution) -> WallOutputs:
     linearity = solution.linearity
     if linearity is None:
         return WallOutputs()
-    linearity = dict(linearity)
     wall = WallEncoding.of(linearity)
     encoding, peak_nits = wall.name, float(wall.peak_nits or DEFAULT_PEAK_NITS)
     lut_name = None
     files: dict[str, str] = {}
-    channels = linearity.get("channels") or {}
-    if any(channels[c]["corrected"] for c in channels):
+    if linearity.corrected:
         lut = lut_table(linearity, encoding, peak_nits=peak_nits)
         group = lut_transform(lut)
         group.getFormatMetadata().addChildElement(
@@ -129,12 +128,16 @@ def wall_outputs(solution: Solution) -> WallOutputs:
         name = sidecar_name(f"{solution.stage}_panel_linearity", text)
         files[f"{LUT_DIR}/{name}"] = text
         lut_name = name
-        linearity["lut"] = {
-            "file": f"{LUT_DIR}/{name}",
-            "entries": int(lut.table.shape[0]),
-            "domain": _LUT_DOMAINS[encoding],
-            **lut_accuracy(linearity, lut),
-        }
+        max_error, bands = lut_accuracy(linearity, lut)
+        record = LutFile(
+            file=f"{LUT_DIR}/{name}",
+            entries=int(lut.table.shape[0]),
+            domain=_LUT_DOMAINS[encoding],
+            max_error=max_error,
+            bands=bands,
+            definition=LUT_ACCURACY,
+        )
+        linearity = linearity.updated(lut=record)
 
     chain = [transform_record(t) for t in wall.ocio_transforms()]
     chain += [] if lut_name is None else [file(lut_name)]

@@ -18,12 +18,12 @@ import itertools
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from ocio_vp.choices import WALL_ENCODINGS
 from ocio_vp.formats.measurements import CHANNELS, Validator, read_document
+from ocio_vp.jsontypes import JsonObject, JsonValue, YamlValue
 
 __all__ = [
     "FILE_FORMATS",
@@ -167,11 +167,11 @@ def expand_frame(pattern: str, frame: int) -> str:
 # Reading and validating.
 
 
-def _rgb(ctx: Validator, value: Any, key: tuple[str | int, ...], low: float) -> tuple:
+def _rgb(ctx: Validator, value: JsonValue, key: tuple[str | int, ...], low: float) -> tuple:
     return tuple(float(v) for v in ctx.rgb(value, key, minimum=low, maximum=1e4))
 
 
-def _integer(ctx: Validator, value: Any, key: tuple[str | int, ...], minimum: int = 0) -> int:
+def _integer(ctx: Validator, value: JsonValue, key: tuple[str | int, ...], minimum: int = 0) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
         raise ctx.error(key, f"expected a whole number >= {minimum}, got {value!r}"[:120])
     return int(value)
@@ -180,7 +180,7 @@ def _integer(ctx: Validator, value: Any, key: tuple[str | int, ...], minimum: in
 _PATCH_KEYS = ("channel", "step", "flashes", "index", "content")
 
 
-def _patch(ctx: Validator, raw: Any, i: int, previous_last: int) -> Patch:
+def _patch(ctx: Validator, raw: JsonValue, i: int, previous_last: int) -> Patch:
     key: tuple[str | int, ...] = ("patches", i)
     entry = ctx.mapping(raw, key, ("name", "kind", "first", "last", "drive", "signal"), _PATCH_KEYS)
     name = ctx.name(entry["name"], (*key, "name"))
@@ -237,7 +237,7 @@ def _patch(ctx: Validator, raw: Any, i: int, previous_last: int) -> Patch:
     )
 
 
-def _validation(ctx: Validator, raw: Any) -> Validation:
+def _validation(ctx: Validator, raw: JsonValue) -> Validation:
     keys = ("environment", "stage", "solution_sha256", "in_frustum", "reference")
     optional = ("model", "solved")
     entry = ctx.mapping(raw, ("validation",), keys, ("content_scale", "pulled", *optional))
@@ -266,7 +266,7 @@ def _validation(ctx: Validator, raw: Any) -> Validation:
     )
 
 
-def _checked_patches(ctx: Validator, raw: Any, first_frame: int) -> tuple[Patch, ...]:
+def _checked_patches(ctx: Validator, raw: JsonValue, first_frame: int) -> tuple[Patch, ...]:
     if not isinstance(raw, list) or not raw:
         raise ctx.error(("patches",), "expected a non-empty list of patches")
     patches: list[Patch] = []
@@ -294,7 +294,7 @@ def _checked_patches(ctx: Validator, raw: Any, first_frame: int) -> tuple[Patch,
 
 
 def sequence_from_dict(
-    data: Any, *, source: str = "<sequence>", sha256: str | None = None
+    data: JsonValue, *, source: str = "<sequence>", sha256: str | None = None
 ) -> PatternSequence:
     """Validate a parsed ``sequence.yaml`` document.
 
@@ -364,11 +364,11 @@ def _plain(values: tuple[float, ...]) -> list[float]:
     return [float(v) for v in values]
 
 
-def sequence_to_dict(sequence: PatternSequence) -> dict[str, Any]:
+def sequence_to_dict(sequence: PatternSequence) -> dict[str, YamlValue]:
     """The inverse of :func:`sequence_from_dict` (plain types, file key order)."""
     patches = []
     for p in sequence.patches:
-        entry: dict[str, Any] = {"name": p.name, "kind": p.kind}
+        entry: JsonObject = {"name": p.name, "kind": p.kind}
         if p.channel is not None:
             entry["channel"] = p.channel
         if p.step is not None:
@@ -382,7 +382,7 @@ def sequence_to_dict(sequence: PatternSequence) -> dict[str, Any]:
             entry["flashes"] = [[a, b] for a, b in p.flashes]
         patches.append(entry)
     fps = sequence.fps
-    data: dict[str, Any] = {
+    data: dict[str, YamlValue] = {
         "format": FORMAT,
         "version": VERSION,
         "frames": sequence.frames,
@@ -396,6 +396,7 @@ def sequence_to_dict(sequence: PatternSequence) -> dict[str, Any]:
     }
     if sequence.validation is not None:
         v = sequence.validation
+        pulled: dict[int, YamlValue] = dict(v.pulled)  # chart index: saturation kept
         data["validation"] = {
             "environment": v.environment,
             "stage": v.stage,
@@ -403,7 +404,7 @@ def sequence_to_dict(sequence: PatternSequence) -> dict[str, Any]:
             "in_frustum": v.in_frustum,
             "reference": v.reference,
             "content_scale": v.content_scale,
-            **({"pulled": {j: k for j, k in v.pulled}} if v.pulled else {}),
+            **({"pulled": pulled} if pulled else {}),
             **({"model": v.model} if v.model else {}),
             **({"solved": v.solved} if v.solved else {}),
         }

@@ -29,7 +29,9 @@ from ocio_vp.calibration.equations import condition_number, condition_text
 from ocio_vp.calibration.headroom import content_scale
 from ocio_vp.errors import InputError
 from ocio_vp.formats.diagnostics import lowest_channel_words
+from ocio_vp.formats.linearity import Linearity
 from ocio_vp.formats.provenance import solution_sha256
+from ocio_vp.formats.records import json_object
 from ocio_vp.formats.solution import Solution
 from ocio_vp.formats.solution_inputs import solution_folders
 from ocio_vp.model.correction import (
@@ -113,7 +115,7 @@ def default_report_dir(paths: Sequence[str | Path]) -> Path:
     return chosen.solve_folders[0] / name
 
 
-def linearity_curves(linearity: Any) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+def linearity_curves(linearity: Linearity | None) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Panel response curves before/after the linearity LUT from a solution's ``linearity``.
 
     Reads what :func:`ocio_vp.wall.linearity.fit_linearity` writes: ``channels.<name>`` with the
@@ -122,18 +124,14 @@ def linearity_curves(linearity: Any) -> dict[str, tuple[np.ndarray, np.ndarray]]
     ``r(r^-1(x))`` on 33 steps; an uncorrected channel has no LUT, so no "after" curve.
     """
     curves: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-    channels = linearity.get("channels") if isinstance(linearity, dict) else None
-    if not isinstance(channels, dict):
+    if linearity is None or not linearity.channels:
         return curves
-    for channel, entry in channels.items():
-        if not isinstance(entry, dict) or "drive" not in entry or "response" not in entry:
-            continue
-        drive = np.asarray(entry["drive"], dtype=np.float64)
-        response = np.asarray(entry["response"], dtype=np.float64)
+    for channel, entry in linearity.channels.items():
+        drive, response = entry.drive, entry.response
         if drive.shape != response.shape or not np.all(np.isfinite(response)):
             continue
         curves[f"{channel} before"] = (drive, response)
-        if entry.get("corrected") is True:
+        if entry.corrected:
             from ocio_vp.wall.linearity import inverse_response, response_model
 
             x = np.linspace(0.0, 1.0, 33)
@@ -280,8 +278,8 @@ def _fixture_facts(solution: Solution) -> list[tuple[str, str]]:
     facts = [
         (
             f"fixture {name}",
-            ", ".join(f"{c} {block['drive'][c]:.3f}" for c in block["channels"])
-            + f" (of max {block['max_drive']:g})",
+            ", ".join(f"{c} {block.drive[c]:.3f}" for c in block.channels)
+            + f" (of max {block.max_drive:g})",
         )
         for name, block in solution.fixtures.items()
     ]
@@ -377,10 +375,11 @@ def _triple(values: Any) -> str:
     return ", ".join(f"{float(v):.5g}" for v in np.ravel(values))
 
 
-def _linearity_facts(linearity: Any) -> list[tuple[str, str]]:
-    if not isinstance(linearity, dict):
+def _linearity_facts(linearity: Linearity | None) -> list[tuple[str, str]]:
+    if linearity is None:
         return []
-    return [(str(k), str(v)) for k, v in linearity.items() if not isinstance(v, (dict, list))]
+    block = json_object(linearity.to_dict())
+    return [(k, str(v)) for k, v in block.items() if not isinstance(v, (dict, list))]
 
 
 def _summary(environments: Sequence[EnvironmentData]) -> list[dict[str, str]]:

@@ -10,10 +10,10 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
+from ocio_vp.jsontypes import JsonMapping, JsonObject
 from ocio_vp.plates.contact_sheet import SHEET
 from ocio_vp.plates.take import TakeReading
 from ocio_vp.validation.compare import ValidationResult
@@ -84,8 +84,8 @@ def _rgb(values: np.ndarray) -> list[float]:
 
 
 def validation_document(
-    result: ValidationResult, reading: TakeReading, *, sources: dict[str, Any]
-) -> dict[str, Any]:
+    result: ValidationResult, reading: TakeReading, *, sources: JsonMapping
+) -> JsonObject:
     """The ``validation.json`` document (plain types)."""
     worst = result.worst
     a = reading.alignment
@@ -194,7 +194,7 @@ def write_validation(
     reading: TakeReading,
     folder: str | Path,
     *,
-    sources: dict[str, Any],
+    sources: JsonMapping,
     pulled: tuple[tuple[int, float], ...] = (),
 ) -> list[str]:
     """Write ``validation.json``, ``index.html`` and the contact sheet into ``folder`` (new or

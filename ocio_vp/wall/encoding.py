@@ -33,15 +33,18 @@ IEC 61966-2-1 piecewise curve; ``pq`` is SMPTE ST 2084 of ``drive * peak_nits``.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ocio_vp.choices import DEFAULT_PEAK_NITS, WALL_ENCODINGS
+from ocio_vp.jsontypes import JsonMapping, JsonObject
 from ocio_vp.wall.linearity import CHANNELS, inverse_response, response_model
 
 if TYPE_CHECKING:
+    import PyOpenColorIO as OCIO
+
+    from ocio_vp.formats.linearity import Linearity
     from ocio_vp.formats.solution import Solution
 
 __all__ = [
@@ -49,6 +52,7 @@ __all__ = [
     "DEFAULT_PEAK_NITS",
     "LINEAR_HEADROOM",
     "LOG_SHAPER_KNEE",
+    "LUT_ACCURACY",
     "LUT_SIZE",
     "WALL_ENCODINGS",
     "LinearityLut",
@@ -74,6 +78,8 @@ LUT_DIR = "luts"
 #: Levels (fraction of drive 1.0) the LUT's accuracy is reported over: ``max_error`` is the
 #: worst relative error from 0.2% of peak up, the bands say where it is.
 ACCURACY_BANDS = ((0.001, 0.002), (0.002, 0.02), (0.02, 1.0))
+#: What :func:`lut_accuracy` measures (the ``definition`` of ``linearity.lut``).
+LUT_ACCURACY = "max |r(LUT(x)) - x| / x, x = linear drive (1.0 = top step)"
 _CHECK_POINTS = 20001
 
 _PQ = {  # SMPTE ST 2084:2014 constants
@@ -206,19 +212,21 @@ class WallEncoding:
         object.__setattr__(self, "peak_nits", peak)
 
     @classmethod
-    def from_dict(cls, block: Mapping[str, Any] | None) -> WallEncoding:
+    def from_dict(cls, block: JsonMapping | None) -> WallEncoding:
         """The ``wall_encoding`` block (None or missing: a linear wall)."""
         if not block:
             return cls()
         peak = block.get("peak_nits")
+        if peak is not None and (isinstance(peak, bool) or not isinstance(peak, (int, float))):
+            raise ValueError(f"peak_nits: expected a number, got {peak!r:.40}")
         return cls(str(block.get("name", "linear")), None if peak is None else float(peak))
 
     @classmethod
-    def of(cls, linearity: Mapping[str, Any] | None) -> WallEncoding:
+    def of(cls, linearity: Linearity | None) -> WallEncoding:
         """The encoding a ``linearity`` block records (a linear wall when it records none)."""
-        return cls.from_dict((linearity or {}).get("wall_encoding"))
+        return cls() if linearity is None else linearity.encoding
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> JsonObject:
         return {"name": self.name} | (
             {} if self.peak_nits is None else {"peak_nits": self.peak_nits}
         )
@@ -251,7 +259,7 @@ class WallEncoding:
         """OCIO's ``encoding`` attribute of a colorspace carrying this signal."""
         return _OCIO_ENCODINGS[self.name]
 
-    def ocio_transforms(self) -> list[Any]:
+    def ocio_transforms(self) -> list[OCIO.Transform]:
         """Linear drive -> this signal as OpenColorIO transforms (none for linear)."""
         import PyOpenColorIO as OCIO
 
@@ -300,7 +308,7 @@ class LinearityLut:
 
 
 def lut_table(
-    linearity: Mapping[str, Any],
+    linearity: Linearity,
     encoding: str = "linear",
     *,
     peak_nits: float = DEFAULT_PEAK_NITS,
@@ -312,11 +320,9 @@ def lut_table(
     drive = _unshape(np.linspace(0.0, 1.0, size), encoding, peak_nits)
     table = np.repeat(drive[:, None], 3, axis=1)
     for k, name in enumerate(CHANNELS):
-        channel = linearity["channels"][name]
-        if channel["corrected"]:
-            table[:, k] = inverse_response(
-                np.asarray(channel["drive"]), np.asarray(channel["response"]), drive
-            )
+        channel = (linearity.channels or {})[name]
+        if channel.corrected:
+            table[:, k] = inverse_response(channel.drive, channel.response, drive)
     if encoding != "linear":
         table = encode(table, encoding, peak_nits=peak_nits)
     return LinearityLut(table=table, encoding=encoding, peak_nits=float(peak_nits))
@@ -343,32 +349,30 @@ def lut_drive(lut: LinearityLut, drive: np.ndarray) -> np.ndarray:
     return decode(apply_lut(lut, drive), lut.encoding, peak_nits=lut.peak_nits)
 
 
-def lut_accuracy(linearity: Mapping[str, Any], lut: LinearityLut) -> dict[str, Any]:
+def lut_accuracy(linearity: Linearity, lut: LinearityLut) -> tuple[float, list[dict[str, float]]]:
     """How linear the modelled panel is after the LUT: the relative error
-    ``|r(LUT(x)) - x| / x`` over ``x`` from 0.1% to 100% of drive 1.0 (log-spaced).
+    ``|r(LUT(x)) - x| / x`` (:data:`LUT_ACCURACY`) over ``x`` from 0.1% to 100% of drive 1.0
+    (log-spaced).
 
-    Returns ``max_error`` (worst above 0.2% of peak, over the corrected channels), the worst
-    per band of :data:`ACCURACY_BANDS`, and the level it occurs at.
+    Returns the worst error above 0.2% of peak (over the corrected channels), and per band of
+    :data:`ACCURACY_BANDS` the worst and the level it occurs at (``from``, ``to``,
+    ``max_error``, ``at``).
     """
     x = np.geomspace(ACCURACY_BANDS[0][0], 1.0, _CHECK_POINTS)
     out = lut_drive(lut, np.repeat(x[:, None], 3, axis=1))
     error = np.zeros_like(x)
     for k, name in enumerate(CHANNELS):
-        channel = linearity["channels"][name]
-        if channel["corrected"]:
-            model = response_model(np.asarray(channel["drive"]), np.asarray(channel["response"]))
+        channel = (linearity.channels or {})[name]
+        if channel.corrected:
+            model = response_model(channel.drive, channel.response)
             # the LUT's output can pass 1.0 by an ulp; the response is linear there
             error = np.maximum(error, np.abs(model(np.clip(out[:, k], 0.0, 1.0)) - x) / x)
-    bands = []
+    bands: list[dict[str, float]] = []
     for lo, hi in ACCURACY_BANDS:
         inside = (x >= lo) & (x <= hi)
         i = int(np.argmax(np.where(inside, error, -1.0)))
         bands.append({"from": lo, "to": hi, "max_error": float(error[i]), "at": float(x[i])})
-    return {
-        "max_error": max(b["max_error"] for b in bands[1:]),
-        "bands": bands,
-        "definition": "max |r(LUT(x)) - x| / x, x = linear drive (1.0 = top step)",
-    }
+    return max(b["max_error"] for b in bands[1:]), bands
 
 
 def with_wall_encoding(
@@ -385,16 +389,18 @@ def with_wall_encoding(
         return _with_panel_encodings(solution, encoding, peak_nits)
     if encoding == "linear" and solution.linearity is None:
         return solution
-    linearity = dict(solution.linearity or {"measured": False, "model": "linear (assumed)"})
-    linearity["wall_encoding"] = WallEncoding(encoding, peak_nits).to_dict()
-    return dataclasses.replace(solution, linearity=linearity)
+    from ocio_vp.formats.linearity import assumed_linearity
+
+    linearity = solution.linearity or assumed_linearity()
+    wall = WallEncoding(encoding, peak_nits)
+    return dataclasses.replace(solution, linearity=linearity.updated(wall_encoding=wall))
 
 
 def _with_panel_encodings(solution: Solution, encoding: str, peak_nits: float) -> Solution:
     """:func:`with_wall_encoding` for every panel type without an encoding of its own."""
 
-    def encoded(linearity: dict | None) -> dict | None:
-        if linearity is not None and "wall_encoding" in linearity:
+    def encoded(linearity: Linearity | None) -> Linearity | None:
+        if linearity is not None and linearity.wall_encoding is not None:
             return linearity  # the panel type's own, from the measurements
         single = dataclasses.replace(solution, linearity=linearity, panels=None)
         return with_wall_encoding(single, encoding, peak_nits=peak_nits).linearity

@@ -29,13 +29,23 @@ alone; when every channel is, no LUT is written (``solution.json`` says so).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ocio_vp.errors import InputError, format_key_path
+from ocio_vp.jsontypes import JsonObject, JsonValue
+
+if TYPE_CHECKING:  # the records import this module's neighbours: made where used
+    from ocio_vp.formats.linearity import (
+        ChannelBlack,
+        ChannelNoise,
+        Linearity,
+        LinearityChannel,
+        ShadowDeviation,
+    )
 
 __all__ = [
     "CHANNELS",
@@ -110,7 +120,7 @@ def _error(source: str | None, key: tuple[str | int, ...], problem: str) -> Inpu
 
 
 def _number(
-    value: Any, source: str | None, key: tuple[str | int, ...], *, negative: bool = False
+    value: JsonValue, source: str | None, key: tuple[str | int, ...], *, negative: bool = False
 ) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise _error(source, key, f"expected a number, got {type(value).__name__} {value!r}"[:80])
@@ -122,14 +132,17 @@ def _number(
     return number
 
 
-def _rgb(value: Any, source: str | None, key: tuple[str | int, ...]) -> list[float]:
+def _rgb(value: JsonValue, source: str | None, key: tuple[str | int, ...]) -> list[float]:
     """Camera RGB: finite, may be slightly negative (after the camera's black subtraction)."""
     if not isinstance(value, (list, tuple)) or len(value) != 3:
         raise _error(source, key, "expected [r, g, b]")
     return [_number(v, source, (*key, j), negative=True) for j, v in enumerate(value)]
 
 
-def _check_lengths(drive_raw: Any, camera_raw: Any, source: str | None, channel: str) -> None:
+def _check_lengths(
+    drive_raw: JsonValue, camera_raw: JsonValue, source: str | None, channel: str
+) -> tuple[Sequence[JsonValue], Sequence[JsonValue]]:
+    """The ramp's drive and camera lists, checked to be lists of the same, sufficient length."""
     if not isinstance(drive_raw, (list, tuple)):
         raise _error(source, (channel, "drive"), "expected a list of drive values")
     if not isinstance(camera_raw, (list, tuple)):
@@ -147,9 +160,10 @@ def _check_lengths(drive_raw: Any, camera_raw: Any, source: str | None, channel:
             f"has {len(camera_raw)} entries but drive has {len(drive_raw)}; give one camera "
             "RGB per drive step",
         )
+    return drive_raw, camera_raw
 
 
-def _parse_ramp(raw: Any, source: str | None, channel: str) -> Ramp:
+def _parse_ramp(raw: JsonValue, source: str | None, channel: str) -> Ramp:
     if not isinstance(raw, Mapping):
         raise _error(source, (channel,), "expected a mapping with 'drive' and 'camera'")
     for name in raw:
@@ -158,12 +172,10 @@ def _parse_ramp(raw: Any, source: str | None, channel: str) -> Ramp:
     for name in _RAMP_KEYS:
         if name not in raw:
             raise _error(source, (channel,), f"missing required key {name!r}")
-    _check_lengths(raw["drive"], raw["camera"], source, channel)
-    drive = np.array(
-        [_number(v, source, (channel, "drive", i)) for i, v in enumerate(raw["drive"])]
-    )
+    drive_raw, camera_raw = _check_lengths(raw["drive"], raw["camera"], source, channel)
+    drive = np.array([_number(v, source, (channel, "drive", i)) for i, v in enumerate(drive_raw)])
     camera = np.array(
-        [_rgb(rgb, source, (channel, "camera", i)) for i, rgb in enumerate(raw["camera"])]
+        [_rgb(rgb, source, (channel, "camera", i)) for i, rgb in enumerate(camera_raw)]
     )
     for i in range(1, len(drive)):
         if drive[i] <= drive[i - 1]:
@@ -183,7 +195,7 @@ def _parse_ramp(raw: Any, source: str | None, channel: str) -> Ramp:
     return Ramp(drive=drive, camera=camera)
 
 
-def parse_ramps(raw: Any, *, source: str | None = None) -> dict[str, Ramp]:
+def parse_ramps(raw: JsonValue, *, source: str | None = None) -> dict[str, Ramp]:
     """Validate the ``ramps`` section of a measurements file (see ``docs/measurements.md``).
 
     Camera values may be negative (a camera's black subtraction leaves the zero step slightly
@@ -224,9 +236,9 @@ def parse_ramps(raw: Any, *, source: str | None = None) -> dict[str, Ramp]:
     }
 
 
-def ramps_to_dict(ramps: Mapping[str, Ramp]) -> dict[str, Any]:
+def ramps_to_dict(ramps: Mapping[str, Ramp]) -> JsonObject:
     """The inverse of :func:`parse_ramps` (plain Python types)."""
-    data: dict[str, Any] = {
+    data: JsonObject = {
         c: {
             "drive": [float(v) for v in ramps[c].drive],
             "camera": [[float(v) for v in row] for row in ramps[c].camera],
@@ -396,8 +408,8 @@ class ChannelResponse:
     drive: np.ndarray
     response: np.ndarray
     measured: np.ndarray
-    black: dict[str, Any]
-    noise: dict[str, Any]
+    black: ChannelBlack
+    noise: ChannelNoise
     projection_residual: float
     below_floor: list[int] = field(default_factory=list)
     merged: list[list[int]] = field(default_factory=list)
@@ -438,6 +450,8 @@ def channel_response(
         When the top step is not brighter than the black, or the response falls by more than
         :data:`REFUSAL_SIGMAS` noise sigmas (naming the step).
     """
+    from ocio_vp.formats.linearity import ChannelBlack, ChannelNoise
+
     s = np.asarray(SL, dtype=np.float64)[:, channel]
     name = CHANNELS[channel]
     y = ramp.camera @ s / (s @ s)
@@ -466,13 +480,17 @@ def channel_response(
         drive=knot_d,
         response=knot_r,
         measured=r[steps >= 0],
-        black={"source": black_source, "camera": [float(v) for v in black], "level": y0 / top},
-        noise={
-            "floor": floor,
-            "relative": relative,
-            "source": "given" if ramp.noise_floor is not None else "estimated from the ramp",
-            "detection_limit": DETECTION_SIGMAS * floor,
-        },
+        black=ChannelBlack(
+            source=black_source,
+            camera=np.asarray(black, dtype=np.float64).copy(),
+            level=float(y0 / top),
+        ),
+        noise=ChannelNoise(
+            floor=float(floor),
+            relative=float(relative),
+            source="given" if ramp.noise_floor is not None else "estimated from the ramp",
+            detection_limit=float(DETECTION_SIGMAS * floor),
+        ),
         projection_residual=float(np.max(np.linalg.norm(excess, axis=1)) / np.linalg.norm(top * s)),
         below_floor=[int(steps[i]) for i in groups["below"]],
         merged=[[int(steps[i]) for i in block] for block in groups["merged"]],
@@ -526,16 +544,18 @@ def inverse_response(drive: np.ndarray, response: np.ndarray, x: np.ndarray) -> 
 # The ``linearity`` block of solution.json.
 
 
-def _deviations(fit: ChannelResponse, tolerance: float) -> dict[str, Any]:
+def _deviations(
+    fit: ChannelResponse, tolerance: float
+) -> tuple[float, ShadowDeviation | None, bool]:
     """Absolute and relative deviation from linear at the knots, and whether to correct."""
+    from ocio_vp.formats.linearity import ShadowDeviation
+
     d, r = fit.drive[1:-1], fit.response[1:-1]
     absolute = float(np.max(np.abs(fit.response - fit.drive)))
-    out: dict[str, Any] = {"max_deviation": absolute, "shadow_deviation": None}
     if len(d) == 0:
-        out["corrected"] = absolute > tolerance
-        return out
+        return absolute, None, absolute > tolerance
     relative = r / d - 1.0
-    sigma = np.hypot(fit.noise["floor"], fit.noise["relative"] * r)
+    sigma = np.hypot(fit.noise.floor, fit.noise.relative * r)
     # deviations smaller than the noise say nothing about the wall (at 0.03% of peak a 0.02%
     # floor is 70% of the level)
     significant = np.abs(r - d) > DETECTION_SIGMAS * sigma
@@ -543,20 +563,19 @@ def _deviations(fit: ChannelResponse, tolerance: float) -> dict[str, Any]:
     # one step's own noise is 10% of it or less), with its uncertainty (the step's and the
     # black's noise), and chosen by its lower bound: the largest of many noisy deviations is
     # otherwise mostly noise
-    quantified = significant & (r >= QUANTIFICATION_SIGMAS * fit.noise["floor"])
-    uncertainty = np.hypot(sigma, fit.noise["floor"]) / d
+    quantified = significant & (r >= QUANTIFICATION_SIGMAS * fit.noise.floor)
+    uncertainty = np.hypot(sigma, fit.noise.floor) / d
+    shadow = None
     if np.any(quantified):
         bound = np.abs(relative) - 2 * uncertainty
         i = int(np.argmax(np.where(quantified, bound, -np.inf)))
-        out["shadow_deviation"] = {
-            "relative": float(relative[i]),
-            "uncertainty": float(uncertainty[i]),
-            "drive": float(d[i]),
-        }
-    out["corrected"] = bool(
+        shadow = ShadowDeviation(
+            relative=float(relative[i]), uncertainty=float(uncertainty[i]), drive=float(d[i])
+        )
+    corrected = bool(
         absolute > tolerance or np.any(significant & (np.abs(relative) > RELATIVE_TOLERANCE))
     )
-    return out
+    return absolute, shadow, corrected
 
 
 def _top_step(
@@ -564,7 +583,7 @@ def _top_step(
 ) -> tuple[float, str | None]:
     """How far the ramp's top step is from ``primaries``: refused beyond
     :data:`TOP_STEP_REFUSAL`, a warning beyond the noise (and camera repeatability)."""
-    black = np.asarray(fit.black["camera"])
+    black = fit.black.camera
     primary = SL[:, k]
     mismatch = float(np.linalg.norm(ramp.camera[-1] - black - primary) / np.linalg.norm(primary))
     name = CHANNELS[k]
@@ -576,7 +595,7 @@ def _top_step(
             f"{100 * mismatch:.3g}% (more than {100 * TOP_STEP_REFUSAL:g}%): the ramp and the "
             "primaries must be shot at the same level and exposure",
         )
-    noise = 3.0 * math.hypot(fit.noise["floor"], fit.noise["relative"])
+    noise = 3.0 * math.hypot(fit.noise.floor, fit.noise.relative)
     if mismatch <= max(noise, TOP_STEP_WARNING):
         return mismatch, None
     return mismatch, (
@@ -594,16 +613,16 @@ def _steps_text(steps: list[int], drive: np.ndarray) -> str:
 def _channel_notes(name: str, ramp: Ramp, fit: ChannelResponse) -> list[str]:
     """What was done to the ramp, in words (terminal and ``solution.json``)."""
     black, noise = fit.black, fit.noise
-    rgb = ", ".join(f"{v + 0.0:.4g}" for v in black["camera"])  # + 0.0: no "-0"
+    rgb = ", ".join(f"{v + 0.0:.4g}" for v in black.camera)  # + 0.0: no "-0"
     notes = [
-        f"{name}: black ({black['source']}) camera [{rgb}] = {100 * black['level']:.3g}% of "
-        f"the top step, subtracted; noise {100 * noise['floor']:.2g}% of the top step + "
-        f"{100 * noise['relative']:.2g}% of the level ({noise['source']})"
+        f"{name}: black ({black.source}) camera [{rgb}] = {100 * black.level:.3g}% of "
+        f"the top step, subtracted; noise {100 * noise.floor:.2g}% of the top step + "
+        f"{100 * noise.relative:.2g}% of the level ({noise.source})"
     ]
     if fit.below_floor:
         notes.append(
             f"{name}: {_steps_text(fit.below_floor, ramp.drive)} below the detection limit "
-            f"({100 * noise['detection_limit']:.2g}% of the top step): dropped from the fit"
+            f"({100 * noise.detection_limit:.2g}% of the top step): dropped from the fit"
         )
     for block in fit.merged:
         if not set(block) & set(fit.below_floor + fit.at_top):
@@ -619,18 +638,18 @@ def _channel_notes(name: str, ramp: Ramp, fit: ChannelResponse) -> list[str]:
     return notes
 
 
-def _summary(channels: Mapping[str, Any], tolerance: float) -> str:
-    corrected = [c for c in CHANNELS if channels[c]["corrected"]]
-    worst = max(channels[c]["max_deviation"] for c in CHANNELS)
+def _summary(channels: Mapping[str, LinearityChannel], tolerance: float) -> str:
+    corrected = [c for c in CHANNELS if channels[c].corrected]
+    worst = max(channels[c].max_deviation for c in CHANNELS)
 
     def shadow(c: str) -> str:
-        dev = channels[c]["shadow_deviation"]
+        dev = channels[c].shadow_deviation
         if dev is None:
             return f"{c} within the noise"
-        word = "dark" if dev["relative"] < 0 else "bright"
+        word = "dark" if dev.relative < 0 else "bright"
         return (
-            f"{c} {100 * abs(dev['relative']):.3g}% (+-{100 * dev['uncertainty']:.2g}%) {word} "
-            f"at {100 * dev['drive']:.3g}% of peak"
+            f"{c} {100 * abs(dev.relative):.3g}% (+-{100 * dev.uncertainty:.2g}%) {word} "
+            f"at {100 * dev.drive:.3g}% of peak"
         )
 
     if corrected:
@@ -653,7 +672,7 @@ def fit_linearity(
     *,
     tolerance: float = LINEARITY_TOLERANCE,
     source: str | None = None,
-) -> dict[str, Any]:
+) -> Linearity:
     """The ``linearity`` block of ``solution.json`` from the measured ramps.
 
     Per channel: the response knots, the black subtracted, the noise, the steps dropped or
@@ -666,8 +685,10 @@ def fit_linearity(
     The pre-correction LUT is built from the knots when the config is written
     (:func:`ocio_vp.ocio.wall.wall_outputs`); ``corrected`` false everywhere means no LUT.
     """
+    from ocio_vp.formats.linearity import MEASURED_KEYS, Linearity, LinearityChannel
+
     SL = np.asarray(SL, dtype=np.float64)
-    channels: dict[str, Any] = {}
+    channels: dict[str, LinearityChannel] = {}
     notes: list[str] = []
     warnings: list[str] = []
     for k, name in enumerate(CHANNELS):
@@ -676,30 +697,35 @@ def fit_linearity(
         top_vs_primary, warning = _top_step(ramp, fit, SL, k, source)
         warnings += [warning] if warning else []
         notes += _channel_notes(name, ramp, fit)
-        channels[name] = {
-            "drive": fit.drive.tolist(),
-            "response": fit.response.tolist(),
-            "measured_response": fit.measured.tolist(),
-            **_deviations(fit, tolerance),
-            "black": fit.black,
-            "noise": fit.noise,
-            "below_floor": fit.below_floor,
-            "merged": fit.merged,
-            "at_top": fit.at_top,
-            "projection_residual": fit.projection_residual,
-            "top_step_vs_primary": top_vs_primary,
-        }
-    corrected = any(channels[c]["corrected"] for c in CHANNELS)
-    return {
-        "measured": True,
-        "model": "isotonic-pchip-inverse-1d-lut" if corrected else "linear",
-        "summary": _summary(channels, tolerance),
-        "notes": notes,
-        "warnings": warnings,
-        "tolerance": tolerance,
-        "relative_tolerance": RELATIVE_TOLERANCE,
-        "max_deviation": max(channels[c]["max_deviation"] for c in CHANNELS),
-        "projection": "least squares of each step's camera RGB onto the primary's column of [SL]",
-        "channels": channels,
-        "lut": None,
-    }
+        max_deviation, shadow, corrected = _deviations(fit, tolerance)
+        channels[name] = LinearityChannel(
+            drive=fit.drive,
+            response=fit.response,
+            measured_response=fit.measured,
+            max_deviation=max_deviation,
+            shadow_deviation=shadow,
+            corrected=corrected,
+            black=fit.black,
+            noise=fit.noise,
+            below_floor=fit.below_floor,
+            merged=fit.merged,
+            at_top=fit.at_top,
+            projection_residual=fit.projection_residual,
+            top_step_vs_primary=top_vs_primary,
+        )
+    return Linearity(
+        measured=True,
+        model="isotonic-pchip-inverse-1d-lut"
+        if any(c.corrected for c in channels.values())
+        else "linear",
+        summary=_summary(channels, tolerance),
+        notes=notes,
+        warnings=warnings,
+        tolerance=tolerance,
+        relative_tolerance=RELATIVE_TOLERANCE,
+        max_deviation=max(channels[c].max_deviation for c in CHANNELS),
+        projection="least squares of each step's camera RGB onto the primary's column of [SL]",
+        channels=channels,
+        lut=None,
+        present=MEASURED_KEYS,
+    )

@@ -25,12 +25,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 if TYPE_CHECKING:
+    from ocio_vp.formats.linearity import Linearity, SoftClip
     from ocio_vp.formats.solution import Solution
 
 __all__ = [
@@ -86,21 +86,22 @@ def full_drive(knee: float) -> float:
     return knee + span * max(math.log(span / FULL_TOLERANCE), 0.0)
 
 
-def soft_clip_knee(linearity: Mapping[str, Any] | None) -> float | None:
+def soft_clip_knee(linearity: Linearity | None) -> float | None:
     """The knee recorded in a ``linearity`` block, or None (off; files without one)."""
-    block = (linearity or {}).get("soft_clip")
-    if not block:
+    if linearity is None or linearity.soft_clip is None:
         return None
-    return float(block["knee"])
+    return linearity.soft_clip.knee
 
 
-def _block(knee: float) -> dict[str, Any]:
-    return {
-        "knee": float(knee),
-        "curve": SOFT_CLIP_CURVE,
-        "full_drive": round(full_drive(knee), 6),
-        "inverse_cap": INVERSE_CAP,
-    }
+def _block(knee: float) -> SoftClip:
+    from ocio_vp.formats.linearity import SoftClip
+
+    return SoftClip(
+        knee=float(knee),
+        curve=SOFT_CLIP_CURVE,
+        full_drive=round(full_drive(knee), 6),
+        inverse_cap=INVERSE_CAP,
+    )
 
 
 def with_soft_clip(solution: Solution, knee: float | None) -> Solution:
@@ -110,9 +111,10 @@ def with_soft_clip(solution: Solution, knee: float | None) -> Solution:
         return solution
     check_knee(knee)
 
-    def clipped(linearity: dict | None) -> dict:
-        base = dict(linearity or {"measured": False, "model": "linear (assumed)"})
-        return {**base, "soft_clip": _block(knee)}
+    from ocio_vp.formats.linearity import assumed_linearity
+
+    def clipped(linearity: Linearity | None) -> Linearity:
+        return (linearity or assumed_linearity()).updated(soft_clip=_block(knee))
 
     panels = solution.panels
     if panels:
