@@ -75,7 +75,7 @@ def test_fixtures_respect_every_limit(solved, rgbw):
         solution = solved[name]
         notes = solution.diagnostics.fixtures
         assert notes.applied
-        drives = np.array(list(solution.fixtures["rgbw"]["drive"].values()))
+        drives = np.array(list(solution.fixtures["rgbw"].drive.values()))
         assert np.all(drives >= 0) and np.all(drives <= 1.0 + 1e-9)
         wall = np.asarray(notes.wall_drive)
         baseline = np.linalg.inv(rgbw.SL) @ solution.w_avg
@@ -113,7 +113,7 @@ def test_fixtures_lower_held_out_error_by_40_percent_in_a_broadband_scene(stage,
             rgbw, rgbw.environment(name), method="least-squares", fixtures=False
         )
         drives = np.array(
-            [with_f.fixtures["rgbw"]["drive"][c] for c in with_f.fixtures["rgbw"]["channels"]]
+            [with_f.fixtures["rgbw"].drive[c] for c in with_f.fixtures["rgbw"].channels]
         )
         de_f = held_out_errors(
             stage, name, M=with_f.M, w_avg=with_f.w_avg, Q=with_f.Q, reflectances=refl,
@@ -134,7 +134,7 @@ def test_fixtures_that_add_nothing_stay_off(stage):
     s = solve_environment(m, m.environments[0], method="least-squares")
     wall = solve_environment(m, m.environments[0], method="least-squares", fixtures=False)
     assert not s.diagnostics.fixtures.applied
-    assert all(v == 0.0 for v in s.fixtures["rgb"]["drive"].values())
+    assert all(v == 0.0 for v in s.fixtures["rgb"].drive.values())
     assert np.array_equal(s.M, wall.M) and np.array_equal(s.Q, wall.Q)
 
 
@@ -201,9 +201,9 @@ def test_cli_solve_and_export_lights(tmp_path, stage, capsys):
     document = json.loads((folder / "lights.json").read_text())
     solution = load_solution(tmp_path / "calib" / "d65")
     channels = document["fixtures"][0]["channels"]
-    assert [c["channel"] for c in channels] == list(solution.fixtures["rgbacl"]["channels"])
+    assert [c["channel"] for c in channels] == list(solution.fixtures["rgbacl"].channels)
     for row in channels:
-        assert row["drive"] == pytest.approx(solution.fixtures["rgbacl"]["drive"][row["channel"]])
+        assert row["drive"] == pytest.approx(solution.fixtures["rgbacl"].drive[row["channel"]])
     csv_lines = (folder / "lights.csv").read_text().splitlines()
     assert len(csv_lines) == 1 + len(channels)
     # the patch: universe, mode and two slots per channel from the start address

@@ -75,7 +75,7 @@ def test_sidecar_is_clf_v3_read_by_colour(solved):
         assert f'xmlns="{CLF_V3_NAMESPACE}"' in text and 'compCLFversion="3.0"' in text
         process_list = colour_clf_io.read_clf(lut.read_bytes())
         solution = load_solution(folder)
-        encoding = solution.linearity["wall_encoding"]["name"]
+        encoding = solution.linearity.encoding.name
         table = lut_table(solution.linearity, encoding).table
         *shaper, lut = process_list.process_nodes
         assert type(lut).__name__ == "LUT1D" and lut.array.dim == table.shape

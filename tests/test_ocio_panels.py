@@ -107,9 +107,9 @@ def test_the_ceiling_gets_its_own_m_linearity_lut_and_pq_signal(written):
 
     solution = load_solution(written["least-squares"])
     ceiling = solution.panels["ceiling"]
-    assert ceiling.linearity["wall_encoding"] == {"name": "pq", "peak_nits": 1500.0}
-    assert ceiling.linearity["lut"]["file"].startswith("luts/")
-    assert (written["least-squares"] / ceiling.linearity["lut"]["file"]).is_file()
+    assert ceiling.linearity.wall_encoding == {"name": "pq", "peak_nits": 1500.0}
+    assert ceiling.linearity.lut.file.startswith("luts/")
+    assert (written["least-squares"] / ceiling.linearity.lut.file).is_file()
     assert solution.linearity is None or "lut" not in (solution.linearity or {})  # the wall's
     signal = apply(written["least-squares"], REFERENCE, "LED Ceiling - Outer Frustum", COLOURS)
     # Decode PQ (colour-science), then the ceiling's own response: the linear drive M c.

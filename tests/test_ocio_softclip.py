@@ -118,7 +118,7 @@ def test_every_panel_type_is_soft_clipped(panel_stage_and_measurements, tmp_path
     d = drives(written)
     checked = 0
     for panel in written.panels.values():
-        assert panel.linearity["soft_clip"]["knee"] == KNEE
+        assert panel.linearity.soft_clip.knee == KNEE
         spaces = {"out_of_frustum": (panel.M, None)}
         if panel.in_frustum and panel.N is not None:
             spaces["in_frustum"] = (panel.N, panel.black_level_offset)
@@ -128,7 +128,7 @@ def test_every_panel_type_is_soft_clipped(panel_stage_and_measurements, tmp_path
             want = run(configs["plain"], REFERENCE, space,
                        content_for(forward(d, KNEE), matrix, offset))  # fmt: skip
             assert np.abs(got - want).max() < TOLERANCE, space
-            if not panel.linearity.get("lut"):
+            if panel.linearity.lut is None:
                 assert np.abs(got - forward(d, KNEE)).max() < TOLERANCE, space
             checked += 1
     assert checked >= 4

@@ -4,14 +4,13 @@ plus the bounce the black-level offset cancels."""
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 from conftest import make_measurements_dict
 
 from ocio_vp.formats.measurements import measurements_from_dict
 from ocio_vp.pipeline import solve_measurements
 from ocio_vp.validation.compare import expected_camera
+from ocio_vp.wall.softclip import with_soft_clip
 
 
 def _solution():
@@ -28,7 +27,7 @@ def test_expected_camera_follows_the_soft_clip_of_the_solve():
     plain = expected_camera(solution, light)
     np.testing.assert_allclose(plain, np.clip(light, 0, 1) @ SL.T + bounce, rtol=1e-12)
     knee = 0.6
-    clipped = dataclasses.replace(solution, linearity={"soft_clip": {"knee": knee}})
+    clipped = with_soft_clip(solution, knee)
     span = 1 - knee
     f = np.where(light > knee, 1 - span * np.exp(-(light - knee) / span), light)
     want = np.clip(f, 0, 1) @ SL.T + bounce

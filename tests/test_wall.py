@@ -242,11 +242,11 @@ class TestFitLinearity:
         block = fit_linearity(m.ramps, m.SL)
         drive = np.linspace(0, 1, STEPS)
         # Closed form of the deviation over the ramp steps.
-        assert block["channels"]["red"]["max_deviation"] == pytest.approx(
+        assert block.channels["red"].max_deviation == pytest.approx(
             np.max(np.abs(drive**1.1 - drive)), abs=1e-12
         )
-        assert [block["channels"][c]["corrected"] for c in CHANNELS] == [True, False, False]
-        assert block["model"] == "isotonic-pchip-inverse-1d-lut"
+        assert [block.channels[c].corrected for c in CHANNELS] == [True, False, False]
+        assert block.model == "isotonic-pchip-inverse-1d-lut"
 
     def test_a_wall_linear_within_tolerance_gets_no_lut(self, tmp_path):
         # 0.1% bow on red: below the documented 0.2% tolerance.
@@ -257,8 +257,8 @@ class TestFitLinearity:
         m = measurements_from_dict(document)
         solution = solve_environment(m, m.environments[0])
         block = solution.linearity
-        assert block["model"] == "linear" and block["max_deviation"] < LINEARITY_TOLERANCE
-        assert block["max_deviation"] == pytest.approx(0.001, rel=1e-3)  # 0.004 / 4 at d = 0.5
+        assert block.model == "linear" and block.max_deviation < LINEARITY_TOLERANCE
+        assert block.max_deviation == pytest.approx(0.001, rel=1e-3)  # 0.004 / 4 at d = 0.5
         write_solutions([solution], tmp_path)
         written = json.loads((tmp_path / "env_0" / "solution.json").read_text())
         assert written["linearity"]["model"] == "linear"
@@ -358,7 +358,7 @@ class TestWrittenConfig:
         (array,) = [child for child in lut if child.tag.endswith("Array")]
         entries, channels = map(int, array.get("dim").split())
         assert channels == 3 and entries <= 4095
-        assert entries == load_solution(written[encoding]).linearity["lut"]["entries"]
+        assert entries == load_solution(written[encoding]).linearity.lut.entries
 
     def test_rewriting_a_loaded_solution_gives_the_same_sidecar(self, written, tmp_path):
         folder = written["pq"]
@@ -585,6 +585,6 @@ class TestCommandLine:
         solution = with_wall_encoding(solve_environment(m, m.environments[0]), "gamma2.4")
         outputs = wall_outputs(solution)
         assert outputs.files == {} and outputs.search_path is None
-        assert outputs.linearity["measured"] is False
+        assert outputs.linearity.measured is False
         (chain,) = {len(v) for v in outputs.extra_wall_transforms.values()}
         assert chain == 1

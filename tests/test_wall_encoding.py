@@ -12,6 +12,7 @@ import pytest
 from conftest import make_measurements_dict
 
 from ocio_vp.cli import main
+from ocio_vp.formats.linearity import ChannelBlack, ChannelNoise, Linearity, LinearityChannel
 from ocio_vp.ocio.config import OUT_OF_FRUSTUM, REFERENCE
 from ocio_vp.ocio.wall import encoding_transforms, log_shaper_transform
 from ocio_vp.wall.encoding import (
@@ -97,19 +98,32 @@ class TestShaper:
         )
 
 
-def shadow_block(size: int = 33) -> dict:
+def _channel(drive: np.ndarray, response: np.ndarray, corrected: bool) -> LinearityChannel:
+    return LinearityChannel(
+        drive=drive,
+        response=response,
+        measured_response=response,
+        max_deviation=float(np.max(np.abs(response - drive))),
+        shadow_deviation=None,
+        corrected=corrected,
+        black=ChannelBlack(source="zero step", camera=np.zeros(3), level=0.0),
+        noise=ChannelNoise(floor=0.0, relative=0.0, source="given", detection_limit=0.0),
+        below_floor=[],
+        merged=[],
+        at_top=[],
+        projection_residual=0.0,
+        top_step_vs_primary=0.0,
+    )
+
+
+def shadow_block(size: int = 33) -> Linearity:
     """A linearity block whose red is 30% dark near black (``d (1 - 0.3 exp(-d / 0.01))``)."""
     d = np.r_[0.0, np.geomspace(1e-4, 1.0, size - 1)]
     r = d * (1 - 0.3 * np.exp(-d / 0.01))
     r /= r[-1]
-    linear = {"drive": [0.0, 1.0], "response": [0.0, 1.0], "corrected": False}
-    return {
-        "channels": {
-            "red": {"drive": d.tolist(), "response": r.tolist(), "corrected": True},
-            "green": linear,
-            "blue": linear,
-        }
-    }
+    linear = _channel(np.array([0.0, 1.0]), np.array([0.0, 1.0]), False)
+    channels = {"red": _channel(d, r, True), "green": linear, "blue": linear}
+    return Linearity(measured=True, model="isotonic-pchip-inverse-1d-lut", channels=channels)
 
 
 class TestLutAccuracy:
@@ -120,30 +134,30 @@ class TestLutAccuracy:
 
         block = shadow_block()
         lut = lut_table(block, encoding)
-        accuracy = lut_accuracy(block, lut)
-        assert accuracy["max_error"] < 0.005  # the documented target
+        max_error, bands_measured = lut_accuracy(block, lut)
+        assert max_error < 0.005  # the documented target
         x = np.geomspace(0.002, 1.0, 20001)
         front = [] if encoding == "linear" else encoding_transforms(encoding)
         signal = run([*front, lut_transform(lut)], x)
         drive = signal if encoding == "linear" else decode(signal, encoding)
-        red = block["channels"]["red"]
-        error = np.abs(response_model(red["drive"], red["response"])(np.clip(drive, 0, 1)) / x - 1)
+        red = block.channels["red"]
+        error = np.abs(response_model(red.drive, red.response)(np.clip(drive, 0, 1)) / x - 1)
         # (for sRGB OCIO's moncurve adds its own 0.025% below 0.3% of peak, see TestSrgb)
         tolerance = 3e-4 if encoding == "srgb" else 2e-5
-        assert np.max(error) == pytest.approx(accuracy["max_error"], rel=0.5, abs=tolerance)
-        bands = {(b["from"], b["to"]): b["max_error"] for b in accuracy["bands"]}
-        assert accuracy["max_error"] == max(bands[(0.002, 0.02)], bands[(0.02, 1.0)])
+        assert np.max(error) == pytest.approx(max_error, rel=0.5, abs=tolerance)
+        bands = {(b["from"], b["to"]): b["max_error"] for b in bands_measured}
+        assert max_error == max(bands[(0.002, 0.02)], bands[(0.02, 1.0)])
 
     def test_even_drive_spacing_was_far_worse_in_the_shadows(self):
         # The old sidecar sampled the inverse every 1/255 of drive for a linear wall: the same
         # measure over 0.2%-2% of peak, on the same response, for comparison.
         block = shadow_block()
-        red = block["channels"]["red"]
-        model = response_model(red["drive"], red["response"])
+        red = block.channels["red"]
+        model = response_model(red.drive, red.response)
         from ocio_vp.wall.linearity import inverse_response
 
         knots = np.linspace(0, LINEAR_HEADROOM, 4081)
-        table = inverse_response(np.array(red["drive"]), np.array(red["response"]), knots)
+        table = inverse_response(red.drive, red.response, knots)
         x = np.geomspace(0.002, 0.02, 2001)
         even = np.abs(model(np.interp(x, knots, table)) / x - 1).max()
         spaced = np.abs(
@@ -164,10 +178,10 @@ def test_panel_types_keep_their_own_encoding_and_take_the_stages_otherwise(
     wall, ceiling = m.panels
     m = dataclasses.replace(m, panels=(wall, dataclasses.replace(ceiling, encoding="gamma2.4")))
     solution = with_wall_encoding(solve_environment(m, m.environments[0]), "pq", peak_nits=1200)
-    assert solution.panels["ceiling"].linearity["wall_encoding"] == {"name": "gamma2.4"}
-    pq = {"name": "pq", "peak_nits": 1200.0}
-    assert solution.panels["wall"].linearity["wall_encoding"] == pq
-    assert solution.linearity["wall_encoding"] == pq  # the top level is the wall's
+    assert solution.panels["ceiling"].linearity.wall_encoding == WallEncoding("gamma2.4")
+    pq = WallEncoding("pq", 1200.0)
+    assert solution.panels["wall"].linearity.wall_encoding == pq
+    assert solution.linearity.wall_encoding == pq  # the top level is the wall's
 
 
 @pytest.mark.parametrize("name, peak", [("gamma2.4", None), ("srgb", None), ("pq", 600.0)])

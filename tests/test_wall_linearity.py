@@ -26,6 +26,7 @@ from conftest import make_measurements_dict
 from ocio_vp.cli import main
 from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import measurements_from_dict
+from ocio_vp.formats.records import json_value
 from ocio_vp.ocio.config import OUT_OF_FRUSTUM, REFERENCE
 from ocio_vp.wall.encoding import decode, encode
 from ocio_vp.wall.linearity import (
@@ -73,10 +74,11 @@ def camera_ramps(
 
 
 def fitted(ramps: dict, document: dict | None = None) -> dict:
+    """The fitted block as solution.json holds it (what pipeline scripts read)."""
     document = document or make_measurements_dict()
     document["ramps"] = ramps
     m = measurements_from_dict(document, source="m.yaml")
-    return fit_linearity(m.ramps, m.SL, source="m.yaml")
+    return json_value(fit_linearity(m.ramps, m.SL, source="m.yaml"))
 
 
 # --------------------------------------------------------------------------------------------

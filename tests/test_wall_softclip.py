@@ -4,7 +4,6 @@ it from ``full_drive``), its exact inverse, and how solution.json records it."""
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import math
 
@@ -12,6 +11,7 @@ import numpy as np
 import pytest
 
 from ocio_vp.formats.solution import load_solution, solution_to_json
+from ocio_vp.wall.encoding import WallEncoding, with_wall_encoding
 from ocio_vp.wall.softclip import (
     FULL_TOLERANCE,
     INVERSE_CAP,
@@ -91,13 +91,13 @@ def test_solution_json_records_it_and_old_files_read_as_off(tmp_path):
     assert soft_clip_knee(solution.linearity) is None  # written before the option existed
     assert with_soft_clip(solution, None) is solution
     clipped = with_soft_clip(solution, 0.75)
-    block = clipped.linearity["soft_clip"]
-    assert block["knee"] == 0.75 and block["full_drive"] == pytest.approx(full_drive(0.75))
-    assert clipped.linearity["model"] == "linear (assumed)"
+    block = clipped.linearity.soft_clip
+    assert block.knee == 0.75 and block.full_drive == pytest.approx(full_drive(0.75))
+    assert clipped.linearity.model == "linear (assumed)"
     path = tmp_path / "solution.json"
     path.write_text(solution_to_json(clipped), encoding="utf-8")
     assert json.loads(path.read_text())["linearity"]["soft_clip"]["knee"] == 0.75
     assert soft_clip_knee(load_solution(path).linearity) == 0.75
     # the other settings of the wall's transfer are kept beside it
-    encoded = dataclasses.replace(solution, linearity={"wall_encoding": {"name": "pq"}})
-    assert with_soft_clip(encoded, 0.5).linearity["wall_encoding"] == {"name": "pq"}
+    encoded = with_wall_encoding(solution, "pq")
+    assert with_soft_clip(encoded, 0.5).linearity.wall_encoding == WallEncoding("pq")
