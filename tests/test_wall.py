@@ -215,7 +215,7 @@ class TestChannelResponse:
         )
         fit = channel_response(ramps["green"], SL, 1)
         assert fit.drive[0] == 0 and fit.response[0] == 0 and len(fit.drive) == 9
-        assert fit.black["source"].startswith("assumed 0")
+        assert fit.black.source.startswith("assumed 0")
         np.testing.assert_allclose(fit.response[1:], drive**1.1, atol=1e-12)
         np.testing.assert_allclose(fit.measured, drive**1.1, atol=1e-12)
 

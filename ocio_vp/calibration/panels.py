@@ -27,7 +27,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -90,7 +89,9 @@ class PanelLight:
         return predict_lit_chart(self.panel.SRL, self.beta, np.eye(3), drive)
 
 
-def panel_lights(measurements: Measurements, w_avgs: Mapping[str, Any]) -> tuple[PanelLight, ...]:
+def panel_lights(
+    measurements: Measurements, w_avgs: Mapping[str, np.ndarray]
+) -> tuple[PanelLight, ...]:
     """Every panel type's :class:`PanelLight`, in file order (``w_avgs``: ``{name: (3,)}``).
 
     Raises

@@ -4,11 +4,16 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ocio_vp.choices import DEFAULT_FOOTAGE_ENCODING
 from ocio_vp.commands.common import warn
 from ocio_vp.commands.report import SOLUTIONS_HELP
+
+if TYPE_CHECKING:  # footage imports OCIO: not at start-up
+    from ocio_vp.footage.apply import FrameResult
 
 __all__ = [
     "FREE_SPACE_MARGIN",
@@ -216,6 +221,7 @@ def _run_tasks(tasks: list, args: argparse.Namespace, workers: int) -> int:
     write_error = None
     bar = progress(total=len(tasks), unit="frame", disable=args.no_progress or None, leave=True)
     with bar:
+        results: Iterator[tuple[int, FrameResult | BaseException]]
         if workers == 1 and not args.scheduler:
             results = apply_frames(tasks, threads=tasks[0].threads if tasks else 1)
         else:

@@ -3,8 +3,13 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 from ocio_vp.commands.common import progress, warn
+
+if TYPE_CHECKING:
+    from ocio_vp.simulator.stage import EnvironmentLight
 
 __all__ = ["add_parser", "run"]
 
@@ -359,7 +364,7 @@ def _panel_measurements(wall, args: argparse.Namespace):
 
     gain = DEFAULT_CEILING_GAIN if args.ceiling_gain is None else args.ceiling_gain
     stage = panel_stage(wall, ceiling_leds=ceiling_leds_from_arg(args.ceiling_leds), gain=gain)
-    environments = {name: name for name in SCENES}
+    environments: Mapping[str, EnvironmentLight] = {name: name for name in SCENES}
     if args.environment:
         environments = environments_from_args(args.environment)
     return simulate_panel_measurements(stage, environments)

@@ -17,9 +17,10 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any, TextIO
+from typing import TYPE_CHECKING, TextIO
 
 if TYPE_CHECKING:
+    from ocio_vp.formats.diagnostics import Diagnostics
     from ocio_vp.formats.solution import Solution
 
 __all__ = ["SUMMARY_COLUMNS", "model_words", "print_summary", "summary_lines", "summary_row"]
@@ -83,7 +84,7 @@ def _percent(per_channel) -> str:
     return f"{100 * float(sum(per_channel)) / len(per_channel):.2f}%"
 
 
-def _condition(value: Any) -> str:
+def _condition(value: float | None) -> str:
     from ocio_vp.calibration.equations import condition_text
 
     return condition_text(float(value)) if value is not None else "-"
@@ -100,7 +101,7 @@ def _delta_e(value: float) -> str:
     return f"{value:.3g}" if value >= 1e-6 else "0"
 
 
-def _leds(diagnostics: Any) -> str:
+def _leds(diagnostics: Diagnostics) -> str:
     figures = diagnostics.extrapolation
     if figures is None:
         return "-"
@@ -128,7 +129,7 @@ def summary_row(solution: Solution) -> tuple[str, ...]:
     )
 
 
-def _wall_line(solutions: Sequence[Any]) -> str:
+def _wall_line(solutions: Sequence[Solution]) -> str:
     """The stage's cond[SL] and the wall's signal, once."""
     first = solutions[0]
     from ocio_vp.wall.encoding import WallEncoding
@@ -140,7 +141,7 @@ def _wall_line(solutions: Sequence[Any]) -> str:
     )
 
 
-def _grouped(solutions: Sequence[Any]) -> list[str]:
+def _grouped(solutions: Sequence[Solution]) -> list[str]:
     """Every warning once, with the environments it concerns."""
     where: dict[str, list[str]] = {}
     for s in solutions:
@@ -153,7 +154,7 @@ def _grouped(solutions: Sequence[Any]) -> list[str]:
     return lines
 
 
-def summary_lines(solutions: Sequence[Any]) -> tuple[list[str], list[str]]:
+def summary_lines(solutions: Sequence[Solution]) -> tuple[list[str], list[str]]:
     """(stdout lines, stderr lines) of the summary (module docstring)."""
     if not solutions:
         return [], []
@@ -161,9 +162,11 @@ def summary_lines(solutions: Sequence[Any]) -> tuple[list[str], list[str]]:
     widths = [max(len(r[i]) for r in rows) for i in range(len(SUMMARY_COLUMNS))]
     out = [_wall_line(solutions), LEGEND]
     out += ["  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)).rstrip() for r in rows]
-    guarded = [s for s in solutions if s.correction.kind == "protected"]
+    from ocio_vp.model.correction import ProtectedCorrection
+
+    guarded = [s.correction for s in solutions if isinstance(s.correction, ProtectedCorrection)]
     if guarded:
-        out.append(f"emitter guard: {guarded[0].correction.protection()}")
+        out.append(f"emitter guard: {guarded[0].protection()}")
     out.append(
         "why each model: solution.json (diagnostics.model_reason) and the report; "
         "`ocio-vp report DIR` draws them"
@@ -171,7 +174,7 @@ def summary_lines(solutions: Sequence[Any]) -> tuple[list[str], list[str]]:
     return out + _gamut_notes(solutions), _grouped(solutions)
 
 
-def _gamut_notes(solutions: Sequence[Any]) -> list[str]:
+def _gamut_notes(solutions: Sequence[Solution]) -> list[str]:
     """The LEDs' gamut, once per fact with the environments it concerns: chart colours the
     wall cannot show in-frustum, and light outside the gamut out of the frustum (from
     ``diagnostics.in_frustum_drive_range`` and ``out_of_frustum_negative_channels``)."""
@@ -201,7 +204,7 @@ def _gamut_notes(solutions: Sequence[Any]) -> list[str]:
 
 
 def print_summary(
-    solutions: Sequence[Any], *, out: TextIO | None = None, err: TextIO | None = None
+    solutions: Sequence[Solution], *, out: TextIO | None = None, err: TextIO | None = None
 ) -> None:
     """Print :func:`summary_lines`: the table on ``out`` (stdout), warnings on ``err``."""
     lines, warnings = summary_lines(solutions)

@@ -25,7 +25,8 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import Any
+
+import numpy as np
 
 from ocio_vp.choices import CONTEXT_VARIABLE
 from ocio_vp.errors import InputError
@@ -69,7 +70,7 @@ def render_nuke_script(
     *,
     stage: str,
     environment: str,
-    Q: Any,
+    Q: np.ndarray,
     config_path: str,
     names: dict[str, str],
     q_lut: str | None = None,

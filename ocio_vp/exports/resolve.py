@@ -24,10 +24,10 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import PyOpenColorIO as OCIO
+from numpy.typing import ArrayLike
 
 from ocio_vp.correction.root_polynomial import root_polynomial_term_powers
 from ocio_vp.deprecation import deprecated_names
@@ -112,11 +112,11 @@ def render_dctl(
     stage: str,
     environment: str,
     description: str,
-    matrix: Any,
+    matrix: ArrayLike,
     offset: Sequence[float] | None = None,
 ) -> str:
     """DCTL text computing ``matrix . rgb + offset`` (names are escaped for C comments)."""
-    matrix = np.asarray(matrix, dtype=np.float64)
+    values = np.asarray(matrix, dtype=np.float64)
     offset_values = np.zeros(3) if offset is None else np.asarray(offset, dtype=np.float64)
     return render_template(
         "resolve_matrix.dctl.j2",
@@ -124,7 +124,7 @@ def render_dctl(
         stage=stage,
         environment=environment,
         description=description,
-        matrix=matrix.tolist(),
+        matrix=values.tolist(),
         offset=offset_values.tolist(),
     )
 

@@ -14,7 +14,10 @@ from __future__ import annotations
 
 import functools
 from importlib import resources
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # imported where templates are rendered, not at start-up
+    import jinja2
 
 from ocio_vp.exports.escape import c_comment, c_float, markdown_text, tcl_float, tcl_string
 
@@ -43,7 +46,7 @@ def read_template(name: str) -> str:
 
 
 @functools.lru_cache(maxsize=1)
-def jinja_environment() -> Any:
+def jinja_environment() -> jinja2.Environment:
     """The jinja2 environment with our escaping filters, loading templates as resources."""
     import jinja2
 

@@ -14,13 +14,19 @@ import multiprocessing
 import os
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from ocio_vp.errors import InputError
+
+if TYPE_CHECKING:
+    from ocio_vp.formats.measurements import Environment, Measurements
+    from ocio_vp.formats.solution import Solution
+    from ocio_vp.pipeline import SolveOptions
 
 __all__ = ["default_workers", "map_unordered", "solve_environments"]
 
 T = TypeVar("T")
+R = TypeVar("R")
 
 
 def default_workers() -> int:
@@ -31,7 +37,7 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _inline(func: Callable[[T], Any], items: Sequence[T]) -> Iterator[tuple[int, Any]]:
+def _inline(func: Callable[[T], R], items: Sequence[T]) -> Iterator[tuple[int, R | BaseException]]:
     for i, item in enumerate(items):
         try:
             yield i, func(item)
@@ -40,8 +46,8 @@ def _inline(func: Callable[[T], Any], items: Sequence[T]) -> Iterator[tuple[int,
 
 
 def _local_pool(
-    func: Callable[[T], Any], items: Sequence[T], workers: int
-) -> Iterator[tuple[int, Any]]:
+    func: Callable[[T], R], items: Sequence[T], workers: int
+) -> Iterator[tuple[int, R | BaseException]]:
     # "spawn": the parent has threads (tqdm, OCIO); forking a threaded process can deadlock.
     # At most 2 tasks per worker are in flight, so nothing grows with the number of items.
     context = multiprocessing.get_context("spawn")
@@ -64,8 +70,8 @@ def _local_pool(
 
 
 def _dask(
-    func: Callable[[T], Any], items: Sequence[T], scheduler: str
-) -> Iterator[tuple[int, Any]]:
+    func: Callable[[T], R], items: Sequence[T], scheduler: str
+) -> Iterator[tuple[int, R | BaseException]]:
     try:
         from distributed import Client, as_completed
     except ImportError as exc:  # pragma: no cover - dask is a dependency
@@ -90,12 +96,12 @@ def _dask(
 
 
 def map_unordered(
-    func: Callable[[T], Any],
+    func: Callable[[T], R],
     items: Iterable[T],
     *,
     workers: int | None = None,
     scheduler: str | None = None,
-) -> Iterator[tuple[int, Any]]:
+) -> Iterator[tuple[int, R | BaseException]]:
     """Yield ``(index, func(item) or the exception it raised)`` as tasks finish.
 
     Parameters
@@ -125,7 +131,9 @@ def map_unordered(
     return _inline(func, items) if n == 1 else _local_pool(func, items, n)
 
 
-def _solve_one(payload: tuple) -> Any:
+def _solve_one(
+    payload: tuple[Measurements, Environment, SolveOptions | None],
+) -> Solution:
     from ocio_vp.pipeline import solve_environment
 
     measurements, environment, options = payload
@@ -133,13 +141,13 @@ def _solve_one(payload: tuple) -> Any:
 
 
 def solve_environments(
-    measurements: Any,
-    environments: Sequence[Any],
-    options: Any = None,
+    measurements: Measurements,
+    environments: Sequence[Environment],
+    options: SolveOptions | None = None,
     *,
     scheduler: str | None = None,
     workers: int | None = 1,
-) -> list[Any]:
+) -> list[Solution]:
     """:func:`ocio_vp.pipeline.solve_environment` for each environment with ``options`` (a
     :class:`ocio_vp.pipeline.SolveOptions`, None for the defaults), in their order, on a local
     pool or a Dask cluster (``scheduler``); the first failure is raised."""

@@ -13,7 +13,6 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -201,11 +200,8 @@ def solution_to_json(solution: Solution) -> str:
     return json.dumps(solution_to_dict(solution), indent=2, allow_nan=False) + "\n"
 
 
-def _matrix(data: JsonMapping, key: str, source: str, optional: bool = False) -> Any:
-    value = data.get(key)
-    if value is None and optional:
-        return None
-    array = _finite_array(value, (3, 3))
+def _matrix(data: JsonMapping, key: str, source: str) -> np.ndarray:
+    array = _finite_array(data.get(key), (3, 3))
     if array is None:
         raise InputError("expected a finite 3x3 matrix", source=source, key=key)
     return array
@@ -265,11 +261,8 @@ def _finite_array(value: JsonValue, shape: tuple[int, ...]) -> np.ndarray | None
     return array
 
 
-def _rgb(data: JsonMapping, key: str, source: str, optional: bool = False) -> Any:
-    value = data.get(key)
-    if value is None and optional:
-        return None
-    array = _finite_array(value, (3,))
+def _rgb(data: JsonMapping, key: str, source: str) -> np.ndarray:
+    array = _finite_array(data.get(key), (3,))
     if array is None:
         raise InputError("expected a finite [r, g, b]", source=source, key=key)
     return array
@@ -354,8 +347,10 @@ def load_solution(path: str | Path) -> Solution:
         SL=_matrix(data, "SL", source),
         M=_matrix(data, "M", source),
         post_correction=_post_correction(data, Q, source),
-        N=_matrix(data, "N", source, optional=True),
-        black_level_offset=_rgb(data, "black_level_offset", source, optional=True),
+        N=None if data.get("N") is None else _matrix(data, "N", source),
+        black_level_offset=None
+        if data.get("black_level_offset") is None
+        else _rgb(data, "black_level_offset", source),
         black_level_method=_text(data, "black_level_method", source),
         diagnostics=diagnostics,
         measurements_file=_text(measurements, "file", source),

@@ -19,6 +19,7 @@ import numpy as np
 import yaml
 
 from ocio_vp.formats.measurements import CHANNELS, Validator, parse_stage, read_document
+from ocio_vp.jsontypes import JsonMapping, JsonValue
 from ocio_vp.plates.movie import MATRICES, RANGES, is_movie
 from ocio_vp.plates.raw import DEFAULT_DEMOSAIC, DEMOSAIC_METHODS, is_raw
 from ocio_vp.plates.reader import canonical_encoding, plate_path
@@ -180,16 +181,19 @@ class _Where:
     flat_field: tuple[Path, ...] | None = None
 
 
-def _paths(ctx: Validator, value: Any, key: tuple[str | int, ...], base: Path) -> tuple[Path, ...]:
-    frames = value if isinstance(value, list) else [value]
-    if not frames or not all(isinstance(f, str) and f for f in frames):
+def _paths(
+    ctx: Validator, value: JsonValue, key: tuple[str | int, ...], base: Path
+) -> tuple[Path, ...]:
+    given = value if isinstance(value, list) else [value]
+    frames = [f for f in given if isinstance(f, str) and f]
+    if not frames or len(frames) != len(given):
         raise ctx.error(key, "expected a file path or a list of frame paths")
     return tuple(plate_path(base, f) for f in frames)
 
 
 def _plate(
     ctx: Validator,
-    raw: Mapping[str, Any],
+    raw: JsonMapping,
     key: tuple[str | int, ...],
     where: _Where,
     name: str,
@@ -221,7 +225,9 @@ def _key(*parts: str | int) -> str:
     return format_key_path(*parts)
 
 
-def _region(ctx: Validator, value: Any, key: tuple[str | int, ...]) -> tuple[int, int, int, int]:
+def _region(
+    ctx: Validator, value: JsonValue, key: tuple[str | int, ...]
+) -> tuple[int, int, int, int]:
     if not isinstance(value, list) or len(value) != 4:
         raise ctx.error(key, "expected a region [x0, y0, x1, y1] in pixels")
     numbers = [ctx.number(v, (*key, i)) for i, v in enumerate(value)]
@@ -233,7 +239,7 @@ def _region(ctx: Validator, value: Any, key: tuple[str | int, ...]) -> tuple[int
     return (x0, y0, x1, y1)
 
 
-def _corners(ctx: Validator, value: Any, key: tuple[str | int, ...]) -> np.ndarray | None:
+def _corners(ctx: Validator, value: JsonValue, key: tuple[str | int, ...]) -> np.ndarray | None:
     if value == DETECT:
         return None
     if not isinstance(value, list) or len(value) != 4:
@@ -247,7 +253,7 @@ def _corners(ctx: Validator, value: Any, key: tuple[str | int, ...]) -> np.ndarr
 
 
 def _chart(
-    ctx: Validator, value: Any, key: tuple[str | int, ...], where: _Where, name: str
+    ctx: Validator, value: JsonValue, key: tuple[str | int, ...], where: _Where, name: str
 ) -> ChartShot:
     raw = ctx.mapping(value, key, required=("plate",), optional=(*_PLATE_KEYS, "corners"))
     return ChartShot(
@@ -259,7 +265,7 @@ def _chart(
 
 def _region_shot(
     ctx: Validator,
-    value: Any,
+    value: JsonValue,
     key: tuple[str | int, ...],
     where: _Where,
     name: str,
@@ -273,7 +279,7 @@ def _region_shot(
 
 
 def capture_from_dict(
-    data: Any, *, source: str = "<capture>", sha256: str | None = None
+    data: JsonValue, *, source: str = "<capture>", sha256: str | None = None
 ) -> Capture:
     """Validate a parsed capture document (paths are resolved relative to ``source``).
 
@@ -323,7 +329,7 @@ def capture_from_dict(
         lit_chart=lit_chart,
         environments=environments,
         source=source,
-        document=data,
+        document=top,
         sha256=sha256,
         take=_take(ctx, top["take"], base) if "take" in top else None,
         panels=panels,
@@ -396,7 +402,7 @@ _TAKE_KEYS = ("region", "encoding", "layer", "clip_level", "in", "out", "matrix"
 _MOVIE_KEYS = ("in", "out", "matrix", "range")
 
 
-def _take(ctx: Validator, value: Any, base: Path) -> TakeRef:
+def _take(ctx: Validator, value: JsonValue, base: Path) -> TakeRef:
     """``take``: the frames of one continuous take, the sequence it filmed, and options."""
     raw = ctx.mapping(value, ("take",), ("frames", "sequence"), _TAKE_KEYS)
     for name in ("frames", "sequence"):
@@ -438,7 +444,7 @@ def _take(ctx: Validator, value: Any, base: Path) -> TakeRef:
     )
 
 
-def _movie_point(ctx: Validator, value: Any, name: str) -> int | str:
+def _movie_point(ctx: Validator, value: JsonValue, name: str) -> int | str:
     """``take.in``/``take.out``: a frame number (0 = the movie's first frame) or a timecode."""
     if isinstance(value, int) and not isinstance(value, bool) and value >= 0:
         return value
@@ -449,7 +455,7 @@ def _movie_point(ctx: Validator, value: Any, name: str) -> int | str:
     )
 
 
-def _movie_choice(ctx: Validator, raw: Mapping[str, Any], name: str, allowed) -> str | None:
+def _movie_choice(ctx: Validator, raw: JsonMapping, name: str, allowed) -> str | None:
     """``take.matrix`` / ``take.range``: one of ``allowed`` (case and punctuation ignored,
     ``bt709`` = ``rec709``)."""
     if name not in raw:
@@ -462,7 +468,7 @@ def _movie_choice(ctx: Validator, raw: Mapping[str, Any], name: str, allowed) ->
 
 
 def _wall_shots(
-    ctx: Validator, top: Mapping[str, Any], key: tuple[str | int, ...], where: _Where, stem: str
+    ctx: Validator, top: JsonMapping, key: tuple[str | int, ...], where: _Where, stem: str
 ) -> tuple[dict[str, RegionShot], dict[str, ChartShot]]:
     """The primaries' regions and the lit charts of the wall (or of one panel type, under
     ``key`` with plate names starting ``stem``)."""
@@ -485,7 +491,7 @@ def _wall_shots(
 _PANEL_SETTINGS = ("in_frustum", "calibration_panel", "beta", "region", "encoding", "peak_nits")
 
 
-def _panels(ctx: Validator, value: Any, where: _Where) -> tuple[PanelCapture, ...]:
+def _panels(ctx: Validator, value: JsonValue, where: _Where) -> tuple[PanelCapture, ...]:
     """``panels``: each type's name, settings and plates (the settings are checked when the
     measurements file is built from them, under the same key paths)."""
     if not isinstance(value, list) or not value:
@@ -504,7 +510,7 @@ def _panels(ctx: Validator, value: Any, where: _Where) -> tuple[PanelCapture, ..
     return tuple(panels)
 
 
-def _header(ctx: Validator, data: Any) -> Mapping[str, Any]:
+def _header(ctx: Validator, data: JsonValue) -> Mapping[str, Any]:
     """The top-level mapping, its format and version checked, its stage validated."""
     panels = isinstance(data, Mapping) and "panels" in data
     wall = ("panels", "environments") if panels else ()
@@ -547,7 +553,7 @@ def _header(ctx: Validator, data: Any) -> Mapping[str, Any]:
     return top
 
 
-def _chart_grid(ctx: Validator, value: Any) -> tuple[int, int, float]:
+def _chart_grid(ctx: Validator, value: JsonValue) -> tuple[int, int, float]:
     """``chart``: (rows, columns, inset), defaults 4, 6, 0.25."""
     chart = ctx.mapping(value, ("chart",), (), ("rows", "columns", "inset"))
     rows, columns = chart.get("rows", 4), chart.get("columns", 6)
@@ -560,7 +566,7 @@ def _chart_grid(ctx: Validator, value: Any) -> tuple[int, int, float]:
     return rows, columns, inset
 
 
-def _sampling(ctx: Validator, value: Any) -> dict[str, Any]:
+def _sampling(ctx: Validator, value: JsonValue) -> dict[str, Any]:
     """``sampling``: the patch statistic's options (method, trim, clip_level), checked."""
     sampling = dict(ctx.mapping(value, ("sampling",), (), ("method", "trim", "clip_level")))
     if "trim" in sampling:
@@ -578,7 +584,7 @@ def _sampling(ctx: Validator, value: Any) -> dict[str, Any]:
 
 
 def _environments(
-    ctx: Validator, envs: Any, where: _Where, panels: tuple[PanelCapture, ...] = ()
+    ctx: Validator, envs: JsonValue, where: _Where, panels: tuple[PanelCapture, ...] = ()
 ) -> tuple[EnvironmentCapture, ...]:
     """``environments``: a non-empty list, unique names, each with its target chart (with
     ``panels``: ``black_level`` a region per in-frustum type, ``w_avg`` per type)."""
@@ -609,7 +615,7 @@ def _environments(
 
 def _panel_environment(
     ctx: Validator,
-    env: Mapping[str, Any],
+    env: JsonMapping,
     key: tuple[str | int, ...],
     where: _Where,
     name: str,
@@ -641,7 +647,7 @@ def load_capture(path: str | Path) -> Capture:
     return capture_from_dict(data, source=str(path), sha256=sha256)
 
 
-def with_corners(document: Mapping[str, Any], corners: Mapping[tuple[str | int, ...], np.ndarray]):
+def with_corners(document: JsonMapping, corners: Mapping[tuple[str | int, ...], np.ndarray]):
     """A copy of a capture document with detected corners written in place of ``detect``."""
     import copy
 
@@ -654,7 +660,7 @@ def with_corners(document: Mapping[str, Any], corners: Mapping[tuple[str | int, 
     return out
 
 
-def save_capture_document(document: Mapping[str, Any], path: str | Path) -> None:
+def save_capture_document(document: JsonMapping, path: str | Path) -> None:
     """Write a capture document as YAML, atomically (comments in the old file are not kept)."""
     from ocio_vp.staging import write_file_atomically
 

@@ -26,6 +26,7 @@ import numpy as np
 
 from ocio_vp.errors import InputError
 from ocio_vp.formats.documents import check_regular_file
+from ocio_vp.jsontypes import JsonValue
 from ocio_vp.plates.raw import is_raw
 
 __all__ = [
@@ -57,7 +58,7 @@ def _encodings() -> tuple[str, ...]:
 ENCODINGS = "linear or a name in colour.CCTF_DECODINGS"
 
 
-def canonical_encoding(name: str, *, source: object = None, key: str | None = None) -> str:
+def canonical_encoding(name: JsonValue, *, source: object = None, key: str | None = None) -> str:
     """Return the canonical spelling of an encoding name (case-insensitive), or raise."""
     import difflib
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 
@@ -15,6 +15,9 @@ from ocio_vp.errors import InputError, excerpt
 from ocio_vp.formats.documents import read_bounded
 from ocio_vp.formats.measurements import PANEL_RANGE, PanelGeometry
 from ocio_vp.simulator.data import PAPER_ENVIRONMENTS, wavelengths
+
+if TYPE_CHECKING:
+    from ocio_vp.simulator.stage import EnvironmentLight, Leds
 
 __all__ = [
     "ceiling_leds_from_arg",
@@ -75,7 +78,7 @@ def read_spectra_csv(path: str | Path, *, columns: int) -> np.ndarray:
     )
 
 
-def _leds(value: str, key: str = "--leds") -> Any:
+def _leds(value: str, key: str = "--leds") -> Leds:
     if value.lower().endswith(".csv"):
         return read_spectra_csv(value, columns=3)
     try:
@@ -90,7 +93,7 @@ def _leds(value: str, key: str = "--leds") -> Any:
     return pairs
 
 
-def ceiling_leds_from_arg(value: str) -> Any:
+def ceiling_leds_from_arg(value: str) -> Leds:
     """``--ceiling-leds``: three PEAK/FWHM pairs or a CSV of measured spectra, as ``--leds``."""
     return _leds(value, "--ceiling-leds")
 
@@ -110,9 +113,22 @@ def _panel(value: str) -> PanelGeometry:
     return PanelGeometry(width=width, height=height, distance=distance)
 
 
-def stage_options_from_args(args: argparse.Namespace) -> dict[str, Any]:
+class StageOptions(TypedDict, total=False):
+    """Keyword options of :func:`ocio_vp.simulator.stage.spectral_stage` given on the command
+    line."""
+
+    camera: str
+    leds: Leds
+    chart: str
+    panel: PanelGeometry
+    panel_albedo: float | None
+    name: str
+    wall_gain: float
+
+
+def stage_options_from_args(args: argparse.Namespace) -> StageOptions:
     """Keyword options for :func:`ocio_vp.simulator.stage.spectral_stage` from parsed arguments."""
-    options: dict[str, Any] = {}
+    options = StageOptions()
     if args.camera is not None:
         options["camera"] = args.camera
     if args.leds is not None:
@@ -129,12 +145,12 @@ def stage_options_from_args(args: argparse.Namespace) -> dict[str, Any]:
     return options
 
 
-def environments_from_args(values: list[str] | None) -> dict[str, Any]:
+def environments_from_args(values: list[str] | None) -> dict[str, EnvironmentLight]:
     """``NAME`` or ``NAME=FILE.csv`` items -> the simulator's environments mapping (a bare
     ``NAME`` is checked when the stage is simulated)."""
     if not values:
         return {name: name for name in PAPER_ENVIRONMENTS}
-    environments: dict[str, Any] = {}
+    environments: dict[str, EnvironmentLight] = {}
     for value in values:
         name, _, path = value.partition("=")
         if name in environments:

@@ -24,17 +24,20 @@ not contain, lit by what both panel types really emit.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeAlias
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import Environment, Measurements, PanelGeometry, Stage
 from ocio_vp.formats.panels import PanelRegion, PanelType
 from ocio_vp.simulator.data import ENVIRONMENTS
 from ocio_vp.simulator.stage import (
+    EnvironmentLight,
+    Leds,
     SpectralStage,
     camera_rgb,
     environment_spectrum,
@@ -43,6 +46,13 @@ from ocio_vp.simulator.stage import (
 )
 from ocio_vp.simulator.truth import HeldOutErrors, held_out_errors
 from ocio_vp.spectra import align, unknown_name
+
+#: An environment of a two-type stage: a name of ``SCENES``, any light of
+#: :data:`~ocio_vp.simulator.stage.EnvironmentLight` (the same everywhere), or
+#: ``{"wall": spectrum, "ceiling": spectrum}``.
+SceneLight: TypeAlias = "EnvironmentLight | Mapping[str, ArrayLike]"
+#: Which environments: a name, names, or safe name -> light (None: every scene).
+Scenes: TypeAlias = "str | Sequence[str] | Mapping[str, SceneLight] | None"
 
 __all__ = [
     "CEILING_PANEL",
@@ -160,7 +170,7 @@ class PanelStage:
 def panel_stage(
     wall: SpectralStage | None = None,
     *,
-    ceiling_leds: Any = DEFAULT_CEILING_LEDS,
+    ceiling_leds: Leds = DEFAULT_CEILING_LEDS,
     gain: float = DEFAULT_CEILING_GAIN,
     panel: PanelGeometry = CEILING_PANEL,
     white: str = "xyz",
@@ -211,7 +221,7 @@ def panel_stage(
     return PanelStage(wall, dataclasses.replace(ceiling, leds=ceiling.leds * gains * gain))
 
 
-def scene_light(stage: SpectralStage, environment: Any) -> dict[str, np.ndarray]:
+def scene_light(stage: SpectralStage, environment: SceneLight) -> dict[str, np.ndarray]:
     """``{"wall": (W,), "ceiling": (W,)}``: the light from the sides and from above, summing to
     the environment as :func:`environment_spectrum` scales it (white diffuser green = 1).
 
@@ -222,7 +232,7 @@ def scene_light(stage: SpectralStage, environment: Any) -> dict[str, np.ndarray]
     """
     if isinstance(environment, Mapping):
         parts = {k: np.asarray(environment[k], dtype=np.float64) for k in ("wall", "ceiling")}
-    elif environment in SCENES:
+    elif isinstance(environment, str) and environment in SCENES:
         scene = SCENES[environment]
         above, sides = scene.above(), scene.sides()
         green = [camera_rgb(stage, s)[1] for s in (above, sides)]
@@ -263,7 +273,7 @@ def _panel_type(name: str, spectral: SpectralStage, region: PanelRegion) -> Pane
     )
 
 
-def _environments(environments: Any) -> list[tuple[str, Any]]:
+def _environments(environments: Scenes) -> list[tuple[str, SceneLight]]:
     if environments is None:
         environments = tuple(SCENES)
     if isinstance(environments, str):
@@ -273,7 +283,7 @@ def _environments(environments: Any) -> list[tuple[str, Any]]:
     return [(name, name) for name in environments]
 
 
-def simulate_panel_measurements(stage: PanelStage, environments: Any = None) -> Measurements:
+def simulate_panel_measurements(stage: PanelStage, environments: Scenes = None) -> Measurements:
     """The measurements file of ``stage`` (``panels``: wall, ceiling) for ``environments``
     (default every scene of :data:`SCENES`; see :func:`scene_light` for what else they may be).
 
@@ -323,7 +333,7 @@ def simulate_panel_measurements(stage: PanelStage, environments: Any = None) -> 
 
 def panel_held_out_errors(
     stage: PanelStage,
-    environment: Any,
+    environment: SceneLight,
     *,
     M: Mapping[str, np.ndarray],
     correct: Callable[[np.ndarray], np.ndarray],

@@ -8,7 +8,6 @@ the in-frustum background with the panel bounce). Public names are re-exported b
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -16,6 +15,7 @@ from numpy.typing import ArrayLike
 from ocio_vp.calibration.equations import in_frustum_drive, predict_displayed_chart, solve_M
 from ocio_vp.formats.solution import Solution
 from ocio_vp.simulator.stage import (
+    EnvironmentLight,
     SpectralStage,
     black_level_reading,
     camera_rgb,
@@ -50,7 +50,7 @@ class StagePrediction:
 
 def predict_stage(
     stage: SpectralStage,
-    environment: Any,
+    environment: EnvironmentLight,
     *,
     M: ArrayLike,
     Q: ArrayLike | None = None,
@@ -95,7 +95,9 @@ def predict_stage(
     )
 
 
-def predict_solution(stage: SpectralStage, environment: Any, solution: Solution) -> StagePrediction:
+def predict_solution(
+    stage: SpectralStage, environment: EnvironmentLight, solution: Solution
+) -> StagePrediction:
     """:func:`predict_stage` for a solved :class:`~ocio_vp.formats.solution.Solution`.
 
     Uses its M (lighting), post-correction, in-frustum matrix (N, or M where N was not solved,

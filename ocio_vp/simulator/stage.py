@@ -42,9 +42,9 @@ https://doi.org/10.1145/3543664.3543699
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypeAlias
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -64,6 +64,18 @@ from ocio_vp.simulator.data import (
     wavelengths,
 )
 from ocio_vp.spectra import spectral_shape, unknown_name
+
+if TYPE_CHECKING:
+    import colour
+
+#: An environment's light: a name from ``ENVIRONMENTS``, a colour ``SpectralDistribution`` or
+#: a (W,) array on the simulator's grid.
+EnvironmentLight: TypeAlias = "str | colour.SpectralDistribution | ArrayLike"
+#: Which environments to simulate: a name, names, or safe name -> light (None: the paper's).
+Environments: TypeAlias = "str | Sequence[str] | Mapping[str, EnvironmentLight] | None"
+#: An LED set: three (peak, FWHM) pairs (nm), (W, 3) spectra, or a colour
+#: ``MultiSpectralDistributions`` of three channels (None: the default LEDs).
+Leds: TypeAlias = "ArrayLike | colour.MultiSpectralDistributions | None"
 
 __all__ = [
     "DEFAULT_PANEL",
@@ -149,14 +161,16 @@ def camera_rgb(stage: SpectralStage, spectrum: ArrayLike) -> np.ndarray:
     return np.asarray(spectrum, dtype=np.float64) @ stage.camera
 
 
-def _resolve_leds(leds: Any) -> tuple[np.ndarray, str]:
+def _resolve_leds(leds: Leds) -> tuple[np.ndarray, str]:
     if leds is None:
         leds = DEFAULT_LEDS
     array = np.asarray(leds, dtype=np.float64) if not hasattr(leds, "values") else None
     if array is not None and array.shape == (3, 2):
         pairs = ", ".join(f"{p:g}/{f:g} nm" for p, f in array)
         return gaussian_leds(array), f"Gaussian LEDs (peak/FWHM) {pairs}"
-    if hasattr(leds, "align"):  # a colour MultiSpectralDistributions with 3 channels
+    import colour
+
+    if isinstance(leds, colour.MultiSpectralDistributions):  # with 3 channels
         array = np.asarray(leds.copy().align(spectral_shape()).values, dtype=np.float64)
     if array is None or array.shape != (len(wavelengths()), 3) or not np.all(np.isfinite(array)):
         raise InputError(
@@ -172,7 +186,7 @@ def _resolve_leds(leds: Any) -> tuple[np.ndarray, str]:
 def spectral_stage(
     *,
     camera: str = DEFAULT_CAMERA,
-    leds: Any = None,
+    leds: Leds = None,
     chart: str = DEFAULT_CHART,
     panel: PanelGeometry | None = None,
     beta: float | None = None,
@@ -281,7 +295,7 @@ def _check_camera_tells_leds_apart(SL: np.ndarray) -> None:
         )
 
 
-def environment_spectrum(stage: SpectralStage, environment: Any) -> np.ndarray:
+def environment_spectrum(stage: SpectralStage, environment: EnvironmentLight) -> np.ndarray:
     """(W,) an environment's spectrum, scaled so a perfect white diffuser reads green = 1.
 
     ``environment`` is a name from :data:`ENVIRONMENTS`, a colour ``SpectralDistribution`` or
@@ -311,7 +325,7 @@ def environment_spectrum(stage: SpectralStage, environment: Any) -> np.ndarray:
     return spectrum / green
 
 
-def _environments(environments: Any) -> list[tuple[str, Any]]:
+def _environments(environments: Environments) -> list[tuple[str, EnvironmentLight]]:
     if environments is None:
         environments = PAPER_ENVIRONMENTS
     if isinstance(environments, str):
@@ -331,7 +345,7 @@ def black_level_reading(
 
 
 def simulate_measurements(
-    environments: Any = None, *, stage: SpectralStage | None = None, **options: Any
+    environments: Environments = None, *, stage: SpectralStage | None = None, **options: Any
 ) -> Measurements:
     """Simulate a complete measurements file (version 1) for a stage and environments.
 
@@ -397,6 +411,6 @@ def simulate_measurements(
     )
 
 
-def paper_stage_measurements(environments: Any = PAPER_ENVIRONMENTS) -> Measurements:
+def paper_stage_measurements(environments: Environments = PAPER_ENVIRONMENTS) -> Measurements:
     """:func:`simulate_measurements` of :func:`paper_stage` (default: the paper's seven)."""
     return simulate_measurements(environments, stage=paper_stage())
