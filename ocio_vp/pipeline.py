@@ -424,7 +424,7 @@ def _type_linearity(measurements: Measurements, index: int) -> Linearity | None:
     from ocio_vp.formats.linearity import assumed_linearity
     from ocio_vp.wall.encoding import WallEncoding
 
-    wall = WallEncoding(panel.encoding, panel.peak_nits)
+    wall = WallEncoding(panel.encoding, panel.peak_nits).block()
     return (linearity or assumed_linearity()).updated(wall_encoding=wall)
 
 

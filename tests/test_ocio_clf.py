@@ -14,7 +14,7 @@ from ocio_vp.cli import main
 from ocio_vp.formats.solution import load_solution
 from ocio_vp.ocio.clf import CLF_V3_NAMESPACE, clf_v3
 from ocio_vp.ocio.config import OUT_OF_FRUSTUM, REFERENCE
-from ocio_vp.wall.encoding import apply_lut, lut_table
+from ocio_vp.wall.encoding import WallEncoding, apply_lut, lut_table
 
 
 @pytest.fixture(scope="module")
@@ -75,7 +75,7 @@ def test_sidecar_is_clf_v3_read_by_colour(solved):
         assert f'xmlns="{CLF_V3_NAMESPACE}"' in text and 'compCLFversion="3.0"' in text
         process_list = colour_clf_io.read_clf(lut.read_bytes())
         solution = load_solution(folder)
-        encoding = solution.linearity.encoding.name
+        encoding = WallEncoding.of(solution.linearity).name
         table = lut_table(solution.linearity, encoding).table
         *shaper, lut = process_list.process_nodes
         assert type(lut).__name__ == "LUT1D" and lut.array.dim == table.shape

@@ -178,10 +178,10 @@ def test_panel_types_keep_their_own_encoding_and_take_the_stages_otherwise(
     wall, ceiling = m.panels
     m = dataclasses.replace(m, panels=(wall, dataclasses.replace(ceiling, encoding="gamma2.4")))
     solution = with_wall_encoding(solve_environment(m, m.environments[0]), "pq", peak_nits=1200)
-    assert solution.panels["ceiling"].linearity.wall_encoding == WallEncoding("gamma2.4")
+    assert WallEncoding.of(solution.panels["ceiling"].linearity) == WallEncoding("gamma2.4")
     pq = WallEncoding("pq", 1200.0)
-    assert solution.panels["wall"].linearity.wall_encoding == pq
-    assert solution.linearity.wall_encoding == pq  # the top level is the wall's
+    assert WallEncoding.of(solution.panels["wall"].linearity) == pq
+    assert WallEncoding.of(solution.linearity) == pq  # the top level is the wall's
 
 
 @pytest.mark.parametrize("name, peak", [("gamma2.4", None), ("srgb", None), ("pq", 600.0)])

@@ -100,4 +100,4 @@ def test_solution_json_records_it_and_old_files_read_as_off(tmp_path):
     assert soft_clip_knee(load_solution(path).linearity) == 0.75
     # the other settings of the wall's transfer are kept beside it
     encoded = with_wall_encoding(solution, "pq")
-    assert with_soft_clip(encoded, 0.5).linearity.wall_encoding == WallEncoding("pq")
+    assert WallEncoding.of(with_soft_clip(encoded, 0.5).linearity) == WallEncoding("pq")

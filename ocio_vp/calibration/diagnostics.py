@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, TypedDict
+from typing import Protocol, TypedDict
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -24,8 +24,46 @@ from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.formats.diagnostics import ClippedCharts, Diagnostics, DriveRange, IdentityCheck
 from ocio_vp.metrics import error_relative_to_white, patch_label, white_scale
 
-if TYPE_CHECKING:
-    from ocio_vp.correction.problem import QFit, QProblem
+
+class ChartProblem(Protocol):
+    """The chart solve the diagnostics judge (a :class:`ocio_vp.correction.problem.QProblem`;
+    ``correction/`` sits above this package)."""
+
+    @property
+    def SL(self) -> np.ndarray: ...
+    @property
+    def SRL(self) -> np.ndarray: ...
+    @property
+    def M(self) -> np.ndarray: ...
+    @property
+    def beta(self) -> float: ...
+    @property
+    def w_avg(self) -> np.ndarray: ...
+    @property
+    def target(self) -> np.ndarray: ...
+    @property
+    def white_patch(self) -> int: ...
+    @property
+    def extra_light(self) -> np.ndarray | None: ...
+
+    @property
+    def fit_weights(self) -> np.ndarray: ...
+
+
+class FitReport(Protocol):
+    """What a Q method reported (a :class:`ocio_vp.correction.problem.QFit`)."""
+
+    @property
+    def model(self) -> str: ...
+    @property
+    def reason(self) -> str | None: ...
+    @property
+    def cross_validated_error(self) -> np.ndarray | None: ...
+    @property
+    def target_rank(self) -> int | None: ...
+    @property
+    def warnings(self) -> tuple[str, ...]: ...
+
 
 __all__ = [
     "ClippedDriveFields",
@@ -178,7 +216,7 @@ def identity_check(Q: ArrayLike, SL: ArrayLike, N: ArrayLike | None) -> Identity
 
 
 def clipped_drive_lit(
-    problem: QProblem, Q: ArrayLike, drive: OutOfFrustumDrive
+    problem: ChartProblem, Q: ArrayLike, drive: OutOfFrustumDrive
 ) -> ClippedDriveFields:
     """The lit chart as the wall really lights it when ``M w_avg`` has a negative channel.
 
@@ -207,8 +245,8 @@ def clipped_drive_lit(
 
 
 def stability_diagnostics(
-    problem: QProblem,
-    fit: QFit,
+    problem: ChartProblem,
+    fit: FitReport,
     *,
     method: str,
     M: np.ndarray,

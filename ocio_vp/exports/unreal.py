@@ -115,6 +115,16 @@ def _desired_spaces(source: ExportSource, content: str) -> list[str]:
     return [content, names["out_of_frustum"], names["in_frustum"], *panels.color_spaces]
 
 
+def _display_views(names: dict[str, str]) -> list[JsonValue]:
+    """The wall's two display views, when the config has a display."""
+    if "display" not in names:
+        return []
+    return [
+        {"display": names["display"], "view": names[view]}
+        for view in ("view_out_of_frustum", "view_in_frustum")
+    ]
+
+
 def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> JsonObject:
     """The machine-readable assignment of colorspaces to nDisplay's OCIO slots."""
     names = source.names
@@ -138,12 +148,6 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> JsonObje
         }
 
     panels = panel_assignments(solution, content)  # a stage's other panel types
-    views: list[JsonValue] = []
-    if "display" in names:
-        views += [
-            {"display": names["display"], "view": names["view_out_of_frustum"]},
-            {"display": names["display"], "view": names["view_in_frustum"]},
-        ]
     return {
         "format": "ocio-vp/unreal-ocio",
         "version": 2,
@@ -157,7 +161,7 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> JsonObje
             "class": "UOpenColorIOConfiguration",
             "configuration_file": config,
             "desired_color_spaces": _desired_spaces(source, content),
-            "desired_display_views": views + panels.display_views,
+            "desired_display_views": _display_views(names) + panels.display_views,
         },
         "content_working_space_alternatives": alternatives,
         "unreal_versions": UNREAL_VERSIONS,

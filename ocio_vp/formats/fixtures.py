@@ -27,14 +27,11 @@ its ``lit_chart``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ocio_vp.formats.checker import Checker
 from ocio_vp.jsontypes import JsonObject, JsonValue
-
-if TYPE_CHECKING:  # measurements imports this module
-    from ocio_vp.formats.measurements import Validator
 
 __all__ = ["DMX_MODES", "DmxPatch", "Fixture", "fixtures_to_dict", "parse_fixtures"]
 
@@ -74,7 +71,7 @@ class Fixture:
         return np.moveaxis(self.lit_chart, 0, 2) / self.reference_drive
 
 
-def _parse_one(ctx: Validator, value: JsonValue, key: tuple, n: int) -> Fixture:
+def _parse_one(ctx: Checker, value: JsonValue, key: tuple, n: int) -> Fixture:
     entry = ctx.mapping(
         value,
         key,
@@ -108,13 +105,13 @@ def _parse_one(ctx: Validator, value: JsonValue, key: tuple, n: int) -> Fixture:
     return Fixture(name, channels, reference, chart, max_drive, pixel_mapped, direct, dmx)
 
 
-def _integer(ctx: Validator, value: JsonValue, key: tuple, low: int, high: int) -> int:
+def _integer(ctx: Checker, value: JsonValue, key: tuple, low: int, high: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
         raise ctx.error(key, f"expected an integer {low}..{high}, got {value!r}"[:200])
     return value
 
 
-def _parse_dmx(ctx: Validator, value: JsonValue, key: tuple, channels: int) -> DmxPatch:
+def _parse_dmx(ctx: Checker, value: JsonValue, key: tuple, channels: int) -> DmxPatch:
     entry = ctx.mapping(value, key, required=("universe", "address", "mode"))
     universe = _integer(ctx, entry["universe"], (*key, "universe"), 0, MAX_UNIVERSE)
     address = _integer(ctx, entry["address"], (*key, "address"), 1, 512)
@@ -130,7 +127,7 @@ def _parse_dmx(ctx: Validator, value: JsonValue, key: tuple, channels: int) -> D
     return DmxPatch(universe, address, mode)
 
 
-def parse_fixtures(ctx: Validator, value: JsonValue, n: int) -> tuple[Fixture, ...]:
+def parse_fixtures(ctx: Checker, value: JsonValue, n: int) -> tuple[Fixture, ...]:
     """Validate the ``fixtures`` list (``n`` chart patches).
 
     ``ctx`` is the measurements file's :class:`~ocio_vp.formats.measurements.Validator`, so every

@@ -2,7 +2,8 @@
 
 :func:`ocio_vp.wall.linearity.fit_linearity` makes it from the measured ramps; the wall
 encoding (:mod:`ocio_vp.wall.encoding`), the pre-correction LUT the config writer bakes
-(:mod:`ocio_vp.ocio.wall`) and the soft clip (:mod:`ocio_vp.wall.softclip`) add to it. A block
+(:mod:`ocio_vp.ocio.wall`) and the soft clip (:mod:`ocio_vp.wall.softclip`) add to it. The
+records are data only (``wall/`` computes with them and imports this module, not the reverse). A block
 read back from a file is the same records (:func:`~ocio_vp.formats.records.read_record`), and
 is written back with the keys it had, in the order it had them: pipeline scripts read these
 keys, whose names and meaning are unchanged.
@@ -18,7 +19,6 @@ import numpy as np
 
 from ocio_vp.formats.records import Record, read_record
 from ocio_vp.jsontypes import JsonValue
-from ocio_vp.wall.encoding import WallEncoding
 
 __all__ = [
     "MEASURED_KEYS",
@@ -29,6 +29,7 @@ __all__ = [
     "LutFile",
     "ShadowDeviation",
     "SoftClip",
+    "WallEncodingBlock",
     "assumed_linearity",
     "read_linearity",
 ]
@@ -116,6 +117,17 @@ class LutFile(Record):
 
 
 @dataclass(frozen=True)
+class WallEncodingBlock(Record):
+    """The wall's signal encoding as recorded (``wall_encoding``): its name and, for PQ, the
+    peak (:class:`ocio_vp.wall.encoding.WallEncoding` is the encoding itself)."""
+
+    OMIT_NONE = ("peak_nits",)
+
+    name: str
+    peak_nits: float | None = None
+
+
+@dataclass(frozen=True)
 class SoftClip(Record):
     """The soft clip of the wall's highlights (:mod:`ocio_vp.wall.softclip`)."""
 
@@ -148,7 +160,7 @@ class Linearity(Record):
     projection: str | None = None
     channels: dict[str, LinearityChannel] | None = None
     lut: LutFile | None = None
-    wall_encoding: WallEncoding | None = None
+    wall_encoding: WallEncodingBlock | None = None
     soft_clip: SoftClip | None = None
     present: tuple[str, ...] | None = field(default=None, compare=False)
     #: Keys this version does not know, kept as read (written back unchanged).
@@ -159,16 +171,11 @@ class Linearity(Record):
         """Whether any channel needs the pre-correction LUT."""
         return any(c.corrected for c in (self.channels or {}).values())
 
-    @property
-    def encoding(self) -> WallEncoding:
-        """The wall's signal encoding (linear when the block records none)."""
-        return WallEncoding() if self.wall_encoding is None else self.wall_encoding
-
     def updated(
         self,
         *,
         lut: LutFile | None = None,
-        wall_encoding: WallEncoding | None = None,
+        wall_encoding: WallEncodingBlock | None = None,
         soft_clip: SoftClip | None = None,
     ) -> Linearity:
         """A copy with the blocks given set (a key the block lacks goes after its keys)."""

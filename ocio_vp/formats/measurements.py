@@ -24,6 +24,7 @@ from ocio_vp.choices import DEFAULT_WHITE_PATCH, PRIORITIES
 from ocio_vp.errors import InputError, excerpt, format_key_path
 from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.fixtures import Fixture, fixtures_to_dict, parse_fixtures
+from ocio_vp.formats.geometry import PanelGeometry
 from ocio_vp.formats.panels import (
     PanelType,
     panel_values_to_dict,
@@ -84,20 +85,6 @@ REQUIRED_SECTIONS = ("primaries", "lit_chart", "environments")
 MIN_BETA = 1e-6
 #: Calibration panel width, height and distance (and |offset|) in metres.
 PANEL_RANGE = (1e-3, 1e3)
-
-
-@dataclass(frozen=True)
-class PanelGeometry:
-    """The calibration panel as seen from the chart, in metres (the chart faces the panel).
-
-    ``offset_x``/``offset_y`` move the panel centre sideways from the chart's normal.
-    """
-
-    width: float
-    height: float
-    distance: float
-    offset_x: float = 0.0
-    offset_y: float = 0.0
 
 
 @dataclass(frozen=True)

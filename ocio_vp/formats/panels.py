@@ -35,17 +35,16 @@ from __future__ import annotations
 import difflib
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from ocio_vp.choices import WALL_ENCODINGS
 from ocio_vp.errors import InputError, excerpt, format_key_path
+from ocio_vp.formats.checker import Checker
+from ocio_vp.formats.geometry import PanelGeometry
 from ocio_vp.jsontypes import JsonMapping, JsonObject, JsonValue
 from ocio_vp.wall.linearity import CHANNELS, Ramp, parse_ramps, ramps_to_dict
-
-if TYPE_CHECKING:  # measurements imports this module
-    from ocio_vp.formats.measurements import PanelGeometry, Validator
 
 __all__ = [
     "PANEL_KEYS",
@@ -116,7 +115,7 @@ def _kind(value: JsonValue) -> str:
 
 
 def _pair(
-    ctx: Validator, value: JsonValue, key: tuple, low: float, high: float
+    ctx: Checker, value: JsonValue, key: tuple, low: float, high: float
 ) -> tuple[float, float]:
     if not isinstance(value, (list, tuple)) or len(value) != 2:
         raise ctx.error(key, f"expected [min, max] in degrees, got {_kind(value)}")
@@ -126,7 +125,7 @@ def _pair(
     return a, b
 
 
-def _region(ctx: Validator, value: JsonValue, key: tuple) -> PanelRegion:
+def _region(ctx: Checker, value: JsonValue, key: tuple) -> PanelRegion:
     raw = ctx.mapping(value, key, required=("elevation",), optional=("azimuth",))
     elevation = _pair(ctx, raw["elevation"], (*key, "elevation"), -90.0, 90.0)
     azimuth = (-180.0, 180.0)
@@ -135,7 +134,7 @@ def _region(ctx: Validator, value: JsonValue, key: tuple) -> PanelRegion:
     return PanelRegion(elevation, azimuth)
 
 
-def _regions(ctx: Validator, value: JsonValue, key: tuple) -> tuple[PanelRegion, ...]:
+def _regions(ctx: Checker, value: JsonValue, key: tuple) -> tuple[PanelRegion, ...]:
     """One ``{elevation, azimuth}`` box or a non-empty list of them."""
     if isinstance(value, list):
         if not value:
@@ -144,7 +143,7 @@ def _regions(ctx: Validator, value: JsonValue, key: tuple) -> tuple[PanelRegion,
     return (_region(ctx, value, key),)
 
 
-def _encoding(ctx: Validator, entry: JsonMapping, key: tuple) -> tuple[str | None, float | None]:
+def _encoding(ctx: Checker, entry: JsonMapping, key: tuple) -> tuple[str | None, float | None]:
     encoding = entry.get("encoding")
     if encoding is not None and encoding not in WALL_ENCODINGS:
         raise ctx.error(
@@ -159,7 +158,7 @@ def _encoding(ctx: Validator, entry: JsonMapping, key: tuple) -> tuple[str | Non
     return encoding, peak
 
 
-def _ramps(ctx: Validator, value: JsonValue, key: tuple) -> Mapping[str, Any]:
+def _ramps(ctx: Checker, value: JsonValue, key: tuple) -> Mapping[str, Any]:
     """``parse_ramps`` with its errors placed under ``panels[i].ramps``."""
     try:
         return parse_ramps(value, source=ctx.source)
@@ -168,7 +167,7 @@ def _ramps(ctx: Validator, value: JsonValue, key: tuple) -> Mapping[str, Any]:
         raise InputError(error.problem, source=ctx.source, key=f"{where}.{error.key}") from None
 
 
-def _parse_one(ctx: Validator, value: JsonValue, key: tuple, n: int | None) -> PanelType:
+def _parse_one(ctx: Checker, value: JsonValue, key: tuple, n: int | None) -> PanelType:
     required, optional = PANEL_KEYS
     entry = ctx.mapping(value, key, required=required, optional=optional)
     name = ctx.name(entry["name"], (*key, "name"))
@@ -197,7 +196,7 @@ def _parse_one(ctx: Validator, value: JsonValue, key: tuple, n: int | None) -> P
     return PanelType(name, in_frustum, SL, SRL, panel, beta, ramps, regions, encoding, peak)
 
 
-def parse_panels(ctx: Validator, value: JsonValue) -> tuple[PanelType, ...]:
+def parse_panels(ctx: Checker, value: JsonValue) -> tuple[PanelType, ...]:
     """Validate the ``panels`` list: safe, unique names, the same number of chart patches in
     every ``lit_chart``, at least one in-frustum type, regions that do not overlap."""
     if not isinstance(value, list) or not value:
@@ -230,7 +229,7 @@ def parse_panels(ctx: Validator, value: JsonValue) -> tuple[PanelType, ...]:
 
 
 def parse_panel_values(
-    ctx: Validator,
+    ctx: Checker,
     value: JsonValue,
     key: tuple,
     panels: tuple[PanelType, ...],

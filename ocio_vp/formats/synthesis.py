@@ -9,12 +9,9 @@ rest: unknown keys, wrong types and empty texts are errors naming the key path.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
+from ocio_vp.formats.checker import Checker
 from ocio_vp.jsontypes import JsonObject, JsonValue
-
-if TYPE_CHECKING:  # measurements imports this module
-    from ocio_vp.formats.measurements import Validator
 
 __all__ = [
     "SYNTHESIS_SOURCES",
@@ -54,7 +51,7 @@ class SynthesisRecord:
     warnings: tuple[str, ...] = ()
 
 
-def _text(ctx: Validator, value: JsonValue, key: tuple[str | int, ...]) -> str:
+def _text(ctx: Checker, value: JsonValue, key: tuple[str | int, ...]) -> str:
     if not isinstance(value, str) or not value.strip() or len(value) > _MAX_TEXT:
         raise ctx.error(key, f"expected a non-empty text of at most {_MAX_TEXT} characters")
     if "\n" in value or "\r" in value:
@@ -63,7 +60,7 @@ def _text(ctx: Validator, value: JsonValue, key: tuple[str | int, ...]) -> str:
 
 
 def _texts(
-    ctx: Validator, value: JsonValue, key: tuple[str | int, ...], *, empty: bool
+    ctx: Checker, value: JsonValue, key: tuple[str | int, ...], *, empty: bool
 ) -> tuple[str, ...]:
     if not isinstance(value, list) or (not value and not empty):
         raise ctx.error(
@@ -72,9 +69,7 @@ def _texts(
     return tuple(_text(ctx, v, (*key, i)) for i, v in enumerate(value))
 
 
-def parse_synthesis(
-    ctx: Validator, value: JsonValue, key: tuple[str | int, ...]
-) -> SynthesisRecord:
+def parse_synthesis(ctx: Checker, value: JsonValue, key: tuple[str | int, ...]) -> SynthesisRecord:
     """Validate an environment's ``synthesized`` mapping (``ctx``: a measurements ``Validator``)."""
     raw = ctx.mapping(value, key, required=_REQUIRED, optional=_OPTIONAL)
     source = raw["source"]

@@ -17,16 +17,12 @@ A stage of several panel types gives ``encoding`` and ``peak_nits`` per type ins
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
-
-from ocio_vp.jsontypes import JsonMapping, JsonObject
-
-if TYPE_CHECKING:  # measurements imports this module
-    from ocio_vp.formats.measurements import Validator
-    from ocio_vp.patterns.sequence import PatternSequence
+from typing import Protocol
 
 from ocio_vp.choices import WALL_ENCODINGS
 from ocio_vp.errors import InputError, excerpt
+from ocio_vp.formats.checker import Checker
+from ocio_vp.jsontypes import JsonMapping, JsonObject
 
 __all__ = ["WALL_STATE_KEYS", "WallState", "parse_wall_state", "stage_with_sequence"]
 
@@ -63,7 +59,7 @@ class WallState:
         return f"{self.encoding}{peak}"
 
 
-def parse_wall_state(ctx: Validator, stage: JsonMapping, key: tuple[str | int, ...]) -> WallState:
+def parse_wall_state(ctx: Checker, stage: JsonMapping, key: tuple[str | int, ...]) -> WallState:
     """The :class:`WallState` of a ``stage`` mapping (``ctx``: the file's Validator)."""
     encoding = stage.get("wall_encoding")
     if encoding is not None and encoding not in WALL_ENCODINGS:
@@ -94,9 +90,21 @@ def parse_wall_state(ctx: Validator, stage: JsonMapping, key: tuple[str | int, .
     return WallState(encoding, None if peak is None else float(peak), pattern_size)
 
 
-def stage_with_sequence(
-    stage: JsonMapping, sequence: PatternSequence, *, source: str
-) -> JsonObject:
+class PlayedSequence(Protocol):
+    """What the wall played (a :class:`~ocio_vp.patterns.sequence.PatternSequence`, which
+    imports this module): its signal encoding, peak and pattern size."""
+
+    @property
+    def encoding(self) -> str: ...
+
+    @property
+    def peak_nits(self) -> float | None: ...
+
+    @property
+    def size(self) -> tuple[int, int]: ...
+
+
+def stage_with_sequence(stage: JsonMapping, sequence: PlayedSequence, *, source: str) -> JsonObject:
     """``stage`` (a capture file's section) with the wall state of the take's ``sequence``
     (a :class:`~ocio_vp.patterns.sequence.PatternSequence`) added; a capture file that states
     another encoding or peak than the sequence the wall played is refused."""

@@ -18,12 +18,13 @@ import functools
 import hashlib
 import json
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ocio_vp.calibration.equations import condition_number, condition_text
 from ocio_vp.calibration.headroom import content_scale
@@ -34,6 +35,7 @@ from ocio_vp.formats.provenance import solution_sha256
 from ocio_vp.formats.records import json_object
 from ocio_vp.formats.solution import Solution
 from ocio_vp.formats.solution_inputs import solution_folders
+from ocio_vp.jsontypes import JsonObject, JsonValue
 from ocio_vp.model.correction import (
     PostCorrection,
     ProtectedCorrection,
@@ -303,7 +305,7 @@ def _method(solution: Solution) -> str:
     return f"{text} ({solution.correction.describe()})"
 
 
-def _share(value: Any, sign: str = "") -> str:
+def _share(value: float | str, sign: str = "") -> str:
     """A share in %; JSON keeps an infinite one as text ("-inf")."""
     number = float(value)
     return f"{number:{sign}.0%}" if np.isfinite(number) else f"{number:{sign}}"
@@ -351,10 +353,10 @@ def _q_rows(solution: Solution) -> list[dict[str, Any]]:
     return [model, _matrix_rows("Q (3x3)", solution.Q, fallback)]
 
 
-def _short(value: Any) -> str:
+def _short(value: JsonValue) -> str:
     """Notes as a person reads them: floats to 4 significant digits, inside lists and dicts."""
 
-    def walk(v: Any) -> Any:
+    def walk(v: JsonValue) -> JsonValue:
         if isinstance(v, float):
             return float(f"{v:.4g}")
         if isinstance(v, dict):
@@ -369,7 +371,7 @@ def _short(value: Any) -> str:
     return str(value)
 
 
-def _triple(values: Any) -> str:
+def _triple(values: ArrayLike | None) -> str:
     if values is None:
         return "—"
     return ", ".join(f"{float(v):.5g}" for v in np.ravel(values))
@@ -404,17 +406,20 @@ def _summary(environments: Sequence[EnvironmentData]) -> list[dict[str, str]]:
 MANIFEST = "report.json"
 
 
-def _manifest(environments: Sequence[EnvironmentData], out_dir: Path) -> dict[str, Any]:
-    """Solutions named relative to the report folder: no absolute path in any output."""
+def _solutions(environments: Sequence[EnvironmentData], out_dir: Path) -> list[str]:
+    """The solutions, named relative to the report folder: no absolute path in any output."""
+    return [
+        Path(os.path.relpath(data.path.resolve(), out_dir.resolve())).as_posix()
+        for data in environments
+    ]
 
-    def relative(path: Path) -> str:
-        return Path(os.path.relpath(path.resolve(), out_dir.resolve())).as_posix()
 
+def _manifest(environments: Sequence[EnvironmentData], out_dir: Path) -> JsonObject:
     return {
         "format": "ocio-vp/report",
         "version": 1,
         "environments": [data.solution.environment for data in environments],
-        "solutions": [relative(data.path) for data in environments],
+        "solutions": _solutions(environments, out_dir),
         # which solution each environment's figures come from (a re-solve flags the report)
         "solution_sha256": {
             data.solution.environment: solution_sha256(data.path.parent) for data in environments
@@ -456,9 +461,7 @@ def _check_replaceable(
     except (OSError, ValueError, KeyError, TypeError):
         return  # no report there, or one written before manifests: nothing to compare
     dropped = [
-        env
-        for path, env in old_solutions.items()
-        if path not in _manifest(environments, out_dir)["solutions"]
+        env for path, env in old_solutions.items() if path not in _solutions(environments, out_dir)
     ]
     if dropped and not replace:
         raise InputError(
@@ -476,7 +479,7 @@ def build_report(
     match_white: bool = True,
     camera_to_xyz: np.ndarray | None = None,
     replace: bool = False,
-    on_step: Any = None,
+    on_step: Callable[[], None] | None = None,
 ) -> Report:
     """Write ``out_dir/index.html`` and its SVGs for every solution in ``paths``, all or nothing.
 

@@ -4,20 +4,19 @@ in-frustum types match in camera (solution.json's ``panels`` and ``diagnostics.p
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ocio_vp.formats.solution import Solution
 
 __all__ = ["panel_facts"]
 
 
-def _triple(values: Any) -> str:
+def _triple(values: ArrayLike) -> str:
     return ", ".join(f"{v:.4g}" for v in np.asarray(values, dtype=np.float64).ravel())
 
 
-def _percent(values: Any) -> str:
+def _percent(values: ArrayLike) -> str:
     return " / ".join(f"{100 * v:.1f}%" for v in np.asarray(values, dtype=np.float64).ravel())
 
 

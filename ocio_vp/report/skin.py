@@ -10,9 +10,13 @@ measured skin.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING
 
+from ocio_vp.jsontypes import JsonObject
 from ocio_vp.skin_data import ITA_BANDS
+
+if TYPE_CHECKING:
+    from ocio_vp.formats.solution import Solution
 
 __all__ = ["skin_facts", "skin_panel"]
 
@@ -21,11 +25,10 @@ def _pair(expected: float, least_squares: float) -> str:
     return f"{expected:.2f} ({least_squares:.2f})"
 
 
-def skin_panel(solutions: Sequence[Any]) -> dict[str, Any] | None:
+def skin_panel(solutions: Sequence[Solution]) -> JsonObject | None:
     """``{"bands": [...], "rows": [{"name", "key", "cells": [...], "all": str}]}`` for the
     template, bands lightest first; None when no solve has skin figures."""
-    figures = [(s, s.diagnostics.skin) for s in solutions]
-    figures = [(s, f) for s, f in figures if f is not None]
+    figures = [(s, f) for s in solutions if (f := s.diagnostics.skin) is not None]
     if not figures:
         return None
     present = {b.band for _, f in figures for b in f.bands}
@@ -49,7 +52,7 @@ def skin_panel(solutions: Sequence[Any]) -> dict[str, Any] | None:
     return {"bands": bands, "rows": rows}
 
 
-def skin_facts(solution: Any) -> list[tuple[str, str]]:
+def skin_facts(solution: Solution) -> list[tuple[str, str]]:
     """Per environment: the skin samples and, with skin first, the default's figures."""
     f = solution.diagnostics.skin
     if f is None:

@@ -18,13 +18,16 @@ from __future__ import annotations
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TypedDict
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.formats.measurements import Measurements
 from ocio_vp.jsontypes import JsonObject, JsonValue
+
+if TYPE_CHECKING:
+    from ocio_vp.patterns.sequence import PatternSequence
 
 __all__ = [
     "CHART_CORNERS",
@@ -469,7 +472,7 @@ def write_capture(
     options: PlateOptions = PlateOptions(),
     *,
     bar=None,
-    sequence: Any = None,
+    sequence: PatternSequence | None = None,
     sequence_ref: str | None = None,
 ) -> Path:
     """Render every plate of ``measurements`` into ``folder`` and write ``folder/capture.yaml``.
@@ -547,7 +550,7 @@ TAKE_MOVIE = "A001.mov"
 MOVIE_ENCODING = "ARRI LogC3"
 
 
-def practice_sequence() -> Any:
+def practice_sequence() -> PatternSequence:
     """The built-in sequence a simulated stage films when none is given: the calibration
     sequence at 64x36 pixels, 8 frames a patch (about 30 s, ~750 camera frames at 25 fps)."""
     from ocio_vp.patterns.design import PatternOptions, calibration_sequence
@@ -585,7 +588,9 @@ def _film_patterns(measurements, folder: Path, options: PlateOptions, sequence, 
 
 
 def plate_count(
-    measurements: Measurements, options: PlateOptions = PlateOptions(), sequence: Any = None
+    measurements: Measurements,
+    options: PlateOptions = PlateOptions(),
+    sequence: PatternSequence | None = None,
 ) -> int:
     """How many plates (and take frames) :func:`write_capture` writes (for a progress bar)."""
     if measurements.panels:

@@ -38,13 +38,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ocio_vp.choices import DEFAULT_PEAK_NITS, WALL_ENCODINGS
+from ocio_vp.formats.linearity import Linearity, WallEncodingBlock, assumed_linearity
 from ocio_vp.jsontypes import JsonMapping, JsonObject
 from ocio_vp.wall.linearity import CHANNELS, inverse_response, response_model
 
 if TYPE_CHECKING:
     import PyOpenColorIO as OCIO
 
-    from ocio_vp.formats.linearity import Linearity
     from ocio_vp.formats.solution import Solution
 
 __all__ = [
@@ -224,7 +224,12 @@ class WallEncoding:
     @classmethod
     def of(cls, linearity: Linearity | None) -> WallEncoding:
         """The encoding a ``linearity`` block records (a linear wall when it records none)."""
-        return cls() if linearity is None else linearity.encoding
+        block = None if linearity is None else linearity.wall_encoding
+        return cls() if block is None else cls(block.name, block.peak_nits)
+
+    def block(self) -> WallEncodingBlock:
+        """The ``wall_encoding`` record of a ``linearity`` block."""
+        return WallEncodingBlock(self.name, self.peak_nits)
 
     def to_dict(self) -> JsonObject:
         return {"name": self.name} | (
@@ -389,10 +394,8 @@ def with_wall_encoding(
         return _with_panel_encodings(solution, encoding, peak_nits)
     if encoding == "linear" and solution.linearity is None:
         return solution
-    from ocio_vp.formats.linearity import assumed_linearity
-
     linearity = solution.linearity or assumed_linearity()
-    wall = WallEncoding(encoding, peak_nits)
+    wall = WallEncoding(encoding, peak_nits).block()
     return dataclasses.replace(solution, linearity=linearity.updated(wall_encoding=wall))
 
 

@@ -31,21 +31,19 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ocio_vp.errors import InputError, format_key_path
+from ocio_vp.formats.linearity import (
+    MEASURED_KEYS,
+    ChannelBlack,
+    ChannelNoise,
+    Linearity,
+    LinearityChannel,
+    ShadowDeviation,
+)
 from ocio_vp.jsontypes import JsonObject, JsonValue
-
-if TYPE_CHECKING:  # the records import this module's neighbours: made where used
-    from ocio_vp.formats.linearity import (
-        ChannelBlack,
-        ChannelNoise,
-        Linearity,
-        LinearityChannel,
-        ShadowDeviation,
-    )
 
 __all__ = [
     "CHANNELS",
@@ -450,8 +448,6 @@ def channel_response(
         When the top step is not brighter than the black, or the response falls by more than
         :data:`REFUSAL_SIGMAS` noise sigmas (naming the step).
     """
-    from ocio_vp.formats.linearity import ChannelBlack, ChannelNoise
-
     s = np.asarray(SL, dtype=np.float64)[:, channel]
     name = CHANNELS[channel]
     y = ramp.camera @ s / (s @ s)
@@ -548,8 +544,6 @@ def _deviations(
     fit: ChannelResponse, tolerance: float
 ) -> tuple[float, ShadowDeviation | None, bool]:
     """Absolute and relative deviation from linear at the knots, and whether to correct."""
-    from ocio_vp.formats.linearity import ShadowDeviation
-
     d, r = fit.drive[1:-1], fit.response[1:-1]
     absolute = float(np.max(np.abs(fit.response - fit.drive)))
     if len(d) == 0:
@@ -685,8 +679,6 @@ def fit_linearity(
     The pre-correction LUT is built from the knots when the config is written
     (:func:`ocio_vp.ocio.wall.wall_outputs`); ``corrected`` false everywhere means no LUT.
     """
-    from ocio_vp.formats.linearity import MEASURED_KEYS, Linearity, LinearityChannel
-
     SL = np.asarray(SL, dtype=np.float64)
     channels: dict[str, LinearityChannel] = {}
     notes: list[str] = []

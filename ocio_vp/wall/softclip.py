@@ -29,8 +29,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ocio_vp.formats.linearity import Linearity, SoftClip, assumed_linearity
+
 if TYPE_CHECKING:
-    from ocio_vp.formats.linearity import Linearity, SoftClip
     from ocio_vp.formats.solution import Solution
 
 __all__ = [
@@ -94,8 +95,6 @@ def soft_clip_knee(linearity: Linearity | None) -> float | None:
 
 
 def _block(knee: float) -> SoftClip:
-    from ocio_vp.formats.linearity import SoftClip
-
     return SoftClip(
         knee=float(knee),
         curve=SOFT_CLIP_CURVE,
@@ -110,8 +109,6 @@ def with_soft_clip(solution: Solution, knee: float | None) -> Solution:
     if knee is None:
         return solution
     check_knee(knee)
-
-    from ocio_vp.formats.linearity import assumed_linearity
 
     def clipped(linearity: Linearity | None) -> Linearity:
         return (linearity or assumed_linearity()).updated(soft_clip=_block(knee))

@@ -1,0 +1,21 @@
+"""The calibration panel's geometry, shared by the stage section and the panel types."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["PanelGeometry"]
+
+
+@dataclass(frozen=True)
+class PanelGeometry:
+    """The calibration panel as seen from the chart, in metres (the chart faces the panel).
+
+    ``offset_x``/``offset_y`` move the panel centre sideways from the chart's normal.
+    """
+
+    width: float
+    height: float
+    distance: float
+    offset_x: float = 0.0
+    offset_y: float = 0.0
