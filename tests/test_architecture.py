@@ -285,3 +285,46 @@ def test_colour_science_loads_without_its_plotting_until_that_is_used():
     assert (before, after, same, kind) == (False, True, True, "module")
     assert module.startswith("colour.plotting")
     assert delta_e > 0
+
+
+#: Most functions whose signature mentions ``Any``: a value truly of any type (a YAML/JSON
+#: reader's narrowing helpers, keyword forwarding, reflection over record fields). Everything
+#: else crossing a function boundary has a named type (a record, a protocol, an array, JsonValue).
+MAX_ANY_SIGNATURES = 40
+
+
+def any_signatures(source: str, name: str = "<source>") -> list[str]:
+    """``name:line function`` for each function whose parameter or return annotations mention
+    ``Any`` (``ast.unparse`` of the annotation contains "Any")."""
+    found = []
+    for node in ast.walk(ast.parse(source, name)):
+        if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            continue
+        args = node.args
+        params = [*args.posonlyargs, *args.args, *args.kwonlyargs, args.vararg, args.kwarg]
+        annotations = [p.annotation for p in params if p is not None and p.annotation]
+        annotations += [node.returns] if node.returns else []
+        if any("Any" in ast.unparse(a) for a in annotations):
+            found.append(f"{name}:{node.lineno} {node.name}")
+    return found
+
+
+def test_any_signatures_finds_planted_ones():
+    source = (
+        "def a(x: Any) -> int: ...\n"
+        "def b(*, y: dict[str, Any]) -> None: ...\n"
+        "def c(**z: Any): ...\n"
+        "def d() -> list[Any]: ...\n"
+        "def e(x: int, y: 'Anything') -> str: ...\n"  # a name that contains Any counts too
+        "def f(x: int, *rest: float) -> JsonValue: ...\n"
+    )
+    assert [s.split()[1] for s in any_signatures(source)] == ["a", "b", "c", "d", "e"]
+
+
+def test_at_most_40_functions_take_or_return_any():
+    found = [
+        hit
+        for path in sorted(PACKAGE.rglob("*.py"))
+        for hit in any_signatures(path.read_text(), str(path.relative_to(PACKAGE.parent)))
+    ]
+    assert len(found) <= MAX_ANY_SIGNATURES, "\n".join(found)
