@@ -43,9 +43,9 @@ def _apply(config: OCIO.Config, src: str, dst: str, rgb) -> np.ndarray:
 class TestDrives:
     def test_negative_channel_is_reported(self) -> None:
         d = out_of_frustum_drive(np.array([[1, 0, 0], [0, 1, 0], [0, -2, 1]]), [0.5, 0.5, 0.5])
-        np.testing.assert_allclose(d["drive"], [0.5, 0.5, -0.5])
-        assert d["negative_channels"] == [2]
-        np.testing.assert_allclose(d["clipped_drive"], [0.5, 0.5, 0.0])
+        np.testing.assert_allclose(d.drive, [0.5, 0.5, -0.5])
+        assert d.negative_channels == [2]
+        np.testing.assert_allclose(d.clipped_drive, [0.5, 0.5, 0.0])
 
     def test_in_frustum_range_counts_by_hand(self) -> None:
         target = np.full((24, 3), 0.25)

@@ -13,6 +13,7 @@ from conftest import make_measurements_dict
 from ocio_vp.calibration.headroom import content_scale, content_scale_lines
 from ocio_vp.formats.measurements import measurements_from_dict
 from ocio_vp.pipeline import solve_measurements
+from ocio_vp.wall.encoding import with_wall_encoding
 
 
 def _solution(camera=None):
@@ -38,8 +39,9 @@ def test_camera_native_white_is_m_times_ones():
 def test_a_clipping_solve_warns_and_pq_states_the_nits():
     solution = _solution("ARRI Wide Gamut 4")
     M = solution.M * 2.0  # a dimmer panel: content white needs twice the drive
-    pq = {"wall_encoding": {"name": "pq", "peak_nits": 600.0}}
-    scale = content_scale(dataclasses.replace(solution, M=M, linearity=pq))
+    scale = content_scale(
+        with_wall_encoding(dataclasses.replace(solution, M=M), "pq", peak_nits=600.0)
+    )
     lines = scale.lines()
     out, err = content_scale_lines([scale])
     assert out == lines and scale.clips and len(err) == 1 and err[0].startswith("warning:")

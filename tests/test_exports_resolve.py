@@ -101,7 +101,7 @@ class TestCube:
 
         identity = OCIO.Config.CreateRaw().getProcessor(OCIO.MatrixTransform())
         result = fit_cube(identity, tmp_path / "i.cube", size=9, input_range=(-0.25, 16.0))
-        assert result.path is not None and result.errors["max_error"] < 1e-5
+        assert result.path is not None and result.errors.max_error < 1e-5
         text = result.path.read_text()
         assert "LUT_3D_SIZE 9" in text and "LUT_1D_SIZE" in text
         rgb = np.random.default_rng(2).uniform(-0.25, 16.0, size=(500, 3))
@@ -122,10 +122,10 @@ class TestCube:
         )
         cube = bake_cube(processor, tmp_path / "g.cube", size=9, input_range=(0.0, 1.0))
         report = cube_error(processor, cube, input_range=(0.0, 1.0))
-        assert report["max_error"] > 1e-3
+        assert report.max_error > 1e-3
         rgb = np.random.default_rng(1).uniform(size=(2000, 3))
         error = np.abs(colour.io.read_LUT(str(cube)).apply(rgb) - rgb ** (1 / 2.4)).max()
-        assert 1e-3 < error <= report["max_error"] + 1e-5
+        assert 1e-3 < error <= report.max_error + 1e-5
         refused = fit_cube(processor, tmp_path / "r.cube", size=9, input_range=(0.0, 1.0))
         assert refused.path is None and "over the limit" in refused.reason
         assert not list(tmp_path.glob("r*.cube")) and not list(tmp_path.glob(".*trial*"))

@@ -29,7 +29,7 @@ from ocio_vp.fixtures import (
 )
 from ocio_vp.formats.fixtures import DmxPatch, Fixture
 from ocio_vp.formats.measurements import save_measurements
-from ocio_vp.formats.solution import load_solution, solution_to_json
+from ocio_vp.formats.solution import FixtureDrive, load_solution, solution_to_json
 from ocio_vp.pipeline import solve_environment
 from ocio_vp.simulator.fixtures import fixture_spectra, with_simulated_fixtures
 from ocio_vp.simulator.stage import paper_stage, simulate_measurements
@@ -168,7 +168,7 @@ def test_dmx_values_closed_form():
 
 
 def test_dmx_rows_keep_channel_order_and_scale_by_max_drive():
-    block = {"channels": ["white", "red"], "drive": {"red": 0.5, "white": 1.0}, "max_drive": 2.0}
+    block = FixtureDrive(("white", "red"), {"red": 0.5, "white": 1.0}, max_drive=2.0)
     rows = dmx_rows("key", block)
     assert [r["channel"] for r in rows] == ["white", "red"]
     assert [r["level"] for r in rows] == [0.5, 0.25]

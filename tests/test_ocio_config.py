@@ -17,6 +17,7 @@ from ocio_vp.formats.measurements import measurements_from_dict
 from ocio_vp.ocio import config as oc
 from ocio_vp.ocio.writer import write_solutions
 from ocio_vp.pipeline import solve_measurements
+from ocio_vp.wall.encoding import with_wall_encoding
 
 COLOURS = np.random.default_rng(7).uniform(-0.2, 4.0, size=(64, 3))  # HDR and negative too
 
@@ -132,8 +133,10 @@ def test_wall_colorspace_encoding_follows_the_wall_signal(written, wall, encodin
     import dataclasses
 
     _, solutions = written
-    linearity = None if wall is None else {"wall_encoding": {"name": wall}}
-    config = oc.build_config(dataclasses.replace(solutions[0], linearity=linearity))
+    solution = dataclasses.replace(solutions[0], linearity=None)
+    if wall is not None:
+        solution = with_wall_encoding(solution, wall)
+    config = oc.build_config(solution)
     for name in (oc.OUT_OF_FRUSTUM, oc.IN_FRUSTUM):
         assert config.getColorSpace(name).getEncoding() == encoding
 

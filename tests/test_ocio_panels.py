@@ -12,6 +12,7 @@ import PyOpenColorIO as OCIO
 import pytest
 
 from benchmarks.panel_solves import ceiling_response, three_types
+from ocio_vp.formats.linearity import WallEncodingBlock
 from ocio_vp.formats.solution import load_solution
 from ocio_vp.ocio.panels import panel_labels
 from ocio_vp.ocio.writer import write_environment
@@ -107,10 +108,10 @@ def test_the_ceiling_gets_its_own_m_linearity_lut_and_pq_signal(written):
 
     solution = load_solution(written["least-squares"])
     ceiling = solution.panels["ceiling"]
-    assert ceiling.linearity.wall_encoding == {"name": "pq", "peak_nits": 1500.0}
+    assert ceiling.linearity.wall_encoding == WallEncodingBlock("pq", 1500.0)
     assert ceiling.linearity.lut.file.startswith("luts/")
     assert (written["least-squares"] / ceiling.linearity.lut.file).is_file()
-    assert solution.linearity is None or "lut" not in (solution.linearity or {})  # the wall's
+    assert solution.linearity is None or solution.linearity.lut is None  # the wall's
     signal = apply(written["least-squares"], REFERENCE, "LED Ceiling - Outer Frustum", COLOURS)
     # Decode PQ (colour-science), then the ceiling's own response: the linear drive M c.
     pre = colour.models.eotf_ST2084(signal) / 1500.0

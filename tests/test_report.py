@@ -15,6 +15,7 @@ import pytest
 from conftest import make_measurements_dict
 
 from ocio_vp.cli import main
+from ocio_vp.formats.linearity import assumed_linearity
 from ocio_vp.formats.measurements import measurements_from_dict
 from ocio_vp.metrics import error_relative_to_white
 from ocio_vp.ocio.writer import write_solutions
@@ -288,7 +289,7 @@ class TestLinearity:
 
     def test_no_linearity_no_curves(self):
         assert linearity_curves(None) == {}
-        assert linearity_curves({"measured": False, "channels": None}) == {}
+        assert linearity_curves(assumed_linearity()) == {}
 
 
 class TestCommand:

@@ -22,8 +22,6 @@ import numpy as np
 from ocio_vp.calibration.equations import predict_lit_chart
 from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.correction.skin import SkinRows, SkinSamples, skin_rows
-from ocio_vp.formats.records import json_object, json_value
-from ocio_vp.jsontypes import JsonObject
 from ocio_vp.model.correction import FitDomain, fit_domain
 
 if TYPE_CHECKING:
@@ -141,18 +139,19 @@ class QFit:
         return self.correction.matrix
 
     @property
-    def notes(self) -> JsonObject:
-        """Everything the method reported, as solution.json's ``diagnostics.method_notes``."""
-        notes: JsonObject = {"model": self.model, "description": self.description}
+    def notes(self) -> dict[str, object]:
+        """Everything the method reported (its own figures: numbers, arrays, text), which
+        solution.json writes as ``diagnostics.method_notes`` (converted to JSON there)."""
+        notes: dict[str, object] = {"model": self.model, "description": self.description}
         if self.reason is not None:
             notes["reason"] = self.reason
         if self.target_rank is not None:
             notes["target_rank"] = self.target_rank
         if self.cross_validated_error is not None:
-            notes["cross_validated_error"] = json_value(self.cross_validated_error)
+            notes["cross_validated_error"] = self.cross_validated_error
         if self.warnings:
             notes["warnings"] = list(self.warnings)
-        return notes | json_object(self.details)
+        return notes | dict(self.details)
 
 
 # Eq. 5's kernel lives with the problem: the linear family, perceptual (its start) and joint all

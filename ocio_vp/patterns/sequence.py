@@ -248,10 +248,12 @@ def _validation(ctx: Validator, raw: JsonValue) -> Validation:
         entry.get("content_scale", 1.0), ("validation", "content_scale"), strict=True
     )
     pulled = entry.get("pulled") or {}
-    if not isinstance(pulled, dict) or not all(
-        isinstance(k, int) and isinstance(v, (int, float)) and 0 <= v <= 1
-        for k, v in pulled.items()
-    ):
+    kept = {  # chart index (a YAML integer key, read as its text) -> saturation kept
+        int(k): float(v)
+        for k, v in (pulled.items() if isinstance(pulled, dict) else ())
+        if k.isdecimal() and isinstance(v, (int, float)) and 0 <= v <= 1
+    }
+    if not isinstance(pulled, dict) or len(kept) != len(pulled):
         raise ctx.error(("validation", "pulled"), "expected {chart index: saturation kept}")
     return Validation(
         environment=entry["environment"],
@@ -260,7 +262,7 @@ def _validation(ctx: Validator, raw: JsonValue) -> Validation:
         in_frustum=entry["in_frustum"],
         reference=entry["reference"],
         content_scale=scale,
-        pulled=tuple((int(k), float(v)) for k, v in pulled.items()),
+        pulled=tuple(kept.items()),
         model=entry.get("model"),
         solved=entry.get("solved"),
     )
