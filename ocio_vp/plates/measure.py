@@ -260,7 +260,7 @@ def measure_steps(capture: Capture) -> int:
     return walls + len(capture.environments) + blacks
 
 
-def take_sections(reading: TakeReading) -> dict[str, Any]:
+def take_sections(reading: TakeReading) -> JsonObject:
     """``primaries`` (black subtracted) and ``ramps`` (each step, black subtracted; the drive
     of that channel as ``sequence.yaml`` gives it) from a measured take."""
     sequence = reading.sequence
@@ -389,7 +389,7 @@ def _plate_warnings(plates: list[PlateSampling]) -> list[str]:
     return warnings
 
 
-def _environment(env, chart, black_level) -> dict[str, Any]:
+def _environment(env, chart, black_level) -> JsonObject:
     """One environment's entry: its target chart, black level(s) and w_avg as given."""
     entry: dict[str, Any] = {"name": env.name, "target_chart": chart(env.target_chart).tolist()}
     if env.black_level is not None:

@@ -178,7 +178,7 @@ def _panel_text(candidate: str, sha256: str) -> str:
     return f"{text} (from {path.name})"
 
 
-def _matrix_rows(name: str, matrix: np.ndarray | None, meaning: str) -> dict[str, Any]:
+def _matrix_rows(name: str, matrix: np.ndarray | None, meaning: str) -> JsonObject:
     if matrix is None:
         return {"name": name, "meaning": meaning, "rows": None, "cond": None}
     return {
@@ -335,7 +335,7 @@ def _polynomial(correction: PostCorrection) -> RootPolynomialCorrection | None:
     return inner if isinstance(inner, RootPolynomialCorrection) else None
 
 
-def _q_rows(solution: Solution) -> list[dict[str, Any]]:
+def _q_rows(solution: Solution) -> list[JsonObject]:
     """Q's matrix; for a root-polynomial Q, its coefficients too (what the config's LUTs and
     ``ocio-vp apply`` use) and the matrix named as the model's 3x3 fallback."""
     polynomial = _polynomial(solution.correction)
