@@ -46,11 +46,11 @@ def _solve_and_judge(stage, measurements, env_name, kind, noise, seed, reflectan
     extra, drives_ok, white_ok = None, True, True
     if solution.fixtures:
         block = solution.fixtures[kind.replace("-", "_")]
-        drives = np.array([block["drive"][c] for c in block["channels"]])
+        drives = np.array(block.drives)
         extra = fixture_spectra(stage, kind)[1] @ drives
         notes = solution.diagnostics.fixtures
-        drives_ok = bool(np.all(drives >= 0) and np.all(drives <= block["max_drive"] + 1e-9))
-        white_ok = notes["limits"].get("white_point_delta_e", 0.0) <= 2.0 + 1e-6
+        drives_ok = bool(np.all(drives >= 0) and np.all(drives <= block.max_drive + 1e-9))
+        white_ok = notes.limits.get("white_point_delta_e", 0.0) <= 2.0 + 1e-6
     errors = held_out_errors(
         stage, env_name, M=solution.M, w_avg=solution.w_avg, Q=solution.Q,
         reflectances=reflectances, extra_emission=extra,

@@ -65,8 +65,8 @@ def _even_drive_lut(linearity, domain_max: float, size: int):
         np.stack(
             [
                 inverse_response(
-                    np.array(linearity["channels"][c]["drive"]),
-                    np.array(linearity["channels"][c]["response"]),
+                    linearity.channels[c].drive,
+                    linearity.channels[c].response,
                     x,
                 )
                 for c in CHANNELS
@@ -92,8 +92,8 @@ def _relative_errors(linearity, transforms, encoding: str) -> list[float]:
     drive = decode(signal, encoding)
     error = np.zeros_like(x)
     for k, c in enumerate(CHANNELS):
-        channel = linearity["channels"][c]
-        model = response_model(channel["drive"], channel["response"])
+        channel = linearity.channels[c]
+        model = response_model(channel.drive, channel.response)
         error = np.maximum(error, np.abs(model(np.clip(drive[:, k], 0, 1)) / x - 1))
     return [float(np.max(error[(x >= lo) & (x <= hi)])) for lo, hi in ACCURACY_BANDS]
 
