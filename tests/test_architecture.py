@@ -103,7 +103,7 @@ def test_the_import_graph_has_no_cycle():
 #: module of its own package or of a package on its row or below, never above.
 ROWS = {
     "metrics": 0, "spectra": 0, "errors": 0, "choices": 0, "skin_data": 0,
-    "deprecation": 0, "svg": 0, "jsontypes": 0,
+    "deprecation": 0, "svg": 0,
     "formats": 1, "wall": 1, "staging": 1, "model": 1, "patterns": 1,
     "calibration": 2,
     "correction": 3, "ocio": 3, "plates": 3, "hdri": 3, "fixtures": 3,

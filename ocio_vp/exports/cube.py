@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 import PyOpenColorIO as OCIO
 
-from ocio_vp.jsontypes import JsonObject
+from ocio_vp.formats.jsontypes import JsonObject
 
 __all__ = [
     "CUBE_LIMIT",

@@ -16,7 +16,7 @@ from pathlib import Path
 from ocio_vp.errors import InputError
 from ocio_vp.exports.source import DEFAULT_CUBES, CubeOptions, ExportSource, ExportSummary
 from ocio_vp.fixtures.dmx import content_matrix, dmx_csv, dmx_rows
-from ocio_vp.jsontypes import JsonObject
+from ocio_vp.formats.jsontypes import JsonObject
 
 __all__ = ["write_lights"]
 

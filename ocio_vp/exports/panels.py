@@ -21,8 +21,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.solution import Solution
-from ocio_vp.jsontypes import JsonObject, JsonValue
 
 __all__ = ["PANEL_VERSIONS", "PanelAssignments", "panel_assignments", "panel_notes"]
 

@@ -41,8 +41,8 @@ from ocio_vp.exports.source import (
     post_correction_carriage,
 )
 from ocio_vp.exports.templating import render_template
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.solution import Solution
-from ocio_vp.jsontypes import JsonObject, JsonValue
 from ocio_vp.model.correction import (
     PostCorrection,
     ProtectedCorrection,

@@ -17,9 +17,9 @@ import PyOpenColorIO as OCIO
 
 from ocio_vp.errors import InputError
 from ocio_vp.exports.cube import CubeAccuracy
+from ocio_vp.formats.jsontypes import JsonObject
 from ocio_vp.formats.measurements import check_safe_name
 from ocio_vp.formats.solution import Solution, load_solution
-from ocio_vp.jsontypes import JsonObject
 from ocio_vp.model.footage_range import Agreement
 
 #: Cube lattice size and input range (camera RGB) of every exported .cube.

@@ -37,7 +37,7 @@ from ocio_vp.exports.source import (
 )
 from ocio_vp.exports.templating import render_template
 from ocio_vp.exports.unreal_script import SCRIPT_FILE, render_unreal_script
-from ocio_vp.jsontypes import JsonObject, JsonValue
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.ocio.config import WORKING_SPACE_NAMES
 
 __all__ = ["MAPPING_FILE", "unreal_mapping", "write_ocioz", "write_unreal"]

@@ -15,7 +15,7 @@ import numpy as np
 
 from ocio_vp.errors import InputError
 from ocio_vp.formats.geometry import PanelGeometry
-from ocio_vp.jsontypes import JsonMapping, JsonValue
+from ocio_vp.formats.jsontypes import JsonMapping, JsonValue
 
 __all__ = ["Checker"]
 

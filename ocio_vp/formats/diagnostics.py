@@ -14,9 +14,9 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ocio_vp.choices import DEFAULT_WHITE_PATCH
+from ocio_vp.formats.jsontypes import JsonMapping
 from ocio_vp.formats.records import Record, read_record, read_value
 from ocio_vp.formats.skin import SkinFigures
-from ocio_vp.jsontypes import JsonMapping
 from ocio_vp.model.footage_range import Agreement
 
 __all__ = [

@@ -14,7 +14,7 @@ exhaust memory:
   typos and edits gone wrong);
 - integers too long to be a float64 are errors, not ``OverflowError``/int-string-limit
   tracebacks;
-- a YAML document holds JSON's values only (:data:`~ocio_vp.jsontypes.JsonValue`): a date, and
+- a YAML document holds JSON's values only (:data:`~ocio_vp.formats.jsontypes.JsonValue`): a date, and
   an integer key, are kept as their text; other keys that are not text (``null``, ``yes``, a
   number with a point), ``!!binary``, ``!!set``, ``!!omap`` and ``!!pairs`` are errors, so what
   a file holds has one type whichever of the two it is.
@@ -34,7 +34,7 @@ from yaml.constructor import ConstructorError, SafeConstructor
 from yaml.resolver import Resolver
 
 from ocio_vp.errors import InputError, excerpt
-from ocio_vp.jsontypes import JsonObject, JsonValue
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 
 try:  # libyaml's scanner and parser are much faster; the composer below stays in Python.
     from yaml._yaml import CParser

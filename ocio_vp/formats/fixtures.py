@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ocio_vp.formats.checker import Checker
-from ocio_vp.jsontypes import JsonObject, JsonValue
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 
 __all__ = ["DMX_MODES", "DmxPatch", "Fixture", "fixtures_to_dict", "parse_fixtures"]
 

@@ -17,8 +17,8 @@ from typing import Any
 
 import numpy as np
 
+from ocio_vp.formats.jsontypes import JsonValue
 from ocio_vp.formats.records import Record, read_record
-from ocio_vp.jsontypes import JsonValue
 
 __all__ = [
     "MEASURED_KEYS",

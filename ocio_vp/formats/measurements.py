@@ -25,6 +25,7 @@ from ocio_vp.errors import InputError, excerpt, format_key_path
 from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.fixtures import Fixture, fixtures_to_dict, parse_fixtures
 from ocio_vp.formats.geometry import PanelGeometry
+from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
 from ocio_vp.formats.panels import (
     PanelType,
     panel_values_to_dict,
@@ -35,7 +36,6 @@ from ocio_vp.formats.panels import (
 )
 from ocio_vp.formats.synthesis import SynthesisRecord, parse_synthesis, synthesis_to_dict
 from ocio_vp.formats.wall_state import WALL_STATE_KEYS, WallState, parse_wall_state
-from ocio_vp.jsontypes import JsonMapping, JsonObject, JsonValue
 from ocio_vp.wall.linearity import CHANNELS, parse_ramps, ramps_to_dict
 
 __all__ = [

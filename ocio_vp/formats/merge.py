@@ -20,6 +20,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ocio_vp.errors import InputError, excerpt
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.measurements import (
     REQUIRED_SECTIONS,
     Measurements,
@@ -28,7 +29,6 @@ from ocio_vp.formats.measurements import (
     measurements_from_dict,
     read_document,
 )
-from ocio_vp.jsontypes import JsonObject, JsonValue
 
 __all__ = ["load_measurement_files", "merge_measurement_documents"]
 

@@ -23,10 +23,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ocio_vp.errors import InputError, excerpt
+from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
 from ocio_vp.formats.linearity import Linearity, read_linearity
 from ocio_vp.formats.measurements import check_safe_name
 from ocio_vp.formats.records import json_object
-from ocio_vp.jsontypes import JsonMapping, JsonObject, JsonValue
 
 __all__ = ["PanelSolution", "panel_solutions_from_dict", "panel_solutions_to_dict"]
 

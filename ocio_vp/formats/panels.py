@@ -35,7 +35,6 @@ from __future__ import annotations
 import difflib
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -43,7 +42,7 @@ from ocio_vp.choices import WALL_ENCODINGS
 from ocio_vp.errors import InputError, excerpt, format_key_path
 from ocio_vp.formats.checker import Checker
 from ocio_vp.formats.geometry import PanelGeometry
-from ocio_vp.jsontypes import JsonMapping, JsonObject, JsonValue
+from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
 from ocio_vp.wall.linearity import CHANNELS, Ramp, parse_ramps, ramps_to_dict
 
 __all__ = [
@@ -158,7 +157,7 @@ def _encoding(ctx: Checker, entry: JsonMapping, key: tuple) -> tuple[str | None,
     return encoding, peak
 
 
-def _ramps(ctx: Checker, value: JsonValue, key: tuple) -> Mapping[str, Any]:
+def _ramps(ctx: Checker, value: JsonValue, key: tuple) -> dict[str, Ramp]:
     """``parse_ramps`` with its errors placed under ``panels[i].ramps``."""
     try:
         return parse_ramps(value, source=ctx.source)

@@ -19,7 +19,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from ocio_vp.jsontypes import JsonObject
+from ocio_vp.formats.jsontypes import JsonObject
 
 __all__ = [
     "SOURCE_FILE",

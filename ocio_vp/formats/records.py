@@ -20,7 +20,7 @@ from typing import Any, ClassVar, TypeVar
 import numpy as np
 
 from ocio_vp.errors import InputError, excerpt
-from ocio_vp.jsontypes import JsonObject, JsonValue
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 
 __all__ = ["Record", "json_object", "json_value", "read_record", "read_value"]
 

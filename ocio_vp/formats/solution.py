@@ -13,6 +13,7 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -21,6 +22,7 @@ from ocio_vp.errors import InputError, excerpt
 from ocio_vp.formats.diagnostics import Diagnostics
 from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.fixtures import DmxPatch
+from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
 from ocio_vp.formats.linearity import Linearity, read_linearity
 from ocio_vp.formats.measurements import check_safe_name
 from ocio_vp.formats.panel_solution import (
@@ -29,7 +31,6 @@ from ocio_vp.formats.panel_solution import (
     panel_solutions_to_dict,
 )
 from ocio_vp.formats.records import Record, json_object, read_record
-from ocio_vp.jsontypes import JsonMapping, JsonObject, JsonValue
 from ocio_vp.model.correction import (
     MatrixCorrection,
     PostCorrection,

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ocio_vp.formats.checker import Checker
-from ocio_vp.jsontypes import JsonObject, JsonValue
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 
 __all__ = [
     "SYNTHESIS_SOURCES",

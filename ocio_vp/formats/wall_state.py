@@ -22,7 +22,7 @@ from typing import Protocol
 from ocio_vp.choices import WALL_ENCODINGS
 from ocio_vp.errors import InputError, excerpt
 from ocio_vp.formats.checker import Checker
-from ocio_vp.jsontypes import JsonMapping, JsonObject
+from ocio_vp.formats.jsontypes import JsonMapping, JsonObject
 
 __all__ = ["WALL_STATE_KEYS", "WallState", "parse_wall_state", "stage_with_sequence"]
 

@@ -49,17 +49,20 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.errors import InputError
-from ocio_vp.jsontypes import JsonObject, JsonValue
 from ocio_vp.model.expansion import (
     ROOT_POLYNOMIAL_TERMS,
     apply_root_polynomial,
     root_polynomial_terms,
 )
+
+if TYPE_CHECKING:  # formats imports model: the JSON types for annotations only
+    from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 
 __all__ = [
     "DEFAULT_BRIGHT",

@@ -32,11 +32,14 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ocio_vp.jsontypes import JsonObject
+if TYPE_CHECKING:  # formats imports model: the JSON types for annotations only
+    from ocio_vp.formats.jsontypes import JsonObject
+
 
 __all__ = [
     "EMITTER_LEVELS",

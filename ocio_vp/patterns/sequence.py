@@ -22,8 +22,8 @@ from pathlib import Path
 import numpy as np
 
 from ocio_vp.choices import WALL_ENCODINGS
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue, YamlValue
 from ocio_vp.formats.measurements import CHANNELS, Validator, read_document
-from ocio_vp.jsontypes import JsonObject, JsonValue, YamlValue
 
 __all__ = [
     "FILE_FORMATS",

@@ -18,8 +18,8 @@ from typing import Any
 import numpy as np
 import yaml
 
+from ocio_vp.formats.jsontypes import JsonMapping, JsonValue
 from ocio_vp.formats.measurements import CHANNELS, Validator, parse_stage, read_document
-from ocio_vp.jsontypes import JsonMapping, JsonValue
 from ocio_vp.plates.movie import MATRICES, RANGES, is_movie
 from ocio_vp.plates.raw import DEFAULT_DEMOSAIC, DEMOSAIC_METHODS, is_raw
 from ocio_vp.plates.reader import canonical_encoding, plate_path

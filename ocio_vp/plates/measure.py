@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from ocio_vp.errors import InputError
+from ocio_vp.formats.jsontypes import JsonObject
 from ocio_vp.formats.measurements import (
     CHANNELS,
     FORMAT,

@@ -26,7 +26,7 @@ import numpy as np
 
 from ocio_vp.errors import InputError
 from ocio_vp.formats.documents import check_regular_file
-from ocio_vp.jsontypes import JsonValue
+from ocio_vp.formats.jsontypes import JsonValue
 from ocio_vp.plates.raw import is_raw
 
 __all__ = [

@@ -30,12 +30,12 @@ from ocio_vp.calibration.equations import condition_number, condition_text
 from ocio_vp.calibration.headroom import content_scale
 from ocio_vp.errors import InputError
 from ocio_vp.formats.diagnostics import lowest_channel_words
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.linearity import Linearity
 from ocio_vp.formats.provenance import solution_sha256
 from ocio_vp.formats.records import json_object
 from ocio_vp.formats.solution import Solution
 from ocio_vp.formats.solution_inputs import solution_folders
-from ocio_vp.jsontypes import JsonObject, JsonValue
 from ocio_vp.model.correction import (
     PostCorrection,
     ProtectedCorrection,

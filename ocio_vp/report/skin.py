@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from ocio_vp.jsontypes import JsonObject
+from ocio_vp.formats.jsontypes import JsonObject
 from ocio_vp.skin_data import ITA_BANDS
 
 if TYPE_CHECKING:

@@ -23,8 +23,8 @@ from typing import TYPE_CHECKING, Any, TypedDict
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.measurements import Measurements
-from ocio_vp.jsontypes import JsonObject, JsonValue
 
 if TYPE_CHECKING:
     from ocio_vp.patterns.sequence import PatternSequence

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ocio_vp.jsontypes import JsonMapping, JsonObject
+from ocio_vp.formats.jsontypes import JsonMapping, JsonObject
 from ocio_vp.plates.contact_sheet import SHEET
 from ocio_vp.plates.take import TakeReading
 from ocio_vp.validation.compare import ValidationResult

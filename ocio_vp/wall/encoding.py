@@ -38,8 +38,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ocio_vp.choices import DEFAULT_PEAK_NITS, WALL_ENCODINGS
+from ocio_vp.formats.jsontypes import JsonMapping, JsonObject
 from ocio_vp.formats.linearity import Linearity, WallEncodingBlock, assumed_linearity
-from ocio_vp.jsontypes import JsonMapping, JsonObject
 from ocio_vp.wall.linearity import CHANNELS, inverse_response, response_model
 
 if TYPE_CHECKING:

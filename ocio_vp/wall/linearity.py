@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ocio_vp.errors import InputError, format_key_path
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.linearity import (
     MEASURED_KEYS,
     ChannelBlack,
@@ -43,7 +44,6 @@ from ocio_vp.formats.linearity import (
     LinearityChannel,
     ShadowDeviation,
 )
-from ocio_vp.jsontypes import JsonObject, JsonValue
 
 __all__ = [
     "CHANNELS",
