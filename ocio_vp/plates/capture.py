@@ -339,7 +339,7 @@ def capture_from_dict(
     return capture
 
 
-def _raw_options(ctx: Validator, value: Any, stage: Mapping[str, Any]) -> RawOptions:
+def _raw_options(ctx: Validator, value: JsonValue, stage: JsonMapping) -> RawOptions:
     """``raw``: ``demosaic`` (default superpixel) and ``to_camera`` (a 3x3 matrix or ``dng``,
     only with ``stage.camera_colorspace``)."""
     raw = ctx.mapping(value, ("raw",), (), ("demosaic", "to_camera"))

@@ -11,7 +11,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -85,6 +85,10 @@ class MeasureResult:
     take: TakeReading | None = None
 
 
+#: Samples a chart shot: its (n, 3) patch means.
+ChartSampler = Callable[[ChartShot], np.ndarray]
+
+
 def _open(ref: PlateRef, demosaic: str | None = None) -> tuple[PlateInfo, ...]:
     infos = tuple(
         open_plate(p, encoding=ref.encoding, layer=ref.layer, demosaic=demosaic) for p in ref.paths
@@ -136,7 +140,7 @@ def _named(error: InputError, ref: PlateRef, key: str) -> InputError:
 
 
 def _sample_chart(
-    capture: Capture, shot: ChartShot, detect: Any
+    capture: Capture, shot: ChartShot, detect: Callable[..., Detection] | None
 ) -> tuple[PlateSampling, np.ndarray | None]:
     from ocio_vp.errors import format_key_path
 
@@ -300,7 +304,11 @@ def _measure_take(capture: Capture, document: dict[str, Any], on_take) -> TakeRe
 
 
 def measure_capture(
-    capture: Capture, *, detect: Any = None, on_step: Any = None, on_take: Any = None
+    capture: Capture,
+    *,
+    detect: Callable[..., Detection] | None = None,
+    on_step: Callable[[], None] | None = None,
+    on_take: Callable[[str, int], None] | None = None,
 ) -> MeasureResult:
     """Sample every plate of ``capture`` and build the measurements.
 
@@ -407,10 +415,12 @@ def _environment(env, chart, black_level) -> JsonObject:
     return entry
 
 
-def _wall_part(capture: Capture, chart: Any, plates: list, step: Any) -> dict[str, Any]:
+def _wall_part(
+    capture: Capture, chart: ChartSampler, plates: list[PlateSampling], step: Callable[[], None]
+) -> JsonObject:
     """``primaries`` and ``lit_chart`` of a single-wall capture, each where it is given (a
     wall file from a take has no lit chart; a charts file no primaries)."""
-    out: dict[str, Any] = {}
+    out: JsonObject = {}
     if capture.primaries:
         out["primaries"] = _primaries(capture, capture.primaries, plates, step)
     if capture.lit_chart:
@@ -422,10 +432,10 @@ def _wall_values(
     capture: Capture,
     primaries: Mapping[str, RegionShot],
     lit_chart: Mapping[str, ChartShot],
-    chart: Any,
+    chart: ChartSampler,
     plates: list[PlateSampling],
-    step: Any,
-) -> dict[str, Any]:
+    step: Callable[[], None],
+) -> JsonObject:
     """``primaries`` and ``lit_chart`` of the wall (or of one panel type), sampled."""
     return {
         "primaries": _primaries(capture, primaries, plates, step),
@@ -434,7 +444,10 @@ def _wall_values(
 
 
 def _primaries(
-    capture: Capture, primaries: Mapping[str, RegionShot], plates: list, step: Any
+    capture: Capture,
+    primaries: Mapping[str, RegionShot],
+    plates: list[PlateSampling],
+    step: Callable[[], None],
 ) -> dict[str, list[float]]:
     """The mean camera RGB of each primary's region (the plates' samplings go to ``plates``)."""
     sampled = _sample_regions(capture, primaries, "primaries")
@@ -521,7 +534,7 @@ def samples_document(
     return out
 
 
-def _raw_record(sampling: PlateSampling) -> dict[str, Any]:
+def _raw_record(sampling: PlateSampling) -> JsonObject:
     """A raw plate's demosaicing and conversion to the camera gamut (``samples.json``)."""
     info = sampling.infos[0]
     if info.demosaic is None:
@@ -535,7 +548,7 @@ def _raw_record(sampling: PlateSampling) -> dict[str, Any]:
     return out
 
 
-def _detection_record(sampling: PlateSampling) -> dict[str, Any]:
+def _detection_record(sampling: PlateSampling) -> JsonObject:
     """How a chart's corners were found (``samples.json``), when they were searched for."""
     found = sampling.detection
     if found is None:
