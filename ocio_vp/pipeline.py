@@ -304,7 +304,8 @@ def post_correction_problem(
     weights = np.ones(measurements.n_patches)
     weights[list(clipped)] = 0.0
     if measurements.panels:
-        return _panels_problem(measurements, environment, weights)
+        problem = _panels_problem(measurements, environment, weights)
+        return dataclasses.replace(problem, black_level=environment.black_level)
     return QProblem(
         SL=measurements.SL,
         SRL=measurements.SRL,
@@ -315,6 +316,7 @@ def post_correction_problem(
         white_patch=measurements.stage.white_patch,
         weights=weights,
         white_reflectance=measurements.stage.white_reflectance,
+        black_level=environment.black_level,
     )
 
 
