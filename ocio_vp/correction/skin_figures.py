@@ -19,11 +19,11 @@ from ocio_vp.correction.linear import patch_errors
 from ocio_vp.correction.problem import QProblem, fit_least_squares
 from ocio_vp.correction.skin import sample_camera_to_xyz, skin_delta_e
 from ocio_vp.formats.skin import ROUNDING, SkinBand, SkinDefault, SkinFigures
-from ocio_vp.metrics import error_relative_to_white
+from ocio_vp.metrics import white_scale
 from ocio_vp.model.correction import MatrixCorrection, PostCorrection
 from ocio_vp.skin_data import ITA_BANDS
 
-__all__ = ["background_error", "skin_figures"]
+__all__ = ["background_error", "clipped_background", "skin_figures"]
 
 #: An in-frustum matrix is not formed from a Q less well conditioned than this (as N's solve).
 _MAX_CONDITION = 1e8
@@ -56,7 +56,9 @@ def _background_outside(problem: QProblem, correction: PostCorrection) -> int:
     return int(drive.below_zero + drive.above_max)
 
 
-def background_error(problem: QProblem, correction: PostCorrection) -> float:
+def background_error(
+    problem: QProblem, correction: PostCorrection, patches: np.ndarray | None = None
+) -> float:
     """The in-frustum background's expected error, mean over the chart and R, G, B relative to
     white: the target chart shown as content through ``Q^-1`` and the calibrated wall
     (``d = M Q^-1(p) - M b``, the exact black-level offset where the black level ``b`` was
@@ -64,15 +66,26 @@ def background_error(problem: QProblem, correction: PostCorrection) -> float:
     corrected by ``Q``. With the wall as measured the only error is the clipping: chart colours
     outside the LEDs' gamut, which ``Q^-1`` moves. The top of the drive range is not modelled
     (where it lies depends on the exposure, unknown to the solve). NaN where Q has no inverse.
+    ``patches``: only these (a boolean mask; the mean is then over them).
     """
     if not correction.invertible or not condition_number(correction.matrix) < _MAX_CONDITION:
         return float("nan")
     SL, M = np.asarray(problem.SL, dtype=np.float64), np.asarray(problem.M, dtype=np.float64)
     P = np.asarray(problem.target, dtype=np.float64)
+    mask = np.ones(len(P), dtype=bool) if patches is None else np.asarray(patches, dtype=bool)
     b = np.zeros(3) if problem.black_level is None else np.asarray(problem.black_level, float)
-    drive = (correction.inverse(P) - b) @ M.T
-    seen = np.clip(drive, 0.0, None) @ SL.T + b
-    return float(np.mean(error_relative_to_white(correction.apply(seen), P, problem.white_patch)))
+    drive = (correction.inverse(P[mask]) - b) @ M.T
+    shown = correction.apply(np.clip(drive, 0.0, None) @ SL.T + b)
+    return float(np.mean(np.abs(shown - P[mask]) / white_scale(P, problem.white_patch)))
+
+
+def clipped_background(problem: QProblem, correction: PostCorrection) -> np.ndarray:
+    """(n,) bool: the chart colours whose in-frustum drive (as :func:`background_error` forms
+    it) has a channel below 0 through ``correction``."""
+    M = np.asarray(problem.M, dtype=np.float64)
+    P = np.asarray(problem.target, dtype=np.float64)
+    b = np.zeros(3) if problem.black_level is None else np.asarray(problem.black_level, float)
+    return np.any((correction.inverse(P) - b) @ M.T < 0, axis=1)
 
 
 def skin_figures(
