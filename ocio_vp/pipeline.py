@@ -8,7 +8,8 @@ the diagnostics that say whether the result can be trusted.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+import functools
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -167,7 +168,8 @@ def solve_environment(
     problem, excluded = _screen(problem, measurements, environment, options.keep_all_patches)
     problem = with_skin(problem, measurements.stage.skin_patches, options.spectra, environment.name)
     priority = environment.priority or options.priority
-    fit = _fit(problem, options.method, measurements, environment, priority)
+    guard = functools.partial(_protected, problem=problem, options=options)
+    fit = _fit(problem, options.method, measurements, environment, priority, guard)
     correction = _protected(fit.correction, problem, options)
     skin = _skin_figures(problem, correction, priority, options)
     SL, M_calibrated = problem.SL, problem.M
@@ -495,9 +497,11 @@ def _fit(
     measurements: Measurements,
     environment: Environment,
     priority: str = DEFAULT_PRIORITY,
+    guard: Callable[[PostCorrection], PostCorrection] | None = None,
 ) -> QFit:
-    """Q by ``method`` (skin first with ``priority="skin"``); a bad chart is reported at its
-    place in the measurements file."""
+    """Q by ``method`` (skin first with ``priority="skin"``, judged against the default
+    through ``guard``, the emitter guard the solve will wrap it in); a bad chart is reported at
+    its place in the measurements file."""
     if priority == "skin" and method != "auto":
         in_file = environment.priority is not None
         raise InputError(
@@ -510,7 +514,7 @@ def _fit(
         )
     try:
         if priority == "skin":
-            return q_skin_priority(problem)
+            return q_skin_priority(problem, guard)
         return solve_post_correction(problem, method=method)
     except InputError as error:
         raise _located(error, measurements, environment) from None

@@ -164,11 +164,23 @@ def summary_lines(solutions: Sequence[Any]) -> tuple[list[str], list[str]]:
     guarded = [s for s in solutions if s.correction.kind == "protected"]
     if guarded:
         out.append(f"emitter guard: {guarded[0].correction.protection()}")
+    out += _skin_first_lines(solutions)
     out.append(
         "why each model: solution.json (diagnostics.model_reason) and the report; "
         "`ocio-vp report DIR` draws them"
     )
     return out + _gamut_notes(solutions), _grouped(solutions)
+
+
+def _skin_first_lines(solutions: Sequence[Any]) -> list[str]:
+    """With skin first, per environment: the background and the LEDs in frame beside the
+    default's (``diagnostics.skin.default``)."""
+    lines = []
+    for s in solutions:
+        skin = s.diagnostics.skin
+        if skin is not None and skin.default is not None:
+            lines.append(f"skin first: {s.environment}: {skin.default.words()}")
+    return lines
 
 
 def _gamut_notes(solutions: Sequence[Any]) -> list[str]:

@@ -27,6 +27,7 @@ default itself where none holds.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 
 import numpy as np
 
@@ -64,6 +65,8 @@ BLEND_STEPS = (0.75, 0.5, 0.25, 0.0)
 #: Along the projected way the background's first-order rise is turned into a fall of this
 #: fraction of it, so that its second-order change does not make it a rise.
 PROJECTION_MARGIN = 0.25
+#: What the solve wraps the post-correction in (the emitter guard), applied before judging it.
+Guard = Callable[[PostCorrection], PostCorrection]
 #: Forward-difference step of the background's gradient, relative to the largest parameter.
 _STEP = 1e-6
 #: "No worse" up to rounding: a figure may exceed the default's by this fraction of itself.
@@ -234,14 +237,18 @@ def _no_worse(value: float, bound: float) -> bool:
     return not np.isfinite(bound) or value <= bound + _ROUNDING * abs(bound)
 
 
-def within_default(problem: QProblem, fit: QFit) -> tuple[QFit, str, float]:
+def within_default(
+    problem: QProblem, fit: QFit, guard: Guard | None = None
+) -> tuple[QFit, str, float]:
     """``fit`` drawn towards the default until its background and LED figures are no worse
-    than the default's, nor its skin (module docstring): the fit, what was done in words, and
-    the share of the way from the default to the skin fit taken (1: the skin fit unchanged,
-    0: the default)."""
+    than the default's, nor its skin (module docstring), each judged through ``guard`` (the
+    emitter guard the solve wraps the model in; none by default): the fit, what was done in
+    words, and the share of the way from the default to the skin fit taken (1: the skin fit
+    unchanged, 0: the default)."""
     default = q_auto(problem)
-    reference = _figures(problem, default.correction)
-    figures = _figures(problem, fit.correction)
+    guarded = guard or (lambda correction: correction)
+    reference = _figures(problem, guarded(default.correction))
+    figures = _figures(problem, guarded(fit.correction))
     chart = max(figures.chart, reference.chart)  # both the default's and the skin fit's are fine
     chosen, share, way = fit.correction, 1.0, "straight"
     if not figures.no_worse(reference, chart):
@@ -253,7 +260,7 @@ def within_default(problem: QProblem, fit: QFit) -> tuple[QFit, str, float]:
                 if way == "straight" and a == 1.0:
                     continue  # the skin fit itself, judged above
                 candidate = _model(fit.correction, D + a * step)
-                judged = _figures(problem, candidate)
+                judged = _figures(problem, guarded(candidate))
                 if judged.no_worse(reference, chart):
                     chosen, share, figures = candidate, a, judged
                     break
@@ -275,8 +282,9 @@ def within_default(problem: QProblem, fit: QFit) -> tuple[QFit, str, float]:
     return dataclasses.replace(fit, correction=chosen, details=details), note, share
 
 
-def q_skin_priority(problem: QProblem) -> QFit:
+def q_skin_priority(problem: QProblem, guard: Guard | None = None) -> QFit:
     """The skin-first post-correction (module docstring); an InputError without skin samples.
+    ``guard``: the emitter guard the solve will wrap it in (judged through it).
 
     Examples
     --------
@@ -333,7 +341,7 @@ def q_skin_priority(problem: QProblem) -> QFit:
             f"{CHART_BUDGET:g}x least squares' {chart_ls:.3g}: the default kept; {default.reason}"
         )
         return dataclasses.replace(default, reason=reason)
-    fit, elsewhere, share = within_default(problem, fit)
+    fit, elsewhere, share = within_default(problem, fit, guard)
     if share == 0.0:  # the default itself, its reason saying why
         return fit
     chart = float(np.mean(patch_errors(fit.correction.apply(X), P, w, white)[0][active]))

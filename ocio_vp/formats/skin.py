@@ -48,10 +48,16 @@ class SkinDefault(Record):
     def words(self) -> str:
         """The terminal's line: this solve's background and in-frame LED figures beside the
         default's."""
+        if self.background is None or self.background_default is None:
+            background = "background not modelled (Q has no inverse: N not solved)"
+        else:
+            background = (
+                f"background {_percent(self.background)} of white (default "
+                f"{_percent(self.background_default)})"
+            )
         return (
-            f"background {_percent(self.background)} of white (default "
-            f"{_percent(self.background_default)}); LEDs in frame p95 ΔE2000 "
-            f"{self.led_damage:.3g} (default {self.led_damage_default:.3g})"
+            f"{background}; LEDs in frame p95 ΔE2000 {self.led_damage:.3g} (default "
+            f"{self.led_damage_default:.3g})"
         )
 
 
@@ -104,5 +110,5 @@ def _figure(value: float) -> str:
     return f"{value:.2f}" if value >= ROUNDING else "0"
 
 
-def _percent(value: float | None) -> str:
-    return "-" if value is None else f"{100 * value:.3f} %"
+def _percent(value: float) -> str:
+    return f"{100 * value:.3f} %"
