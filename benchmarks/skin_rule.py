@@ -231,7 +231,54 @@ def five() -> str:
             )
             envs = ", ".join(f"{e} {v:.2f}x" for e, v in s.by_environment_ratio.items())
             per_env.append(f"- {stage_name}, {set_name}: {envs}")
-    return "\n".join([*lines, "", "Per environment (auto / LS):", "", *per_env])
+    return "\n".join(
+        [*lines, "", "Per environment (auto / LS):", "", *per_env, "", *_spectra_lines()]
+    )
+
+
+def _spectra_lines() -> list[str]:
+    """How far the five samples' spectra lie from measured skin (every NIST subject, 400-700
+    nm): RMS distance to the nearest subject, of the spectrum and of its shape (divided by its
+    mean), beside the NIST subjects' own nearest-neighbour distances; and the haemoglobin dip
+    near 575 nm (mean of 560 and 590 nm minus 575 nm) every measured skin shows."""
+    from benchmarks.skin_eval import held_out_skin
+    from ocio_vp.skin_data import ita_degrees, lab_d65, training_skin
+
+    five = _five_samples()
+    nist = np.vstack([training_skin().reflectances, held_out_skin().reflectances])
+    visible = slice(4, 65)  # 400-700 nm on the 5 nm grid from 380
+
+    def nearest(a, b, shape=False, itself=False):
+        a, b = a[:, visible], b[:, visible]
+        if shape:
+            a, b = a / a.mean(1, keepdims=True), b / b.mean(1, keepdims=True)
+        d = np.sqrt(np.mean((a[:, None] - b[None]) ** 2, axis=2))
+        if itself:
+            np.fill_diagonal(d, np.inf)
+        return d.min(axis=1)
+
+    def dip(r):
+        return (r[:, 36] + r[:, 42]) / 2 - r[:, 39]  # 560, 590 and 575 nm
+
+    own, own_shape = nearest(nist, nist, itself=True), nearest(nist, nist, True, True)
+    ita = ita_degrees(lab_d65(five.reflectances))
+    rows = [
+        "| sample | ITA° | RMS to the nearest NIST subject | shape RMS | dip at 575 nm |",
+        "|---|---|---|---|---|",
+        f"| NIST subjects (nearest other subject: median, max) | - | {np.median(own):.3f}, "
+        f"{own.max():.3f} | {np.median(own_shape):.3f}, {own_shape.max():.3f} | median "
+        f"{np.median(dip(nist)):.3f}, min {dip(nist).min():.3f} |",
+    ]
+    for name, a, d, sd, w in zip(
+        five.names,
+        ita,
+        nearest(five.reflectances, nist),
+        nearest(five.reflectances, nist, True),
+        dip(five.reflectances),
+        strict=True,
+    ):
+        rows.append(f"| {name} | {a:.0f} | {d:.3f} | {sd:.3f} | {w:.3f} |")
+    return rows
 
 
 def main(argv=None) -> int:

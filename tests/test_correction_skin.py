@@ -191,7 +191,6 @@ def test_skin_first_composes_with_the_emitter_guard(stage_and_measurements, solv
     # the guarded default, and skin first keeps the default there (docs/skin.md).
     env = next(e for e in m.environments if e.name == "direct_sun")
     guarded = solve_environment(m, env, priority="skin", protect_emitters=True)
-    plain = solved[(env.name, "skin")]
     default = solved[(env.name, "general")]
     assert guarded.correction.kind == "protected"
     inner = unprotected(guarded.correction)
