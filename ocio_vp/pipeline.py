@@ -55,7 +55,7 @@ from ocio_vp.correction.problem import fit_least_squares
 from ocio_vp.correction.registry import QFit, QProblem, solve_post_correction
 from ocio_vp.correction.skin import chart_skin_samples, joined, patch_skin_samples
 from ocio_vp.correction.skin_figures import skin_figures
-from ocio_vp.correction.skin_priority import q_skin_priority
+from ocio_vp.correction.skin_priority import default_fit, q_skin_priority
 from ocio_vp.correction.skin_spectra import StageSpectra, spectral_skin_samples
 from ocio_vp.correction.validation import CLOSED_FORM_METHODS, cross_validated_error
 from ocio_vp.errors import InputError
@@ -243,7 +243,7 @@ def _skin_figures(
     the same problem, protected alike)."""
     default = None
     if priority == "skin" and problem.skin is not None:
-        fit = solve_post_correction(problem, method="auto")
+        fit = default_fit(problem)  # as skin first compared with it
         default = (fit.model, _protected(fit.correction, problem, options))
     return skin_figures(problem, correction, priority, default)
 

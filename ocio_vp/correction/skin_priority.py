@@ -48,7 +48,7 @@ from ocio_vp.model.correction import (
 )
 from ocio_vp.model.expansion import ROOT_POLYNOMIAL_TERMS, root_polynomial_expansion
 
-__all__ = ["BLEND_STEPS", "CHART_BUDGET", "PRIORITY_SKIN_WEIGHT", "q_skin_priority"]
+__all__ = ["BLEND_STEPS", "CHART_BUDGET", "PRIORITY_SKIN_WEIGHT", "default_fit", "q_skin_priority"]
 
 #: Weight of the skin samples with skin first (relative to the chart's energy). Chosen on the
 #: training skin (half fitted, half judged) and the tuning cameras at 0.2 % and 1 % noise:
@@ -71,6 +71,20 @@ Guard = Callable[[PostCorrection], PostCorrection]
 _STEP = 1e-6
 #: "No worse" up to rounding: a figure may exceed the default's by this fraction of itself.
 _ROUNDING = 1e-9
+
+
+#: The last problem whose default was solved, and that fit: skin first compares with the
+#: default and the solve then reports it, on the same (frozen) problem; solved once.
+_LAST_DEFAULT: list[tuple[QProblem, QFit]] = []
+
+
+def default_fit(problem: QProblem) -> QFit:
+    """The default's post-correction of ``problem`` (``auto``), solved once per problem."""
+    if _LAST_DEFAULT and _LAST_DEFAULT[0][0] is problem:
+        return _LAST_DEFAULT[0][1]
+    fit = q_auto(problem)
+    _LAST_DEFAULT[:] = [(problem, fit)]
+    return fit
 
 
 def _parameters(
@@ -245,7 +259,7 @@ def within_default(
     emitter guard the solve wraps the model in; none by default): the fit, what was done in
     words, and the share of the way from the default to the skin fit taken (1: the skin fit
     unchanged, 0: the default)."""
-    default = q_auto(problem)
+    default = default_fit(problem)
     guarded = guard or (lambda correction: correction)
     reference = _figures(problem, guarded(default.correction))
     figures = _figures(problem, guarded(fit.correction))
@@ -307,7 +321,7 @@ def q_skin_priority(problem: QProblem, guard: Guard | None = None) -> QFit:
     X, P, w, white = problem_arrays(problem)
     rank, _ = target_rank(P, w, X)
     if rank < 3:
-        fit = q_auto(problem)
+        fit = default_fit(problem)
         reason = f"skin priority not applied: the target chart has rank {rank}; {fit.reason}"
         return QFit(
             fit.correction, fit.model, fit.description, reason=reason, target_rank=rank,
@@ -317,7 +331,9 @@ def q_skin_priority(problem: QProblem, guard: Guard | None = None) -> QFit:
     Q_ls = fit_least_squares(X, P, w)
     chart_ls = float(np.mean(patch_errors(X @ Q_ls.T, P, w, white)[0][active]))
     if chart_ls < EXACT:
-        fit = q_auto(problem)  # the stage reproduces the light: no colour, skin or other, to fix
+        fit = default_fit(
+            problem
+        )  # the stage reproduces the light: no colour, skin or other, to fix
         return QFit(
             fit.correction, fit.model, fit.description, reason=f"faces first: {fit.reason}",
             cross_validated_error=fit.cross_validated_error, target_rank=rank,
@@ -335,7 +351,7 @@ def q_skin_priority(problem: QProblem, guard: Guard | None = None) -> QFit:
         )
     chart = float(np.mean(patch_errors(fit.correction.apply(X), P, w, white)[0][active]))
     if not chart <= CHART_BUDGET * chart_ls:
-        default = q_auto(problem)
+        default = default_fit(problem)
         reason = (
             f"faces first, but the skin fit's chart error {chart:.3g} is above "
             f"{CHART_BUDGET:g}x least squares' {chart_ls:.3g}: the default kept; {default.reason}"
