@@ -34,6 +34,7 @@ from benchmarks.skin_eval import (
     VariantSummary,
     evaluate,
     led_label,
+    paired_difference,
     summarise,
     variants,
 )
@@ -254,6 +255,33 @@ def criteria(summaries: dict[str, VariantSummary]) -> list[str]:
     return lines
 
 
+def elsewhere_lines(evaluation: Evaluation) -> list[str]:
+    """Skin first against the default on the background and the emitters, solve by solve: the
+    mean paired difference and its standard error (no worse: at most one standard error
+    above 0, i.e. not worse beyond the noise of the comparison)."""
+    lines = []
+    for label in (PRIORITY, MEASURED):
+        if label not in _labels(evaluation) or DEFAULT not in _labels(evaluation):
+            continue
+        parts, met = [], True
+        for figure, name, scale, unit in (
+            ("background", "background error", 100.0, " % of white"),
+            ("emitters_p95", "emitter p95", 1.0, " ΔE2000"),
+        ):
+            d = paired_difference(evaluation, label, DEFAULT, figure)
+            met = met and d.mean <= d.standard_error
+            parts.append(
+                f"{name} {scale * d.mean:+.4f} ± {scale * d.standard_error:.4f}{unit} (worse in "
+                f"{d.worse}, better in {d.better} of {d.solves})"
+            )
+        lines.append(
+            f"- `{label}` no worse than the default on the background and the emitters (paired "
+            f"differences over the same solves, ± one standard error): {'; '.join(parts)}: "
+            f"**{'met' if met else 'NOT met'}**."
+        )
+    return lines
+
+
 def models_line(summary: VariantSummary) -> str:
     shares = sorted(summary.models.items(), key=lambda kv: -kv[1])
     return ", ".join(f"{model} {100 * share:.0f}%" for model, share in shares)
@@ -308,6 +336,7 @@ def report(
         "### Targets",
         "",
         *criteria(summaries),
+        *elsewhere_lines(evaluation),
         *([noise_line(summaries, second)] if second is not None and DEFAULT in summaries else []),
         "",
         "### Skin per environment (mean ΔE2000 over cameras, LED sets and subjects)",

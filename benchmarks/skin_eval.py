@@ -52,6 +52,7 @@ __all__ = [
     "cameras_of",
     "evaluate",
     "held_out_skin",
+    "paired_difference",
     "skin_set",
     "summarise",
     "variants",
@@ -247,13 +248,15 @@ def evaluate(
     noise: float = NOISE,
     seed: int = 0,
     progress: Callable[[str], None] | None = None,
+    skin=None,
 ) -> Evaluation:
     """Solve and judge every (camera, LED set, environment, variant) of one half.
 
     ``methods`` (registry names; default all, plus the skin priority when the solver has it)
     or ``variant_list``; ``environments`` default :func:`broadband_environments`; ``cameras``
     and ``led_sets`` default to the half's (``quick``: its first four cameras, one LED set).
-    Always includes least squares, the reference of every ratio.
+    Always includes least squares, the reference of every ratio. ``skin``: another
+    :class:`ocio_vp.skin_data.SkinSet` to judge on instead of the half's.
     """
     from ocio_vp.errors import InputError
     from ocio_vp.simulator.stage import simulate_measurements, spectral_stage
@@ -272,7 +275,7 @@ def evaluate(
     cameras = tuple(cameras)
     if quick and led_sets is None:
         leds_all = leds_all[:1]
-    samples = (skin_set(split), held_out_reflectances()["cie2017"])
+    samples = (skin or skin_set(split), held_out_reflectances()["cie2017"])
     out = Evaluation(split=split, cameras=cameras, led_sets=leds_all, environments=environments)
     for camera, leds in ((c, x) for c in cameras for x in leds_all):
         try:
@@ -398,4 +401,37 @@ def summarise(evaluation: Evaluation, variant: str) -> VariantSummary:
         background=float(np.mean([r.background for r, _ in pairs])),
         seconds=float(np.mean([r.seconds for r, _ in pairs])),
         models={k: v / len(pairs) for k, v in models.items()},
+    )
+
+
+@dataclass(frozen=True)
+class PairedDifference:
+    """``variant`` minus ``other`` on one per-solve figure over the solves both have: the mean
+    difference, its standard error, the solves where it is above 0 (worse) and below 0."""
+
+    mean: float
+    standard_error: float
+    solves: int
+    worse: int
+    better: int
+
+
+def paired_difference(
+    evaluation: Evaluation, variant: str, other: str, figure: str
+) -> PairedDifference:
+    """:class:`PairedDifference` of a :class:`SkinRow` attribute (``background``,
+    ``emitters_p95``, ``skin_mean``, ...) between two variants, solve by solve."""
+    theirs = {_key(r): getattr(r, figure) for r in evaluation.rows if r.variant == other}
+    d = np.array(
+        [getattr(r, figure) - theirs[_key(r)] for r in evaluation.rows
+         if r.variant == variant and _key(r) in theirs]
+    )  # fmt: skip
+    if len(d) < 2:
+        raise ValueError(f"fewer than two solves of {variant!r} beside {other!r}")
+    return PairedDifference(
+        mean=float(d.mean()),
+        standard_error=float(d.std(ddof=1) / np.sqrt(len(d))),
+        solves=len(d),
+        worse=int(np.sum(d > 0)),
+        better=int(np.sum(d < 0)),
     )

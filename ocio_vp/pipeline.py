@@ -8,7 +8,8 @@ the diagnostics that say whether the result can be trusted.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+import functools
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -54,7 +55,7 @@ from ocio_vp.correction.problem import fit_least_squares
 from ocio_vp.correction.registry import QFit, QProblem, solve_post_correction
 from ocio_vp.correction.skin import chart_skin_samples, joined, patch_skin_samples
 from ocio_vp.correction.skin_figures import skin_figures
-from ocio_vp.correction.skin_priority import q_skin_priority
+from ocio_vp.correction.skin_priority import default_fit, q_skin_priority
 from ocio_vp.correction.skin_spectra import StageSpectra, spectral_skin_samples
 from ocio_vp.correction.validation import CLOSED_FORM_METHODS, cross_validated_error
 from ocio_vp.errors import InputError
@@ -168,7 +169,8 @@ def solve_environment(
     problem, excluded = _screen(problem, measurements, environment, options.keep_all_patches)
     problem = with_skin(problem, measurements.stage.skin_patches, options.spectra, environment.name)
     priority = environment.priority or options.priority
-    fit = _fit(problem, options.method, measurements, environment, priority)
+    guard = functools.partial(_protected, problem=problem, options=options)
+    fit = _fit(problem, options.method, measurements, environment, priority, guard)
     correction = _protected(fit.correction, problem, options)
     skin = _skin_figures(problem, correction, priority, options)
     SL, M_calibrated = problem.SL, problem.M
@@ -242,7 +244,7 @@ def _skin_figures(
     the same problem, protected alike)."""
     default = None
     if priority == "skin" and problem.skin is not None:
-        fit = solve_post_correction(problem, method="auto")
+        fit = default_fit(problem)  # as skin first compared with it
         default = (fit.model, _protected(fit.correction, problem, options))
     return skin_figures(problem, correction, priority, default)
 
@@ -305,7 +307,8 @@ def post_correction_problem(
     weights = np.ones(measurements.n_patches)
     weights[list(clipped)] = 0.0
     if measurements.panels:
-        return _panels_problem(measurements, environment, weights)
+        problem = _panels_problem(measurements, environment, weights)
+        return dataclasses.replace(problem, black_level=environment.black_level)
     return QProblem(
         SL=measurements.SL,
         SRL=measurements.SRL,
@@ -316,6 +319,7 @@ def post_correction_problem(
         white_patch=measurements.stage.white_patch,
         weights=weights,
         white_reflectance=measurements.stage.white_reflectance,
+        black_level=environment.black_level,
     )
 
 
@@ -494,9 +498,11 @@ def _fit(
     measurements: Measurements,
     environment: Environment,
     priority: str = DEFAULT_PRIORITY,
+    guard: Callable[[PostCorrection], PostCorrection] | None = None,
 ) -> QFit:
-    """Q by ``method`` (skin first with ``priority="skin"``); a bad chart is reported at its
-    place in the measurements file."""
+    """Q by ``method`` (skin first with ``priority="skin"``, judged against the default
+    through ``guard``, the emitter guard the solve will wrap it in); a bad chart is reported at
+    its place in the measurements file."""
     if priority == "skin" and method != "auto":
         in_file = environment.priority is not None
         raise InputError(
@@ -509,7 +515,7 @@ def _fit(
         )
     try:
         if priority == "skin":
-            return q_skin_priority(problem)
+            return q_skin_priority(problem, guard)
         return solve_post_correction(problem, method=method)
     except InputError as error:
         raise _located(error, measurements, environment) from None

@@ -167,11 +167,23 @@ def summary_lines(solutions: Sequence[Solution]) -> tuple[list[str], list[str]]:
     guarded = [s.correction for s in solutions if isinstance(s.correction, ProtectedCorrection)]
     if guarded:
         out.append(f"emitter guard: {guarded[0].protection()}")
+    out += _skin_first_lines(solutions)
     out.append(
         "why each model: solution.json (diagnostics.model_reason) and the report; "
         "`ocio-vp report DIR` draws them"
     )
     return out + _gamut_notes(solutions), _grouped(solutions)
+
+
+def _skin_first_lines(solutions: Sequence[Solution]) -> list[str]:
+    """With skin first, per environment: the background and the LEDs in frame beside the
+    default's (``diagnostics.skin.default``)."""
+    lines = []
+    for s in solutions:
+        skin = s.diagnostics.skin
+        if skin is not None and skin.default is not None:
+            lines.append(f"skin first: {s.environment}: {skin.default.words()}")
+    return lines
 
 
 def _gamut_notes(solutions: Sequence[Solution]) -> list[str]:

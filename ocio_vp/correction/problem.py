@@ -55,6 +55,9 @@ class QProblem:
     #: Skin as this stage and the location see it (:mod:`ocio_vp.correction.skin`); None where
     #: the chart gives none.
     skin: SkinSamples | None = None
+    #: (3,) the camera's reading of the dark in-frustum panels (``black_level``), what the
+    #: in-frustum offset cancels; None where not measured.
+    black_level: np.ndarray | None = None
 
     @property
     def drive(self) -> np.ndarray:

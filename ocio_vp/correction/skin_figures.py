@@ -4,7 +4,8 @@ Every figure is measured on the solve's own data: the problem's skin samples
 (:mod:`ocio_vp.correction.skin`) and chart, the chosen post-correction and the paper's least
 squares fitted to the same patches; with skin first also the default post-correction
 (``auto``), the wall's LEDs in frame through each (emitter damage) and the chart colours each
-in-frustum matrix ``N = M Q^-1`` drives outside the wall's range (the background).
+in-frustum matrix ``N = M Q^-1`` drives outside the wall's range and the error of the chart
+shown in frustum through each (the background, :func:`background_error`).
 """
 
 from __future__ import annotations
@@ -18,10 +19,11 @@ from ocio_vp.correction.linear import patch_errors
 from ocio_vp.correction.problem import QProblem, fit_least_squares
 from ocio_vp.correction.skin import sample_camera_to_xyz, skin_delta_e
 from ocio_vp.formats.skin import ROUNDING, SkinBand, SkinDefault, SkinFigures
+from ocio_vp.metrics import white_scale
 from ocio_vp.model.correction import MatrixCorrection, PostCorrection
 from ocio_vp.skin_data import ITA_BANDS
 
-__all__ = ["skin_figures"]
+__all__ = ["background_error", "clipped_background", "skin_figures"]
 
 #: An in-frustum matrix is not formed from a Q less well conditioned than this (as N's solve).
 _MAX_CONDITION = 1e8
@@ -32,6 +34,11 @@ def _figure(value: float) -> float:
     digits differ between machines: written as 0."""
     value = float(value)
     return 0.0 if abs(value) < ROUNDING else value
+
+
+def _fraction(value: float) -> float | None:
+    """An error relative to white as recorded: None where not defined, 0 below rounding."""
+    return None if not np.isfinite(value) else (0.0 if abs(value) < ROUNDING else float(value))
 
 
 def _background_outside(problem: QProblem, correction: PostCorrection) -> int:
@@ -47,6 +54,38 @@ def _background_outside(problem: QProblem, correction: PostCorrection) -> int:
         white_patch=problem.white_patch,
     )
     return int(drive.below_zero + drive.above_max)
+
+
+def background_error(
+    problem: QProblem, correction: PostCorrection, patches: np.ndarray | None = None
+) -> float:
+    """The in-frustum background's expected error, mean over the chart and R, G, B relative to
+    white: the target chart shown as content through ``Q^-1`` and the calibrated wall
+    (``d = M Q^-1(p) - M b``, the exact black-level offset where the black level ``b`` was
+    measured), each drive clipped at 0 as the wall clips it, seen as ``[SL] d + b`` and
+    corrected by ``Q``. With the wall as measured the only error is the clipping: chart colours
+    outside the LEDs' gamut, which ``Q^-1`` moves. The top of the drive range is not modelled
+    (where it lies depends on the exposure, unknown to the solve). NaN where Q has no inverse.
+    ``patches``: only these (a boolean mask; the mean is then over them).
+    """
+    if not correction.invertible or not condition_number(correction.matrix) < _MAX_CONDITION:
+        return float("nan")
+    SL, M = np.asarray(problem.SL, dtype=np.float64), np.asarray(problem.M, dtype=np.float64)
+    P = np.asarray(problem.target, dtype=np.float64)
+    mask = np.ones(len(P), dtype=bool) if patches is None else np.asarray(patches, dtype=bool)
+    b = np.zeros(3) if problem.black_level is None else np.asarray(problem.black_level, float)
+    drive = (correction.inverse(P[mask]) - b) @ M.T
+    shown = correction.apply(np.clip(drive, 0.0, None) @ SL.T + b)
+    return float(np.mean(np.abs(shown - P[mask]) / white_scale(P, problem.white_patch)))
+
+
+def clipped_background(problem: QProblem, correction: PostCorrection) -> np.ndarray:
+    """(n,) bool: the chart colours whose in-frustum drive (as :func:`background_error` forms
+    it) has a channel below 0 through ``correction``."""
+    M = np.asarray(problem.M, dtype=np.float64)
+    P = np.asarray(problem.target, dtype=np.float64)
+    b = np.zeros(3) if problem.black_level is None else np.asarray(problem.black_level, float)
+    return np.any((correction.inverse(P) - b) @ M.T < 0, axis=1)
 
 
 def skin_figures(
@@ -87,6 +126,8 @@ def skin_figures(
             led_damage_default=_figure(in_frame_led_damage(default[1], problem.SL, white, camera)),
             background_outside=_background_outside(problem, correction),
             background_outside_default=_background_outside(problem, default[1]),
+            background=_fraction(background_error(problem, correction)),
+            background_default=_fraction(background_error(problem, default[1])),
         )
     return SkinFigures(
         priority=priority,

@@ -11,20 +11,44 @@ the root-polynomial is not safe (it folds, flips or collapses a bright saturated
 chart does not constrain its terms) a 3x3 is fitted to the same rows instead. The chart's
 error is bounded (:data:`CHART_BUDGET` times least squares'); a target chart of rank below 3
 (monochromatic light) has no colour to put first and is solved as the default solves it.
+
+Faces first must not cost the rest of the frame: through the skin-first model the in-frustum
+background's expected error (:func:`~ocio_vp.correction.skin_figures.background_error`) and
+the wall's LEDs in frame (:func:`~ocio_vp.correction.extrapolation.in_frame_led_damage`) may be
+no worse than through the default's post-correction on the same problem, nor its skin samples
+(and the chart no worse than the worse of the two). Where the skin fit is, the model is taken
+from the default towards it, its parameters ``D + a step`` (two models of one kind, whose
+outputs are linear in their parameters): first along the step with the background's rise taken
+out to first order (the gradient projected out in the skin fit's own metric, so the fit gives
+up as little as it can), then straight, for a in 1 and :data:`BLEND_STEPS`, largest first; the
+default itself where none holds.
 """
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Callable
+
 import numpy as np
 
+from ocio_vp.calibration.equations import condition_number
 from ocio_vp.correction.auto import bounded_candidate, q_auto
+from ocio_vp.correction.extrapolation import in_frame_led_damage
 from ocio_vp.correction.linear import patch_errors, problem_arrays, target_rank
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
-from ocio_vp.correction.skin import with_rows
+from ocio_vp.correction.skin import sample_camera_to_xyz, skin_delta_e, with_rows
+from ocio_vp.correction.skin_figures import background_error, clipped_background
 from ocio_vp.errors import InputError
-from ocio_vp.model.correction import MatrixCorrection
+from ocio_vp.metrics import white_scale
+from ocio_vp.model.correction import (
+    FitDomain,
+    MatrixCorrection,
+    PostCorrection,
+    RootPolynomialCorrection,
+)
+from ocio_vp.model.expansion import ROOT_POLYNOMIAL_TERMS, root_polynomial_expansion
 
-__all__ = ["CHART_BUDGET", "PRIORITY_SKIN_WEIGHT", "q_skin_priority"]
+__all__ = ["BLEND_STEPS", "CHART_BUDGET", "PRIORITY_SKIN_WEIGHT", "default_fit", "q_skin_priority"]
 
 #: Weight of the skin samples with skin first (relative to the chart's energy). Chosen on the
 #: training skin (half fitted, half judged) and the tuning cameras at 0.2 % and 1 % noise:
@@ -35,10 +59,246 @@ PRIORITY_SKIN_WEIGHT = 0.5
 CHART_BUDGET = 1.15
 #: Least squares' chart ΔE2000 below this is rounding: the stage reproduces the light exactly.
 EXACT = 1e-6
+#: Shares of the way from the default to the skin fit tried, largest first, where the skin fit
+#: is worse than the default on the background or the LEDs in frame (0 is the default itself).
+BLEND_STEPS = (0.75, 0.5, 0.25, 0.0)
+#: Along the projected way the background's first-order rise is turned into a fall of this
+#: fraction of it, so that its second-order change does not make it a rise.
+PROJECTION_MARGIN = 0.25
+#: What the solve wraps the post-correction in (the emitter guard), applied before judging it.
+Guard = Callable[[PostCorrection], PostCorrection]
+#: Forward-difference step of the background's gradient, relative to the largest parameter.
+_STEP = 1e-6
+#: "No worse" up to rounding: a figure may exceed the default's by this fraction of itself.
+_ROUNDING = 1e-9
 
 
-def q_skin_priority(problem: QProblem) -> QFit:
+#: The last problem whose default was solved, and that fit: skin first compares with the
+#: default and the solve then reports it, on the same (frozen) problem; solved once.
+_LAST_DEFAULT: list[tuple[QProblem, QFit]] = []
+
+
+def default_fit(problem: QProblem) -> QFit:
+    """The default's post-correction of ``problem`` (``auto``), solved once per problem."""
+    if _LAST_DEFAULT and _LAST_DEFAULT[0][0] is problem:
+        return _LAST_DEFAULT[0][1]
+    fit = q_auto(problem)
+    _LAST_DEFAULT[:] = [(problem, fit)]
+    return fit
+
+
+def _parameters(
+    skin: PostCorrection, default: PostCorrection
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The skin fit's and the default's parameters in one space, where the two are models of
+    one kind whose outputs mix linearly in them: two matrices, two root-polynomials of one
+    degree, fallback, domain and fade, or a root-polynomial and the matrix that is its fallback
+    (its linear terms); None for any other pair."""
+    if isinstance(skin, MatrixCorrection) and isinstance(default, MatrixCorrection):
+        return skin.Q, default.Q
+    if not isinstance(skin, RootPolynomialCorrection):
+        return None
+    C = skin.coefficients
+    if isinstance(default, MatrixCorrection):
+        if not np.array_equal(default.Q, skin.fallback):
+            return None
+        D = np.zeros_like(C)
+        D[:, :3] = default.Q  # the first three terms are r, g, b
+        return C, D
+    if (
+        isinstance(default, RootPolynomialCorrection)
+        and default.coefficients.shape == C.shape
+        and np.array_equal(default.fallback, skin.fallback)
+        and default.fade == skin.fade
+        and _same_domain(default.domain, skin.domain)
+    ):
+        return C, default.coefficients
+    return None
+
+
+def _model(skin: PostCorrection, parameters: np.ndarray) -> PostCorrection:
+    """``skin``'s kind of model with other parameters."""
+    if isinstance(skin, MatrixCorrection):
+        return MatrixCorrection(parameters)
+    if not isinstance(skin, RootPolynomialCorrection):
+        raise TypeError(f"no parameters for a {skin.kind} model")
+    return dataclasses.replace(skin, coefficients=parameters)
+
+
+def _gradient(problem: QProblem, skin: PostCorrection, at: np.ndarray) -> np.ndarray:
+    """The background error's gradient in the parameters at ``at`` (forward differences) over
+    the chart colours that clip there (the others are shown exactly); each moved model's
+    inverse is one Newton step from the unmoved one's (exact to the step's square)."""
+    model = _model(skin, at)
+    clipped = clipped_background(problem, model)
+    gradient = np.zeros_like(at)
+    if not np.any(clipped):
+        return gradient
+    P = np.asarray(problem.target, dtype=np.float64)
+    scale = white_scale(P, problem.white_patch)
+    P = P[clipped]
+    SL, M = np.asarray(problem.SL, dtype=np.float64), np.asarray(problem.M, dtype=np.float64)
+    b = np.zeros(3) if problem.black_level is None else np.asarray(problem.black_level, float)
+    u = model.inverse(P)
+    h = _STEP * np.maximum(np.max(np.abs(u), axis=1), 1e-12)
+    J = np.stack(
+        [(model.apply(u + h[:, None] * e) - model.apply(u - h[:, None] * e)) / (2 * h[:, None])
+         for e in np.eye(3)],
+        axis=-1,
+    )  # fmt: skip
+
+    def error(moved: PostCorrection) -> float:
+        content = u - np.linalg.solve(J, (moved.apply(u) - P)[..., None])[..., 0]
+        seen = np.clip((content - b) @ M.T, 0.0, None) @ SL.T + b
+        return float(np.mean(np.abs(moved.apply(seen) - P) / scale))
+
+    base = error(model)
+    step = _STEP * max(float(np.max(np.abs(at))), 1.0)
+    for index in np.ndindex(at.shape):
+        moved = at.copy()
+        moved[index] += step
+        gradient[index] = (error(_model(skin, moved)) - base) / step
+    return gradient
+
+
+def _directions(problem: QProblem, skin: PostCorrection, C: np.ndarray, D: np.ndarray):
+    """From the default's parameters ``D`` towards the skin fit's ``C``: the straight way and,
+    where the background error rises along it, the way with that rise taken out (to first
+    order, plus :data:`PROJECTION_MARGIN` of it turned into a fall), that one first."""
+    step = C - D
+    g = _gradient(problem, skin, D)
+    rise = float(np.sum(g * step))
+    metric = _fit_metric(problem, C)
+    if rise > 0 and metric is not None:
+        h = np.linalg.solve(metric, g.T).T  # the way the fit's rows resist least
+        norm = float(np.sum(g * h))
+        if norm > 0:
+            yield "projected", step - (1 + PROJECTION_MARGIN) * rise / norm * h
+    yield "straight", step
+
+
+def _fit_metric(problem: QProblem, C: np.ndarray) -> np.ndarray | None:
+    """``E^T W E`` of the skin fit's rows (the chart and the skin samples, the expansion ``E``
+    of their lit colours, weights ``W``): how much its objective grows per parameter change;
+    None where it is singular or the parameters are not a root-polynomial's or a matrix's."""
+    X, P, w, _ = problem_arrays(problem)
+    X, _, w = with_rows(X, P, w, problem.skin_rows(PRIORITY_SKIN_WEIGHT))
+    terms = C.shape[1]
+    degree = next((d for d, n in ROOT_POLYNOMIAL_TERMS.items() if n == terms), None)
+    if terms == 3:
+        E = X
+    elif degree is not None:
+        E = root_polynomial_expansion(X, degree)
+    else:
+        return None
+    H = E.T @ (w[:, None] * E)
+    return H if condition_number(H) < 1e12 else None
+
+
+def _same_domain(a: FitDomain | None, b: FitDomain | None) -> bool:
+    return a is b or (a is not None and b is not None and a.to_dict() == b.to_dict())
+
+
+@dataclasses.dataclass(frozen=True)
+class _Figures:
+    """What a candidate is judged on against the default: the background error (relative to
+    white), the LEDs in frame (p95 ΔE2000) and the skin samples (mean ΔE2000)."""
+
+    background: float
+    leds: float
+    skin: float
+    chart: float
+
+    def no_worse(self, default: _Figures, chart: float) -> bool:
+        """Background and LEDs no worse than ``default``'s, skin no worse either, and the
+        chart's mean ΔE2000 at most ``chart``."""
+        return all(
+            _no_worse(mine, theirs)
+            for mine, theirs in zip(
+                (self.background, self.leds, self.skin, self.chart),
+                (default.background, default.leds, default.skin, chart),
+                strict=True,
+            )
+        )
+
+    def words(self, default: _Figures) -> str:
+        return (
+            f"background {100 * self.background:.3g} % of white (default "
+            f"{100 * default.background:.3g} %), LEDs in frame p95 ΔE2000 {self.leds:.3g} "
+            f"(default {default.leds:.3g})"
+        )
+
+
+def _figures(problem: QProblem, correction: PostCorrection) -> _Figures:
+    """:class:`_Figures` of ``correction`` on ``problem``."""
+    white = np.asarray(problem.target, dtype=np.float64)[problem.white_patch]
+    camera = sample_camera_to_xyz()
+    skin = problem.skin
+    lit = problem.skin_predicted
+    if skin is None or lit is None:
+        raise ValueError("skin first without skin samples")
+    X, P, w, _ = problem_arrays(problem)
+    chart = patch_errors(correction.apply(X), P, w, problem.white_patch)[0][w > 0]
+    return _Figures(
+        background=background_error(problem, correction),
+        leds=in_frame_led_damage(correction, problem.SL, white, camera),
+        skin=float(np.mean(skin_delta_e(correction.apply(lit), skin.target, white, camera))),
+        chart=float(np.mean(chart)),
+    )
+
+
+def _no_worse(value: float, bound: float) -> bool:
+    return not np.isfinite(bound) or value <= bound + _ROUNDING * abs(bound)
+
+
+def within_default(
+    problem: QProblem, fit: QFit, guard: Guard | None = None
+) -> tuple[QFit, str, float]:
+    """``fit`` drawn towards the default until its background and LED figures are no worse
+    than the default's, nor its skin (module docstring), each judged through ``guard`` (the
+    emitter guard the solve wraps the model in; none by default): the fit, what was done in
+    words, and the share of the way from the default to the skin fit taken (1: the skin fit
+    unchanged, 0: the default)."""
+    default = default_fit(problem)
+    guarded = guard or (lambda correction: correction)
+    reference = _figures(problem, guarded(default.correction))
+    figures = _figures(problem, guarded(fit.correction))
+    chart = max(figures.chart, reference.chart)  # both the default's and the skin fit's are fine
+    chosen, share, way = fit.correction, 1.0, "straight"
+    if not figures.no_worse(reference, chart):
+        chosen, share, figures = default.correction, 0.0, reference
+        pair = _parameters(fit.correction, default.correction)
+        C, D = pair if pair is not None else (np.zeros(0), np.zeros(0))
+        for way, step in () if pair is None else _directions(problem, fit.correction, C, D):
+            for a in (1.0, *BLEND_STEPS[:-1]):
+                if way == "straight" and a == 1.0:
+                    continue  # the skin fit itself, judged above
+                candidate = _model(fit.correction, D + a * step)
+                judged = _figures(problem, guarded(candidate))
+                if judged.no_worse(reference, chart):
+                    chosen, share, figures = candidate, a, judged
+                    break
+            if share > 0:
+                break
+    words = figures.words(reference)
+    if share == 1.0 and way == "straight":
+        return fit, f"no worse than the default ({default.model}) elsewhere: {words}", share
+    if share == 0.0:
+        note = f"the default ({default.model}) kept: the skin fit was worse than it elsewhere"
+        reason = f"faces first, but {note}: {words}; {default.reason}"
+        return dataclasses.replace(default, reason=reason), note, share
+    note = (
+        f"{share:g} of the way from the default ({default.model}) to the skin fit"
+        f"{', the background rise taken out' if way == 'projected' else ''}: the skin fit "
+        f"alone was worse than the default elsewhere; so, {words}"
+    )
+    details = {**fit.details, "share": share, "way": way}
+    return dataclasses.replace(fit, correction=chosen, details=details), note, share
+
+
+def q_skin_priority(problem: QProblem, guard: Guard | None = None) -> QFit:
     """The skin-first post-correction (module docstring); an InputError without skin samples.
+    ``guard``: the emitter guard the solve will wrap it in (judged through it).
 
     Examples
     --------
@@ -61,7 +321,7 @@ def q_skin_priority(problem: QProblem) -> QFit:
     X, P, w, white = problem_arrays(problem)
     rank, _ = target_rank(P, w, X)
     if rank < 3:
-        fit = q_auto(problem)
+        fit = default_fit(problem)
         reason = f"skin priority not applied: the target chart has rank {rank}; {fit.reason}"
         return QFit(
             fit.correction, fit.model, fit.description, reason=reason, target_rank=rank,
@@ -71,7 +331,9 @@ def q_skin_priority(problem: QProblem) -> QFit:
     Q_ls = fit_least_squares(X, P, w)
     chart_ls = float(np.mean(patch_errors(X @ Q_ls.T, P, w, white)[0][active]))
     if chart_ls < EXACT:
-        fit = q_auto(problem)  # the stage reproduces the light: no colour, skin or other, to fix
+        fit = default_fit(
+            problem
+        )  # the stage reproduces the light: no colour, skin or other, to fix
         return QFit(
             fit.correction, fit.model, fit.description, reason=f"faces first: {fit.reason}",
             cross_validated_error=fit.cross_validated_error, target_rank=rank,
@@ -89,17 +351,17 @@ def q_skin_priority(problem: QProblem) -> QFit:
         )
     chart = float(np.mean(patch_errors(fit.correction.apply(X), P, w, white)[0][active]))
     if not chart <= CHART_BUDGET * chart_ls:
-        return QFit(
-            MatrixCorrection(Q_ls),
-            "least-squares",
-            "full 3x3 least squares (eq. 5)",
-            reason=(
-                f"faces first, but the skin fit's chart error {chart:.3g} is above "
-                f"{CHART_BUDGET:g}x least squares' {chart_ls:.3g}: least squares kept"
-            ),
-            target_rank=rank,
+        default = default_fit(problem)
+        reason = (
+            f"faces first, but the skin fit's chart error {chart:.3g} is above "
+            f"{CHART_BUDGET:g}x least squares' {chart_ls:.3g}: the default kept; {default.reason}"
         )
-    notes = [] if why is None else [why]
+        return dataclasses.replace(default, reason=reason)
+    fit, elsewhere, share = within_default(problem, fit, guard)
+    if share == 0.0:  # the default itself, its reason saying why
+        return fit
+    chart = float(np.mean(patch_errors(fit.correction.apply(X), P, w, white)[0][active]))
+    notes = [elsewhere] if why is None else [elsewhere, why]
     reason = (
         f"faces first: {fit.description} (skin weight {PRIORITY_SKIN_WEIGHT:g}); chart mean "
         f"ΔE2000 {chart:.3g} against least squares' {chart_ls:.3g} (at most {CHART_BUDGET:g}x)"

@@ -31,7 +31,10 @@ class SkinBand(Record):
 class SkinDefault(Record):
     """The default post-correction on the same problem (written with skin first): its model,
     its expected skin ΔE2000, the wall's LEDs in frame (p95 ΔE2000) through it and through this
-    solve, and the chart patches the in-frustum matrix drives outside [0, 1] for each."""
+    solve, the chart patches the in-frustum matrix drives outside [0, 1] for each, and the
+    in-frustum background's expected error relative to white through each
+    (:func:`ocio_vp.correction.skin_figures.background_error`; None where Q has no inverse or
+    in a file written before the figure existed)."""
 
     model: str
     expected: float
@@ -39,6 +42,23 @@ class SkinDefault(Record):
     led_damage_default: float
     background_outside: int
     background_outside_default: int
+    background: float | None = None
+    background_default: float | None = None
+
+    def words(self) -> str:
+        """The terminal's line: this solve's background and in-frame LED figures beside the
+        default's."""
+        if self.background is None or self.background_default is None:
+            background = "background not modelled (Q has no inverse: N not solved)"
+        else:
+            background = (
+                f"background {_percent(self.background)} of white (default "
+                f"{_percent(self.background_default)})"
+            )
+        return (
+            f"{background}; LEDs in frame p95 ΔE2000 {self.led_damage:.3g} (default "
+            f"{self.led_damage_default:.3g})"
+        )
 
 
 @dataclass(frozen=True)
@@ -88,3 +108,7 @@ def _ratio(value: float, reference: float) -> float:
 
 def _figure(value: float) -> str:
     return f"{value:.2f}" if value >= ROUNDING else "0"
+
+
+def _percent(value: float) -> str:
+    return f"{100 * value:.3f} %"

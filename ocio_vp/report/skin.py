@@ -71,10 +71,9 @@ def skin_facts(solution: Solution) -> list[tuple[str, str]]:
         facts.append(
             (
                 "skin first against the default",
-                f"the default ({d.model}) expects skin {d.expected:.3g}; the wall's LEDs in "
-                f"frame p95 ΔE2000 {d.led_damage:.3g} (default {d.led_damage_default:.3g}); "
-                f"chart colours N drives outside the wall's range {d.background_outside} "
-                f"(default {d.background_outside_default})",
+                f"the default ({d.model}) expects skin {d.expected:.3g}; {d.words()}; chart "
+                f"colours N drives outside the wall's range {d.background_outside} (default "
+                f"{d.background_outside_default})",
             )
         )
     return facts
