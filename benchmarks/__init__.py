@@ -13,6 +13,7 @@ import statistics
 import tempfile
 import time
 from collections.abc import Callable, Iterator, Sequence
+from pathlib import Path
 from typing import Any
 
 __all__ = ["cached_bytecode", "fmt_ms", "markdown_table", "median_time", "replace_section"]
@@ -64,6 +65,17 @@ def replace_section(document: str, section: str) -> str:
     end = next((i for i in range(start + 1, len(lines)) if lines[i].startswith(level)), len(lines))
     tail = "\n".join(lines[end:])
     return "\n".join(lines[:start]) + "\n" + body + (f"\n{tail}\n" if tail else "")
+
+
+def write_section(section: str, out: str | None) -> None:
+    """Print ``section``, or put it in the document ``out`` with :func:`replace_section` (the
+    other sections kept; the document made when missing)."""
+    if not out:
+        print(section)
+        return
+    path = Path(out)
+    existing = path.read_text(encoding="utf-8") if path.exists() else ""
+    path.write_text(replace_section(existing, section), encoding="utf-8")
 
 
 @contextlib.contextmanager

@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.child import run_child
+from benchmarks.child import memory_rows, run_child
 
 SIZE_4K = (3840, 2160)
 SIZE_HD = (1920, 1080)
@@ -173,7 +173,6 @@ def _report(size, count, distinct, write_s, megabytes, runs, memory) -> str:
     plain = min(r["total"] for r in runs["plain"])
     measure = min(r["total"] for r in runs["measure"])
     width, height = size
-    mib = 2**20
     lines = [
         "## Movie take: measuring a ProRes 4444 take against decoding it with PyAV alone",
         "",
@@ -211,14 +210,8 @@ def _report(size, count, distinct, write_s, megabytes, runs, memory) -> str:
         "| frames | peak RSS (MiB) | after imports (MiB) | added by measuring (MiB) |",
         "|---:|---:|---:|---:|",
     ]
-    for n, result in memory:
-        lines.append(
-            f"| {n} | {result['peak'] / mib:.0f} | {result['base'] / mib:.0f} | "
-            f"{(result['peak'] - result['base']) / mib:.0f} |"
-        )
-    (n_a, a), (n_b, b) = memory
-    growth = (b["peak"] - b["base"]) - (a["peak"] - a["base"])
-    lines += ["", f"- {n_b / n_a:.1f}x the frames, {growth / mib:+.0f} MiB of peak memory.", ""]
+    rows, growth = memory_rows(memory)
+    lines += [*rows, "", f"{growth}.", ""]
     return "\n".join(lines)
 
 

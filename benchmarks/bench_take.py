@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.child import run_child
+from benchmarks.child import memory_rows, run_child
 
 SIZE_4K = (4096, 2160)
 SIZE_HD = (1920, 1080)
@@ -170,7 +170,6 @@ def run(quick: bool = False) -> str:
     extrapolated = fixed + REAL_TIME_FRAMES * (per_1 + fraction * per_2)
     real_time = REAL_TIME_FRAMES / CAMERA_FPS
     width, height = size
-    mib = 2**20
     lines = [
         "## Take: measuring a camera take of the calibration sequence",
         "",
@@ -205,17 +204,11 @@ def run(quick: bool = False) -> str:
         "| frames | peak RSS (MiB) | after imports (MiB) | added by measuring (MiB) |",
         "|---:|---:|---:|---:|",
     ]
-    for n, result in memory:
-        lines.append(
-            f"| {n} | {result['peak'] / mib:.0f} | {result['base'] / mib:.0f} | "
-            f"{(result['peak'] - result['base']) / mib:.0f} |"
-        )
-    (n_a, a), (n_b, b) = memory
-    growth = (b["peak"] - b["base"]) - (a["peak"] - a["base"])
+    rows, growth = memory_rows(memory)
     lines += [
+        *rows,
         "",
-        f"- {n_b / n_a:.1f}x the frames, {growth / mib:+.0f} MiB of peak memory: per frame only a "
-        "few numbers are kept.",
+        f"{growth}: per frame only a few numbers are kept.",
         f"- Checked: the dropped frame is found ({measured['steps']}), white reads "
         f"{', '.join(f'{v:.4f}' for v in measured['white'])} (simulated: "
         f"{', '.join(f'{v:.4f}' for v in SL.sum(axis=1))}, within the 1 % flicker).",

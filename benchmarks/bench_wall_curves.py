@@ -112,20 +112,13 @@ def run(quick: bool = False) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from pathlib import Path
-
-    from benchmarks import replace_section
+    from benchmarks import write_section
 
     parser = argparse.ArgumentParser(prog="python -m benchmarks.bench_wall_curves")
     parser.add_argument("--out", help="replace this section of that document (default: print)")
     args = parser.parse_args(argv)
     text = run()
-    if args.out:
-        path = Path(args.out)
-        existing = path.read_text(encoding="utf-8") if path.exists() else ""
-        path.write_text(replace_section(existing, text), encoding="utf-8")
-    else:
-        print(text)
+    write_section(text, args.out)
     return 0
 
 

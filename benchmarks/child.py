@@ -24,3 +24,18 @@ def run_child(code: str, *args: str) -> str:
     return subprocess.run(
         [sys.executable, "-c", PRELUDE + code, *args], check=True, capture_output=True, text=True
     ).stdout
+
+
+MIB = 2**20
+
+
+def memory_rows(memory: list[tuple[int, dict[str, int]]]) -> tuple[list[str], str]:
+    """(table rows, growth sentence) of ``(frames, {"peak", "base"} bytes)`` runs of two
+    lengths: the peak, the peak after imports and what measuring added, in MiB."""
+    rows = [
+        f"| {n} | {r['peak'] / MIB:.0f} | {r['base'] / MIB:.0f} | {(r['peak'] - r['base']) / MIB:.0f} |"
+        for n, r in memory
+    ]
+    (n_a, a), (n_b, b) = memory
+    growth = (b["peak"] - b["base"]) - (a["peak"] - a["base"])
+    return rows, f"- {n_b / n_a:.1f}x the frames, {growth / MIB:+.0f} MiB of peak memory"
