@@ -35,7 +35,14 @@ import numpy as np
 
 from benchmarks import markdown_table
 
-__all__ = ["PROTECT", "WorstPixel", "host_agreement", "hosts_config", "hosts_section"]
+__all__ = [
+    "PROTECT",
+    "WorstPixel",
+    "cielab_defined",
+    "host_agreement",
+    "hosts_config",
+    "hosts_section",
+]
 
 #: The label of ``--method auto --protect-emitters`` beside the registry's methods.
 PROTECT = "auto --protect-emitters"
@@ -103,12 +110,9 @@ def _lab(x: np.ndarray, matrix: np.ndarray, white: np.ndarray) -> np.ndarray:
     return np.asarray(colour.XYZ_to_Lab(x @ matrix.T * scale, colour.XYZ_to_xy(white_xyz * scale)))
 
 
-def _delta_e(a: np.ndarray, b: np.ndarray, matrix: np.ndarray, white: np.ndarray) -> np.ndarray:
-    import colour
-
-    return np.asarray(
-        colour.delta_E(_lab(a, matrix, white), _lab(b, matrix, white), method="CIE 2000")
-    )
+def cielab_defined(applied: np.ndarray, configured: np.ndarray, matrix: np.ndarray) -> np.ndarray:
+    """Pixels CIELAB defines in both outputs: L* >= 0, that is Y >= 0 through ``matrix``."""
+    return ((applied @ matrix.T)[:, 1] >= 0) & ((configured @ matrix.T)[:, 1] >= 0)
 
 
 @dataclass(frozen=True)
@@ -194,6 +198,7 @@ def _worst_pixel(camera, solution, pixels, kinds, applied, configured, errors, m
 def _one(stage, measurements, env, method: str, reflectances):
     """(ΔE2000 per pixel, pixel kinds, the worst pixel, whether CIELAB defines the pixel: L* >= 0
     in both outputs) of one cell on one stage."""
+    from ocio_vp.metrics import camera_delta_E_2000
     from ocio_vp.ocio.writer import write_environment
     from ocio_vp.pipeline import solve_environment
     from ocio_vp.simulator.stage import camera_rgb, environment_spectrum
@@ -209,10 +214,8 @@ def _one(stage, measurements, env, method: str, reflectances):
         applied, configured = _outputs(Path(folder), pixels.copy())
     white = camera_rgb(stage, environment_spectrum(stage, env.name))
     matrix = camera_matrix(stage)
-    errors = _delta_e(applied, configured, matrix, white)
-    defined = (_lab(applied, matrix, white)[:, 0] >= 0) & (
-        _lab(configured, matrix, white)[:, 0] >= 0
-    )
+    errors = camera_delta_E_2000(applied, configured, camera_to_xyz=matrix, white=white)
+    defined = cielab_defined(applied, configured, matrix)
     worst = _worst_pixel(
         stage.camera_name, solution, pixels, kinds, applied, configured,
         np.where(defined, errors, -np.inf), matrix, white,

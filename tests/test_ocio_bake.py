@@ -319,8 +319,9 @@ def test_auto_d50_emitters_agree_between_apply_and_the_config():
     where CIELAB defines them, and every emitter to a relative miss below 1 % in each channel (those
     above 1 % of the pixel's largest).
     """
-    from benchmarks.accuracy_hosts import _delta_e, _lab, _outputs, hosts_config
+    from benchmarks.accuracy_hosts import _outputs, cielab_defined, hosts_config
     from benchmarks.bench_accuracy import Results, _simulate
+    from ocio_vp.metrics import camera_delta_E_2000
     from ocio_vp.ocio.writer import write_environment
     from ocio_vp.pipeline import solve_environment
     from ocio_vp.simulator.extremes import emitters_in_scene
@@ -339,10 +340,8 @@ def test_auto_d50_emitters_agree_between_apply_and_the_config():
         write_environment(solution, Path(folder))
         applied, configured = _outputs(Path(folder), pixels.copy())
     matrix, white = camera_matrix(stage), camera_rgb(stage, environment_spectrum(stage, "d50"))
-    errors = _delta_e(applied, configured, matrix, white)
-    defined = (_lab(applied, matrix, white)[:, 0] >= 0) & (
-        _lab(configured, matrix, white)[:, 0] >= 0
-    )
+    errors = camera_delta_E_2000(applied, configured, camera_to_xyz=matrix, white=white)
+    defined = cielab_defined(applied, configured, matrix)
     assert defined.sum() >= 2 * len(pixels) // 3  # the blue emitters (420-470 nm) are not
     assert errors[defined].max() <= AGREEMENT_WORST, f"worst ΔE2000 {errors[defined].max():.2f}"
     large = np.abs(applied) >= 0.01 * np.abs(applied).max(axis=1, keepdims=True)
