@@ -262,12 +262,8 @@ def skin_delta_e(
     corrected: np.ndarray, target: np.ndarray, white: np.ndarray, camera_to_xyz: np.ndarray
 ) -> np.ndarray:
     """(..., k) ΔE2000 of corrected skin samples (..., k, 3) against the location's (k, 3),
-    through ``camera_to_xyz``, normalised on the location white's camera RGB ``white``."""
-    import colour
+    through ``camera_to_xyz``, normalised on the location white's camera RGB ``white``: the
+    package's one camera RGB -> ΔE2000, :func:`ocio_vp.metrics.camera_delta_E_2000`."""
+    from ocio_vp.metrics import camera_delta_E_2000
 
-    xyz_white = camera_to_xyz @ white
-    reference = _lab(np.asarray(target) @ camera_to_xyz.T, xyz_white)
-    return np.asarray(
-        colour.delta_E(reference, _lab(np.asarray(corrected) @ camera_to_xyz.T, xyz_white)),
-        dtype=np.float64,
-    )
+    return camera_delta_E_2000(target, corrected, camera_to_xyz=camera_to_xyz, white=white)
