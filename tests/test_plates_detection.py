@@ -162,7 +162,8 @@ def test_measure_finds_the_chart_and_records_the_corners(tmp_path, charts, capsy
     # A second run reads the corners written back: no search, the same numbers.
     again = tmp_path / "again.yaml"
     assert main(["measure", str(capture), "--out", str(again)]) == 0
-    assert "detected" not in capsys.readouterr().out
+    searched = json.loads((tmp_path / "again.overlays" / "samples.json").read_text())
+    assert not searched["plates"][0]["detected"] and "detection" not in searched["plates"][0]
     first = yaml.safe_load(out.read_text())["environments"][0]["target_chart"]
     second = yaml.safe_load(again.read_text())["environments"][0]["target_chart"]
     np.testing.assert_allclose(second, first, rtol=1e-4)
