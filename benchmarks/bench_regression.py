@@ -341,6 +341,34 @@ def _solve_section(pythons, files, root, env, rounds: int) -> str:
     )
 
 
+#: ``export`` targets timed, each a row (every checkout has them; ``all`` differs between them).
+EXPORT_TARGETS = ("unreal", "nuke", "resolve")
+
+
+def _export_section(pythons, root: Path, env, rounds: int) -> str:
+    """``export`` of each checkout's own default-Q solution (the calibrations its apply rows
+    use), one row a target, rounds interleaved."""
+    commands = {}
+    for who, py in pythons.items():
+        for target in EXPORT_TARGETS:
+            commands[(f"`export --target {target}`, default Q", who)] = [
+                py, "-m", "ocio_vp.cli", "export", str(root / who / "auto" / "incandescent"),
+                "--target", target, "--out", str(root / "x" / who),
+            ]  # fmt: skip
+    load = os.getloadavg()[0]
+    cells = _rounds(commands, rounds, env, root)
+    rows = list(dict.fromkeys(row for row, _ in commands))
+    return "\n".join(
+        [
+            f"### `export`, best of {rounds} rounds",
+            "",
+            f"Load average (1 min) at the start: {load:.1f} on {os.cpu_count()} cores.",
+            "",
+            _table(cells, rows, None, dict.fromkeys(rows, f"<= 1.05x {BASELINE_COMMIT}")),
+        ]
+    )
+
+
 def _solve_calibrations(pythons, files, root: Path, env) -> None:
     """Each checkout's own solutions of the incandescent environment, for its apply rows."""
     for who, py in pythons.items():
@@ -377,6 +405,7 @@ def run(quick: bool = False) -> str:
             shutil.rmtree(root / "o", ignore_errors=True)
         if len(costs) == 2:
             parts[-1:] = [_per_frame_line(*costs), ""]
+        parts += [_export_section(pythons, root, env, 1 if quick else 2), ""]
         parts += [_solve_section(pythons, files, root, env, 1 if quick else 2)]
     return "\n".join(parts)
 
