@@ -260,6 +260,7 @@ def _apply_section(pythons, files, root, env, count: int, rounds: int) -> tuple[
         )
     per_frame = {key: cell.best()[1] / count for key, cell in cells.items()}
     per_frame[plain_key] = cpu / count
+    floor = "" if plains is not None else _chain_floor(root, frames[0], cpu / count)
     text = "\n".join(
         [
             f"### `apply` on {count} frames ({_frame_size(files)} half-float zip EXR), {how}",
@@ -271,6 +272,7 @@ def _apply_section(pythons, files, root, env, count: int, rounds: int) -> tuple[
             _table(cells, rows, plain, targets, plains),
             "",
             agreement,
+            *(["", floor] if floor else []),
         ]
     )
     return text, per_frame
@@ -309,6 +311,64 @@ def _agreement(out: Path, name: str) -> str:
     )
 
 
+def _cpu_best(work, frame: np.ndarray, repeats: int = 5) -> float:
+    """Least CPU seconds of ``work`` on a fresh copy of ``frame`` (the copy not counted)."""
+    best = np.inf
+    for _ in range(repeats):
+        buf = frame.copy()
+        start = time.process_time()
+        work(buf)
+        best = min(best, time.process_time() - start)
+    return best
+
+
+def _chain_floor(root: Path, frame_path: Path, plain_cpu: float) -> str:
+    """Why ``--via config`` cannot reach 0.9x here: the CPU a 4K half frame costs in each piece
+    of its chain, against the plain read + write's CPU a frame (both cores are busy either
+    way, so speed / plain is at most plain CPU / (plain CPU + the transform's))."""
+    import OpenImageIO as oiio
+    import PyOpenColorIO as OCIO
+
+    from ocio_vp.footage.apply import OcioTransform, load_post_correction, pixel_transform
+
+    frame = np.ascontiguousarray(oiio.ImageBuf(str(frame_path)).get_pixels(oiio.HALF)[..., :3])
+    solution = root / "this" / "auto" / "incandescent"
+    chain = pixel_transform(load_post_correction(solution, via="config"))
+    half = OCIO.BIT_DEPTH_F16
+
+    def ocio(transform) -> OcioTransform:
+        processor = OCIO.Config.CreateRaw().getProcessor(transform)
+        return OcioTransform(
+            None, processor.getOptimizedCPUProcessor(half, half, OCIO.OPTIMIZATION_NONE)
+        )
+
+    costs = {
+        "the config's chain (what `--via config` runs)": _cpu_best(chain, frame),
+        "the exact model (the default)": _cpu_best(pixel_transform(load_post_correction(
+            solution)), frame),
+        "an identity-valued 33^3 3D LUT alone (the least a LUT chain costs)": _cpu_best(
+            ocio(OCIO.Lut3DTransform(33)), frame),
+        "an identity matrix (OCIO's half conversions alone, what a 3x3 Q costs)": _cpu_best(
+            ocio(OCIO.MatrixTransform()), frame),
+    }  # fmt: skip
+    body = [
+        [name, f"{cpu * 1000:.0f} ms", f"{plain_cpu / (plain_cpu + cpu):.2f}x"]
+        for name, cpu in costs.items()
+    ]
+    return "\n".join(
+        [
+            f"CPU of one core for one {frame.shape[1]}x{frame.shape[0]} half frame in this "
+            f"process (best of 5), against the plain read + write's {plain_cpu:.2f} s of CPU a "
+            "frame in the rounds above. Where reading and writing keep both cores busy, a "
+            "command's speed / plain read + write is at most plain CPU / (plain CPU + transform "
+            "CPU), the speed bound below (a plain loop that leaves a core partly idle lets a "
+            "command go faster than it):",
+            "",
+            markdown_table(["transform (one thread)", "CPU a frame", "speed bound"], body),
+        ]
+    )
+
+
 def _frame_size(files) -> str:
     import OpenImageIO as oiio
 
@@ -337,6 +397,34 @@ def _solve_section(pythons, files, root, env, rounds: int) -> str:
             f"Load average (1 min) at the start: {load:.1f} on {os.cpu_count()} cores.",
             "",
             _table(cells, rows, None, targets),
+        ]
+    )
+
+
+#: ``export`` targets timed, each a row (every checkout has them; ``all`` differs between them).
+EXPORT_TARGETS = ("unreal", "nuke", "resolve")
+
+
+def _export_section(pythons, root: Path, env, rounds: int) -> str:
+    """``export`` of each checkout's own default-Q solution (the calibrations its apply rows
+    use), one row a target, rounds interleaved."""
+    commands = {}
+    for who, py in pythons.items():
+        for target in EXPORT_TARGETS:
+            commands[(f"`export --target {target}`, default Q", who)] = [
+                py, "-m", "ocio_vp.cli", "export", str(root / who / "auto" / "incandescent"),
+                "--target", target, "--out", str(root / "x" / who),
+            ]  # fmt: skip
+    load = os.getloadavg()[0]
+    cells = _rounds(commands, rounds, env, root)
+    rows = list(dict.fromkeys(row for row, _ in commands))
+    return "\n".join(
+        [
+            f"### `export`, best of {rounds} rounds",
+            "",
+            f"Load average (1 min) at the start: {load:.1f} on {os.cpu_count()} cores.",
+            "",
+            _table(cells, rows, None, dict.fromkeys(rows, f"<= 1.05x {BASELINE_COMMIT}")),
         ]
     )
 
@@ -377,6 +465,7 @@ def run(quick: bool = False) -> str:
             shutil.rmtree(root / "o", ignore_errors=True)
         if len(costs) == 2:
             parts[-1:] = [_per_frame_line(*costs), ""]
+        parts += [_export_section(pythons, root, env, 1 if quick else 2), ""]
         parts += [_solve_section(pythons, files, root, env, 1 if quick else 2)]
     return "\n".join(parts)
 

@@ -101,3 +101,26 @@ def test_choose_fade_takes_the_first_that_folds_nowhere(problem):
     chosen = list(tried).index(f"{fade[0]:g}-{fade[1]:g}")
     assert all(v > 0 for v in list(tried.values())[:chosen]) and tried[list(tried)[chosen]] == 0
     assert fold_fraction(RootPolynomialCorrection(C, A, problem.domain, fade), problem.domain) == 0
+
+
+def test_a_remembered_fold_fraction_is_each_fades_own(problem, monkeypatch):
+    """The chosen fade's fold fraction is measured once a solve (then remembered): a repeat
+    gives the measured value and a different fade is measured anew, never the other's."""
+    import importlib
+
+    from ocio_vp.correction.problem import fit_least_squares
+    from ocio_vp.correction.root_polynomial import fit_root_polynomial
+
+    module = importlib.import_module("ocio_vp.correction.extrapolation")  # not the function
+    X, P, w = problem.predicted, problem.target, problem.fit_weights
+    C, A = fit_root_polynomial(X, P, w, 2), fit_least_squares(X, P, w)
+    monkeypatch.setattr(module, "_FOLDS", {})
+    measured = []
+    real = module._measured_folds
+    monkeypatch.setattr(module, "_measured_folds", lambda *a: measured.append(1) or real(*a))
+    wide, narrow = (RootPolynomialCorrection(C, A, problem.domain, f) for f in FADES[::2])
+    first = fold_fraction(wide, problem.domain)
+    assert fold_fraction(dataclasses.replace(wide), problem.domain) == first
+    assert len(measured) == 1
+    assert fold_fraction(narrow, problem.domain) == real(narrow, problem.domain)
+    assert len(measured) == 2

@@ -141,7 +141,6 @@ def run(args: argparse.Namespace) -> int:
     from ocio_vp.footage.sequences import expand_frames, output_paths, parse_frame_range
     from ocio_vp.formats.solution import load_solution
     from ocio_vp.formats.solution_inputs import solution_folders
-    from ocio_vp.plates.reader import canonical_encoding
 
     solutions, frames = split_inputs(args.inputs)
     if not solutions:
@@ -149,7 +148,7 @@ def run(args: argparse.Namespace) -> int:
     if not frames:
         raise InputError("no frames given after the solution(s)", key="FRAMES")
     chosen = solution_folders(solutions, key="SOLUTION")
-    encoding = canonical_encoding(args.footage_encoding, key="--footage-encoding")
+    encoding = _footage_encoding(args.footage_encoding)
     frame_range = parse_frame_range(args.frame_range) if args.frame_range else None
     inputs = expand_frames(frames, frames=frame_range)
     workers = 1 if args.workers is None else args.workers
@@ -170,6 +169,16 @@ def run(args: argparse.Namespace) -> int:
         _refuse_other_solutions(tasks)
     check_free_space(tasks)
     return _run_tasks(tasks, args, workers)
+
+
+def _footage_encoding(name: str) -> str:
+    """The canonical spelling of ``--footage-encoding``. Linear (the default) is known without
+    importing the plates package, which every other name needs (its readers, detection...)."""
+    if name.lower() == "linear":
+        return "linear"
+    from ocio_vp.plates.reader import canonical_encoding
+
+    return canonical_encoding(name, key="--footage-encoding")
 
 
 def _refuse_other_solutions(tasks: list) -> None:

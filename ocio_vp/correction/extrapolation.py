@@ -79,8 +79,36 @@ def _halton(n: int, base: int) -> np.ndarray:
 _REFLECTIVE = np.stack([_halton(FOLD_SAMPLES, b) for b in (2, 3, 5)], axis=-1)
 
 
+#: Fold fractions already measured, by :func:`_fold_key`: a solve measures the chosen fade's
+#: twice (choosing it, then in the diagnostics); a few entries suffice.
+_FOLDS: dict[bytes, float] = {}
+
+
+def _fold_key(correction: PostCorrection, domain: FitDomain) -> bytes | None:
+    """Everything a bounded root-polynomial's fold fraction depends on, as bytes (None for
+    other corrections: not remembered)."""
+    if not isinstance(correction, RootPolynomialCorrection) or correction.domain is None:
+        return None
+    own = correction.domain
+    arrays = [correction.coefficients, correction.fallback, np.asarray(correction.fade)]
+    arrays += [own.to_drive, own.hull, own.centre, domain.to_drive]
+    return b"|".join(np.ascontiguousarray(a, dtype=np.float64).tobytes() for a in arrays)
+
+
 def fold_fraction(correction: PostCorrection, domain: FitDomain) -> float:
     """Share of the reflective solid where the correction folds (see the module docstring)."""
+    key = _fold_key(correction, domain)
+    if key is not None and key in _FOLDS:
+        return _FOLDS[key]
+    folds = _measured_folds(correction, domain)
+    if key is not None:
+        if len(_FOLDS) >= 32:
+            _FOLDS.pop(next(iter(_FOLDS)))  # the oldest
+        _FOLDS[key] = folds
+    return folds
+
+
+def _measured_folds(correction: PostCorrection, domain: FitDomain) -> float:
     x = _REFLECTIVE @ np.linalg.inv(domain.to_drive).T
     h = 1e-7 * np.max(np.abs(x))
     columns = []

@@ -2,7 +2,7 @@
 
 The colour maths is the solution's own OCIO config, ``Stage Footage`` -> reference (Q, the
 paper's post-correction, eq. 5, plus whatever that colorspace carries), run by OCIO's CPU
-processor in place (``apply(PackedImageDesc)``; ``applyRGB`` on a numpy array is ~10x slower)
+processor in place (``apply(PackedImageDesc)``, not the much slower ``applyRGB`` on an array)
 through the pluggable :class:`PixelTransform` (:data:`TRANSFORMS`). A non-linear Q (a bounded
 root-polynomial, an emitter-protected one) is applied exactly instead (:class:`ModelTransform`:
 float64 maths of :mod:`ocio_vp.model`, not the config's baked LUT). Every other channel (alpha,
@@ -130,7 +130,7 @@ def load_post_correction(
     folder = folder if folder.is_dir() else folder.parent
     names = dict(solution.ocio or {})
     if "post_correction_colorspace" not in names or "reference" not in names:
-        # Deferred: the ocio package pulls in the wall's encodings (scipy, ~0.7 s of start-up)
+        # Deferred: the ocio package pulls in the wall's encodings (scipy: costly at start-up)
         # and solution.json names both colorspaces; only files without them need the defaults.
         from ocio_vp.ocio.config import POST_CORRECTION_COLORSPACE, REFERENCE
 

@@ -623,7 +623,7 @@ def _lut3d_text(values: np.ndarray) -> str:
 def clf_text(chain: LutChain, lut: np.ndarray, description: str) -> str:
     """CLF text of the chain. OCIO writes every operator but the 3D LUT's numbers (integers,
     :data:`LUT_STEPS_PER_STOP`), which are formatted here, each distinct slice once (OCIO's
-    writer formats all 65^3 entries, ~20x slower); the tests read the files back with OCIO."""
+    writer formats all 65^3 entries, much slower); the tests read the files back with OCIO."""
     shell = chain_transform(chain, None)
     shell.getFormatMetadata().addChildElement("Description", description)
     text = clf_v3(shell.write(formatName=CLF_FORMAT, config=OCIO.Config.CreateRaw()))

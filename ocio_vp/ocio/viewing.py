@@ -20,6 +20,7 @@ A per-environment config carries, beside the wall colour spaces and ``Stage Foot
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -79,7 +80,9 @@ MONITORS = (
 )
 
 
+@functools.lru_cache(maxsize=1)
 def _aces_config() -> OCIO.Config:
+    # Parsed once a process, not once an environment written; every caller only reads it.
     return OCIO.Config.CreateFromFile(ACES_CG_CONFIG)
 
 

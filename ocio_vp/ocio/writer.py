@@ -3,12 +3,12 @@
 All environments are written into a staging folder first and renamed into place only when
 every one of them succeeded, so a failure never leaves a half-written output folder.
 
-A non-linear environment costs ~0.1-0.2 s to write (it designs, bakes, checks and formats two
-LUT chains; ~0.5 s with emitter protection, whose inverse is solved slice by slice); a 3x3 one
-~0.02 s. :func:`writer_pool` starts one helper process that writes some
-environments while this process writes the others. It imports only numpy, OpenColorIO and this
-package's writer (~0.25 s, not colour-science), so a command that starts it before it loads
-and solves finds it ready; the files are the same either way.
+A non-linear environment costs far more to write than a 3x3 one (it designs, bakes, checks and
+formats two LUT chains; more with emitter protection, whose inverse is solved slice by slice;
+docs/performance.md has the figures). :func:`writer_pool` starts one helper process that writes
+some environments while this process writes the others. It imports only numpy, OpenColorIO and
+this package's writer (not colour-science), so a command that starts it before it loads and
+solves finds it ready; the files are the same either way.
 """
 
 from __future__ import annotations
