@@ -17,7 +17,6 @@ Layout (names are module constants so other tools can rely on them):
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -27,9 +26,11 @@ import PyOpenColorIO as OCIO
 from ocio_vp.calibration.diagnostics import is_identity, offset_is_negligible
 from ocio_vp.calibration.equations import condition_text
 from ocio_vp.deprecation import deprecated_names
+from ocio_vp.formats.linearity import Linearity
 from ocio_vp.formats.solution import Solution
 from ocio_vp.model.correction import MAX_CONDITION_INVERSE, truncated_pseudo_inverse
 from ocio_vp.ocio.description import (
+    FAMILY,
     ColourSpace,
     ConfigData,
     NamedTransform,
@@ -37,6 +38,7 @@ from ocio_vp.ocio.description import (
     View,
     build,
     clamp,
+    colour_space,
     file,
     group,
     one,
@@ -81,7 +83,6 @@ DISPLAY = "LED Wall"
 VIEW_OUTER = "Outer Frustum"
 VIEW_INNER = "Inner Frustum"
 CONFIG_FILENAME = "config.ocio"
-FAMILY = "ocio-vp"
 
 
 def _wall_signal_encodings() -> dict[str, str]:
@@ -116,26 +117,6 @@ WORKING_SPACE_NAMES = {
     "ACEScg": "ACEScg",
     "ITU-R BT.709": "Linear Rec.709 (sRGB)",
 }
-
-
-def _colorspace(
-    name: str,
-    description: str,
-    *,
-    family: str,
-    encoding: str = "scene-linear",
-    to_reference: Transform | None = None,
-    from_reference: Transform | None = None,
-) -> ColourSpace:
-    """A colour space of this tool's family ``ocio-vp/<family>``."""
-    return ColourSpace(
-        name,
-        f"{FAMILY}/{family}",
-        description,
-        encoding,
-        to_reference=to_reference,
-        from_reference=from_reference,
-    )
 
 
 @dataclass(frozen=True)
@@ -377,24 +358,28 @@ def _origin(solution: Solution) -> str:
 def _camera_spaces(camera: str | None) -> list[ColourSpace]:
     """The reference (camera native linear) and the raw data colorspace."""
     gamut_text = f" ({camera} primaries)" if camera else " (as measured; gamut not stated)"
-    reference = _colorspace(
+    reference = colour_space(
         REFERENCE,
         f"The camera's native linear RGB{gamut_text}: the space all calibration values were "
         "measured in. Content for the LED wall is expected here.",
         family="Camera",
     )
-    raw = _colorspace(RAW, "Data: no colour conversion.", family="Utility", encoding="data")
-    return [reference, dataclasses.replace(raw, is_data=True)]
+    raw = colour_space(
+        RAW, "Data: no colour conversion.", family="Utility", encoding="data", is_data=True
+    )
+    return [reference, raw]
 
 
-def _wall_space(name: str, description: str, solution: Solution, chains: Chains) -> ColourSpace:
+def wall_space(
+    name: str, description: str, linearity: Linearity | None, chains: Chains
+) -> ColourSpace:
     """A wall colour space: reference -> drive (``chains[0]``) and back, both explicit."""
     there, back = chains
-    return _colorspace(
+    return colour_space(
         name,
         description,
         family="LED Wall",
-        encoding=WallEncoding.of(solution.linearity).ocio_encoding,
+        encoding=WallEncoding.of(linearity).ocio_encoding,
         from_reference=one(there),
         to_reference=one(back),
     )
@@ -402,11 +387,11 @@ def _wall_space(name: str, description: str, solution: Solution, chains: Chains)
 
 def _out_of_frustum_space(solution: Solution, chains: Chains, origin: str) -> ColourSpace:
     """The panel drive for content outside the camera frustum: M, then the wall's tail."""
-    return _wall_space(
+    return wall_space(
         OUT_OF_FRUSTUM,
         f"Panel drive for content OUTSIDE the camera frustum (lights the actors): M = [SL]^-1 "
         f"{format_matrix(solution.M)}{soft_clip_text(solution.linearity)}. {origin}.",
-        solution,
+        solution.linearity,
         chains,
     )
 
@@ -459,11 +444,11 @@ def _in_frustum_space(
     solution: Solution, chains: Chains, origin: str, model: ModelFiles | None = None
 ) -> ColourSpace:
     """The panel drive for the in-camera background: N (or M) and the offset, then the tail."""
-    return _wall_space(
+    return wall_space(
         IN_FRUSTUM,
         f"Panel drive for content INSIDE the camera frustum (the in-camera background): "
         f"{_in_frustum_text(solution, model)}{soft_clip_text(solution.linearity)}. {origin}.",
-        solution,
+        solution.linearity,
         chains,
     )
 
@@ -500,7 +485,7 @@ def _add_post_correction(
     if q_identity:
         forward = inverse = group([])
     data.colour_spaces.append(
-        _colorspace(
+        colour_space(
             POST_CORRECTION_COLORSPACE,
             "Camera linear RGB as recorded on the stage; converting to the reference applies Q. "
             + q_text,
@@ -538,9 +523,7 @@ def _set_roles(data: ConfigData, camera: str | None) -> np.ndarray | None:
         log = add_acescct(data, aces_to_camera)
         roles[OCIO.ROLE_COMPOSITING_LOG] = log
         roles[OCIO.ROLE_COLOR_TIMING] = log
-        add_camera_log_spaces(
-            data, camera, reference=REFERENCE, footage=POST_CORRECTION_COLORSPACE, family=FAMILY
-        )
+        add_camera_log_spaces(data, camera, reference=REFERENCE, footage=POST_CORRECTION_COLORSPACE)
         camera_to_aces = np.linalg.inv(aces_to_camera)
     data.roles.update(roles)
     return camera_to_aces
@@ -562,7 +545,7 @@ def _add_working_spaces(data: ConfigData, camera: str) -> tuple[dict[str, str], 
             aces_to_camera = np.asarray(to_camera, dtype=np.float64)
         name = WORKING_SPACE_NAMES[key]
         data.colour_spaces.append(
-            _colorspace(
+            colour_space(
                 name,
                 f"{source.name} linear; to the reference ({camera}) by colour-science's "
                 "matrix_RGB_to_RGB with CAT02 adaptation.",
@@ -581,7 +564,7 @@ def _add_working_spaces(data: ConfigData, camera: str) -> tuple[dict[str, str], 
         @ target.matrix_RGB_to_XYZ
     )
     data.colour_spaces.append(
-        _colorspace(
+        colour_space(
             "CIE-XYZ-D65",
             f"CIE 1931 XYZ, D65 white; from the reference by {camera}'s RGB-to-XYZ matrix with "
             "CAT02 adaptation to D65 (colour-science).",

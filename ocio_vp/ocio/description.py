@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     import PyOpenColorIO as OCIO
 
 __all__ = [
+    "FAMILY",
     "ColourSpace",
     "ConfigData",
     "Enum",
@@ -33,6 +34,7 @@ __all__ = [
     "ViewTransform",
     "build",
     "clamp",
+    "colour_space",
     "colour_space_record",
     "file",
     "group",
@@ -154,6 +156,32 @@ class ColourSpace:
     display_referred: bool = False
     aliases: tuple[str, ...] = ()
     bit_depth: Enum = Enum("BIT_DEPTH_UNKNOWN")
+
+
+#: The family every colour space this tool makes sits under (``ocio-vp/<family>``).
+FAMILY = "ocio-vp"
+
+
+def colour_space(
+    name: str,
+    description: str,
+    *,
+    family: str,
+    encoding: str = "scene-linear",
+    to_reference: Transform | None = None,
+    from_reference: Transform | None = None,
+    is_data: bool = False,
+) -> ColourSpace:
+    """A colour space of this tool's family ``ocio-vp/<family>``."""
+    return ColourSpace(
+        name,
+        f"{FAMILY}/{family}",
+        description,
+        encoding,
+        is_data=is_data,
+        to_reference=to_reference,
+        from_reference=from_reference,
+    )
 
 
 @dataclass(frozen=True)
@@ -473,12 +501,12 @@ def config_record(config: OCIO.Config) -> ConfigData:
             for vt in config.getViewTransforms()
         ],
         views=views,
-        active_displays=tuple(_names(config.getActiveDisplays())),
-        active_views=tuple(_names(config.getActiveViews())),
+        active_displays=tuple(name_list(config.getActiveDisplays())),
+        active_views=tuple(name_list(config.getActiveViews())),
     )
 
 
-def _names(value: object) -> list[str]:
+def name_list(value: object) -> list[str]:
     """A name list as OCIO returns it (a comma-separated string before 2.5, an iterator)."""
     if isinstance(value, str):
         return [v.strip() for v in value.split(",") if v.strip()]

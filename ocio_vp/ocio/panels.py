@@ -28,7 +28,6 @@ from ocio_vp.formats.panel_solution import PanelSolution
 from ocio_vp.formats.solution import Solution
 from ocio_vp.ocio.config import (
     DISPLAY,
-    FAMILY,
     IN_FRUSTUM,
     OUT_OF_FRUSTUM,
     VIEW_INNER,
@@ -37,13 +36,13 @@ from ocio_vp.ocio.config import (
     in_frustum_text,
     ocio_names,
     wall_chains,
+    wall_space,
 )
-from ocio_vp.ocio.description import ColourSpace, ConfigData, View, one
+from ocio_vp.ocio.description import ColourSpace, ConfigData, View
 from ocio_vp.ocio.matrix import format_matrix
 from ocio_vp.ocio.softclip import soft_clip_text
 from ocio_vp.ocio.viewing import set_categories
 from ocio_vp.ocio.wall import wall_outputs
-from ocio_vp.wall.encoding import WallEncoding
 
 __all__ = ["PanelOutputs", "add_panel_spaces", "panel_labels", "panel_outputs"]
 
@@ -139,23 +138,12 @@ def panel_outputs(solution: Solution, model: ModelFiles | None = None) -> PanelO
         wall = wall_outputs(view)  # this type's own linearity LUT and signal encoding
         files.update(wall.files)
         chains = wall_chains(view, wall.extra_wall_transforms or {}, model)
-        encoding = WallEncoding.of(wall.linearity).ocio_encoding
         names = _names(labels[name], panel.in_frustum)
         texts = _descriptions(solution, panel)
         roles = [(OUT_OF_FRUSTUM, "out_of_frustum")]
         roles += [(IN_FRUSTUM, "in_frustum")] if panel.in_frustum else []
         for role, key in roles:
-            there, back = chains[role]
-            spaces.append(
-                ColourSpace(
-                    names[key],
-                    f"{FAMILY}/LED Wall",
-                    texts[role],
-                    encoding,
-                    from_reference=one(there),
-                    to_reference=one(back),
-                )
-            )
+            spaces.append(wall_space(names[key], texts[role], wall.linearity, chains[role]))
             views.append((names[f"view_{key}"], names[key]))
         panels[name] = dataclasses.replace(panel, linearity=wall.linearity, ocio=names)
     return PanelOutputs(tuple(spaces), tuple(views), files, panels)

@@ -39,12 +39,12 @@ from ocio_vp.choices import CONTEXT_VARIABLE
 from ocio_vp.errors import InputError
 from ocio_vp.ocio.config import (
     DISPLAY,
-    FAMILY,
     POST_CORRECTION,
     POST_CORRECTION_COLORSPACE,
     REFERENCE,
 )
 from ocio_vp.ocio.description import (
+    FAMILY,
     ColourSpace,
     ConfigData,
     Look,
@@ -55,6 +55,7 @@ from ocio_vp.ocio.description import (
     colour_space_record,
     config_record,
     group,
+    name_list,
     transform_record,
 )
 from ocio_vp.ocio.viewing import (
@@ -179,10 +180,11 @@ def _renamed(transform: Transform, names: dict[str, str]) -> Transform:
     return dataclasses.replace(transform, params=params)
 
 
-def _environment_spaces(env: ShowEnvironment, aces_to_base: Transform) -> list[ColourSpace]:
-    """The environment's own colour spaces, converted from the base's reference."""
+def _environment_spaces(
+    env: ShowEnvironment, own: list[ColourSpace], aces_to_base: Transform
+) -> list[ColourSpace]:
+    """The environment's own colour spaces ``own``, converted from the base's reference."""
     to_base = _camera_to_reference(env, aces_to_base)
-    own = _own_spaces(config_record(env.config))
     names = {cs.name: environment_space(cs.name, env.name) for cs in own}
     spaces = []
     for cs in own:
@@ -240,9 +242,10 @@ def _overlay(base: OCIO.Config, environments: Sequence[ShowEnvironment]) -> Conf
     aces_to_base = _base_to_reference(base)
     shared: dict[str, ColourSpace] | None = None
     for env in environments:
-        own = {cs.name: cs for cs in _own_spaces(config_record(env.config))}
-        shared = own if shared is None else {k: v for k, v in shared.items() if k in own}
-        overlay.colour_spaces += _environment_spaces(env, aces_to_base)
+        own = _own_spaces(config_record(env.config))
+        names = {cs.name: cs for cs in own}
+        shared = names if shared is None else {k: v for k, v in shared.items() if k in names}
+        overlay.colour_spaces += _environment_spaces(env, own, aces_to_base)
     for name, template in (shared or {}).items():
         overlay.colour_spaces.append(_switched_space(name, template, aces, aces_to_base))
     q = _space_transform(POST_CORRECTION_COLORSPACE, REFERENCE)
@@ -335,13 +338,6 @@ def merge_by_api(base: OCIO.Config, overlay: OCIO.Config) -> OCIO.Config:
     return merged
 
 
-def _names(value) -> list[str]:
-    """A name list as OCIO returns it (a comma-separated string in 2.2, an iterator later)."""
-    if isinstance(value, str):
-        return [v.strip() for v in value.split(",") if v.strip()]
-    return list(value)
-
-
 def _view_target(config: OCIO.Config, display: str, view: str) -> tuple[str, str]:
     """(view transform, display colour space) of a view, shared views resolved."""
     space = config.getDisplayViewColorSpaceName(display, view)
@@ -417,16 +413,16 @@ def build_show_config(
         f"The context variable {CONTEXT_VARIABLE} picks the environment (default "
         f"{environments[0].name}); each also has its own colour spaces, '<name> [<environment>]'."
     )
-    displays = _names(base_config.getActiveDisplays()) or list(base_config.getDisplaysAll())
+    displays = name_list(base_config.getActiveDisplays()) or list(base_config.getDisplaysAll())
     footage = _footage_views(merged, [d for d in displays if d != DISPLAY])
-    active_views = _names(base_config.getActiveViews())
+    active_views = name_list(base_config.getActiveViews())
     if active_views:
         led = [v for v in overlay.getViews(DISPLAY) if v not in active_views]
         merged.setActiveViews(", ".join([*active_views, *dict.fromkeys(footage), *led]))
-    if _names(base_config.getActiveDisplays()):
+    if name_list(base_config.getActiveDisplays()):
         merged.setActiveDisplays(", ".join([*displays, DISPLAY]))
     # the base may list inactive names it does not define (OCIO logs each one on every load)
-    inactive = _names(merged.getInactiveColorSpaces())
+    inactive = name_list(merged.getInactiveColorSpaces())
     merged.setInactiveColorSpaces(", ".join(n for n in inactive if merged.getColorSpace(n)))
     merged.validate()
     return merged

@@ -36,6 +36,7 @@ from ocio_vp.ocio.description import (
     View,
     ViewTransform,
     clamp,
+    colour_space,
     colour_space_record,
     group,
     transform_record,
@@ -101,7 +102,7 @@ def footage_to_reference(footage: ColourSpace) -> tuple[Transform, Transform | N
 
 
 def add_camera_log_spaces(
-    data: ConfigData, camera: str | None, *, reference: str, footage: str, family: str
+    data: ConfigData, camera: str | None, *, reference: str, footage: str
 ) -> list[str]:
     """Add ``Camera Native (LogC4)`` and ``Stage Footage (LogC4)`` (for ``camera``'s log curve)
     and ACEScct; returns the names added (none without a known camera gamut)."""
@@ -110,22 +111,22 @@ def add_camera_log_spaces(
         return []
     native_name, footage_name = camera_log_names(curve)
     encode = transform_record(log_transform(curve))
-    native = ColourSpace(
-        name=native_name,
-        family=f"{family}/Camera",
-        encoding="log",
-        description=f"{reference} encoded as {curve.name} ({camera}): footage after Q, in "
+    native = colour_space(
+        native_name,
+        f"{reference} encoded as {curve.name} ({camera}): footage after Q, in "
         "the camera's own log encoding (the DIT cart's log out).",
+        family="Camera",
+        encoding="log",
         from_reference=encode,
     )
     forward, inverse = footage_to_reference(data.colour_space(footage))
     decode = transform_record(log_transform(curve, OCIO.TRANSFORM_DIR_INVERSE))
-    stage = ColourSpace(
-        name=footage_name,
-        family=f"{family}/Camera",
-        encoding="log",
-        description=f"Footage recorded on the stage in {curve.name} ({camera}): converting it to "
+    stage = colour_space(
+        footage_name,
+        f"Footage recorded on the stage in {curve.name} ({camera}): converting it to "
         f"{reference} decodes it and applies the post-correction, exactly as {footage!r}.",
+        family="Camera",
+        encoding="log",
         to_reference=group([decode, forward]),
         from_reference=None if inverse is None else group([inverse, encode]),
     )
@@ -164,12 +165,12 @@ def add_acescct(data: ConfigData, aces_to_camera: np.ndarray) -> str:
     """ACEScct (OCIO's builtin curve and AP1 -> AP0) then ACES2065-1 -> the camera gamut."""
     source = _aces_config().getColorSpace(ACESCCT)
     to_ref = transform_record(source.getTransform(OCIO.COLORSPACE_DIR_TO_REFERENCE))
-    cs = ColourSpace(
-        name=ACESCCT,
-        family="ocio-vp/Working",
-        encoding="log",
-        description="ACEScct (ACES log for grading and compositing), as in OCIO's built-in ACES "
+    cs = colour_space(
+        ACESCCT,
+        "ACEScct (ACES log for grading and compositing), as in OCIO's built-in ACES "
         "CG config, then ACES2065-1 to the camera gamut.",
+        family="Working",
+        encoding="log",
         to_reference=group([to_ref, matrix_record(aces_to_camera)]),
     )
     data.colour_spaces.append(cs)
