@@ -120,12 +120,10 @@ class _DeferredModule(types.ModuleType):
 
 
 def _defer_colour_plotting() -> None:
-    """colour-science's ``__init__`` (0.4.x) imports ``colour.plotting``, and with it
-    matplotlib's pyplot: ~30% of ``import colour``, which every solve pays for ΔE2000 and
-    its camera data; ocio_vp never plots with it (the report draws its own SVG). Until
-    something uses ``colour.plotting``, a stand-in takes its place; the first attribute read
-    from it imports the real one. Nothing changes if colour is already imported. Called by
-    :func:`main` only: ``import ocio_vp`` in someone else's process leaves their modules alone."""
+    """colour-science's ``__init__`` (0.4.x) imports ``colour.plotting`` and with it matplotlib's
+    pyplot, which ocio_vp never uses through colour: a stand-in takes its place until the first
+    attribute read from it imports the real one. Called by :func:`main` only, so ``import
+    ocio_vp`` in someone else's process leaves their modules alone."""
     name = "colour.plotting"
     if "colour" not in sys.modules and name not in sys.modules:
         sys.modules[name] = _DeferredModule(name)

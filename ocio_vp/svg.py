@@ -348,9 +348,8 @@ def subplot_boxes(
 
 def data_limits(values: Iterable[float], *, zero: bool = False) -> tuple[float, float]:
     """The finite values' range with 5% margins (from 0 when ``zero``: bars stand on it)."""
-    finite = np.asarray(
-        [v for v in np.ravel(np.asarray(values, dtype=np.float64)) if math.isfinite(v)]
-    )
+    flat = np.ravel(np.asarray(values, dtype=np.float64))
+    finite = flat[np.isfinite(flat)]
     low = float(finite.min()) if finite.size else 0.0
     high = float(finite.max()) if finite.size else 1.0
     if zero:
