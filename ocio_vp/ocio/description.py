@@ -1,15 +1,10 @@
 """A config as plain data, and the one function that turns it into an OpenColorIO config.
 
-In the manner of OpenColorIO-Config-ACES (its ``ConfigData`` and ``generate_config``): what
-goes into a config (roles, colour spaces with their transforms, displays, views, view
-transforms, named transforms, looks, search path, descriptions) is held in small frozen records
-that import nothing from OpenColorIO, so two descriptions compare with ``==`` and tests compare
-data; :func:`build` is the only place that calls PyOpenColorIO to make a config from them.
-
-A transform is a :class:`Transform`: its OCIO class name, its parameters by OCIO setter name
-(``Matrix``, ``Src``, ``MinInValue``, ...; an enum value as :class:`Enum`), its children (a
-group's) and its direction. :func:`transform_record` reads one back from an OCIO transform (for
-the transforms taken from OCIO's built-in ACES config and from configs the tool loads).
+As OpenColorIO-Config-ACES's ``ConfigData`` and ``generate_config``: what goes into a config is
+held in small records that import nothing from OpenColorIO (two descriptions compare with
+``==``); :func:`build` is the only place that makes a config from them. A :class:`Transform` is
+an OCIO class name, its parameters by setter name, a group's children and its direction;
+:func:`transform_record` reads one back from an OCIO transform.
 """
 
 from __future__ import annotations
@@ -68,8 +63,7 @@ class Transform:
         return dataclasses.replace(self, inverse=not self.inverse)
 
 
-#: Parameters each transform type carries, by OCIO getter/setter name. A parameter that may be
-#: unset is read only when OCIO says it is set (``_IS_SET``).
+#: Parameters each transform type carries, by OCIO getter/setter name (read where ``_IS_SET``).
 PARAMS: dict[str, tuple[str, ...]] = {
     "MatrixTransform": ("Matrix", "Offset"),
     "FileTransform": ("Src", "CCCId", "Interpolation"),
@@ -287,8 +281,7 @@ def transform_record(transform: OCIO.Transform) -> Transform:
 
 
 def colour_space_record(cs: OCIO.ColorSpace) -> ColourSpace:
-    """The record of an OCIO colour space (its name, family, encoding, description,
-    categories, data flag, reference side and both transforms)."""
+    """The record of an OCIO colour space."""
     import PyOpenColorIO as OCIO
 
     def get(direction):
@@ -396,9 +389,8 @@ def _add_view_transform(config: OCIO.Config, record: ViewTransform) -> None:
 
 
 def build(data: ConfigData, *, validate: bool = True) -> OCIO.Config:
-    """The OCIO config of ``data``, validated (a config that does not validate raises
-    ``PyOpenColorIO.Exception``: a bug, never expected). ``validate=False`` only for a part
-    that is merged into another config (which is validated then)."""
+    """The OCIO config of ``data``, validated (``PyOpenColorIO.Exception``: a bug) unless
+    ``validate=False`` (a part merged into another config, validated then)."""
     import PyOpenColorIO as OCIO
 
     config = OCIO.Config()
@@ -507,7 +499,7 @@ def config_record(config: OCIO.Config) -> ConfigData:
 
 
 def name_list(value: object) -> list[str]:
-    """A name list as OCIO returns it (a comma-separated string before 2.5, an iterator)."""
+    """A name list as OCIO returns it (a comma-separated string before 2.5, else an iterator)."""
     if isinstance(value, str):
         return [v.strip() for v in value.split(",") if v.strip()]
     return list(value)  # type: ignore[call-overload]

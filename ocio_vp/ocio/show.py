@@ -1,28 +1,18 @@
 """One config for a whole show: every environment's wall and footage spaces on a base config.
 
-``ocio-vp export SOLUTIONS... --target show`` puts every given environment into one config
-built on a base config (default: OCIO's built-in ACES CG config,
-:data:`~ocio_vp.ocio.viewing.ACES_CG_CONFIG`, written out so the file loads on its own). The
-base keeps its colour spaces, roles, displays and views; this adds
+``ocio-vp export SOLUTIONS... --target show`` keeps the base config (default: OCIO's built-in
+ACES CG config) and adds, as data (:func:`_overlay`):
 
-- per environment, every colour space of its own config in the families that belong to the
-  calibration (:data:`ENVIRONMENT_FAMILIES`: the wall spaces, whatever panel types there are,
-  ``Camera Native Linear``, ``Stage Footage`` and the camera's log spaces) as
-  ``<name> [<environment>]``, their transforms copied as they are (the post-correction and the
-  wall's LUT sidecars exactly as the environment's config carries them) after the conversion
-  from the base's reference to that environment's camera gamut (the environment config's own
-  ``aces_interchange`` conversion);
-- under the names the per-environment configs use (``LED Wall - Inner Frustum``, ``Stage
-  Footage``, ...), colour spaces that pick the environment from the context variable
-  :data:`CONTEXT_VARIABLE` (``VP_ENVIRONMENT``; default, in the config's ``environment``
-  section, the first environment): a ``ColorSpaceTransform`` to ``<name> [$VP_ENVIRONMENT]``;
-- the named transform ``Post-Correction Q``, the look ``Post-Correction Q Look`` and, on every
-  base display that has a view, a view of footage after Q; the ``LED Wall`` display.
+- per environment, the colour spaces of its own config in :data:`ENVIRONMENT_FAMILIES` as
+  ``<name> [<environment>]``, their transforms as they are after the base's reference ->
+  that environment's camera gamut;
+- under the per-environment names (``LED Wall - Inner Frustum``, ...), colour spaces that pick
+  the environment from the context variable :data:`CONTEXT_VARIABLE` (default the first);
+- the named transform ``Post-Correction Q``, its look, a footage-after-Q view on every base
+  display, and the ``LED Wall`` display.
 
-The base and this overlay are merged by OCIO's own config merging
-(``ConfigMergingHelpers.MergeConfigs``, OCIO 2.5+; the base is preferred wherever both define
-something) where the installed OCIO has it, and by the API otherwise (:func:`merge_by_api`,
-which gives the same config: ``tests/test_ocio_show.py``).
+The base and the overlay are merged by OCIO's own merging (2.5+; the base wins) where the
+installed OCIO has it, else by :func:`merge_by_api`, which gives the same config.
 """
 
 from __future__ import annotations
@@ -139,7 +129,7 @@ def _base_to_reference(base: OCIO.Config) -> Transform:
 
 
 def _record(cs: OCIO.ColorSpace) -> ColourSpace:
-    """The base's colour space as data; one whose transforms have no record is refused."""
+    """The base's colour space as data (InputError where a transform has no record)."""
     try:
         return colour_space_record(cs)
     except ValueError as error:
@@ -339,7 +329,6 @@ def merge_by_api(base: OCIO.Config, overlay: OCIO.Config) -> OCIO.Config:
 
 
 def _view_target(config: OCIO.Config, display: str, view: str) -> tuple[str, str]:
-    """(view transform, display colour space) of a view, shared views resolved."""
     space = config.getDisplayViewColorSpaceName(display, view)
     if space == OCIO.OCIO_VIEW_USE_DISPLAY_NAME:
         space = display
@@ -389,8 +378,8 @@ def build_show_config(
 ) -> OCIO.Config:
     """The show config of ``environments`` on ``base`` (see the module docstring).
 
-    ``use_merger``: True for OCIO's own merging, False for :func:`merge_by_api`, None for
-    OCIO's where the installed OCIO has it.
+    ``use_merger``: OCIO's merging (True), :func:`merge_by_api` (False), or OCIO's if it has
+    one (None).
 
     Raises
     ------
