@@ -1,9 +1,8 @@
 """The ``ocio-vp`` command: parses arguments and dispatches to :mod:`ocio_vp.commands`.
 
-User mistakes (:class:`ocio_vp.errors.InputError`), bad arguments and what the disk or the
-system did (disk full, read-only, permissions) end with one line on stderr and exit 2; a bug
-ends with one line and exit 1 (``OCIO_VP_TRACEBACK=1`` shows the traceback). Never a traceback
-for something the user or the disk did.
+User mistakes, bad arguments and what the disk or the system did end with one line on stderr
+and exit 2 (:func:`ocio_vp.errors.describe_failure`); a bug with one line and exit 1
+(``OCIO_VP_TRACEBACK=1`` shows the traceback).
 """
 
 from __future__ import annotations
