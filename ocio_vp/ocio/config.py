@@ -289,8 +289,11 @@ def config_data(
     )
     data.colour_spaces += _camera_spaces(solution.camera_colorspace)
     chains = wall_chains(solution, extra_wall_transforms or {}, model)
-    data.colour_spaces.append(_out_of_frustum_space(solution, chains[OUT_OF_FRUSTUM], origin))
-    data.colour_spaces.append(_in_frustum_space(solution, chains[IN_FRUSTUM], origin, model))
+    outer = f"M = [SL]^-1 {format_matrix(solution.M)}"
+    inner = _in_frustum_text(solution, model)
+    for name, inside, drive in ((OUT_OF_FRUSTUM, False, outer), (IN_FRUSTUM, True, inner)):
+        text = drive_description(inside, drive, solution.linearity, origin)
+        data.colour_spaces.append(wall_space(name, text, solution.linearity, chains[name]))
     _add_post_correction(data, solution, origin, model)
     camera_to_aces = _set_roles(data, solution.camera_colorspace)
     _add_displays(data, camera_to_aces)
@@ -350,14 +353,18 @@ def wall_space(
     )
 
 
-def _out_of_frustum_space(solution: Solution, chains: Chains, origin: str) -> ColourSpace:
-    return wall_space(
-        OUT_OF_FRUSTUM,
-        f"Panel drive for content OUTSIDE the camera frustum (lights the actors): M = [SL]^-1 "
-        f"{format_matrix(solution.M)}{soft_clip_text(solution.linearity)}. {origin}.",
-        solution.linearity,
-        chains,
+def drive_description(
+    inside: bool, drive: str, linearity: Linearity | None, origin: str, panel: str = ""
+) -> str:
+    """The description of a wall colour space (of panel type ``panel``, "" for the wall's):
+    content inside or outside the frustum, the ``drive`` in words, the soft clip, ``origin``."""
+    of = f" of panel type {panel!r}" if panel else ""
+    where = (
+        "INSIDE the camera frustum (the in-camera background)"
+        if inside
+        else "OUTSIDE the camera frustum (lights the actors)"
     )
+    return f"Panel drive{of} for content {where}: {drive}{soft_clip_text(linearity)}. {origin}."
 
 
 def in_frustum_text(
@@ -401,18 +408,6 @@ def _in_frustum_text(solution: Solution, model: ModelFiles | None = None) -> str
         if offset_is_negligible(solution.black_level_offset, solution.SL):
             text += " - negligible (below 1e-5 of the wall's white), left out of this transform"
     return text
-
-
-def _in_frustum_space(
-    solution: Solution, chains: Chains, origin: str, model: ModelFiles | None = None
-) -> ColourSpace:
-    return wall_space(
-        IN_FRUSTUM,
-        f"Panel drive for content INSIDE the camera frustum (the in-camera background): "
-        f"{_in_frustum_text(solution, model)}{soft_clip_text(solution.linearity)}. {origin}.",
-        solution.linearity,
-        chains,
-    )
 
 
 def _add_post_correction(

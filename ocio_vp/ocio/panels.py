@@ -22,6 +22,7 @@ from ocio_vp.ocio.config import (
     VIEW_INNER,
     VIEW_OUTER,
     ModelFiles,
+    drive_description,
     in_frustum_text,
     ocio_names,
     wall_chains,
@@ -29,7 +30,6 @@ from ocio_vp.ocio.config import (
 )
 from ocio_vp.ocio.description import ColourSpace, ConfigData, View
 from ocio_vp.ocio.matrix import format_matrix
-from ocio_vp.ocio.softclip import soft_clip_text
 from ocio_vp.ocio.viewing import set_categories
 from ocio_vp.ocio.wall import wall_outputs
 
@@ -92,13 +92,10 @@ def _view(solution: Solution, panel: PanelSolution) -> Solution:
 def _descriptions(solution: Solution, panel: PanelSolution) -> dict[str, str]:
     origin = f"stage {solution.stage!r}, environment {solution.environment!r}"
     inner = in_frustum_text(panel.M, panel.N, panel.black_level_offset, panel.N_reason)
-    clip = soft_clip_text(panel.linearity)
+    outer = f"its own M = [SL]^-1 {format_matrix(panel.M)}"
     return {
-        OUT_OF_FRUSTUM: f"Panel drive of panel type {panel.name!r} for content OUTSIDE the "
-        f"camera frustum (lights the actors): its own M = [SL]^-1 {format_matrix(panel.M)}"
-        f"{clip}. {origin}.",
-        IN_FRUSTUM: f"Panel drive of panel type {panel.name!r} for content INSIDE the camera "
-        f"frustum (the in-camera background): {inner}{clip}. {origin}.",
+        OUT_OF_FRUSTUM: drive_description(False, outer, panel.linearity, origin, panel.name),
+        IN_FRUSTUM: drive_description(True, inner, panel.linearity, origin, panel.name),
     }
 
 
