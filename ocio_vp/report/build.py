@@ -32,7 +32,6 @@ from ocio_vp.formats.records import json_object
 from ocio_vp.formats.solution import Solution
 from ocio_vp.formats.solution_inputs import solution_folders
 from ocio_vp.model.correction import (
-    PostCorrection,
     ProtectedCorrection,
     RootPolynomialCorrection,
     unprotected,
@@ -304,17 +303,11 @@ def _beyond_the_chart(solution: Solution) -> str:
     return text
 
 
-def _polynomial(correction: PostCorrection) -> RootPolynomialCorrection | None:
-    """The root-polynomial inside a correction (protected or not), else None."""
-    inner = unprotected(correction)
-    return inner if isinstance(inner, RootPolynomialCorrection) else None
-
-
 def _q_rows(solution: Solution) -> list[JsonObject]:
     """Q's matrix; for a root-polynomial Q, its coefficients too (what the config's LUTs and
     ``ocio-vp apply`` use) and the matrix named as the model's 3x3 fallback."""
-    polynomial = _polynomial(solution.correction)
-    if polynomial is None:
+    polynomial = unprotected(solution.correction)
+    if not isinstance(polynomial, RootPolynomialCorrection):
         return [_matrix_rows("Q", solution.Q, "post-correction of the footage (eq. 5)")]
     terms = root_polynomial_terms(polynomial.degree)
     model = _matrix_rows(
