@@ -280,13 +280,16 @@ def transform_record(transform: OCIO.Transform) -> Transform:
     return Transform(kind, tuple(params), children, inverse)
 
 
+def _optional_record(transform: OCIO.Transform | None) -> Transform | None:
+    return None if transform is None else transform_record(transform)
+
+
 def colour_space_record(cs: OCIO.ColorSpace) -> ColourSpace:
     """The record of an OCIO colour space."""
     import PyOpenColorIO as OCIO
 
     def get(direction):
-        transform = cs.getTransform(direction)
-        return None if transform is None else transform_record(transform)
+        return _optional_record(cs.getTransform(direction))
 
     return ColourSpace(
         name=cs.getName(),
@@ -437,33 +440,29 @@ def config_record(config: OCIO.Config) -> ConfigData:
     import PyOpenColorIO as OCIO
 
     every = (OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ALL)
-    named = []
-    for name in config.getNamedTransformNames(OCIO.NAMEDTRANSFORM_ALL):
-        nt = config.getNamedTransform(name)
-        forward = nt.getTransform(OCIO.TRANSFORM_DIR_FORWARD)
-        inverse = nt.getTransform(OCIO.TRANSFORM_DIR_INVERSE)
-        named.append(
-            NamedTransform(
-                name,
-                nt.getFamily(),
-                nt.getDescription(),
-                None if forward is None else transform_record(forward),
-                None if inverse is None else transform_record(inverse),
-                tuple(nt.getCategories()),
-            )
+    named = [
+        NamedTransform(
+            nt.getName(),
+            nt.getFamily(),
+            nt.getDescription(),
+            _optional_record(nt.getTransform(OCIO.TRANSFORM_DIR_FORWARD)),
+            _optional_record(nt.getTransform(OCIO.TRANSFORM_DIR_INVERSE)),
+            tuple(nt.getCategories()),
         )
-    looks = []
-    for look in config.getLooks():
-        inverse = look.getInverseTransform()
-        looks.append(
-            Look(
-                look.getName(),
-                look.getProcessSpace(),
-                transform_record(look.getTransform()),
-                look.getDescription(),
-                None if inverse is None else transform_record(inverse),
-            )
+        for nt in map(
+            config.getNamedTransform, config.getNamedTransformNames(OCIO.NAMEDTRANSFORM_ALL)
         )
+    ]
+    looks = [
+        Look(
+            look.getName(),
+            look.getProcessSpace(),
+            transform_record(look.getTransform()),
+            look.getDescription(),
+            _optional_record(look.getInverseTransform()),
+        )
+        for look in config.getLooks()
+    ]
     views = [
         View(
             display,
