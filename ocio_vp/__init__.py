@@ -4,10 +4,8 @@ Implements LeGendre, Lepicovsky & Debevec, "Jointly Optimizing Color Rendition a
 Backgrounds in an RGB Virtual Production Stage", DigiPro 2022,
 https://doi.org/10.1145/3543664.3543699.
 
-The public names below are imported on first use (PEP 562): ``import ocio_vp`` and every
-``ocio-vp`` command then load only what they use. ``ocio-vp apply``, for one, needs numpy,
-OpenColorIO and OpenImageIO but not colour-science, whose import (with the matplotlib and scipy
-it loads) took longer than post-correcting six 4K frames.
+The public names below are imported on first use (PEP 562), so ``import ocio_vp`` and every
+``ocio-vp`` command load only what they use.
 """
 
 from __future__ import annotations

@@ -1,9 +1,8 @@
 """The ``ocio-vp`` command: parses arguments and dispatches to :mod:`ocio_vp.commands`.
 
-User mistakes (:class:`ocio_vp.errors.InputError`), bad arguments and what the disk or the
-system did (disk full, read-only, permissions) end with one line on stderr and exit 2; a bug
-ends with one line and exit 1 (``OCIO_VP_TRACEBACK=1`` shows the traceback). Never a traceback
-for something the user or the disk did.
+User mistakes, bad arguments and what the disk or the system did end with one line on stderr
+and exit 2 (:func:`ocio_vp.errors.describe_failure`); a bug with one line and exit 1
+(``OCIO_VP_TRACEBACK=1`` shows the traceback).
 """
 
 from __future__ import annotations
@@ -120,12 +119,10 @@ class _DeferredModule(types.ModuleType):
 
 
 def _defer_colour_plotting() -> None:
-    """colour-science's ``__init__`` (0.4.x) imports ``colour.plotting``, and with it
-    matplotlib's pyplot: ~30% of ``import colour``, which every solve pays for ΔE2000 and
-    its camera data; ocio_vp never plots with it (the report draws its own SVG). Until
-    something uses ``colour.plotting``, a stand-in takes its place; the first attribute read
-    from it imports the real one. Nothing changes if colour is already imported. Called by
-    :func:`main` only: ``import ocio_vp`` in someone else's process leaves their modules alone."""
+    """colour-science's ``__init__`` (0.4.x) imports ``colour.plotting`` and with it matplotlib's
+    pyplot, which ocio_vp never uses through colour: a stand-in takes its place until the first
+    attribute read from it imports the real one. Called by :func:`main` only, so ``import
+    ocio_vp`` in someone else's process leaves their modules alone."""
     name = "colour.plotting"
     if "colour" not in sys.modules and name not in sys.modules:
         sys.modules[name] = _DeferredModule(name)

@@ -1,11 +1,8 @@
 """Names that left the public API, served for one more release with a DeprecationWarning.
 
-A module lists its old names in a table, ``name -> (replacement, value)``: ``replacement`` is
-what to use instead (in words, for the warning), ``value`` where the old name's value now
-lives, ``"package.module:name"``, or a function of no arguments returning it (either is
-imported only when the old name is used). ``module.__getattr__ =
-deprecated_names(__name__, table)`` (PEP 562) then serves them. :data:`REMOVED_IN` is the
-release that drops them.
+A module sets ``__getattr__ = deprecated_names(__name__, table)`` (PEP 562), the table mapping
+each old name to (what to use instead, in words; where its value lives, ``"module:name"``, or a
+function returning it), imported only when the old name is used.
 """
 
 from __future__ import annotations

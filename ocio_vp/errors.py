@@ -1,9 +1,7 @@
 """The one exception type for user mistakes, and bounded quoting of user values.
 
-Every problem a user can fix (a bad file, field or value) is raised as :class:`InputError`.
-The command line prints it on one line and exits with status 2; anything else is a bug.
-Messages quote user values only through :func:`excerpt`, so a 10 MB name or a YAML alias
-bomb becomes a short escaped excerpt, never a huge (or endless) line.
+Every problem a user can fix is an :class:`InputError`, printed on one line with exit status 2;
+user values are quoted through :func:`excerpt`, so a huge or endless value stays one short line.
 """
 
 from __future__ import annotations
@@ -80,8 +78,7 @@ class InputError(ValueError):
     key
         The key path inside that file, e.g. ``environments[2].target_chart[5]``.
 
-    Each part is made one line and clipped (the middle elided), so a message stays under
-    :data:`MAX_MESSAGE` characters whatever the input.
+    Each part is clipped to one line, the whole under :data:`MAX_MESSAGE` characters.
     """
 
     def __init__(self, problem: str, *, source: object = None, key: str | None = None) -> None:
@@ -97,13 +94,9 @@ class InputError(ValueError):
 
 
 def describe_failure(error: BaseException) -> tuple[int, str]:
-    """The exit status and one-line message for an exception that ended a command.
-
-    User mistakes and what the disk or the system did are status 2 (the user can act on
-    them): :class:`InputError`, ``OSError`` (disk full, read-only, permissions ...), running
-    out of memory, OpenColorIO refusing a config, a linear-algebra failure on extreme input.
-    Anything else is a bug in ocio-vp: status 1, with a hint to report it.
-    """
+    """The exit status and one-line message for an exception that ended a command: 2 for
+    what the user can act on (:class:`InputError`, ``OSError``, out of memory, OpenColorIO
+    refusing a config, a linear-algebra failure on extreme input), else 1 (a bug)."""
     if isinstance(error, InputError):
         return 2, str(error)
     if isinstance(error, OSError):

@@ -1,8 +1,7 @@
 """From a measurements file to one :class:`~ocio_vp.formats.solution.Solution` per environment.
 
-This is the orchestration of the paper's method (Section 3): beta and w_avg, M = [SL]^-1, Q by
-the chosen method (eq. 5), N = M Q^-1 (eq. 8) and the black-level offset (Section 3.4), plus
-the diagnostics that say whether the result can be trusted.
+The paper's method (Section 3): beta and w_avg, M = [SL]^-1, Q by the chosen method (eq. 5),
+N = M Q^-1 (eq. 8) and the black-level offset (Section 3.4), with the diagnostics.
 """
 
 from __future__ import annotations
@@ -125,8 +124,7 @@ class SolveOptions:
 
 
 def _assumed(measurements: Measurements, environment: Environment) -> list[str]:
-    """What the solve assumes for optional measurements the file does not give (stated in
-    ``diagnostics.assumed`` and on the terminal)."""
+    """What the solve assumes for optional measurements the file does not give."""
     from ocio_vp.correction.outliers import patch_name
 
     out = []
@@ -153,12 +151,8 @@ def solve_environment(
     options: SolveOptions | None = None,
     **changes: Any,
 ) -> Solution:
-    """Solve M, Q, N and the black-level offset for one environment.
-
-    ``options`` (default :class:`SolveOptions`) with ``changes`` applied: the same names as its
-    fields (``solve_environment(m, env, method="least-squares")``); any other name is a
-    TypeError.
-    """
+    """Solve M, Q, N and the black-level offset for one environment, with ``options`` (default
+    :class:`SolveOptions`) and ``changes`` to its fields (another name is a TypeError)."""
     options = dataclasses.replace(options or SolveOptions(), **changes)
     environment = _primary_environment(measurements, environment)
     clipped = _clipped_patches(measurements, environment)
@@ -266,7 +260,6 @@ def _lighting(measurements: Measurements, problem: QProblem, method: str) -> Fix
 
 
 def _environment_key(measurements: Measurements, environment: Environment, key: str) -> str:
-    """``environments[i].key``: where an environment's value sits in the measurements file."""
     index = [e.name for e in measurements.environments].index(environment.name)
     return f"environments[{index}].{key}"
 
@@ -303,56 +296,44 @@ def post_correction_problem(
     measurements: Measurements, environment: Environment, clipped: Sequence[int] = ()
 ) -> QProblem:
     """The post-correction problem of ``environment`` as the solve poses it: M = [SL]^-1,
-    beta, w_avg, the target; the ``clipped`` patches weigh 0."""
+    beta, w_avg, the target; the ``clipped`` patches weigh 0. With ``panels``: the first
+    in-frustum type's eq. 3, every other type's light as ``extra_light``."""
     weights = np.ones(measurements.n_patches)
     weights[list(clipped)] = 0.0
+    extra = None
     if measurements.panels:
-        problem = _panels_problem(measurements, environment, weights)
-        return dataclasses.replace(problem, black_level=environment.black_level)
+        lights = panel_lights(measurements, environment_panel_w_avg(measurements, environment))
+        primary = next(light for light in lights if light.panel.in_frustum)
+        SL, SRL, beta, M = primary.panel.SL, primary.panel.SRL, primary.beta, primary.M
+        w_avg, extra = primary.w_avg, other_panels_light(lights, primary.name)
+    else:
+        SL, SRL, beta = measurements.SL, measurements.SRL, stage_beta(measurements)
+        M = solve_M(measurements.SL, source=measurements.source)
+        w_avg = environment_w_avg(measurements, environment)
     return QProblem(
-        SL=measurements.SL,
-        SRL=measurements.SRL,
-        beta=stage_beta(measurements),
-        M=solve_M(measurements.SL, source=measurements.source),
-        w_avg=environment_w_avg(measurements, environment),
+        SL=SL,
+        SRL=SRL,
+        beta=beta,
+        M=M,
+        w_avg=w_avg,
         target=environment.target_chart,
         white_patch=measurements.stage.white_patch,
         weights=weights,
         white_reflectance=measurements.stage.white_reflectance,
+        extra_light=extra,
         black_level=environment.black_level,
     )
 
 
 def _primary_environment(measurements: Measurements, environment: Environment) -> Environment:
-    """With ``panels``: the environment as its first in-frustum type sees it (that type's
-    w_avg and black level as the environment's), so the solve's single-wall steps apply."""
+    """With ``panels``: the environment as its first in-frustum type sees it (its w_avg and
+    black level), so the single-wall steps apply."""
     if not measurements.panels:
         return environment
     primary = primary_panel(measurements.panels).name
     w_avg = None if environment.panel_w_avg is None else environment.panel_w_avg[primary]
     black = (environment.panel_black_level or {}).get(primary)
     return dataclasses.replace(environment, w_avg=w_avg, black_level=black)
-
-
-def _panels_problem(
-    measurements: Measurements, environment: Environment, weights: np.ndarray
-) -> QProblem:
-    """Eq. 5 on a stage of several panel types: the first in-frustum type's eq. 3, plus every
-    other type's light (:mod:`ocio_vp.calibration.panels`) as ``extra_light``."""
-    lights = panel_lights(measurements, environment_panel_w_avg(measurements, environment))
-    primary = next(light for light in lights if light.panel.in_frustum)
-    return QProblem(
-        SL=primary.panel.SL,
-        SRL=primary.panel.SRL,
-        beta=primary.beta,
-        M=primary.M,
-        w_avg=primary.w_avg,
-        target=environment.target_chart,
-        white_patch=measurements.stage.white_patch,
-        weights=weights,
-        white_reflectance=measurements.stage.white_reflectance,
-        extra_light=other_panels_light(lights, primary.name),
-    )
 
 
 def _solve_panels(
@@ -367,9 +348,8 @@ def _solve_panels(
     offset: np.ndarray | None,
     linearity: Linearity | None,
 ) -> tuple[dict[str, PanelSolution], PanelsNotes, list[str]]:
-    """solution.json's ``panels`` block, the diagnostics' and the warnings: every type's M,
-    N and offset for the in-frustum ones (the first one's are the top-level ones), each
-    type's share of the light, and how the in-frustum types match in camera."""
+    """solution.json's ``panels`` block (every type's M; N and offset in frustum), the
+    diagnostics' (shares of the light, in-camera match) and the warnings."""
     primary = primary_panel(measurements.panels).name
     lights = panel_lights(measurements, environment_panel_w_avg(measurements, environment))
     blacks = dict(environment.panel_black_level or {})
@@ -411,8 +391,7 @@ def _solve_panels(
 
 
 def _type_linearity(measurements: Measurements, index: int) -> Linearity | None:
-    """A panel type's ``linearity`` block from its own ramps (None without ramps and without
-    an ``encoding`` of its own, which it records as ``wall_encoding``)."""
+    """A panel type's ``linearity`` from its own ramps and ``encoding`` (None without either)."""
     from ocio_vp.wall.linearity import fit_linearity
 
     panel = measurements.panels[index]
@@ -445,8 +424,8 @@ def _located(error: InputError, measurements: Measurements, environment: Environ
 def _screen(
     problem: QProblem, measurements: Measurements, environment: Environment, keep_all: bool
 ) -> tuple[QProblem, list[Inconsistency]]:
-    """Check the chart (guards every method relies on), then exclude the patches inconsistent
-    with the rest unless ``keep_all``; a white patch that sets w_avg is refused instead."""
+    """Check the chart, then exclude the patches inconsistent with the rest unless ``keep_all``
+    (a white patch that sets w_avg is refused instead)."""
     try:
         check_problem(problem)
         if keep_all:
@@ -476,9 +455,9 @@ def with_skin(
     spectra: StageSpectra | None = None,
     environment: str = "",
 ) -> QProblem:
-    """``problem`` with its skin samples (:mod:`ocio_vp.correction.skin`) for the patches it
-    fits: the ``named`` skin patches; else virtual skin on a ColorChecker 24 (with the stage's
-    ``spectra``, skin computed from them too); else the patches of skin colour."""
+    """``problem`` with its skin samples (:mod:`ocio_vp.correction.skin`): the ``named`` skin
+    patches, else virtual skin on a ColorChecker 24 (and from the stage's ``spectra``), else
+    the patches of skin colour."""
     active = problem.fit_weights > 0
     target = np.asarray(problem.target, dtype=np.float64)
     skin = None
@@ -500,9 +479,8 @@ def _fit(
     priority: str = DEFAULT_PRIORITY,
     guard: Callable[[PostCorrection], PostCorrection] | None = None,
 ) -> QFit:
-    """Q by ``method`` (skin first with ``priority="skin"``, judged against the default
-    through ``guard``, the emitter guard the solve will wrap it in); a bad chart is reported at
-    its place in the measurements file."""
+    """Q by ``method`` (skin first with ``priority="skin"``, judged through the emitter
+    ``guard``); a bad chart is reported at its place in the measurements file."""
     if priority == "skin" and method != "auto":
         in_file = environment.priority is not None
         raise InputError(
@@ -531,12 +509,9 @@ def _charts(
     offset: np.ndarray | None,
     environment: Environment,
 ) -> Charts:
-    """Per-patch camera RGB, for reports and the errors.
-
-    The target p_j, the lit chart under M alone (baseline) and after Q, and the chart shown
-    in-frustum as the camera records it (baseline: through M, no Q; ours: through N and the
-    offset, then Q). A non-linear Q shows content through ``M Q^-1(c)``, as the config does.
-    """
+    """Per-patch camera RGB: the target, the lit chart under M (baseline) and after Q, and the
+    chart shown in frustum (baseline: through M; ours: N and the offset, or ``M Q^-1(c)`` for a
+    non-linear Q as the config does, then Q)."""
     baseline = problem.predicted
     lit = baseline if fit.M is None else dataclasses.replace(problem, M=M).predicted
     content, matrix = environment.target_chart, problem.M if N is None else N
@@ -565,8 +540,7 @@ def _charts(
 
 
 def _extrapolation(problem: QProblem, correction: PostCorrection) -> Extrapolation:
-    """How the post-correction behaves beyond the chart (:mod:`ocio_vp.correction.extrapolation`),
-    against the paper's least squares on the same patches."""
+    """The post-correction beyond the chart against least squares on the same patches."""
     X, P, w = problem.predicted, np.asarray(problem.target, dtype=np.float64), problem.fit_weights
     return extrapolation(
         correction,
@@ -609,8 +583,6 @@ def _diagnostics(
     ]
     if n_reason:
         warnings.append(f"N not solved: {n_reason}")
-    # M w_avg below zero (light outside the LEDs' gamut) is a note, not a warning: the
-    # terminal says it from ``out_of_frustum_negative_channels`` (commands/summary.py).
     method = options.method
     stability, stability_warnings = stability_diagnostics(
         problem,
@@ -627,7 +599,6 @@ def _diagnostics(
         if fit.cross_validated_error is None and method in CLOSED_FORM_METHODS
         else None,
     )
-    # A target chart synthesized by ``ocio-vp target-chart`` is recorded, with its warnings.
     synthesized = environment.synthesized
     synthesized_warnings = [] if synthesized is None else synthesis_warnings(synthesized)
     return Diagnostics(

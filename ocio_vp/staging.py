@@ -1,20 +1,14 @@
 """Write outputs all at once or not at all, never over an input or a file ocio-vp did not write.
 
 - Files are written into a hidden staging folder beside the destination and renamed into place
-  only when everything succeeded, so a failure never leaves a half-written output folder.
-- Every folder ocio-vp publishes carries a marker file, :data:`MARKER`, listing the files it
-  wrote. An existing folder is replaced only if it is empty or carries the marker and holds
-  nothing else: a user's folder, or a user's file added to an output folder, stops the run
-  with a one-line error saying what to move.
-- A single output file (a measurements file) is replaced only if it starts with
-  :data:`FILE_SIGNATURE` (YAML written by ocio-vp) or already holds the same bytes.
-- No output may be, or contain, an input of the same run (:func:`check_not_input`).
-- While a run writes into a folder it holds an exclusive lock on it; a second run writing into
-  the same folder fails at once instead of mixing its files with the first one's.
-- A run that is stopped (Ctrl-C, ``kill``, ``timeout``, a CPU-time limit) removes its staging
-  folders: :func:`stop_on_signals` turns SIGTERM, SIGHUP and SIGXCPU into :class:`Interrupted`
-  as Python does SIGINT, so every ``finally`` runs, and a later signal no longer cuts the clean-up
-  short; staging folders still present at exit are removed too (``atexit``).
+  only when everything succeeded.
+- Every folder ocio-vp publishes carries :data:`MARKER`, listing the files it wrote; an existing
+  folder is replaced only if it is empty or holds nothing else.
+- A single output file is replaced only if it starts with :data:`FILE_SIGNATURE` or already
+  holds the same bytes; no output may be, or contain, an input (:func:`check_not_input`).
+- A run holds an exclusive lock on the folder it writes into (a second run fails at once).
+- A stopped run (Ctrl-C, ``kill``, ``timeout``, a CPU-time limit) removes its staging folders
+  (:func:`stop_on_signals`, and ``atexit``).
 """
 
 from __future__ import annotations
@@ -66,11 +60,8 @@ _MOVE_HINT = "move it away or choose another output"
 
 
 def default_mode(*, folder: bool = False) -> int:
-    """The mode a plain ``open``/``mkdir`` would give under the current umask.
-
-    :mod:`tempfile` creates private files (0600) and folders (0700); what we publish from them
-    must look like any other output of the user's.
-    """
+    """The mode a plain ``open``/``mkdir`` would give under the current umask (not
+    :mod:`tempfile`'s private one)."""
     mask = os.umask(0)
     os.umask(mask)
     return (0o777 if folder else 0o666) & ~mask
@@ -82,13 +73,8 @@ _LOCKS: dict[str, tuple[int, int]] = {}
 
 @contextlib.contextmanager
 def output_lock(folder: str | os.PathLike[str]) -> Iterator[None]:
-    """Hold an exclusive lock on the existing ``folder`` while writing into it.
-
-    Raises
-    ------
-    InputError
-        At once, when another process holds the lock (another ocio-vp run writing there).
-    """
+    """Hold an exclusive lock on the existing ``folder`` while writing into it; an InputError
+    at once when another process holds it."""
     key = os.path.realpath(folder)
     if fcntl is None or key in _LOCKS:
         fd, depth = _LOCKS.get(key, (-1, 0))
@@ -173,12 +159,8 @@ STOP_SIGNALS = tuple(
 
 @contextlib.contextmanager
 def stop_on_signals() -> Iterator[None]:
-    """Within this block a stop signal raises :class:`Interrupted` in the main thread (once:
-    later ones are ignored, so they cannot interrupt the clean-up the first one started).
-
-    Previous handlers are restored on exit. Outside the main thread it does nothing (Python
-    delivers signals to the main thread only).
-    """
+    """Within this block a stop signal raises :class:`Interrupted` in the main thread, once
+    (later ones cannot cut the clean-up short); nothing outside the main thread."""
     stopping: list[int] = []
 
     def handler(signum: int, frame: object) -> None:
@@ -212,11 +194,8 @@ def _remove_live_stages() -> None:
 
 @contextlib.contextmanager
 def staged_dir(parent: str | os.PathLike[str]) -> Iterator[Path]:
-    """Yield a fresh staging folder inside ``parent`` (created if needed); removed on exit.
-
-    ``parent`` is locked (:func:`output_lock`) meanwhile. Folders this call created are
-    removed again if nothing was published into them.
-    """
+    """Yield a fresh staging folder inside ``parent`` (created if needed, and locked
+    meanwhile); removed on exit, with the folders this call created if still empty."""
     parent = Path(parent)
     if os.path.lexists(parent) and not parent.is_dir():
         raise InputError(f"exists and is not a folder; {_MOVE_HINT}", source=parent)
@@ -276,10 +255,8 @@ def _nested_outputs(final: Path, present: list[str]) -> set[str]:
 
 
 def check_replaceable(final: str | os.PathLike[str]) -> None:
-    """Raise :class:`InputError` unless ``final`` is absent, empty or an ocio-vp output folder.
-
-    An output folder qualifies only if it holds nothing but the files its :data:`MARKER` lists.
-    """
+    """Raise :class:`InputError` unless ``final`` is absent, empty or an ocio-vp output folder
+    holding nothing but the files its :data:`MARKER` lists."""
     final = Path(final)
     if not os.path.lexists(final):
         return
@@ -331,11 +308,8 @@ def check_not_input(
 def publish_dirs(
     pairs: Sequence[tuple[Path, Path]], *, inputs: Iterable[str | os.PathLike[str]] = ()
 ) -> None:
-    """Move staged folders to their final places; check every one before moving any.
-
-    Each final folder must be replaceable (:func:`check_replaceable`) and no input; each staged
-    folder gets its :data:`MARKER` first.
-    """
+    """Move staged folders (each given its :data:`MARKER`) to their final places, after
+    checking every one is replaceable and no input."""
     check_not_input([final for _, final in pairs], inputs)
     for _, final in pairs:
         check_replaceable(final)
@@ -419,10 +393,8 @@ def check_file_replaceable(path: str | os.PathLike[str], data: bytes | None = No
 def write_output_file(
     path: str | os.PathLike[str], data: bytes | str, *, replace: bool = False
 ) -> None:
-    """:func:`write_file_atomically`, refusing to replace a file ocio-vp did not write.
-
-    ``replace`` skips that check (the user asked to replace the file, e.g. ``--force``).
-    """
+    """:func:`write_file_atomically`, refusing to replace a file ocio-vp did not write unless
+    ``replace``."""
     raw = data.encode("utf-8") if isinstance(data, str) else data
     if not replace:
         check_file_replaceable(path, raw)
@@ -439,10 +411,8 @@ def write_output_file(
 
 
 def write_file_atomically(path: str | os.PathLike[str], data: bytes | str) -> None:
-    """Write ``data`` to ``path`` through a temporary file and a rename.
-
-    A file that is replaced keeps its mode; a new one gets the umask's default.
-    """
+    """Write ``data`` to ``path`` through a temporary file and a rename, keeping a replaced
+    file's mode."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     try:

@@ -1,19 +1,9 @@
 """A small SVG writer for every figure ocio_vp draws (the report's, the take's contact sheet):
-shapes, text, embedded images, axes with nice ticks.
+shapes, text, embedded images, axes with nice ticks (against matplotlib: docs/report.md).
 
-Why not matplotlib: these figures are rectangles, circles, lines and text, which SVG states
-directly and a browser draws sharp at any zoom, in a small fraction of matplotlib's time
-(measured side by side in docs/report.md, "Figures: the SVG writer against matplotlib").
-
-Conventions:
-
-- One user unit is one point (1/72 inch), so font sizes are points as in the old figures;
-  the ``width``/``height`` attributes are the figure's inches times ``dpi`` in pixels (the
-  size the page shows it at), the ``viewBox`` the same figure in points.
-- Every number is rounded to 0.01 unit and every attribute is written in a fixed order, so
-  the same input gives a byte-identical file.
-- Every string that reaches the file goes through :func:`escape` (text and attribute values).
-- Colours are sRGB hex (:func:`hex_colour`): values are clipped to [0, 1] and rounded to 8 bits.
+One user unit is one point (``width``/``height`` are the figure's pixels at ``dpi``); numbers are
+rounded to 0.01 and attributes written in a fixed order, so the same input gives the same bytes;
+every string goes through :func:`escape`; colours are 8-bit sRGB hex (:func:`hex_colour`).
 """
 
 from __future__ import annotations
@@ -46,9 +36,8 @@ __all__ = [
 #: User units per inch: one unit is one point.
 PT = 72.0
 FONT = "DejaVu Sans, Verdana, Arial, Helvetica, sans-serif"
-#: One pass of str.translate: markup characters to entities, tab and line breaks to character
-#: references; characters XML 1.0 does not allow (a solution file may hold anything in a name)
-#: and lone surrogates (not encodable as UTF-8) dropped.
+#: For str.translate: markup to entities, tab and line breaks to character references,
+#: characters XML 1.0 forbids and lone surrogates dropped.
 _ESCAPES: dict[int, str | None] = {
     **dict.fromkeys([*range(0x00, 0x09), 0x0B, 0x0C, *range(0x0E, 0x20), 0xFFFE, 0xFFFF]),
     **dict.fromkeys(range(0xD800, 0xE000)),
@@ -69,11 +58,7 @@ _ESCAPES: dict[int, str | None] = {
 
 
 def escape(text: object) -> str:
-    """``text`` as XML character data or a double-quoted attribute value.
-
-    ``&``, ``<``, ``>``, ``"`` and ``'`` become entities, tab and line breaks character
-    references (an attribute keeps them); characters XML 1.0 forbids (other control
-    characters) and lone surrogates are dropped, so any string gives a well-formed file.
+    """``text`` as XML character data or a double-quoted attribute value (:data:`_ESCAPES`).
 
     >>> escape('a < b & "c"')
     'a &lt; b &amp; &quot;c&quot;'
@@ -113,9 +98,8 @@ def hex_colours(rgb: np.ndarray) -> list[str]:
 def nice_ticks(low: float, high: float, max_ticks: int = 7) -> np.ndarray:
     """Tick values in ``[low, high]`` at multiples of 1, 2 or 5 times a power of ten.
 
-    The step is the smallest such number giving at most ``max_ticks`` ticks in the range,
-    unless that leaves fewer than two (a range just under two large steps, ``max_ticks`` < 6):
-    then the next smaller step. An empty or non-finite range gives no ticks.
+    The smallest such step giving at most ``max_ticks`` ticks (the next smaller where that
+    leaves fewer than two); none for an empty or non-finite range.
 
     >>> nice_ticks(0, 10).tolist()
     [0.0, 2.0, 4.0, 6.0, 8.0, 10.0]
@@ -158,8 +142,7 @@ def tick_labels(ticks: np.ndarray) -> list[str]:
 
 @functools.cache
 def _name(key: str) -> str:
-    """A keyword argument as an attribute name: ``class_`` -> ``class``, ``data_patch`` ->
-    ``data-patch``."""
+    """A keyword argument as an attribute name (``class_`` -> ``class``, ``data_x`` -> ``data-x``)."""
     return key.rstrip("_").replace("_", "-")
 
 
@@ -205,7 +188,6 @@ class Canvas:
         """End the group :meth:`open` started."""
         self._parts.append(f"</{tag}>")
 
-    # The shapes write their geometry directly (the report draws a few thousand of them).
     def rect(self, x: float, y: float, w: float, h: float, **attributes: object) -> None:
         """A rectangle with its top left corner at (x, y)."""
         self._parts.append(
@@ -331,11 +313,8 @@ def subplot_boxes(
     wspace: float = 0.2,
     hspace: float = 0.2,
 ) -> list[tuple[float, float, float, float]]:
-    """Boxes ``(x, y, w, h)`` in reading order, placed like matplotlib's ``subplots_adjust``.
-
-    ``left``/``right``/``top``/``bottom`` are fractions of the figure measured from its left and
-    bottom edges; ``wspace``/``hspace`` the gaps as fractions of a box's width/height.
-    """
+    """Boxes ``(x, y, w, h)`` in reading order, placed like matplotlib's ``subplots_adjust``
+    (fractions of the figure from its left and bottom edges; gaps as fractions of a box)."""
     width = (right - left) * canvas.width / (columns + wspace * (columns - 1))
     height = (top - bottom) * canvas.height / (rows + hspace * (rows - 1))
     x0, y0 = left * canvas.width, (1 - top) * canvas.height
@@ -348,9 +327,8 @@ def subplot_boxes(
 
 def data_limits(values: Iterable[float], *, zero: bool = False) -> tuple[float, float]:
     """The finite values' range with 5% margins (from 0 when ``zero``: bars stand on it)."""
-    finite = np.asarray(
-        [v for v in np.ravel(np.asarray(values, dtype=np.float64)) if math.isfinite(v)]
-    )
+    flat = np.ravel(np.asarray(values, dtype=np.float64))
+    finite = flat[np.isfinite(flat)]
     low = float(finite.min()) if finite.size else 0.0
     high = float(finite.max()) if finite.size else 1.0
     if zero:

@@ -204,11 +204,8 @@ def _refuse_other_solutions(tasks: list) -> None:
 
 
 def _refuse_foreign(outputs: list[Path]) -> None:
-    """Before any work: an output name taken by a file ocio-vp did not write is an error.
-
-    Each frame checks its own output again when it runs (a pool or Dask worker may run it much
-    later): that second read of one header guards against a file put there in between.
-    """
+    """Before any work: an output name taken by a file ocio-vp did not write is an error (each
+    frame checks again when it runs)."""
     from ocio_vp.errors import InputError
     from ocio_vp.footage.sequences import foreign_output_reason, foreign_outputs
 
@@ -266,12 +263,8 @@ def _run_tasks(tasks: list, args: argparse.Namespace, workers: int) -> int:
 
 def write_failure_error(tasks: list, finished: set[int], failure) -> Exception:
     """The one-line error that ends a run whose output could not be written (``failure``, a
-    ``write-error`` FrameResult): the first frame not written, how many are done (complete,
-    kept) and that the same command continues from there.
-
-    Frames still being written when the run stopped count as done when their output is there
-    now with this run's post-correction (a frame is renamed into place only once complete).
-    """
+    ``write-error`` FrameResult): the first frame not written and how many are done (frames
+    still being written count where their output is there now, with this post-correction)."""
     import os
 
     from ocio_vp.errors import InputError
@@ -293,13 +286,9 @@ def write_failure_error(tasks: list, finished: set[int], failure) -> Exception:
 
 
 def check_free_space(tasks: list, *, margin: float = FREE_SPACE_MARGIN) -> None:
-    """Refuse, before any frame is written, a run the output disk clearly cannot hold.
-
-    The outputs are estimated at the size of their inputs (same format and compression);
-    outputs already there that will be skipped need nothing, and one that will be replaced
-    gives its space back. The run is refused when the free space is below ``margin`` times
-    the estimate (a post-correction changes how frames compress a little, not by half).
-    """
+    """Refuse, before any frame is written, a run the output disk clearly cannot hold: free
+    space below ``margin`` times the outputs' size, estimated at their inputs' (less what
+    replaced outputs give back; skipped ones need nothing)."""
     import os
     import shutil
 

@@ -32,6 +32,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import math
     import time
     from pathlib import Path
 
@@ -56,7 +57,8 @@ def run(args: argparse.Namespace) -> int:
         f"simulated stage: {stage.camera_name}, {stage.led_description}, {stage.chart_name}, "
         f"beta {stage.beta:.5f}, panel albedo {stage.panel_albedo}; the camera exposed so the "
         f"wall's full white is {stage.wall_gain:g}x the location's white (content white "
-        f"{_stops(stage.wall_gain)} below the wall's peak, as a stage engineer sets it up)"
+        f"{math.log2(stage.wall_gain):.3g} stops below the wall's peak, as a stage engineer sets "
+        "it up)"
     )
     print_summary(written)
     print(spectral_check(stage, written))
@@ -115,10 +117,3 @@ def spectral_check(stage, solutions) -> str:
         f"checked on the simulated spectra: the table's figures agree within {gap} "
         f"percentage points (largest: {where})"
     )
-
-
-def _stops(gain: float) -> str:
-    """``'2 stops'`` for a gain of 4 (at most two decimals)."""
-    import math
-
-    return f"{math.log2(gain):.3g} stops"

@@ -13,6 +13,9 @@ if TYPE_CHECKING:
 
 __all__ = ["add_parser", "run"]
 
+#: The plate options' defaults (a change warns that it has no effect without --plates).
+_DEFAULTS = {"vignetting": 0.05, "noise": 0.01, "seed": 0}
+
 
 class ListEnvironments(argparse.Action):
     """``--list-environments``: print them and exit before required options are checked."""
@@ -194,16 +197,18 @@ def _add_plate_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--vignetting",
         type=float,
-        default=0.05,
+        default=_DEFAULTS["vignetting"],
         help="with --plates: lens fall-off at the frame corners (removed by the flat fields)",
     )
     parser.add_argument(
         "--noise",
         type=float,
-        default=0.01,
+        default=_DEFAULTS["noise"],
         help="with --plates: relative sensor noise (std; plus 1e-4 absolute read noise)",
     )
-    parser.add_argument("--seed", type=int, default=0, help="with --plates: noise seed")
+    parser.add_argument(
+        "--seed", type=int, default=_DEFAULTS["seed"], help="with --plates: noise seed"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -221,11 +226,11 @@ def run(args: argparse.Namespace) -> int:
                 warn("simulate", f"--{name} has no effect without --plates")
     elif not (0 <= args.vignetting < 1 and 0 <= args.noise < 1):
         raise InputError("expected 0 <= value < 1", key="--vignetting/--noise")
-    if args.plates is not None:
-        _check_plates_folder(args.plates)
-        if args.sequence is not None:
-            from ocio_vp.staging import check_not_input
+    if args.plates is not None:  # checked before the measurements file is written
+        from ocio_vp.staging import check_not_input, check_replaceable
 
+        check_replaceable(args.plates)
+        if args.sequence is not None:
             check_not_input([args.plates], [args.sequence])
     stage = spectral_stage(**options)
     if args.ceiling_leds is not None:
@@ -317,9 +322,6 @@ def _film(measurements, args: argparse.Namespace) -> str:
     return str(final / name)
 
 
-_DEFAULTS = {"vignetting": 0.05, "noise": 0.01, "seed": 0}
-
-
 def _mixable_defaults(environments: dict, stage) -> dict:
     """The default environments without rgb_led_white when the stage's LEDs cannot mix a
     camera-neutral white (named with --environment, it is refused instead)."""
@@ -368,14 +370,6 @@ def _panel_measurements(wall, args: argparse.Namespace):
     if args.environment:
         environments = environments_from_args(args.environment)
     return simulate_panel_measurements(stage, environments)
-
-
-def _check_plates_folder(folder: str) -> None:
-    """--plates may name a new or empty folder, or one this command wrote before (checked
-    before anything is written, so a refusal leaves the measurements file unwritten too)."""
-    from ocio_vp.staging import check_replaceable
-
-    check_replaceable(folder)
 
 
 def _write_plates(measurements, args: argparse.Namespace):

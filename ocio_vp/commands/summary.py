@@ -1,16 +1,9 @@
 """What ``solve`` and ``demo`` print: one screen a stage engineer reads between takes.
 
-- the stage and the wall's signal, once (cond[SL] is the stage's, the encoding and peak the
-  wall's: they do not vary by environment);
-- one line of figures per environment, the model in a few words (the reasons are in
-  ``solution.json``'s ``diagnostics.model_reason`` and the report);
-- each distinct note once (facts of the stage no one can change on set, such as chart colours
-  outside the LEDs' gamut, are notes on stdout, not warnings);
-- every warning on stderr, one line each, the same warning of several environments once with
-  their names (``2>log`` catches them all).
-
-The figures come from :func:`ocio_vp.calibration.diagnostics.summary_errors`, as the report's
-do: one environment shows one set of numbers everywhere. Kept light (no numpy at import).
+The stage and the wall's signal once; one line of figures per environment
+(:func:`ocio_vp.calibration.diagnostics.summary_errors`, as the report's); each distinct note
+once on stdout; every warning once on stderr, with the environments it concerns. No numpy at
+import.
 """
 
 from __future__ import annotations
@@ -147,11 +140,7 @@ def _grouped(solutions: Sequence[Solution]) -> list[str]:
     for s in solutions:
         for warning in s.diagnostics.warnings:
             where.setdefault(str(warning), []).append(s.environment)
-    lines = []
-    for text, names in where.items():
-        scope = names[0] if len(names) == 1 else ", ".join(names)
-        lines.append(f"warning: {scope}: {text}")
-    return lines
+    return [f"warning: {', '.join(names)}: {text}" for text, names in where.items()]
 
 
 def summary_lines(solutions: Sequence[Solution]) -> tuple[list[str], list[str]]:
@@ -177,19 +166,17 @@ def summary_lines(solutions: Sequence[Solution]) -> tuple[list[str], list[str]]:
 
 def _skin_first_lines(solutions: Sequence[Solution]) -> list[str]:
     """With skin first, per environment: the background and the LEDs in frame beside the
-    default's (``diagnostics.skin.default``)."""
-    lines = []
-    for s in solutions:
-        skin = s.diagnostics.skin
-        if skin is not None and skin.default is not None:
-            lines.append(f"skin first: {s.environment}: {skin.default.words()}")
-    return lines
+    default's."""
+    return [
+        f"skin first: {s.environment}: {skin.default.words()}"
+        for s in solutions
+        if (skin := s.diagnostics.skin) is not None and skin.default is not None
+    ]
 
 
 def _gamut_notes(solutions: Sequence[Solution]) -> list[str]:
-    """The LEDs' gamut, once per fact with the environments it concerns: chart colours the
-    wall cannot show in-frustum, and light outside the gamut out of the frustum (from
-    ``diagnostics.in_frustum_drive_range`` and ``out_of_frustum_negative_channels``)."""
+    """The LEDs' gamut (chart colours the wall cannot show in frustum, light outside it out of
+    the frustum) and the assumptions, once per fact with the environments it concerns."""
     where: dict[str, list[str]] = {}
     for s in solutions:
         d = s.diagnostics

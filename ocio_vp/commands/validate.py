@@ -13,8 +13,7 @@ FAILED_STATUS = 3
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    # Not from ocio_vp.validation: that package loads numpy and the readers (~0.2 s of every
-    # ``ocio-vp`` start, ``--help`` included).
+    # Not from ocio_vp.validation: that package loads numpy and the readers at every start.
     from ocio_vp.choices import DEFAULT_VALIDATION_THRESHOLD as DEFAULT_THRESHOLD
 
     parser = subparsers.add_parser(

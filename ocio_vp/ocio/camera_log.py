@@ -1,13 +1,7 @@
-"""Cameras' log encodings as OCIO ``LogCameraTransform`` s, for the ``Stage Footage (LogC4)``-style
-colour spaces.
+"""Cameras' log encodings as OCIO ``LogCameraTransform`` s (``Stage Footage (LogC4)`` and alike).
 
-Each curve is the vendor's published one, written as OCIO's camera log: above ``linSideBreak``
-``y = logSideSlope * log_base(linSideSlope * x + linSideOffset) + logSideOffset``, below it a
-straight line of slope ``linearSlope`` through the same point. The names are colour-science's
-decoding names (``colour.LOG_DECODINGS``, as the capture file's ``encoding:`` and ``ocio-vp apply
---footage-encoding`` use them) with colour-science's default arguments, and
-``tests/test_ocio_camera_log.py`` checks every curve against colour-science's own
-``log_encoding`` / ``log_decoding`` over the whole range footage spans.
+Each curve is the vendor's published one in OCIO's camera-log terms, named by colour-science's
+decoding names (``colour.LOG_DECODINGS``) with its default arguments.
 
 References
 ----------

@@ -1,12 +1,8 @@
 """CLF text that does not depend on the OpenColorIO version that wrote it.
 
-OCIO's CLF writer marks its ``ProcessList`` differently by version: up to 2.5 with no XML
-namespace, from 2.6 with the SMPTE ST 2136-1 one. Readers differ too (colour-science's
-``colour-clf-io`` refuses the SMPTE files but reads ``urn:AMPAS:CLF:v3.0`` ones). Every CLF this
-package writes is therefore normalised to the Academy CLF v3 header, the most widely read form:
-``<ProcessList xmlns="urn:AMPAS:CLF:v3.0" compCLFversion="3.0" ...>``. The process nodes OCIO
-writes (Matrix, Range, LUT1D, LUT3D, Exponent, Log) are all CLF v3 nodes, so only the header
-changes.
+OCIO's CLF writer marks its ``ProcessList`` with no namespace up to 2.5 and with SMPTE ST
+2136-1's from 2.6, which some readers (``colour-clf-io``) refuse. Every CLF this package writes
+gets the Academy CLF v3 header instead; the nodes OCIO writes are all CLF v3 nodes.
 """
 
 from __future__ import annotations

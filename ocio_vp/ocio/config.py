@@ -1,23 +1,20 @@
-"""One OpenColorIO config per environment, built with the PyOpenColorIO API.
+"""One OpenColorIO config per environment, as data (:mod:`ocio_vp.ocio.description`).
 
 Layout (names are module constants so other tools can rely on them):
 
-- ``Camera Native Linear`` — the reference: the camera's own linear RGB, in which everything was
-  measured and solved. Content for the wall is expected here.
-- ``LED Wall - Outer Frustum`` — reference -> panel drive through M (lights the actors).
-- ``LED Wall - Inner Frustum`` — reference -> panel drive through N plus the black-level offset
-  (the background, pre-distorted for Q).
-- ``Stage Footage`` — what the camera recorded on the stage; converting it to the reference
-  applies Q (the post-correction). Q is also the NamedTransform ``Post-Correction Q``.
+- ``Camera Native Linear``: the reference, the camera's linear RGB everything was measured in;
+- ``LED Wall - Outer Frustum``: reference -> panel drive through M (lights the actors);
+- ``LED Wall - Inner Frustum``: through N plus the black-level offset (the background);
+- ``Stage Footage``: footage shot on the stage; to the reference applies Q (also the named
+  transform ``Post-Correction Q``);
 - an ``LED Wall`` display with ``Outer Frustum`` / ``Inner Frustum`` views, for hosts (Unreal
-  nDisplay) that pick display/views or colorspaces but not looks or named transforms.
+  nDisplay) that pick display/views but not looks or named transforms.
 
-``ocio_profile_version`` is 2.1 so that Unreal 5.1+ and other OCIO 2.1 hosts load it.
+Profile version 2.1, so that Unreal 5.1+ and other OCIO 2.1 hosts load it.
 """
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -27,9 +24,11 @@ import PyOpenColorIO as OCIO
 from ocio_vp.calibration.diagnostics import is_identity, offset_is_negligible
 from ocio_vp.calibration.equations import condition_text
 from ocio_vp.deprecation import deprecated_names
+from ocio_vp.formats.linearity import Linearity
 from ocio_vp.formats.solution import Solution
 from ocio_vp.model.correction import MAX_CONDITION_INVERSE, truncated_pseudo_inverse
 from ocio_vp.ocio.description import (
+    FAMILY,
     ColourSpace,
     ConfigData,
     NamedTransform,
@@ -37,6 +36,7 @@ from ocio_vp.ocio.description import (
     View,
     build,
     clamp,
+    colour_space,
     file,
     group,
     one,
@@ -81,7 +81,6 @@ DISPLAY = "LED Wall"
 VIEW_OUTER = "Outer Frustum"
 VIEW_INNER = "Inner Frustum"
 CONFIG_FILENAME = "config.ocio"
-FAMILY = "ocio-vp"
 
 
 def _wall_signal_encodings() -> dict[str, str]:
@@ -105,44 +104,20 @@ __getattr__ = deprecated_names(
 )
 
 
-#: Working spaces added when the stage names its camera gamut, and the OCIO role each takes.
-WORKING_SPACES = {
-    "ACES2065-1": "aces_interchange",
-    "ACEScg": None,
-    "ITU-R BT.709": None,
-}
+#: Working spaces added when the stage names its camera gamut (colour's name: the config's),
+#: and the OCIO role each takes.
 WORKING_SPACE_NAMES = {
     "ACES2065-1": "ACES2065-1",
     "ACEScg": "ACEScg",
     "ITU-R BT.709": "Linear Rec.709 (sRGB)",
 }
-
-
-def _colorspace(
-    name: str,
-    description: str,
-    *,
-    family: str,
-    encoding: str = "scene-linear",
-    to_reference: Transform | None = None,
-    from_reference: Transform | None = None,
-) -> ColourSpace:
-    """A colour space of this tool's family ``ocio-vp/<family>``."""
-    return ColourSpace(
-        name,
-        f"{FAMILY}/{family}",
-        description,
-        encoding,
-        to_reference=to_reference,
-        from_reference=from_reference,
-    )
+WORKING_SPACE_ROLES = {"ACES2065-1": "aces_interchange"}
 
 
 @dataclass(frozen=True)
 class ModelFiles:
-    """A non-linear post-correction's sidecars (:mod:`ocio_vp.ocio.bake`): the Q file, the
-    Q^-1 file (None where the correction has no inverse) and a sentence on how close they
-    come to the exact model (for the descriptions)."""
+    """A non-linear post-correction's sidecars (:mod:`ocio_vp.ocio.bake`): Q, Q^-1 (None
+    without an inverse) and how close they come to the model (for the descriptions)."""
 
     q: str
     q_inverse: str | None
@@ -153,19 +128,16 @@ Chains = tuple[list[Transform], list[Transform]]
 
 
 def wall_transforms(solution: Solution, model: ModelFiles | None = None) -> dict[str, Chains]:
-    """Reference -> drive transform chains (records) for the two wall colorspaces, each with
-    the chain of the other direction (drive -> reference) given explicitly.
+    """(reference -> drive, drive -> reference) chains of the two wall colour spaces, before
+    the wall's tail (:func:`wall_chains`).
 
     With ``model`` (a non-linear Q's sidecars) and N solved, the in-frustum drive is
-    ``[SL]^-1 Q^-1(c)`` (the Q^-1 file, then the calibrated ``[SL]^-1``, which is M except for
-    a method that lights with its own M) instead of the matrix N, and its other direction is
-    ``Q([SL] d)`` ([SL]^-1 inverted, then the Q file): OCIO never inverts a LUT file.
-
-    The wall's tail (linearity LUT, signal encoding) is appended by :func:`config_data`.
+    ``[SL]^-1 Q^-1(c)`` (the Q^-1 file, then the calibrated ``[SL]^-1``) and its other
+    direction ``Q([SL] d)``: OCIO never inverts a LUT file.
     """
     outer = [matrix_record(solution.M)]
     outer_back = [matrix_record(solution.M, inverse=True)]
-    # An offset the camera cannot see is left out (docs/stability.md); solution.json keeps it.
+    # an offset the camera cannot see is left out (docs/stability.md); solution.json keeps it
     offset = solution.black_level_offset
     if offset_is_negligible(offset, solution.SL):
         offset = None
@@ -185,22 +157,11 @@ def post_correction_transforms(
     solution: Solution, model: ModelFiles | None = None
 ) -> tuple[Transform, Transform, str]:
     """Q as transform records: (footage -> corrected, corrected -> footage, a note on the
-    second).
+    second), both explicit so that OCIO never inverts a chain (a LUT) by search.
 
-    Both directions are explicit, so a host asking for the other one (reference -> ``Stage
-    Footage``, the named transform inverted) never makes OCIO invert a chain by itself (it
-    inverts a LUT by search: minutes for a 65^3 cube):
-
-    - a 3x3 Q: the matrix, and its inverse;
-    - a Q too ill-conditioned to invert (cond(Q) above :data:`MAX_CONDITION_INVERSE`, the limit
-      for N), whose inverse would amplify a finite input to 1e17 and more: its truncated
-      pseudo-inverse (gain at most ``MAX_CONDITION_INVERSE / sigma_max``; content goes to the
-      smallest footage that Q maps to content's projection onto Q's range), a bounded stand-in;
-    - a non-linear Q: its ``model`` files (Q, Q^-1), or where the model has no inverse the
-      3x3's pseudo-inverse, marked as a stand-in that is not the model's inverse.
-
-    A non-linear Q without its files is refused: the config never silently carries a 3x3 where
-    ``ocio-vp apply`` runs the model.
+    The inverse is Q^-1 for a 3x3 Q, the baked Q^-1 for a non-linear one (``model``, required:
+    ValueError without it), and Q's truncated pseudo-inverse, a bounded stand-in said to be
+    one, where Q or the model has no inverse (cond(Q) above :data:`MAX_CONDITION_INVERSE`).
     """
     correction = solution.correction
     Q = correction.matrix
@@ -235,15 +196,9 @@ def post_correction_transforms(
 
 
 def wall_signal_tail(solution: Solution, extra: list[Transform]) -> list[Transform]:
-    """``extra`` (the wall's LUT and encoding) between explicit clamps.
-
-    Where the wall signal starts, drive below 0 is black and drive above the encoding's top
-    (1.0 for gamma 2.4 and sRGB, 10000 nits / peak for PQ) is clipped; an encoded signal
-    ends clamped to [0, 1], so the inverse direction never feeds a curve values outside its
-    domain. OCIO versions disagree outside it (the PQ builtin mirrors negative values from
-    OCIO 2.4 on, 2.2/2.3 clamp them), so the clamps make every version give the same numbers.
-    A linear wall without a LUT has no tail and stays affine (its Resolve cube is exact).
-    """
+    """``extra`` (the wall's LUT and encoding) between clamps to the encoding's domain (drive
+    in [0, top], signal in [0, 1]), outside which OCIO versions disagree (PQ below 0); empty
+    without ``extra`` (a linear wall stays affine)."""
     if not extra:
         return []
     top = WallEncoding.of(solution.linearity).signal_top
@@ -257,10 +212,9 @@ def wall_signal_tail(solution: Solution, extra: list[Transform]) -> list[Transfo
 
 
 def wall_tail(solution: Solution, extra: list[Transform]) -> Chains:
-    """(drive -> wall signal, wall signal -> drive): the soft clip when the solve asked for one
-    (``linearity.soft_clip``, :mod:`ocio_vp.ocio.softclip`), then :func:`wall_signal_tail`;
-    the other direction inverts the signal tail and then the soft clip, each explicitly. Both
-    empty for a linear wall without LUT or soft clip (its drive stays affine)."""
+    """(drive -> wall signal, wall signal -> drive): the soft clip the solve asked for
+    (:mod:`ocio_vp.ocio.softclip`), then :func:`wall_signal_tail`; both empty for a linear
+    wall without LUT or soft clip."""
     signal = wall_signal_tail(solution, extra)
     undo = [group(signal, inverse=True)] if signal else []
     knee = soft_clip_knee(solution.linearity)
@@ -273,8 +227,8 @@ def wall_tail(solution: Solution, extra: list[Transform]) -> Chains:
 def wall_chains(
     solution: Solution, extra: dict[str, list[Transform]], model: ModelFiles | None
 ) -> dict[str, Chains]:
-    """:func:`wall_transforms` with each wall colour space's tail (``extra``: its LUT and
-    encoding; :func:`wall_tail`) after it, and undone before the other direction."""
+    """:func:`wall_transforms` with each wall colour space's tail (:func:`wall_tail` of
+    ``extra``, its LUT and encoding) after it, undone before the other direction."""
     chains = wall_transforms(solution, model)
     for name, (there, back) in chains.items():
         tail, undo = wall_tail(solution, list(extra.get(name, [])))
@@ -290,8 +244,7 @@ def build_config(
     search_path: str | None = None,
     model: ModelFiles | None = None,
 ) -> OCIO.Config:
-    """The validated OCIO config of one solved environment: :func:`config_data` built by
-    :func:`ocio_vp.ocio.description.build`."""
+    """The validated OCIO config of :func:`config_data`."""
     return build(
         config_data(
             solution,
@@ -316,16 +269,11 @@ def config_data(
     solution
         The solved environment.
     extra_wall_transforms
-        Transform records appended (after the matrix) to the ``OUT_OF_FRUSTUM`` /
-        ``IN_FRUSTUM`` chains, e.g. the panel-linearity LUT and the wall signal encoding.
+        Records appended to each wall colour space's chain (its linearity LUT and encoding).
     search_path
         The config's search path for sidecar files (e.g. ``"luts"``).
     model
-        The LUT sidecars of a non-linear post-correction (:mod:`ocio_vp.ocio.bake`), used in
-        place of the matrices Q and N; required for one.
-
-    Every colorspace with a transform and the named transform get both directions explicitly
-    (OCIO never has to invert a LUT file by itself).
+        A non-linear post-correction's LUT sidecars, in place of the matrices Q and N.
 
     Raises
     ------
@@ -341,8 +289,11 @@ def config_data(
     )
     data.colour_spaces += _camera_spaces(solution.camera_colorspace)
     chains = wall_chains(solution, extra_wall_transforms or {}, model)
-    data.colour_spaces.append(_out_of_frustum_space(solution, chains[OUT_OF_FRUSTUM], origin))
-    data.colour_spaces.append(_in_frustum_space(solution, chains[IN_FRUSTUM], origin, model))
+    outer = f"M = [SL]^-1 {format_matrix(solution.M)}"
+    inner = _in_frustum_text(solution, model)
+    for name, inside, drive in ((OUT_OF_FRUSTUM, False, outer), (IN_FRUSTUM, True, inner)):
+        text = drive_description(inside, drive, solution.linearity, origin)
+        data.colour_spaces.append(wall_space(name, text, solution.linearity, chains[name]))
     _add_post_correction(data, solution, origin, model)
     camera_to_aces = _set_roles(data, solution.camera_colorspace)
     _add_displays(data, camera_to_aces)
@@ -364,7 +315,6 @@ def _add_displays(data: ConfigData, camera_to_aces: np.ndarray | None) -> None:
 
 
 def _origin(solution: Solution) -> str:
-    """Which stage, environment and measurements file a description speaks of."""
     origin = f"stage {solution.stage!r}, environment {solution.environment!r}"
     if solution.measurements_sha256:
         origin += (
@@ -375,40 +325,46 @@ def _origin(solution: Solution) -> str:
 
 
 def _camera_spaces(camera: str | None) -> list[ColourSpace]:
-    """The reference (camera native linear) and the raw data colorspace."""
     gamut_text = f" ({camera} primaries)" if camera else " (as measured; gamut not stated)"
-    reference = _colorspace(
+    reference = colour_space(
         REFERENCE,
         f"The camera's native linear RGB{gamut_text}: the space all calibration values were "
         "measured in. Content for the LED wall is expected here.",
         family="Camera",
     )
-    raw = _colorspace(RAW, "Data: no colour conversion.", family="Utility", encoding="data")
-    return [reference, dataclasses.replace(raw, is_data=True)]
+    raw = colour_space(
+        RAW, "Data: no colour conversion.", family="Utility", encoding="data", is_data=True
+    )
+    return [reference, raw]
 
 
-def _wall_space(name: str, description: str, solution: Solution, chains: Chains) -> ColourSpace:
+def wall_space(
+    name: str, description: str, linearity: Linearity | None, chains: Chains
+) -> ColourSpace:
     """A wall colour space: reference -> drive (``chains[0]``) and back, both explicit."""
     there, back = chains
-    return _colorspace(
+    return colour_space(
         name,
         description,
         family="LED Wall",
-        encoding=WallEncoding.of(solution.linearity).ocio_encoding,
+        encoding=WallEncoding.of(linearity).ocio_encoding,
         from_reference=one(there),
         to_reference=one(back),
     )
 
 
-def _out_of_frustum_space(solution: Solution, chains: Chains, origin: str) -> ColourSpace:
-    """The panel drive for content outside the camera frustum: M, then the wall's tail."""
-    return _wall_space(
-        OUT_OF_FRUSTUM,
-        f"Panel drive for content OUTSIDE the camera frustum (lights the actors): M = [SL]^-1 "
-        f"{format_matrix(solution.M)}{soft_clip_text(solution.linearity)}. {origin}.",
-        solution,
-        chains,
+def drive_description(
+    inside: bool, drive: str, linearity: Linearity | None, origin: str, panel: str = ""
+) -> str:
+    """The description of a wall colour space (of panel type ``panel``, "" for the wall's):
+    content inside or outside the frustum, the ``drive`` in words, the soft clip, ``origin``."""
+    of = f" of panel type {panel!r}" if panel else ""
+    where = (
+        "INSIDE the camera frustum (the in-camera background)"
+        if inside
+        else "OUTSIDE the camera frustum (lights the actors)"
     )
+    return f"Panel drive{of} for content {where}: {drive}{soft_clip_text(linearity)}. {origin}."
 
 
 def in_frustum_text(
@@ -419,8 +375,8 @@ def in_frustum_text(
     *,
     N_text: str | None = None,
 ) -> str:
-    """What an in-frustum drive is: ``N_text`` (default N = M Q^-1) or, N not solved, M and why,
-    plus the black-level offset. The wall's and every other panel type's description."""
+    """What an in-frustum drive is (the wall's and every panel type's): ``N_text`` (default
+    N = M Q^-1) or, N not solved, M and why; plus the black-level offset."""
     if N is None:
         text = f"N NOT SOLVED ({N_reason}); M is used instead, {format_matrix(M)}"
     else:
@@ -431,7 +387,6 @@ def in_frustum_text(
 
 
 def _in_frustum_text(solution: Solution, model: ModelFiles | None = None) -> str:
-    """What the wall's in-frustum drive is: N, or M when N was not solved, plus the offset."""
     N_text = None
     if solution.N is not None and model is not None:
         N_text = (
@@ -455,31 +410,14 @@ def _in_frustum_text(solution: Solution, model: ModelFiles | None = None) -> str
     return text
 
 
-def _in_frustum_space(
-    solution: Solution, chains: Chains, origin: str, model: ModelFiles | None = None
-) -> ColourSpace:
-    """The panel drive for the in-camera background: N (or M) and the offset, then the tail."""
-    return _wall_space(
-        IN_FRUSTUM,
-        f"Panel drive for content INSIDE the camera frustum (the in-camera background): "
-        f"{_in_frustum_text(solution, model)}{soft_clip_text(solution.linearity)}. {origin}.",
-        solution,
-        chains,
-    )
-
-
 def _add_post_correction(
     data: ConfigData,
     solution: Solution,
     origin: str,
     model: ModelFiles | None = None,
 ) -> None:
-    """Q twice: the ``Stage Footage`` colorspace and the ``Post-Correction Q`` named transform,
-    both directions explicit (:func:`post_correction_transforms`).
-
-    A non-linear Q comes as LUT sidecars (``model``); Q's matrix is then only its 3x3
-    approximation, printed for reference.
-    """
+    """Q twice: the ``Stage Footage`` colour space and the ``Post-Correction Q`` named
+    transform (a non-linear Q as its ``model`` sidecars; its matrix then only printed)."""
     q_identity = is_identity(solution.Q) and model is None
     reason = solution.diagnostics.model_reason
     q_text = (
@@ -492,7 +430,6 @@ def _add_post_correction(
             f"({model.q}; the matrix below is only its 3x3 approximation). {model.note} " + q_text
         )
     if q_identity:
-        # Kept under the same names so hosts' settings survive, but as no-op transforms.
         q_text = "Q is the identity: no post-correction is needed. " + q_text
     forward, inverse, inverse_text = post_correction_transforms(solution, model)
     if inverse_text:
@@ -500,7 +437,7 @@ def _add_post_correction(
     if q_identity:
         forward = inverse = group([])
     data.colour_spaces.append(
-        _colorspace(
+        colour_space(
             POST_CORRECTION_COLORSPACE,
             "Camera linear RGB as recorded on the stage; converting to the reference applies Q. "
             + q_text,
@@ -515,11 +452,9 @@ def _add_post_correction(
 
 
 def _set_roles(data: ConfigData, camera: str | None) -> np.ndarray | None:
-    """Every role on the reference, or on a working space when the camera gamut is known:
-    then also the interchange roles, ACEScct as ``compositing_log`` and ``color_timing``
-    (as in the ACES configs) and the camera's log spaces. Without a camera gamut there is no
-    log space to name, so ``compositing_log`` and ``color_timing`` are left out (a linear
-    space there would break the tools that grade or key in log).
+    """Every role on the reference; with the camera gamut known, the interchange roles, ACEScct
+    as ``compositing_log`` and ``color_timing`` (as the ACES configs) and the camera's log
+    spaces (without it, no log role: a linear space there breaks tools that key in log).
 
     Returns the reference -> ACES2065-1 matrix (None when the camera gamut is unknown)."""
     roles = {
@@ -538,31 +473,27 @@ def _set_roles(data: ConfigData, camera: str | None) -> np.ndarray | None:
         log = add_acescct(data, aces_to_camera)
         roles[OCIO.ROLE_COMPOSITING_LOG] = log
         roles[OCIO.ROLE_COLOR_TIMING] = log
-        add_camera_log_spaces(
-            data, camera, reference=REFERENCE, footage=POST_CORRECTION_COLORSPACE, family=FAMILY
-        )
+        add_camera_log_spaces(data, camera, reference=REFERENCE, footage=POST_CORRECTION_COLORSPACE)
         camera_to_aces = np.linalg.inv(aces_to_camera)
     data.roles.update(roles)
     return camera_to_aces
 
 
 def _add_working_spaces(data: ConfigData, camera: str) -> tuple[dict[str, str], np.ndarray]:
-    """Add ACES2065-1, ACEScg and linear Rec.709, converted to the camera gamut (CAT02).
-
-    Returns their roles and the ACES2065-1 -> camera matrix."""
+    """Add ACES2065-1, ACEScg, linear Rec.709 (CAT02 to the camera gamut) and CIE-XYZ-D65;
+    returns their roles and the ACES2065-1 -> camera matrix."""
     import colour
 
     target = colour.RGB_COLOURSPACES[camera]
     roles = {}
     aces_to_camera = np.eye(3)
-    for key, role in WORKING_SPACES.items():
+    for key, name in WORKING_SPACE_NAMES.items():
         source = colour.RGB_COLOURSPACES[key]
         to_camera = colour.matrix_RGB_to_RGB(source, target, chromatic_adaptation_transform="CAT02")
         if key == "ACES2065-1":
             aces_to_camera = np.asarray(to_camera, dtype=np.float64)
-        name = WORKING_SPACE_NAMES[key]
         data.colour_spaces.append(
-            _colorspace(
+            colour_space(
                 name,
                 f"{source.name} linear; to the reference ({camera}) by colour-science's "
                 "matrix_RGB_to_RGB with CAT02 adaptation.",
@@ -570,9 +501,8 @@ def _add_working_spaces(data: ConfigData, camera: str) -> tuple[dict[str, str], 
                 to_reference=matrix_record(to_camera),
             )
         )
-        if role:
-            roles[role] = name
-    # CIE XYZ (D65) lets OCIO 2.1+ hosts convert between this config and others.
+        if key in WORKING_SPACE_ROLES:
+            roles[WORKING_SPACE_ROLES[key]] = name
     d65 = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
     to_xyz = (
         colour.adaptation.matrix_chromatic_adaptation_VonKries(
@@ -581,7 +511,7 @@ def _add_working_spaces(data: ConfigData, camera: str) -> tuple[dict[str, str], 
         @ target.matrix_RGB_to_XYZ
     )
     data.colour_spaces.append(
-        _colorspace(
+        colour_space(
             "CIE-XYZ-D65",
             f"CIE 1931 XYZ, D65 white; from the reference by {camera}'s RGB-to-XYZ matrix with "
             "CAT02 adaptation to D65 (colour-science).",

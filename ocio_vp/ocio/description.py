@@ -1,15 +1,10 @@
 """A config as plain data, and the one function that turns it into an OpenColorIO config.
 
-In the manner of OpenColorIO-Config-ACES (its ``ConfigData`` and ``generate_config``): what
-goes into a config (roles, colour spaces with their transforms, displays, views, view
-transforms, named transforms, looks, search path, descriptions) is held in small frozen records
-that import nothing from OpenColorIO, so two descriptions compare with ``==`` and tests compare
-data; :func:`build` is the only place that calls PyOpenColorIO to make a config from them.
-
-A transform is a :class:`Transform`: its OCIO class name, its parameters by OCIO setter name
-(``Matrix``, ``Src``, ``MinInValue``, ...; an enum value as :class:`Enum`), its children (a
-group's) and its direction. :func:`transform_record` reads one back from an OCIO transform (for
-the transforms taken from OCIO's built-in ACES config and from configs the tool loads).
+As OpenColorIO-Config-ACES's ``ConfigData`` and ``generate_config``: what goes into a config is
+held in small records that import nothing from OpenColorIO (two descriptions compare with
+``==``); :func:`build` is the only place that makes a config from them. A :class:`Transform` is
+an OCIO class name, its parameters by setter name, a group's children and its direction;
+:func:`transform_record` reads one back from an OCIO transform.
 """
 
 from __future__ import annotations
@@ -23,6 +18,7 @@ if TYPE_CHECKING:
     import PyOpenColorIO as OCIO
 
 __all__ = [
+    "FAMILY",
     "ColourSpace",
     "ConfigData",
     "Enum",
@@ -33,6 +29,7 @@ __all__ = [
     "ViewTransform",
     "build",
     "clamp",
+    "colour_space",
     "colour_space_record",
     "file",
     "group",
@@ -66,8 +63,7 @@ class Transform:
         return dataclasses.replace(self, inverse=not self.inverse)
 
 
-#: Parameters each transform type carries, by OCIO getter/setter name. A parameter that may be
-#: unset is read only when OCIO says it is set (``_IS_SET``).
+#: Parameters each transform type carries, by OCIO getter/setter name (read where ``_IS_SET``).
 PARAMS: dict[str, tuple[str, ...]] = {
     "MatrixTransform": ("Matrix", "Offset"),
     "FileTransform": ("Src", "CCCId", "Interpolation"),
@@ -154,6 +150,32 @@ class ColourSpace:
     display_referred: bool = False
     aliases: tuple[str, ...] = ()
     bit_depth: Enum = Enum("BIT_DEPTH_UNKNOWN")
+
+
+#: The family every colour space this tool makes sits under (``ocio-vp/<family>``).
+FAMILY = "ocio-vp"
+
+
+def colour_space(
+    name: str,
+    description: str,
+    *,
+    family: str,
+    encoding: str = "scene-linear",
+    to_reference: Transform | None = None,
+    from_reference: Transform | None = None,
+    is_data: bool = False,
+) -> ColourSpace:
+    """A colour space of this tool's family ``ocio-vp/<family>``."""
+    return ColourSpace(
+        name,
+        f"{FAMILY}/{family}",
+        description,
+        encoding,
+        is_data=is_data,
+        to_reference=to_reference,
+        from_reference=from_reference,
+    )
 
 
 @dataclass(frozen=True)
@@ -258,14 +280,16 @@ def transform_record(transform: OCIO.Transform) -> Transform:
     return Transform(kind, tuple(params), children, inverse)
 
 
+def _optional_record(transform: OCIO.Transform | None) -> Transform | None:
+    return None if transform is None else transform_record(transform)
+
+
 def colour_space_record(cs: OCIO.ColorSpace) -> ColourSpace:
-    """The record of an OCIO colour space (its name, family, encoding, description,
-    categories, data flag, reference side and both transforms)."""
+    """The record of an OCIO colour space."""
     import PyOpenColorIO as OCIO
 
     def get(direction):
-        transform = cs.getTransform(direction)
-        return None if transform is None else transform_record(transform)
+        return _optional_record(cs.getTransform(direction))
 
     return ColourSpace(
         name=cs.getName(),
@@ -368,9 +392,8 @@ def _add_view_transform(config: OCIO.Config, record: ViewTransform) -> None:
 
 
 def build(data: ConfigData, *, validate: bool = True) -> OCIO.Config:
-    """The OCIO config of ``data``, validated (a config that does not validate raises
-    ``PyOpenColorIO.Exception``: a bug, never expected). ``validate=False`` only for a part
-    that is merged into another config (which is validated then)."""
+    """The OCIO config of ``data``, validated (``PyOpenColorIO.Exception``: a bug) unless
+    ``validate=False`` (a part merged into another config, validated then)."""
     import PyOpenColorIO as OCIO
 
     config = OCIO.Config()
@@ -417,33 +440,29 @@ def config_record(config: OCIO.Config) -> ConfigData:
     import PyOpenColorIO as OCIO
 
     every = (OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ALL)
-    named = []
-    for name in config.getNamedTransformNames(OCIO.NAMEDTRANSFORM_ALL):
-        nt = config.getNamedTransform(name)
-        forward = nt.getTransform(OCIO.TRANSFORM_DIR_FORWARD)
-        inverse = nt.getTransform(OCIO.TRANSFORM_DIR_INVERSE)
-        named.append(
-            NamedTransform(
-                name,
-                nt.getFamily(),
-                nt.getDescription(),
-                None if forward is None else transform_record(forward),
-                None if inverse is None else transform_record(inverse),
-                tuple(nt.getCategories()),
-            )
+    named = [
+        NamedTransform(
+            nt.getName(),
+            nt.getFamily(),
+            nt.getDescription(),
+            _optional_record(nt.getTransform(OCIO.TRANSFORM_DIR_FORWARD)),
+            _optional_record(nt.getTransform(OCIO.TRANSFORM_DIR_INVERSE)),
+            tuple(nt.getCategories()),
         )
-    looks = []
-    for look in config.getLooks():
-        inverse = look.getInverseTransform()
-        looks.append(
-            Look(
-                look.getName(),
-                look.getProcessSpace(),
-                transform_record(look.getTransform()),
-                look.getDescription(),
-                None if inverse is None else transform_record(inverse),
-            )
+        for nt in map(
+            config.getNamedTransform, config.getNamedTransformNames(OCIO.NAMEDTRANSFORM_ALL)
         )
+    ]
+    looks = [
+        Look(
+            look.getName(),
+            look.getProcessSpace(),
+            transform_record(look.getTransform()),
+            look.getDescription(),
+            _optional_record(look.getInverseTransform()),
+        )
+        for look in config.getLooks()
+    ]
     views = [
         View(
             display,
@@ -473,13 +492,13 @@ def config_record(config: OCIO.Config) -> ConfigData:
             for vt in config.getViewTransforms()
         ],
         views=views,
-        active_displays=tuple(_names(config.getActiveDisplays())),
-        active_views=tuple(_names(config.getActiveViews())),
+        active_displays=tuple(name_list(config.getActiveDisplays())),
+        active_views=tuple(name_list(config.getActiveViews())),
     )
 
 
-def _names(value: object) -> list[str]:
-    """A name list as OCIO returns it (a comma-separated string before 2.5, an iterator)."""
+def name_list(value: object) -> list[str]:
+    """A name list as OCIO returns it (a comma-separated string before 2.5, else an iterator)."""
     if isinstance(value, str):
         return [v.strip() for v in value.split(",") if v.strip()]
     return list(value)  # type: ignore[call-overload]

@@ -27,12 +27,8 @@ def matrix_transform(
 def matrix_record(
     matrix: np.ndarray, offset: Sequence[float] | np.ndarray | None = None, *, inverse: bool = False
 ) -> Transform:
-    """The MatrixTransform record (:mod:`ocio_vp.ocio.description`) of ``matrix @ rgb + offset``.
-
-    Values are written to 12 significant digits, and an entry below 1e-12 of the largest as 0:
-    the digits beyond are rounding of the solve (they differ between machines), and 1e-12 is
-    far below any camera's precision.
-    """
+    """The MatrixTransform record of ``matrix @ rgb + offset``, to 12 significant digits
+    (beyond, the digits are the solve's rounding and differ between machines)."""
     return description.matrix(*_m44(matrix, offset), inverse=inverse)
 
 
@@ -47,19 +43,21 @@ def _m44(
     return [float(v) for v in m44.ravel()], [float(v) for v in off]
 
 
-def _significant(values: np.ndarray) -> np.ndarray:
-    """``values`` to 12 significant digits, entries below 1e-12 of the largest set to 0."""
+def _zeroed(values: np.ndarray) -> np.ndarray:
+    """``values`` with the entries below 1e-12 of the largest (rounding) set to 0."""
     top = float(np.max(np.abs(values), initial=0.0))
-    values = np.where(np.abs(values) <= 1e-12 * top, 0.0, values)
+    return np.where(np.abs(values) <= 1e-12 * top, 0.0, values)
+
+
+def _significant(values: np.ndarray) -> np.ndarray:
+    """``values`` to 12 significant digits, rounding (:func:`_zeroed`) as 0."""
+    values = _zeroed(values)
     return np.array([float(f"{v:.12g}") for v in values.ravel()]).reshape(values.shape)
 
 
 def format_matrix(matrix: np.ndarray | None) -> str:
-    """A matrix as config descriptions print it: 6 digits; an entry below 1e-12 of the largest
-    is rounding (its digits differ between machines) and prints as 0."""
+    """A matrix as config descriptions print it: 6 digits, rounding (:func:`_zeroed`) as 0."""
     if matrix is None:
         return "none"
-    matrix = np.asarray(matrix, dtype=np.float64)
-    floor = 1e-12 * float(np.max(np.abs(matrix), initial=0.0))
-    matrix = np.where(np.abs(matrix) <= floor, 0.0, matrix)
+    matrix = _zeroed(np.asarray(matrix, dtype=np.float64))
     return "[" + "; ".join(" ".join(f"{v:.6g}" for v in row) for row in matrix) + "]"

@@ -1,22 +1,11 @@
 """The colour spaces of a stage's other panel types, beside the wall's.
 
-A stage of several panel types (solution.json's ``panels``) keeps the wall colour spaces of a
-single-type stage for its first in-frustum type (``LED Wall - Outer Frustum`` /
-``LED Wall - Inner Frustum``, built by :mod:`ocio_vp.ocio.config` from the top-level M and N)
-and gets, for every other type, its own:
-
-- ``LED <Type> - Outer Frustum``: reference -> that type's drive through its own M (every type
-  lights the actors where it is out of frame);
-- ``LED <Type> - Inner Frustum`` (in-frustum types only): through its own N and black-level
-  offset (or ``M_k Q^-1(c)`` for a non-linear Q: the config's Q^-1 LUT chain, then M_k);
-
-both directions given explicitly, as the wall's (:func:`ocio_vp.ocio.config.wall_transforms`);
-
-each followed by that type's own linearity LUT and signal encoding (the same tail as the wall's,
-:func:`ocio_vp.ocio.wall.wall_outputs` and :func:`ocio_vp.ocio.config.wall_tail`), and
-views ``<Type> Outer Frustum`` / ``<Type> Inner Frustum`` on the ``LED Wall`` display.
-``<Type>`` is the panel type's name in title case ("ceiling" -> "LED Ceiling - Outer Frustum"),
-or ``Panel <name>`` where two names would read alike or one would read "Wall".
+The first in-frustum type keeps the wall's colour spaces; every other type gets ``LED <Type> -
+Outer Frustum`` (through its own M) and, in frustum, ``LED <Type> - Inner Frustum`` (its own N
+and offset, or ``M_k Q^-1(c)`` for a non-linear Q), built as the wall's
+(:func:`ocio_vp.ocio.config.wall_chains`, :func:`ocio_vp.ocio.config.wall_space`) with its own
+linearity LUT and encoding, and views ``<Type> Outer Frustum`` / ``<Type> Inner Frustum`` on the
+``LED Wall`` display.
 """
 
 from __future__ import annotations
@@ -28,22 +17,21 @@ from ocio_vp.formats.panel_solution import PanelSolution
 from ocio_vp.formats.solution import Solution
 from ocio_vp.ocio.config import (
     DISPLAY,
-    FAMILY,
     IN_FRUSTUM,
     OUT_OF_FRUSTUM,
     VIEW_INNER,
     VIEW_OUTER,
     ModelFiles,
+    drive_description,
     in_frustum_text,
     ocio_names,
     wall_chains,
+    wall_space,
 )
-from ocio_vp.ocio.description import ColourSpace, ConfigData, View, one
+from ocio_vp.ocio.description import ColourSpace, ConfigData, View
 from ocio_vp.ocio.matrix import format_matrix
-from ocio_vp.ocio.softclip import soft_clip_text
 from ocio_vp.ocio.viewing import set_categories
 from ocio_vp.ocio.wall import wall_outputs
-from ocio_vp.wall.encoding import WallEncoding
 
 __all__ = ["PanelOutputs", "add_panel_spaces", "panel_labels", "panel_outputs"]
 
@@ -79,8 +67,8 @@ def _names(label: str, in_frustum: bool) -> dict[str, str]:
 class PanelOutputs:
     """What the other panel types add: colour spaces, (view, colour space) pairs for the
     ``LED Wall`` display, LUT sidecars (relative path -> text), and every type's
-    :class:`~ocio_vp.formats.panel_solution.PanelSolution` with its ``ocio`` names and
-    ``linearity`` (LUT file) filled in, as solution.json records them."""
+    :class:`~ocio_vp.formats.panel_solution.PanelSolution` with ``ocio`` and ``linearity``
+    filled in, as solution.json records them."""
 
     colorspaces: tuple[ColourSpace, ...]
     views: tuple[tuple[str, str], ...]
@@ -104,22 +92,16 @@ def _view(solution: Solution, panel: PanelSolution) -> Solution:
 def _descriptions(solution: Solution, panel: PanelSolution) -> dict[str, str]:
     origin = f"stage {solution.stage!r}, environment {solution.environment!r}"
     inner = in_frustum_text(panel.M, panel.N, panel.black_level_offset, panel.N_reason)
-    clip = soft_clip_text(panel.linearity)
+    outer = f"its own M = [SL]^-1 {format_matrix(panel.M)}"
     return {
-        OUT_OF_FRUSTUM: f"Panel drive of panel type {panel.name!r} for content OUTSIDE the "
-        f"camera frustum (lights the actors): its own M = [SL]^-1 {format_matrix(panel.M)}"
-        f"{clip}. {origin}.",
-        IN_FRUSTUM: f"Panel drive of panel type {panel.name!r} for content INSIDE the camera "
-        f"frustum (the in-camera background): {inner}{clip}. {origin}.",
+        OUT_OF_FRUSTUM: drive_description(False, outer, panel.linearity, origin, panel.name),
+        IN_FRUSTUM: drive_description(True, inner, panel.linearity, origin, panel.name),
     }
 
 
 def panel_outputs(solution: Solution, model: ModelFiles | None = None) -> PanelOutputs | None:
-    """The other panel types' colour spaces (None for a stage of one panel type).
-
-    ``model``: a non-linear Q's LUT chains (the config's sidecars), through whose Q^-1 the
-    in-frustum types show content (``M_k Q^-1(c)``), as the wall's inner frustum does.
-    """
+    """The other panel types' colour spaces (None for a stage of one panel type); ``model``:
+    a non-linear Q's sidecars, as for the wall's."""
     if not solution.panels:
         return None
     primary = next(p.name for p in solution.panels.values() if p.in_frustum)
@@ -136,36 +118,24 @@ def panel_outputs(solution: Solution, model: ModelFiles | None = None) -> PanelO
             panels[name] = dataclasses.replace(panel, linearity=solution.linearity, ocio=names)
             continue
         view = _view(solution, panel)
-        wall = wall_outputs(view)  # this type's own linearity LUT and signal encoding
+        wall = wall_outputs(view)
         files.update(wall.files)
         chains = wall_chains(view, wall.extra_wall_transforms or {}, model)
-        encoding = WallEncoding.of(wall.linearity).ocio_encoding
         names = _names(labels[name], panel.in_frustum)
         texts = _descriptions(solution, panel)
         roles = [(OUT_OF_FRUSTUM, "out_of_frustum")]
         roles += [(IN_FRUSTUM, "in_frustum")] if panel.in_frustum else []
         for role, key in roles:
-            there, back = chains[role]
-            spaces.append(
-                ColourSpace(
-                    names[key],
-                    f"{FAMILY}/LED Wall",
-                    texts[role],
-                    encoding,
-                    from_reference=one(there),
-                    to_reference=one(back),
-                )
-            )
+            spaces.append(wall_space(names[key], texts[role], wall.linearity, chains[role]))
             views.append((names[f"view_{key}"], names[key]))
         panels[name] = dataclasses.replace(panel, linearity=wall.linearity, ocio=names)
     return PanelOutputs(tuple(spaces), tuple(views), files, panels)
 
 
 def add_panel_spaces(data: ConfigData, outputs: PanelOutputs) -> None:
-    """Add the colour spaces and their views on the ``LED Wall`` display (and the categories
-    every colour space of the config has)."""
+    """Add the colour spaces, their views on the ``LED Wall`` display and their categories."""
     data.colour_spaces += outputs.colorspaces
     data.views += [View(DISPLAY, view, space) for view, space in outputs.views]
     if data.active_views:  # none listed: every view is active
         data.active_views = (*data.active_views, *(view for view, _ in outputs.views))
-    set_categories(data)  # as the wall's: menus that filter by category list them
+    set_categories(data)

@@ -1,28 +1,18 @@
 """One config for a whole show: every environment's wall and footage spaces on a base config.
 
-``ocio-vp export SOLUTIONS... --target show`` puts every given environment into one config
-built on a base config (default: OCIO's built-in ACES CG config,
-:data:`~ocio_vp.ocio.viewing.ACES_CG_CONFIG`, written out so the file loads on its own). The
-base keeps its colour spaces, roles, displays and views; this adds
+``ocio-vp export SOLUTIONS... --target show`` keeps the base config (default: OCIO's built-in
+ACES CG config) and adds, as data (:func:`_overlay`):
 
-- per environment, every colour space of its own config in the families that belong to the
-  calibration (:data:`ENVIRONMENT_FAMILIES`: the wall spaces, whatever panel types there are,
-  ``Camera Native Linear``, ``Stage Footage`` and the camera's log spaces) as
-  ``<name> [<environment>]``, their transforms copied as they are (the post-correction and the
-  wall's LUT sidecars exactly as the environment's config carries them) after the conversion
-  from the base's reference to that environment's camera gamut (the environment config's own
-  ``aces_interchange`` conversion);
-- under the names the per-environment configs use (``LED Wall - Inner Frustum``, ``Stage
-  Footage``, ...), colour spaces that pick the environment from the context variable
-  :data:`CONTEXT_VARIABLE` (``VP_ENVIRONMENT``; default, in the config's ``environment``
-  section, the first environment): a ``ColorSpaceTransform`` to ``<name> [$VP_ENVIRONMENT]``;
-- the named transform ``Post-Correction Q``, the look ``Post-Correction Q Look`` and, on every
-  base display that has a view, a view of footage after Q; the ``LED Wall`` display.
+- per environment, the colour spaces of its own config in :data:`ENVIRONMENT_FAMILIES` as
+  ``<name> [<environment>]``, their transforms as they are after the base's reference ->
+  that environment's camera gamut;
+- under the per-environment names (``LED Wall - Inner Frustum``, ...), colour spaces that pick
+  the environment from the context variable :data:`CONTEXT_VARIABLE` (default the first);
+- the named transform ``Post-Correction Q``, its look, a footage-after-Q view on every base
+  display, and the ``LED Wall`` display.
 
-The base and this overlay are merged by OCIO's own config merging
-(``ConfigMergingHelpers.MergeConfigs``, OCIO 2.5+; the base is preferred wherever both define
-something) where the installed OCIO has it, and by the API otherwise (:func:`merge_by_api`,
-which gives the same config: ``tests/test_ocio_show.py``).
+The base and the overlay are merged by OCIO's own merging (2.5+; the base wins) where the
+installed OCIO has it, else by :func:`merge_by_api`, which gives the same config.
 """
 
 from __future__ import annotations
@@ -39,12 +29,12 @@ from ocio_vp.choices import CONTEXT_VARIABLE
 from ocio_vp.errors import InputError
 from ocio_vp.ocio.config import (
     DISPLAY,
-    FAMILY,
     POST_CORRECTION,
     POST_CORRECTION_COLORSPACE,
     REFERENCE,
 )
 from ocio_vp.ocio.description import (
+    FAMILY,
     ColourSpace,
     ConfigData,
     Look,
@@ -55,6 +45,7 @@ from ocio_vp.ocio.description import (
     colour_space_record,
     config_record,
     group,
+    name_list,
     transform_record,
 )
 from ocio_vp.ocio.viewing import (
@@ -138,7 +129,7 @@ def _base_to_reference(base: OCIO.Config) -> Transform:
 
 
 def _record(cs: OCIO.ColorSpace) -> ColourSpace:
-    """The base's colour space as data; one whose transforms have no record is refused."""
+    """The base's colour space as data (InputError where a transform has no record)."""
     try:
         return colour_space_record(cs)
     except ValueError as error:
@@ -179,10 +170,11 @@ def _renamed(transform: Transform, names: dict[str, str]) -> Transform:
     return dataclasses.replace(transform, params=params)
 
 
-def _environment_spaces(env: ShowEnvironment, aces_to_base: Transform) -> list[ColourSpace]:
-    """The environment's own colour spaces, converted from the base's reference."""
+def _environment_spaces(
+    env: ShowEnvironment, own: list[ColourSpace], aces_to_base: Transform
+) -> list[ColourSpace]:
+    """The environment's own colour spaces ``own``, converted from the base's reference."""
     to_base = _camera_to_reference(env, aces_to_base)
-    own = _own_spaces(config_record(env.config))
     names = {cs.name: environment_space(cs.name, env.name) for cs in own}
     spaces = []
     for cs in own:
@@ -240,9 +232,10 @@ def _overlay(base: OCIO.Config, environments: Sequence[ShowEnvironment]) -> Conf
     aces_to_base = _base_to_reference(base)
     shared: dict[str, ColourSpace] | None = None
     for env in environments:
-        own = {cs.name: cs for cs in _own_spaces(config_record(env.config))}
-        shared = own if shared is None else {k: v for k, v in shared.items() if k in own}
-        overlay.colour_spaces += _environment_spaces(env, aces_to_base)
+        own = _own_spaces(config_record(env.config))
+        names = {cs.name: cs for cs in own}
+        shared = names if shared is None else {k: v for k, v in shared.items() if k in names}
+        overlay.colour_spaces += _environment_spaces(env, own, aces_to_base)
     for name, template in (shared or {}).items():
         overlay.colour_spaces.append(_switched_space(name, template, aces, aces_to_base))
     q = _space_transform(POST_CORRECTION_COLORSPACE, REFERENCE)
@@ -335,15 +328,7 @@ def merge_by_api(base: OCIO.Config, overlay: OCIO.Config) -> OCIO.Config:
     return merged
 
 
-def _names(value) -> list[str]:
-    """A name list as OCIO returns it (a comma-separated string in 2.2, an iterator later)."""
-    if isinstance(value, str):
-        return [v.strip() for v in value.split(",") if v.strip()]
-    return list(value)
-
-
 def _view_target(config: OCIO.Config, display: str, view: str) -> tuple[str, str]:
-    """(view transform, display colour space) of a view, shared views resolved."""
     space = config.getDisplayViewColorSpaceName(display, view)
     if space == OCIO.OCIO_VIEW_USE_DISPLAY_NAME:
         space = display
@@ -393,8 +378,8 @@ def build_show_config(
 ) -> OCIO.Config:
     """The show config of ``environments`` on ``base`` (see the module docstring).
 
-    ``use_merger``: True for OCIO's own merging, False for :func:`merge_by_api`, None for
-    OCIO's where the installed OCIO has it.
+    ``use_merger``: OCIO's merging (True), :func:`merge_by_api` (False), or OCIO's if it has
+    one (None).
 
     Raises
     ------
@@ -417,16 +402,16 @@ def build_show_config(
         f"The context variable {CONTEXT_VARIABLE} picks the environment (default "
         f"{environments[0].name}); each also has its own colour spaces, '<name> [<environment>]'."
     )
-    displays = _names(base_config.getActiveDisplays()) or list(base_config.getDisplaysAll())
+    displays = name_list(base_config.getActiveDisplays()) or list(base_config.getDisplaysAll())
     footage = _footage_views(merged, [d for d in displays if d != DISPLAY])
-    active_views = _names(base_config.getActiveViews())
+    active_views = name_list(base_config.getActiveViews())
     if active_views:
         led = [v for v in overlay.getViews(DISPLAY) if v not in active_views]
         merged.setActiveViews(", ".join([*active_views, *dict.fromkeys(footage), *led]))
-    if _names(base_config.getActiveDisplays()):
+    if name_list(base_config.getActiveDisplays()):
         merged.setActiveDisplays(", ".join([*displays, DISPLAY]))
     # the base may list inactive names it does not define (OCIO logs each one on every load)
-    inactive = _names(merged.getInactiveColorSpaces())
+    inactive = name_list(merged.getInactiveColorSpaces())
     merged.setInactiveColorSpaces(", ".join(n for n in inactive if merged.getColorSpace(n)))
     merged.validate()
     return merged

@@ -1,19 +1,11 @@
 """The wall drive's soft clip (:mod:`ocio_vp.wall.softclip`) as OCIO transform records, both ways.
 
 The curve ``f(d) = 1 - (1 - k) exp(-(d - k) / (1 - k))`` above the knee ``k``, the identity
-below, is exactly OCIO's ``LogCameraTransform`` (OCIO 2.0 on; a CLF ``Log`` node, styles
-``cameraLogToLin`` / ``cameraLinToLog``) run in its inverse direction with base e,
-``logSideSlope = -(1 - k)``, ``logSideOffset = k``, ``linSideSlope = -1 / (1 - k)``,
-``linSideOffset = 1 / (1 - k)`` and ``linSideBreak = k``: its log side is the drive, its lin side
-the clipped drive, ``log(linSideSlope k + linSideOffset) = log 1 = 0`` puts the break at drive
-``k``, and the linear segment OCIO derives below the break for C1 continuity has slope 1 and
-offset 0, the identity (negative drive included). An analytic operator rather than a Lut1D:
-no table, no shaper, no interpolation error, no domain to clamp negative drive to, and OCIO
-inverts it analytically too.
-
-Other direction (given explicitly): a ``RangeTransform`` caps the signal at
-:data:`~ocio_vp.wall.softclip.INVERSE_CAP` (``f`` never reaches 1.0; its inverse diverges
-there), then the same LogCameraTransform forward, ``d = k - (1 - k) ln((1 - y) / (1 - k))``.
+below, is exactly OCIO's ``LogCameraTransform`` inverted, with base e, ``logSideSlope =
+-(1 - k)``, ``logSideOffset = k``, ``linSideSlope = -1 / (1 - k)``, ``linSideOffset = 1 / (1 - k)``
+and ``linSideBreak = k`` (the linear segment OCIO derives below the break is the identity): no
+table, no interpolation error. The other direction caps the signal at
+:data:`~ocio_vp.wall.softclip.INVERSE_CAP` (the inverse diverges at 1), then runs it forward.
 """
 
 from __future__ import annotations

@@ -2,19 +2,12 @@
 
 A per-environment config carries, beside the wall colour spaces and ``Stage Footage``:
 
-- with the camera gamut known: ``ACEScct`` (the ``compositing_log`` and ``color_timing`` role,
-  as in the ACES configs), and the camera's log encoding (:mod:`ocio_vp.ocio.camera_log`) twice:
-  ``Camera Native (LogC4)`` (the reference, log-encoded: corrected footage as the camera's log)
-  and ``Stage Footage (LogC4)`` (footage as the camera recorded it on the stage, in log:
-  converting it to the reference decodes it and applies Q);
-- the look ``Post-Correction Q Look`` (Q, as ``Stage Footage`` carries it), so a monitor can
-  show footage after Q;
-- monitor displays taken from OCIO's built-in ACES CG config (``sRGB - Display``,
-  ``Rec.1886 Rec.709 - Display``, ``ST2084-P3-D65 - Display``: the names, display colour spaces
-  and ACES output transforms of that config), each with a view for content and a view for
-  footage after Q, beside the ``LED Wall`` display. Without a camera gamut no ACES output
-  transform applies: the views then show camera RGB un-tone-mapped as if it were Rec.709 and
-  say so.
+- with the camera gamut known: ``ACEScct`` (``compositing_log`` and ``color_timing``) and the
+  camera's log encoding twice, ``Camera Native (LogC4)`` (corrected footage in the camera's log)
+  and ``Stage Footage (LogC4)`` (footage recorded in it: to the reference decodes and applies Q);
+- the look ``Post-Correction Q Look``, so a monitor can show footage after Q;
+- :data:`MONITORS`, displays of OCIO's built-in ACES CG config, each with a view of content and
+  one of footage after Q (without a camera gamut: camera RGB un-tone-mapped as if Rec.709).
 """
 
 from __future__ import annotations
@@ -36,6 +29,7 @@ from ocio_vp.ocio.description import (
     View,
     ViewTransform,
     clamp,
+    colour_space,
     colour_space_record,
     group,
     transform_record,
@@ -92,8 +86,8 @@ def camera_log_names(curve: LogCurve) -> tuple[str, str]:
 
 
 def footage_to_reference(footage: ColourSpace) -> tuple[Transform, Transform | None]:
-    """``footage``'s conversion to the reference and its explicit inverse (None: OCIO's own):
-    the post-correction exactly as that colour space carries it."""
+    """``footage``'s conversion to the reference (Q, as it carries it) and its explicit
+    inverse (None: OCIO's own)."""
     to_ref, from_ref = footage.to_reference, footage.from_reference
     if to_ref is None and from_ref is not None:  # only the other direction: OCIO inverts it
         to_ref, from_ref = dataclasses.replace(from_ref, inverse=True), None
@@ -101,7 +95,7 @@ def footage_to_reference(footage: ColourSpace) -> tuple[Transform, Transform | N
 
 
 def add_camera_log_spaces(
-    data: ConfigData, camera: str | None, *, reference: str, footage: str, family: str
+    data: ConfigData, camera: str | None, *, reference: str, footage: str
 ) -> list[str]:
     """Add ``Camera Native (LogC4)`` and ``Stage Footage (LogC4)`` (for ``camera``'s log curve)
     and ACEScct; returns the names added (none without a known camera gamut)."""
@@ -110,22 +104,22 @@ def add_camera_log_spaces(
         return []
     native_name, footage_name = camera_log_names(curve)
     encode = transform_record(log_transform(curve))
-    native = ColourSpace(
-        name=native_name,
-        family=f"{family}/Camera",
-        encoding="log",
-        description=f"{reference} encoded as {curve.name} ({camera}): footage after Q, in "
+    native = colour_space(
+        native_name,
+        f"{reference} encoded as {curve.name} ({camera}): footage after Q, in "
         "the camera's own log encoding (the DIT cart's log out).",
+        family="Camera",
+        encoding="log",
         from_reference=encode,
     )
     forward, inverse = footage_to_reference(data.colour_space(footage))
     decode = transform_record(log_transform(curve, OCIO.TRANSFORM_DIR_INVERSE))
-    stage = ColourSpace(
-        name=footage_name,
-        family=f"{family}/Camera",
-        encoding="log",
-        description=f"Footage recorded on the stage in {curve.name} ({camera}): converting it to "
+    stage = colour_space(
+        footage_name,
+        f"Footage recorded on the stage in {curve.name} ({camera}): converting it to "
         f"{reference} decodes it and applies the post-correction, exactly as {footage!r}.",
+        family="Camera",
+        encoding="log",
         to_reference=group([decode, forward]),
         from_reference=None if inverse is None else group([inverse, encode]),
     )
@@ -143,9 +137,8 @@ CATEGORIES = {
 
 
 def set_categories(data: ConfigData) -> None:
-    """Categories for every scene colour space that has none (by its family), and for the
-    named transforms: so hosts that filter menus by category list them (and ociocheck is
-    content)."""
+    """Categories (by family) for every scene colour space and named transform that has none,
+    so that hosts whose menus filter by category list them."""
 
     def categorised(cs: ColourSpace) -> ColourSpace:
         if cs.categories or cs.display_referred:
@@ -164,12 +157,12 @@ def add_acescct(data: ConfigData, aces_to_camera: np.ndarray) -> str:
     """ACEScct (OCIO's builtin curve and AP1 -> AP0) then ACES2065-1 -> the camera gamut."""
     source = _aces_config().getColorSpace(ACESCCT)
     to_ref = transform_record(source.getTransform(OCIO.COLORSPACE_DIR_TO_REFERENCE))
-    cs = ColourSpace(
-        name=ACESCCT,
-        family="ocio-vp/Working",
-        encoding="log",
-        description="ACEScct (ACES log for grading and compositing), as in OCIO's built-in ACES "
+    cs = colour_space(
+        ACESCCT,
+        "ACEScct (ACES log for grading and compositing), as in OCIO's built-in ACES "
         "CG config, then ACES2065-1 to the camera gamut.",
+        family="Working",
+        encoding="log",
         to_reference=group([to_ref, matrix_record(aces_to_camera)]),
     )
     data.colour_spaces.append(cs)
@@ -225,14 +218,8 @@ def add_monitor_displays(
 
 
 def _clamped_display(display: ColourSpace) -> ColourSpace:
-    """An ACES config display colour space; a PQ one with its negative signal clamped to 0 in
-    both directions.
-
-    OCIO versions disagree on PQ below 0 (the builtin clamps negative values in 2.2 and 2.3 and
-    mirrors them from 2.4 on): with the clamp, and the decode given explicitly, every version
-    gives the same numbers. A negative display signal does not exist on the monitor, so nothing
-    it shows changes; the SDR displays are kept exactly as the ACES config has them.
-    """
+    """An ACES config display colour space; a PQ one with its negative signal clamped to 0 both
+    ways (OCIO versions disagree on PQ below 0; a monitor shows no negative signal)."""
     encode = display.from_reference
     if "ST2084" not in display.name or encode is None or display.to_reference is not None:
         return display

@@ -1,16 +1,11 @@
 """The wall colorspaces' OCIO tail: the panel-linearity LUT sidecar and the signal encoding.
 
-Chain (reference -> wall signal), for both ``LED Wall - Outer Frustum`` (M) and
-``LED Wall - Inner Frustum`` (N + offset)::
+Chain (reference -> wall signal) of both wall colour spaces::
 
     gamma2.4, srgb, pq:  matrix  ->  encoding  ->  FileTransform luts/<sidecar>.clf (LUT)
     linear:              matrix  ->  FileTransform luts/<sidecar>.clf (log2 shaper + LUT)
 
-``<sidecar>`` is ``<stage>_panel_linearity_<hash>``, named by its content.
-
-The LUT is spaced in the wall's signal (see :mod:`ocio_vp.wall.encoding`, which holds the
-numbers); this module turns it into OCIO transforms and sidecar text for
-:mod:`ocio_vp.ocio.writer`.
+``<sidecar>`` is ``<stage>_panel_linearity_<hash>``; the numbers are :mod:`ocio_vp.wall.encoding`'s.
 """
 
 from __future__ import annotations
@@ -80,9 +75,8 @@ def lut_transform(lut: LinearityLut):
 
 
 def sidecar_name(stem: str, text: str) -> str:
-    """``<stem>_<hash>.clf``: OCIO caches files by path for the whole process, so two configs
-    whose sidecars differ must not share a file name (a host session loading two calibrations
-    of one stage would otherwise apply the first one's LUT to both)."""
+    """``<stem>_<hash>.clf``: OCIO caches files by path for the whole process, so sidecars
+    that differ must not share a name."""
     digest = hashlib.sha256(text.encode("utf-8")).hexdigest()[:12]
     return f"{stem}_{digest}.clf"
 

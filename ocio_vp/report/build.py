@@ -1,14 +1,9 @@
 """``ocio-vp report``: a self-contained HTML page (plus its SVG figures) for one or more solutions.
 
-For each environment: the paper's comparison charts (baseline M only vs ours), per-patch ΔE,
-the matrices with their condition numbers, model choices, warnings, beta, w_avg and the
-linearity curves when the solve has them; for all environments together the paper's Fig. 11
-error bars. The page links its SVGs relatively and loads nothing from the network, so the folder
-can be zipped, mailed or opened from a USB stick. It is written into a staging folder and
-renamed into place, so a failed run never leaves half a report.
-
-The numbers come from ``solution.json`` only; see :mod:`ocio_vp.report.data` for the
-camera-to-display matrix and ΔE conventions, :mod:`ocio_vp.report.plots` for the figures.
+Per environment: the paper's comparison charts (baseline M only vs ours), per-patch ΔE, the
+matrices, model choices, warnings and linearity curves; for all of them the paper's Fig. 11
+error bars. The page loads nothing from the network and is published all or nothing. The
+numbers come from ``solution.json`` only (:mod:`ocio_vp.report.data`).
 """
 
 from __future__ import annotations
@@ -37,7 +32,6 @@ from ocio_vp.formats.records import json_object
 from ocio_vp.formats.solution import Solution
 from ocio_vp.formats.solution_inputs import solution_folders
 from ocio_vp.model.correction import (
-    PostCorrection,
     ProtectedCorrection,
     RootPolynomialCorrection,
     unprotected,
@@ -76,10 +70,8 @@ TEMPLATE = "report.html.j2"
 
 @dataclass
 class Report:
-    """What :func:`build_report` wrote: the page and the numbers behind every figure.
-
-    Paths in the plot records point into the final folder, not the staging folder.
-    """
+    """What :func:`build_report` wrote: the page and the numbers behind every figure (their
+    paths in the final folder)."""
 
     index: Path
     environments: list[EnvironmentData]
@@ -90,17 +82,9 @@ class Report:
 
 
 def default_report_dir(paths: Sequence[str | Path]) -> Path:
-    """Where a report goes when ``--out`` is not given; never onto a report of other solutions.
-
-    All environments of one ``solve`` output folder: ``SOLVE/report``. One environment:
-    ``SOLVE/<environment>/report``. Some of them: ``SOLVE/report-<env>+<env>...``. Solutions
-    from several solve folders have no natural home: give ``--out``.
-
-    Raises
-    ------
-    InputError
-        Solutions from several ``solve`` output folders.
-    """
+    """Where a report goes without ``--out``: ``SOLVE/report`` for all environments of one
+    ``solve`` output folder, ``SOLVE/<environment>/report`` for one, ``SOLVE/report-<env>+...``
+    for some; an InputError for solutions from several solve folders."""
     chosen = solution_folders(paths)
     if len(chosen.solve_folders) != 1:
         raise InputError(
@@ -118,13 +102,8 @@ def default_report_dir(paths: Sequence[str | Path]) -> Path:
 
 
 def linearity_curves(linearity: Linearity | None) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """Panel response curves before/after the linearity LUT from a solution's ``linearity``.
-
-    Reads what :func:`ocio_vp.wall.linearity.fit_linearity` writes: ``channels.<name>`` with the
-    response knots ``drive``/``response`` (before). For a channel marked ``corrected`` the
-    "after" curve is the response model applied to the LUT's drive,
-    ``r(r^-1(x))`` on 33 steps; an uncorrected channel has no LUT, so no "after" curve.
-    """
+    """Panel response curves from a solution's ``linearity``: every channel's measured knots
+    ("before") and, for a corrected one, the response after its LUT ``r(r^-1(x))`` ("after")."""
     curves: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     if linearity is None or not linearity.channels:
         return curves
@@ -143,12 +122,8 @@ def linearity_curves(linearity: Linearity | None) -> dict[str, tuple[np.ndarray,
 
 
 def panel_description(solution: Solution, path: Path) -> str | None:
-    """The calibration panel's geometry, when the measurements file is found beside the solve.
-
-    ``solution.json`` records beta but not the panel; the measurements file it names is looked
-    for in the solve output folder (where ``ocio-vp demo`` writes it) and used only if its
-    SHA-256 matches the one recorded in the solution.
-    """
+    """The calibration panel's geometry from the measurements file the solution names, found in
+    the solve output folder with the SHA-256 it records (None otherwise)."""
     name = solution.measurements_file
     if not name or not solution.measurements_sha256:
         return None
@@ -164,8 +139,7 @@ def panel_description(solution: Solution, path: Path) -> str | None:
 
 @functools.lru_cache(maxsize=16)
 def _panel_text(candidate: str, sha256: str) -> str:
-    """Parse the measurements file once per content (every environment of a solve names the
-    same one; parsing it was a tenth of a 7-environment report)."""
+    """Parse the measurements file once per content (every environment of a solve names it)."""
     from ocio_vp.formats.measurements import load_measurements
 
     path = Path(candidate)
@@ -329,17 +303,11 @@ def _beyond_the_chart(solution: Solution) -> str:
     return text
 
 
-def _polynomial(correction: PostCorrection) -> RootPolynomialCorrection | None:
-    """The root-polynomial inside a correction (protected or not), else None."""
-    inner = unprotected(correction)
-    return inner if isinstance(inner, RootPolynomialCorrection) else None
-
-
 def _q_rows(solution: Solution) -> list[JsonObject]:
     """Q's matrix; for a root-polynomial Q, its coefficients too (what the config's LUTs and
     ``ocio-vp apply`` use) and the matrix named as the model's 3x3 fallback."""
-    polynomial = _polynomial(solution.correction)
-    if polynomial is None:
+    polynomial = unprotected(solution.correction)
+    if not isinstance(polynomial, RootPolynomialCorrection):
         return [_matrix_rows("Q", solution.Q, "post-correction of the footage (eq. 5)")]
     terms = root_polynomial_terms(polynomial.degree)
     model = _matrix_rows(
@@ -490,13 +458,12 @@ def build_report(
     out_dir
         The report folder; replaced as a whole if it exists.
     dpi
-        Pixels per inch of the figures' displayed size (their ``width``/``height``; the
-        drawings are vectors, so this only scales them on the page).
+        Pixels per inch of the figures' displayed size (vectors: only their size on the page).
     match_white
         Scale each stage chart so its white's green matches the target's (paper, Section 4).
     camera_to_xyz
-        (3, 3) camera RGB -> XYZ when the caller knows the camera; otherwise derived from the
-        solutions (see :func:`ocio_vp.report.data.camera_to_display`).
+        (3, 3) camera RGB -> XYZ when the caller knows the camera
+        (:func:`ocio_vp.report.data.camera_to_display`).
     """
     import jinja2
 
@@ -555,15 +522,11 @@ def _relocate(report: Report, staged: Path, final: Path) -> None:
     def moved(path: Path) -> Path:
         return final / path.relative_to(staged)
 
-    report.error_bars.update(
-        {k: dataclasses.replace(p, path=moved(p.path)) for k, p in report.error_bars.items()}
+    plots: tuple[dict[str, Any], ...] = (
+        report.error_bars,
+        report.charts,
+        report.delta_e,
+        report.linearity,
     )
-    report.charts.update(
-        {k: dataclasses.replace(p, path=moved(p.path)) for k, p in report.charts.items()}
-    )
-    report.delta_e.update(
-        {k: dataclasses.replace(p, path=moved(p.path)) for k, p in report.delta_e.items()}
-    )
-    report.linearity.update(
-        {k: dataclasses.replace(p, path=moved(p.path)) for k, p in report.linearity.items()}
-    )
+    for records in plots:
+        records.update({k: dataclasses.replace(p, path=moved(p.path)) for k, p in records.items()})

@@ -1,28 +1,11 @@
 """The numbers behind the report: charts read from ``solution.json``, made display-referred.
 
-Everything comes from ``solution.json`` (read with :func:`ocio_vp.formats.solution.load_solution`):
-``diagnostics.charts`` holds the per-patch camera RGB of the target chart and of the predicted
-(or measured) stage charts. For the screen they go through one **camera-to-display matrix** per
-camera, as the paper does ("one consistent color matrix to take all images from a camera raw
-color space to sRGB", Section 4):
-
-- when the caller knows the camera (the demo's simulated one), its camera-to-XYZ matrix
-  (:func:`ocio_vp.metrics.camera_to_xyz_matrix`) followed by XYZ -> linear sRGB;
-- when the solution names ``camera_colorspace``, colour-science's matrix from that space to
-  linear sRGB (CAT02 adaptation of the white points);
-- otherwise a 3x3 matrix fitted by least squares from the camera RGB of a target chart to the
-  linear sRGB of colour-science's ColorChecker24 (After November 2014) reference values. The
-  paper fitted its matrix on a chart in daylight; we fit on every environment's target chart of
-  the same stage and keep the one that fits best (relative residual), which is the most
-  broadband light, so a tungsten or sodium environment still looks warm or yellow on screen.
-
-Each environment is then scaled so that the target white patch's largest display channel is
-0.9, and each stage chart is first scaled so that the green channel of its white patch equals
-the target's (the paper's comparison charts do the same, Section 4), then clipped to [0, 1] and
-sRGB-encoded. Errors are never computed on these display values: Fig. 11's errors are the
-solve's own (camera RGB), and ΔE (:func:`ocio_vp.metrics.chart_errors`) goes through the
-camera-to-XYZ matrix that matches the display choice above (for the fitted case, sRGB's
-RGB-to-XYZ after the fitted matrix).
+``diagnostics.charts`` holds the per-patch camera RGB of the target and the stage charts. For
+the screen they go through one camera-to-display matrix per camera, as the paper does (Section
+4; :func:`camera_to_display`), are exposed so the target white's largest channel is
+:data:`DISPLAY_WHITE` (each stage chart's white green matched to the target's first), clipped
+and sRGB-encoded. Errors are never computed on display values: Fig. 11's are the solve's own
+(camera RGB), ΔE goes through the matching camera-to-XYZ matrix.
 
 References
 ----------
@@ -88,10 +71,8 @@ DISPLAY_WHITE = 0.9
 
 @dataclass(frozen=True)
 class DisplayTransform:
-    """Camera RGB -> linear sRGB (``display = matrix @ camera``) and -> CIE XYZ (for ΔE).
-
-    ``description`` says where the matrices come from.
-    """
+    """Camera RGB -> linear sRGB (``display = matrix @ camera``) and -> CIE XYZ (for ΔE), and
+    where they come from."""
 
     matrix: np.ndarray
     camera_to_xyz: np.ndarray
@@ -140,35 +121,23 @@ def _charts(solution: Solution, source: Path) -> dict[str, np.ndarray]:
         raise InputError(
             "missing (re-run `ocio-vp solve`)", source=source, key="diagnostics.charts"
         )
-    out = {
-        "target": charts.target,
-        "lit_baseline": charts.lit_baseline,
-        "lit_corrected": charts.lit_corrected,
-        "displayed_baseline": charts.displayed_baseline,
-        "displayed_corrected": charts.displayed_corrected,
-    }
-    where = "diagnostics.charts"
+    out = {name: getattr(charts, name) for name in CHART_KEYS}
     clipped = solution.diagnostics.charts_clipped_drive
     if clipped is not None:
         out["lit_baseline"], out["lit_corrected"] = clipped.lit_baseline, clipped.lit_corrected
-    for name, array in out.items():
+    for name, array in out.items():  # the target first
+        key = f"diagnostics.charts.{name}"
         if array.ndim != 2 or array.shape[1] != 3 or not np.all(np.isfinite(array)):
-            raise InputError("expected a finite (n, 3) chart", source=source, key=f"{where}.{name}")
-    n = out["target"].shape[0]
-    for name, array in out.items():
-        if array.shape[0] != n:
-            key = f"diagnostics.charts.{name}"
+            raise InputError("expected a finite (n, 3) chart", source=source, key=key)
+        if array.shape[0] != (n := len(out["target"])):
             raise InputError(f"expected {n} patches, got {array.shape[0]}", source=source, key=key)
     return out
 
 
 def infer_white_patch(solution: Solution, charts: dict[str, np.ndarray]) -> int:
-    """The chart's white patch index.
-
-    ``diagnostics.white_patch`` when the solve recorded it; otherwise the index that reproduces
-    the solve's own ``lit_chart_error_baseline`` (Fig. 11 is relative to that patch); otherwise
-    18 (ColorChecker 24) or the brightest target patch for other charts.
-    """
+    """The chart's white patch index: ``diagnostics.white_patch`` when recorded, else the one
+    that reproduces the solve's ``lit_chart_error_baseline``, else the ColorChecker's or the
+    brightest target patch."""
     d = solution.diagnostics
     n = charts["target"].shape[0]
     if d.recorded("white_patch") and 0 <= d.white_patch < n:
@@ -202,10 +171,8 @@ def patch_names(n: int) -> list[str]:
 
 
 def fit_display_matrix(target: np.ndarray) -> tuple[np.ndarray, float]:
-    """Least-squares 3x3 ``A`` with ``A @ target_j ~ colorchecker_srgb()_j`` over 24 patches.
-
-    Returns ``(A, relative residual)``; the residual is ``|A p - s| / |s|`` (Frobenius).
-    """
+    """Least-squares 3x3 ``A`` with ``A @ target_j ~ colorchecker_srgb()_j`` over 24 patches,
+    and its relative residual ``|A p - s| / |s|`` (Frobenius)."""
     reference = colorchecker_srgb()
     solution, *_ = np.linalg.lstsq(np.asarray(target, dtype=np.float64), reference, rcond=None)
     A = solution.T
@@ -221,11 +188,10 @@ def camera_to_display(
 ) -> DisplayTransform:
     """One camera-to-display (and camera-to-XYZ) matrix for solutions from the same camera.
 
-    In order of preference: ``camera_to_xyz`` given by a caller that knows the camera (the
-    demo's simulated one), then XYZ -> linear sRGB; the solutions' ``camera_colorspace``
-    (colour-science's matrices, CAT02 to sRGB's D65); a least-squares fit of the best-fitting
-    target chart to the ColorChecker24 reference in linear sRGB (see the module docstring),
-    with XYZ from sRGB's matrix; identity for a chart that is not a ColorChecker 24.
+    In order of preference: ``camera_to_xyz`` (a caller that knows the camera), then XYZ ->
+    linear sRGB; the solutions' ``camera_colorspace`` (colour-science, CAT02); a least-squares
+    fit of the best-fitting target chart to the ColorChecker24 in linear sRGB (the most
+    broadband light, so a tungsten environment still looks warm); identity for another chart.
     """
     import colour
 
@@ -277,12 +243,9 @@ def camera_to_display(
 def display_charts(
     charts: dict[str, np.ndarray], matrix: np.ndarray, white_patch: int, *, match_white: bool = True
 ) -> dict[str, np.ndarray]:
-    """sRGB-encoded display values of every chart, in [0, 1].
-
-    The exposure puts the target white's largest display channel at :data:`DISPLAY_WHITE`;
-    with ``match_white`` each stage chart is first scaled so its white patch's green channel
-    equals the target's (the paper's comparison charts, Section 4).
-    """
+    """sRGB-encoded display values of every chart, in [0, 1], the target white's largest
+    channel at :data:`DISPLAY_WHITE`; with ``match_white`` each stage chart's white green is
+    first scaled to the target's (the paper's comparison charts, Section 4)."""
     import colour
 
     target = charts["target"]
@@ -294,8 +257,6 @@ def display_charts(
         if match_white and name != "target" and chart[white_patch, 1] > 0:
             scale *= target[white_patch, 1] / chart[white_patch, 1]
         linear.append(np.clip(scale * chart @ matrix.T, 0.0, 1.0))
-    # One encoding call for all charts: colour-science's per-call overhead, not the maths,
-    # was most of the time.
     encoded = np.asarray(colour.cctf_encoding(np.concatenate(linear), "sRGB"), dtype=np.float64)
     ends = np.cumsum([len(chart) for chart in linear])[:-1]
     return dict(zip(charts, np.split(encoded, ends), strict=True))
@@ -304,19 +265,14 @@ def display_charts(
 def delta_e(
     charts: dict[str, np.ndarray], camera_to_xyz: np.ndarray, white_patch: int
 ) -> dict[str, dict[str, np.ndarray]]:
-    """Per-patch CIE ΔE2000 and ΔE ITP of every stage chart against the target.
-
-    :func:`ocio_vp.metrics.chart_errors` through ``camera_to_xyz`` (its normalisation: target
-    white at Y = 1 and the Lab reference white for ΔE2000, at 100 cd/m^2 for ΔE ITP). Stage
-    charts are not re-exposed: an exposure error is a real error here.
-    """
+    """Per-patch CIE ΔE2000 and ΔE ITP of every stage chart against the target, by
+    :func:`ocio_vp.metrics.chart_errors` through ``camera_to_xyz`` (stage charts are not
+    re-exposed: an exposure error is a real error here)."""
     from ocio_vp.metrics import chart_errors
 
     if not (np.asarray(camera_to_xyz) @ charts["target"][white_patch])[1] > 0:
         raise InputError("the target white patch has no luminance; ΔE is undefined")
-    # The four stage charts in one call against the target repeated four times (ΔE is per
-    # patch, and the normalisation uses the first copy's white patch, the target's): a quarter
-    # of the colour-science calls, whose overhead was most of the report's data time.
+    # one call for the four stage charts (the normalisation uses the first copy's white patch)
     n, stages = len(charts["target"]), list(STAGE_CHARTS)
     errors = chart_errors(
         np.concatenate([charts[chart] for chart in stages]),
@@ -337,16 +293,9 @@ def delta_e(
 
 
 def itp_defined(chart: np.ndarray, camera_to_xyz: np.ndarray) -> np.ndarray:
-    """(n,) bool: where ΔE ITP means something for these camera RGB colours.
-
-    ICtCp applies the PQ curve to BT.2100 LMS, which is defined for non-negative light only.
-    A colour with a negative LMS component (outside what any light can produce: an
-    extrapolated rendition, a rank-deficient post-correction) falls beyond the PQ formula's
-    pole, about -1e-4 cd/m^2, where ICtCp and ΔE ITP take arbitrary values (1e8 and more). Such
-    patches are reported as undefined rather than as a number. The scale is irrelevant here
-    (only the sign is tested), so the normalisation of :func:`ocio_vp.metrics.chart_errors`
-    need not be repeated; its colour conversion (XYZ -> BT.2020 with CAT02, then LMS) is.
-    """
+    """(n,) bool: where ΔE ITP means something for these camera RGB colours: ICtCp's PQ curve
+    is defined for non-negative BT.2100 LMS only (beyond its pole ΔE ITP takes arbitrary
+    values), so a colour with a negative LMS component is undefined, not a number."""
     import colour
     from colour.models.rgb.ictcp import MATRIX_ICTCP_RGB_TO_LMS
 
@@ -362,9 +311,8 @@ def itp_defined(chart: np.ndarray, camera_to_xyz: np.ndarray) -> np.ndarray:
 def _errors(
     diagnostics: Diagnostics, charts: dict[str, np.ndarray], white_patch: int
 ) -> dict[str, np.ndarray]:
-    """The solve's Fig. 11 errors, the figures ``solve`` and ``demo`` print
-    (:func:`ocio_vp.calibration.diagnostics.summary_errors`); recomputed from the charts only
-    if an old file lacks them."""
+    """The solve's Fig. 11 errors (:func:`ocio_vp.calibration.diagnostics.summary_errors`),
+    recomputed from the charts where an old file lacks them."""
     figures = summary_errors(diagnostics)
     stored_by_chart = {
         "lit_baseline": figures.lit_baseline,
@@ -387,11 +335,8 @@ def environment_data(
     match_white: bool = True,
     camera_to_xyz: np.ndarray | None = None,
 ) -> list[EnvironmentData]:
-    """Load every solution and compute what the report shows; one display matrix per stage.
-
-    ``camera_to_xyz`` (3, 3), when the caller knows the camera, is used for every solution.
-    """
-
+    """Load every solution and compute what the report shows; one display matrix per stage
+    (``camera_to_xyz``, when the caller knows the camera, for every solution)."""
     files = find_solutions(paths)
     loaded = []
     for index, path in enumerate(files):

@@ -1,11 +1,9 @@
 """The report's figures as SVG (:mod:`ocio_vp.svg`, no matplotlib): the paper's
 comparison charts, its Fig. 11 error bars, per-patch ΔE, and the panel linearity curves.
 
-Every plot function writes one SVG file and returns the numbers it drew (colours, bar heights,
-curve points). The file's elements carry ``class`` and ``data-*`` attributes (``data-panel``,
-``data-patch``, ``data-series``, ``data-channel``, ``data-environment``, ``data-curve``) and
-their axes carry their tick values, so a test, or a user, reads back from the file what is on
-the page: fills of the swatches, bar heights through the axis scale, curve points.
+Every plot function writes one SVG file and returns the numbers it drew; the elements carry
+``class`` and ``data-*`` attributes and the axes their ticks, so what is on the page can be read
+back from the file.
 
 References
 ----------
@@ -67,10 +65,7 @@ BACKGROUND = "#3a3a3a"
 
 @dataclass(frozen=True)
 class ChartPlot:
-    """sRGB colours drawn per panel: ``squares`` (target) and ``circles`` (stage).
-
-    The display values clipped to [0, 1]; the file holds them rounded to 8-bit hex.
-    """
+    """sRGB colours in [0, 1] drawn per panel: ``squares`` (target) and ``circles`` (stage)."""
 
     path: Path
     squares: dict[str, np.ndarray]
@@ -156,13 +151,9 @@ def _suptitle(canvas: Canvas, text: str) -> None:
 
 
 def plot_comparison_charts(data: EnvironmentData, path: Path, *, dpi: float = 110) -> ChartPlot:
-    """The paper's comparison charts for one environment (Section 4, its result figures).
-
-    Squares are the target chart (real location), inset circles the stage chart; a 2x2 grid:
-    lit chart (top) and in-camera background chart (bottom), baseline (left) and ours (right).
-    Colours are ``data.display`` (see :mod:`ocio_vp.report.data`), clipped to [0, 1] and written
-    as 8-bit sRGB hex.
-    """
+    """The paper's comparison charts for one environment (Section 4): squares the target chart,
+    inset circles the stage's; lit chart and in-camera background (rows), baseline and ours
+    (columns), in ``data.display`` colours."""
     canvas = Canvas(10.0, 7.4, dpi, label=f"{data.solution.environment}: comparison charts")
     boxes = subplot_boxes(
         canvas, 2, 2, left=0.015, right=0.985, top=0.88, bottom=0.01, hspace=0.2, wspace=0.05
@@ -186,12 +177,9 @@ def plot_comparison_charts(data: EnvironmentData, path: Path, *, dpi: float = 11
 
 
 def _axis_top(values: np.ndarray) -> float | None:
-    """A y limit that keeps the other environments readable next to an outlier (sodium).
-
-    ``values`` is (environments, 6). When one environment's worst bar is over 2.5 times every
-    other environment's, the axis stops at 1.6 times the second worst and the outlier bars are
-    labelled with their value; otherwise ``None`` (the data's range with 5% margins).
-    """
+    """A y limit that keeps the others readable next to an outlier environment (sodium): 1.6
+    times the second worst where the worst of ``values`` (environments, 6) is over 2.5 times
+    it, else None (the data's range)."""
     worst = np.sort(np.max(values, axis=1))[::-1] if len(values) > 1 else np.array([])
     if len(worst) < 2 or not worst[1] > 0 or worst[0] <= 2.5 * worst[1]:
         return None
@@ -199,11 +187,8 @@ def _axis_top(values: np.ndarray) -> float | None:
 
 
 def _bar(axes: Axes, centre: float, width: float, height: float, **attributes: object) -> None:
-    """A bar from 0 to ``height`` (data units) centred on ``centre``; nothing for NaN.
-
-    A bar too low to show (SVG does not draw a zero-height rectangle) also gets its outline's
-    bottom edge, as matplotlib drew it: a value of 0 is seen, not read as missing.
-    """
+    """A bar from 0 to ``height`` (data units) centred on ``centre``; nothing for NaN; a bar
+    too low to show also gets its bottom edge, so a 0 is not read as missing."""
     if not math.isfinite(height):
         return
     x0, x1 = axes.x(centre - width / 2), axes.x(centre + width / 2)
@@ -226,13 +211,8 @@ def _label_clipped(axes: Axes, x: float, top: float, value: float) -> None:
 def plot_error_bars(
     environments: Sequence[EnvironmentData], kind: str, path: Path, *, dpi: float = 110
 ) -> ErrorBarsPlot:
-    """The paper's Fig. 11: mean error per channel relative to the target white patch.
-
-    ``kind`` is ``"lit"`` (out-of-frustum lit chart, Fig. 11a) or ``"displayed"`` (in-frustum
-    displayed chart, Fig. 11b). Solid bars: baseline (M only); hatched bars: ours. Bars are
-    ``<rect class="bar">`` with ``data-environment``, ``data-series`` (``<kind>_baseline`` or
-    ``<kind>_corrected``) and ``data-channel``; heights in percent on the y axis.
-    """
+    """The paper's Fig. 11, mean error per channel relative to the target white, for ``kind``
+    ``"lit"`` (11a) or ``"displayed"`` (11b): baseline solid, ours hatched."""
     if kind not in ("lit", "displayed"):
         raise ValueError(f"kind must be 'lit' or 'displayed', got {kind!r}")
     names = [e.solution.environment for e in environments]
@@ -362,12 +342,8 @@ def _delta_e_panel(
 
 
 def plot_delta_e(data: EnvironmentData, path: Path, *, dpi: float = 110) -> DeltaEPlot:
-    """Per-patch ΔE2000 and ΔE ITP of the stage charts against the target, baseline vs ours.
-
-    Columns ΔE2000, ΔE ITP; rows lit chart, in-camera background. Bars are ``<rect class="bar">``
-    with ``data-metric``, ``data-series`` (a stage chart) and ``data-patch``; an undefined ΔE
-    ITP (NaN) has no bar but a red x, ``<path class="undefined">``, at 0.
-    """
+    """Per-patch ΔE2000 and ΔE ITP (columns) of the lit and in-camera charts (rows) against
+    the target, baseline vs ours; an undefined ΔE ITP is a red x at 0, not a bar."""
     canvas = Canvas(11.0, 6.8, dpi, label=f"{data.solution.environment}: ΔE per patch")
     boxes = subplot_boxes(
         canvas, 2, 2, left=0.06, right=0.99, top=0.91, bottom=0.2, hspace=0.2, wspace=0.14
@@ -411,13 +387,9 @@ def plot_linearity(
     title: str = "Panel linearity",
     dpi: float = 110,
 ) -> LinearityPlot:
-    """Panel response (drive -> normalised camera response) and its deviation from linear.
-
-    ``curves`` maps a label such as ``"red before"``/``"red after"`` to ``(x, y)``; the label's
-    first word picks the channel colour, ``after`` curves are dashed. Left: the curves with the
-    ideal line y = x; right: ``y - x`` in percent of the top step, where small deviations show.
-    Each curve is a ``<g class="curve" data-curve=LABEL data-axes="response"|"deviation">``.
-    """
+    """Panel response (drive -> normalised camera response) and its deviation ``y - x`` from
+    linear; ``curves`` maps labels such as ``"red before"`` / ``"red after"`` (dashed) to
+    ``(x, y)``, the first word picking the channel colour."""
     canvas = Canvas(10.0, 4.0, dpi, label=title)
     boxes = subplot_boxes(canvas, 1, 2, left=0.07, right=0.98, top=0.88, bottom=0.13, wspace=0.25)
     drawn = {
