@@ -50,7 +50,6 @@ from ocio_vp.choices import (
 from ocio_vp.correction.extrapolation import Extrapolation, extrapolation
 from ocio_vp.correction.guards import check_problem, singular_q_cause
 from ocio_vp.correction.outliers import Inconsistency, inconsistent_patches
-from ocio_vp.correction.perceptual import default_camera_to_xyz
 from ocio_vp.correction.problem import fit_least_squares
 from ocio_vp.correction.registry import QFit, QProblem, solve_post_correction
 from ocio_vp.correction.skin import chart_skin_samples, joined, patch_skin_samples
@@ -74,7 +73,7 @@ from ocio_vp.formats.records import json_object
 from ocio_vp.formats.skin import SkinFigures
 from ocio_vp.formats.solution import Solution
 from ocio_vp.formats.synthesis import synthesis_to_dict, synthesis_warnings
-from ocio_vp.metrics import error_relative_to_white
+from ocio_vp.metrics import error_relative_to_white, sample_camera_to_xyz
 from ocio_vp.model.correction import DEFAULT_DARK, PostCorrection, ProtectedCorrection
 
 __all__ = [
@@ -260,9 +259,7 @@ def _lighting(measurements: Measurements, problem: QProblem, method: str) -> Fix
             source=measurements.source,
             key="fixtures",
         )
-    return light_with_fixtures(
-        measurements.fixtures, problem, camera_to_xyz=default_camera_to_xyz()
-    )
+    return light_with_fixtures(measurements.fixtures, problem, camera_to_xyz=sample_camera_to_xyz())
 
 
 def _environment_key(measurements: Measurements, environment: Environment, key: str) -> str:
@@ -373,7 +370,7 @@ def _solve_panels(
     primary = primary_panel(measurements.panels).name
     lights = panel_lights(measurements, environment_panel_w_avg(measurements, environment))
     blacks = dict(environment.panel_black_level or {})
-    white, camera = measurements.stage.white_patch, default_camera_to_xyz()
+    white, camera = measurements.stage.white_patch, sample_camera_to_xyz()
     drives: dict[str, InFrustumDrive] = {primary: InFrustumDrive(N, n_reason, offset)}
     for light in lights:
         if light.panel.in_frustum and light.name != primary:
@@ -574,7 +571,7 @@ def _extrapolation(problem: QProblem, correction: PostCorrection) -> Extrapolati
         SL=problem.SL,
         white=P[problem.white_patch],
         lit_white=X[problem.white_patch],
-        camera_to_xyz=default_camera_to_xyz(),
+        camera_to_xyz=sample_camera_to_xyz(),
         domain=problem.domain,
     )
 

@@ -12,11 +12,11 @@ import pytest
 from conftest import paper_stage_problem
 
 from ocio_vp.correction.perceptual import (
-    default_camera_to_xyz,
     make_q_perceptual,
     mean_delta_e,
     patch_delta_e,
     q_perceptual,
+    sample_camera_to_xyz,
 )
 from ocio_vp.correction.problem import QProblem
 from ocio_vp.metrics import chart_errors
@@ -33,7 +33,7 @@ def _least_squares(problem: QProblem) -> np.ndarray:
 
 
 def test_objective_matches_metrics_module(problem):
-    matrix = default_camera_to_xyz()
+    matrix = sample_camera_to_xyz()
     pred = problem.predicted @ _least_squares(problem).T
     errors = chart_errors(pred, problem.target, camera_to_xyz=matrix)
     assert mean_delta_e(pred, problem.target, camera_to_xyz=matrix) == pytest.approx(
@@ -46,7 +46,7 @@ def test_objective_matches_metrics_module(problem):
 
 @pytest.mark.parametrize("metric", ["CIE 2000", "ITP"])
 def test_lower_mean_delta_e_than_least_squares(problem, metric):
-    matrix = default_camera_to_xyz()
+    matrix = sample_camera_to_xyz()
     fit = make_q_perceptual(metric=metric)(problem)
     field = "delta_E_2000" if metric == "CIE 2000" else "delta_E_ITP"
     ls = getattr(
@@ -85,7 +85,7 @@ def test_a_stack_of_predictions_equals_one_call_each(problem, metric):
     for index in np.ndindex(2, 4):
         single = patch_delta_e(stack[index], problem.target, metric=metric)
         np.testing.assert_allclose(batched[index], single, rtol=1e-12, atol=1e-12)
-        one = chart_errors(stack[index], problem.target, camera_to_xyz=default_camera_to_xyz())
+        one = chart_errors(stack[index], problem.target, camera_to_xyz=sample_camera_to_xyz())
         np.testing.assert_allclose(batched[index], getattr(one, field), rtol=1e-9)
 
 

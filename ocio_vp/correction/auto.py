@@ -50,12 +50,11 @@ from ocio_vp.correction.linear import (
     problem_arrays,
     target_rank,
 )
-from ocio_vp.correction.perceptual import default_camera_to_xyz
 from ocio_vp.correction.problem import QFit, QProblem
 from ocio_vp.correction.root_polynomial import bounded_loo_predictions, make_q_root_polynomial
 from ocio_vp.correction.skin import skin_delta_e
 from ocio_vp.errors import InputError
-from ocio_vp.metrics import error_relative_to_white
+from ocio_vp.metrics import error_relative_to_white, sample_camera_to_xyz
 from ocio_vp.model.correction import MatrixCorrection, PostCorrection, RootPolynomialCorrection
 
 __all__ = [
@@ -243,7 +242,7 @@ def candidate_skin_errors(
     if lit is None or problem.skin is None or problem.skin.count == 0:
         return {}
     target = np.asarray(problem.target, dtype=np.float64)
-    camera = default_camera_to_xyz()
+    camera = sample_camera_to_xyz()
     white = target[problem.white_patch]
     corrected = np.stack([c.apply(lit) for c in corrections.values()])
     errors = skin_delta_e(corrected, problem.skin.target, white, camera)

@@ -14,7 +14,7 @@ subject to limits a stage can live with:
   Both are normalised to luminance Y = 1 and the baseline's chromaticity is the Lab reference
   white, so the baseline is L* = 100, a* = b* = 0 and the ΔE is purely chromatic. Default 2.0
   (about the "just noticeable" white-balance shift on set). Camera RGB -> XYZ is a 3x3 matrix
-  (:func:`ocio_vp.correction.perceptual.default_camera_to_xyz`, the sample camera, unless given).
+  (:func:`ocio_vp.metrics.sample_camera_to_xyz`, the sample camera, unless given).
 - **gamut**: every LED drive of the environment's average light ``d = M' w_avg`` stays in
   ``[0, max_drive]``; default ``max_drive`` = the baseline's largest drive channel (the joint
   light needs no more headroom than the paper's).
@@ -142,7 +142,7 @@ def make_q_joint(
     ----------
     camera_to_xyz
         (3, 3) camera RGB -> CIE XYZ for the white-point ΔE and the luminance; default the
-        sample camera's (:func:`ocio_vp.correction.perceptual.default_camera_to_xyz`).
+        sample camera's (:func:`ocio_vp.metrics.sample_camera_to_xyz`).
     max_delta_e
         Largest CIEDE2000 between the joint and the baseline stage-light chromaticity.
     max_drive
@@ -159,9 +159,9 @@ def make_q_joint(
 
     def q_joint_method(problem: QProblem) -> QFit:
         if camera_to_xyz is None:
-            from ocio_vp.correction.perceptual import default_camera_to_xyz
+            from ocio_vp.metrics import sample_camera_to_xyz
 
-            matrix = default_camera_to_xyz()
+            matrix = sample_camera_to_xyz()
         else:
             matrix = np.asarray(camera_to_xyz, dtype=np.float64)
         joint = _JointProblem(

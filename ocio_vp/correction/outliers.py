@@ -72,13 +72,12 @@ from ocio_vp.correction.linear import (
     loo_predictions,
 )
 from ocio_vp.correction.perceptual import (
-    default_camera_to_xyz,
     normalising_white,
     patch_delta_e,
 )
 from ocio_vp.errors import InputError
 from ocio_vp.formats.diagnostics import Inconsistency
-from ocio_vp.metrics import COLORCHECKER_NAMES, white_scale
+from ocio_vp.metrics import COLORCHECKER_NAMES, sample_camera_to_xyz, white_scale
 from ocio_vp.metrics import patch_label as patch_name
 
 __all__ = [
@@ -300,7 +299,7 @@ def patch_influence(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> 
     w = np.asarray(w, dtype=np.float64)
     G, B = _normal_equations(X, P, w)
     fitted = X @ (np.linalg.pinv(G, hermitian=True) @ B)
-    luminance = fitted @ default_camera_to_xyz()[1]
+    luminance = fitted @ sample_camera_to_xyz()[1]
     influence = np.zeros(len(w))
     if not np.any((w > 0) & (luminance > 0)):
         return influence

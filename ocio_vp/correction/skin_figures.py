@@ -17,9 +17,9 @@ from ocio_vp.calibration.equations import condition_number
 from ocio_vp.correction.extrapolation import in_frame_led_damage
 from ocio_vp.correction.linear import patch_errors
 from ocio_vp.correction.problem import QProblem, fit_least_squares
-from ocio_vp.correction.skin import sample_camera_to_xyz, skin_delta_e
+from ocio_vp.correction.skin import skin_delta_e
 from ocio_vp.formats.skin import ROUNDING, SkinBand, SkinDefault, SkinFigures
-from ocio_vp.metrics import white_scale
+from ocio_vp.metrics import sample_camera_to_xyz, white_scale
 from ocio_vp.model.correction import MatrixCorrection, PostCorrection
 from ocio_vp.skin_data import ITA_BANDS
 

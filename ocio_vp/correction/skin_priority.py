@@ -36,10 +36,10 @@ from ocio_vp.correction.auto import bounded_candidate, q_auto
 from ocio_vp.correction.extrapolation import in_frame_led_damage
 from ocio_vp.correction.linear import patch_errors, problem_arrays, target_rank
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
-from ocio_vp.correction.skin import sample_camera_to_xyz, skin_delta_e, with_rows
+from ocio_vp.correction.skin import skin_delta_e, with_rows
 from ocio_vp.correction.skin_figures import background_error, clipped_background
 from ocio_vp.errors import InputError
-from ocio_vp.metrics import white_scale
+from ocio_vp.metrics import sample_camera_to_xyz, white_scale
 from ocio_vp.model.correction import (
     FitDomain,
     MatrixCorrection,
