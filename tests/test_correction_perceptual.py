@@ -7,6 +7,8 @@ reachable target must be found exactly; the ground truth is the spectral simulat
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from conftest import paper_stage_problem
@@ -67,7 +69,7 @@ def test_lower_mean_delta_e_than_least_squares(problem, metric):
 def test_reachable_target_is_found(problem):
     # The target is exactly Q_true x_j: the minimum mean ΔE is 0 at Q_true.
     Q_true = np.array([[1.05, -0.04, 0.02], [0.03, 0.97, 0.01], [-0.02, 0.05, 1.08]])
-    exact = QProblem(**{**problem.__dict__, "target": problem.predicted @ Q_true.T})
+    exact = dataclasses.replace(problem, target=problem.predicted @ Q_true.T)
     fit = q_perceptual(exact)
     np.testing.assert_allclose(fit.Q, Q_true, atol=1e-6)
     assert fit.notes["mean_delta_e"] < 1e-6
@@ -97,7 +99,7 @@ def test_excluded_patches_do_not_count(problem):
     wild[3] *= [2.0, 0.3, 3.0]
     solve = make_q_perceptual(max_iterations=20)  # same path, fewer steps: this is not about ΔE
     fits = [
-        solve(QProblem(**{**problem.__dict__, "target": t, "weights": weights}))
+        solve(dataclasses.replace(problem, target=t, weights=weights))
         for t in (problem.target, wild)
     ]
     np.testing.assert_allclose(fits[0].Q, fits[1].Q, atol=1e-9)
