@@ -51,11 +51,11 @@ from ocio_vp.correction.linear import (
     target_rank,
 )
 from ocio_vp.correction.problem import QFit, QProblem
-from ocio_vp.correction.root_polynomial import bounded_loo_predictions, make_q_root_polynomial
+from ocio_vp.correction.root_polynomial import make_q_root_polynomial
 from ocio_vp.correction.skin import skin_delta_e
 from ocio_vp.errors import InputError
-from ocio_vp.metrics import error_relative_to_white, sample_camera_to_xyz
-from ocio_vp.model.correction import MatrixCorrection, PostCorrection, RootPolynomialCorrection
+from ocio_vp.metrics import error_relative_to_white, sample_camera_to_xyz, zero_below_rounding
+from ocio_vp.model.correction import MatrixCorrection, PostCorrection
 
 __all__ = [
     "AUTO_SKIN_WEIGHT",
@@ -290,7 +290,6 @@ def _root_polynomial_candidates(
     :data:`AUTO_SKIN_WEIGHT`), their leave-one-out predictions added to ``held``, and why any
     is not a candidate."""
     models, excluded = {}, []
-    rows = problem.skin_rows(AUTO_SKIN_WEIGHT)
     active = int(np.count_nonzero(problem.fit_weights > 0))
     for name in (m for m in ladder if m in ROOT_POLYNOMIAL_DEGREES):
         if active <= {2: 6, 3: 13}[ROOT_POLYNOMIAL_DEGREES[name]]:
@@ -300,8 +299,8 @@ def _root_polynomial_candidates(
             excluded.append(why or "")
             continue
         models[name] = fit
-        assert isinstance(fit.correction, RootPolynomialCorrection)  # a bounded fit
-        held[name] = bounded_loo_predictions(problem, fit.correction, rows)
+        assert fit.loo_predictions is not None  # enough patches, checked above
+        held[name] = fit.loo_predictions
     return models, excluded
 
 
@@ -363,10 +362,7 @@ def q_auto(problem: QProblem) -> QFit:
         "excluded_candidates": excluded,
     }
     if skin:
-        # Below 1e-6 a ΔE is rounding (digits that differ between machines): written as 0.
-        details["skin_delta_e"] = {
-            k: float(np.mean(v)) if np.mean(v) >= 1e-6 else 0.0 for k, v in skin.items()
-        }
+        details["skin_delta_e"] = {k: zero_below_rounding(np.mean(v)) for k, v in skin.items()}
     return _chosen_fit(
         chosen,
         X,

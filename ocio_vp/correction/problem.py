@@ -141,6 +141,12 @@ class QFit:
     target_rank: int | None = None
     warnings: tuple[str, ...] = ()
     details: Mapping[str, Any] = field(default_factory=dict)
+    #: (n, 3) the leave-one-patch-out predictions behind ``cross_validated_error``, where the
+    #: method made them (``auto`` compares candidates with them).
+    loo_predictions: np.ndarray | None = None
+    #: With skin first: the default's fit that this one was judged against (the solve reports
+    #: the two side by side).
+    default: QFit | None = None
 
     @property
     def Q(self) -> np.ndarray:

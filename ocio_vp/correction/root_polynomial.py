@@ -138,14 +138,18 @@ def make_q_root_polynomial(degree: int = 2, skin_weight: float = 0.0) -> Callabl
         details: dict = {"folds_by_fade": tried}
         if rows is not None:
             details["skin_weight"] = skin_weight
+        held = _held_out(problem, correction, rows)
         return QFit(
             correction,
             f"root-polynomial-{degree}" + ("" if rows is None else "-skin"),
             f"root-polynomial regression of degree {degree} (Finlayson et al. 2015){anchored}, "
             "bounded to the chart's domain; Q is its 3x3 fallback",
-            cross_validated_error=_loo_error(problem, correction, rows),
+            cross_validated_error=None
+            if held is None or not np.all(np.isfinite(held))
+            else error_relative_to_white(held, P, problem.white_patch, w),
             warnings=tuple(warnings),
             details=details,
+            loo_predictions=held,
         )
 
     q_root_polynomial_method.__name__ = f"q_root_polynomial_{degree}"
@@ -237,18 +241,13 @@ def _domain(problem: QProblem, weights: np.ndarray) -> FitDomain:
     )
 
 
-def _loo_error(
-    problem: QProblem, correction: RootPolynomialCorrection, rows: SkinRows | None = None
+def _held_out(
+    problem: QProblem, correction: RootPolynomialCorrection, rows: SkinRows | None
 ) -> np.ndarray | None:
-    """(3,) the bounded model's leave-one-patch-out error (white-relative); None with no patch
-    to spare."""
-    w = problem.fit_weights
-    if int(np.count_nonzero(w > 0)) <= ROOT_POLYNOMIAL_TERMS[correction.degree]:
+    """:func:`bounded_loo_predictions`; None with no patch to spare."""
+    if int(np.count_nonzero(problem.fit_weights > 0)) <= ROOT_POLYNOMIAL_TERMS[correction.degree]:
         return None
-    held = bounded_loo_predictions(problem, correction, rows)
-    if not np.all(np.isfinite(held)):
-        return None
-    return error_relative_to_white(held, problem.target, problem.white_patch, w)
+    return bounded_loo_predictions(problem, correction, rows)
 
 
 #: The registry's ``root-polynomial`` method: degree 2 (6 terms).
