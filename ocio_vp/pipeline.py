@@ -54,7 +54,7 @@ from ocio_vp.correction.problem import fit_least_squares
 from ocio_vp.correction.registry import QFit, QProblem, solve_post_correction
 from ocio_vp.correction.skin import chart_skin_samples, joined, patch_skin_samples
 from ocio_vp.correction.skin_figures import skin_figures
-from ocio_vp.correction.skin_priority import default_fit, q_skin_priority
+from ocio_vp.correction.skin_priority import q_skin_priority
 from ocio_vp.correction.skin_spectra import StageSpectra, spectral_skin_samples
 from ocio_vp.correction.validation import CLOSED_FORM_METHODS, cross_validated_error
 from ocio_vp.errors import InputError
@@ -171,7 +171,7 @@ def solve_environment(
     guard = functools.partial(_protected, problem=problem, options=options)
     fit = _fit(problem, options.method, measurements, environment, priority, guard)
     correction = _protected(fit.correction, problem, options)
-    skin = _skin_figures(problem, correction, priority, options)
+    skin = _skin_figures(problem, fit, correction, priority, options)
     SL, M_calibrated = problem.SL, problem.M
     M = M_calibrated if fit.M is None else np.asarray(fit.M, dtype=np.float64)
     if lighting is not None:
@@ -237,14 +237,13 @@ def _protected(
 
 
 def _skin_figures(
-    problem: QProblem, correction: PostCorrection, priority: str, options: SolveOptions
+    problem: QProblem, fit: QFit, correction: PostCorrection, priority: str, options: SolveOptions
 ) -> SkinFigures | None:
-    """What the solve expects of skin; with skin first, beside the default's (solved again on
-    the same problem, protected alike)."""
+    """What the solve expects of skin; with skin first, beside the default's (the fit skin
+    first compared with, protected alike)."""
     default = None
-    if priority == "skin" and problem.skin is not None:
-        fit = default_fit(problem)  # as skin first compared with it
-        default = (fit.model, _protected(fit.correction, problem, options))
+    if priority == "skin" and fit.default is not None:
+        default = (fit.default.model, _protected(fit.default.correction, problem, options))
     return skin_figures(problem, correction, priority, default)
 
 

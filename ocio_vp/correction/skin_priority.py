@@ -48,7 +48,7 @@ from ocio_vp.model.correction import (
 )
 from ocio_vp.model.expansion import ROOT_POLYNOMIAL_TERMS, root_polynomial_expansion
 
-__all__ = ["BLEND_STEPS", "CHART_BUDGET", "PRIORITY_SKIN_WEIGHT", "default_fit", "q_skin_priority"]
+__all__ = ["BLEND_STEPS", "CHART_BUDGET", "PRIORITY_SKIN_WEIGHT", "q_skin_priority"]
 
 #: Weight of the skin samples with skin first (relative to the chart's energy). Chosen on the
 #: training skin (half fitted, half judged) and the tuning cameras at 0.2 % and 1 % noise:
@@ -71,20 +71,6 @@ Guard = Callable[[PostCorrection], PostCorrection]
 _STEP = 1e-6
 #: "No worse" up to rounding: a figure may exceed the default's by this fraction of itself.
 _ROUNDING = 1e-9
-
-
-#: The last problem whose default was solved, and that fit: skin first compares with the
-#: default and the solve then reports it, on the same (frozen) problem; solved once.
-_LAST_DEFAULT: list[tuple[QProblem, QFit]] = []
-
-
-def default_fit(problem: QProblem) -> QFit:
-    """The default's post-correction of ``problem`` (``auto``), solved once per problem."""
-    if _LAST_DEFAULT and _LAST_DEFAULT[0][0] is problem:
-        return _LAST_DEFAULT[0][1]
-    fit = q_auto(problem)
-    _LAST_DEFAULT[:] = [(problem, fit)]
-    return fit
 
 
 def _parameters(
@@ -252,14 +238,13 @@ def _no_worse(value: float, bound: float) -> bool:
 
 
 def within_default(
-    problem: QProblem, fit: QFit, guard: Guard | None = None
+    problem: QProblem, fit: QFit, default: QFit, guard: Guard | None = None
 ) -> tuple[QFit, str, float]:
     """``fit`` drawn towards the default until its background and LED figures are no worse
     than the default's, nor its skin (module docstring), each judged through ``guard`` (the
     emitter guard the solve wraps the model in; none by default): the fit, what was done in
     words, and the share of the way from the default to the skin fit taken (1: the skin fit
-    unchanged, 0: the default)."""
-    default = default_fit(problem)
+    unchanged, 0: the default); ``default`` is ``auto``'s fit of ``problem``."""
     guarded = guard or (lambda correction: correction)
     reference = _figures(problem, guarded(default.correction))
     figures = _figures(problem, guarded(fit.correction))
@@ -318,10 +303,16 @@ def q_skin_priority(problem: QProblem, guard: Guard | None = None) -> QFit:
             "the measurements file, or patches of skin colour are needed)",
             key="--priority",
         )
+    default = q_auto(problem)
+    fit = _q_skin_priority(problem, default, guard)
+    return dataclasses.replace(fit, default=default)
+
+
+def _q_skin_priority(problem: QProblem, default: QFit, guard: Guard | None) -> QFit:
     X, P, w, white = problem_arrays(problem)
     rank, _ = target_rank(P, w, X)
     if rank < 3:
-        fit = default_fit(problem)
+        fit = default
         reason = f"skin priority not applied: the target chart has rank {rank}; {fit.reason}"
         return QFit(
             fit.correction, fit.model, fit.description, reason=reason, target_rank=rank,
@@ -331,9 +322,7 @@ def q_skin_priority(problem: QProblem, guard: Guard | None = None) -> QFit:
     Q_ls = fit_least_squares(X, P, w)
     chart_ls = float(np.mean(patch_errors(X @ Q_ls.T, P, w, white)[0][active]))
     if chart_ls < EXACT:
-        fit = default_fit(
-            problem
-        )  # the stage reproduces the light: no colour, skin or other, to fix
+        fit = default  # the stage reproduces the light: no colour, skin or other, to fix
         return QFit(
             fit.correction, fit.model, fit.description, reason=f"faces first: {fit.reason}",
             cross_validated_error=fit.cross_validated_error, target_rank=rank,
@@ -351,13 +340,12 @@ def q_skin_priority(problem: QProblem, guard: Guard | None = None) -> QFit:
         )
     chart = float(np.mean(patch_errors(fit.correction.apply(X), P, w, white)[0][active]))
     if not chart <= CHART_BUDGET * chart_ls:
-        default = default_fit(problem)
         reason = (
             f"faces first, but the skin fit's chart error {chart:.3g} is above "
             f"{CHART_BUDGET:g}x least squares' {chart_ls:.3g}: the default kept; {default.reason}"
         )
         return dataclasses.replace(default, reason=reason)
-    fit, elsewhere, share = within_default(problem, fit, guard)
+    fit, elsewhere, share = within_default(problem, fit, default, guard)
     if share == 0.0:  # the default itself, its reason saying why
         return fit
     chart = float(np.mean(patch_errors(fit.correction.apply(X), P, w, white)[0][active]))
