@@ -45,6 +45,7 @@ from ocio_vp.spectra import spectral_shape, wavelengths
 __all__ = [
     "COLORCHECKER_NAMES",
     "ITP_WHITE_NITS",
+    "ROUNDING",
     "SAMPLE_MATRIX_FILE",
     "WHITE_FLOOR",
     "ChartErrors",
@@ -57,6 +58,7 @@ __all__ = [
     "sample_camera_to_xyz",
     "training_rgb_xyz",
     "white_scale",
+    "zero_below_rounding",
 ]
 
 #: The 24 patches of the ColorChecker Classic in reading order (X-Rite's names).
@@ -108,6 +110,18 @@ _CMFS = "CIE 1931 2 Degree Standard Observer"
 #: A white-patch channel below this fraction of the white's brightest channel is floored to it,
 #: so that a near-monochromatic target (sodium: almost no blue) does not divide by ~0.
 WHITE_FLOOR = 0.01
+#: A colour difference below this is rounding, whose digits differ between machines: files and
+#: terminals give it as 0 (:func:`zero_below_rounding`).
+ROUNDING = 1e-6
+
+
+def zero_below_rounding(value: float) -> float:
+    """``value`` as a float, or 0.0 where its magnitude is below :data:`ROUNDING`.
+
+    >>> zero_below_rounding(3.2e-8), zero_below_rounding(0.42)
+    (0.0, 0.42)
+    """
+    return 0.0 if abs(value) < ROUNDING else float(value)
 
 
 def white_scale(

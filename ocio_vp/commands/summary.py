@@ -19,6 +19,8 @@ import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, TextIO
 
+from ocio_vp.metrics import zero_below_rounding
+
 if TYPE_CHECKING:
     from ocio_vp.formats.diagnostics import Diagnostics
     from ocio_vp.formats.solution import Solution
@@ -97,8 +99,8 @@ def _n_state(solution: Solution) -> str:
 
 
 def _delta_e(value: float) -> str:
-    """A ΔE2000 figure; below 1e-6 it is rounding (machine-dependent digits), printed as 0."""
-    return f"{value:.3g}" if value >= 1e-6 else "0"
+    """A ΔE2000 figure; rounding (machine-dependent digits) printed as 0."""
+    return f"{zero_below_rounding(value):.3g}"
 
 
 def _leds(diagnostics: Diagnostics) -> str:

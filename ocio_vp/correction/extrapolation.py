@@ -200,21 +200,14 @@ def extrapolation(
     the target white patch (the ΔE's reference), ``lit_white`` the lit one (the probes' scale)."""
     kept, negative = saturation_probe(correction, lit_white)
     return Extrapolation(
-        led_damage=_recorded(in_frame_led_damage(correction, SL, white, camera_to_xyz)),
-        led_damage_least_squares=_recorded(
-            in_frame_led_damage(MatrixCorrection(least_squares), SL, white, camera_to_xyz)
+        led_damage=in_frame_led_damage(correction, SL, white, camera_to_xyz),
+        led_damage_least_squares=in_frame_led_damage(
+            MatrixCorrection(least_squares), SL, white, camera_to_xyz
         ),
         kept=kept,
         negative=negative,
         folds=_folds(correction, domain),
     )
-
-
-def _recorded(delta_e: float) -> float:
-    """A ΔE2000 figure as solution.json keeps it: 4 significant digits, and 0 below 1e-6 (the
-    rounding of a correction that leaves the LEDs alone). The digits beyond differ between
-    machines: the sodium stage's rank-1 Q moves its LEDs by a p95 that agrees to 2e-8 only."""
-    return 0.0 if delta_e < 1e-6 else float(f"{delta_e:.4g}")
 
 
 def _folds(correction: PostCorrection, domain: FitDomain) -> float | None:
