@@ -1,27 +1,19 @@
 """``--priority skin``: the post-correction fitted with faces first.
 
-The default (``auto``) already fits its root-polynomial candidate to the problem's skin samples
-(:mod:`ocio_vp.correction.skin`) with a small weight and never takes a model that renders them
-worse than least squares. With skin first the weight is :data:`PRIORITY_SKIN_WEIGHT`: the
-bounded root-polynomial of degree 2 fitted to the chart and the skin samples, each skin sample
-scaled by its luminance to the power -2/3 (CIE L* is about ``Y^(1/3)``: skin of every
-lightness counts alike). Its fallback outside the chart's domain stays the chart's least
-squares, so emitters, highlights and saturated colours are corrected as by the default. Where
-the root-polynomial is not safe (it folds, flips or collapses a bright saturated input, or the
-chart does not constrain its terms) a 3x3 is fitted to the same rows instead. The chart's
-error is bounded (:data:`CHART_BUDGET` times least squares'); a target chart of rank below 3
-(monochromatic light) has no colour to put first and is solved as the default solves it.
+The bounded root-polynomial of degree 2 is fitted to the chart and the problem's skin samples
+(:mod:`ocio_vp.correction.skin`) with weight :data:`PRIORITY_SKIN_WEIGHT`, each sample scaled
+by its luminance to the power -2/3 (skin of every lightness counts alike); a 3x3 is fitted to
+the same rows where the root-polynomial is not safe. Its fallback outside the chart's domain
+stays the chart's least squares. The chart's error is bounded (:data:`CHART_BUDGET` times least
+squares'); a target chart of rank below 3 has no colour to put first and is solved as the
+default (``auto``) solves it.
 
-Faces first must not cost the rest of the frame: through the skin-first model the in-frustum
-background's expected error (:func:`~ocio_vp.correction.skin_figures.background_error`) and
-the wall's LEDs in frame (:func:`~ocio_vp.correction.extrapolation.in_frame_led_damage`) may be
-no worse than through the default's post-correction on the same problem, nor its skin samples
-(and the chart no worse than the worse of the two). Where the skin fit is, the model is taken
-from the default towards it, its parameters ``D + a step`` (two models of one kind, whose
-outputs are linear in their parameters): first along the step with the background's rise taken
-out to first order (the gradient projected out in the skin fit's own metric, so the fit gives
-up as little as it can), then straight, for a in 1 and :data:`BLEND_STEPS`, largest first; the
-default itself where none holds.
+Faces first must not cost the rest of the frame: the in-frustum background's expected error,
+the wall's LEDs in frame and the skin samples may be no worse than through the default's
+post-correction. Where the skin fit is, the model is drawn from the default towards it
+(parameters ``D + a step``): first along the step with the background's first-order rise
+projected out (in the skin fit's own metric), then straight, for a in 1 and
+:data:`BLEND_STEPS`, largest first; the default itself where none holds.
 """
 
 from __future__ import annotations
@@ -50,10 +42,8 @@ from ocio_vp.model.expansion import ROOT_POLYNOMIAL_TERMS, root_polynomial_expan
 
 __all__ = ["BLEND_STEPS", "CHART_BUDGET", "PRIORITY_SKIN_WEIGHT", "q_skin_priority"]
 
-#: Weight of the skin samples with skin first (relative to the chart's energy). Chosen on the
-#: training skin (half fitted, half judged) and the tuning cameras at 0.2 % and 1 % noise:
-#: 0.5 rendered that skin 0.65-0.77x least squares with general reflectances ~0.94x; 1.0 gained
-#: at 0.2 % noise and lost it at 1 % (docs/skin.md).
+#: Weight of the skin samples with skin first (relative to the chart's energy), chosen on the
+#: training skin and the tuning cameras (docs/skin.md).
 PRIORITY_SKIN_WEIGHT = 0.5
 #: The chart's mean ΔE2000 after the fit may be at most this times least squares'.
 CHART_BUDGET = 1.15
