@@ -1,15 +1,6 @@
-"""Chart error metrics: the paper's relative-to-white error, CIE ΔE2000 and ΔE ITP.
-
-- :func:`error_relative_to_white` : mean absolute
-  error per channel relative to the target white patch, the metric of the paper's Fig. 11.
-- :func:`camera_to_xyz_matrix`: a 3x3 camera RGB -> CIE XYZ matrix fitted (least squares,
-  colour's ``matrix_colour_correction``, Cheung 2004 with 3 terms) on colour-science's offline
-  RAW to ACES v1 training reflectances (190 samples) under an illuminant (default D65), XYZ
-  from the CIE 1931 2-degree observer.
-- :func:`chart_errors`: ΔE2000 and ΔE ITP per patch through that matrix, with colour's own
-  ``delta_E`` implementations.
-- :func:`delta_E_2000`: ΔE2000 between two renderings of the same pixels (two hosts, or a
-  host and the exact model), through a camera -> XYZ matrix, relative to a scene white.
+"""Chart error metrics: the paper's relative-to-white error (Fig. 11), CIE ΔE2000 and ΔE ITP
+of camera RGB through a camera RGB -> XYZ matrix (:func:`camera_to_xyz_matrix`, or the sample
+camera's, :func:`sample_camera_to_xyz`).
 
 Normalisation (both ΔE need one):
 

@@ -1,9 +1,7 @@
 """How a post-correction behaves beyond the chart, measured on every solve, and the bound on it.
 
-A chart holds 24 reflective colours; footage holds more: saturated surfaces at the edge of the
-reflective gamut, emitters (practicals, screens, neon, the wall's own LEDs in frame) and
-highlights above white. What a fit does there is extrapolation, and it is measured here from
-the calibration data alone:
+Footage holds more than the chart's reflective colours: saturated surfaces, emitters and
+highlights above white. What a fit does there is measured here from the calibration alone:
 
 - :func:`fold_fraction`: the share of the reflective solid (drive-relative ``u`` in [0, 1]^3,
   :class:`~ocio_vp.model.correction.FitDomain`) where the correction's Jacobian determinant has
@@ -20,8 +18,7 @@ the calibration data alone:
   pairwise mixes at 1/4, 1 and 4 times the white patch's luminance) are emitters whose camera
   RGB the calibration measured: recorded alike on stage and on location, so the right
   correction leaves them alone. The p95 ΔE2000 between Q(x) and x over them is the emitter
-  damage a solve can measure without spectra (the benchmark measures it on narrow-band
-  emitters from 420 to 680 nm: docs/accuracy.md).
+  damage a solve can measure without spectra (docs/accuracy.md measures it on emitters).
 """
 
 from __future__ import annotations

@@ -2,18 +2,11 @@
 to the chart's domain, and the exact inverse of the polynomial.
 
 A root-polynomial Q maps camera RGB ``x`` to ``C e(x)`` (:mod:`ocio_vp.model.expansion`:
-every term homogeneous of degree 1, so ``Q(k x) = k Q(x)``). Fitted on 24 patches it renders
-reflective colours better than a 3x3 (docs/accuracy.md), but beyond the chart it only
-extrapolates: bright saturated inputs and emitters lose or flip channels. So the method returns
-a :class:`~ocio_vp.model.correction.RootPolynomialCorrection`: the polynomial inside the chart's
-domain, fading to the least-squares 3x3 on the same patches outside it, with the fade chosen by
-:func:`ocio_vp.correction.extrapolation.choose_fade` (the widest that folds nowhere among
-reflective colours). Its leave-one-out error is the bounded model's: each patch is predicted by
-the polynomial and the 3x3 fitted without it, blended by its place in the domain of the others.
-
-The inverse of the polynomial itself (:func:`invert_root_polynomial`) is solved on each
-colour's direction (homogeneity) by damped Newton iterations with the analytic Jacobian
-(:func:`~ocio_vp.model.expansion.root_polynomial_jacobian`), all colours at once.
+homogeneous of degree 1). Beyond the chart it only extrapolates (bright saturated inputs and
+emitters lose or flip channels), so the method returns a
+:class:`~ocio_vp.model.correction.RootPolynomialCorrection`: the polynomial inside the chart's
+domain, fading to the least-squares 3x3 outside it, with the widest fade that folds nowhere
+among reflective colours (:func:`ocio_vp.correction.extrapolation.choose_fade`).
 
 References
 ----------
