@@ -50,8 +50,7 @@ SKIN_CHART = "BabelColor Average"
 
 #: Ridge strength of the chart combination, relative to the mean patch energy: small enough to
 #: reproduce skin's spectrum, large enough that no coefficient amplifies the chart's noise
-#: (chosen on the training skin, half fitted and half judged, at 0.2 % and 1 % noise: 1e-5
-#: amplified 1 % noise, 1e-3 and above blurred the skin; docs/skin.md).
+#: (chosen on the training skin, docs/skin.md).
 COMBINATION_RIDGE = 1e-4
 
 
