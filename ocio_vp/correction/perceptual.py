@@ -9,10 +9,9 @@ colour-science's own ``delta_E`` ("CIE 2000" or "ITP"), in the normalisation of
 100 cd/m^2 for ΔE ITP), after a camera RGB -> XYZ matrix.
 
 That matrix comes from the caller (``make_q_perceptual(camera_to_xyz=...)``) when the camera is
-characterised; the registry's ``perceptual`` uses :func:`sample_camera_to_xyz`, the matrix of
-the sample camera (:func:`ocio_vp.spectra.camera_sensitivities`, as the simulator uses) fitted by
-:func:`ocio_vp.metrics.camera_to_xyz_matrix` — a generic stand-in for "a camera's RGB", good
-enough to weigh errors perceptually, not a colorimetric characterisation of *your* camera.
+characterised; the registry's ``perceptual`` uses the sample camera's
+(:func:`ocio_vp.metrics.sample_camera_to_xyz`): a stand-in good enough to weigh errors
+perceptually, not a colorimetric characterisation of *your* camera.
 
 References
 ----------
@@ -92,10 +91,9 @@ def patch_delta_e(
     """(..., n) ΔE (``metric``) of each patch of ``predicted`` against ``target`` (camera RGB).
 
     ``predicted`` is (n, 3) or a stack of predictions (..., n, 3) of the same (n, 3) target
-    (candidate models): the whole stack goes through colour-science in one call. Normalised on the target white patch; when that patch is excluded (weight 0) or has no
-    luminance, on the fitted patch of highest luminance instead, so a corrupted or clipped
-    white patch never makes the metric undefined. ``camera_to_xyz`` defaults to
-    :func:`sample_camera_to_xyz`.
+    (candidate models), in one call. Normalised on the target white patch, or where that is
+    excluded (weight 0) or has no luminance, on the fitted patch of highest luminance.
+    ``camera_to_xyz`` defaults to :func:`~ocio_vp.metrics.sample_camera_to_xyz`.
     """
     import colour
 
@@ -135,7 +133,7 @@ def make_q_perceptual(
     Parameters
     ----------
     camera_to_xyz
-        (3, 3) camera RGB -> CIE XYZ; default :func:`sample_camera_to_xyz`.
+        (3, 3) camera RGB -> CIE XYZ; default :func:`~ocio_vp.metrics.sample_camera_to_xyz`.
     metric
         ``"CIE 2000"`` (CIEDE2000 in Lab) or ``"ITP"`` (ITU-R BT.2124).
     max_iterations

@@ -1,8 +1,7 @@
 """The data of a post-correction (Q) solve and its result.
 
-:class:`QProblem` and :class:`QFit` live here, apart from the registry in
-:mod:`ocio_vp.correction.registry`, so that modules holding Q methods can import them without importing the
-registry that imports them (``ocio_vp.correction.registry`` re-exports both names).
+:class:`QProblem` and :class:`QFit` live apart from :mod:`ocio_vp.correction.registry`
+(which re-exports them) so that the methods can import them without an import cycle.
 
 References
 ----------
