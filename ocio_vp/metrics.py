@@ -190,9 +190,9 @@ def _on_grid(spectra) -> np.ndarray:
 def _training_reflectances() -> np.ndarray:
     """(190, W) the RAW to ACES v1 training reflectances on the project's grid.
 
-    Read from colour-science's own CSV file with numpy (the same numbers as colour's
-    ``read_training_data_rawtoaces_v1``, which takes ~50x longer to parse it); colour's
-    reader and ``align`` when the file's wavelengths are not the grid's.
+    Read from colour-science's own CSV file with numpy (the same numbers as colour's slower
+    ``read_training_data_rawtoaces_v1``); colour's reader and ``align`` when the file's
+    wavelengths are not the grid's.
     """
     import colour
     from colour.characterisation.aces_it import ROOT_RESOURCES_RAWTOACES
