@@ -19,8 +19,6 @@ import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, TextIO
 
-from ocio_vp.metrics import zero_below_rounding
-
 if TYPE_CHECKING:
     from ocio_vp.formats.diagnostics import Diagnostics
     from ocio_vp.formats.solution import Solution
@@ -100,6 +98,8 @@ def _n_state(solution: Solution) -> str:
 
 def _delta_e(value: float) -> str:
     """A ΔE2000 figure; rounding (machine-dependent digits) printed as 0."""
+    from ocio_vp.metrics import zero_below_rounding
+
     return f"{zero_below_rounding(value):.3g}"
 
 
