@@ -1,15 +1,6 @@
-"""Chart error metrics: the paper's relative-to-white error, CIE ΔE2000 and ΔE ITP.
-
-- :func:`error_relative_to_white` : mean absolute
-  error per channel relative to the target white patch, the metric of the paper's Fig. 11.
-- :func:`camera_to_xyz_matrix`: a 3x3 camera RGB -> CIE XYZ matrix fitted (least squares,
-  colour's ``matrix_colour_correction``, Cheung 2004 with 3 terms) on colour-science's offline
-  RAW to ACES v1 training reflectances (190 samples) under an illuminant (default D65), XYZ
-  from the CIE 1931 2-degree observer.
-- :func:`chart_errors`: ΔE2000 and ΔE ITP per patch through that matrix, with colour's own
-  ``delta_E`` implementations.
-- :func:`delta_E_2000`: ΔE2000 between two renderings of the same pixels (two hosts, or a
-  host and the exact model), through a camera -> XYZ matrix, relative to a scene white.
+"""Chart error metrics: the paper's relative-to-white error (Fig. 11), CIE ΔE2000 and ΔE ITP
+of camera RGB through a camera RGB -> XYZ matrix (:func:`camera_to_xyz_matrix`, or the sample
+camera's, :func:`sample_camera_to_xyz`).
 
 Normalisation (both ΔE need one):
 
@@ -45,6 +36,7 @@ from ocio_vp.spectra import spectral_shape, wavelengths
 __all__ = [
     "COLORCHECKER_NAMES",
     "ITP_WHITE_NITS",
+    "ROUNDING",
     "SAMPLE_MATRIX_FILE",
     "WHITE_FLOOR",
     "ChartErrors",
@@ -57,6 +49,7 @@ __all__ = [
     "sample_camera_to_xyz",
     "training_rgb_xyz",
     "white_scale",
+    "zero_below_rounding",
 ]
 
 #: The 24 patches of the ColorChecker Classic in reading order (X-Rite's names).
@@ -108,6 +101,18 @@ _CMFS = "CIE 1931 2 Degree Standard Observer"
 #: A white-patch channel below this fraction of the white's brightest channel is floored to it,
 #: so that a near-monochromatic target (sodium: almost no blue) does not divide by ~0.
 WHITE_FLOOR = 0.01
+#: A colour difference below this is rounding, whose digits differ between machines: files and
+#: terminals give it as 0 (:func:`zero_below_rounding`).
+ROUNDING = 1e-6
+
+
+def zero_below_rounding(value: float) -> float:
+    """``value`` as a float, or 0.0 where its magnitude is below :data:`ROUNDING`.
+
+    >>> zero_below_rounding(3.2e-8), zero_below_rounding(0.42)
+    (0.0, 0.42)
+    """
+    return 0.0 if abs(value) < ROUNDING else float(value)
 
 
 def white_scale(
@@ -185,9 +190,9 @@ def _on_grid(spectra) -> np.ndarray:
 def _training_reflectances() -> np.ndarray:
     """(190, W) the RAW to ACES v1 training reflectances on the project's grid.
 
-    Read from colour-science's own CSV file with numpy (the same numbers as colour's
-    ``read_training_data_rawtoaces_v1``, which takes ~50x longer to parse it); colour's
-    reader and ``align`` when the file's wavelengths are not the grid's.
+    Read from colour-science's own CSV file with numpy (the same numbers as colour's slower
+    ``read_training_data_rawtoaces_v1``); colour's reader and ``align`` when the file's
+    wavelengths are not the grid's.
     """
     import colour
     from colour.characterisation.aces_it import ROOT_RESOURCES_RAWTOACES

@@ -49,12 +49,11 @@ from ocio_vp.choices import (
 from ocio_vp.correction.extrapolation import Extrapolation, extrapolation
 from ocio_vp.correction.guards import check_problem, singular_q_cause
 from ocio_vp.correction.outliers import Inconsistency, inconsistent_patches
-from ocio_vp.correction.perceptual import default_camera_to_xyz
 from ocio_vp.correction.problem import fit_least_squares
 from ocio_vp.correction.registry import QFit, QProblem, solve_post_correction
 from ocio_vp.correction.skin import chart_skin_samples, joined, patch_skin_samples
 from ocio_vp.correction.skin_figures import skin_figures
-from ocio_vp.correction.skin_priority import default_fit, q_skin_priority
+from ocio_vp.correction.skin_priority import q_skin_priority
 from ocio_vp.correction.skin_spectra import StageSpectra, spectral_skin_samples
 from ocio_vp.correction.validation import CLOSED_FORM_METHODS, cross_validated_error
 from ocio_vp.errors import InputError
@@ -73,7 +72,7 @@ from ocio_vp.formats.records import json_object
 from ocio_vp.formats.skin import SkinFigures
 from ocio_vp.formats.solution import Solution
 from ocio_vp.formats.synthesis import synthesis_to_dict, synthesis_warnings
-from ocio_vp.metrics import error_relative_to_white
+from ocio_vp.metrics import error_relative_to_white, sample_camera_to_xyz
 from ocio_vp.model.correction import DEFAULT_DARK, PostCorrection, ProtectedCorrection
 
 __all__ = [
@@ -166,7 +165,7 @@ def solve_environment(
     guard = functools.partial(_protected, problem=problem, options=options)
     fit = _fit(problem, options.method, measurements, environment, priority, guard)
     correction = _protected(fit.correction, problem, options)
-    skin = _skin_figures(problem, correction, priority, options)
+    skin = _skin_figures(problem, fit, correction, priority, options)
     SL, M_calibrated = problem.SL, problem.M
     M = M_calibrated if fit.M is None else np.asarray(fit.M, dtype=np.float64)
     if lighting is not None:
@@ -232,14 +231,13 @@ def _protected(
 
 
 def _skin_figures(
-    problem: QProblem, correction: PostCorrection, priority: str, options: SolveOptions
+    problem: QProblem, fit: QFit, correction: PostCorrection, priority: str, options: SolveOptions
 ) -> SkinFigures | None:
-    """What the solve expects of skin; with skin first, beside the default's (solved again on
-    the same problem, protected alike)."""
+    """What the solve expects of skin; with skin first, beside the default's (the fit skin
+    first compared with, protected alike)."""
     default = None
-    if priority == "skin" and problem.skin is not None:
-        fit = default_fit(problem)  # as skin first compared with it
-        default = (fit.model, _protected(fit.correction, problem, options))
+    if priority == "skin" and fit.default is not None:
+        default = (fit.default.model, _protected(fit.default.correction, problem, options))
     return skin_figures(problem, correction, priority, default)
 
 
@@ -254,9 +252,7 @@ def _lighting(measurements: Measurements, problem: QProblem, method: str) -> Fix
             source=measurements.source,
             key="fixtures",
         )
-    return light_with_fixtures(
-        measurements.fixtures, problem, camera_to_xyz=default_camera_to_xyz()
-    )
+    return light_with_fixtures(measurements.fixtures, problem, camera_to_xyz=sample_camera_to_xyz())
 
 
 def _environment_key(measurements: Measurements, environment: Environment, key: str) -> str:
@@ -353,7 +349,7 @@ def _solve_panels(
     primary = primary_panel(measurements.panels).name
     lights = panel_lights(measurements, environment_panel_w_avg(measurements, environment))
     blacks = dict(environment.panel_black_level or {})
-    white, camera = measurements.stage.white_patch, default_camera_to_xyz()
+    white, camera = measurements.stage.white_patch, sample_camera_to_xyz()
     drives: dict[str, InFrustumDrive] = {primary: InFrustumDrive(N, n_reason, offset)}
     for light in lights:
         if light.panel.in_frustum and light.name != primary:
@@ -548,7 +544,7 @@ def _extrapolation(problem: QProblem, correction: PostCorrection) -> Extrapolati
         SL=problem.SL,
         white=P[problem.white_patch],
         lit_white=X[problem.white_patch],
-        camera_to_xyz=default_camera_to_xyz(),
+        camera_to_xyz=sample_camera_to_xyz(),
         domain=problem.domain,
     )
 

@@ -70,11 +70,6 @@ class SkinSet:
         """(n,) ITA° of each sample, computed from its spectrum."""
         return ita_degrees(lab_d65(self.reflectances))
 
-    def in_band(self, band: str) -> np.ndarray:
-        """(k, W) the reflectances of one band."""
-        mask = np.array([b == band for b in self.bands], dtype=bool)
-        return self.reflectances[mask]
-
 
 def lab_d65(reflectances) -> np.ndarray:
     """(..., 3) CIELAB of reflectances (..., W) on the grid under D65, CIE 1931 2° observer."""

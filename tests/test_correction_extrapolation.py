@@ -22,7 +22,7 @@ from ocio_vp.correction.extrapolation import (
     in_frame_led_damage,
     saturation_probe,
 )
-from ocio_vp.correction.perceptual import default_camera_to_xyz
+from ocio_vp.metrics import sample_camera_to_xyz
 from ocio_vp.model import MatrixCorrection, RootPolynomialCorrection
 
 
@@ -83,7 +83,7 @@ def test_a_collapsed_dominant_channel_is_written_finite(problem):
 
 
 def test_the_identity_damages_no_in_frame_led(problem):
-    xyz = default_camera_to_xyz()
+    xyz = sample_camera_to_xyz()
     white = problem.target[problem.white_patch]
     assert in_frame_led_damage(MatrixCorrection(np.eye(3)), problem.SL, white, xyz) == 0.0
     gain = in_frame_led_damage(MatrixCorrection(np.diag([1.3, 1.0, 1.0])), problem.SL, white, xyz)

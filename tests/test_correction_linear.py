@@ -24,7 +24,6 @@ from ocio_vp.correction.linear import (
     loo_predictions,
     target_rank,
 )
-from ocio_vp.correction.perceptual import default_camera_to_xyz
 from ocio_vp.correction.registry import Q_SOLVE_METHODS, QProblem, solve_post_correction
 from ocio_vp.correction.root_polynomial import (
     fit_root_polynomial,
@@ -32,7 +31,7 @@ from ocio_vp.correction.root_polynomial import (
 )
 from ocio_vp.correction.skin import with_rows
 from ocio_vp.errors import InputError
-from ocio_vp.metrics import chart_errors
+from ocio_vp.metrics import chart_errors, sample_camera_to_xyz
 from ocio_vp.model.correction import RootPolynomialCorrection
 from ocio_vp.pipeline import DEFAULT_METHOD, solve_environment, with_skin
 from ocio_vp.simulator.data import ENVIRONMENTS
@@ -174,7 +173,7 @@ class TestDiagonalAndRegularised:
                 D = np.diag((Xk * Pk).sum(axis=0) / (Xk * Xk).sum(axis=0))
                 QT = np.linalg.solve(Xk.T @ Xk + lam * np.eye(3), Xk.T @ Pk + lam * D.T)
                 held[j] = X[j] @ QT
-            de = chart_errors(held, P, camera_to_xyz=default_camera_to_xyz()).delta_E_2000
+            de = chart_errors(held, P, camera_to_xyz=sample_camera_to_xyz()).delta_E_2000
             errors.append(de.mean())
         errors = np.array(errors)
         strongest = REGULARISATION_GRID[np.flatnonzero(errors <= errors.min() + 1e-6)[-1]]
@@ -297,7 +296,7 @@ class TestAutoOnTheSimulator:
                         dataclasses.replace(problem, weights=w), method=name
                     ).correction
                 held[j] = Q.apply(X[j]) if hasattr(Q, "apply") else Q @ X[j]
-            de = chart_errors(held, P, camera_to_xyz=default_camera_to_xyz()).delta_E_2000
+            de = chart_errors(held, P, camera_to_xyz=sample_camera_to_xyz()).delta_E_2000
             np.testing.assert_allclose(notes["cv_delta_e"][name], de.mean(), rtol=1e-9)
         assert s.diagnostics.model in AUTO_LADDER
         assert "ΔE2000" in s.diagnostics.model_reason

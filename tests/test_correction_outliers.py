@@ -29,8 +29,8 @@ from ocio_vp.correction.outliers import (
     patch_name,
     patch_scores,
 )
-from ocio_vp.correction.perceptual import default_camera_to_xyz
 from ocio_vp.errors import InputError
+from ocio_vp.metrics import sample_camera_to_xyz
 from ocio_vp.pipeline import solve_environment
 from ocio_vp.simulator.data import ENVIRONMENTS as ALL_ENVIRONMENTS
 from ocio_vp.simulator.stage import simulate_measurements, spectral_stage
@@ -220,7 +220,7 @@ def test_cli_names_the_patch_and_keep_all_patches_opts_out(clean, tmp_path, caps
 
 def _delta_e_2000(rgb, reference_rgb, white_rgb):
     """colour-science's ΔE2000 of camera RGB through the generic camera matrix, on a white."""
-    matrix = default_camera_to_xyz()
+    matrix = sample_camera_to_xyz()
     white = matrix @ white_rgb
     xy = colour.XYZ_to_xy(white)
 

@@ -7,16 +7,18 @@ reachable target must be found exactly; the ground truth is the spectral simulat
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from conftest import paper_stage_problem
 
 from ocio_vp.correction.perceptual import (
-    default_camera_to_xyz,
     make_q_perceptual,
     mean_delta_e,
     patch_delta_e,
     q_perceptual,
+    sample_camera_to_xyz,
 )
 from ocio_vp.correction.problem import QProblem
 from ocio_vp.metrics import chart_errors
@@ -33,7 +35,7 @@ def _least_squares(problem: QProblem) -> np.ndarray:
 
 
 def test_objective_matches_metrics_module(problem):
-    matrix = default_camera_to_xyz()
+    matrix = sample_camera_to_xyz()
     pred = problem.predicted @ _least_squares(problem).T
     errors = chart_errors(pred, problem.target, camera_to_xyz=matrix)
     assert mean_delta_e(pred, problem.target, camera_to_xyz=matrix) == pytest.approx(
@@ -46,7 +48,7 @@ def test_objective_matches_metrics_module(problem):
 
 @pytest.mark.parametrize("metric", ["CIE 2000", "ITP"])
 def test_lower_mean_delta_e_than_least_squares(problem, metric):
-    matrix = default_camera_to_xyz()
+    matrix = sample_camera_to_xyz()
     fit = make_q_perceptual(metric=metric)(problem)
     field = "delta_E_2000" if metric == "CIE 2000" else "delta_E_ITP"
     ls = getattr(
@@ -67,7 +69,7 @@ def test_lower_mean_delta_e_than_least_squares(problem, metric):
 def test_reachable_target_is_found(problem):
     # The target is exactly Q_true x_j: the minimum mean ΔE is 0 at Q_true.
     Q_true = np.array([[1.05, -0.04, 0.02], [0.03, 0.97, 0.01], [-0.02, 0.05, 1.08]])
-    exact = QProblem(**{**problem.__dict__, "target": problem.predicted @ Q_true.T})
+    exact = dataclasses.replace(problem, target=problem.predicted @ Q_true.T)
     fit = q_perceptual(exact)
     np.testing.assert_allclose(fit.Q, Q_true, atol=1e-6)
     assert fit.notes["mean_delta_e"] < 1e-6
@@ -85,7 +87,7 @@ def test_a_stack_of_predictions_equals_one_call_each(problem, metric):
     for index in np.ndindex(2, 4):
         single = patch_delta_e(stack[index], problem.target, metric=metric)
         np.testing.assert_allclose(batched[index], single, rtol=1e-12, atol=1e-12)
-        one = chart_errors(stack[index], problem.target, camera_to_xyz=default_camera_to_xyz())
+        one = chart_errors(stack[index], problem.target, camera_to_xyz=sample_camera_to_xyz())
         np.testing.assert_allclose(batched[index], getattr(one, field), rtol=1e-9)
 
 
@@ -97,7 +99,7 @@ def test_excluded_patches_do_not_count(problem):
     wild[3] *= [2.0, 0.3, 3.0]
     solve = make_q_perceptual(max_iterations=20)  # same path, fewer steps: this is not about ΔE
     fits = [
-        solve(QProblem(**{**problem.__dict__, "target": t, "weights": weights}))
+        solve(dataclasses.replace(problem, target=t, weights=weights))
         for t in (problem.target, wild)
     ]
     np.testing.assert_allclose(fits[0].Q, fits[1].Q, atol=1e-9)

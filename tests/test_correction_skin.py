@@ -184,7 +184,7 @@ def test_skin_first_composes_with_the_emitter_guard(stage_and_measurements, solv
     the default's), and moves the wall's LEDs in frame clearly less than that model alone does;
     judged through the guard, skin first is no worse than the guarded default on them."""
     from ocio_vp.correction.extrapolation import in_frame_led_damage
-    from ocio_vp.correction.skin import sample_camera_to_xyz
+    from ocio_vp.metrics import sample_camera_to_xyz
     from ocio_vp.model.correction import unprotected
 
     _, m = stage_and_measurements

@@ -17,7 +17,6 @@ import pytest
 from ocio_vp.calibration.geometry import stage_beta
 from ocio_vp.cli import main
 from ocio_vp.correction.joint import DEFAULT_MAX_DELTA_E
-from ocio_vp.correction.perceptual import default_camera_to_xyz
 from ocio_vp.errors import InputError
 from ocio_vp.fixtures import (
     DriveProblem,
@@ -30,6 +29,7 @@ from ocio_vp.fixtures import (
 from ocio_vp.formats.fixtures import DmxPatch, Fixture
 from ocio_vp.formats.measurements import save_measurements
 from ocio_vp.formats.solution import FixtureDrive, load_solution, solution_to_json
+from ocio_vp.metrics import sample_camera_to_xyz
 from ocio_vp.pipeline import solve_environment
 from ocio_vp.simulator.fixtures import fixture_spectra, with_simulated_fixtures
 from ocio_vp.simulator.stage import paper_stage, simulate_measurements
@@ -70,7 +70,7 @@ def test_irreducible_error_is_the_least_squares_residual_numpy_finds():
 
 
 def test_fixtures_respect_every_limit(solved, rgbw):
-    xyz = default_camera_to_xyz()
+    xyz = sample_camera_to_xyz()
     for name in ("d65", "incandescent"):
         solution = solved[name]
         notes = solution.diagnostics.fixtures

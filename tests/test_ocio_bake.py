@@ -131,7 +131,7 @@ def test_the_chain_is_the_matrix_where_the_model_is(written):
 def test_recorded_agreement_is_what_the_config_does(written):
     """solution.json's agreement (quoted in the descriptions and the exports) is measured on
     the config's own processor: recomputed here from the calibration, it is the same."""
-    from ocio_vp.correction.perceptual import default_camera_to_xyz
+    from ocio_vp.metrics import sample_camera_to_xyz
     from ocio_vp.model.footage_range import agreement, calibration_footage_range
 
     for solution, config in written.values():
@@ -140,7 +140,7 @@ def test_recorded_agreement_is_what_the_config_does(written):
         footage = calibration_footage_range(
             lit_chart=charts.lit_baseline, white_patch=white,
             target_white=charts.target[white], SL=solution.SL,
-            camera_to_xyz=default_camera_to_xyz(),
+            camera_to_xyz=sample_camera_to_xyz(),
         )  # fmt: skip
         measured = agreement(
             footage, _model(solution), _processor(config, POST_CORRECTION_COLORSPACE, REFERENCE)
@@ -163,8 +163,7 @@ def test_in_frustum_round_trip_through_the_config(written, case):
     """Content -> the config's in-frustum drive (OCIO) -> the wall [SL] -> the exact model:
     the content again, within 0.5 ΔE2000 (p99) and 2 (worst), content in the chart's gamut
     from 1 % to 4x its white. The 3x3 approximation the config used before is worse."""
-    from ocio_vp.correction.perceptual import default_camera_to_xyz
-    from ocio_vp.metrics import delta_E_2000
+    from ocio_vp.metrics import delta_E_2000, sample_camera_to_xyz
 
     solution, config = written[case]
     model = _model(solution)
@@ -172,10 +171,10 @@ def test_in_frustum_round_trip_through_the_config(written, case):
     drive = _processor(config, REFERENCE, IN_FRUSTUM)(c) - solution.in_frustum_offset
     seen = model(drive @ np.asarray(solution.SL).T)
     white = np.asarray(solution.diagnostics.charts.target)[18]
-    de = delta_E_2000(seen, c, camera_to_xyz=default_camera_to_xyz(), white=white)
+    de = delta_E_2000(seen, c, camera_to_xyz=sample_camera_to_xyz(), white=white)
     assert np.percentile(de, 99) <= AGREEMENT_P99 and de.max() <= AGREEMENT_WORST
     seen_3x3 = model((c @ np.asarray(solution.N).T) @ np.asarray(solution.SL).T)
-    de_3x3 = delta_E_2000(seen_3x3, c, camera_to_xyz=default_camera_to_xyz(), white=white)
+    de_3x3 = delta_E_2000(seen_3x3, c, camera_to_xyz=sample_camera_to_xyz(), white=white)
     assert de_3x3.mean() > 2 * de.mean()
 
 

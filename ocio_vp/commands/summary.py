@@ -90,8 +90,10 @@ def _n_state(solution: Solution) -> str:
 
 
 def _delta_e(value: float) -> str:
-    """A ΔE2000 figure; below 1e-6 it is rounding (machine-dependent digits), printed as 0."""
-    return f"{value:.3g}" if value >= 1e-6 else "0"
+    """A ΔE2000 figure; rounding (machine-dependent digits) printed as 0."""
+    from ocio_vp.metrics import zero_below_rounding
+
+    return f"{zero_below_rounding(value):.3g}"
 
 
 def _leds(diagnostics: Diagnostics) -> str:

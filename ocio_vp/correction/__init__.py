@@ -69,7 +69,6 @@ from ocio_vp.correction.outliers import (
 )
 from ocio_vp.correction.perceptual import (
     PERCEPTUAL_METRICS,
-    default_camera_to_xyz,
     make_q_perceptual,
     mean_delta_e,
     normalising_white,
@@ -151,7 +150,6 @@ __all__ = [
     "choose_shrinkage",
     "colour_spread",
     "cross_validated_error",
-    "default_camera_to_xyz",
     "extrapolation",
     "fit_least_squares",
     "fit_model",

@@ -2,23 +2,15 @@
 fitted to.
 
 The candidates (:data:`~ocio_vp.correction.linear.AUTO_LADDER`, simplest first) are the linear
-family of :mod:`ocio_vp.correction.linear` — identity, white balance, shrunk least squares, the
-paper's least squares — and the root-polynomial model of degree 2
-(:mod:`ocio_vp.correction.root_polynomial`). Each is judged by its **leave-one-patch-out**
-predictions (every patch predicted by the model fitted without it, in closed form), in
-**ΔE2000** through a camera RGB -> XYZ matrix
+family of :mod:`ocio_vp.correction.linear` and the bounded root-polynomial of degree 2. Each is
+judged by its leave-one-patch-out predictions in ΔE2000
 (:func:`ocio_vp.correction.perceptual.patch_delta_e`). The paper's least squares is kept unless
 another model is better by more than :data:`~ocio_vp.correction.linear.AUTO_SE_FACTOR`
-standard errors of the paired per-patch differences (a one-standard-error rule: the
-comparison's own noise decides what "better" means; ``regularised``, a shrunk least squares,
-needs :data:`SHRUNK_SE_FACTOR`); among equals the simplest wins.
-Root-polynomial degree 3 is not a candidate:
-its 13 terms per channel over-fit a 24-patch chart (on held-out colours it was 34 % worse than
-the 3x3 under broadband light, and worse in 29 of 30 environment and noise cells,
-docs/accuracy.md). When the target chart has numerical rank below
-3 (a monochromatic light such as low-pressure sodium) a reduced-rank Q is fitted instead and N
-is not solved. docs/accuracy.md measures the rule on held-out colours; docs/stability.md
-explains it.
+standard errors of the paired per-patch differences (:data:`SHRUNK_SE_FACTOR` for
+``regularised``), and no model that renders the skin samples worse is taken; among equals the
+simplest wins. A target chart of rank below 3 (a monochromatic light such as low-pressure
+sodium) gets a reduced-rank Q and N is not solved. docs/accuracy.md measures the rule on
+held-out colours; docs/stability.md explains it.
 """
 
 from __future__ import annotations
@@ -50,13 +42,12 @@ from ocio_vp.correction.linear import (
     problem_arrays,
     target_rank,
 )
-from ocio_vp.correction.perceptual import default_camera_to_xyz
 from ocio_vp.correction.problem import QFit, QProblem
-from ocio_vp.correction.root_polynomial import bounded_loo_predictions, make_q_root_polynomial
+from ocio_vp.correction.root_polynomial import make_q_root_polynomial
 from ocio_vp.correction.skin import skin_delta_e
 from ocio_vp.errors import InputError
-from ocio_vp.metrics import error_relative_to_white
-from ocio_vp.model.correction import MatrixCorrection, PostCorrection, RootPolynomialCorrection
+from ocio_vp.metrics import error_relative_to_white, sample_camera_to_xyz, zero_below_rounding
+from ocio_vp.model.correction import MatrixCorrection, PostCorrection
 
 __all__ = [
     "AUTO_SKIN_WEIGHT",
@@ -74,23 +65,18 @@ DEGREE_3_EXCLUDED = (
 )
 
 #: ``regularised`` (least squares shrunk toward white balance) replaces least squares only when
-#: better by this many standard errors of the paired per-patch differences, not
-#: :data:`~ocio_vp.correction.linear.AUTO_SE_FACTOR`: its leave-one-patch-out gains on the chart
-#: carried to held-out reflectances less often than the other candidates' (docs/accuracy.md,
-#: "Beyond the chart": a shrunk 3x3 renders optimal colours better and reflectances worse).
+#: better by this many standard errors of the paired per-patch differences: its gains on the
+#: chart carry to held-out reflectances less often than the others' (docs/accuracy.md).
 SHRUNK_SE_FACTOR = 2.0
 
 #: Weight of the skin samples in ``auto``'s root-polynomial candidate (relative to the chart's
-#: energy; :func:`ocio_vp.correction.skin.skin_rows`). Chosen on the training skin (half
-#: fitted, half judged) and the tuning cameras at 0.2 % and 1 % noise: 0.25 renders that skin
-#: ~0.8x least squares and general reflectances ~0.92x; 0.5 gains skin and loses the general
-#: margin, 0.1 loses to least squares on skin at 1 % noise (docs/skin.md).
+#: energy; :func:`ocio_vp.correction.skin.skin_rows`), chosen on the training skin and the
+#: tuning cameras (docs/skin.md).
 AUTO_SKIN_WEIGHT = 0.25
 
 #: A candidate is not taken when its mean ΔE2000 on the skin samples is above least squares' by
-#: more than this many standard errors of the paired per-sample differences: worse beyond the
-#: comparison's own noise (a root-polynomial within a hundredth of a ΔE of least squares on
-#: skin and 0.8 ΔE better on the chart is not refused for that hundredth).
+#: more than this many standard errors of the paired per-sample differences (worse beyond the
+#: comparison's own noise).
 SKIN_SE_FACTOR = 1.0
 
 
@@ -243,7 +229,7 @@ def candidate_skin_errors(
     if lit is None or problem.skin is None or problem.skin.count == 0:
         return {}
     target = np.asarray(problem.target, dtype=np.float64)
-    camera = default_camera_to_xyz()
+    camera = sample_camera_to_xyz()
     white = target[problem.white_patch]
     corrected = np.stack([c.apply(lit) for c in corrections.values()])
     errors = skin_delta_e(corrected, problem.skin.target, white, camera)
@@ -251,11 +237,9 @@ def candidate_skin_errors(
 
 
 def _skin_veto(skin: dict[str, np.ndarray]) -> tuple[set[str], list[str]]:
-    """The candidates that render the skin samples worse than least squares beyond the noise of
-    the comparison: their mean ΔE2000 above least squares' by more than
-    :data:`SKIN_SE_FACTOR` standard errors of the paired per-sample differences (and more than
-    :data:`~ocio_vp.correction.linear.AUTO_TIE`, rounding). Faces first: a model must not lose
-    on skin, however much it gains on the chart. Returns them and why, in words."""
+    """The candidates whose mean skin ΔE2000 is above least squares' by more than
+    :data:`SKIN_SE_FACTOR` standard errors of the paired differences (and more than
+    :data:`~ocio_vp.correction.linear.AUTO_TIE`), and why, in words."""
     if not skin:
         return set(), []
     base = skin["least-squares"]
@@ -291,7 +275,6 @@ def _root_polynomial_candidates(
     :data:`AUTO_SKIN_WEIGHT`), their leave-one-out predictions added to ``held``, and why any
     is not a candidate."""
     models, excluded = {}, []
-    rows = problem.skin_rows(AUTO_SKIN_WEIGHT)
     active = int(np.count_nonzero(problem.fit_weights > 0))
     for name in (m for m in ladder if m in ROOT_POLYNOMIAL_DEGREES):
         if active <= {2: 6, 3: 13}[ROOT_POLYNOMIAL_DEGREES[name]]:
@@ -301,20 +284,17 @@ def _root_polynomial_candidates(
             excluded.append(why or "")
             continue
         models[name] = fit
-        assert isinstance(fit.correction, RootPolynomialCorrection)  # a bounded fit
-        held[name] = bounded_loo_predictions(problem, fit.correction, rows)
+        assert fit.loo_predictions is not None  # enough patches, checked above
+        held[name] = fit.loo_predictions
     return models, excluded
 
 
 def q_auto(problem: QProblem) -> QFit:
     """The simplest model the scene needs, judged in leave-one-out ΔE2000 (module docstring).
 
-    The fit says which model was chosen (``model``), why (``reason``, in ΔE2000, with every
-    candidate left out and why), the target chart's rank and the chosen model's leave-one-out
-    error per channel relative to white (``cross_validated_error``); its ``details`` hold every
-    candidate's leave-one-out mean ΔE2000 (``cv_delta_e``) with its difference from least
-    squares and that difference's standard error (``cv_comparison``). A root-polynomial choice
-    is that method's bounded model (:class:`~ocio_vp.model.correction.RootPolynomialCorrection`).
+    ``model`` names the choice and ``reason`` why (every candidate left out, and why);
+    ``details`` hold every candidate's leave-one-out mean ΔE2000 (``cv_delta_e``), its
+    difference from least squares and that difference's standard error (``cv_comparison``).
 
     Examples
     --------
@@ -364,10 +344,7 @@ def q_auto(problem: QProblem) -> QFit:
         "excluded_candidates": excluded,
     }
     if skin:
-        # Below 1e-6 a ΔE is rounding (digits that differ between machines): written as 0.
-        details["skin_delta_e"] = {
-            k: float(np.mean(v)) if np.mean(v) >= 1e-6 else 0.0 for k, v in skin.items()
-        }
+        details["skin_delta_e"] = {k: zero_below_rounding(np.mean(v)) for k, v in skin.items()}
     return _chosen_fit(
         chosen,
         X,

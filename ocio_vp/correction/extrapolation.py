@@ -1,9 +1,7 @@
 """How a post-correction behaves beyond the chart, measured on every solve, and the bound on it.
 
-A chart holds 24 reflective colours; footage holds more: saturated surfaces at the edge of the
-reflective gamut, emitters (practicals, screens, neon, the wall's own LEDs in frame) and
-highlights above white. What a fit does there is extrapolation, and it is measured here from
-the calibration data alone:
+Footage holds more than the chart's reflective colours: saturated surfaces, emitters and
+highlights above white. What a fit does there is measured here from the calibration alone:
 
 - :func:`fold_fraction`: the share of the reflective solid (drive-relative ``u`` in [0, 1]^3,
   :class:`~ocio_vp.model.correction.FitDomain`) where the correction's Jacobian determinant has
@@ -20,8 +18,7 @@ the calibration data alone:
   pairwise mixes at 1/4, 1 and 4 times the white patch's luminance) are emitters whose camera
   RGB the calibration measured: recorded alike on stage and on location, so the right
   correction leaves them alone. The p95 ΔE2000 between Q(x) and x over them is the emitter
-  damage a solve can measure without spectra (the benchmark measures it on narrow-band
-  emitters from 420 to 680 nm: docs/accuracy.md).
+  damage a solve can measure without spectra (docs/accuracy.md measures it on emitters).
 """
 
 from __future__ import annotations
@@ -200,21 +197,14 @@ def extrapolation(
     the target white patch (the ΔE's reference), ``lit_white`` the lit one (the probes' scale)."""
     kept, negative = saturation_probe(correction, lit_white)
     return Extrapolation(
-        led_damage=_recorded(in_frame_led_damage(correction, SL, white, camera_to_xyz)),
-        led_damage_least_squares=_recorded(
-            in_frame_led_damage(MatrixCorrection(least_squares), SL, white, camera_to_xyz)
+        led_damage=in_frame_led_damage(correction, SL, white, camera_to_xyz),
+        led_damage_least_squares=in_frame_led_damage(
+            MatrixCorrection(least_squares), SL, white, camera_to_xyz
         ),
         kept=kept,
         negative=negative,
         folds=_folds(correction, domain),
     )
-
-
-def _recorded(delta_e: float) -> float:
-    """A ΔE2000 figure as solution.json keeps it: 4 significant digits, and 0 below 1e-6 (the
-    rounding of a correction that leaves the LEDs alone). The digits beyond differ between
-    machines: the sodium stage's rank-1 Q moves its LEDs by a p95 that agrees to 2e-8 only."""
-    return 0.0 if delta_e < 1e-6 else float(f"{delta_e:.4g}")
 
 
 def _folds(correction: PostCorrection, domain: FitDomain) -> float | None:

@@ -1,37 +1,25 @@
 """The ``joint`` Q-solve method: optimise the out-of-frustum matrix and Q together, within limits.
 
 The paper (Future Work, "Joint Optimization of M and Q") fixes ``M = [SL]^-1`` and then
-solves Q (eq. 5); minimising eq. 5 over both was tried and gave non-neutral stage light and
-out-of-gamut drives. This method minimises the same lit-chart error
+solves Q (eq. 5); minimising eq. 5 over both gave non-neutral stage light and out-of-gamut
+drives. This method minimises the same lit-chart error
 
     ``J(M', Q) = sum_j w_j || (1/beta) Q [SRL]_j M' w_avg - p_j ||^2``
 
-over both, from the sequential solution (M, least-squares Q), with scipy's SLSQP in float64,
-subject to limits a stage can live with:
+from the sequential solution (M, least-squares Q), with scipy's SLSQP, subject to:
 
-- **white point**: the stage light as the camera sees it, ``[SL] M' w_avg``, keeps its
-  chromaticity within ``max_delta_e`` CIEDE2000 of the baseline ``[SL] M w_avg`` (= w_avg).
-  Both are normalised to luminance Y = 1 and the baseline's chromaticity is the Lab reference
-  white, so the baseline is L* = 100, a* = b* = 0 and the ΔE is purely chromatic. Default 2.0
-  (about the "just noticeable" white-balance shift on set). Camera RGB -> XYZ is a 3x3 matrix
-  (:func:`ocio_vp.correction.perceptual.default_camera_to_xyz`, the sample camera, unless given).
-- **gamut**: every LED drive of the environment's average light ``d = M' w_avg`` stays in
-  ``[0, max_drive]``; default ``max_drive`` = the baseline's largest drive channel (the joint
-  light needs no more headroom than the paper's).
-- **conditioning**: ``cond(Q) <= max_condition`` (default 100), so N = [SL]^-1 Q^-1 stays usable.
+- **white point**: the stage light as the camera sees it, ``[SL] M' w_avg``, stays within
+  ``max_delta_e`` CIEDE2000 (chromatic only: both at Y = 1, the baseline the Lab white) of the
+  baseline ``[SL] M w_avg``, through a camera RGB -> XYZ matrix (the sample camera's unless
+  given);
+- **gamut**: the drive ``d = M' w_avg`` stays in ``[0, max_drive]`` (default: the baseline's
+  largest drive channel);
+- **conditioning**: ``cond(Q) <= max_condition``, so N = [SL]^-1 Q^-1 stays usable.
 
-Scale ambiguity: ``(s M', Q / s)`` gives the same product; it is fixed by keeping the luminance
-(Y through the camera matrix) of ``[SL] M' w_avg`` equal to the baseline's.
-
-Parametrisation: J and all the limits depend on M' only through the drive ``d = M' w_avg``, so
-the optimiser works on (d, Q) (12 unknowns) and M' is the smallest (Frobenius) change of M with
-that drive, ``M' = M + (d - M w_avg) w_avg^T / |w_avg|^2``: colours other than the
-environment's average are moved as little as possible.
-
-The in-frustum matrix is unchanged in meaning: ``N = [SL]^-1 Q^-1`` (paper, eq. 7), computed by
-:mod:`ocio_vp.pipeline` from the calibrated wall, not from M', so the background stays exact
-after Q. ``QFit.notes`` reports the error reduction against the sequential method and which
-limits are active.
+The scale ambiguity ``(s M', Q / s)`` is fixed by keeping the luminance of ``[SL] M' w_avg``.
+J and the limits depend on M' only through ``d``, so the optimiser works on (d, Q) and M' is
+the smallest (Frobenius) change of M with that drive. N is still ``[SL]^-1 Q^-1`` (eq. 7),
+from the calibrated wall, so the background stays exact after Q.
 
 References
 ----------
@@ -142,7 +130,7 @@ def make_q_joint(
     ----------
     camera_to_xyz
         (3, 3) camera RGB -> CIE XYZ for the white-point ΔE and the luminance; default the
-        sample camera's (:func:`ocio_vp.correction.perceptual.default_camera_to_xyz`).
+        sample camera's (:func:`ocio_vp.metrics.sample_camera_to_xyz`).
     max_delta_e
         Largest CIEDE2000 between the joint and the baseline stage-light chromaticity.
     max_drive
@@ -159,9 +147,9 @@ def make_q_joint(
 
     def q_joint_method(problem: QProblem) -> QFit:
         if camera_to_xyz is None:
-            from ocio_vp.correction.perceptual import default_camera_to_xyz
+            from ocio_vp.metrics import sample_camera_to_xyz
 
-            matrix = default_camera_to_xyz()
+            matrix = sample_camera_to_xyz()
         else:
             matrix = np.asarray(camera_to_xyz, dtype=np.float64)
         joint = _JointProblem(

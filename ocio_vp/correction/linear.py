@@ -17,13 +17,8 @@ rank-r              5, 8  reduced-rank least squares, for a (nearly) monochromat
 ==================  ====  ==================================================================
 
 ``auto`` (:mod:`ocio_vp.correction.auto`) picks among these and the root-polynomial model
-by their **leave-one-patch-out** predictions in **ΔE2000** (:func:`choose_model`, the
-one-standard-error rule); the kernels it needs (:func:`ladder_predictions`,
-:func:`fit_model`, :func:`target_rank`, :func:`colour_spread`) live here.
-
-Every leave-one-out here is in closed form: each patch's fit is the full fit's normal
-equations with that patch's rank-one term removed (a batch of 3x3 solves, 6x6 for the
-root-polynomial's six terms: the hat-matrix identity done exactly), so a solve is linear in the
+by their leave-one-patch-out ΔE2000 (:func:`choose_model`); its kernels live here. Every
+leave-one-out is in closed form (rank-one downdates of the normal equations), linear in the
 number of patches.
 """
 
@@ -78,22 +73,17 @@ AUTO_SE_FACTOR = 1.0
 AUTO_TIE = 1e-6
 
 #: A colour direction of the target chart carrying less than this fraction of its largest
-#: singular value, relative to the lit chart's (:func:`target_rank`), is treated as absent
-#: (low-pressure sodium: ~1e-15; high-pressure sodium: 0.4; daylight and tungsten: 0.7-1).
+#: singular value, relative to the lit chart's (:func:`target_rank`), is treated as absent.
 RANK_RELATIVE_TOLERANCE = 1e-3
 #: A target chart whose *second* relative singular value is below this has one colour: a line
-#: spectrum whose other directions carry only measurement noise. Under low-pressure sodium
-#: that noise reaches 0.03-0.07 at 1-2 % noise on every value (0.12 on the Sigma camera,
-#: whose lit chart has small minor singular values that the ratio divides by), against
-#: 0.38-0.46 for high-pressure sodium, the narrowest broadband light simulated: halfway, on a
-#: log scale, is 0.2. The rank then does not depend on how noisy the plates are (a noise-free
-#: simulation and its plates give the same model).
+#: spectrum whose other directions carry only measurement noise (halfway, on a log scale,
+#: between low-pressure sodium's noise and high-pressure sodium, the narrowest broadband light
+#: simulated), so the rank does not depend on how noisy the plates are.
 LINE_SPECTRUM_TOLERANCE = 0.2
 
 #: A target chart whose colours spread less than this fraction of the lit chart's
-#: (:func:`colour_spread`: a line-spectrum light the wall cannot reproduce, e.g. sodium lamps
-#: 0.02-0.74 on the simulator, broadband lights 0.81-1) is a *narrow* target: ``auto`` then also
-#: weighs reduced-rank models (rank-1, rank-2) against the others.
+#: (:func:`colour_spread`: a line-spectrum light the wall cannot reproduce) is a *narrow*
+#: target: ``auto`` then also weighs reduced-rank models (rank-1, rank-2) against the others.
 NARROW_TARGET = 0.78
 
 #: Shrinkage strengths tried by ``regularised``, relative to ``trace(X^T W X) / 3``.
@@ -101,9 +91,8 @@ REGULARISATION_GRID = (0.0, *np.logspace(-4, 2, 13).tolist())
 
 #: ``auto``'s candidates, simplest first. ``white-preserving`` is not one: pinning Q to a single
 #: patch makes Q and N inherit that patch's noise (docs/stability.md), so it is never "simpler".
-#: ``root-polynomial`` is degree 2 (6 terms per channel); degree 3 (13 terms) is not a
-#: candidate: fitted on 24 patches it over-fits (docs/accuracy.md: 34 % worse than the 3x3 on
-#: held-out colours under broadband light, worse in 29 of 30 environment and noise cells).
+#: ``root-polynomial`` is degree 2 (6 terms per channel); degree 3 (13 terms) over-fits 24
+#: patches (docs/accuracy.md).
 AUTO_LADDER = ("identity", "diagonal", "regularised", "least-squares", "root-polynomial")
 #: The ladder for a narrow target (:data:`NARROW_TARGET`).
 AUTO_LADDER_NARROW = (
@@ -339,10 +328,8 @@ def loo_root_polynomial(X: np.ndarray, P: np.ndarray, w: np.ndarray, degree: int
 
     Linear in its parameters, so the hat-matrix identity holds: patch j's held-out prediction
     is ``p_j - r_j / (1 - h_jj)`` (r_j the full fit's residual, h_jj its leverage), from one
-    SVD of the weighted expansion (:func:`ocio_vp.model.expansion.root_polynomial_expansion`,
-    colour-science's terms in its order, without importing colour-science: ~1 s of every
-    solve's start-up); better conditioned than the 6x6 or 13x13 normal equations. A patch
-    that alone decides a term (h_jj ~ 1) falls back to them.
+    SVD of the weighted expansion (better conditioned than the normal equations). A patch
+    that alone decides a term (h_jj ~ 1) falls back to the normal equations.
     """
     from ocio_vp.model.expansion import root_polynomial_expansion
 

@@ -2,63 +2,19 @@
 
 One bad patch (a mis-placed sampling box, flare, a reflection on the chart, a swapped row)
 moves a least-squares Q by tens of percent. :func:`inconsistent_patches` finds such patches
-from the data alone, so that every method fits without them and the engineer is told which:
+from the data alone, so that every method fits without them and the engineer is told which.
+Each patch is predicted by a Huber-weighted least-squares 3x3 fitted on the other patches
+(closed-form leave-one-out); it is suspect by its **residual** (large relative to itself, to
+the chart's residuals and to white), its **influence** (leaving it out moves the other
+patches' colours visibly, :func:`patch_influence`) or **explanation** (the rest of the chart is
+far more consistent without it, :func:`deletion_gain`); two reading-order neighbours are
+**swapped** when the rest predicts them far better exchanged (:func:`pair_residuals`). The
+worst suspect is excluded and the search repeats, with a higher bar for later patches, up to
+:data:`MAX_EXCLUDED_FRACTION` of the chart; past that the chart is refused.
 
-1. Every patch is predicted by the richest linear model (the paper's 9-parameter least squares,
-   made robust by Huber weights so that several bad patches cannot drag it) fitted on the
-   *other* patches (closed-form leave-one-out,
-   :func:`ocio_vp.correction.linear.loo_predictions`). A patch that model cannot predict from
-   the rest is inconsistent with every simpler model as well. Under broadband light the
-   root-polynomial (the default's non-linear candidate) must miss it too: a colour the 3x3
-   cannot model (a saturated red with a narrow red LED) is not a defect.
-2. A patch is suspect by its **residual** when that held-out residual is large on three scales
-   at once: relative to the patch itself (:data:`OUTLIER_RELATIVE`), relative to the spread of
-   all patches' residuals (a robust z-score of the residuals scaled by ``sqrt(1 - leverage)``,
-   against 1.4826 x their median, which does not grow with the outlier it is looking for:
-   :data:`OUTLIER_Z`) and relative to white (:data:`OUTLIER_FLOOR`). Under a
-   near-monochromatic light the model's own misses are larger, and only a patch that is almost
-   entirely wrong is suspect this way (:data:`OUTLIER_RELATIVE_NARROW`).
-3. A patch is suspect by its **influence** when leaving it out moves the least-squares fit's
-   colours of the other patches by at least :data:`OUTLIER_INFLUENCE` mean ΔE2000, that
-   influence stands :data:`OUTLIER_Z` robust standard deviations above the chart's others
-   (:func:`patch_influence`), and its held-out prediction misses it by
-   :data:`OUTLIER_RELATIVE` of itself. This is what an engineer would see, and it catches,
-   under sodium light, a patch read 2.5x too bright that the residual test must let pass.
-4. A patch is suspect by **explanation** when the rest of the chart is far more consistent
-   without it: removing it lowers the other patches' held-out residuals (root mean square,
-   relative to white) :data:`DELETION_GAIN` times below a typical patch's removal
-   (:func:`deletion_gain`), and its held-out prediction misses it by :data:`OUTLIER_RELATIVE`
-   of itself (:data:`EXPLAINS_RELATIVE` under broadband light). The ratio is the chart's own:
-   under sodium light, where the 3x3 misses clean patches by half their value, it stays as
-   close to 1 on a clean chart as under daylight, and it catches the patch read 2.5x too
-   bright under high-pressure sodium that neither test above can tell from the model's own
-   misses, and under daylight a white patch read 1.3x too bright (a flare).
-5. Two reading-order neighbours look **swapped** (the patch order mixed up, in the target or
-   the lit chart) when the rest of the chart, fitted without both (:func:`pair_residuals`),
-   predicts them far better exchanged than as read (:data:`SWAP_RATIO`, :data:`SWAP_FLOOR`)
-   and they stand out from the chart's other pairs (:data:`SWAP_Z`).
-   Under sodium light the residual test cannot see a swap between two patches the 3x3 model
-   already misses; the pair is explicit about the cause. Both are excluded, each naming the
-   other (``swapped_with``), before any single patch is.
-6. A suspect patch (any way, and off by at least :data:`OUTLIER_FLOOR` of white) is
-   inconsistent. The worst is excluded and the search repeats. When it was suspect only by
-   its influence or by explanation and another suspect patch explains the chart at least as
-   well, the data cannot tell which of the two is bad: both are excluded, each naming the
-   other (``ambiguous_with``). Once a patch is gone, those of a similar colour are predicted
-   less well without being wrong, so a further patch must also have looked suspect on the
-   whole chart (:data:`FIRST_PASS_SUPPORT`) and either drag the others visibly or miss clearly
-   (:data:`LATER_INFLUENCE`, :data:`LATER_RELATIVE`), or be far off
-   (:data:`UNSUPPORTED_SCORE`); up to :data:`MAX_EXCLUDED_FRACTION` of the chart (and at
-   most :data:`MAX_EXCLUDED` patches), past that the chart is refused. On a chart of more than
-   :data:`INFLUENCE_JUDGES` patches influence is judged on that many, so the work stays linear
-   in the chart's size.
-
-The thresholds were set on the spectral simulator, each from a measured distribution stated at
-its constant: no false alarm on clean charts with 1 % noise on every value (4,940 of them in
-docs/accuracy.md, where 3 low-pressure sodium charts on the Sigma camera still name two clean
-neighbours as swapped). docs/accuracy.md
-("Bad patches", ``python -m benchmarks.bench_accuracy --screening-only``) measures false alarms,
-detection and the change of the corrected colours; docs/stability.md explains it.
+docs/stability.md explains the tests; each threshold below was set on the spectral simulator
+for no false alarm on clean charts with 1 % noise, and docs/accuracy.md ("Bad patches",
+``python -m benchmarks.bench_accuracy --screening-only``) measures false alarms and detection.
 """
 
 from __future__ import annotations
@@ -72,13 +28,12 @@ from ocio_vp.correction.linear import (
     loo_predictions,
 )
 from ocio_vp.correction.perceptual import (
-    default_camera_to_xyz,
     normalising_white,
     patch_delta_e,
 )
 from ocio_vp.errors import InputError
 from ocio_vp.formats.diagnostics import Inconsistency
-from ocio_vp.metrics import COLORCHECKER_NAMES, white_scale
+from ocio_vp.metrics import COLORCHECKER_NAMES, sample_camera_to_xyz, white_scale
 from ocio_vp.metrics import patch_label as patch_name
 
 __all__ = [
@@ -121,48 +76,20 @@ OUTLIER_Z = 4.0
 #: ... and at least this fraction of the target white (dark patches' noise is not a defect).
 OUTLIER_FLOOR = 0.02
 #: Under a line-spectrum light the wall cannot reproduce (a *narrow* target,
-#: :data:`ocio_vp.correction.linear.NARROW_TARGET`), the 3x3 model itself misses single patches
-#: by up to ~70% of their value, so only a patch at least this far off (read as zero, or its
-#: row lost) is flagged.
+#: :data:`ocio_vp.correction.linear.NARROW_TARGET`) the 3x3 itself misses single patches by
+#: much of their value: only a patch at least this far off (read as zero, its row lost) is.
 OUTLIER_RELATIVE_NARROW = 0.9
 #: A patch is also inconsistent when leaving it out moves the least-squares fit's colours of the
-#: other patches by at least this mean ΔE2000 (its *influence*, :func:`patch_influence`), what
-#: an engineer would see, whatever the light. On clean simulated charts with 1 % noise on every
-#: value (2 cameras x 2 LED sets x 10 environments x 10 draws, ``python -m
-#: benchmarks.bench_accuracy --screening-only``) the most influential patch moved them by
-#: 0.6 ΔE2000 (median) and 2.4 at most (high-pressure sodium); 3 is that maximum with a
-#: quarter to spare, and three just-noticeable differences. The patch must also stand
-#: :data:`OUTLIER_Z` robust standard deviations above the chart's influences (1.4826 x their
-#: median), as residuals must, and miss its held-out prediction by :data:`OUTLIER_RELATIVE`
-#: of itself (on the accuracy benchmark's own 228 noisy charts one clean white patch under
-#: sodium reached 3.01 while predicted within 2 %).
+#: other patches by at least this mean ΔE2000 (:func:`patch_influence`: what an engineer would
+#: see), it stands :data:`OUTLIER_Z` robust standard deviations above the chart's influences
+#: and it misses its held-out prediction by :data:`OUTLIER_RELATIVE` of itself.
 OUTLIER_INFLUENCE = 3.0
 #: A patch is also inconsistent when removing it makes the other patches' held-out residuals
-#: (root mean square, relative to white) at least this many times smaller than a typical
-#: patch's removal does (:func:`deletion_gain`), and its held-out prediction misses it by
-#: :data:`OUTLIER_RELATIVE` of itself. Measured on the bad-patch study's clean charts (2
-#: cameras x 2 LED sets x 10 environments, 19 charts each at 1 % noise, ``python -m
-#: benchmarks.bench_accuracy --screening-only``) and on 50 further noise draws of each: no
-#: patch missed by 30 % of itself scored above 1.40 (the red patch under high-pressure sodium,
-#: Sigma camera); patches predicted closer reached 1.75 (the white: the brightest patch
-#: carries most of the noise in units of white), which is why the relative limit is part of
-#: the test. The median patch read as zero or 2.5x too bright (target or lit chart) scores 2.8
-#: to 6.6 under broadband light, 1.5 to 2.2 under high-pressure sodium, 1.2 to 1.5 under
-#: low-pressure sodium. On the study's Nikon charts under line-spectrum light, 1.6 cuts the
-#: visible misses of one bad patch from 16 to 12 (left: 10 swaps, 2 patches read 2.5x too
-#: bright) and of two from 6 to 4; 1.5 would make that 3 but leave 7 % between the limit and
-#: the clean red; 1.75 gives 13 and 6. The price: once a clean patch is excluded, the red or
-#: white under sodium can be excluded after it (32 of 18,240 clean charts with one patch
-#: removed, 17 without this test).
+#: this many times smaller than a typical patch's removal does (:func:`deletion_gain`) and it
+#: misses its held-out prediction by :data:`OUTLIER_RELATIVE` of itself ...
 DELETION_GAIN = 1.6
-#: ... under broadband light the explaining patch need only miss by this fraction of itself:
-#: there the 3x3 predicts clean patches far better than under sodium light, and a white
-#: or yellow patch read 1.3x too bright (a flare, a reflection) misses by only 17-25 % of
-#: itself while the rest of the chart is 1.8-6.4 times more consistent without it; under
-#: :data:`OUTLIER_RELATIVE` such a patch moved the corrected colours visibly (p95 ΔE2000 above
-#: the noise floor + 1) and was never named. On 1,148 clean broadband charts (2 cameras x 2 LED
-#: sets x 7 environments x 41 draws at 1 % noise) no patch reached a gain of 1.43, and no
-#: neutral was missed by more than 7.1 % of itself.
+#: ... or, under broadband light (where the 3x3 predicts clean patches well), by this fraction:
+#: a white patch read 1.3x too bright (a flare) misses by less than OUTLIER_RELATIVE.
 EXPLAINS_RELATIVE = 0.1
 #: Fitted patches whose colours judge each patch's influence on a large chart (all of them up
 #: to this many); patches judged per block. Both bound the work: linear in the chart's size.
@@ -176,51 +103,27 @@ HUBER = 2.0
 #: 3.3 on the relative test; a patch merely missing a similar neighbour stays near 1).
 FIRST_PASS_SUPPORT = 0.5
 UNSUPPORTED_SCORE = 2.0
-#: After the worst patch is excluded, a further patch with a score below UNSUPPORTED_SCORE must
-#: also move the fit's colours of the other patches by at least LATER_INFLUENCE mean ΔE2000 (one
-#: just-noticeable difference) or miss its held-out prediction by LATER_RELATIVE times the
-#: relative limit. Once a bad magenta or moderate red is gone, the clean red patch (then the
-#: only one of its hue) is predicted worse: on clean simulated charts with one patch removed
-#: (2 cameras x 2 LED sets x 10 environments x 3 draws x 24 patches at 1 % noise) 29 clean
-#: patches would then have been excluded too, all of them red, at most 1.11 times the limit
-#: and 0.77 ΔE2000; excluding it moved the corrected held-out colours by 3.8 ΔE2000 (p95)
-#: where keeping it gave 1.1 (the noise floor), on the simulated direct-sun stage.
-#: Under line-spectrum light LATER_RELATIVE times the limit (1.35) is more than a patch read as
-#: zero, or a lost lit-chart row, ever misses (exactly 100 % of itself), and a lost row cannot
-#: drag the fit: the bar is capped at :data:`OUTLIER_RELATIVE_NARROW`. That names the second
-#: bad patch in 2 more of the study's 72 two-bad Nikon charts under such light (visible misses
-#: 8 -> 6), and no more clean patches excluded after a first exclusion than without the cap
-#: (the 18,240 charts above).
+#: After the worst patch is excluded, a further patch scoring below UNSUPPORTED_SCORE must also
+#: move the other patches' colours by LATER_INFLUENCE mean ΔE2000 (one just-noticeable
+#: difference) or miss its held-out prediction by LATER_RELATIVE times the relative limit
+#: (capped at :data:`OUTLIER_RELATIVE_NARROW` under line-spectrum light): once a bad patch is
+#: gone, a clean one of a similar colour is predicted worse without being wrong.
 LATER_INFLUENCE = 1.0
 LATER_RELATIVE = 1.5
 #: More inconsistent patches than this fraction of the chart: refuse rather than guess.
 MAX_EXCLUDED_FRACTION = 0.125
-#: ... or than this many on a large chart (over 192 patches): each exclusion re-judges the
-#: whole chart, so this bounds the screening's work (linear in the chart's size; ~0.1 s per
-#: exclusion at 1000 patches). So many bad patches say the sampling itself went wrong.
+#: ... or than this many on a large chart (each exclusion re-judges the whole chart). So many
+#: bad patches say the sampling itself went wrong.
 MAX_EXCLUDED = 24
 #: Two reading-order neighbours look **swapped** (in the target or the lit chart) when, fitted
 #: without both, the rest of the chart predicts them at least SWAP_RATIO times better exchanged
 #: than as read (the sum of the two held-out residuals' sizes, relative to white:
-#: :func:`pair_residuals`) and exchanging them explains at least SWAP_FLOOR of white. On the
-#: clean simulated charts of the bad-patch study (2 cameras x 2 LED sets x 10 environments x 20
-#: draws at 1 % noise, 17,480 pairs) no pair under broadband light was predicted better
-#: exchanged at all (as read minus exchanged: -0.13 at most); under line-spectrum light a pair
-#: exchanging explained by more than 0.2 of white was at most 2.34 times better exchanged
-#: (Sigma, sodium vapour: the model itself misses those patches), and a pair 3 or more times
-#: better exchanged gained 0.10 of white at most (two dark patches). Every visible swap under
-#: broadband light scored at least 3.7 and 0.35, most under sodium light 3 to 20 and 0.5 to 2.
+#: :func:`pair_residuals`) and exchanging them explains at least SWAP_FLOOR of white ...
 SWAP_RATIO = 3.0
 SWAP_FLOOR = 0.25
-#: ... and, as read, the pair misses by at least SWAP_Z times the chart's typical pair
-#: (1.4826 x the median over all pairs): where the model does not fit the chart at all (a
-#: one-colour target with a random lit chart, as in the tests) every pair misses alike and
-#: some are better exchanged by chance. Of the study's 588 visible swaps (target or lit chart,
-#: every stage and light) that pass the two limits above, 586 also pass this one (the other
-#: two stand at 1.7, under high-pressure sodium; 2.5 would lose two more, at 2.3, and name
-#: fewer swaps under sodium). The price, on 600 such unfit charts: the pairs passing the two
-#: limits above stood at most 2.71 times the typical pair (p99 2.03), and 7 of the 600 have a
-#: pair named (the single-patch tests name a patch on 7 of the first 300 of them).
+#: ... and, as read, the pair misses by at least SWAP_Z times the chart's typical pair (where
+#: the model does not fit the chart at all every pair misses alike, some better exchanged by
+#: chance).
 SWAP_Z = 2.0
 #: Patches needed after exclusion (a 9-parameter fit with headroom to judge it).
 _MIN_REMAINING = 12
@@ -278,13 +181,10 @@ def patch_influence(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> 
     """(n,) how far each fitted patch drags the fit: the mean ΔE2000, over the other fitted
     patches, between their least-squares predictions with and without it (0 for excluded ones).
 
-    Every leave-one-out fit is a rank-one downdate of the 3x3 normal equations (batched), and
-    ΔE2000 goes through the generic camera RGB -> XYZ matrix
-    (:func:`ocio_vp.correction.perceptual.patch_delta_e`), normalised on the fitted white
-    patch ``white`` (or the brightest fitted patch); all zeros when no fitted colour has
-    luminance. On a chart of more than :data:`INFLUENCE_JUDGES` fitted patches the mean is
-    taken over that many of them, spread evenly, and the patches are judged in blocks, so time
-    and memory grow linearly with the chart.
+    ΔE2000 as :func:`ocio_vp.correction.perceptual.patch_delta_e` gives it, normalised on the
+    fitted white patch ``white`` (or the brightest fitted patch); all zeros when no fitted
+    colour has luminance. Closed form (rank-one downdates, batched); on a chart of more than
+    :data:`INFLUENCE_JUDGES` fitted patches the mean is over that many, spread evenly.
 
     Examples
     --------
@@ -300,7 +200,7 @@ def patch_influence(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> 
     w = np.asarray(w, dtype=np.float64)
     G, B = _normal_equations(X, P, w)
     fitted = X @ (np.linalg.pinv(G, hermitian=True) @ B)
-    luminance = fitted @ default_camera_to_xyz()[1]
+    luminance = fitted @ sample_camera_to_xyz()[1]
     influence = np.zeros(len(w))
     if not np.any((w > 0) & (luminance > 0)):
         return influence
@@ -329,8 +229,7 @@ def pair_residuals(
     is ``|pred_j - P_j| + |pred_k - P_k|``, ``exchanged`` is ``|pred_j - P_k| + |pred_k - P_j|``
     (Euclidean norms of the white-relative residuals, ``scale``: :func:`ocio_vp.metrics.
     white_scale`); both NaN for a pair with an unfitted patch. A swapped lit-chart row gives the
-    same pair: the fit without both does not see it, and exchanging the rows exchanges the
-    predictions. Time and memory grow linearly with the chart.
+    same pair (exchanging the rows exchanges the predictions).
 
     Examples
     --------
@@ -366,15 +265,11 @@ def deletion_gain(X: np.ndarray, P: np.ndarray, w: np.ndarray, scale: np.ndarray
     """(n,) how much more consistent the rest of the chart is without each fitted patch.
 
     ``cost[j]`` is the root mean square, over the other fitted patches k (weighted by ``w``),
-    of k's held-out least-squares residual (relative to white, ``scale``) when j is removed
-    from the chart: each k predicted by the fit without both j and k. The gain is the median
-    of ``cost`` over the fitted patches divided by ``cost[j]``: about 1 for every patch of a
-    consistent chart however well the 3x3 fits it, well above 1 for the patch whose removal
-    leaves the rest consistent (0 for unfitted patches). Every fit without j is a rank-one
-    downdate of the 3x3 normal equations and each k's held-out residual follows in closed form
-    (its residual over ``1 - leverage``); on a chart of more than :data:`INFLUENCE_JUDGES`
-    fitted patches the mean is taken over that many of them, spread evenly, so the work
-    grows linearly with the chart.
+    of k's held-out least-squares residual (relative to white, ``scale``) with j removed too.
+    The gain is the median of ``cost`` divided by ``cost[j]``: about 1 for every patch of a
+    consistent chart, well above 1 for the patch whose removal leaves the rest consistent (0
+    for unfitted patches). Closed form (rank-one downdates); on a chart of more than
+    :data:`INFLUENCE_JUDGES` fitted patches the mean is over that many, spread evenly.
 
     Examples
     --------
@@ -449,21 +344,16 @@ def patch_scores(
     relative = _relative_miss(held, P)
     narrow = is_narrow(X, P, w) if narrow is None else narrow
     if not narrow and np.count_nonzero(active) > _MIN_REMAINING:
-        # A colour the 3x3 cannot model is not a defect: the default's non-linear candidate
-        # (root-polynomial, degree 2) predicts it, while a defect is missed by every model.
-        # On clean charts with 1 % noise (Nikon, 630/20 nm red LED, daylight) the saturated
-        # red is missed by the 3x3 by 28 % (median; up to 31 %, over the 30 % limit in 1.8 %
-        # of charts) and by the root-polynomial by 22 % (at most 26 %).
+        # A colour the 3x3 cannot model (a saturated red under a narrow red LED) is not a
+        # defect: the default's root-polynomial predicts it, while a defect is missed by both.
         rich = loo_predictions("root-polynomial", X, P, robust, white)
         relative = np.minimum(relative, _relative_miss(rich, P))
     limit = OUTLIER_RELATIVE_NARROW if narrow else OUTLIER_RELATIVE
     influence = patch_influence(X, P, w, white)
     as_read, exchanged = pair_residuals(X, P, robust, scale if pair_scale is None else pair_scale)
     # A patch drags the fit when its influence is large in ΔE2000, stands out from the chart's
-    # other patches as residuals must (a chart the model does not fit at all, e.g. random
-    # values, has every patch influential and none of them an outlier), and the others do not
-    # predict it (the white patch, the brightest, can drag an ill-determined sodium fit by
-    # 3 ΔE2000 while predicted within 2 % of itself).
+    # others (on a chart the model does not fit at all every patch is influential) and the
+    # others do not predict it (a clean white can drag an ill-determined sodium fit).
     typical = max(_robust_sd(influence[active]), 1e-12)
     drag = np.minimum(influence / OUTLIER_INFLUENCE, influence / typical / OUTLIER_Z)
     drag = np.minimum(drag, relative / OUTLIER_RELATIVE)
@@ -538,10 +428,7 @@ def _rival(scores: dict, j: int) -> int | None:
     When ``j`` is excluded on soft evidence only (it drags the fit or its removal explains the
     chart, while its own prediction does not mark it as wrong), another patch that looked
     suspect too (:data:`FIRST_PASS_SUPPORT`) and whose removal leaves the rest at least as
-    consistent (:func:`deletion_gain`) is as likely the bad one. On the bad-patch study
-    (every stage, light and corruption) this happened twice, both times with ``j`` clean and
-    the other patch the corrupted one (high-pressure sodium, Nikon: patch 13 read 2.5x too
-    bright, alone and with a second bad patch).
+    consistent (:func:`deletion_gain`) is as likely the bad one.
     """
     if scores["misses"][j] > 1.0:
         return None

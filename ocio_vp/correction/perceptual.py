@@ -9,10 +9,9 @@ colour-science's own ``delta_E`` ("CIE 2000" or "ITP"), in the normalisation of
 100 cd/m^2 for ΔE ITP), after a camera RGB -> XYZ matrix.
 
 That matrix comes from the caller (``make_q_perceptual(camera_to_xyz=...)``) when the camera is
-characterised; the registry's ``perceptual`` uses :func:`default_camera_to_xyz`, the matrix of
-the sample camera (:func:`ocio_vp.spectra.camera_sensitivities`, as the simulator uses) fitted by
-:func:`ocio_vp.metrics.camera_to_xyz_matrix` — a generic stand-in for "a camera's RGB", good
-enough to weigh errors perceptually, not a colorimetric characterisation of *your* camera.
+characterised; the registry's ``perceptual`` uses the sample camera's
+(:func:`ocio_vp.metrics.sample_camera_to_xyz`): a stand-in good enough to weigh errors
+perceptually, not a colorimetric characterisation of *your* camera.
 
 References
 ----------
@@ -22,7 +21,6 @@ CIE 142-2001, CIEDE2000; ITU-R BT.2124-0 (2019), ΔE ITP.
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Callable
 
 import numpy as np
@@ -30,11 +28,11 @@ from numpy.typing import ArrayLike
 
 from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
+from ocio_vp.metrics import sample_camera_to_xyz
 from ocio_vp.model.correction import MatrixCorrection
 
 __all__ = [
     "PERCEPTUAL_METRICS",
-    "default_camera_to_xyz",
     "make_q_perceptual",
     "mean_delta_e",
     "normalising_white",
@@ -47,17 +45,6 @@ PERCEPTUAL_METRICS = ("CIE 2000", "ITP")
 
 _ITP_WHITE_NITS = 100.0  # as ocio_vp.metrics.ITP_WHITE_NITS
 _STEP = 1e-6  # finite-difference step on Q's entries (which are ~1)
-
-
-@functools.lru_cache(maxsize=1)
-def default_camera_to_xyz() -> np.ndarray:
-    """Camera RGB -> XYZ of the sample camera (see the module docstring), cached."""
-    from ocio_vp.metrics import camera_to_xyz_matrix
-    from ocio_vp.spectra import camera_sensitivities
-
-    matrix = np.asarray(camera_to_xyz_matrix(camera_sensitivities()), dtype=np.float64)
-    matrix.setflags(write=False)
-    return matrix
 
 
 def _encoder(
@@ -104,15 +91,14 @@ def patch_delta_e(
     """(..., n) ΔE (``metric``) of each patch of ``predicted`` against ``target`` (camera RGB).
 
     ``predicted`` is (n, 3) or a stack of predictions (..., n, 3) of the same (n, 3) target
-    (candidate models): the whole stack goes through colour-science in one call. Normalised on the target white patch; when that patch is excluded (weight 0) or has no
-    luminance, on the fitted patch of highest luminance instead, so a corrupted or clipped
-    white patch never makes the metric undefined. ``camera_to_xyz`` defaults to
-    :func:`default_camera_to_xyz`.
+    (candidate models), in one call. Normalised on the target white patch, or where that is
+    excluded (weight 0) or has no luminance, on the fitted patch of highest luminance.
+    ``camera_to_xyz`` defaults to :func:`~ocio_vp.metrics.sample_camera_to_xyz`.
     """
     import colour
 
     target = np.asarray(target, dtype=np.float64)
-    matrix = default_camera_to_xyz() if camera_to_xyz is None else np.asarray(camera_to_xyz, float)
+    matrix = sample_camera_to_xyz() if camera_to_xyz is None else np.asarray(camera_to_xyz, float)
     white = normalising_white(target @ matrix[1], white_patch, weights)
     encode = _encoder(target, matrix, white, metric)
     return np.asarray(
@@ -147,7 +133,7 @@ def make_q_perceptual(
     Parameters
     ----------
     camera_to_xyz
-        (3, 3) camera RGB -> CIE XYZ; default :func:`default_camera_to_xyz`.
+        (3, 3) camera RGB -> CIE XYZ; default :func:`~ocio_vp.metrics.sample_camera_to_xyz`.
     metric
         ``"CIE 2000"`` (CIEDE2000 in Lab) or ``"ITP"`` (ITU-R BT.2124).
     max_iterations
@@ -160,7 +146,7 @@ def make_q_perceptual(
         import colour
         from scipy.optimize import minimize
 
-        matrix = default_camera_to_xyz() if camera_to_xyz is None else np.asarray(camera_to_xyz)
+        matrix = sample_camera_to_xyz() if camera_to_xyz is None else np.asarray(camera_to_xyz)
         X = np.asarray(problem.predicted, dtype=np.float64)
         P = np.asarray(problem.target, dtype=np.float64)
         w = problem.fit_weights

@@ -1,8 +1,7 @@
 """The data of a post-correction (Q) solve and its result.
 
-:class:`QProblem` and :class:`QFit` live here, apart from the registry in
-:mod:`ocio_vp.correction.registry`, so that modules holding Q methods can import them without importing the
-registry that imports them (``ocio_vp.correction.registry`` re-exports both names).
+:class:`QProblem` and :class:`QFit` live apart from :mod:`ocio_vp.correction.registry`
+(which re-exports them) so that the methods can import them without an import cycle.
 
 References
 ----------
@@ -15,6 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -59,17 +59,19 @@ class QProblem:
     #: in-frustum offset cancels; None where not measured.
     black_level: np.ndarray | None = None
 
-    @property
+    # The derived arrays below are computed once per problem (a frozen dataclass keeps no
+    # state but these caches) and read-only, since every solve step shares them.
+    @cached_property
     def drive(self) -> np.ndarray:
         """(3,) ``M w_avg`` as the wall emits it: a negative channel clipped to 0."""
-        return np.clip(np.asarray(self.M, dtype=np.float64) @ self.w_avg, 0.0, None)
+        return _read_only(np.clip(np.asarray(self.M, dtype=np.float64) @ self.w_avg, 0.0, None))
 
-    @property
+    @cached_property
     def skin_predicted(self) -> np.ndarray | None:
         """(k, 3) the skin samples lit as :attr:`predicted` lights the chart (None: no skin)."""
         if self.skin is None:
             return None
-        return self.skin.lit(self.beta, self.drive, self.extra_light)
+        return _read_only(self.skin.lit(self.beta, self.drive, self.extra_light))
 
     def skin_rows(self, skin_weight: float) -> SkinRows | None:
         """The skin samples as rows to fit beside the chart's
@@ -82,18 +84,16 @@ class QProblem:
             lit, self.skin.target, target, self.fit_weights, self.white_patch, skin_weight
         )
 
-    @property
+    @cached_property
     def predicted(self) -> np.ndarray:
         """(n, 3) the lit chart, eq. 3 plus ``extra_light``: the x_j that Q maps to p_j.
 
         Eq. 3 with the drive the wall can emit: a negative channel of ``M w_avg`` (a light
-        outside the LEDs' gamut, e.g. sodium) is clipped to 0, as the wall clips it. Fitting Q
-        to eq. 3's unclipped chart, lit partly by negative light, fits it to colours the camera
-        never sees (on the simulated sodium stages it doubles the held-out ΔE2000 of every
-        method: docs/accuracy.md).
+        outside the LEDs' gamut, e.g. sodium) is clipped to 0, as the wall clips it, so Q is
+        not fitted to colours the camera never sees (docs/accuracy.md).
         """
         lit = predict_lit_chart(self.SRL, self.beta, np.eye(3), self.drive)
-        return lit if self.extra_light is None else lit + self.extra_light
+        return _read_only(lit if self.extra_light is None else lit + self.extra_light)
 
     @property
     def domain(self) -> FitDomain:
@@ -111,6 +111,11 @@ class QProblem:
     def fit_weights(self) -> np.ndarray:
         n = self.target.shape[0]
         return np.ones(n) if self.weights is None else np.asarray(self.weights, dtype=np.float64)
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    array.setflags(write=False)
+    return array
 
 
 @dataclass(frozen=True)
@@ -135,6 +140,12 @@ class QFit:
     target_rank: int | None = None
     warnings: tuple[str, ...] = ()
     details: Mapping[str, Any] = field(default_factory=dict)
+    #: (n, 3) the leave-one-patch-out predictions behind ``cross_validated_error``, where the
+    #: method made them (``auto`` compares candidates with them).
+    loo_predictions: np.ndarray | None = None
+    #: With skin first: the default's fit that this one was judged against (the solve reports
+    #: the two side by side).
+    default: QFit | None = None
 
     @property
     def Q(self) -> np.ndarray:

@@ -2,18 +2,11 @@
 to the chart's domain, and the exact inverse of the polynomial.
 
 A root-polynomial Q maps camera RGB ``x`` to ``C e(x)`` (:mod:`ocio_vp.model.expansion`:
-every term homogeneous of degree 1, so ``Q(k x) = k Q(x)``). Fitted on 24 patches it renders
-reflective colours better than a 3x3 (docs/accuracy.md), but beyond the chart it only
-extrapolates: bright saturated inputs and emitters lose or flip channels. So the method returns
-a :class:`~ocio_vp.model.correction.RootPolynomialCorrection`: the polynomial inside the chart's
-domain, fading to the least-squares 3x3 on the same patches outside it, with the fade chosen by
-:func:`ocio_vp.correction.extrapolation.choose_fade` (the widest that folds nowhere among
-reflective colours). Its leave-one-out error is the bounded model's: each patch is predicted by
-the polynomial and the 3x3 fitted without it, blended by its place in the domain of the others.
-
-The inverse of the polynomial itself (:func:`invert_root_polynomial`) is solved on each
-colour's direction (homogeneity) by damped Newton iterations with the analytic Jacobian
-(:func:`~ocio_vp.model.expansion.root_polynomial_jacobian`), all colours at once.
+homogeneous of degree 1). Beyond the chart it only extrapolates (bright saturated inputs and
+emitters lose or flip channels), so the method returns a
+:class:`~ocio_vp.model.correction.RootPolynomialCorrection`: the polynomial inside the chart's
+domain, fading to the least-squares 3x3 outside it, with the widest fade that folds nowhere
+among reflective colours (:func:`ocio_vp.correction.extrapolation.choose_fade`).
 
 References
 ----------
@@ -138,14 +131,18 @@ def make_q_root_polynomial(degree: int = 2, skin_weight: float = 0.0) -> Callabl
         details: dict = {"folds_by_fade": tried}
         if rows is not None:
             details["skin_weight"] = skin_weight
+        held = _held_out(problem, correction, rows)
         return QFit(
             correction,
             f"root-polynomial-{degree}" + ("" if rows is None else "-skin"),
             f"root-polynomial regression of degree {degree} (Finlayson et al. 2015){anchored}, "
             "bounded to the chart's domain; Q is its 3x3 fallback",
-            cross_validated_error=_loo_error(problem, correction, rows),
+            cross_validated_error=None
+            if held is None or not np.all(np.isfinite(held))
+            else error_relative_to_white(held, P, problem.white_patch, w),
             warnings=tuple(warnings),
             details=details,
+            loo_predictions=held,
         )
 
     q_root_polynomial_method.__name__ = f"q_root_polynomial_{degree}"
@@ -237,18 +234,13 @@ def _domain(problem: QProblem, weights: np.ndarray) -> FitDomain:
     )
 
 
-def _loo_error(
-    problem: QProblem, correction: RootPolynomialCorrection, rows: SkinRows | None = None
+def _held_out(
+    problem: QProblem, correction: RootPolynomialCorrection, rows: SkinRows | None
 ) -> np.ndarray | None:
-    """(3,) the bounded model's leave-one-patch-out error (white-relative); None with no patch
-    to spare."""
-    w = problem.fit_weights
-    if int(np.count_nonzero(w > 0)) <= ROOT_POLYNOMIAL_TERMS[correction.degree]:
+    """:func:`bounded_loo_predictions`; None with no patch to spare."""
+    if int(np.count_nonzero(problem.fit_weights > 0)) <= ROOT_POLYNOMIAL_TERMS[correction.degree]:
         return None
-    held = bounded_loo_predictions(problem, correction, rows)
-    if not np.all(np.isfinite(held)):
-        return None
-    return error_relative_to_white(held, problem.target, problem.white_patch, w)
+    return bounded_loo_predictions(problem, correction, rows)
 
 
 #: The registry's ``root-polynomial`` method: degree 2 (6 terms).

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ocio_vp.calibration.equations import predict_lit_chart
+from ocio_vp.metrics import sample_camera_to_xyz
 from ocio_vp.skin_data import SkinSet, band_of, ita_degrees, training_skin
 
 __all__ = [
@@ -49,8 +50,7 @@ SKIN_CHART = "BabelColor Average"
 
 #: Ridge strength of the chart combination, relative to the mean patch energy: small enough to
 #: reproduce skin's spectrum, large enough that no coefficient amplifies the chart's noise
-#: (chosen on the training skin, half fitted and half judged, at 0.2 % and 1 % noise: 1e-5
-#: amplified 1 % noise, 1e-3 and above blurred the skin; docs/skin.md).
+#: (chosen on the training skin, docs/skin.md).
 COMBINATION_RIDGE = 1e-4
 
 
@@ -81,19 +81,6 @@ class SkinSamples:
         if extra_light is not None and self.weights is not None:
             lit = lit + self.weights @ extra_light
         return lit
-
-
-@functools.lru_cache(maxsize=1)
-def sample_camera_to_xyz() -> np.ndarray:
-    """Camera RGB -> XYZ of the sample camera, as ``auto`` judges ΔE
-    (:func:`ocio_vp.correction.perceptual.default_camera_to_xyz`, which imports this module's
-    callers and so cannot be imported here)."""
-    from ocio_vp.metrics import camera_to_xyz_matrix
-    from ocio_vp.spectra import camera_sensitivities
-
-    matrix = np.asarray(camera_to_xyz_matrix(camera_sensitivities()), dtype=np.float64)
-    matrix.setflags(write=False)
-    return matrix
 
 
 @functools.lru_cache(maxsize=2)

@@ -17,9 +17,9 @@ from ocio_vp.calibration.equations import condition_number
 from ocio_vp.correction.extrapolation import in_frame_led_damage
 from ocio_vp.correction.linear import patch_errors
 from ocio_vp.correction.problem import QProblem, fit_least_squares
-from ocio_vp.correction.skin import sample_camera_to_xyz, skin_delta_e
-from ocio_vp.formats.skin import ROUNDING, SkinBand, SkinDefault, SkinFigures
-from ocio_vp.metrics import white_scale
+from ocio_vp.correction.skin import skin_delta_e
+from ocio_vp.formats.skin import SkinBand, SkinDefault, SkinFigures
+from ocio_vp.metrics import sample_camera_to_xyz, white_scale, zero_below_rounding
 from ocio_vp.model.correction import MatrixCorrection, PostCorrection
 from ocio_vp.skin_data import ITA_BANDS
 
@@ -29,16 +29,9 @@ __all__ = ["background_error", "clipped_background", "skin_figures"]
 _MAX_CONDITION = 1e8
 
 
-def _figure(value: float) -> float:
-    """A ΔE2000 figure; below :data:`~ocio_vp.formats.skin.ROUNDING` it is rounding, whose
-    digits differ between machines: written as 0."""
-    value = float(value)
-    return 0.0 if abs(value) < ROUNDING else value
-
-
 def _fraction(value: float) -> float | None:
     """An error relative to white as recorded: None where not defined, 0 below rounding."""
-    return None if not np.isfinite(value) else (0.0 if abs(value) < ROUNDING else float(value))
+    return zero_below_rounding(value) if np.isfinite(value) else None
 
 
 def _background_outside(problem: QProblem, correction: PostCorrection) -> int:
@@ -112,7 +105,7 @@ def skin_figures(
         SkinBand(
             name,
             int(np.sum(band == name)),
-            *(_figure(np.mean(e[band == name])) for e in errors[:2]),
+            *(zero_below_rounding(np.mean(e[band == name])) for e in errors[:2]),
         )
         for name, _ in ITA_BANDS
         if np.any(band == name)
@@ -121,9 +114,13 @@ def skin_figures(
     if default is not None:
         comparison = SkinDefault(
             model=default[0],
-            expected=_figure(np.mean(errors[2])),
-            led_damage=_figure(in_frame_led_damage(correction, problem.SL, white, camera)),
-            led_damage_default=_figure(in_frame_led_damage(default[1], problem.SL, white, camera)),
+            expected=zero_below_rounding(np.mean(errors[2])),
+            led_damage=zero_below_rounding(
+                in_frame_led_damage(correction, problem.SL, white, camera)
+            ),
+            led_damage_default=zero_below_rounding(
+                in_frame_led_damage(default[1], problem.SL, white, camera)
+            ),
             background_outside=_background_outside(problem, correction),
             background_outside_default=_background_outside(problem, default[1]),
             background=_fraction(background_error(problem, correction)),
@@ -133,10 +130,10 @@ def skin_figures(
         priority=priority,
         source=skin.source,
         samples=skin.count,
-        expected=_figure(np.mean(errors[0])),
-        least_squares=_figure(np.mean(errors[1])),
-        chart=_figure(np.mean(chart[0][0][active])),
-        chart_least_squares=_figure(np.mean(chart[0][1][active])),
+        expected=zero_below_rounding(np.mean(errors[0])),
+        least_squares=zero_below_rounding(np.mean(errors[1])),
+        chart=zero_below_rounding(np.mean(chart[0][0][active])),
+        chart_least_squares=zero_below_rounding(np.mean(chart[0][1][active])),
         bands=bands,
         default=comparison,
     )

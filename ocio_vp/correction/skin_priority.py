@@ -1,27 +1,19 @@
 """``--priority skin``: the post-correction fitted with faces first.
 
-The default (``auto``) already fits its root-polynomial candidate to the problem's skin samples
-(:mod:`ocio_vp.correction.skin`) with a small weight and never takes a model that renders them
-worse than least squares. With skin first the weight is :data:`PRIORITY_SKIN_WEIGHT`: the
-bounded root-polynomial of degree 2 fitted to the chart and the skin samples, each skin sample
-scaled by its luminance to the power -2/3 (CIE L* is about ``Y^(1/3)``: skin of every
-lightness counts alike). Its fallback outside the chart's domain stays the chart's least
-squares, so emitters, highlights and saturated colours are corrected as by the default. Where
-the root-polynomial is not safe (it folds, flips or collapses a bright saturated input, or the
-chart does not constrain its terms) a 3x3 is fitted to the same rows instead. The chart's
-error is bounded (:data:`CHART_BUDGET` times least squares'); a target chart of rank below 3
-(monochromatic light) has no colour to put first and is solved as the default solves it.
+The bounded root-polynomial of degree 2 is fitted to the chart and the problem's skin samples
+(:mod:`ocio_vp.correction.skin`) with weight :data:`PRIORITY_SKIN_WEIGHT`, each sample scaled
+by its luminance to the power -2/3 (skin of every lightness counts alike); a 3x3 is fitted to
+the same rows where the root-polynomial is not safe. Its fallback outside the chart's domain
+stays the chart's least squares. The chart's error is bounded (:data:`CHART_BUDGET` times least
+squares'); a target chart of rank below 3 has no colour to put first and is solved as the
+default (``auto``) solves it.
 
-Faces first must not cost the rest of the frame: through the skin-first model the in-frustum
-background's expected error (:func:`~ocio_vp.correction.skin_figures.background_error`) and
-the wall's LEDs in frame (:func:`~ocio_vp.correction.extrapolation.in_frame_led_damage`) may be
-no worse than through the default's post-correction on the same problem, nor its skin samples
-(and the chart no worse than the worse of the two). Where the skin fit is, the model is taken
-from the default towards it, its parameters ``D + a step`` (two models of one kind, whose
-outputs are linear in their parameters): first along the step with the background's rise taken
-out to first order (the gradient projected out in the skin fit's own metric, so the fit gives
-up as little as it can), then straight, for a in 1 and :data:`BLEND_STEPS`, largest first; the
-default itself where none holds.
+Faces first must not cost the rest of the frame: the in-frustum background's expected error,
+the wall's LEDs in frame and the skin samples may be no worse than through the default's
+post-correction. Where the skin fit is, the model is drawn from the default towards it
+(parameters ``D + a step``): first along the step with the background's first-order rise
+projected out (in the skin fit's own metric), then straight, for a in 1 and
+:data:`BLEND_STEPS`, largest first; the default itself where none holds.
 """
 
 from __future__ import annotations
@@ -36,10 +28,10 @@ from ocio_vp.correction.auto import bounded_candidate, q_auto
 from ocio_vp.correction.extrapolation import in_frame_led_damage
 from ocio_vp.correction.linear import patch_errors, problem_arrays, target_rank
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
-from ocio_vp.correction.skin import sample_camera_to_xyz, skin_delta_e, with_rows
+from ocio_vp.correction.skin import skin_delta_e, with_rows
 from ocio_vp.correction.skin_figures import background_error, clipped_background
 from ocio_vp.errors import InputError
-from ocio_vp.metrics import white_scale
+from ocio_vp.metrics import sample_camera_to_xyz, white_scale
 from ocio_vp.model.correction import (
     FitDomain,
     MatrixCorrection,
@@ -48,12 +40,10 @@ from ocio_vp.model.correction import (
 )
 from ocio_vp.model.expansion import ROOT_POLYNOMIAL_TERMS, root_polynomial_expansion
 
-__all__ = ["BLEND_STEPS", "CHART_BUDGET", "PRIORITY_SKIN_WEIGHT", "default_fit", "q_skin_priority"]
+__all__ = ["BLEND_STEPS", "CHART_BUDGET", "PRIORITY_SKIN_WEIGHT", "q_skin_priority"]
 
-#: Weight of the skin samples with skin first (relative to the chart's energy). Chosen on the
-#: training skin (half fitted, half judged) and the tuning cameras at 0.2 % and 1 % noise:
-#: 0.5 rendered that skin 0.65-0.77x least squares with general reflectances ~0.94x; 1.0 gained
-#: at 0.2 % noise and lost it at 1 % (docs/skin.md).
+#: Weight of the skin samples with skin first (relative to the chart's energy), chosen on the
+#: training skin and the tuning cameras (docs/skin.md).
 PRIORITY_SKIN_WEIGHT = 0.5
 #: The chart's mean ΔE2000 after the fit may be at most this times least squares'.
 CHART_BUDGET = 1.15
@@ -71,20 +61,6 @@ Guard = Callable[[PostCorrection], PostCorrection]
 _STEP = 1e-6
 #: "No worse" up to rounding: a figure may exceed the default's by this fraction of itself.
 _ROUNDING = 1e-9
-
-
-#: The last problem whose default was solved, and that fit: skin first compares with the
-#: default and the solve then reports it, on the same (frozen) problem; solved once.
-_LAST_DEFAULT: list[tuple[QProblem, QFit]] = []
-
-
-def default_fit(problem: QProblem) -> QFit:
-    """The default's post-correction of ``problem`` (``auto``), solved once per problem."""
-    if _LAST_DEFAULT and _LAST_DEFAULT[0][0] is problem:
-        return _LAST_DEFAULT[0][1]
-    fit = q_auto(problem)
-    _LAST_DEFAULT[:] = [(problem, fit)]
-    return fit
 
 
 def _parameters(
@@ -252,14 +228,13 @@ def _no_worse(value: float, bound: float) -> bool:
 
 
 def within_default(
-    problem: QProblem, fit: QFit, guard: Guard | None = None
+    problem: QProblem, fit: QFit, default: QFit, guard: Guard | None = None
 ) -> tuple[QFit, str, float]:
     """``fit`` drawn towards the default until its background and LED figures are no worse
     than the default's, nor its skin (module docstring), each judged through ``guard`` (the
     emitter guard the solve wraps the model in; none by default): the fit, what was done in
     words, and the share of the way from the default to the skin fit taken (1: the skin fit
-    unchanged, 0: the default)."""
-    default = default_fit(problem)
+    unchanged, 0: the default); ``default`` is ``auto``'s fit of ``problem``."""
     guarded = guard or (lambda correction: correction)
     reference = _figures(problem, guarded(default.correction))
     figures = _figures(problem, guarded(fit.correction))
@@ -318,10 +293,16 @@ def q_skin_priority(problem: QProblem, guard: Guard | None = None) -> QFit:
             "the measurements file, or patches of skin colour are needed)",
             key="--priority",
         )
+    default = q_auto(problem)
+    fit = _q_skin_priority(problem, default, guard)
+    return dataclasses.replace(fit, default=default)
+
+
+def _q_skin_priority(problem: QProblem, default: QFit, guard: Guard | None) -> QFit:
     X, P, w, white = problem_arrays(problem)
     rank, _ = target_rank(P, w, X)
     if rank < 3:
-        fit = default_fit(problem)
+        fit = default
         reason = f"skin priority not applied: the target chart has rank {rank}; {fit.reason}"
         return QFit(
             fit.correction, fit.model, fit.description, reason=reason, target_rank=rank,
@@ -331,9 +312,7 @@ def q_skin_priority(problem: QProblem, guard: Guard | None = None) -> QFit:
     Q_ls = fit_least_squares(X, P, w)
     chart_ls = float(np.mean(patch_errors(X @ Q_ls.T, P, w, white)[0][active]))
     if chart_ls < EXACT:
-        fit = default_fit(
-            problem
-        )  # the stage reproduces the light: no colour, skin or other, to fix
+        fit = default  # the stage reproduces the light: no colour, skin or other, to fix
         return QFit(
             fit.correction, fit.model, fit.description, reason=f"faces first: {fit.reason}",
             cross_validated_error=fit.cross_validated_error, target_rank=rank,
@@ -351,13 +330,12 @@ def q_skin_priority(problem: QProblem, guard: Guard | None = None) -> QFit:
         )
     chart = float(np.mean(patch_errors(fit.correction.apply(X), P, w, white)[0][active]))
     if not chart <= CHART_BUDGET * chart_ls:
-        default = default_fit(problem)
         reason = (
             f"faces first, but the skin fit's chart error {chart:.3g} is above "
             f"{CHART_BUDGET:g}x least squares' {chart_ls:.3g}: the default kept; {default.reason}"
         )
         return dataclasses.replace(default, reason=reason)
-    fit, elsewhere, share = within_default(problem, fit, guard)
+    fit, elsewhere, share = within_default(problem, fit, default, guard)
     if share == 0.0:  # the default itself, its reason saying why
         return fit
     chart = float(np.mean(patch_errors(fit.correction.apply(X), P, w, white)[0][active]))

@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ocio_vp.formats.records import Record
+from ocio_vp.metrics import ROUNDING
 
 __all__ = ["ROUNDING", "SkinBand", "SkinDefault", "SkinFigures"]
 
@@ -96,8 +97,7 @@ class SkinFigures(Record):
         return f"{_figure(self.expected)} ({self.ratio:.2f}x LS)"
 
 
-#: ΔE2000 below this is rounding (machine-dependent digits): printed as 0, ratios as 1.
-ROUNDING = 1e-6
+# ΔE2000 below ROUNDING is rounding (machine-dependent digits): printed as 0, ratios as 1.
 
 
 def _ratio(value: float, reference: float) -> float:

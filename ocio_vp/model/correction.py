@@ -21,17 +21,11 @@ readers that want one; the ``post_correction`` block holds the object itself
 
 The domain
 ----------
-Under the wall's RGB LEDs a reflectance reflects each LED channel by some fraction in [0, 1],
-so a reflective surface on stage, mapped to drive space by ``M = [SL]^-1`` and divided per
-channel by the drive of a perfect white diffuser, lies in the unit cube (``u = U x`` with
-``U = D^-1 M``; :class:`FitDomain`). Outside that solid a pixel is an emitter or a highlight:
-brighter than white in some LED channel, or needing negative light. Its chromaticity plane
-(``u`` divided by its sum) holds the chart's colours in a convex polygon, the **hull**: the
-directions the fit has seen. A root-polynomial Q is used inside the hull and fades to its
-fallback matrix (least squares on the same patches) by :data:`DEFAULT_FADE` times the hull's
-size around white (a gauge, so the fade is exposure-invariant). Outside the hull the
-polynomial only extrapolates: on saturated colours and emitters it flips and collapses
-channels that a matrix keeps (docs/stability.md).
+A reflective surface on stage, in drive relative to a perfect white diffuser, lies in the unit
+cube (:class:`FitDomain`); outside it a pixel is an emitter or a highlight. The chart's colours
+span a convex polygon (the **hull**) in that space's chromaticity plane: a root-polynomial Q is
+used inside it and fades to its fallback matrix by :data:`DEFAULT_FADE` times the hull's size
+around white, since outside it the polynomial only extrapolates (docs/stability.md).
 
 References
 ----------

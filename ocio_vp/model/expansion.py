@@ -3,13 +3,9 @@
 The terms of degree d (degree 2: ``r, g, b, sqrt(rg), sqrt(gb), sqrt(rb)``; degree 3 adds the
 cube roots of ``r^2 g`` etc. and ``rgb``: 13 terms) are those of colour-science's
 :func:`colour.characterisation.polynomial_expansion_Finlayson2015` (same terms, same order,
-tested against it), written as one numpy expression per term so that baking a LUT or
-post-correcting a frame does not pay colour-science's per-call overhead. Roots are
-sign-preserving (``sign(t) |t|^(1/k)``): negative inputs (noise around black) give finite,
-continuous values and zero maps to zero.
-
-A leaf of :mod:`ocio_vp.correction`: the fit (:mod:`~ocio_vp.correction.root_polynomial`) and
-the typed post-correction (:mod:`~ocio_vp.model.correction`) both build on it.
+tested against it), one numpy expression per term, without colour-science's per-call
+overhead. Roots are sign-preserving (``sign(t) |t|^(1/k)``): negative inputs (noise around
+black) give finite, continuous values and zero maps to zero.
 
 References
 ----------

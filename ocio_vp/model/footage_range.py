@@ -22,10 +22,8 @@ the white's largest channel. :func:`agreement` measures ΔE2000 between a host a
 model on every set (:func:`ocio_vp.metrics.delta_E_2000`: the ``camera_to_xyz`` matrix, the
 scene white's chromaticity as Lab's reference white, the white at Y = 1).
 
-Tests, benchmarks and the config writer share these definitions: the simulator builds the
-sets from spectra (:func:`ocio_vp.simulator.truth.stage_footage_range`: held-out reflectances,
-narrow-band emitters), the writer from the calibration alone (:func:`calibration_footage_range`:
-the lit chart, the wall's primaries).
+The simulator builds the sets from spectra (:func:`ocio_vp.simulator.truth.stage_footage_range`),
+the config writer from the calibration alone (:func:`calibration_footage_range`).
 """
 
 from __future__ import annotations

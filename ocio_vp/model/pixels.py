@@ -1,22 +1,13 @@
 """A post-correction as a per-pixel function for footage: the same model, arranged for speed.
 
-:meth:`~ocio_vp.model.correction.RootPolynomialCorrection.apply` is written to be read (float64,
-the chromaticity gauge built step by step, the polynomial gathered where it applies); it is
-the reference. :func:`pixel_function` evaluates the same formulas on a band of pixels in a
-chosen float type (float32 for footage), rearranged so that every step is one pass of numpy
-over the band and no step depends on the number of pixels the domain holds:
-
-- the domain's gauge, ``max_i n_i . ((u_r, u_b) / sum(u) - centre)`` with ``u = U x``, is
-  ``max_i (b_i . x) / (s . x)``: the hull's edges folded into one (3, edges) matrix ``B`` and
-  ``s = U^T 1``, so one small matrix product replaces the drive, the chromaticity and the
-  per-edge products;
-- the polynomial is computed for every pixel of the band (the reference gathers the pixels
-  inside the fade; on footage nearly all of them are), and blended as ``L + w (P - L)``;
-- an emitter-protected correction's weights use the same rearrangement.
-
-float32 arithmetic rounds each step at 6e-8 relative; the result agrees with the float64
-reference to about 1e-6 of the pixel's largest channel (tested), 500 times finer than half
-float's rounding (what EXR footage stores) and below any visible difference in float32 EXRs.
+:meth:`~ocio_vp.model.correction.RootPolynomialCorrection.apply` (float64) is the reference.
+:func:`pixel_function` evaluates the same formulas on a band of pixels in a chosen float type
+(float32 for footage), each step one pass of numpy over the band: the domain's gauge
+``max_i n_i . ((u_r, u_b) / sum(u) - centre)`` with ``u = U x`` becomes
+``max_i (b_i . x) / (s . x)`` (the hull's edges folded into one (3, edges) matrix ``B``,
+``s = U^T 1``), and the polynomial is computed for every pixel and blended as
+``L + w (P - L)``. The tests bound the difference from the reference, well below half float's
+rounding (what EXR footage stores).
 """
 
 from __future__ import annotations

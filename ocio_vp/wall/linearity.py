@@ -500,8 +500,8 @@ def response_model(drive: np.ndarray, response: np.ndarray):
     PCHIP (Fritsch & Carlson 1980) preserves the monotonicity of the data, so its inverse
     exists; a fitted polynomial could wiggle and fold back.
     """
-    # scipy is imported here, not at the top: ~0.6 s, and this module is imported by every
-    # `ocio-vp` command (through the measurements reader) while few of them fit a response.
+    # scipy is imported here: every `ocio-vp` command imports this module (through the
+    # measurements reader) while few of them fit a response.
     from scipy.interpolate import PchipInterpolator
 
     return PchipInterpolator(
