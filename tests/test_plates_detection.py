@@ -72,6 +72,9 @@ def test_found_under_each_degradation(tmp_path, charts, chart, degradation):
     samples = sample_chart(info.path, found.corners, 4, 6, clip_level=np.inf)
     expected = sample_chart(info.path, truth, 4, 6, clip_level=np.inf)
     white = np.abs(expected.means).max()
+    # 0.3% of white: under a tenth of the error the paper reports after calibration (under 4%
+    # of the white square on average, its Quantitative Results), so detection adds no visible
+    # error; the same bound as the whole measurement's (tests/test_simulator_plates.py).
     assert np.max(np.abs(samples.means - expected.means)) < 0.003 * white
 
 
