@@ -28,10 +28,10 @@ def test_a_solve_replaces_its_environment_with_the_exports_and_report_inside(tmp
 
 
 #: ``ocio-vp solve`` (``ocio_vp.cli.main``, as ``python -m ocio_vp.cli`` runs it) with one
-#: pause: once this process has written an environment into the staging folder, it touches the
-#: file argv[1] and waits there until a stop signal ends the wait. functools.wraps keeps the
-#: real function's name, so the helper process (which pickles write_environment by name) writes
-#: its environments with the real one, unpaused, meanwhile.
+#: pause: when this process starts writing an environment into the staging folder (the helper
+#: process has its share by then), it touches the file argv[1] and waits there until a stop
+#: signal ends the wait. functools.wraps keeps the real function's name, so the helper (which
+#: pickles write_environment by name) bakes its environment with the real one meanwhile.
 STOPPABLE_SOLVE = """
 import functools, pathlib, sys, time
 from ocio_vp.cli import main
@@ -40,13 +40,12 @@ from ocio_vp.ocio import writer
 real = writer.write_environment
 
 @functools.wraps(real)
-def write_then_wait(solution, folder):
-    real(solution, folder)
+def wait_while_writing(solution, folder):
     pathlib.Path(sys.argv[1]).touch()
     while True:
         time.sleep(0.01)
 
-writer.write_environment = write_then_wait
+writer.write_environment = wait_while_writing
 sys.exit(main(sys.argv[2:]))
 """
 
