@@ -5,6 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from ocio_vp.cli import _defer_colour_plotting
+
+# As every ``ocio-vp`` command does (ocio_vp.cli.main): colour-science's own import of
+# colour.plotting, and with it matplotlib's pyplot, waits until something reads an attribute
+# of colour.plotting (~0.4 s of CPU in each test process; nothing here plots with it).
+_defer_colour_plotting()
+
 CHANNELS = ("red", "green", "blue")
 
 
@@ -134,3 +141,41 @@ def panel_stage_measurements(environments=("overcast", "interior"), **options):
 @pytest.fixture(scope="session")
 def panel_stage_and_measurements():
     return panel_stage_measurements()
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _writing_in_this_process():
+    """``ocio-vp solve`` and ``demo`` called in-process (``ocio_vp.cli.main``) write every
+    environment in this process instead of starting a helper process for each call.
+
+    The helper is a fresh "spawn" interpreter per call: ~2 s of CPU (its imports) for a
+    solve that itself takes ~0.1 s, paid by ~100 in-process solves in this suite. What it
+    writes is the same bytes (tests/test_ocio_writer.py compares both ways, byte for byte, and
+    its failures), and every ``ocio-vp`` run in a subprocess (the CLI tests of exit codes,
+    signals, FIFOs, concurrent runs) still starts it. A test marked ``writer_helper`` gets the
+    real helper back (:func:`_writer_helper_when_marked`)."""
+    import contextlib
+
+    from ocio_vp.ocio import writer
+
+    @contextlib.contextmanager
+    def no_helper(method=None, *, protect_emitters=False):
+        yield None
+
+    real = writer.writer_pool
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(writer, "writer_pool", no_helper)
+        yield real
+
+
+@pytest.fixture(autouse=True)
+def _writer_helper_when_marked(request, _writing_in_this_process):
+    """The real writing helper for tests marked ``writer_helper`` (see above)."""
+    if request.node.get_closest_marker("writer_helper") is None:
+        yield
+        return
+    from ocio_vp.ocio import writer
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(writer, "writer_pool", _writing_in_this_process)
+        yield

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from ocio_vp.correction.skin import (
+    COMBINATION_RIDGE,
     SKIN_CHART,
     chart_reflectances,
     chart_skin_samples,
@@ -50,8 +51,13 @@ class TestChartSkinWeights:
         chart = chart_reflectances()
         active = np.ones(24, bool)
         weights = chart_skin_weights(chart, chart[[0, 1, 11]], active)
-        # Ridge-regularised, so close to (not exactly) the unit vectors.
-        np.testing.assert_allclose(weights @ chart, chart[[0, 1, 11]], atol=0.01)
+        # Ridge-regularised, so close to (not exactly) the unit vectors: with R = U S Vᵀ and
+        # λ = COMBINATION_RIDGE * trace(R Rᵀ) / 24 (the docstring's definition), a patch j is
+        # rebuilt short by exactly λ Σ_k U_jk s_k / (s_k² + λ) V_k (closed form, by SVD).
+        U, sv, Vt = np.linalg.svd(chart, full_matrices=False)
+        lam = COMBINATION_RIDGE * np.sum(sv**2) / len(chart)
+        short = lam * (U[[0, 1, 11]] * (sv / (sv**2 + lam))) @ Vt
+        np.testing.assert_allclose(weights @ chart, chart[[0, 1, 11]] - short, atol=1e-9)
         assert np.argmax(weights, axis=1).tolist() == [0, 1, 11]
 
     def test_excluded_patches_get_no_weight(self):
@@ -96,9 +102,11 @@ def test_the_colorchecker_skin_patches_are_found_by_colour(stage_and_measurement
 
 
 def test_the_default_never_expects_skin_worse_than_least_squares(solved):
-    """Worse only within the comparison's noise (a hundredth of a ΔE here), better overall."""
-    ratios = [solved[(name, "general")].diagnostics.skin.ratio for name in BROADBAND]
-    assert max(ratios) <= 1.001 and np.mean(ratios) < 0.95
+    """Worse by at most a thousandth of a ΔE2000 (a thousandth of a just-noticeable difference,
+    ~1 ΔE2000: invisible; direct sun's default is 0.0002 worse), better overall."""
+    skin = [solved[(name, "general")].diagnostics.skin for name in BROADBAND]
+    assert all(s.expected <= s.least_squares + 1e-3 for s in skin), skin
+    assert np.mean([s.ratio for s in skin]) < 0.95
 
 
 def test_skin_first_renders_the_samples_better_and_keeps_emitters(solved):

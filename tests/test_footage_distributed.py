@@ -42,13 +42,32 @@ def test_local_process_pool():
     _check(map_unordered(_sqrt_or_fail, ITEMS, workers=2))
 
 
-def test_dask_cluster():
+@pytest.fixture(scope="module")
+def dask_scheduler():
+    """The address of one in-process Dask cluster (threads) for this file's tests: quick to
+    start, and a tcp:// scheduler takes the same path. The suite runs beside other work, where
+    a thread may wait seconds for a core: Dask's connection and heartbeat timeouts are made
+    generous (nothing here tests them), so only a wrong result can fail these tests."""
     distributed = pytest.importorskip("distributed")
-    # An in-process cluster (threads) keeps the test fast; a tcp:// scheduler takes the same path.
-    with distributed.LocalCluster(
-        n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
-    ) as cluster:
-        _check(map_unordered(_sqrt_or_fail, ITEMS, scheduler=cluster.scheduler_address))
+    import dask
+
+    patient = {
+        "distributed.comm.timeouts.connect": "300s",
+        "distributed.comm.timeouts.tcp": "300s",
+        "distributed.scheduler.worker-ttl": "600s",
+        "distributed.deploy.lost-worker-timeout": "300s",
+    }
+    with (
+        dask.config.set(patient),
+        distributed.LocalCluster(
+            n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+        ) as cluster,
+    ):
+        yield cluster.scheduler_address
+
+
+def test_dask_cluster(dask_scheduler):
+    _check(map_unordered(_sqrt_or_fail, ITEMS, scheduler=dask_scheduler))
 
 
 def test_bad_scheduler_and_workers():
@@ -77,17 +96,13 @@ def test_apply_with_two_local_workers(tmp_path):
         np.testing.assert_array_equal(a, b)
 
 
-def test_solve_on_dask_matches_local(tmp_path):
+def test_solve_on_dask_matches_local(tmp_path, dask_scheduler):
     import json
 
-    distributed = pytest.importorskip("distributed")
     doc = tmp_path / "stage.yaml"
     doc.write_text(yaml.safe_dump(make_measurements_dict(environments=2)))
-    with distributed.LocalCluster(
-        n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
-    ) as cluster:
-        args = ["solve", str(doc), "--scheduler", cluster.scheduler_address]
-        assert main([*args, "--out", str(tmp_path / "dask")]) == 0
+    args = ["solve", str(doc), "--scheduler", dask_scheduler]
+    assert main([*args, "--out", str(tmp_path / "dask")]) == 0
     assert main(["solve", str(doc), "--out", str(tmp_path / "local")]) == 0
     for env in ("env_0", "env_1"):
         a = json.loads((tmp_path / "dask" / env / "solution.json").read_text())

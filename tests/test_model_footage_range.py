@@ -38,7 +38,8 @@ def test_the_sets_span_what_footage_spans(footage):
     assert tuple(sets) == SETS
     assert np.any(sets["near_black"] < 0)  # noise around black
     assert np.all(np.abs(sets["near_black"]) < 0.02 + 6 * READ_NOISE)
-    assert sets["highlights"].max() <= HDR * WHITE.max() * 1.001
+    # Noiseless, at most HDR times the lit white; exp2(log2(HDR)) may round an ulp above HDR.
+    assert sets["highlights"].max() <= HDR * WHITE.max() * (1 + 4 * np.finfo(float).eps)
     assert sets["highlights"].max() > 0.5 * HDR * WHITE.max()
     emitters = sets["emitters"].reshape(len(EMITTER_LEVELS), -1, 3)
     for level, block in zip(EMITTER_LEVELS, emitters, strict=True):

@@ -19,6 +19,9 @@ from ocio_vp.formats.solution import solution_to_json
 from ocio_vp.ocio.writer import _share, write_solutions, writer_pool
 from ocio_vp.pipeline import solve_environment
 
+# The real helper process throughout (tests/conftest.py replaces it for other in-process solves).
+pytestmark = pytest.mark.writer_helper
+
 
 @pytest.fixture(scope="module")
 def solutions():

@@ -14,7 +14,17 @@ from ocio_vp.formats.measurements import load_measurements, measurements_from_di
 from ocio_vp.pipeline import solve_environment
 from ocio_vp.plates.capture import capture_from_dict, load_capture
 from ocio_vp.plates.measure import measure_capture
-from ocio_vp.simulator.plates import CHART_CORNERS, render_chart, render_regions, write_plate
+from ocio_vp.simulator.plates import (
+    CHART_CORNERS,
+    PLATE_SIZE,
+    render_chart,
+    render_regions,
+    write_plate,
+)
+
+#: A frame the size of the simulator's other plates (rows, columns, RGB), for plates whose
+#: content does not matter (refused for their channels or bit depth whatever they show).
+FRAME = (PLATE_SIZE[1], PLATE_SIZE[0], 3)
 
 NOISE, READ_NOISE = 0.01, 1e-4
 # 10 % fall-off at the frame's corners, removed with a flat field (4 frames of a white target).
@@ -278,7 +288,7 @@ class TestBadInput:
 
     def test_no_rgb_channels(self, tmp_path, capture_file, capsys):
         def edit(d, plates):
-            write_plate(plates / "yz.exr", np.ones((400, 600, 3)), channels=("Y", "Z"))
+            write_plate(plates / "yz.exr", np.ones(FRAME), channels=("Y", "Z"))
             d["lit_chart"]["green"]["plate"] = "plates/yz.exr"
 
         err = self._run(tmp_path, capture_file, edit, capsys)
@@ -295,7 +305,7 @@ class TestBadInput:
 
     def test_8bit_without_encoding(self, tmp_path, capture_file, capsys):
         def edit(d, plates):
-            write_plate(plates / "eight.png", np.full((400, 600, 3), 0.5), dtype="uint8")
+            write_plate(plates / "eight.png", np.full(FRAME, 0.5), dtype="uint8")
             d["environments"][1]["target_chart"]["plate"] = "plates/eight.png"
 
         err = self._run(tmp_path, capture_file, edit, capsys)

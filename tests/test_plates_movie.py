@@ -149,13 +149,14 @@ def test_in_and_out_points_measure_the_same_part(filmed, readings):
     """The untagged movie (start 10:00:00:00) with its tags in the capture file and in/out
     points around the sequence (timecode and frame number) measures what the whole take does."""
     folder, _ = filmed
+    first, last = 5, 585  # frames of the 595-frame take (PATTERNS) around its sequence
     capture = _capture(
         folder,
         "A003.mov",
         encoding="ARRI LogC3",
         matrix="Rec.709",
         range="legal",
-        **{"in": "10:00:00:05", "out": 585},
+        **{"in": f"10:00:00:{first:02d}", "out": last},
     )
     data = _measure(capture)
     np.testing.assert_allclose(_SL(data), _SL(readings["prores4444"]), rtol=1e-6, atol=1e-9)
@@ -166,7 +167,9 @@ def test_in_and_out_points_measure_the_same_part(filmed, readings):
         "legal",
         "capture file",
     )
-    assert movie["start_timecode"] == "10:00:00:00" and samples["take"]["frame_count"] == 581
+    # The take starts at 10:00:00:00, so the in point is frame ``first``; in and out both count.
+    assert movie["start_timecode"] == "10:00:00:00"
+    assert samples["take"]["frame_count"] == last - first + 1
 
 
 def _refused(capture: Path, capsys) -> str:

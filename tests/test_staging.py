@@ -27,11 +27,36 @@ def test_a_solve_replaces_its_environment_with_the_exports_and_report_inside(tmp
     assert (calib / "direct_sun" / "exports" / "nuke" / "mine.txt").read_text() == "keep"
 
 
+#: ``ocio-vp solve`` (``ocio_vp.cli.main``, as ``python -m ocio_vp.cli`` runs it) with one
+#: pause: when this process starts writing an environment into the staging folder (the helper
+#: process has its share by then), it touches the file argv[1] and waits there until a stop
+#: signal ends the wait. functools.wraps keeps the real function's name, so the helper (which
+#: pickles write_environment by name) bakes its environment with the real one meanwhile.
+STOPPABLE_SOLVE = """
+import functools, pathlib, sys, time
+from ocio_vp.cli import main
+from ocio_vp.ocio import writer
+
+real = writer.write_environment
+
+@functools.wraps(real)
+def wait_while_writing(solution, folder):
+    pathlib.Path(sys.argv[1]).touch()
+    while True:
+        time.sleep(0.01)
+
+writer.write_environment = wait_while_writing
+sys.exit(main(sys.argv[2:]))
+"""
+
+
 def test_a_stopped_solve_leaves_no_staging_folder(tmp_path):
     """A real ``ocio-vp solve`` stopped by SIGINT (Ctrl-C) and one stopped by SIGTERM (kill,
     timeout), each while its environments are being written into the staging folder: exit
     128 + the signal, one line, and no staging folder, half-published environment or helper
-    process left behind. Both run at once (the test's cost is one solve's start)."""
+    process left behind. Both run at once (the test's cost is one solve's start). The signal
+    is sent once the run says it is writing (:data:`STOPPABLE_SOLVE`), not when a poll happens
+    to see the staging folder: the moment is the same on a slow or loaded machine."""
     import os
     import signal
     import subprocess
@@ -41,26 +66,29 @@ def test_a_stopped_solve_leaves_no_staging_folder(tmp_path):
     from ocio_vp.formats.measurements import save_measurements
     from ocio_vp.simulator.stage import simulate_measurements
 
-    # Two environments whose emitter-protected Q bakes LUT chains: ~1 s in the staging folder.
+    # Two environments with emitter-protected Q: the helper process bakes one's LUT chains
+    # while this process writes the other.
     stage = tmp_path / "stage.yaml"
     save_measurements(simulate_measurements(["incandescent", "warm_white_led"]), stage)
     runs = {}
     for sig in (signal.SIGINT, signal.SIGTERM):
-        out = tmp_path / sig.name
-        cmd = [sys.executable, "-m", "ocio_vp.cli", "solve", str(stage), "--out", str(out)]
-        cmd.append("--protect-emitters")
-        runs[sig] = (out, subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True))
-    deadline = time.monotonic() + 120
+        out, writing = tmp_path / sig.name, tmp_path / f"writing-{sig.name}"
+        cmd = [sys.executable, "-c", STOPPABLE_SOLVE, str(writing)]
+        cmd += ["solve", str(stage), "--out", str(out), "--protect-emitters"]
+        runs[sig] = (out, writing, subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True))
+    deadline = time.monotonic() + 300  # a generous bound for a loaded machine, never reached
     waiting = dict(runs)
     while waiting and time.monotonic() < deadline:
-        for sig, (out, proc) in list(waiting.items()):
-            assert proc.poll() is None, "the solve ended before it was stopped"
-            if out.is_dir() and any(p.name.startswith(".ocio-vp-staging-") for p in out.iterdir()):
+        for sig, (out, writing, proc) in list(waiting.items()):
+            assert proc.poll() is None, ("the solve ended before it was stopped", sig)
+            if writing.exists():
+                staged = [p.name for p in out.iterdir() if p.name.startswith(".ocio-vp-staging-")]
+                assert len(staged) == 1, (sig, staged)  # stopped while writing into it
                 proc.send_signal(sig)
                 del waiting[sig]
-        time.sleep(0.005)
-    assert not waiting, "no staging folder appeared"
-    for sig, (out, proc) in runs.items():
+        time.sleep(0.01)
+    assert not waiting, "no environment was written"
+    for sig, (out, _, proc) in runs.items():
         _, err = proc.communicate(timeout=60)  # the helper process has ended too (pipe closed)
         assert proc.returncode == 128 + sig.value, (sig, proc.returncode, err)
         assert err.strip() == "ocio-vp solve: interrupted", err
