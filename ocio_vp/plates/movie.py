@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from ocio_vp.errors import InputError
+from ocio_vp.plates.raw import library_message
 from ocio_vp.plates.reader import PlateInfo, linearise
 from ocio_vp.plates.take_reader import FrameStats, frame_stats
 
@@ -122,10 +123,6 @@ def _error(message: str, path: Path, key: str | None = None) -> InputError:
     return InputError(message, source=path, key=key)
 
 
-def _av_message(exc: Exception) -> str:
-    return " ".join(str(exc).split())[:160] or type(exc).__name__
-
-
 def _open(path: Path):  # -> av.container.InputContainer
     import av
 
@@ -137,7 +134,7 @@ def _open(path: Path):  # -> av.container.InputContainer
         return av.open(str(path), "r")
     except (av.FFmpegError, OSError, ValueError) as exc:
         raise _error(
-            f"cannot open as a movie (truncated or not a movie?): {_av_message(exc)}", path
+            f"cannot open as a movie (truncated or not a movie?): {library_message(exc)}", path
         ) from None
 
 
@@ -355,17 +352,21 @@ def _chroma(plane: np.ndarray, box, sub: tuple[int, int]) -> np.ndarray:
     return part[y0 - y0 // sy * sy :][: y1 - y0, x0 - x0 // sx * sx :][:, : x1 - x0]
 
 
+def _gbr_to_rgb(g: np.ndarray, b: np.ndarray, r: np.ndarray, *, info: MovieInfo) -> np.ndarray:
+    """R'G'B' (..., 3) float32 from planar G, B, R code values at the stream's range."""
+    rgb = np.stack([r, g, b], axis=-1).astype(np.float32)
+    if info.range == "legal":
+        scale = float(1 << (info.bits - 8))
+        return (rgb - np.float32(16 * scale)) / np.float32(219 * scale)
+    return rgb / np.float32((1 << info.bits) - 1)
+
+
 def frame_rgb(frame, info: MovieInfo, box: tuple[int, int, int, int]) -> np.ndarray:
     """R'G'B' float32 (rows, columns, 3) of ``box`` (x0, y0, x1, y1) of a decoded frame."""
     x0, y0, x1, y1 = box
     planes = [_plane(frame, k, info.bits) for k in range(3)]
-    if info.rgb:  # planar G, B, R
-        g, b, r = (p[y0:y1, x0:x1] for p in planes)
-        rgb = np.stack([r, g, b], axis=-1).astype(np.float32)
-        if info.range == "legal":
-            scale = float(1 << (info.bits - 8))
-            return (rgb - np.float32(16 * scale)) / np.float32(219 * scale)
-        return rgb / np.float32((1 << info.bits) - 1)
+    if info.rgb:
+        return _gbr_to_rgb(*(p[y0:y1, x0:x1] for p in planes), info=info)
     luma = planes[0][y0:y1, x0:x1]
     cb = _chroma(planes[1], box, info.subsampling)
     cr = _chroma(planes[2], box, info.subsampling)
@@ -434,7 +435,7 @@ def _decoded(info: MovieInfo, container, stream) -> Iterator[tuple[int, Any]]:
             yield index, frame
     except av.FFmpegError as exc:
         raise _error(
-            f"cannot decode frame {index + 1} (truncated or corrupt?): {_av_message(exc)}",
+            f"cannot decode frame {index + 1} (truncated or corrupt?): {library_message(exc)}",
             info.path,
         ) from None
     if info.last is not None and index < info.last:
@@ -569,12 +570,7 @@ def reduced_frame(info: MovieInfo, index: int, factor: int) -> np.ndarray:
         values = plane[np.ix_(rows, cols)].astype(np.float32)
         planes.append(values.reshape(cells_y, n, cells_x, n).mean(axis=(1, 3)))
     if info.rgb:
-        g, b, r = planes
-        full = float((1 << info.bits) - 1)
-        rgb = np.stack([r, g, b], axis=-1) / np.float32(full)
-        if info.range == "legal":
-            scale = float(1 << (info.bits - 8))
-            rgb = (rgb * np.float32(full) - np.float32(16 * scale)) / np.float32(219 * scale)
+        rgb = _gbr_to_rgb(*planes, info=info)
     else:
         rgb = ycbcr_to_rgb(*planes, bits=info.bits, matrix=info.matrix, range_=info.range)
     return decode_log(rgb, info.encoding)

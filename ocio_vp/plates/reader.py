@@ -249,7 +249,7 @@ def open_plate(
 
 def _open_raw(source: str, encoding: str | None, demosaic: str | None) -> PlateInfo:
     """A camera raw plate's header (:mod:`ocio_vp.plates.raw`): linear by definition."""
-    from ocio_vp.plates.raw import DEFAULT_DEMOSAIC, raw_mosaic
+    from ocio_vp.plates.raw import DEFAULT_DEMOSAIC, raw_size
 
     demosaic = demosaic or DEFAULT_DEMOSAIC
     if encoding not in (None, "linear"):
@@ -257,8 +257,7 @@ def _open_raw(source: str, encoding: str | None, demosaic: str | None) -> PlateI
             f"a camera raw plate is linear sensor data: remove its encoding ({encoding!r})",
             source=source,
         )
-    raw = raw_mosaic(source)
-    height, width = raw.mosaic.shape
+    height, width = raw_size(source)
     return PlateInfo(
         path=source,
         file_format=f"raw (LibRaw, {demosaic} demosaic)",
