@@ -36,6 +36,7 @@ import numpy as np
 
 from ocio_vp.errors import InputError
 from ocio_vp.plates.reader import PlateInfo, read_region
+from ocio_vp.plates.sampling import apply_homography
 
 __all__ = [
     "MIN_PATCH_PIXELS",
@@ -45,7 +46,6 @@ __all__ = [
     "detect_chart",
     "detect_chart_corners",
     "detection_overlay",
-    "detector",
 ]
 
 #: The widest image the search runs on (plates wider are block-averaged down to it).
@@ -82,10 +82,6 @@ class Detection:
     #: Indices of the chart's patches found as patches (the others were covered, or as dark as
     #: the chart's frame: their samples are the corners' extrapolation, check the overlay).
     seen: tuple[int, ...] = ()
-
-    @property
-    def found(self) -> bool:
-        return self.corners is not None
 
     @property
     def patches_found(self) -> int:
@@ -254,15 +250,10 @@ def _grid_fit(ij: np.ndarray, centres: np.ndarray, areas: np.ndarray):
         det = np.array([abs(np.linalg.det(_jacobian(H, p))) for p in src])
         half = 0.5 * np.sqrt(areas / np.maximum(det, 1e-12))
         quads = src[:, None, :] + half[:, None, None] * offsets[None]
-        projected = _project(H, quads.reshape(-1, 2)).reshape(-1, 4, 2)
-        corrected = centres - (_quad_centroids(projected) - _project(H, src))
+        projected = apply_homography(H, quads.reshape(-1, 2)).reshape(-1, 4, 2)
+        corrected = centres - (_quad_centroids(projected) - apply_homography(H, src))
         H = fit_homography(src, corrected)
     return None if H is None else (H, corrected)
-
-
-def _project(H: np.ndarray, points: np.ndarray) -> np.ndarray:
-    p = np.c_[points, np.ones(len(points))] @ H.T
-    return p[:, :2] / p[:, 2:3]
 
 
 def _affine(src: np.ndarray, dst: np.ndarray) -> np.ndarray | None:
@@ -283,7 +274,7 @@ def _grow(c: _Candidates, seed: int, a: np.ndarray, b: np.ndarray) -> dict[tuple
         ij = np.array(list(members))
         lo, hi = ij.min(axis=0) - 1, ij.max(axis=0) + 1
         grid = np.array([(i, j) for i in range(lo[0], hi[0] + 1) for j in range(lo[1], hi[1] + 1)])
-        predicted = _project(H, grid.astype(float))
+        predicted = apply_homography(H, grid.astype(float))
         d = np.linalg.norm(predicted[:, None, :] - c.centres[None, :, :], axis=2)
         nearest = d.argmin(axis=1)
         close = d[np.arange(len(grid)), nearest] < 0.3 * pitch
@@ -416,7 +407,7 @@ def _orient(image, H, ij, centres, rows, columns) -> tuple[np.ndarray | None, st
                       [-0.5, rows - 0.5]])  # fmt: skip
     scored = []
     for P in _placements(ij, rows, columns):
-        corners = _project(H @ P, outer)
+        corners = apply_homography(H @ P, outer)
         e1, e2 = corners[1] - corners[0], corners[3] - corners[0]
         if e1[0] * e2[1] - e1[1] * e2[0] <= 0:  # a mirror image: not a chart seen from the front
             continue
@@ -442,7 +433,7 @@ def _jacobian(H: np.ndarray, point: np.ndarray) -> np.ndarray:
     """d(x, y)/d(i, j) of the homography at ``point``."""
     u, v = float(point[0]), float(point[1])
     w = H[2, 0] * u + H[2, 1] * v + H[2, 2]
-    x, y = _project(H, np.array([[u, v]]))[0]
+    x, y = apply_homography(H, np.array([[u, v]]))[0]
     return (
         np.array(
             [
@@ -494,7 +485,7 @@ def _fit_grid(c: _Candidates, ij: np.ndarray, members: np.ndarray) -> _Grid | No
         if fitted is None:
             return None
         H, centres = fitted
-        residual = np.linalg.norm(_project(H, ij.astype(float)) - centres, axis=1)
+        residual = np.linalg.norm(apply_homography(H, ij.astype(float)) - centres, axis=1)
         keep = residual < max(0.5, 5 * float(np.median(residual)))
         if keep.all() or keep.sum() < _MIN_MEMBERS:
             break
@@ -532,7 +523,7 @@ def _cells(corners: np.ndarray, points: np.ndarray, rows: int, columns: int) -> 
     G = grid_homography(corners, rows, columns)
     if not np.linalg.cond(G) < 1e12:
         return ()
-    uv = _project(np.linalg.inv(G), points)
+    uv = apply_homography(np.linalg.inv(G), points)
     col, row = np.floor(uv[:, 0]).astype(int), np.floor(uv[:, 1]).astype(int)
     inside = (col >= 0) & (col < columns) & (row >= 0) & (row < rows)
     return tuple(sorted({int(v) for v in (row * columns + col)[inside]}))
@@ -584,11 +575,6 @@ def detect_chart_corners(info: PlateInfo, *, rows: int = 4, columns: int = 6) ->
     if found.corners is None:
         raise DetectionError(found, source=info.path)
     return found.corners
-
-
-def detector(*, source: object = None):
-    """The detection function for :func:`ocio_vp.plates.measure.measure_capture`."""
-    return detect_chart
 
 
 def detection_overlay(detection: Detection) -> np.ndarray:

@@ -31,7 +31,7 @@ from ocio_vp.formats.measurements import (
 )
 from ocio_vp.plates.capture import Capture, ChartShot, PlateRef, RegionShot
 from ocio_vp.plates.contact_sheet import SHEET
-from ocio_vp.plates.detection import Detection
+from ocio_vp.plates.detection import Detection, DetectionError, detect_chart
 from ocio_vp.plates.raw import CameraSpace
 from ocio_vp.plates.reader import PlateInfo, open_plate, read_region
 from ocio_vp.plates.sampling import ChartSamples, patch_labels, sample_chart, sample_region
@@ -151,8 +151,6 @@ def _sample_chart(
         space = _camera_space(capture, infos[0])
         corners, found = shot.corners, None
         if corners is None:
-            from ocio_vp.plates.detection import DetectionError, detect_chart
-
             detection = (detect or detect_chart)(
                 infos[0], rows=capture.rows, columns=capture.columns
             )
@@ -170,9 +168,9 @@ def _sample_chart(
             **capture.sampling,
         )
         samples = _in_camera_space(samples, space)
+    except DetectionError:
+        raise  # already names the plate and key, and carries the search for its overlay
     except InputError as error:
-        if detection is not None and detection.corners is None:
-            raise  # already names the plate and key, and carries the search for its overlay
         raise _named(error, shot.plate, key) from None
     labels = tuple(f"patch {j}" for j in range(capture.rows * capture.columns))
     sampling = PlateSampling(

@@ -38,6 +38,7 @@ from ocio_vp.plates.statistics import ROBUST_MEAN_METHODS, patch_statistics
 __all__ = [
     "ROBUST_MEAN_METHODS",
     "ChartSamples",
+    "apply_homography",
     "chart_box",
     "grid_homography",
     "patch_labels",
@@ -140,7 +141,8 @@ def grid_homography(corners: np.ndarray, rows: int, columns: int) -> np.ndarray:
     return np.append(h, 1.0).reshape(3, 3)
 
 
-def _apply(H: np.ndarray, points: np.ndarray) -> np.ndarray:
+def apply_homography(H: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Points (..., 2) mapped by the 3x3 homography ``H`` (column vectors, divided by w)."""
     p = points @ H[:, :2].T + H[:, 2]
     return p[..., :2] / p[..., 2:3]
 
@@ -169,7 +171,7 @@ def patch_labels(
     )
     for r in range(rows):
         for c in range(columns):
-            quad = _apply(H, cell + np.array([c, r], dtype=np.float64))
+            quad = apply_homography(H, cell + np.array([c, r], dtype=np.float64))
             qx0, qy0, qx1, qy1 = chart_box(quad, margin=1)
             qx0, qy0 = max(qx0, x0), max(qy0, y0)
             qx1, qy1 = min(qx1, x1), min(qy1, y1)
@@ -177,7 +179,7 @@ def patch_labels(
                 continue
             ys, xs = np.mgrid[qy0:qy1, qx0:qx1]
             centres = np.stack([xs + 0.5, ys + 0.5], axis=-1).astype(np.float64)
-            uv = _apply(Hinv, centres) - [c, r]
+            uv = apply_homography(Hinv, centres) - [c, r]
             inside = np.all((uv >= inset) & (uv <= 1 - inset), axis=-1)
             view = labels[qy0 - y0 : qy1 - y0, qx0 - x0 : qx1 - x0]
             view[inside] = r * columns + c
