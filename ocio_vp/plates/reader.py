@@ -63,7 +63,7 @@ def canonical_encoding(name: JsonValue, *, source: object = None, key: str | Non
     import difflib
 
     if isinstance(name, str) and name.lower() == "linear":
-        return "linear"  # the default: no need to import colour-science (~1 s) to know it
+        return "linear"  # the default: no need to import colour-science to know it
 
     names = _encodings()
     by_lower = {n.lower(): n for n in names}
@@ -297,8 +297,8 @@ def read_region(
 ) -> np.ndarray:
     """Read the R, G, B pixels of ``box`` = ``(x0, y0, x1, y1)`` (end-exclusive), linearised.
 
-    Only the scanline bands (or tiles) that cover ``box`` are decoded, at most ~32 MB at a time,
-    and only the channels from the first to the last of R, G, B.
+    Only the scanline bands (or tiles) that cover ``box`` are decoded, a bounded number of bytes
+    at a time, and only the channels from the first to the last of R, G, B.
 
     Returns
     -------

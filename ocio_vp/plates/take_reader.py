@@ -1,8 +1,7 @@
 """Reading a camera take: its numbered frames, and statistics of bands of rows of each.
 
-A 3-minute 4K take is ~4,300 frames of ~20 MB; measuring it must not decode them all. Each
-frame is opened for its header, and only **bands** of rows inside the wall's region are
-decoded: OpenEXR stores scanlines in chunks (16 rows for ZIP, 32 for PIZ or DWAA, ...), so the
+A take is thousands of large frames; measuring it must not decode them all. Each frame is
+opened for its header, and only **bands** of rows inside the wall's region are decoded: OpenEXR stores scanlines in chunks (16 rows for ZIP, 32 for PIZ or DWAA, ...), so the
 bands are whole chunks, aligned to them. Per frame, only a few numbers are kept
 (:class:`FrameStats`: sums, the brightest value and how many pixels reach it), so memory does
 not grow with the take's length. Frames are read on a few threads (OpenImageIO decodes without
@@ -154,7 +153,7 @@ def band_rows(
 def frame_stats(pixels: np.ndarray, clip: float | None) -> FrameStats:
     """:class:`FrameStats` of linear RGB ``pixels`` (..., 3); ``clip`` the clip level if known.
     The channels are laid out one after the other first: reductions over a contiguous axis are
-    ~10x faster than over a strided one (it matters at a movie's frame rate)."""
+    faster than over a strided one (it matters at a movie's frame rate)."""
     channels = np.ascontiguousarray(np.asarray(pixels, dtype=np.float64).reshape(-1, 3).T)
     peak = channels.max(axis=1)
     return FrameStats(

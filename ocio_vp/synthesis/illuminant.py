@@ -8,8 +8,7 @@ make it reproduce the colour exactly. The estimate is done in two steps:
    methods of :data:`ILLUMINANT_METHODS`: ``daylight-planckian`` (CIE daylight at 5000 K and
    above, Planckian radiation below: the reference illuminants of CIE 13.3), ``planckian``,
    ``smooth`` (colour-science's ``XYZ_to_sd``, Jakob & Hanika 2019) and ``flat`` (equal
-   energy, a baseline). colour-science's Meng 2015 recovery was left out: it takes ~15 s per
-   colour on this grid and was no better than Jakob 2019 when tried;
+   energy, a baseline);
 2. an exact colour match: the base is multiplied by the smooth factor ``c0 + c1 t + c2 t^2``
    (``t = (lambda - 580 nm) / 200 nm``) whose three coefficients make the camera see exactly
    w_avg (a 3x3 linear solve).
