@@ -151,7 +151,7 @@ def _find_rgb(names: tuple[str, ...], layer: str | None, path: str) -> tuple[int
     return (int(chosen[0]), int(chosen[1]), int(chosen[2]))  # type: ignore[arg-type]
 
 
-def _open_input(path: str):  # -> oiio.ImageInput
+def open_input(path: str):  # -> oiio.ImageInput
     import OpenImageIO as oiio
 
     if not os.path.exists(path):
@@ -196,7 +196,7 @@ def open_plate(
     source = str(path)
     if is_raw(source):
         return _open_raw(source, encoding, demosaic)
-    inp = _open_input(source)
+    inp = open_input(source)
     try:
         if subimage and not inp.seek_subimage(subimage, 0):
             raise InputError(f"has no subimage {subimage}", source=source)
@@ -318,7 +318,7 @@ def read_region(
     ch0, ch1 = min(info.rgb), max(info.rgb) + 1
     select = [c - ch0 for c in info.rgb]
     out = np.empty((y1 - y0, x1 - x0, 3), dtype=np.float32)
-    inp = _open_input(info.path)
+    inp = open_input(info.path)
     try:
         if info.subimage:
             inp.seek_subimage(info.subimage, 0)
@@ -334,7 +334,7 @@ def read_region(
                 data = inp.read_tiles(
                     info.subimage, 0, tx0, tx1, ty, ty1, 0, 1, ch0, ch1, oiio.FLOAT
                 )
-                _check_read(data, inp, info, (ty1 - ty, tx1 - tx0, ch1 - ch0))
+                check_read(data, inp, info.path, (ty1 - ty, tx1 - tx0, ch1 - ch0))
                 r0, r1 = max(ty, y0), min(ty1, y1)
                 out[r0 - y0 : r1 - y0] = data[r0 - ty : r1 - ty, x0 - tx0 : x1 - tx0][..., select]
                 ty = ty1
@@ -343,7 +343,7 @@ def read_region(
             for ya in range(y0, y1, rows):
                 yb = min(ya + rows, y1)
                 data = inp.read_scanlines(info.subimage, 0, ya, yb, 0, ch0, ch1, oiio.FLOAT)
-                _check_read(data, inp, info, (yb - ya, info.width, ch1 - ch0))
+                check_read(data, inp, info.path, (yb - ya, info.width, ch1 - ch0))
                 out[ya - y0 : yb - y0] = data[:, x0 - info.x : x1 - info.x][..., select]
     finally:
         inp.close()
@@ -355,14 +355,16 @@ def read_region(
     return out
 
 
-def _check_read(data: object, inp: object, info: PlateInfo, shape: tuple[int, ...]) -> None:
+def check_read(data: object, inp: object, source: str, shape: tuple[int, ...]) -> np.ndarray:
+    """OpenImageIO's pixels ``data`` as an array of ``shape``, or the reader's error, one line."""
     if data is None or not isinstance(data, np.ndarray) or inp.has_error:  # type: ignore[attr-defined]
         message = " ".join(str(inp.geterror()).split()) or "read failed"  # type: ignore[attr-defined]
-        raise InputError(f"cannot read pixels (corrupt file?): {message[:200]}", source=info.path)
+        raise InputError(f"cannot read pixels (corrupt file?): {message[:200]}", source=source)
     if data.ndim == 2:  # one channel comes back as (rows, width)
         data.shape = (*data.shape, 1)
     if tuple(data.shape) != shape:
-        raise InputError(f"read {data.shape} pixels, expected {shape}", source=info.path)
+        raise InputError(f"read {data.shape} pixels, expected {shape}", source=source)
+    return data
 
 
 def plate_path(base: str | os.PathLike[str], value: str) -> Path:

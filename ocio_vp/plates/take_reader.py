@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ocio_vp.errors import InputError
-from ocio_vp.plates.reader import PlateInfo, linearise, open_plate
+from ocio_vp.plates.reader import PlateInfo, check_read, linearise, open_input, open_plate
 
 __all__ = [
     "FrameStats",
@@ -180,10 +180,7 @@ def _read_frame(
     x0, _, x1, _ = region
     ch0, ch1 = min(info.rgb), max(info.rgb) + 1
     select = [c - ch0 for c in info.rgb]
-    inp = oiio.ImageInput.open(str(path))
-    if inp is None:
-        message = " ".join(oiio.geterror().split())[:200] or "unknown reason"
-        raise InputError(f"cannot read as an image: {message}", source=path)
+    inp = open_input(str(path))
     try:
         spec = inp.spec()
         if (spec.x, spec.y, spec.width, spec.height) != (info.x, info.y, info.width, info.height):
@@ -195,10 +192,7 @@ def _read_frame(
         parts = []
         for ya, yb in rows:
             data = inp.read_scanlines(info.subimage, 0, ya, yb, 0, ch0, ch1, oiio.FLOAT)
-            if data is None or inp.has_error:
-                message = " ".join(str(inp.geterror()).split())[:200] or "read failed"
-                raise InputError(f"cannot read pixels (corrupt file?): {message}", source=path)
-            data = np.asarray(data).reshape(yb - ya, info.width, ch1 - ch0)
+            data = check_read(data, inp, str(path), (yb - ya, info.width, ch1 - ch0))
             parts.append(data[:, x0 - info.x : x1 - info.x][..., select])
     finally:
         inp.close()
