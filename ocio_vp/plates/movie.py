@@ -38,6 +38,8 @@ from ocio_vp.plates.reader import PlateInfo, linearise
 from ocio_vp.plates.take_reader import FrameStats, frame_stats
 
 __all__ = [
+    "AV_MATRICES",
+    "AV_RANGES",
     "BAND_PIXELS",
     "MATRICES",
     "MOVIE_SUFFIXES",
@@ -62,9 +64,9 @@ MATRICES = {"rec709": (0.2126, 0.0722), "rec2020": (0.2627, 0.0593), "rec601": (
 #: Ranges: ``legal`` (video: Y' 16-235, C 16-240 at 8 bits) or ``full``.
 RANGES = ("legal", "full")
 #: FFmpeg's colour-space codes (AVColorSpace, H.273 MatrixCoefficients) we convert.
-_AV_MATRIX = {1: "rec709", 9: "rec2020", 5: "rec601", 6: "rec601"}
+AV_MATRICES = {1: "rec709", 9: "rec2020", 5: "rec601", 6: "rec601"}
 #: AVColorRange: 1 = MPEG (legal), 2 = JPEG (full).
-_AV_RANGE = {1: "legal", 2: "full"}
+AV_RANGES = {1: "legal", 2: "full"}
 _PIX_FMT = re.compile(r"(yuv|yuva|yuvj|gbr|gbra)(444|422|420)?p(\d+)?(le)?")
 
 
@@ -154,8 +156,8 @@ def _layout(pix_fmt: str, path: Path) -> tuple[int, bool, tuple[int, int]]:
 
 def _tags(ctx, matrix: str | None, range_: str | None, path: Path, rgb: bool):
     """The matrix and range to convert with, and where they came from."""
-    stream_matrix = "rgb" if rgb else _AV_MATRIX.get(int(ctx.colorspace or 2))
-    stream_range = _AV_RANGE.get(int(ctx.color_range or 0))
+    stream_matrix = "rgb" if rgb else AV_MATRICES.get(int(ctx.colorspace or 2))
+    stream_range = AV_RANGES.get(int(ctx.color_range or 0))
     if int(ctx.colorspace or 2) == 10:
         raise _error("the stream is Rec.2020 constant luminance, which ocio-vp does not read", path)
     chosen_matrix = matrix or stream_matrix

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ocio_vp.patterns.sequence import PatternSequence
+from ocio_vp.plates.movie import AV_MATRICES, AV_RANGES
 from ocio_vp.simulator.take import TakeOptions, render_frames
 
 __all__ = ["MOVIE_CODECS", "write_movie"]
@@ -29,9 +30,9 @@ MOVIE_CODECS = {
     "prores422": ("prores_ks", "3", "yuv422p10le"),
 }
 _WEIGHTS = {"rec709": "ITU-R BT.709", "rec2020": "ITU-R BT.2020"}
-#: FFmpeg's codes for the tags (AVColorSpace, AVColorRange).
-_AV_MATRIX = {"rec709": 1, "rec2020": 9}
-_AV_RANGE = {"legal": 1, "full": 2}
+#: FFmpeg's codes for the tags (AVColorSpace, AVColorRange), as the reader decodes them.
+_AV_MATRIX = {name: code for code, name in AV_MATRICES.items()}
+_AV_RANGE = {name: code for code, name in AV_RANGES.items()}
 
 
 def _ycbcr(encoded: np.ndarray, matrix: str, range_: str) -> np.ndarray:
