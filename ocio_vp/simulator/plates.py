@@ -46,7 +46,7 @@ __all__ = [
     "write_plate",
 ]
 
-#: (width, height) of the rendered plates: small, so a whole stage renders in seconds.
+#: (width, height) of the rendered plates: small, so a whole stage renders quickly.
 PLATE_SIZE = (600, 400)
 #: The chart's four outer corners (TL, TR, BR, BL) on a 600 x 400 plate, seen at an angle.
 CHART_CORNERS = np.array([[128.0, 82.0], [478.0, 104.0], [466.0, 322.0], [140.0, 306.0]])
