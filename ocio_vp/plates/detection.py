@@ -1,31 +1,20 @@
 """Chart detection for a chart shot without ``corners``: numpy and scipy only (default install).
 
-The plate is reduced by whole-pixel block averages to at most :data:`WORKING_WIDTH` pixels
-across (read in bands, so memory stays flat on an 8K plate). Then:
+docs/capture.md (*Chart detection*) describes it for users. The plate is block-averaged to at
+most :data:`WORKING_WIDTH` pixels across (read in bands). Then:
 
-1. **Patches.** On the log of each channel (over a floor of 2 % of the plate's bright level,
-   lightly smoothed), pixels whose log-colour gradient is small form regions; a region is a
-   patch candidate when it is compact and convex-like (its area is 0.8-1.05 of the ellipse of
-   its second moments) and not elongated. A chart's patches are separated by its dark frame,
-   so each patch is one region; the background, the frame and glints are not compact.
-2. **Grid.** From a candidate and its nearest neighbours a lattice is grown: a homography
-   (normalised DLT, SVD, conditioning checked) from integer lattice coordinates to the
-   candidates' centroids is fitted and re-predicted, one ring at a time, so perspective is
-   followed. Of a few seeds, the lattice holding most candidates wins. Patches that are missing
-   (too dark to separate from the frame, or covered) do not matter while the rest span the
-   chart.
-3. **Which way up.** A ColorChecker 24 (4 x 6) is oriented by its neutral row: six patches
-   whose colours are proportional to one another (a grey reflects every wavelength alike,
-   whatever lights it), each darker than the last. The mapping of the chart's grid onto the
-   lattice (rotation, and position when an edge row or column was not found) that makes the
-   bottom row such a ramp, white to black, is the chart. Other grids have no such mark: the
-   lattice must be complete and patch 0 is taken as the corner nearest the plate's top-left
-   (shoot them upright).
+1. **Patches**: on the log of each channel (over a floor of 2 % of the bright level, lightly
+   smoothed), regions of small log-colour gradient that are compact, convex-like (0.8-1.05 of
+   the ellipse of their second moments) and not elongated.
+2. **Grid**: from a candidate and its neighbours a lattice is grown ring by ring, a homography
+   (normalised DLT, conditioning checked) refitted each time; of a few seeds the lattice
+   holding most candidates wins.
+3. **Which way up**: a ColorChecker 24 by its neutral row (six patches of proportional colours,
+   each darker than the last); other grids must be complete, patch 0 nearest the top-left.
 
-The chart's four outer corners follow from the grid homography at the grid's outer corners
-(what ``corners`` means in docs/capture.md). When detection fails it says why (``too dark``,
-``clipped``, ``too small``, ``not found``) and :func:`detection_overlay` shows what was
-searched: the patch-like regions, and those in the grid.
+The chart's four outer corners follow from the grid homography. When detection fails it says
+why (``too dark``, ``clipped``, ``too small``, ``not found``) and :func:`detection_overlay`
+shows what was searched.
 """
 
 from __future__ import annotations

@@ -1,22 +1,11 @@
 """Camera raw plates (DNG, CR2/CR3, NEF, ARW, RAF, ...) as camera-native linear RGB, with LibRaw.
 
-A raw file holds the sensor's mosaic: one colour per photosite behind a colour filter array.
-ocio-vp reads it with LibRaw (rawpy) and applies **nothing** a raw developer would: no white
-balance, no colour matrix, no gamma, no brightening. Each sample becomes
-``(value - black) / (white - black)`` with the black level of its colour channel and the white
-(saturation) level the file states, so 1.0 is the sensor's clip: :mod:`ocio_vp.plates.sampling`
-judges clipping there, as for any integer plate.
-
-Demosaicing (:data:`DEMOSAIC_METHODS`): chart patches are averaged over many pixels, so the
-default is the cheapest method with no interpolation at all, ``superpixel``: each 2x2 Bayer
-block gives R, the mean of its two G and B, on all four of its pixels (coordinates stay the
-sensor's). LibRaw's interpolating methods (``linear``, ``vng``, ``ppg``, ``ahd``, ``dcb``,
-``dht``, ``aahd``) are the alternatives, run with the same no-processing settings; a sensor
-whose pattern is not 2x2 Bayer (Fujifilm X-Trans) needs one of them. Their effect on chart
-patches is measured in tests/test_plates_raw.py.
-
-Opening a plate reads its header only; the decoded mosaic of the last two files is kept (a
-plate is read for its samples and again for its overlay).
+Nothing a raw developer applies (white balance, colour matrix, gamma, brightening): each sample
+becomes ``(value - black) / (white - black)`` with the file's levels, so 1.0 is the sensor's
+clip. Demosaicing is ``superpixel`` by default (no interpolation: each 2x2 Bayer block's R, mean
+G and B on its four pixels) or one of LibRaw's (:data:`DEMOSAIC_METHODS`); docs/capture.md
+(*Camera raw plates*) says when each is needed. Opening a plate reads its header only; the
+decoded mosaic of the last two files is kept (a plate is read for its samples and its overlay).
 """
 
 from __future__ import annotations

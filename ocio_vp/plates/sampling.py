@@ -1,25 +1,15 @@
 """Sample a colour chart (and plain regions) from a plate: perspective-correct patch grid, robust
 statistics, flags.
 
-The chart is given by the four outer corners of its patch grid, in pixel coordinates (see
-:mod:`ocio_vp.plates.reader` for the convention), in the order top-left, top-right, bottom-right,
-bottom-left *of the chart* (patch 0 is the top-left patch, reading order row by row). A
-homography maps grid coordinates ``(u, v)`` in ``[0, columns] x [0, rows]`` to the image, so
-perspective is exact for a flat chart. A pixel belongs to patch ``(r, c)`` when the grid
-coordinates of its centre fall in ``[c + inset, c + 1 - inset] x [r + inset, r + 1 - inset]``:
-the inset keeps the samples off the borders between patches.
+The chart is given by the four outer corners of its patch grid (TL, TR, BR, BL of the chart;
+docs/capture.md, *Coordinates*). A homography maps grid coordinates ``(u, v)`` in ``[0, columns]
+x [0, rows]`` to the image; a pixel belongs to patch ``(r, c)`` when its centre's grid
+coordinates fall in ``[c + inset, c + 1 - inset] x [r + inset, r + 1 - inset]``.
 
-Each patch's value is a robust mean of its pixels (:data:`ROBUST_MEAN_METHODS`; default a 10 %
-trimmed mean per channel) after rejecting outliers (farther than 6 robust sigmas, 1.4826 MAD,
-from the patch median: a specular glint, dust, hot pixels), so the trim stays symmetric about the
-noise and the mean unbiased. The spread is the standard deviation of the pixels kept. Patches
-are flagged when pixels are clipped or when
-more than a small fraction of pixels are outliers (e.g. a highlight, dust, a misplaced corner).
-
-Vignetting: each patch is sampled over a small area, so the fall-off inside one patch averages
-out, but the fall-off between patches is measured as is unless a ``flat_field`` plate is given
-(then every pixel is divided by the lens's relative gain there). Without one, frame the
-chart near the optical centre (or correct the plates first); ``docs/capture.md`` says more.
+Each patch's value is a robust mean of its pixels (:data:`ROBUST_MEAN_METHODS`) after rejecting
+outliers (farther than 6 robust sigmas, 1.4826 MAD, from the patch median: a glint, dust, hot
+pixels), so the trim stays symmetric about the noise. Patches are flagged when pixels are
+clipped or too many are outliers. A ``flat_field`` plate divides out the lens's vignetting.
 """
 
 from __future__ import annotations
