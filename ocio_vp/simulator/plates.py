@@ -1,16 +1,10 @@
 """Calibration photographs of a simulated stage, as a stage engineer would shoot them.
 
-From a measurements file's exact values (usually :func:`ocio_vp.simulator.stage.simulate_measurements`)
-this renders the plates of ``docs/capture.md``: the panel showing each primary, the chart lit by
-each LED channel, the chart in every real location, a black-level frame per environment, flat
-fields for the lens's vignetting, and a few frames of footage shot on the stage, all as OpenEXR
-with perspective, vignetting and sensor noise; and the capture file that points at them, so
-``ocio-vp measure`` can be run on them.
-
-A chart is rendered by mapping every pixel centre through the inverse of the chart's homography,
-fitted here as the null space of the 8 x 9 DLT system (SVD), independently of the direct solve
-:mod:`ocio_vp.plates.sampling` uses, so perspective is exact and the two can check each other.
-Noise: a relative ("shot") part and an absolute read-noise part, Gaussian, per pixel and channel.
+From a measurements file's exact values this renders the plates of ``docs/capture.md`` (listed
+in docs/simulator.md) as OpenEXR with perspective, vignetting and sensor noise, and the capture
+file that points at them, so ``ocio-vp measure`` can be run on them. The chart's homography is
+fitted here as the null space of the DLT system (SVD), independently of the direct solve
+:mod:`ocio_vp.plates.sampling` uses, so the two check each other.
 """
 
 from __future__ import annotations

@@ -4,19 +4,9 @@
 5100, paper-like 630/525/460 nm LEDs, ColorChecker N Ohta, 1 m x 1 m panel at 1 m, albedo
 4%); :func:`simulate_measurements` gives its complete measurements file.
 
-Model and units
----------------
-Everything is radiance on the grid :data:`~ocio_vp.simulator.data.SPECTRAL_SHAPE`; a camera
-RGB is ``sum_lambda S_c(lambda) R(lambda) E(lambda)`` (no other factor: the exposure is folded
-into the scaling of the LED and environment spectra). The LED channels are scaled so that drive
-[1, 1, 1] looks like D65 to the camera with green = 1 (a wall white-balanced to D65). A panel
-of LED radiance ``L_k`` lights a Lambertian patch with irradiance ``pi beta L_k``, so the
-photographed patch is ``beta sum S R_j L_k``: [SRL]_j / beta is the patch under a uniform
-sphere of the LED, which is what the paper's eq. 3 needs. An environment of (radiance-like)
-spectrum E gives ``p_j = sum S R_j E`` and the true diffuse integral ``w_avg = sum S E``.
-The dark in-frustum panels reflect the stage's light with the (grey) ``panel_albedo``:
-``b_camera = albedo [SL] clip(M w_avg, 0)`` (the panel sees the lit stage as the chart does;
-the albedo is an effective one that includes how much of the stage the panel sees).
+The model and its units (radiance on one wavelength grid, camera RGB as ``sum S R E``, the
+wall white-balanced to D65 at drive [1, 1, 1], ``[SRL]_j = beta sum S R_j L_k``, the black level
+``b_camera = albedo [SL] clip(M w_avg, 0)``) are in docs/simulator.md (*Model*).
 
 References
 ----------
