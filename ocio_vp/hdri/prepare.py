@@ -2,19 +2,11 @@
 
 LED panels cannot emit more than their peak, yet the paper shows the HDRI's full range by
 spreading bright sources with an energy-preserving dilation (Section 3.2). Here the *excess* of
-every over-range source moves into the pixels closest to it, so that no channel of any pixel
-exceeds ``peak``, the solid-angle-weighted energy ``sum L dOmega`` is unchanged per channel, and
-the excess keeps the source's colour (w_avg keeps its chromaticity).
-
-Algorithm, one source at a time, largest first: over-range pixels are grouped into 8-connected
-sources (wrapping across the longitude seam) and scaled down to the peak; the removed energy
-``X`` is spread with colour ``c = X / max(X)`` into the pixels in order of their angular
-distance to the source, each filled up to the largest ``t`` with ``L + t c <= peak``, until
-``sum t dOmega = max(X)``: the most compact region the peak allows.
-
-Limit (of the sphere, not the method): spreading over a cap of solid angle ``A`` shortens the
-source's mean direction by about ``A / (4 pi)``, so w_avg facing it drops by about
-``E_source cos(t) A / (4 pi)``; the most compact spread minimises it (docs/hdri.md).
+every over-range source moves, in the source's own colour, into the pixels closest to it (in
+angle on the sphere), each filled up to the peak, so that no channel exceeds ``peak`` and the
+solid-angle-weighted energy is unchanged per channel. docs/hdri.md gives the algorithm and
+what it cannot keep (w_avg facing a source drops slightly: the most compact spread minimises
+it).
 
 References
 ----------
@@ -288,7 +280,7 @@ def _spread(
     peak: float,
     row_omega: np.ndarray,
 ) -> SpreadSource:
-    """Fill the pixels nearest to one source with its excess (see the module docstring)."""
+    """Fill the pixels nearest to one source with its excess (docs/hdri.md, *Algorithm*)."""
     from scipy.spatial import cKDTree  # deferred: scipy is only needed when a map is over range
 
     amount = float(excess.max())
