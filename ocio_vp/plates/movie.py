@@ -1,23 +1,12 @@
 """Reading a camera take recorded as a movie file (QuickTime, MP4, MXF) with PyAV.
 
-A movie is decoded once, front to back (:func:`scan_movie`): every frame must be decoded
-anyway (long-GOP codecs cannot skip), so the one pass gives both the alignment's band of rows
-and the measuring bands of every frame, as :class:`~ocio_vp.plates.take_reader.FrameStats`
-(a few numbers a frame: memory does not grow with the take's length). Only the rows measuring
-reads are converted; the planes are read in place from FFmpeg's buffers.
-
-Y'CbCr is converted to R'G'B' here, not by FFmpeg's scaler, with the matrix and range the
-stream declares (H.273 codes: Rec.709, Rec.2020 non-constant luminance, Rec.601; legal or full
-range) at the decoder's own bit depth (10/12-bit ProRes and DNxHR, 10-bit H.265); chroma
-subsampled 4:2:2 or 4:2:0 is repeated onto its luma pixels (exact on the wall's flat patches).
-A stream without colour tags needs ``take.matrix`` and ``take.range`` in the capture file; a
-tag in the capture file overrides the stream's. Then the declared log encoding is decoded as
-for image plates (:func:`ocio_vp.plates.reader.linearise`).
-
-Frame numbers are the frames' order in the file from 0 (``take.in``/``take.out`` choose a part,
-as frame numbers or as timecode ``HH:MM:SS:FF`` on the file's own start timecode); a frame
-whose time stamp is not on the container's constant frame grid (variable frame rate) is
-refused.
+A movie is decoded once, front to back (:func:`scan_movie`), giving the alignment's band and
+the measuring bands of every frame as :class:`~ocio_vp.plates.take_reader.FrameStats` (memory
+does not grow with the take's length). Y'CbCr is converted here, at the decoder's bit depth,
+with the matrix and range the stream declares or the capture file gives (``take.matrix``,
+``take.range``), subsampled chroma repeated onto its luma pixels; then the declared log
+encoding is decoded. Frame numbers count from 0 in the file; docs/capture.md (*A take as a
+movie*) gives the in/out points, timecode and refusals (variable frame rate among them).
 """
 
 from __future__ import annotations
