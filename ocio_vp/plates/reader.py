@@ -1,19 +1,11 @@
 """Read calibration plates with OpenImageIO, one region at a time.
 
-Plates are 4K-8K photographs; the solver needs a few hundred numbers from them. So a plate is
-opened once for its header (:func:`open_plate`) and then only the rows, columns and channels a
-chart or region covers are decoded (:func:`read_region`), in bands of scanlines (or the tiles
-that cover the region), as float32. Nothing converts a whole plate to float64.
-
-Pixel coordinates follow OpenImageIO: origin at the top-left of the display window, x to the
-right, y down, pixel ``(x, y)`` covers ``[x, x+1) x [y, y+1)`` (its centre is at ``+0.5``).
-
-Linear plates (OpenEXR half/float, DPX, 16-bit TIFF) are used as they are; camera raw plates
-(DNG, CR3, NEF, ARW, RAF, ...) are read by LibRaw as camera-native linear RGB
-(:mod:`ocio_vp.plates.raw`). Display-referred
-plates (8 bits per sample, or PNG/JPEG/WebP/HEIF of any depth) are refused unless the caller
-states their encoding, which is then decoded to linear on the region only (see
-:data:`ENCODINGS`).
+A plate is opened once for its header (:func:`open_plate`); then only the rows, columns and
+channels a chart or region covers are decoded (:func:`read_region`), in bands of scanlines (or
+tiles), as float32. Pixel coordinates are OpenImageIO's (docs/capture.md, *Coordinates*).
+Linear plates are used as they are, camera raw plates are read by :mod:`ocio_vp.plates.raw`,
+and display-referred plates (8 bits, PNG, JPEG ...) are refused unless their encoding is stated
+(:data:`ENCODINGS`), then decoded to linear on the region only.
 """
 
 from __future__ import annotations

@@ -1,11 +1,10 @@
 """Reading a camera take: its numbered frames, and statistics of bands of rows of each.
 
 A take is thousands of large frames; measuring it must not decode them all. Each frame is
-opened for its header, and only **bands** of rows inside the wall's region are decoded: OpenEXR stores scanlines in chunks (16 rows for ZIP, 32 for PIZ or DWAA, ...), so the
-bands are whole chunks, aligned to them. Per frame, only a few numbers are kept
-(:class:`FrameStats`: sums, the brightest value and how many pixels reach it), so memory does
-not grow with the take's length. Frames are read on a few threads (OpenImageIO decodes without
-holding Python's lock).
+opened for its header and only **bands** of rows inside the wall's region are decoded, whole
+chunks of the file's scanlines (OpenEXR stores 16 rows for ZIP, 32 for PIZ or DWAA ...). Per
+frame only :class:`FrameStats` is kept, so memory does not grow with the take's length; frames
+are read on a few threads (OpenImageIO decodes without holding Python's lock).
 """
 
 from __future__ import annotations

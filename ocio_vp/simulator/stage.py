@@ -111,7 +111,7 @@ class SpectralStage:
 
 
 def camera_rgb(stage: SpectralStage, spectrum: ArrayLike) -> np.ndarray:
-    """(..., 3) camera RGB of (..., W) spectral radiance: ``sum_lambda S_c(lambda) spectrum(lambda)``.
+    """(..., 3) camera RGB of (..., W) spectral radiance, ``sum_lambda S_c(lambda) E(lambda)``.
 
     Examples
     --------
@@ -224,7 +224,8 @@ def spectral_stage(
 
 def white_reflectance(stage: SpectralStage) -> float:
     """The chart white patch's reflectance as the camera's green channel sees it, ``sum S_g
-    R_white / sum S_g`` to 4 digits (not the paper's nominal 0.9), for w_avg from the white patch."""
+    R_white / sum S_g`` to 4 digits (not the paper's nominal 0.9), for w_avg from the white
+    patch."""
     green = stage.camera[:, 1]
     return round(float(green @ stage.reflectances[stage.white_patch] / green.sum()), 4)
 
