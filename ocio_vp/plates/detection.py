@@ -523,18 +523,16 @@ def detect_chart(info: PlateInfo, *, rows: int = 4, columns: int = 6) -> Detecti
     image, f = _working_image(info)
     lum = image.mean(axis=2)
     bright, noise = float(np.percentile(lum, 99)), _noise(lum)
-    empty = np.zeros(lum.shape, np.int32)
+    early = None
     if not bright > 10 * noise or not bright > 0:
-        detail = f"bright level {bright / max(noise, 1e-30):.2g}x the noise, need 10x"
-        return Detection(
-            None, "too dark", detail, image.astype(np.float32), f, empty, np.zeros(0, bool)
-        )
-    if rows < 2 or columns < 2:
-        detail = f"a {rows} x {columns} strip has no grid to find"
-        return Detection(
-            None, "not found", detail, image.astype(np.float32), f, empty, np.zeros(0, bool)
-        )
+        early = "too dark", f"bright level {bright / max(noise, 1e-30):.2g}x the noise, need 10x"
+    elif rows < 2 or columns < 2:
+        early = "not found", f"a {rows} x {columns} strip has no grid to find"
+    if early is not None:
+        empty = np.zeros(lum.shape, np.int32)
+        return Detection(None, *early, image.astype(np.float32), f, empty, np.zeros(0, bool))
     corners, reason, detail, c, grid = _search(image, f, rows, columns)
+    image32 = image.astype(np.float32)
     used = np.zeros(len(c.areas), bool)
     if grid is not None:
         used[grid.members] = True
@@ -543,12 +541,11 @@ def detect_chart(info: PlateInfo, *, rows: int = 4, columns: int = 6) -> Detecti
         if reason == "not found" and clipped > 0.02:
             reason = "clipped"
             detail = f"{100 * clipped:.0f} % of the plate at its maximum"
-        return Detection(None, reason, detail, image.astype(np.float32), f, c.labels, used)
+        return Detection(None, reason, detail, image32, f, c.labels, used)
     assert grid is not None  # corners come from a grid
     plate = corners * f + [info.x, info.y]
     seen = _cells(plate, c.centres[grid.members] * f + [info.x, info.y], rows, columns)
     detail = f"{len(grid.members)} of {rows * columns} patches, grid residual {grid.rms * f:.2g} px"
-    image32 = image.astype(np.float32)
     return Detection(plate, None, detail, image32, f, c.labels, used, grid.rms * f, seen)
 
 
