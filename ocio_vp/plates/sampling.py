@@ -21,8 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ocio_vp.errors import InputError
-from ocio_vp.plates.frames import flat_field_gain, frames_pixels
-from ocio_vp.plates.reader import PlateInfo, open_plate
+from ocio_vp.plates.frames import data_window, flat_field_gain, frames_pixels
 from ocio_vp.plates.statistics import ROBUST_MEAN_METHODS, patch_statistics
 
 __all__ = [
@@ -176,15 +175,6 @@ def patch_labels(
     return labels
 
 
-def _plate_box(frame: object, encoding: str | None) -> tuple[int, int, int, int]:
-    if isinstance(frame, PlateInfo):
-        return frame.box
-    if isinstance(frame, (str, os.PathLike)):
-        return open_plate(frame, encoding=encoding).box
-    shape = np.shape(np.asarray(frame))
-    return (0, 0, int(shape[1]), int(shape[0]))
-
-
 def sample_chart(
     image: object,
     corners: object,
@@ -289,7 +279,7 @@ def _frames_and_source(image: object, source: object) -> tuple[list, object]:
 
 def _gain(flat_field: object, box: Box, encoding: str | None, frame: object, where: object):
     """The flat field's gain over ``box`` of a plate like ``frame``."""
-    plate_box = _plate_box(frame, encoding)
+    plate_box = data_window(frame, encoding)
     return flat_field_gain(flat_field, box, encoding=encoding, plate_box=plate_box, source=where)
 
 
