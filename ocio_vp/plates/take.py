@@ -35,13 +35,12 @@ from ocio_vp.plates.movie import (
     reduced_frame,
     scan_movie,
 )
-from ocio_vp.plates.reader import PlateInfo, check_box, linearise, read_region
+from ocio_vp.plates.reader import PlateInfo, check_box, linearise, open_plate, read_region
 from ocio_vp.plates.take_reader import (
     FrameStats,
     band_rows,
     chunk_rows,
     list_take_frames,
-    open_take,
     read_frame_stats,
 )
 
@@ -260,7 +259,7 @@ def _open_frames(
     """The take's frame numbers, files, header and (for a movie) the movie's header."""
     if not is_movie(take.frames):
         numbers, paths = _take_frames(take, source)
-        return numbers, paths, open_take(paths[0], encoding=take.encoding, layer=take.layer), None
+        return numbers, paths, open_plate(paths[0], encoding=take.encoding, layer=take.layer), None
     movie = open_movie(
         take.frames,
         encoding=take.encoding,

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ocio_vp.errors import InputError
-from ocio_vp.plates.reader import PlateInfo, check_read, linearise, open_input, open_plate
+from ocio_vp.plates.reader import PlateInfo, check_read, linearise, open_input
 
 __all__ = [
     "FrameStats",
@@ -234,8 +234,3 @@ def read_frame_stats(
         return [one(p) for p in paths]
     with ThreadPoolExecutor(threads) as pool:
         return list(pool.map(one, paths))
-
-
-def open_take(path: Path, *, encoding: str | None, layer: str | None) -> PlateInfo:
-    """The first frame's header (size, R/G/B channels, encoding), checked like a plate's."""
-    return open_plate(path, encoding=encoding, layer=layer)
