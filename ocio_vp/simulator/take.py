@@ -267,6 +267,27 @@ def render_frames(
         yield image.astype(np.float32)
 
 
+def _write_frame(path: Path, image: np.ndarray, dtype: str) -> None:
+    """One frame with OpenImageIO (ZIP for EXR; integer types clipped to [0, 1] first)."""
+    import OpenImageIO as oiio
+
+    data = np.ascontiguousarray(image, dtype=np.float32)
+    if dtype != "half":
+        data = np.clip(data, 0.0, 1.0)
+    spec = oiio.ImageSpec(data.shape[1], data.shape[0], 3, dtype)
+    spec.channelnames = ("R", "G", "B")
+    if dtype == "half":
+        spec.attribute("compression", "zip")
+    out = oiio.ImageOutput.create(str(path))
+    if out is None or not out.open(str(path), spec):
+        raise OSError(f"{path}: cannot write: {oiio.geterror()}")
+    try:
+        if not out.write_image(data):
+            raise OSError(f"{path}: cannot write: {out.geterror()}")
+    finally:
+        out.close()
+
+
 def write_take(
     sequence: PatternSequence,
     SL: np.ndarray,
@@ -281,8 +302,6 @@ def write_take(
     """Render and write the take as ``folder/<name>.####.<ext>``; returns that pattern's file
     name. ``file_format``: ``exr`` (half float, linear) or ``tiff`` (16-bit, ``encoding`` a
     colour-science encoding such as ``ARRI LogC3``, applied before quantisation)."""
-    from ocio_vp.simulator.plates import write_plate
-
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     extension = {"exr": "exr", "tiff": "tif"}[file_format]
@@ -292,7 +311,7 @@ def write_take(
 
             image = np.asarray(colour.cctf_encoding(np.maximum(image, 0.0), function=encoding))
         path = folder / f"{name}.{options.first_frame + k:04d}.{extension}"
-        write_plate(path, image, dtype="half" if file_format == "exr" else "uint16")
+        _write_frame(path, image, "half" if file_format == "exr" else "uint16")
         if on_frame is not None:
             on_frame()
     return f"{name}.####.{extension}"
