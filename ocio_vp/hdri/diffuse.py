@@ -1,26 +1,7 @@
-"""w_avg from an equirectangular HDRI: the diffuse integral of the frontal hemisphere.
-
-Public functions (other modules build on these; names are stable):
-
-- ``equirect_solid_angles(height, width) -> (height, width)``: exact solid angle of each pixel
-  of a latitude-longitude image (sums to 4 pi).
-- ``equirect_directions(height, width) -> (height, width, 3)``: unit direction of each pixel
-  centre (convention below).
-- ``pixel_angles(rows, cols, height, width)``, ``angles_to_directions(theta, phi)`` and
-  ``cosines_to(direction, theta, phi)``: the pieces of those, for any set of pixels (the
-  one place the lat-long direction formula lives; :mod:`ocio_vp.hdri.prepare` uses them).
-- ``diffuse_integral(image, *, normal=FRONT) -> (channels,)``: ``(1/pi) sum L cos+ dOmega``
-  over an in-memory (height, width, channels) equirectangular image.
-- ``read_equirect(path, *, width=DEFAULT_HDRI_WIDTH) -> (height, width, 3)``: read an HDRI
-  with OpenImageIO at a chosen resolution (a MIP level when the file has one, else a box
-  resize); ``width=None`` reads the full resolution.
-- ``w_avg_from_hdri(path, *, width=DEFAULT_HDRI_WIDTH, normal=FRONT) -> (3,)``: the paper's
-  w_avg from an HDRI file.
-- ``environments_with_hdri(measurements, environments, ["ENV=FILE", ...], width=)``: what
-  ``ocio-vp solve --hdri ENV=FILE`` does (w_avg of those environments from their HDRI; on a
-  stage of several panel types, each type's w_avg from the directions it covers).
-- ``region_mask(height, width, regions)`` and ``panel_w_avg(image, panels, normal=FRONT)``:
-  the pixels of a panel type's place in the volume, and each type's part of w_avg.
+"""w_avg from an equirectangular HDRI: the diffuse integral of the frontal hemisphere, for
+``ocio-vp solve --hdri ENV=FILE`` (per panel type on a stage of several, from the directions
+each covers). :func:`pixel_angles`, :func:`angles_to_directions` and :func:`cosines_to` are the
+one place the lat-long direction formula lives (:mod:`ocio_vp.hdri.prepare` uses them).
 
 Convention: y is up; row 0 is the zenith, the last row the nadir; the centre of the image
 (u = 0.5, v = 0.5) looks along +z (:data:`FRONT`), and u increasing turns towards +x. A pixel
@@ -67,8 +48,7 @@ __all__ = [
     "w_avg_from_hdri",
 ]
 
-#: Default working width for w_avg: benchmarks/bench_wavg.py measures the error of each width
-#: against a closed form (docs/performance.md); 1024 wide stays well under 0.1% with a small sun.
+#: Default working width for w_avg (its error per width: benchmarks/bench_wavg.py).
 DEFAULT_HDRI_WIDTH = 1024
 
 #: The direction of the image centre, the default normal of the chart.
@@ -98,10 +78,8 @@ def pixel_angles(
 
 
 def angles_to_directions(theta: ArrayLike, phi: ArrayLike) -> np.ndarray:
-    """Unit vectors ``(sin t sin p, cos t, sin t cos p)`` of polar angles and longitudes.
-
-    ``theta`` and ``phi`` broadcast together; the result has one more axis of length 3. The
-    module's one formula for the direction of a lat-long position.
+    """Unit vectors ``(sin t sin p, cos t, sin t cos p)`` of polar angles and longitudes
+    (broadcast together; the result has one more axis of length 3).
 
     Examples
     --------
@@ -207,12 +185,9 @@ def diffuse_integral(image: ArrayLike, *, normal: ArrayLike = FRONT) -> np.ndarr
 
 
 def read_equirect(path: str | Path, *, width: int | None = DEFAULT_HDRI_WIDTH) -> np.ndarray:
-    """Read the RGB of an equirectangular HDRI with OpenImageIO at about ``width`` pixels wide.
-
-    When the file has a MIP level of exactly that width it is read directly (no decode of the
-    full image); otherwise the nearest larger level is box-filtered down with
-    ``ImageBufAlgo.resize`` (a box filter keeps a bright sun's energy: no negative lobes).
-    ``width=None`` or a width at least the file's reads the full resolution.
+    """(height, width, 3) float32 RGB of an equirectangular HDRI at about ``width`` pixels
+    wide: a MIP level of that width, else the nearest larger level box-filtered down (no
+    negative lobes to lose a sun's energy); ``None`` (or wider than the file) reads it whole.
 
     Raises
     ------
@@ -261,22 +236,13 @@ def read_equirect(path: str | Path, *, width: int | None = DEFAULT_HDRI_WIDTH) -
 def w_avg_from_hdri(
     path: str | Path, *, width: int | None = DEFAULT_HDRI_WIDTH, normal: ArrayLike = FRONT
 ) -> np.ndarray:
-    """The paper's w_avg (Section 3.3) from an equirectangular HDRI file.
-
-    Reads the HDRI at ``width`` (see :func:`read_equirect`) and returns
-    :func:`diffuse_integral` about ``normal``: the value a chart's white patch would show
-    divided by its reflectance, when the chart stands at the HDRI's centre of projection.
-
-    Returns
-    -------
-    numpy.ndarray
-        (3,) float64 RGB, in the HDRI's linear RGB.
+    """The paper's w_avg (Section 3.3), (3,) float64 in the HDRI's linear RGB: the
+    :func:`diffuse_integral` about ``normal`` of the HDRI read at ``width``.
 
     Raises
     ------
     InputError
-        When no channel of it is above zero: the frontal hemisphere is black (or negative),
-        which no stage can calibrate for (the solve would fail later, blaming the chart).
+        When no channel of it is above zero (the frontal hemisphere is black).
     """
     w_avg = diffuse_integral(read_equirect(path, width=width), normal=normal)
     if not np.any(w_avg > 0):
@@ -345,18 +311,9 @@ def panel_w_avg(
 def environments_with_hdri(
     measurements, environments, hdri: Sequence[str], *, width: int | None = DEFAULT_HDRI_WIDTH
 ) -> tuple[tuple, list[str]]:
-    """Give each environment named in ``hdri`` (``ENV=FILE`` items) the w_avg of its HDRI.
-
-    An HDRI belongs to one lighting environment, so each item names it; a bare ``FILE`` is
-    accepted only when exactly one environment is being solved. The HDRI's w_avg replaces the
-    file's ``w_avg`` and the white-patch estimate for that environment.
-
-    Returns
-    -------
-    tuple
-        The environments (others unchanged) and one line per HDRI comparing its w_avg with the
-        white-patch estimate, for the user.
-    """
+    """The environments, each named in ``hdri`` (``ENV=FILE``; a bare ``FILE`` when one
+    environment is solved) with its HDRI's w_avg, and one line per HDRI for the user comparing
+    it with the white-patch estimate."""
     from ocio_vp.calibration.geometry import w_avg_from_white_patch
 
     by_name = {env.name: env for env in environments}

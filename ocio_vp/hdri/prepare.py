@@ -1,33 +1,12 @@
 """Fit an HDRI under the wall's peak: energy-preserving dilation of over-range light sources.
 
-LED panels cannot emit more than their peak, yet the paper assumes the stage shows the full
-dynamic range of the HDRI without clipping light sources (Section 3.2, "HDRI Map Acquisition
-and Display"; the authors spread bright sources with an energy-preserving dilation). Clipping
-a sun of 3000x the white level would remove most of the environment's key light and change
-w_avg; this module instead moves the *excess* of every over-range source into the pixels
-closest to it, so that
-
-- no pixel exceeds ``peak`` in any channel (the wall's limit is per LED channel);
-- the total solid-angle-weighted energy ``sum L dOmega`` is unchanged, per channel;
-- the excess keeps the source's own colour (no coloured fringes), so the diffuse integral
-  w_avg keeps its chromaticity, and the energy stays as close to the source as the peak
-  allows, so w_avg changes only by the second-order shrink below.
-
-Algorithm (distance-ordered spreading, one source at a time, largest first): over-range
-pixels are grouped into 8-connected sources (wrapping across the longitude seam). A source's
-pixels are scaled down to the peak (keeping their chromaticity); the removed RGB energy ``X``
-is spread with colour ``c = X / max(X)`` into the pixels in order of their angular distance to
-the source (true angles on the sphere), each filled up to the largest ``t`` with
-``L + t c <= peak`` in every channel, until ``sum t dOmega = max(X)``. The filled region is
-therefore the most compact one the peak allows: a disc of radius about
-``sqrt(Omega_needed / pi)`` for a compact source. Everything is vectorised per source (a
-window around it, a KD-tree for distances, one sort and one cumulative sum).
-
-Limit (a property of the sphere, not of the method): spreading a source over a cap of solid
-angle ``A`` keeps its energy but shortens its mean direction by about ``A / (4 pi)``, so for a
-normal facing the source w_avg drops by about ``E_source cos(t) A / (4 pi)`` (relative: that
-over w_avg). No non-negative spreading avoids it; the most compact one minimises it.
-``docs/hdri.md`` gives numbers.
+LED panels cannot emit more than their peak, yet the paper shows the HDRI's full range by
+spreading bright sources with an energy-preserving dilation (Section 3.2). Here the *excess* of
+every over-range source moves, in the source's own colour, into the pixels closest to it (in
+angle on the sphere), each filled up to the peak, so that no channel exceeds ``peak`` and the
+solid-angle-weighted energy is unchanged per channel. docs/hdri.md gives the algorithm and
+what it cannot keep (w_avg facing a source drops slightly: the most compact spread minimises
+it).
 
 References
 ----------
@@ -72,12 +51,9 @@ __all__ = [
 
 @dataclass(frozen=True)
 class SpreadSource:
-    """One over-range source and where its excess went.
-
-    ``direction`` is the energy-weighted centre (unit vector, :mod:`ocio_vp.hdri.diffuse` convention);
-    ``radius_deg`` the largest angle from the source's own pixels to a pixel that received
-    energy; ``centre_radius_deg`` the largest angle from ``direction`` to such a pixel.
-    """
+    """One over-range source and where its excess went: ``direction`` its energy-weighted
+    centre (unit vector); the largest angle to a pixel that received energy from the source's
+    own pixels (``radius_deg``) and from ``direction`` (``centre_radius_deg``)."""
 
     pixels: int
     energy: np.ndarray
@@ -104,10 +80,8 @@ class PreparedHDRI:
 
 
 def minimum_cap_radius_deg(excess: float, capacity: float) -> float:
-    """Angular radius of the spherical cap whose ``capacity * solid angle`` equals ``excess``.
-
-    The lower bound on a spread around a point source over a uniform background with room
-    ``capacity = peak - background``: ``2 pi (1 - cos r) capacity = excess``.
+    """Angular radius r of the cap with ``2 pi (1 - cos r) capacity = excess``: the smallest
+    spread of a point source over a background with room ``capacity = peak - background``.
 
     Examples
     --------
@@ -127,10 +101,8 @@ def round_down_to(value: float, dtype: np.dtype | type) -> float:
 
 
 def label_sources(over: np.ndarray) -> tuple[np.ndarray, int]:
-    """8-connected components of a lat-long mask, joined across the longitude seam.
-
-    Returns ``(labels, count)`` like :func:`scipy.ndimage.label`, labels 1..count.
-    """
+    """``(labels, count)`` as :func:`scipy.ndimage.label`: 8-connected components of a
+    lat-long mask, joined across the longitude seam."""
     from scipy import ndimage
 
     labels, count = ndimage.label(over, structure=np.ones((3, 3), dtype=bool))
@@ -189,15 +161,13 @@ def fit_under_peak(
     Returns
     -------
     PreparedHDRI
-        The map (float32 if the input was float32, else float64) and one
-        :class:`SpreadSource` per over-range source, largest first.
+        The map (float32 if the input was, else float64) and its sources, largest first.
 
     Raises
     ------
     InputError
-        When the map is not 2:1, has non-finite values, ``peak <= 0``, or cannot fit: its
-        solid-angle-weighted mean of ``max(R, G, B)`` exceeds ``peak`` (then even a uniform map
-        at the peak holds less energy).
+        When the map is not 2:1, has non-finite values, ``peak <= 0``, or cannot fit (its
+        solid-angle-weighted mean of ``max(R, G, B)`` exceeds ``peak``).
 
     Examples
     --------
@@ -244,11 +214,8 @@ def fit_under_peak(
 def _working_peak(
     requested: float, dtype: np.dtype, storage_dtype: np.dtype | type | None
 ) -> float:
-    """The peak rounded down to the working (and storage) type.
-
-    Values are computed in float64 and rounded to ``dtype``; a peak representable in that
-    dtype keeps every rounded value <= peak (rounding is monotonic).
-    """
+    """The peak rounded down to the working (and storage) type, so that values rounded to
+    it stay <= peak (rounding is monotonic)."""
     peak = round_down_to(requested, dtype)
     if storage_dtype is not None:
         peak = min(peak, round_down_to(requested, storage_dtype))
@@ -271,11 +238,9 @@ def _over_range_sources(over: np.ndarray) -> list[np.ndarray]:
 
 
 def _remove_excess(out: np.ndarray, idx: np.ndarray, *, peak: float, row_omega: np.ndarray):
-    """Scale one source's pixels down to ``peak`` in place; return what was removed.
-
-    ``(max excess, rows, cols, energy, excess, per-pixel weight)``: the energy and excess are
-    solid-angle-weighted RGB sums, the weight each pixel's largest removed channel energy.
-    """
+    """Scale one source's pixels down to ``peak`` in place; return ``(max excess, rows, cols,
+    energy, excess, weight)``: solid-angle-weighted RGB sums, and each pixel's largest removed
+    channel energy."""
     rows, cols = np.divmod(idx, out.shape[1])
     v = out[rows, cols].astype(np.float64)
     scale = peak / v.max(axis=1)
@@ -315,7 +280,7 @@ def _spread(
     peak: float,
     row_omega: np.ndarray,
 ) -> SpreadSource:
-    """Fill the pixels nearest to one source with its excess (see the module docstring)."""
+    """Fill the pixels nearest to one source with its excess (docs/hdri.md, *Algorithm*)."""
     from scipy.spatial import cKDTree  # deferred: scipy is only needed when a map is over range
 
     amount = float(excess.max())
@@ -471,12 +436,9 @@ def prepare_hdri_file(
 ) -> PreparedHDRI:
     """Read an equirectangular HDRI, :func:`fit_under_peak` its RGB, write it (atomically).
 
-    Other channels (alpha, depth...) pass through untouched; metadata is copied and
-    ``ocio_vp:prepare_hdri`` records the peak. The output keeps the input's pixel type when it
-    is half or float (integer inputs are written as half) and its EXR compression (else zip).
-
-    ``normals`` ({name: direction}) fills :attr:`PreparedHDRI.w_avg` with the diffuse integral
-    (:func:`ocio_vp.hdri.diffuse.diffuse_integral`) before and after.
+    Other channels and metadata are copied, ``ocio_vp:prepare_hdri`` records the peak; the
+    pixel type stays half or float (integers become half), the EXR compression stays (else
+    zip). ``normals`` ({name: direction}) fills :attr:`PreparedHDRI.w_avg` before and after.
 
     Raises
     ------

@@ -20,7 +20,6 @@ from ocio_vp.plates.detection import (
     DetectionError,
     detect_chart,
     detect_chart_corners,
-    detector,
 )
 from ocio_vp.plates.frames import (
     flat_field_gain,
@@ -92,7 +91,6 @@ __all__ = [
     "clip_levels",
     "detect_chart",
     "detect_chart_corners",
-    "detector",
     "find_wall",
     "flat_field_gain",
     "frames_pixels",

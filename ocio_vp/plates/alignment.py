@@ -27,8 +27,8 @@ than black in *every* channel. Then every patch change the take shows clearly re
    frames away from both changes (the blended frames, the shutter and a rolling-shutter
    readout).
 
-Everything is a pure function of the per-frame signal, so it is tested on simulated signals of
-many takes in milliseconds (``tests/test_plates_alignment.py``).
+Everything is a pure function of the per-frame signal, so it is tested on the simulated
+signals of many takes (``tests/test_plates_alignment.py``).
 """
 
 from __future__ import annotations

@@ -157,13 +157,18 @@ class Capture:
         lit = [*self.lit_chart.values(), *(c for p in self.panels for c in p.lit_chart.values())]
         return [*lit, *(e.target_chart for e in self.environments)]
 
+    def shots(self) -> list[ChartShot | RegionShot]:
+        """Every chart and region shot: primaries, charts, black levels, panel types'."""
+        shots: list[ChartShot | RegionShot] = [*self.primaries.values(), *self.charts()]
+        shots += [e.black_level for e in self.environments if e.black_level is not None]
+        shots += [r for p in self.panels for r in p.primaries.values()]
+        shots += [r for e in self.environments for r in (e.panel_black_level or {}).values()]
+        return shots
+
     def plate_paths(self) -> list[Path]:
         """Every file the capture reads: plates, their frames and flat fields, the take's
         sequence file and the take's folder."""
-        shots: list[ChartShot | RegionShot] = [*self.primaries.values(), *self.charts()]
-        shots += [r for p in self.panels for r in p.primaries.values()]
-        shots += [e.black_level for e in self.environments if e.black_level is not None]
-        shots += [r for e in self.environments for r in (e.panel_black_level or {}).values()]
+        shots = self.shots()
         paths = [p for shot in shots for p in (*shot.plate.paths, *(shot.plate.flat_field or ()))]
         if self.take is not None:
             paths += [self.take.sequence, self.take.frames.parent]
@@ -208,15 +213,23 @@ def _plate(
     if "flat_field" in raw:  # null switches the capture-wide flat field off for this plate
         value = raw["flat_field"]
         flat = None if value is None else _paths(ctx, value, (*key, "flat_field"), where.base)
+    encoding, layer = _encoding_layer(ctx, raw, key)
+    return PlateRef(
+        paths=paths, encoding=encoding, layer=layer, key=_key(*key), name=name, flat_field=flat
+    )
+
+
+def _encoding_layer(
+    ctx: Validator, raw: JsonMapping, key: tuple[str | int, ...]
+) -> tuple[str | None, str | None]:
+    """A plate's or take's ``encoding`` (canonical spelling) and ``layer``, if given."""
     encoding = raw.get("encoding")
     if encoding is not None:
         encoding = canonical_encoding(encoding, source=ctx.source, key=_key(*key, "encoding"))
     layer = raw.get("layer")
     if layer is not None and not isinstance(layer, str):
         raise ctx.error((*key, "layer"), f"expected a layer name, got {layer!r}")
-    return PlateRef(
-        paths=paths, encoding=encoding, layer=layer, key=_key(*key), name=name, flat_field=flat
-    )
+    return encoding, layer
 
 
 def _key(*parts: str | int) -> str:
@@ -297,25 +310,9 @@ def capture_from_dict(
     if top.get("flat_field") is not None:
         where = _Where(base, _paths(ctx, top["flat_field"], ("flat_field",), base))
     panels: tuple[PanelCapture, ...] = ()
-    primaries: dict[str, RegionShot] = {}
-    lit_chart: dict[str, ChartShot] = {}
     if "panels" in top:
         panels = _panels(ctx, top["panels"], where)
-    else:
-        if "primaries" in top:
-            prim = ctx.mapping(top["primaries"], ("primaries",), CHANNELS, _PLATE_KEYS)
-            shared = None
-            if "plate" in prim:
-                shared = _plate(ctx, prim, ("primaries",), where, "primaries")
-            primaries = {
-                c: _region_shot(ctx, prim[c], ("primaries", c), where, f"primaries_{c}", shared)
-                for c in CHANNELS
-            }
-        if "lit_chart" in top:
-            lit = ctx.mapping(top["lit_chart"], ("lit_chart",), CHANNELS)
-            lit_chart = {
-                c: _chart(ctx, lit[c], ("lit_chart", c), where, f"lit_{c}") for c in CHANNELS
-            }
+    primaries, lit_chart = _wall_shots(ctx, top, (), where, "")
     environments: tuple[EnvironmentCapture, ...] = ()
     if "environments" in top:
         environments = _environments(ctx, top["environments"], where, panels)
@@ -377,12 +374,8 @@ def _check_one_camera_space(ctx: Validator, capture: Capture) -> None:
     camera = capture.stage.get("camera_colorspace")
     if not camera:
         return
-    shots: list[ChartShot | RegionShot] = [*capture.primaries.values(), *capture.charts()]
-    shots += [e.black_level for e in capture.environments if e.black_level is not None]
-    shots += [r for p in capture.panels for r in p.primaries.values()]
-    shots += [r for e in capture.environments for r in (e.panel_black_level or {}).values()]
     to_camera = capture.raw.to_camera
-    for shot in shots:
+    for shot in capture.shots():
         raws = [p for p in shot.plate.paths if is_raw(p)]
         if raws and to_camera is None:
             raise ctx.error(
@@ -420,12 +413,7 @@ def _take(ctx: Validator, value: JsonValue, base: Path) -> TakeRef:
     points = {n: _movie_point(ctx, raw[n], n) for n in ("in", "out") if n in raw}
     matrix = _movie_choice(ctx, raw, "matrix", MATRICES)
     range_ = _movie_choice(ctx, raw, "range", RANGES)
-    encoding = raw.get("encoding")
-    if encoding is not None:
-        encoding = canonical_encoding(encoding, source=ctx.source, key="take.encoding")
-    layer = raw.get("layer")
-    if layer is not None and not isinstance(layer, str):
-        raise ctx.error(("take", "layer"), f"expected a layer name, got {layer!r}")
+    encoding, layer = _encoding_layer(ctx, raw, ("take",))
     clip = raw.get("clip_level")
     if clip is not None:
         clip = ctx.number(clip, ("take", "clip_level"), strict=True)
@@ -470,20 +458,26 @@ def _movie_choice(ctx: Validator, raw: JsonMapping, name: str, allowed) -> str |
 def _wall_shots(
     ctx: Validator, top: JsonMapping, key: tuple[str | int, ...], where: _Where, stem: str
 ) -> tuple[dict[str, RegionShot], dict[str, ChartShot]]:
-    """The primaries' regions and the lit charts of the wall (or of one panel type, under
-    ``key`` with plate names starting ``stem``)."""
-    prim_key = (*key, "primaries")
-    prim = ctx.mapping(top["primaries"], prim_key, CHANNELS, _PLATE_KEYS)
-    shared = None
-    if "plate" in prim:
-        shared = _plate(ctx, prim, prim_key, where, f"{stem}primaries")
-    primaries = {
-        c: _region_shot(ctx, prim[c], (*prim_key, c), where, f"{stem}primaries_{c}", shared)
-        for c in CHANNELS
-    }
-    lit_key = (*key, "lit_chart")
-    lit = ctx.mapping(top["lit_chart"], lit_key, CHANNELS)
-    lit_chart = {c: _chart(ctx, lit[c], (*lit_key, c), where, f"{stem}lit_{c}") for c in CHANNELS}
+    """The primaries' regions and the lit charts of the wall, each empty when not given (or of
+    one panel type, under ``key`` with plate names starting ``stem``)."""
+    primaries: dict[str, RegionShot] = {}
+    lit_chart: dict[str, ChartShot] = {}
+    if "primaries" in top:
+        prim_key = (*key, "primaries")
+        prim = ctx.mapping(top["primaries"], prim_key, CHANNELS, _PLATE_KEYS)
+        shared = None
+        if "plate" in prim:
+            shared = _plate(ctx, prim, prim_key, where, f"{stem}primaries")
+        primaries = {
+            c: _region_shot(ctx, prim[c], (*prim_key, c), where, f"{stem}primaries_{c}", shared)
+            for c in CHANNELS
+        }
+    if "lit_chart" in top:
+        lit_key = (*key, "lit_chart")
+        lit = ctx.mapping(top["lit_chart"], lit_key, CHANNELS)
+        lit_chart = {
+            c: _chart(ctx, lit[c], (*lit_key, c), where, f"{stem}lit_{c}") for c in CHANNELS
+        }
     return primaries, lit_chart
 
 

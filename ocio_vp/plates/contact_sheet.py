@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -85,13 +86,39 @@ def _draw_frame(
     )  # fmt: skip
 
 
-def _spans(axes: Axes, reading: TakeReading, lo: float, hi: float) -> None:
+@dataclass(frozen=True)
+class _Traces:
+    """What every strip draws, computed once for the whole take: log10 R, G, B per frame and
+    their maximum, each patch's frames averaged and left out (masks), the sync marks' spans."""
+
+    log: np.ndarray
+    top: np.ndarray
+    kept: list[np.ndarray]
+    rejected: list[np.ndarray]
+    syncs: list[tuple[float, float]]
+
+
+def _traces(reading: TakeReading, floor: float) -> _Traces:
+    log = np.log10(np.maximum(reading.signal, floor))
+    patches = reading.patches.values()
+    syncs = [
+        tuple(float(v) for v in reading.alignment.to_camera(np.array([m.first, m.last + 1.0])))
+        for m in reading.sequence.of_kind("sync")
+    ]
+    return _Traces(
+        log,
+        np.max(log, axis=1),
+        [np.isin(reading.numbers, p.frames) for p in patches],
+        [np.isin(reading.numbers, p.rejected) for p in patches],
+        syncs,  # type: ignore[arg-type]
+    )
+
+
+def _spans(axes: Axes, reading: TakeReading, syncs: list[tuple[float, float]]) -> None:
     """The sync marks (yellow) and the measured patches (grey, alternating) behind the data."""
+    lo, hi = axes.xlim
     _, y0, _, h = axes.box
-    for sync in reading.sequence.of_kind("sync"):
-        a, b = (
-            float(v) for v in reading.alignment.to_camera(np.array([sync.first, sync.last + 1.0]))
-        )
+    for a, b in syncs:
         if b > lo and a < hi:
             a, b = max(a, lo), min(b, hi)
             axes.canvas.rect(axes.x(a), y0, axes.x(b) - axes.x(a), h, fill="#ffe680",
@@ -107,24 +134,20 @@ def _spans(axes: Axes, reading: TakeReading, lo: float, hi: float) -> None:
                          anchor="start", valign="center", rotate=-90)  # fmt: skip
 
 
-def _draw_strip(axes: Axes, reading: TakeReading, floor: float) -> None:
+def _draw_strip(axes: Axes, reading: TakeReading, traces: _Traces) -> None:
     """One strip of the take's signal (log10 on the axes' linear scale)."""
     lo, hi = axes.xlim
-    numbers, signal = reading.numbers, reading.signal
+    numbers, log, top = reading.numbers, traces.log, traces.top
     inside = (numbers >= lo) & (numbers < hi)
-    _spans(axes, reading, lo, hi)
-    log = np.log10(np.maximum(signal, floor))
+    _spans(axes, reading, traces.syncs)
     clip = axes.clip()
     for c in range(3):
         axes.canvas.polyline(axes.x(numbers[inside]), axes.y(log[inside, c]),
                              stroke=_COLOURS[c], stroke_width=0.7, clip_path=clip)  # fmt: skip
-    top = np.max(log, axis=1)
-    for patch in reading.patches.values():
-        kept = inside & np.isin(numbers, patch.frames)
-        for x, y in zip(axes.x(numbers[kept]), axes.y(top[kept]), strict=True):
+    for kept, bad in zip(traces.kept, traces.rejected, strict=True):
+        for x, y in zip(axes.x(numbers[inside & kept]), axes.y(top[inside & kept]), strict=True):
             axes.canvas.circle(x, y, 0.75, fill="black", class_="kept")
-        bad = inside & np.isin(numbers, patch.rejected)
-        for x, y in zip(axes.x(numbers[bad]), axes.y(top[bad]), strict=True):
+        for x, y in zip(axes.x(numbers[inside & bad]), axes.y(top[inside & bad]), strict=True):
             axes.canvas.text(x, y, "\u00d7", size=6, valign="center", fill="red", class_="rejected")
     x0, _, _, _ = axes.box
     for decade in range(math.ceil(axes.ylim[0]), math.floor(axes.ylim[1]) + 1):
@@ -146,11 +169,12 @@ def write_contact_sheet(reading: TakeReading, path: str | Path) -> None:
     floor = 1e-4 * float(np.max(reading.signal))
     ylim = (math.log10(floor), math.log10(float(np.max(reading.signal)) * 2))
     span = (last - first) / strips
+    traces = _traces(reading, floor)
     for k in range(strips):
         y = _TOP + (_FRAME_SHARE + k) * unit + _GAP * (k + 1)
         xlim = (first + k * span, first + (k + 1) * span)
         axes = Axes(canvas, (_LEFT, y, width, unit), xlim, ylim, name=f"strip{k}")
-        _draw_strip(axes, reading, floor)
+        _draw_strip(axes, reading, traces)
     a = reading.alignment
     steps = "; ".join(
         f"{abs(n)} frame(s) {'dropped' if n < 0 else 'repeated'} near {T:g}" for T, n in a.steps

@@ -1,31 +1,20 @@
 """Chart detection for a chart shot without ``corners``: numpy and scipy only (default install).
 
-The plate is reduced by whole-pixel block averages to at most :data:`WORKING_WIDTH` pixels
-across (read in bands, so memory stays flat on an 8K plate). Then:
+docs/capture.md (*Chart detection*) describes it for users. The plate is block-averaged to at
+most :data:`WORKING_WIDTH` pixels across (read in bands). Then:
 
-1. **Patches.** On the log of each channel (over a floor of 2 % of the plate's bright level,
-   lightly smoothed), pixels whose log-colour gradient is small form regions; a region is a
-   patch candidate when it is compact and convex-like (its area is 0.8-1.05 of the ellipse of
-   its second moments) and not elongated. A chart's patches are separated by its dark frame,
-   so each patch is one region; the background, the frame and glints are not compact.
-2. **Grid.** From a candidate and its nearest neighbours a lattice is grown: a homography
-   (normalised DLT, SVD, conditioning checked) from integer lattice coordinates to the
-   candidates' centroids is fitted and re-predicted, one ring at a time, so perspective is
-   followed. Of a few seeds, the lattice holding most candidates wins. Patches that are missing
-   (too dark to separate from the frame, or covered) do not matter while the rest span the
-   chart.
-3. **Which way up.** A ColorChecker 24 (4 x 6) is oriented by its neutral row: six patches
-   whose colours are proportional to one another (a grey reflects every wavelength alike,
-   whatever lights it), each darker than the last. The mapping of the chart's grid onto the
-   lattice (rotation, and position when an edge row or column was not found) that makes the
-   bottom row such a ramp, white to black, is the chart. Other grids have no such mark: the
-   lattice must be complete and patch 0 is taken as the corner nearest the plate's top-left
-   (shoot them upright).
+1. **Patches**: on the log of each channel (over a floor of 2 % of the bright level, lightly
+   smoothed), regions of small log-colour gradient that are compact, convex-like (0.8-1.05 of
+   the ellipse of their second moments) and not elongated.
+2. **Grid**: from a candidate and its neighbours a lattice is grown ring by ring, a homography
+   (normalised DLT, conditioning checked) refitted each time; of a few seeds the lattice
+   holding most candidates wins.
+3. **Which way up**: a ColorChecker 24 by its neutral row (six patches of proportional colours,
+   each darker than the last); other grids must be complete, patch 0 nearest the top-left.
 
-The chart's four outer corners follow from the grid homography at the grid's outer corners
-(what ``corners`` means in docs/capture.md). When detection fails it says why (``too dark``,
-``clipped``, ``too small``, ``not found``) and :func:`detection_overlay` shows what was
-searched: the patch-like regions, and those in the grid.
+The chart's four outer corners follow from the grid homography. When detection fails it says
+why (``too dark``, ``clipped``, ``too small``, ``not found``) and :func:`detection_overlay`
+shows what was searched.
 """
 
 from __future__ import annotations
@@ -36,6 +25,7 @@ import numpy as np
 
 from ocio_vp.errors import InputError
 from ocio_vp.plates.reader import PlateInfo, read_region
+from ocio_vp.plates.sampling import apply_homography
 
 __all__ = [
     "MIN_PATCH_PIXELS",
@@ -45,7 +35,6 @@ __all__ = [
     "detect_chart",
     "detect_chart_corners",
     "detection_overlay",
-    "detector",
 ]
 
 #: The widest image the search runs on (plates wider are block-averaged down to it).
@@ -82,10 +71,6 @@ class Detection:
     #: Indices of the chart's patches found as patches (the others were covered, or as dark as
     #: the chart's frame: their samples are the corners' extrapolation, check the overlay).
     seen: tuple[int, ...] = ()
-
-    @property
-    def found(self) -> bool:
-        return self.corners is not None
 
     @property
     def patches_found(self) -> int:
@@ -254,15 +239,10 @@ def _grid_fit(ij: np.ndarray, centres: np.ndarray, areas: np.ndarray):
         det = np.array([abs(np.linalg.det(_jacobian(H, p))) for p in src])
         half = 0.5 * np.sqrt(areas / np.maximum(det, 1e-12))
         quads = src[:, None, :] + half[:, None, None] * offsets[None]
-        projected = _project(H, quads.reshape(-1, 2)).reshape(-1, 4, 2)
-        corrected = centres - (_quad_centroids(projected) - _project(H, src))
+        projected = apply_homography(H, quads.reshape(-1, 2)).reshape(-1, 4, 2)
+        corrected = centres - (_quad_centroids(projected) - apply_homography(H, src))
         H = fit_homography(src, corrected)
     return None if H is None else (H, corrected)
-
-
-def _project(H: np.ndarray, points: np.ndarray) -> np.ndarray:
-    p = np.c_[points, np.ones(len(points))] @ H.T
-    return p[:, :2] / p[:, 2:3]
 
 
 def _affine(src: np.ndarray, dst: np.ndarray) -> np.ndarray | None:
@@ -283,7 +263,7 @@ def _grow(c: _Candidates, seed: int, a: np.ndarray, b: np.ndarray) -> dict[tuple
         ij = np.array(list(members))
         lo, hi = ij.min(axis=0) - 1, ij.max(axis=0) + 1
         grid = np.array([(i, j) for i in range(lo[0], hi[0] + 1) for j in range(lo[1], hi[1] + 1)])
-        predicted = _project(H, grid.astype(float))
+        predicted = apply_homography(H, grid.astype(float))
         d = np.linalg.norm(predicted[:, None, :] - c.centres[None, :, :], axis=2)
         nearest = d.argmin(axis=1)
         close = d[np.arange(len(grid)), nearest] < 0.3 * pitch
@@ -416,7 +396,7 @@ def _orient(image, H, ij, centres, rows, columns) -> tuple[np.ndarray | None, st
                       [-0.5, rows - 0.5]])  # fmt: skip
     scored = []
     for P in _placements(ij, rows, columns):
-        corners = _project(H @ P, outer)
+        corners = apply_homography(H @ P, outer)
         e1, e2 = corners[1] - corners[0], corners[3] - corners[0]
         if e1[0] * e2[1] - e1[1] * e2[0] <= 0:  # a mirror image: not a chart seen from the front
             continue
@@ -442,7 +422,7 @@ def _jacobian(H: np.ndarray, point: np.ndarray) -> np.ndarray:
     """d(x, y)/d(i, j) of the homography at ``point``."""
     u, v = float(point[0]), float(point[1])
     w = H[2, 0] * u + H[2, 1] * v + H[2, 2]
-    x, y = _project(H, np.array([[u, v]]))[0]
+    x, y = apply_homography(H, np.array([[u, v]]))[0]
     return (
         np.array(
             [
@@ -494,7 +474,7 @@ def _fit_grid(c: _Candidates, ij: np.ndarray, members: np.ndarray) -> _Grid | No
         if fitted is None:
             return None
         H, centres = fitted
-        residual = np.linalg.norm(_project(H, ij.astype(float)) - centres, axis=1)
+        residual = np.linalg.norm(apply_homography(H, ij.astype(float)) - centres, axis=1)
         keep = residual < max(0.5, 5 * float(np.median(residual)))
         if keep.all() or keep.sum() < _MIN_MEMBERS:
             break
@@ -532,7 +512,7 @@ def _cells(corners: np.ndarray, points: np.ndarray, rows: int, columns: int) -> 
     G = grid_homography(corners, rows, columns)
     if not np.linalg.cond(G) < 1e12:
         return ()
-    uv = _project(np.linalg.inv(G), points)
+    uv = apply_homography(np.linalg.inv(G), points)
     col, row = np.floor(uv[:, 0]).astype(int), np.floor(uv[:, 1]).astype(int)
     inside = (col >= 0) & (col < columns) & (row >= 0) & (row < rows)
     return tuple(sorted({int(v) for v in (row * columns + col)[inside]}))
@@ -543,18 +523,16 @@ def detect_chart(info: PlateInfo, *, rows: int = 4, columns: int = 6) -> Detecti
     image, f = _working_image(info)
     lum = image.mean(axis=2)
     bright, noise = float(np.percentile(lum, 99)), _noise(lum)
-    empty = np.zeros(lum.shape, np.int32)
+    early = None
     if not bright > 10 * noise or not bright > 0:
-        detail = f"bright level {bright / max(noise, 1e-30):.2g}x the noise, need 10x"
-        return Detection(
-            None, "too dark", detail, image.astype(np.float32), f, empty, np.zeros(0, bool)
-        )
-    if rows < 2 or columns < 2:
-        detail = f"a {rows} x {columns} strip has no grid to find"
-        return Detection(
-            None, "not found", detail, image.astype(np.float32), f, empty, np.zeros(0, bool)
-        )
+        early = "too dark", f"bright level {bright / max(noise, 1e-30):.2g}x the noise, need 10x"
+    elif rows < 2 or columns < 2:
+        early = "not found", f"a {rows} x {columns} strip has no grid to find"
+    if early is not None:
+        empty = np.zeros(lum.shape, np.int32)
+        return Detection(None, *early, image.astype(np.float32), f, empty, np.zeros(0, bool))
     corners, reason, detail, c, grid = _search(image, f, rows, columns)
+    image32 = image.astype(np.float32)
     used = np.zeros(len(c.areas), bool)
     if grid is not None:
         used[grid.members] = True
@@ -563,12 +541,11 @@ def detect_chart(info: PlateInfo, *, rows: int = 4, columns: int = 6) -> Detecti
         if reason == "not found" and clipped > 0.02:
             reason = "clipped"
             detail = f"{100 * clipped:.0f} % of the plate at its maximum"
-        return Detection(None, reason, detail, image.astype(np.float32), f, c.labels, used)
+        return Detection(None, reason, detail, image32, f, c.labels, used)
     assert grid is not None  # corners come from a grid
     plate = corners * f + [info.x, info.y]
     seen = _cells(plate, c.centres[grid.members] * f + [info.x, info.y], rows, columns)
     detail = f"{len(grid.members)} of {rows * columns} patches, grid residual {grid.rms * f:.2g} px"
-    image32 = image.astype(np.float32)
     return Detection(plate, None, detail, image32, f, c.labels, used, grid.rms * f, seen)
 
 
@@ -584,11 +561,6 @@ def detect_chart_corners(info: PlateInfo, *, rows: int = 4, columns: int = 6) ->
     if found.corners is None:
         raise DetectionError(found, source=info.path)
     return found.corners
-
-
-def detector(*, source: object = None):
-    """The detection function for :func:`ocio_vp.plates.measure.measure_capture`."""
-    return detect_chart
 
 
 def detection_overlay(detection: Detection) -> np.ndarray:

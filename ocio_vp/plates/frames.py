@@ -64,7 +64,8 @@ def frames_pixels(
     return total, is_float, len(frames)
 
 
-def _size(frame: object, encoding: str | None) -> Box:
+def data_window(frame: object, encoding: str | None) -> Box:
+    """A plate's (or an array's) data window ``(x0, y0, x1, y1)``."""
     if isinstance(frame, (str, os.PathLike, PlateInfo)):
         info = frame if isinstance(frame, PlateInfo) else open_plate(frame, encoding=encoding)
         return info.box
@@ -92,7 +93,7 @@ def flat_field_gain(
     """
     frames = list(flat) if isinstance(flat, (list, tuple)) else [flat]
     where = str(frames[0]) if isinstance(frames[0], (str, os.PathLike)) else source
-    x0, y0, x1, y1 = _size(frames[0], encoding)
+    x0, y0, x1, y1 = data_window(frames[0], encoding)
     if plate_box is not None and (x0, y0, x1, y1) != tuple(plate_box):
         raise InputError(
             f"flat field's data window {[x0, y0, x1, y1]} differs from the plate's "

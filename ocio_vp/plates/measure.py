@@ -31,7 +31,7 @@ from ocio_vp.formats.measurements import (
 )
 from ocio_vp.plates.capture import Capture, ChartShot, PlateRef, RegionShot
 from ocio_vp.plates.contact_sheet import SHEET
-from ocio_vp.plates.detection import Detection
+from ocio_vp.plates.detection import Detection, DetectionError, detect_chart
 from ocio_vp.plates.raw import CameraSpace
 from ocio_vp.plates.reader import PlateInfo, open_plate, read_region
 from ocio_vp.plates.sampling import ChartSamples, patch_labels, sample_chart, sample_region
@@ -151,8 +151,6 @@ def _sample_chart(
         space = _camera_space(capture, infos[0])
         corners, found = shot.corners, None
         if corners is None:
-            from ocio_vp.plates.detection import DetectionError, detect_chart
-
             detection = (detect or detect_chart)(
                 infos[0], rows=capture.rows, columns=capture.columns
             )
@@ -170,9 +168,9 @@ def _sample_chart(
             **capture.sampling,
         )
         samples = _in_camera_space(samples, space)
+    except DetectionError:
+        raise  # already names the plate and key, and carries the search for its overlay
     except InputError as error:
-        if detection is not None and detection.corners is None:
-            raise  # already names the plate and key, and carries the search for its overlay
         raise _named(error, shot.plate, key) from None
     labels = tuple(f"patch {j}" for j in range(capture.rows * capture.columns))
     sampling = PlateSampling(
@@ -221,24 +219,11 @@ def _sample_regions(
                 )
             except InputError as error:
                 raise _named(error, ref, format_key_path(*shot.key)) from None
-        stacked = ChartSamples(
-            **{
-                f: np.concatenate([getattr(r, f) for r in rows])
-                for f in (
-                    "means",
-                    "spreads",
-                    "counts",
-                    "clipped_fraction",
-                    "outlier_fraction",
-                    "clipped",
-                    "high_spread",
-                )
-            },
-            box=rows[0].box,
-            method=rows[0].method,
-            frames=rows[0].frames,
-            clip_level=rows[0].clip_level,
-        )
+        per_patch = [f.name for f in dataclasses.fields(ChartSamples) if f.type == "np.ndarray"]
+        arrays: dict[str, Any] = {
+            f: np.concatenate([getattr(r, f) for r in rows]) for f in per_patch
+        }
+        stacked = dataclasses.replace(rows[0], **arrays)
         stacked = _in_camera_space(stacked, space)
         out.append(
             PlateSampling(
@@ -364,7 +349,7 @@ def measure_capture(
             for p in capture.panels
         ]
     else:
-        document |= _wall_part(capture, chart, plates, step)
+        document |= _wall_values(capture, capture.primaries, capture.lit_chart, chart, plates, step)
     if capture.environments:
         document["environments"] = [
             _environment(env, chart, black_level) for env in capture.environments
@@ -415,19 +400,6 @@ def _environment(env, chart, black_level) -> JsonObject:
     return entry
 
 
-def _wall_part(
-    capture: Capture, chart: ChartSampler, plates: list[PlateSampling], step: Callable[[], None]
-) -> JsonObject:
-    """``primaries`` and ``lit_chart`` of a single-wall capture, each where it is given (a
-    wall file from a take has no lit chart; a charts file no primaries)."""
-    out: JsonObject = {}
-    if capture.primaries:
-        out["primaries"] = _primaries(capture, capture.primaries, plates, step)
-    if capture.lit_chart:
-        out["lit_chart"] = {c: chart(capture.lit_chart[c]).tolist() for c in CHANNELS}
-    return out
-
-
 def _wall_values(
     capture: Capture,
     primaries: Mapping[str, RegionShot],
@@ -436,11 +408,14 @@ def _wall_values(
     plates: list[PlateSampling],
     step: Callable[[], None],
 ) -> JsonObject:
-    """``primaries`` and ``lit_chart`` of the wall (or of one panel type), sampled."""
-    return {
-        "primaries": _primaries(capture, primaries, plates, step),
-        "lit_chart": {c: chart(lit_chart[c]).tolist() for c in CHANNELS},
-    }
+    """``primaries`` and ``lit_chart`` of the wall (or of one panel type), sampled, each where
+    it is given (a wall file from a take has no lit chart; a charts file no primaries)."""
+    out: JsonObject = {}
+    if primaries:
+        out["primaries"] = _primaries(capture, primaries, plates, step)
+    if lit_chart:
+        out["lit_chart"] = {c: chart(lit_chart[c]).tolist() for c in CHANNELS}
+    return out
 
 
 def _primaries(

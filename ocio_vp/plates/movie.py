@@ -1,23 +1,12 @@
 """Reading a camera take recorded as a movie file (QuickTime, MP4, MXF) with PyAV.
 
-A movie is decoded once, front to back (:func:`scan_movie`): every frame must be decoded
-anyway (long-GOP codecs cannot skip), so the one pass gives both the alignment's band of rows
-and the measuring bands of every frame, as :class:`~ocio_vp.plates.take_reader.FrameStats`
-(a few numbers a frame: memory does not grow with the take's length). Only the rows measuring
-reads are converted; the planes are read in place from FFmpeg's buffers.
-
-Y'CbCr is converted to R'G'B' here, not by FFmpeg's scaler, with the matrix and range the
-stream declares (H.273 codes: Rec.709, Rec.2020 non-constant luminance, Rec.601; legal or full
-range) at the decoder's own bit depth (10/12-bit ProRes and DNxHR, 10-bit H.265); chroma
-subsampled 4:2:2 or 4:2:0 is repeated onto its luma pixels (exact on the wall's flat patches).
-A stream without colour tags needs ``take.matrix`` and ``take.range`` in the capture file; a
-tag in the capture file overrides the stream's. Then the declared log encoding is decoded as
-for image plates (:func:`ocio_vp.plates.reader.linearise`).
-
-Frame numbers are the frames' order in the file from 0 (``take.in``/``take.out`` choose a part,
-as frame numbers or as timecode ``HH:MM:SS:FF`` on the file's own start timecode); a frame
-whose time stamp is not on the container's constant frame grid (variable frame rate) is
-refused.
+A movie is decoded once, front to back (:func:`scan_movie`), giving the alignment's band and
+the measuring bands of every frame as :class:`~ocio_vp.plates.take_reader.FrameStats` (memory
+does not grow with the take's length). Y'CbCr is converted here, at the decoder's bit depth,
+with the matrix and range the stream declares or the capture file gives (``take.matrix``,
+``take.range``), subsampled chroma repeated onto its luma pixels; then the declared log
+encoding is decoded. Frame numbers count from 0 in the file; docs/capture.md (*A take as a
+movie*) gives the in/out points, timecode and refusals (variable frame rate among them).
 """
 
 from __future__ import annotations
@@ -33,10 +22,13 @@ from typing import Any
 import numpy as np
 
 from ocio_vp.errors import InputError
+from ocio_vp.plates.raw import library_message
 from ocio_vp.plates.reader import PlateInfo, linearise
 from ocio_vp.plates.take_reader import FrameStats, frame_stats
 
 __all__ = [
+    "AV_MATRICES",
+    "AV_RANGES",
     "BAND_PIXELS",
     "MATRICES",
     "MOVIE_SUFFIXES",
@@ -61,9 +53,9 @@ MATRICES = {"rec709": (0.2126, 0.0722), "rec2020": (0.2627, 0.0593), "rec601": (
 #: Ranges: ``legal`` (video: Y' 16-235, C 16-240 at 8 bits) or ``full``.
 RANGES = ("legal", "full")
 #: FFmpeg's colour-space codes (AVColorSpace, H.273 MatrixCoefficients) we convert.
-_AV_MATRIX = {1: "rec709", 9: "rec2020", 5: "rec601", 6: "rec601"}
+AV_MATRICES = {1: "rec709", 9: "rec2020", 5: "rec601", 6: "rec601"}
 #: AVColorRange: 1 = MPEG (legal), 2 = JPEG (full).
-_AV_RANGE = {1: "legal", 2: "full"}
+AV_RANGES = {1: "legal", 2: "full"}
 _PIX_FMT = re.compile(r"(yuv|yuva|yuvj|gbr|gbra)(444|422|420)?p(\d+)?(le)?")
 
 
@@ -122,10 +114,6 @@ def _error(message: str, path: Path, key: str | None = None) -> InputError:
     return InputError(message, source=path, key=key)
 
 
-def _av_message(exc: Exception) -> str:
-    return " ".join(str(exc).split())[:160] or type(exc).__name__
-
-
 def _open(path: Path):  # -> av.container.InputContainer
     import av
 
@@ -137,7 +125,7 @@ def _open(path: Path):  # -> av.container.InputContainer
         return av.open(str(path), "r")
     except (av.FFmpegError, OSError, ValueError) as exc:
         raise _error(
-            f"cannot open as a movie (truncated or not a movie?): {_av_message(exc)}", path
+            f"cannot open as a movie (truncated or not a movie?): {library_message(exc)}", path
         ) from None
 
 
@@ -157,8 +145,8 @@ def _layout(pix_fmt: str, path: Path) -> tuple[int, bool, tuple[int, int]]:
 
 def _tags(ctx, matrix: str | None, range_: str | None, path: Path, rgb: bool):
     """The matrix and range to convert with, and where they came from."""
-    stream_matrix = "rgb" if rgb else _AV_MATRIX.get(int(ctx.colorspace or 2))
-    stream_range = _AV_RANGE.get(int(ctx.color_range or 0))
+    stream_matrix = "rgb" if rgb else AV_MATRICES.get(int(ctx.colorspace or 2))
+    stream_range = AV_RANGES.get(int(ctx.color_range or 0))
     if int(ctx.colorspace or 2) == 10:
         raise _error("the stream is Rec.2020 constant luminance, which ocio-vp does not read", path)
     chosen_matrix = matrix or stream_matrix
@@ -355,17 +343,21 @@ def _chroma(plane: np.ndarray, box, sub: tuple[int, int]) -> np.ndarray:
     return part[y0 - y0 // sy * sy :][: y1 - y0, x0 - x0 // sx * sx :][:, : x1 - x0]
 
 
+def _gbr_to_rgb(g: np.ndarray, b: np.ndarray, r: np.ndarray, *, info: MovieInfo) -> np.ndarray:
+    """R'G'B' (..., 3) float32 from planar G, B, R code values at the stream's range."""
+    rgb = np.stack([r, g, b], axis=-1).astype(np.float32)
+    if info.range == "legal":
+        scale = float(1 << (info.bits - 8))
+        return (rgb - np.float32(16 * scale)) / np.float32(219 * scale)
+    return rgb / np.float32((1 << info.bits) - 1)
+
+
 def frame_rgb(frame, info: MovieInfo, box: tuple[int, int, int, int]) -> np.ndarray:
     """R'G'B' float32 (rows, columns, 3) of ``box`` (x0, y0, x1, y1) of a decoded frame."""
     x0, y0, x1, y1 = box
     planes = [_plane(frame, k, info.bits) for k in range(3)]
-    if info.rgb:  # planar G, B, R
-        g, b, r = (p[y0:y1, x0:x1] for p in planes)
-        rgb = np.stack([r, g, b], axis=-1).astype(np.float32)
-        if info.range == "legal":
-            scale = float(1 << (info.bits - 8))
-            return (rgb - np.float32(16 * scale)) / np.float32(219 * scale)
-        return rgb / np.float32((1 << info.bits) - 1)
+    if info.rgb:
+        return _gbr_to_rgb(*(p[y0:y1, x0:x1] for p in planes), info=info)
     luma = planes[0][y0:y1, x0:x1]
     cb = _chroma(planes[1], box, info.subsampling)
     cr = _chroma(planes[2], box, info.subsampling)
@@ -434,7 +426,7 @@ def _decoded(info: MovieInfo, container, stream) -> Iterator[tuple[int, Any]]:
             yield index, frame
     except av.FFmpegError as exc:
         raise _error(
-            f"cannot decode frame {index + 1} (truncated or corrupt?): {_av_message(exc)}",
+            f"cannot decode frame {index + 1} (truncated or corrupt?): {library_message(exc)}",
             info.path,
         ) from None
     if info.last is not None and index < info.last:
@@ -569,12 +561,7 @@ def reduced_frame(info: MovieInfo, index: int, factor: int) -> np.ndarray:
         values = plane[np.ix_(rows, cols)].astype(np.float32)
         planes.append(values.reshape(cells_y, n, cells_x, n).mean(axis=(1, 3)))
     if info.rgb:
-        g, b, r = planes
-        full = float((1 << info.bits) - 1)
-        rgb = np.stack([r, g, b], axis=-1) / np.float32(full)
-        if info.range == "legal":
-            scale = float(1 << (info.bits - 8))
-            rgb = (rgb * np.float32(full) - np.float32(16 * scale)) / np.float32(219 * scale)
+        rgb = _gbr_to_rgb(*planes, info=info)
     else:
         rgb = ycbcr_to_rgb(*planes, bits=info.bits, matrix=info.matrix, range_=info.range)
     return decode_log(rgb, info.encoding)

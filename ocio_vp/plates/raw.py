@@ -1,22 +1,11 @@
 """Camera raw plates (DNG, CR2/CR3, NEF, ARW, RAF, ...) as camera-native linear RGB, with LibRaw.
 
-A raw file holds the sensor's mosaic: one colour per photosite behind a colour filter array.
-ocio-vp reads it with LibRaw (rawpy) and applies **nothing** a raw developer would: no white
-balance, no colour matrix, no gamma, no brightening. Each sample becomes
-``(value - black) / (white - black)`` with the black level of its colour channel and the white
-(saturation) level the file states, so 1.0 is the sensor's clip: :mod:`ocio_vp.plates.sampling`
-judges clipping there, as for any integer plate.
-
-Demosaicing (:data:`DEMOSAIC_METHODS`): chart patches are averaged over many pixels, so the
-default is the cheapest method with no interpolation at all, ``superpixel``: each 2x2 Bayer
-block gives R, the mean of its two G and B, on all four of its pixels (coordinates stay the
-sensor's). LibRaw's interpolating methods (``linear``, ``vng``, ``ppg``, ``ahd``, ``dcb``,
-``dht``, ``aahd``) are the alternatives, run with the same no-processing settings; a sensor
-whose pattern is not 2x2 Bayer (Fujifilm X-Trans) needs one of them. Their effect on chart
-patches is measured in tests/test_plates_raw.py.
-
-LibRaw decodes the whole file, so the decoded mosaic of the last few files is kept (a plate is
-read for its samples and again for its overlay).
+Nothing a raw developer applies (white balance, colour matrix, gamma, brightening): each sample
+becomes ``(value - black) / (white - black)`` with the file's levels, so 1.0 is the sensor's
+clip. Demosaicing is ``superpixel`` by default (no interpolation: each 2x2 Bayer block's R, mean
+G and B on its four pixels) or one of LibRaw's (:data:`DEMOSAIC_METHODS`); docs/capture.md
+(*Camera raw plates*) says when each is needed. Opening a plate reads its header only; the
+decoded mosaic of the last two files is kept (a plate is read for its samples and its overlay).
 """
 
 from __future__ import annotations
@@ -29,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ocio_vp.errors import InputError
+from ocio_vp.formats.documents import check_regular_file
 
 __all__ = [
     "DEMOSAIC_METHODS",
@@ -37,7 +27,9 @@ __all__ = [
     "RawMosaic",
     "dng_colour_matrix",
     "is_raw",
+    "library_message",
     "raw_mosaic",
+    "raw_size",
     "read_raw",
     "sensor_to_camera",
 ]
@@ -77,18 +69,46 @@ class RawMosaic:
         ) == [0, 1, 2, 3]
 
 
-def _open(path: str):  # -> rawpy.RawPy
+def library_message(exc: Exception) -> str:
+    """A decoding library's exception as one short line (its class name if it says nothing)."""
+    return " ".join(str(exc).split())[:160] or type(exc).__name__
+
+
+def _open(path: str):  # -> rawpy.RawPy (LibRaw decodes the mosaic only when it is read)
     import rawpy
 
-    if not os.path.exists(path):
-        raise InputError("plate not found", source=path)
     try:
         return rawpy.imread(path)
     except (rawpy.LibRawError, OSError, ValueError) as exc:
-        message = " ".join(str(exc).split())[:160] or type(exc).__name__
         raise InputError(
-            f"LibRaw cannot read this raw file ({type(exc).__name__}: {message})", source=path
+            f"LibRaw cannot read this raw file ({type(exc).__name__}: {library_message(exc)})",
+            source=path,
         ) from None
+
+
+def _stamp(path: str | os.PathLike[str]) -> tuple[str, tuple[int, int]]:
+    """The path and (mtime, size) that key the decoding caches; refuses a missing file."""
+    path = str(path)
+    if not os.path.exists(path):
+        raise InputError("plate not found", source=path)
+    info = check_regular_file(path)
+    return path, (info.st_mtime_ns, info.st_size)
+
+
+def raw_size(path: str | os.PathLike[str]) -> tuple[int, int]:
+    """The visible (height, width) the file states, read from its header without decoding."""
+    path, _ = _stamp(path)
+    with _open(path) as raw:
+        return int(raw.sizes.height), int(raw.sizes.width)
+
+
+def _levels(raw, path: str) -> tuple[tuple[float, ...], float]:
+    """The black level per colour index and the white level, refused unless white > black."""
+    blacks = tuple(float(v) for v in raw.black_level_per_channel)
+    white = float(raw.white_level)
+    if not white > max(blacks):
+        raise InputError(f"white level {white:g} not above black {blacks}", source=path)
+    return blacks, white
 
 
 @functools.lru_cache(maxsize=2)
@@ -97,10 +117,7 @@ def _cached(path: str, stamp: tuple[int, int]) -> RawMosaic:
         if raw.raw_type != 0 and raw.num_colors != 3:  # pragma: no cover - unusual sensors
             raise InputError("not a colour-filter-array raw file", source=path)
         colours = np.array(raw.raw_colors_visible, dtype=np.uint8)
-        blacks = tuple(float(v) for v in raw.black_level_per_channel)
-        white = float(raw.white_level)
-        if not white > max(blacks):
-            raise InputError(f"white level {white:g} not above black {blacks}", source=path)
+        blacks, white = _levels(raw, path)
         return RawMosaic(
             path=path,
             mosaic=np.array(raw.raw_image_visible, dtype=np.uint16),
@@ -114,12 +131,7 @@ def _cached(path: str, stamp: tuple[int, int]) -> RawMosaic:
 
 def raw_mosaic(path: str | os.PathLike[str]) -> RawMosaic:
     """The file's mosaic and levels (see :class:`RawMosaic`), decoded once per file version."""
-    path = str(path)
-    try:
-        info = os.stat(path)
-    except OSError:
-        raise InputError("plate not found", source=path) from None
-    return _cached(path, (info.st_mtime_ns, info.st_size))
+    return _cached(*_stamp(path))
 
 
 def _superpixel(raw: RawMosaic, box: tuple[int, int, int, int]) -> np.ndarray:
@@ -169,8 +181,8 @@ def _developed(path: str, stamp: tuple[int, int], method: str) -> np.ndarray:
             output_bps=16,
             highlight_mode=rawpy.HighlightMode.Clip,
         )
-        black = np.asarray(raw.black_level_per_channel, dtype=np.float32)
-        white = float(raw.white_level)
+        blacks, white = _levels(raw, path)
+    black = np.asarray(blacks, dtype=np.float32)
     # no_auto_scale: LibRaw leaves the samples in the file's units with black subtracted
     levels = np.array([black[0], (black[1] + black[3]) / 2, black[2]], dtype=np.float32)
     return (image.astype(np.float32)) / (np.float32(white) - levels)
@@ -181,8 +193,8 @@ def read_raw(
 ) -> np.ndarray:
     """Camera-native linear RGB (rows, columns, 3), float32, of ``box`` (x0, y0, x1, y1) in the
     sensor's visible pixels: 1.0 = the raw white level (see the module docstring)."""
-    raw = raw_mosaic(path)
     if method == "superpixel":
+        raw = raw_mosaic(path)
         if not raw.bayer:
             raise InputError(
                 "the sensor's colour filter is not a 2x2 Bayer pattern (X-Trans?): superpixel "
@@ -190,8 +202,7 @@ def read_raw(
                 source=raw.path,
             )
         return _superpixel(raw, box)
-    info = os.stat(raw.path)
-    image = _developed(raw.path, (info.st_mtime_ns, info.st_size), method)
+    image = _developed(*_stamp(path), method)
     x0, y0, x1, y1 = box
     return image[y0:y1, x0:x1]
 

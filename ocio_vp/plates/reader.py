@@ -1,19 +1,11 @@
 """Read calibration plates with OpenImageIO, one region at a time.
 
-Plates are 4K-8K photographs; the solver needs a few hundred numbers from them. So a plate is
-opened once for its header (:func:`open_plate`) and then only the rows, columns and channels a
-chart or region covers are decoded (:func:`read_region`), in bands of scanlines (or the tiles
-that cover the region), as float32. Nothing converts a whole plate to float64.
-
-Pixel coordinates follow OpenImageIO: origin at the top-left of the display window, x to the
-right, y down, pixel ``(x, y)`` covers ``[x, x+1) x [y, y+1)`` (its centre is at ``+0.5``).
-
-Linear plates (OpenEXR half/float, DPX, 16-bit TIFF) are used as they are; camera raw plates
-(DNG, CR3, NEF, ARW, RAF, ...) are read by LibRaw as camera-native linear RGB
-(:mod:`ocio_vp.plates.raw`). Display-referred
-plates (8 bits per sample, or PNG/JPEG/WebP/HEIF of any depth) are refused unless the caller
-states their encoding, which is then decoded to linear on the region only (see
-:data:`ENCODINGS`).
+A plate is opened once for its header (:func:`open_plate`); then only the rows, columns and
+channels a chart or region covers are decoded (:func:`read_region`), in bands of scanlines (or
+tiles), as float32. Pixel coordinates are OpenImageIO's (docs/capture.md, *Coordinates*).
+Linear plates are used as they are, camera raw plates are read by :mod:`ocio_vp.plates.raw`,
+and display-referred plates (8 bits, PNG, JPEG ...) are refused unless their encoding is stated
+(:data:`ENCODINGS`), then decoded to linear on the region only.
 """
 
 from __future__ import annotations
@@ -63,7 +55,7 @@ def canonical_encoding(name: JsonValue, *, source: object = None, key: str | Non
     import difflib
 
     if isinstance(name, str) and name.lower() == "linear":
-        return "linear"  # the default: no need to import colour-science (~1 s) to know it
+        return "linear"  # the default: no need to import colour-science to know it
 
     names = _encodings()
     by_lower = {n.lower(): n for n in names}
@@ -151,7 +143,7 @@ def _find_rgb(names: tuple[str, ...], layer: str | None, path: str) -> tuple[int
     return (int(chosen[0]), int(chosen[1]), int(chosen[2]))  # type: ignore[arg-type]
 
 
-def _open_input(path: str):  # -> oiio.ImageInput
+def open_input(path: str):  # -> oiio.ImageInput
     import OpenImageIO as oiio
 
     if not os.path.exists(path):
@@ -196,7 +188,7 @@ def open_plate(
     source = str(path)
     if is_raw(source):
         return _open_raw(source, encoding, demosaic)
-    inp = _open_input(source)
+    inp = open_input(source)
     try:
         if subimage and not inp.seek_subimage(subimage, 0):
             raise InputError(f"has no subimage {subimage}", source=source)
@@ -249,7 +241,7 @@ def open_plate(
 
 def _open_raw(source: str, encoding: str | None, demosaic: str | None) -> PlateInfo:
     """A camera raw plate's header (:mod:`ocio_vp.plates.raw`): linear by definition."""
-    from ocio_vp.plates.raw import DEFAULT_DEMOSAIC, raw_mosaic
+    from ocio_vp.plates.raw import DEFAULT_DEMOSAIC, raw_size
 
     demosaic = demosaic or DEFAULT_DEMOSAIC
     if encoding not in (None, "linear"):
@@ -257,8 +249,7 @@ def _open_raw(source: str, encoding: str | None, demosaic: str | None) -> PlateI
             f"a camera raw plate is linear sensor data: remove its encoding ({encoding!r})",
             source=source,
         )
-    raw = raw_mosaic(source)
-    height, width = raw.mosaic.shape
+    height, width = raw_size(source)
     return PlateInfo(
         path=source,
         file_format=f"raw (LibRaw, {demosaic} demosaic)",
@@ -298,8 +289,8 @@ def read_region(
 ) -> np.ndarray:
     """Read the R, G, B pixels of ``box`` = ``(x0, y0, x1, y1)`` (end-exclusive), linearised.
 
-    Only the scanline bands (or tiles) that cover ``box`` are decoded, at most ~32 MB at a time,
-    and only the channels from the first to the last of R, G, B.
+    Only the scanline bands (or tiles) that cover ``box`` are decoded, a bounded number of bytes
+    at a time, and only the channels from the first to the last of R, G, B.
 
     Returns
     -------
@@ -319,7 +310,7 @@ def read_region(
     ch0, ch1 = min(info.rgb), max(info.rgb) + 1
     select = [c - ch0 for c in info.rgb]
     out = np.empty((y1 - y0, x1 - x0, 3), dtype=np.float32)
-    inp = _open_input(info.path)
+    inp = open_input(info.path)
     try:
         if info.subimage:
             inp.seek_subimage(info.subimage, 0)
@@ -335,7 +326,7 @@ def read_region(
                 data = inp.read_tiles(
                     info.subimage, 0, tx0, tx1, ty, ty1, 0, 1, ch0, ch1, oiio.FLOAT
                 )
-                _check_read(data, inp, info, (ty1 - ty, tx1 - tx0, ch1 - ch0))
+                check_read(data, inp, info.path, (ty1 - ty, tx1 - tx0, ch1 - ch0))
                 r0, r1 = max(ty, y0), min(ty1, y1)
                 out[r0 - y0 : r1 - y0] = data[r0 - ty : r1 - ty, x0 - tx0 : x1 - tx0][..., select]
                 ty = ty1
@@ -344,7 +335,7 @@ def read_region(
             for ya in range(y0, y1, rows):
                 yb = min(ya + rows, y1)
                 data = inp.read_scanlines(info.subimage, 0, ya, yb, 0, ch0, ch1, oiio.FLOAT)
-                _check_read(data, inp, info, (yb - ya, info.width, ch1 - ch0))
+                check_read(data, inp, info.path, (yb - ya, info.width, ch1 - ch0))
                 out[ya - y0 : yb - y0] = data[:, x0 - info.x : x1 - info.x][..., select]
     finally:
         inp.close()
@@ -356,14 +347,16 @@ def read_region(
     return out
 
 
-def _check_read(data: object, inp: object, info: PlateInfo, shape: tuple[int, ...]) -> None:
+def check_read(data: object, inp: object, source: str, shape: tuple[int, ...]) -> np.ndarray:
+    """OpenImageIO's pixels ``data`` as an array of ``shape``, or the reader's error, one line."""
     if data is None or not isinstance(data, np.ndarray) or inp.has_error:  # type: ignore[attr-defined]
         message = " ".join(str(inp.geterror()).split()) or "read failed"  # type: ignore[attr-defined]
-        raise InputError(f"cannot read pixels (corrupt file?): {message[:200]}", source=info.path)
+        raise InputError(f"cannot read pixels (corrupt file?): {message[:200]}", source=source)
     if data.ndim == 2:  # one channel comes back as (rows, width)
         data.shape = (*data.shape, 1)
     if tuple(data.shape) != shape:
-        raise InputError(f"read {data.shape} pixels, expected {shape}", source=info.path)
+        raise InputError(f"read {data.shape} pixels, expected {shape}", source=source)
+    return data
 
 
 def plate_path(base: str | os.PathLike[str], value: str) -> Path:

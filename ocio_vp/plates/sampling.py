@@ -1,25 +1,15 @@
 """Sample a colour chart (and plain regions) from a plate: perspective-correct patch grid, robust
 statistics, flags.
 
-The chart is given by the four outer corners of its patch grid, in pixel coordinates (see
-:mod:`ocio_vp.plates.reader` for the convention), in the order top-left, top-right, bottom-right,
-bottom-left *of the chart* (patch 0 is the top-left patch, reading order row by row). A
-homography maps grid coordinates ``(u, v)`` in ``[0, columns] x [0, rows]`` to the image, so
-perspective is exact for a flat chart. A pixel belongs to patch ``(r, c)`` when the grid
-coordinates of its centre fall in ``[c + inset, c + 1 - inset] x [r + inset, r + 1 - inset]``:
-the inset keeps the samples off the borders between patches.
+The chart is given by the four outer corners of its patch grid (TL, TR, BR, BL of the chart;
+docs/capture.md, *Coordinates*). A homography maps grid coordinates ``(u, v)`` in ``[0, columns]
+x [0, rows]`` to the image; a pixel belongs to patch ``(r, c)`` when its centre's grid
+coordinates fall in ``[c + inset, c + 1 - inset] x [r + inset, r + 1 - inset]``.
 
-Each patch's value is a robust mean of its pixels (:data:`ROBUST_MEAN_METHODS`; default a 10 %
-trimmed mean per channel) after rejecting outliers (farther than 6 robust sigmas, 1.4826 MAD,
-from the patch median: a specular glint, dust, hot pixels), so the trim stays symmetric about the
-noise and the mean unbiased. The spread is the standard deviation of the pixels kept. Patches
-are flagged when pixels are clipped or when
-more than a small fraction of pixels are outliers (e.g. a highlight, dust, a misplaced corner).
-
-Vignetting: each patch is sampled over a small area, so the fall-off inside one patch averages
-out, but the fall-off between patches is measured as is unless a ``flat_field`` plate is given
-(then every pixel is divided by the lens's relative gain there). Without one, frame the
-chart near the optical centre (or correct the plates first); ``docs/capture.md`` says more.
+Each patch's value is a robust mean of its pixels (:data:`ROBUST_MEAN_METHODS`) after rejecting
+outliers (farther than 6 robust sigmas, 1.4826 MAD, from the patch median: a glint, dust, hot
+pixels), so the trim stays symmetric about the noise. Patches are flagged when pixels are
+clipped or too many are outliers. A ``flat_field`` plate divides out the lens's vignetting.
 """
 
 from __future__ import annotations
@@ -31,13 +21,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ocio_vp.errors import InputError
-from ocio_vp.plates.frames import flat_field_gain, frames_pixels
-from ocio_vp.plates.reader import PlateInfo, open_plate
+from ocio_vp.plates.frames import data_window, flat_field_gain, frames_pixels
 from ocio_vp.plates.statistics import ROBUST_MEAN_METHODS, patch_statistics
 
 __all__ = [
     "ROBUST_MEAN_METHODS",
     "ChartSamples",
+    "apply_homography",
     "chart_box",
     "grid_homography",
     "patch_labels",
@@ -140,7 +130,8 @@ def grid_homography(corners: np.ndarray, rows: int, columns: int) -> np.ndarray:
     return np.append(h, 1.0).reshape(3, 3)
 
 
-def _apply(H: np.ndarray, points: np.ndarray) -> np.ndarray:
+def apply_homography(H: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Points (..., 2) mapped by the 3x3 homography ``H`` (column vectors, divided by w)."""
     p = points @ H[:, :2].T + H[:, 2]
     return p[..., :2] / p[..., 2:3]
 
@@ -169,7 +160,7 @@ def patch_labels(
     )
     for r in range(rows):
         for c in range(columns):
-            quad = _apply(H, cell + np.array([c, r], dtype=np.float64))
+            quad = apply_homography(H, cell + np.array([c, r], dtype=np.float64))
             qx0, qy0, qx1, qy1 = chart_box(quad, margin=1)
             qx0, qy0 = max(qx0, x0), max(qy0, y0)
             qx1, qy1 = min(qx1, x1), min(qy1, y1)
@@ -177,20 +168,11 @@ def patch_labels(
                 continue
             ys, xs = np.mgrid[qy0:qy1, qx0:qx1]
             centres = np.stack([xs + 0.5, ys + 0.5], axis=-1).astype(np.float64)
-            uv = _apply(Hinv, centres) - [c, r]
+            uv = apply_homography(Hinv, centres) - [c, r]
             inside = np.all((uv >= inset) & (uv <= 1 - inset), axis=-1)
             view = labels[qy0 - y0 : qy1 - y0, qx0 - x0 : qx1 - x0]
             view[inside] = r * columns + c
     return labels
-
-
-def _plate_box(frame: object, encoding: str | None) -> tuple[int, int, int, int]:
-    if isinstance(frame, PlateInfo):
-        return frame.box
-    if isinstance(frame, (str, os.PathLike)):
-        return open_plate(frame, encoding=encoding).box
-    shape = np.shape(np.asarray(frame))
-    return (0, 0, int(shape[1]), int(shape[0]))
 
 
 def sample_chart(
@@ -297,7 +279,7 @@ def _frames_and_source(image: object, source: object) -> tuple[list, object]:
 
 def _gain(flat_field: object, box: Box, encoding: str | None, frame: object, where: object):
     """The flat field's gain over ``box`` of a plate like ``frame``."""
-    plate_box = _plate_box(frame, encoding)
+    plate_box = data_window(frame, encoding)
     return flat_field_gain(flat_field, box, encoding=encoding, plate_box=plate_box, source=where)
 
 

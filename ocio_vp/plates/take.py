@@ -1,19 +1,12 @@
 """Measuring one continuous camera take of a pattern sequence (``take`` in a capture file).
 
-1. The frames (``take/A001.####.exr``) are listed; the first one's header gives the size, the
-   R, G, B channels and the encoding (declared like a plate's).
-2. The wall's region: given, or found (:mod:`ocio_vp.plates.wall_region`).
-3. One band of rows at the region's middle, in every frame: the per-frame signal the take is
-   aligned with (:mod:`ocio_vp.plates.alignment`).
-4. For each measured patch, the frames inside it away from its changes; of those, a few bands
-   spread over the region, in each frame kept (:mod:`ocio_vp.plates.take_reader`). Frames that
-   stray from the patch's median by more than flicker and noise explain (a frame the alignment
-   put on the wrong side of a change) are left out and named.
-5. Checks, each a one-line refusal: the take truncated (a patch the take does not reach), a
-   patch without a stable frame, white or a primary clipped (how many stops to close), the wall
-   under-exposed (white within 20x the black's pixel noise, or, in a linear integer take, 5
-   stops or more under full code: how many to open), a take that does not look like the
-   sequence.
+The frames are listed; the wall's region is given or found (:mod:`ocio_vp.plates.wall_region`);
+one band of rows at the region's middle in every frame aligns the take with the sequence
+(:mod:`ocio_vp.plates.alignment`); each patch's stable frames (away from its changes, none
+straying from the patch's median by more than flicker and noise explain) are averaged over a
+few bands of rows (:mod:`ocio_vp.plates.take_reader`). docs/capture.md describes the steps and
+the one-line refusals (truncated take, no stable frame, clipped or under-exposed white, a take
+that does not look like the sequence).
 
 The result, :class:`TakeReading`, holds each patch's mean camera RGB (black not subtracted);
 :mod:`ocio_vp.plates.measure` turns it into ``primaries`` and ``ramps``, ``ocio-vp validate``
@@ -42,13 +35,12 @@ from ocio_vp.plates.movie import (
     reduced_frame,
     scan_movie,
 )
-from ocio_vp.plates.reader import PlateInfo, check_box, linearise, read_region
+from ocio_vp.plates.reader import PlateInfo, check_box, linearise, open_plate, read_region
 from ocio_vp.plates.take_reader import (
     FrameStats,
     band_rows,
     chunk_rows,
     list_take_frames,
-    open_take,
     read_frame_stats,
 )
 
@@ -180,7 +172,8 @@ def _window_check(
 
 
 def _stable(values: np.ndarray, floor: float) -> np.ndarray:
-    """Mask of the frames whose mean stays near the patch's median (module docstring, 4)."""
+    """Mask of the frames whose mean stays near the patch's median (:data:`STRAY_RELATIVE`
+    and :data:`STRAY_SIGMAS`)."""
     median = np.median(values, axis=0)
     scale = max(float(np.max(np.abs(median))), floor)
     deviation = np.max(np.abs(values - median), axis=1) / scale
@@ -266,7 +259,7 @@ def _open_frames(
     """The take's frame numbers, files, header and (for a movie) the movie's header."""
     if not is_movie(take.frames):
         numbers, paths = _take_frames(take, source)
-        return numbers, paths, open_take(paths[0], encoding=take.encoding, layer=take.layer), None
+        return numbers, paths, open_plate(paths[0], encoding=take.encoding, layer=take.layer), None
     movie = open_movie(
         take.frames,
         encoding=take.encoding,
@@ -431,7 +424,8 @@ def _bright_patches(reading: TakeReading) -> tuple[str, list[str]]:
 
 
 def _check_exposure(reading: TakeReading, by_index, kept, source) -> None:
-    """Refuse clipping and under-exposure (module docstring, 5)."""
+    """Refuse clipping (:data:`CLIPPED_FRACTION`) and under-exposure (:data:`MIN_WHITE_SNR`,
+    :data:`UNDER_EXPOSED_STOPS`)."""
     key = reading.take.key
     clip = reading.clip_level
     reference, judged = _bright_patches(reading)

@@ -1,12 +1,10 @@
 """Reading a camera take: its numbered frames, and statistics of bands of rows of each.
 
-A 3-minute 4K take is ~4,300 frames of ~20 MB; measuring it must not decode them all. Each
-frame is opened for its header, and only **bands** of rows inside the wall's region are
-decoded: OpenEXR stores scanlines in chunks (16 rows for ZIP, 32 for PIZ or DWAA, ...), so the
-bands are whole chunks, aligned to them. Per frame, only a few numbers are kept
-(:class:`FrameStats`: sums, the brightest value and how many pixels reach it), so memory does
-not grow with the take's length. Frames are read on a few threads (OpenImageIO decodes without
-holding Python's lock).
+A take is thousands of large frames; measuring it must not decode them all. Each frame is
+opened for its header and only **bands** of rows inside the wall's region are decoded, whole
+chunks of the file's scanlines (OpenEXR stores 16 rows for ZIP, 32 for PIZ or DWAA ...). Per
+frame only :class:`FrameStats` is kept, so memory does not grow with the take's length; frames
+are read on a few threads (OpenImageIO decodes without holding Python's lock).
 """
 
 from __future__ import annotations
@@ -21,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ocio_vp.errors import InputError
-from ocio_vp.plates.reader import PlateInfo, linearise, open_plate
+from ocio_vp.plates.reader import PlateInfo, check_read, linearise, open_input
 
 __all__ = [
     "FrameStats",
@@ -154,7 +152,7 @@ def band_rows(
 def frame_stats(pixels: np.ndarray, clip: float | None) -> FrameStats:
     """:class:`FrameStats` of linear RGB ``pixels`` (..., 3); ``clip`` the clip level if known.
     The channels are laid out one after the other first: reductions over a contiguous axis are
-    ~10x faster than over a strided one (it matters at a movie's frame rate)."""
+    faster than over a strided one (it matters at a movie's frame rate)."""
     channels = np.ascontiguousarray(np.asarray(pixels, dtype=np.float64).reshape(-1, 3).T)
     peak = channels.max(axis=1)
     return FrameStats(
@@ -181,10 +179,7 @@ def _read_frame(
     x0, _, x1, _ = region
     ch0, ch1 = min(info.rgb), max(info.rgb) + 1
     select = [c - ch0 for c in info.rgb]
-    inp = oiio.ImageInput.open(str(path))
-    if inp is None:
-        message = " ".join(oiio.geterror().split())[:200] or "unknown reason"
-        raise InputError(f"cannot read as an image: {message}", source=path)
+    inp = open_input(str(path))
     try:
         spec = inp.spec()
         if (spec.x, spec.y, spec.width, spec.height) != (info.x, info.y, info.width, info.height):
@@ -196,10 +191,7 @@ def _read_frame(
         parts = []
         for ya, yb in rows:
             data = inp.read_scanlines(info.subimage, 0, ya, yb, 0, ch0, ch1, oiio.FLOAT)
-            if data is None or inp.has_error:
-                message = " ".join(str(inp.geterror()).split())[:200] or "read failed"
-                raise InputError(f"cannot read pixels (corrupt file?): {message}", source=path)
-            data = np.asarray(data).reshape(yb - ya, info.width, ch1 - ch0)
+            data = check_read(data, inp, str(path), (yb - ya, info.width, ch1 - ch0))
             parts.append(data[:, x0 - info.x : x1 - info.x][..., select])
     finally:
         inp.close()
@@ -242,8 +234,3 @@ def read_frame_stats(
         return [one(p) for p in paths]
     with ThreadPoolExecutor(threads) as pool:
         return list(pool.map(one, paths))
-
-
-def open_take(path: Path, *, encoding: str | None, layer: str | None) -> PlateInfo:
-    """The first frame's header (size, R/G/B channels, encoding), checked like a plate's."""
-    return open_plate(path, encoding=encoding, layer=layer)

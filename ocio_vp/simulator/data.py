@@ -1,25 +1,10 @@
 """Spectral datasets for the stage simulator, all from colour-science's offline data.
 
-Kept apart from the simulator's algorithms (:mod:`ocio_vp.simulator.stage`), as colour-science keeps
-datasets apart from algorithms. Everything is resampled onto one wavelength grid,
-:data:`SPECTRAL_SHAPE` (380-780 nm in 5 nm steps, the grid of the cameras' sensitivities).
-
-The seven environments of the paper (Fig. 5) are in :data:`ENVIRONMENTS`, with extra named
-light sources that other tools use. Choices where the paper names only a kind of light:
-
-- ``warm_white_led``: colour's ``SDS_LIGHT_SOURCES['Luxeon WW 2880']`` (a phosphor white LED).
-- ``incandescent``: CIE illuminant A (a 2856 K Planckian tungsten lamp).
-- ``indoor_daylight``: CIE illuminant ID65 (CIE 184:2009 indoor daylight: D65 through window
-  glass, which cuts the ultraviolet).
-- ``rgb_led_white``: the stage's *own* three LED spectra mixed to a camera-neutral white
-  (R = G = B), so Q must come out as the identity.
-- ``sodium_vapour``: ``SDS_LIGHT_SOURCES['LPS']``, low-pressure sodium (the 589 nm doublet).
-- ``outdoor_shade``: CIE D75 (skylight only, ~7500 K).
-- ``direct_sun``: CIE D55 (mid-morning / mid-afternoon sun plus sky, ~5500 K). D50 would serve
-  as well; D55 sits between horizon-sun D50 and overcast D65, and is what ISO 7589
-  photographic daylight approximates.
-
-Extras: ``high_pressure_sodium`` (``'HPS'``), ``d65`` (CIE D65), ``d50`` (CIE D50).
+Kept apart from the simulator's algorithms (:mod:`ocio_vp.simulator.stage`), as colour-science
+keeps datasets apart from algorithms, and resampled onto one wavelength grid,
+:data:`SPECTRAL_SHAPE` (380-780 nm in 5 nm steps, the grid of the cameras' sensitivities). The
+paper's seven environments (Fig. 5) and a few extra light sources are :data:`ENVIRONMENTS`;
+docs/simulator.md (*Environments*) names the spectrum chosen for each.
 """
 
 from __future__ import annotations

@@ -1,19 +1,10 @@
 """Simulated practical fixtures, built from colour-science's spectra.
 
-Kinds (:data:`FIXTURE_KINDS`), each with the stage's own red, green and blue LED spectra
-(Gaussian, :data:`~ocio_vp.simulator.data.DEFAULT_LEDS`) plus:
-
-- ``rgbw``: a warm phosphor-white channel, CIE LED-B1 (phosphor-converted blue, ~2700 K);
-- ``rgbww``: warm (CIE LED-B1) and cool (CIE LED-B5, ~6500 K) phosphor-white channels;
-- ``rgbacl``: amber (592 nm, 18 nm FWHM), cyan (497 nm, 28 nm) and lime (a broad
-  phosphor-converted green, modelled as 555 nm with 100 nm FWHM), the channels of
-  SkyPanel/Orbiter-style fixtures;
-- ``rgbw-fluorescent``: a cool-white fluorescent-like channel (CIE FL2).
-
-Every channel is scaled so that at drive 1 its luminance (CIE 1931 Y) equals that of the
-stage's green LED at drive 1: a fixture comparable in output to the wall's calibration panel.
-A fixture's chart at its reference drive 1 is the chart lit uniformly by that spectrum, in the
-units of the wall's ``[SRL]_j / beta``.
+Each kind (:data:`FIXTURE_KINDS`, listed in docs/fixtures.md) has the stage's own red, green and
+blue LED spectra plus white, amber, cyan, lime or fluorescent channels. Every channel is scaled
+so that at drive 1 its luminance (CIE 1931 Y) equals the stage's green LED's; a fixture's chart
+at its reference drive 1 is the chart lit uniformly by that spectrum, in the units of the
+wall's ``[SRL]_j / beta``.
 """
 
 from __future__ import annotations

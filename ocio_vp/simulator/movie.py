@@ -1,13 +1,9 @@
 """The simulated take written as a camera would record it: a ProRes movie in QuickTime.
 
-:func:`write_movie` renders the same frames as :func:`ocio_vp.simulator.take.write_take`
-(same options, same noise), encodes them with a camera log curve (any colour-science
-encoding, ``ARRI LogC3`` by default), converts R'G'B' to 10-bit Y'CbCr with colour-science's
-``RGB_to_YCbCr`` (the matrix and range asked for; 4:2:2 chroma as the mean of each pixel
-pair, rounded once, as a camera's processing does), and encodes with FFmpeg's ``prores_ks`` through PyAV: ProRes 4444 (profile 4) or 422 HQ
-(profile 3). The stream is colour-tagged (matrix, range, Rec.709 primaries and transfer, as
-cameras tag log ProRes) unless ``tags=False`` (a movie whose stream says nothing, for the
-refusal), and carries a start timecode.
+:func:`write_movie` encodes the frames of :func:`ocio_vp.simulator.take.write_take` with a
+camera log curve (``ARRI LogC3`` by default), converts them to 10-bit Y'CbCr with
+colour-science (4:2:2 chroma the mean of each pixel pair, rounded once) and writes ProRes 4444
+or 422 HQ with FFmpeg through PyAV, colour-tagged (unless ``tags=False``) with a timecode.
 """
 
 from __future__ import annotations
@@ -19,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ocio_vp.patterns.sequence import PatternSequence
+from ocio_vp.plates.movie import AV_MATRICES, AV_RANGES
 from ocio_vp.simulator.take import TakeOptions, render_frames
 
 __all__ = ["MOVIE_CODECS", "write_movie"]
@@ -29,9 +26,9 @@ MOVIE_CODECS = {
     "prores422": ("prores_ks", "3", "yuv422p10le"),
 }
 _WEIGHTS = {"rec709": "ITU-R BT.709", "rec2020": "ITU-R BT.2020"}
-#: FFmpeg's codes for the tags (AVColorSpace, AVColorRange).
-_AV_MATRIX = {"rec709": 1, "rec2020": 9}
-_AV_RANGE = {"legal": 1, "full": 2}
+#: FFmpeg's codes for the tags (AVColorSpace, AVColorRange), as the reader decodes them.
+_AV_MATRIX = {name: code for code, name in AV_MATRICES.items()}
+_AV_RANGE = {name: code for code, name in AV_RANGES.items()}
 
 
 def _ycbcr(encoded: np.ndarray, matrix: str, range_: str) -> np.ndarray:

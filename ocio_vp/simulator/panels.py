@@ -1,24 +1,11 @@
 """A simulated stage of two panel types: the wall and a ceiling of another panel model.
 
-The wall is a :class:`~ocio_vp.simulator.stage.SpectralStage` as for every other simulation
-(in frustum, with the black level); the ceiling is a second one with its own LEDs (another
-panel model: :data:`DEFAULT_CEILING_LEDS`), its own calibration panel (:data:`CEILING_PANEL`)
-and no black level (it is never in frame). Its processor is matched to the wall: at drive
-[1, 1, 1] it shows the wall's white as a spectroradiometer measures it (CIE 1931 XYZ), as
-panel vendors calibrate, or (``white="camera"``) as the camera sees it.
-
-Light comes from two places. A **scene** (:data:`SCENES`) has a spectrum from above, where the
-ceiling is, and another from the sides, where the wall is (sky from above, sun or ground from
-the sides); the part from above is ``share`` of the diffuse light (camera green), and the two
-sum to an environment whose perfect white diffuser reads green = 1, as
-:func:`~ocio_vp.simulator.stage.environment_spectrum` scales every environment. A name of
-:data:`~ocio_vp.simulator.data.ENVIRONMENTS` (the same spectrum everywhere) sends
-:data:`DEFAULT_CEILING_SHARE` of its light from above.
-
-:func:`simulate_panel_measurements` writes the measurements file a stage engineer would
-(``panels`` with each type's [SL] and [SRL]_j, per environment each type's w_avg and the wall's
-black level), and :func:`panel_held_out_errors` judges a solve on reflectances the chart does
-not contain, lit by what both panel types really emit.
+The ceiling is a second :class:`~ocio_vp.simulator.stage.SpectralStage` with its own LEDs, its
+own calibration panel and no black level, its processor matched to the wall's white. A
+**scene** (:data:`SCENES`) lights it with one spectrum from above (the ceiling's part) and
+another from the sides (the wall's): docs/simulator.md (*A ceiling of another panel model*).
+:func:`simulate_panel_measurements` writes the measurements file a stage engineer would, and
+:func:`panel_held_out_errors` judges a solve on reflectances the chart does not contain.
 """
 
 from __future__ import annotations

@@ -1,16 +1,10 @@
 """Calibration photographs of a simulated stage, as a stage engineer would shoot them.
 
-From a measurements file's exact values (usually :func:`ocio_vp.simulator.stage.simulate_measurements`)
-this renders the plates of ``docs/capture.md``: the panel showing each primary, the chart lit by
-each LED channel, the chart in every real location, a black-level frame per environment, flat
-fields for the lens's vignetting, and a few frames of footage shot on the stage, all as OpenEXR
-with perspective, vignetting and sensor noise; and the capture file that points at them, so
-``ocio-vp measure`` can be run on them.
-
-A chart is rendered by mapping every pixel centre through the inverse of the chart's homography,
-fitted here as the null space of the 8 x 9 DLT system (SVD), independently of the direct solve
-:mod:`ocio_vp.plates.sampling` uses, so perspective is exact and the two can check each other.
-Noise: a relative ("shot") part and an absolute read-noise part, Gaussian, per pixel and channel.
+From a measurements file's exact values this renders the plates of ``docs/capture.md`` (listed
+in docs/simulator.md) as OpenEXR with perspective, vignetting and sensor noise, and the capture
+file that points at them, so ``ocio-vp measure`` can be run on them. The chart's homography is
+fitted here as the null space of the DLT system (SVD), independently of the direct solve
+:mod:`ocio_vp.plates.sampling` uses, so the two check each other.
 """
 
 from __future__ import annotations
@@ -18,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypedDict
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -46,7 +40,7 @@ __all__ = [
     "write_plate",
 ]
 
-#: (width, height) of the rendered plates: small, so a whole stage renders in seconds.
+#: (width, height) of the rendered plates: small, so a whole stage renders quickly.
 PLATE_SIZE = (600, 400)
 #: The chart's four outer corners (TL, TR, BR, BL) on a 600 x 400 plate, seen at an angle.
 CHART_CORNERS = np.array([[128.0, 82.0], [478.0, 104.0], [466.0, 322.0], [140.0, 306.0]])
@@ -269,62 +263,68 @@ def _grid(patches: int) -> tuple[int, int]:
     return (4, 6) if patches == 24 else (1, patches)
 
 
-def _plates(measurements: Measurements, options: PlateOptions) -> Iterator[tuple[str, np.ndarray]]:
-    """(file name, image) of every plate, in a fixed order (seeds depend on the position)."""
-    from ocio_vp.calibration.equations import predict_lit_chart, solve_M
-    from ocio_vp.calibration.geometry import stage_beta
+class _Camera:
+    """Shoots the plates in a fixed order: each shot takes the next seed, so a plate's noise
+    depends only on its position."""
 
-    if measurements.panels:
-        yield from _panel_plates(measurements, options)
-        return
-    rows, columns = _grid(measurements.SRL.shape[0])
-    sensor = _sensor_options(options)
-    seed = iter(range(options.seed * 1000, options.seed * 1000 + 1000))
-    yield from _flat_fields(options, seed)
-    for k, channel in enumerate(("red", "green", "blue")):
-        panel = {channel: (PANEL_REGION, measurements.SL[:, k])}
-        image = render_regions(panel, seed=next(seed), **sensor)
-        if options.take is None:
-            yield f"primary_{channel}.exr", image
-    for k, channel in enumerate(("red", "green", "blue")):
-        values = measurements.SRL[:, :, k]
-        chart = render_chart(values, rows=rows, columns=columns, seed=next(seed), **sensor)
-        yield f"lit_{channel}.exr", chart
-    M = solve_M(measurements.SL)
-    for env in measurements.environments:
-        chart = render_chart(
-            env.target_chart, rows=rows, columns=columns, seed=next(seed), **sensor
+    def __init__(self, measurements: Measurements, options: PlateOptions) -> None:
+        self.rows, self.columns = _grid(measurements.SRL.shape[0])
+        self.seed = iter(range(options.seed * 1000, options.seed * 1000 + 1000))
+        self.sensor: dict[str, Any] = {
+            "vignetting": options.vignetting,
+            "noise": options.noise,
+            "read_noise": options.read_noise,
+        }
+
+    def chart(self, values: ArrayLike) -> np.ndarray:
+        return render_chart(
+            values, rows=self.rows, columns=self.columns, seed=next(self.seed), **self.sensor
         )
-        yield f"{env.name}.exr", chart
-        if env.black_level is not None:
-            dark = {"panel": (PANEL_REGION, env.black_level)}
-            yield f"{env.name}_black.exr", render_regions(dark, seed=next(seed), **sensor)
-        if env.w_avg is None or not options.footage_frames:
+
+    def panel(self, rgb: ArrayLike) -> np.ndarray:
+        return render_regions({"panel": (PANEL_REGION, rgb)}, seed=next(self.seed), **self.sensor)
+
+
+def _plates(measurements: Measurements, options: PlateOptions) -> Iterator[tuple[str, np.ndarray]]:
+    """(file name, image) of every plate, in a fixed order (seeds depend on the position). On a
+    stage of several panel types, each type's primaries and lit charts are prefixed with its
+    name, each in-frustum type has a black level per environment, and the footage is lit by
+    every type through its own M."""
+    from ocio_vp.calibration.equations import predict_lit_chart, solve_M
+    from ocio_vp.calibration.geometry import environment_panel_w_avg, stage_beta
+    from ocio_vp.calibration.panels import panel_lights
+
+    camera = _Camera(measurements, options)
+    yield from _flat_fields(options, camera.seed)
+    panels = measurements.panels
+    walls = [(f"{p.name}_", p.SL, p.SRL) for p in panels]
+    for prefix, SL, SRL in walls or [("", measurements.SL, measurements.SRL)]:
+        for k, channel in enumerate(("red", "green", "blue")):
+            image = camera.panel(SL[:, k])
+            if panels or options.take is None:
+                yield f"{prefix}primary_{channel}.exr", image
+        for k, channel in enumerate(("red", "green", "blue")):
+            yield f"{prefix}lit_{channel}.exr", camera.chart(SRL[:, :, k])
+    M = None if panels else solve_M(measurements.SL)
+    for env in measurements.environments:
+        yield f"{env.name}.exr", camera.chart(env.target_chart)
+        if panels:
+            for name, black in (env.panel_black_level or {}).items():
+                yield f"{env.name}_{name}_black.exr", camera.panel(black)
+        elif env.black_level is not None:
+            yield f"{env.name}_black.exr", camera.panel(env.black_level)
+        if not options.footage_frames or (env.panel_w_avg if panels else env.w_avg) is None:
             continue
-        # Footage: the chart lit by the wall through M alone (what Q then post-corrects).
-        drive = np.clip(M @ np.asarray(env.w_avg, dtype=np.float64), 0.0, None)
-        lit = predict_lit_chart(measurements.SRL, stage_beta(measurements), np.eye(3), drive)
+        # Footage: the chart lit by the wall (each panel type) through M alone (Q post-corrects).
+        if panels:
+            lights = panel_lights(measurements, environment_panel_w_avg(measurements, env))
+            lit = sum(light.lit() for light in lights)
+        else:
+            assert M is not None  # a stage of one panel type
+            drive = np.clip(M @ np.asarray(env.w_avg, dtype=np.float64), 0.0, None)
+            lit = predict_lit_chart(measurements.SRL, stage_beta(measurements), np.eye(3), drive)
         for frame in range(1, options.footage_frames + 1):
-            image = render_chart(lit, rows=rows, columns=columns, seed=next(seed), **sensor)
-            yield f"footage/{env.name}.{frame:04d}.exr", image
-
-
-class _Sensor(TypedDict):
-    """The sensor's fall-off and noise, as :func:`render_regions` and :func:`render_chart`
-    take them."""
-
-    vignetting: float
-    noise: float
-    read_noise: float
-
-
-def _sensor_options(options: PlateOptions) -> _Sensor:
-    """The sensor's fall-off and noise as :func:`render_regions` takes them."""
-    return {
-        "vignetting": options.vignetting,
-        "noise": options.noise,
-        "read_noise": options.read_noise,
-    }
+            yield f"footage/{env.name}.{frame:04d}.exr", camera.chart(lit)
 
 
 def _flat_fields(options: PlateOptions, seed: Iterator[int]) -> Iterator[tuple[str, np.ndarray]]:
@@ -333,48 +333,6 @@ def _flat_fields(options: PlateOptions, seed: Iterator[int]) -> Iterator[tuple[s
     for i in range(options.flat_frames):
         flat = render_regions(white, vignetting=options.vignetting, noise=0.003, seed=next(seed))
         yield f"flat.{i + 1:04d}.exr", flat
-
-
-def _panel_plates(
-    measurements: Measurements, options: PlateOptions
-) -> Iterator[tuple[str, np.ndarray]]:
-    """:func:`_plates` of a stage of several panel types: each type's primaries and lit
-    charts (``<type>_primary_<channel>.exr``, ``<type>_lit_<channel>.exr``), each in-frustum
-    type's black level per environment, and footage lit by every type through its own M."""
-    from ocio_vp.calibration.geometry import environment_panel_w_avg
-    from ocio_vp.calibration.panels import panel_lights
-
-    rows, columns = _grid(measurements.SRL.shape[0])
-    sensor = _sensor_options(options)
-    seed = iter(range(options.seed * 1000, options.seed * 1000 + 1000))
-    yield from _flat_fields(options, seed)
-    for panel in measurements.panels:
-        for k, channel in enumerate(("red", "green", "blue")):
-            region = {channel: (PANEL_REGION, panel.SL[:, k])}
-            yield (
-                f"{panel.name}_primary_{channel}.exr",
-                render_regions(region, seed=next(seed), **sensor),
-            )
-        for k, channel in enumerate(("red", "green", "blue")):
-            values = panel.SRL[:, :, k]
-            chart = render_chart(values, rows=rows, columns=columns, seed=next(seed), **sensor)
-            yield f"{panel.name}_lit_{channel}.exr", chart
-    for env in measurements.environments:
-        chart = render_chart(
-            env.target_chart, rows=rows, columns=columns, seed=next(seed), **sensor
-        )
-        yield f"{env.name}.exr", chart
-        for name, black in (env.panel_black_level or {}).items():
-            dark = {"panel": (PANEL_REGION, black)}
-            yield f"{env.name}_{name}_black.exr", render_regions(dark, seed=next(seed), **sensor)
-        if env.panel_w_avg is None or not options.footage_frames:
-            continue
-        # Footage: the chart lit by every panel type through its own M (what Q post-corrects).
-        lights = panel_lights(measurements, environment_panel_w_avg(measurements, env))
-        lit = sum(light.lit() for light in lights)
-        for frame in range(1, options.footage_frames + 1):
-            image = render_chart(lit, rows=rows, columns=columns, seed=next(seed), **sensor)
-            yield f"footage/{env.name}.{frame:04d}.exr", image
 
 
 def _panel_capture(measurements: Measurements, names: set[str]) -> dict:
@@ -552,7 +510,7 @@ MOVIE_ENCODING = "ARRI LogC3"
 
 def practice_sequence() -> PatternSequence:
     """The built-in sequence a simulated stage films when none is given: the calibration
-    sequence at 64x36 pixels, 8 frames a patch (about 30 s, ~750 camera frames at 25 fps)."""
+    sequence at 64x36 pixels, 8 frames a patch."""
     from ocio_vp.patterns.design import PatternOptions, calibration_sequence
 
     return calibration_sequence(PatternOptions(size=(64, 36), hold=8))

@@ -1,8 +1,7 @@
 """The spectral predictor: what the simulated stage really produces for a solve.
 
 The paper's "theory" column (eq. 3 done spectrally, LED drive clipped at 0 and reported, and
-the in-frustum background with the panel bounce). Public names are re-exported by
-:mod:`ocio_vp.simulator.stage`.
+the in-frustum background with the panel bounce).
 """
 
 from __future__ import annotations

@@ -1,37 +1,12 @@
 """Spectral stage simulator: measurements and ground truth from spectra (colour-science data).
 
-Public API (stable; other modules and tests build on it)
----------------------------------------------------------
-- :class:`SpectralStage` and :func:`spectral_stage` (``camera=``, ``leds=``, ``chart=``,
-  ``panel=``/``beta=``, ``panel_albedo=``, ``name=``): the simulated stage's spectra.
-- :func:`paper_stage`: the default stage (Nikon 5100, paper-like 630/525/460 nm LEDs,
-  ColorChecker N Ohta, 1 m x 1 m panel at 1 m, panel albedo 4%).
-- :func:`camera_rgb` ``(stage, spectrum)``: ``sum_lambda S(lambda) spectrum(lambda)``.
-- :func:`environment_spectrum` ``(stage, env)``: an environment (a name from
-  :data:`ocio_vp.simulator.data.ENVIRONMENTS`, a colour ``SpectralDistribution`` or a (W,)
-  array) as a (W,) spectrum scaled so a perfect white diffuser reads green = 1.
-- :func:`simulate_measurements` ``(environments=None, *, stage=None, **stage options)``
-  -> :class:`~ocio_vp.formats.measurements.Measurements`, complete: [SL], [SRL]_j as photographed
-  (multiplied by beta), target charts p_j, the true w_avg and the black level.
-- :func:`paper_stage_measurements` ``(environments=PAPER_ENVIRONMENTS)``: the paper's seven.
-- :func:`predict_stage` ``(stage, env, *, M, Q=None, N=None, offset=None, content=None)``
-  -> :class:`StagePrediction`: what the stage *really* produces (the paper's "theory"),
-  with LED drive below 0 clipped and reported; :func:`predict_solution` does it for a
-  :class:`~ocio_vp.formats.solution.Solution`.
+:func:`spectral_stage` builds a stage's spectra (:func:`paper_stage`: the default one, Nikon
+5100, paper-like 630/525/460 nm LEDs, ColorChecker N Ohta, 1 m x 1 m panel at 1 m, albedo
+4%); :func:`simulate_measurements` gives its complete measurements file.
 
-Model and units
----------------
-Everything is radiance on the grid :data:`~ocio_vp.simulator.data.SPECTRAL_SHAPE`; a camera
-RGB is ``sum_lambda S_c(lambda) R(lambda) E(lambda)`` (no other factor: the exposure is folded
-into the scaling of the LED and environment spectra). The LED channels are scaled so that drive
-[1, 1, 1] looks like D65 to the camera with green = 1 (a wall white-balanced to D65). A panel
-of LED radiance ``L_k`` lights a Lambertian patch with irradiance ``pi beta L_k``, so the
-photographed patch is ``beta sum S R_j L_k``: [SRL]_j / beta is the patch under a uniform
-sphere of the LED, which is what the paper's eq. 3 needs. An environment of (radiance-like)
-spectrum E gives ``p_j = sum S R_j E`` and the true diffuse integral ``w_avg = sum S E``.
-The dark in-frustum panels reflect the stage's light with the (grey) ``panel_albedo``:
-``b_camera = albedo [SL] clip(M w_avg, 0)`` (the panel sees the lit stage as the chart does;
-the albedo is an effective one that includes how much of the stage the panel sees).
+The model and its units (radiance on one wavelength grid, camera RGB as ``sum S R E``, the
+wall white-balanced to D65 at drive [1, 1, 1], ``[SRL]_j = beta sum S R_j L_k``, the black level
+``b_camera = albedo [SL] clip(M w_avg, 0)``) are in docs/simulator.md (*Model*).
 
 References
 ----------
@@ -136,19 +111,7 @@ class SpectralStage:
 
 
 def camera_rgb(stage: SpectralStage, spectrum: ArrayLike) -> np.ndarray:
-    """Camera RGB of spectral radiance: ``sum_lambda S_c(lambda) spectrum(lambda)``.
-
-    Parameters
-    ----------
-    stage
-        Supplies the camera sensitivities (W, 3).
-    spectrum
-        (..., W) radiance (e.g. reflectance x illuminant).
-
-    Returns
-    -------
-    ndarray
-        (..., 3) camera RGB.
+    """(..., 3) camera RGB of (..., W) spectral radiance, ``sum_lambda S_c(lambda) E(lambda)``.
 
     Examples
     --------
@@ -260,25 +223,16 @@ def spectral_stage(
 
 
 def white_reflectance(stage: SpectralStage) -> float:
-    """The chart white patch's reflectance as the camera's green channel sees it (4 digits).
-
-    ``sum S_g R_white / sum S_g``: ~0.887 for the ColorChecker, not the paper's nominal 0.9, so
-    tools that derive w_avg from the white patch (when a file has no w_avg) get it right.
-    """
+    """The chart white patch's reflectance as the camera's green channel sees it, ``sum S_g
+    R_white / sum S_g`` to 4 digits (not the paper's nominal 0.9), for w_avg from the white
+    patch."""
     green = stage.camera[:, 1]
     return round(float(green @ stage.reflectances[stage.white_patch] / green.sum()), 4)
 
 
-#: The sample stage's :attr:`SpectralStage.wall_gain` (:data:`ocio_vp.choices.SAMPLE_WALL_GAIN`):
-#: the camera is exposed so the wall's full-drive white is two stops above the location's
-#: white, as a stage engineer sets a stage up, so content white needs at most ~60% of any
-#: channel's peak (without it, 165-233% in red) and highlights keep two stops
-#: (docs/headroom.md).
-
-
 def paper_stage(wall_gain: float = SAMPLE_WALL_GAIN) -> SpectralStage:
     """The default simulated stage (see the module docstring), named ``paper-stage``, its wall's
-    peak two stops above content white (:data:`SAMPLE_WALL_GAIN`)."""
+    peak two stops above content white, as a stage engineer sets it up (docs/headroom.md)."""
     return spectral_stage(name="paper-stage", wall_gain=wall_gain)
 
 
@@ -296,11 +250,8 @@ def _check_camera_tells_leds_apart(SL: np.ndarray) -> None:
 
 
 def environment_spectrum(stage: SpectralStage, environment: EnvironmentLight) -> np.ndarray:
-    """(W,) an environment's spectrum, scaled so a perfect white diffuser reads green = 1.
-
-    ``environment`` is a name from :data:`ENVIRONMENTS`, a colour ``SpectralDistribution`` or
-    a (W,) array on the simulator's grid.
-    """
+    """(W,) an environment's spectrum (see :data:`EnvironmentLight`), scaled so a perfect
+    white diffuser reads green = 1."""
     if isinstance(environment, str):
         if environment not in ENVIRONMENTS:
             raise InputError(

@@ -1,28 +1,15 @@
 """A camera filming the wall play a pattern sequence: one continuous, unsynchronised take.
 
-The player shows sequence frame ``f`` during ``[f, f + 1) / fps`` seconds (time 0 = its first
-frame); the camera rolls ``preroll`` seconds earlier, at its own rate, and frame ``i`` of the
-take integrates the wall's light over its shutter, ``[i / camera_fps - preroll, + shutter /
-camera_fps]``, each image row ``readout`` frames later than the one above it (rolling
-shutter), so frames straddling a patch change hold both. Then:
+The player shows sequence frame ``f`` during ``[f, f + 1) / fps`` seconds; the camera rolls
+``preroll`` seconds earlier at its own rate, and frame ``i`` integrates the wall's light over its
+shutter, each row ``readout`` frames later than the one above (rolling shutter). The wall's
+drive passes through the panel's response (:class:`PanelResponse`) and [SL]; ``bounce``,
+``flicker``, ``flare``, ``spill`` onto a textured set, noise, ``dropped`` frames and a
+``truncate``d take are as docs/simulator.md (*The simulated take*) describes.
 
-- the wall: the drive each frame shows (read from the pattern frames themselves, decoded as
-  the wall decodes them, when they exist) passes through the panel's response per channel
-  (:class:`PanelResponse`, darker than linear near black like real walls) and [SL];
-- ``bounce``: the environment's light on the dark panels (camera RGB, ``black_level`` of
-  the measurements), for a take of the validation sequence shot with the stage lit;
-- flicker: a multiplicative ``1 + flicker sin(2 pi flicker_hz t)`` on the wall's light (the
-  beat of the panels' refresh against the shutter), and the camera's black/flare ``flare``
-  (fraction of white) on everything;
-- the frame: the wall fills ``wall_box`` (fractions of the frame) and spills ``spill`` of its
-  light onto a static, textured set around it; Gaussian noise, relative plus absolute;
-- ``dropped``: camera frames lost (the take's numbering continues, its content jumps);
-  ``truncate``: the take stops after that many frames.
-
-:func:`take_signal` gives the per-frame mean of the wall region without rendering images (for
-tests of the alignment over many takes), :func:`write_take` renders and writes the frames.
-Truth for the checks: :func:`true_frame_times` (where each frame's exposure is centred, in
-player frames) and :meth:`PanelResponse.__call__` with [SL].
+:func:`take_signal` gives the per-frame mean of the wall region without rendering images,
+:func:`write_take` renders and writes the frames; the truth for the checks is
+:func:`true_frame_times` and :meth:`PanelResponse.__call__` with [SL].
 """
 
 from __future__ import annotations
@@ -70,7 +57,8 @@ class PanelResponse:
 
 @dataclass(frozen=True)
 class TakeOptions:
-    """The simulated camera and wall (see the module docstring). Sizes in pixels, times in s."""
+    """The simulated camera and wall (docs/simulator.md, *The simulated take*). Sizes in
+    pixels, times in s; ``wall_box`` in fractions of the frame."""
 
     fps: float = 25.0
     shutter: float = 0.5

@@ -21,8 +21,6 @@ from ocio_vp.spectra import align, unknown_name
 __all__ = ["DEFAULT_CHART", "ScaledChart", "chart_spectra", "scaled_to_white"]
 
 DEFAULT_CHART = "ColorChecker N Ohta"
-#: A white patch further than this from the file's white_reflectance is reported.
-WHITE_TOLERANCE = 0.05
 
 
 def chart_spectra(name: str = DEFAULT_CHART) -> np.ndarray:

@@ -1,24 +1,13 @@
 """A plausible illuminant spectrum from one RGB colour (the environment's diffuse integral w_avg).
 
-An RGB colour does not determine a spectrum; what we can do is pick the most plausible one and
-make it reproduce the colour exactly. The estimate is done in two steps:
-
-1. a *base* spectrum from the colour's correlated colour temperature (CCT) and distance from
-   the Planckian locus (Duv), both by colour-science (``colour.temperature``, Ohno 2013). The
-   methods of :data:`ILLUMINANT_METHODS`: ``daylight-planckian`` (CIE daylight at 5000 K and
-   above, Planckian radiation below: the reference illuminants of CIE 13.3), ``planckian``,
-   ``smooth`` (colour-science's ``XYZ_to_sd``, Jakob & Hanika 2019) and ``flat`` (equal
-   energy, a baseline). colour-science's Meng 2015 recovery was left out: it takes ~15 s per
-   colour on this grid and was no better than Jakob 2019 when tried;
-2. an exact colour match: the base is multiplied by the smooth factor ``c0 + c1 t + c2 t^2``
-   (``t = (lambda - 580 nm) / 200 nm``) whose three coefficients make the camera see exactly
-   w_avg (a 3x3 linear solve).
-
-``benchmarks/bench_target_chart.py`` chose ``daylight-planckian`` by measurement (the table is
-in ``docs/target_chart.md``). Colours far from the Planckian locus (``|Duv| >``
-:data:`NATURAL_DUV`) or outside :data:`NATURAL_CCT` are not daylight or incandescent light:
-``auto`` then uses ``smooth`` and says why; spiky lights (LED, fluorescent, sodium) on the locus
-cannot be told from RGB at all, which is why every synthesized target records its assumptions.
+An RGB colour does not determine a spectrum: the most plausible one is made to reproduce it
+exactly. A *base* spectrum comes from the colour's CCT and Duv (colour-science, Ohno 2013) by
+one of :data:`ILLUMINANT_METHODS` (``daylight-planckian``, the default chosen by
+``benchmarks/bench_target_chart.py``: CIE daylight at 5000 K and above, Planckian below);
+it is then multiplied by the smooth factor ``c0 + c1 t + c2 t^2`` (``t = (lambda - 580 nm) /
+200 nm``) whose coefficients make the camera see exactly w_avg. Colours off the locus (``|Duv|
+>`` :data:`NATURAL_DUV`) or outside :data:`NATURAL_CCT` get ``smooth`` under ``auto``
+(docs/target_chart.md).
 
 References
 ----------

@@ -1,17 +1,11 @@
 """A target chart for a CG environment: the chart a camera would record under the HDRI's light.
 
-The paper needs, per environment, a chart photographed in the real location (p_j, eq. 5). For a
-rendered environment there is no location; its future work proposes rendering the chart
-spectrally instead. We do that from the environment's diffuse integral w_avg (Section 3.3):
-
-1. w_avg in the camera's linear RGB (an HDRI in another space is converted to the camera gamut
-   by the same CAT02 matrices the OCIO config uses for that space);
-2. a light spectrum E whose camera RGB is exactly w_avg (:mod:`ocio_vp.synthesis.illuminant`);
-3. ``p_j = sum_lambda S(lambda) R_j(lambda) E(lambda)`` for the chart's reflectances R_j (scaled
-   to the file's white reflectance) and the camera's observer S (:mod:`.camera`).
-
-The environment written carries a ``synthesized`` record (:class:`~ocio_vp.formats.synthesis.
-SynthesisRecord`) with the assumptions, which ``solve`` repeats as a warning.
+For a rendered environment there is no location to photograph the chart in (p_j, eq. 5); as
+the paper's future work proposes, the chart is rendered spectrally from the environment's w_avg
+(Section 3.3): a light spectrum whose camera RGB is exactly w_avg
+(:mod:`ocio_vp.synthesis.illuminant`), then ``p_j = sum S R_j E`` (:mod:`.camera`, :mod:`.chart`).
+docs/target_chart.md says what it assumes; the environment written carries them in a
+``synthesized`` record, which ``solve`` repeats as a warning.
 
 References
 ----------
