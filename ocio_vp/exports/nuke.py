@@ -33,6 +33,7 @@ from ocio_vp.errors import InputError
 from ocio_vp.exports.escape import nuke_identifier
 from ocio_vp.exports.source import (
     DEFAULT_CUBES,
+    ConfigNames,
     CubeOptions,
     ExportSource,
     ExportSummary,
@@ -72,7 +73,7 @@ def render_nuke_script(
     environment: str,
     Q: np.ndarray,
     config_path: str,
-    names: dict[str, str],
+    names: ConfigNames,
     q_lut: str | None = None,
     model_note: str | None = None,
 ) -> str:
@@ -90,8 +91,8 @@ def render_nuke_script(
         config_path=_relative(config_path),
         context_key=CONTEXT_VARIABLE,
         environment=environment,
-        reference=names["reference"],
-        named_transform=names["post_correction"],
+        reference=names.reference,
+        named_transform=names.post_correction,
         group_name=nuke_identifier(environment, prefix="ocio_vp_"),
         label=f"ocio-vp Q: {stage} / {environment}",
         Q=[[float(v) for v in row] for row in Q],

@@ -76,18 +76,18 @@ def resolve_transforms(source: ExportSource) -> dict[str, tuple[str, str, str]]:
     names = source.names
     return {
         "post_correction_Q": (
-            names["post_correction_colorspace"],
-            names["reference"],
+            names.post_correction_colorspace,
+            names.reference,
             "Post-correction Q for footage shot on the stage (camera linear in and out).",
         ),
         "wall_out_of_frustum": (
-            names["reference"],
-            names["out_of_frustum"],
+            names.reference,
+            names.out_of_frustum,
             "Content to LED drive OUTSIDE the camera frustum (M; lights the actors).",
         ),
         "wall_in_frustum": (
-            names["reference"],
-            names["in_frustum"],
+            names.reference,
+            names.in_frustum,
             "Content to LED drive INSIDE the camera frustum (N = M Q^-1 plus black-level offset).",
         ),
     }

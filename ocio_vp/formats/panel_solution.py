@@ -18,6 +18,7 @@ panels file's main wall unchanged. An out-of-frustum type (a ceiling) has M and 
 from __future__ import annotations
 
 from collections.abc import Mapping
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -26,12 +27,53 @@ from ocio_vp.errors import InputError, excerpt
 from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
 from ocio_vp.formats.linearity import Linearity, read_linearity
 from ocio_vp.formats.measurements import check_safe_name
-from ocio_vp.formats.records import json_object
+from ocio_vp.formats.records import Record, json_object, read_record
 
-__all__ = ["PanelSolution", "panel_solutions_from_dict", "panel_solutions_to_dict"]
+__all__ = [
+    "CONFIG_FILENAME",
+    "OcioNames",
+    "PanelSolution",
+    "panel_solutions_from_dict",
+    "panel_solutions_to_dict",
+]
+
+#: The config's file name beside solution.json when its ``ocio`` block does not name one.
+CONFIG_FILENAME = "config.ocio"
 
 #: Largest magnitude of a number read back (as solution.json's other numbers).
 _MAX_VALUE = 1e30
+
+
+@dataclass(frozen=True)
+class OcioNames(Record):
+    """solution.json's ``ocio`` block: the config file and the names of its colour spaces,
+    named transform, display and views by role. Empty until the config is written; a panel
+    type's names only its own colour spaces and views; an older file may lack some."""
+
+    config: str | None = None
+    reference: str | None = None
+    out_of_frustum: str | None = None
+    in_frustum: str | None = None
+    post_correction: str | None = None
+    post_correction_colorspace: str | None = None
+    display: str | None = None
+    view_out_of_frustum: str | None = None
+    view_in_frustum: str | None = None
+
+    @property
+    def config_file(self) -> str:
+        return self.config or CONFIG_FILENAME
+
+
+OcioNames.OMIT_NONE = tuple(f.name for f in dataclasses.fields(OcioNames))  # each when named
+
+
+def read_ocio_names(block: JsonValue, source: str, key: str = "ocio") -> OcioNames:
+    """The ``ocio`` block (absent: empty); only text values (InputError naming ``key``)."""
+    block = {} if block is None else block
+    if not isinstance(block, Mapping) or not all(isinstance(v, str) for v in block.values()):
+        raise InputError("expected names (text) only", source=source, key=key)
+    return read_record(OcioNames, block, key)
 
 
 @dataclass(frozen=True)
@@ -57,7 +99,7 @@ class PanelSolution:
     N_reason: str | None = None
     black_level_offset: np.ndarray | None = None
     linearity: Linearity | None = None
-    ocio: dict[str, str] = field(default_factory=dict)
+    ocio: OcioNames = field(default_factory=OcioNames)
 
     @property
     def in_frustum_matrix(self) -> np.ndarray:
@@ -80,7 +122,7 @@ def panel_solutions_to_dict(panels: Mapping[str, PanelSolution]) -> JsonObject:
         }
         if p.in_frustum:
             entry.update(N=p.N, N_reason=p.N_reason, black_level_offset=p.black_level_offset)
-        entry.update(linearity=p.linearity, ocio=dict(p.ocio))
+        entry.update(linearity=p.linearity, ocio=p.ocio)
         out[name] = json_object(entry)
     return out
 
@@ -118,13 +160,11 @@ def _one(name: str, entry: JsonValue, source: str) -> PanelSolution:
                 f"expected a number in [0, 1], got {number!r}", source=source, key=where
             )
         numbers[field_name] = float(number)
-    ocio, reason = entry.get("ocio") or {}, entry.get("N_reason")
+    reason = entry.get("N_reason")
     try:
         linearity = read_linearity(entry.get("linearity"), f"{key}.linearity")
     except InputError as error:
         raise InputError(error.problem, source=source, key=error.key) from None
-    if not isinstance(ocio, dict) or not all(isinstance(v, str) for v in ocio.values()):
-        raise InputError("expected names (text) only", source=source, key=f"{key}.ocio")
     if reason is not None and not isinstance(reason, str):
         raise InputError("expected text", source=source, key=f"{key}.N_reason")
     return PanelSolution(
@@ -140,7 +180,7 @@ def _one(name: str, entry: JsonValue, source: str) -> PanelSolution:
         N_reason=reason if in_frustum else None,
         black_level_offset=array("black_level_offset", (3,), optional=True) if in_frustum else None,
         linearity=linearity,
-        ocio=dict(ocio),
+        ocio=read_ocio_names(entry.get("ocio"), source, f"{key}.ocio"),
     )
 
 

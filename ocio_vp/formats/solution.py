@@ -26,9 +26,12 @@ from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
 from ocio_vp.formats.linearity import Linearity, read_linearity
 from ocio_vp.formats.measurements import check_safe_name
 from ocio_vp.formats.panel_solution import (
+    CONFIG_FILENAME,
+    OcioNames,
     PanelSolution,
     panel_solutions_from_dict,
     panel_solutions_to_dict,
+    read_ocio_names,
 )
 from ocio_vp.formats.records import Record, json_object, read_record
 from ocio_vp.model.correction import (
@@ -39,7 +42,15 @@ from ocio_vp.model.correction import (
     correction_to_dict,
 )
 
-__all__ = ["SOLUTION_FORMAT", "Diagnostics", "Solution", "load_solution", "solution_to_json"]
+__all__ = [
+    "CONFIG_FILENAME",
+    "SOLUTION_FORMAT",
+    "Diagnostics",
+    "OcioNames",
+    "Solution",
+    "load_solution",
+    "solution_to_json",
+]
 
 SOLUTION_FORMAT = "ocio-vp/solution"
 #: Largest magnitude a number in a solution.json may have (far beyond any solved stage).
@@ -72,9 +83,8 @@ class Solution:
     """Everything solved for one environment; all arrays float64.
 
     ``black_level_offset`` is added to the in-frustum drive after N (``drive = N c + offset``),
-    ``None`` when the environment has no black-level measurement. ``ocio`` maps the roles
-    ``config``, ``reference``, ``out_of_frustum``, ``in_frustum``, ``post_correction`` (and
-    ``post_correction_colorspace``) to names in the config; filled in when the config is written.
+    ``None`` when the environment has no black-level measurement. ``ocio`` names the config and
+    its colour spaces by role (:class:`OcioNames`), filled in when the config is written.
     ``fixtures`` maps each practical fixture to its ``channels`` and ``drive`` per channel (units
     of its ``reference_drive``), ``None`` without a ``fixtures`` section; ``M`` is then the
     matrix to light with while the fixtures are on.
@@ -103,7 +113,7 @@ class Solution:
     measurements_file: str | None = None
     measurements_sha256: str | None = None
     camera_colorspace: str | None = None
-    ocio: dict[str, str] = field(default_factory=dict)
+    ocio: OcioNames = field(default_factory=OcioNames)
     linearity: Linearity | None = None
     fixtures: Mapping[str, FixtureDrive] | None = None
     panels: Mapping[str, PanelSolution] | None = None
@@ -331,9 +341,6 @@ def load_solution(path: str | Path) -> Solution:
         linearity = read_linearity(data.get("linearity"))
     except InputError as error:
         raise InputError(error.problem, source=source, key=error.key) from None
-    ocio = {k: v for k, v in _mapping(data, "ocio", source).items() if isinstance(v, str)}
-    if len(ocio) != len(_mapping(data, "ocio", source)):
-        raise InputError("expected names (text) only", source=source, key="ocio")
     Q = _matrix(data, "Q", source)
     try:
         diagnostics = Diagnostics.from_dict(_mapping(data, "diagnostics", source))
@@ -357,7 +364,7 @@ def load_solution(path: str | Path) -> Solution:
         measurements_file=_text(measurements, "file", source),
         measurements_sha256=_text(measurements, "sha256", source),
         camera_colorspace=_text(data, "camera_colorspace", source),
-        ocio=ocio,
+        ocio=read_ocio_names(data.get("ocio"), source),
         linearity=linearity,
         fixtures=_fixtures(data, source),
         panels=panel_solutions_from_dict(data.get("panels"), source),
