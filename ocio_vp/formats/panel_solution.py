@@ -17,8 +17,8 @@ panels file's main wall unchanged. An out-of-frustum type (a ceiling) has M and 
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 import dataclasses
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np

@@ -117,9 +117,7 @@ def panel_outputs(solution: Solution, model: ModelFiles | None = None) -> PanelO
                 view_out_of_frustum=VIEW_OUTER,
                 view_in_frustum=VIEW_INNER,
             )
-            panels[name] = dataclasses.replace(
-                panel, linearity=solution.linearity, ocio=wall_names
-            )
+            panels[name] = dataclasses.replace(panel, linearity=solution.linearity, ocio=wall_names)
             continue
         view = _view(solution, panel)
         wall = wall_outputs(view)
@@ -132,9 +130,7 @@ def panel_outputs(solution: Solution, model: ModelFiles | None = None) -> PanelO
         for role, key in roles:
             spaces.append(wall_space(names[key], texts[role], wall.linearity, chains[role]))
             views.append((names[f"view_{key}"], names[key]))
-        panels[name] = dataclasses.replace(
-            panel, linearity=wall.linearity, ocio=OcioNames(**names)
-        )
+        panels[name] = dataclasses.replace(panel, linearity=wall.linearity, ocio=OcioNames(**names))
     return PanelOutputs(tuple(spaces), tuple(views), files, panels)
 
 
