@@ -18,7 +18,6 @@ import PyOpenColorIO as OCIO
 from ocio_vp.errors import InputError
 from ocio_vp.exports.cube import CubeAccuracy
 from ocio_vp.formats.jsontypes import JsonObject
-from ocio_vp.formats.measurements import check_safe_name
 from ocio_vp.formats.solution import OcioNames, Solution, load_solution
 from ocio_vp.model.footage_range import Agreement
 
@@ -136,8 +135,6 @@ def load_export_source(directory: str | Path) -> ExportSource:
         if isinstance(error, InputError):
             raise
         raise InputError(f"malformed solution: {error!r}", source=json_path) from None
-    check_safe_name(solution.environment, source=json_path, key="environment")
-    check_safe_name(solution.stage, source=json_path, key="stage")
     config_name = solution.ocio.config_file
     if Path(config_name).name != config_name:
         raise InputError(

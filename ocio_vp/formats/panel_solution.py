@@ -24,10 +24,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ocio_vp.errors import InputError, excerpt
-from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.linearity import Linearity, read_linearity
 from ocio_vp.formats.measurements import check_safe_name
-from ocio_vp.formats.records import Record, json_object, read_record
+from ocio_vp.formats.records import Record, finite_array, json_object, read_record
 
 __all__ = [
     "CONFIG_FILENAME",
@@ -39,9 +39,6 @@ __all__ = [
 
 #: The config's file name beside solution.json when its ``ocio`` block does not name one.
 CONFIG_FILENAME = "config.ocio"
-
-#: Largest magnitude of a number read back (as solution.json's other numbers).
-_MAX_VALUE = 1e30
 
 
 @dataclass(frozen=True)
@@ -68,11 +65,11 @@ class OcioNames(Record):
 OcioNames.OMIT_NONE = tuple(f.name for f in dataclasses.fields(OcioNames))  # each when named
 
 
-def read_ocio_names(block: JsonValue, source: str, key: str = "ocio") -> OcioNames:
+def read_ocio_names(block: JsonValue, key: str = "ocio") -> OcioNames:
     """The ``ocio`` block (absent: empty); only text values (InputError naming ``key``)."""
     block = {} if block is None else block
     if not isinstance(block, Mapping) or not all(isinstance(v, str) for v in block.values()):
-        raise InputError("expected names (text) only", source=source, key=key)
+        raise InputError("expected names (text) only", key=key)
     return read_record(OcioNames, block, key)
 
 
@@ -127,46 +124,30 @@ def panel_solutions_to_dict(panels: Mapping[str, PanelSolution]) -> JsonObject:
     return out
 
 
-def _array(entry: JsonMapping, key: str, shape: tuple[int, ...], where: str, source: str):
-    value = entry.get(key)
-    try:
-        array = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError, OverflowError):
-        array = np.zeros(0)
-    if array.shape != shape or not np.all(np.isfinite(array)) or np.any(abs(array) > _MAX_VALUE):
-        raise InputError(f"expected finite numbers of shape {shape}", source=source, key=where)
-    return array
-
-
-def _one(name: str, entry: JsonValue, source: str) -> PanelSolution:
+def _one(name: str, entry: JsonValue) -> PanelSolution:
     key = f"panels.{name}"
     if not isinstance(entry, Mapping) or not isinstance(entry.get("in_frustum"), bool):
-        raise InputError("expected a mapping with in_frustum true or false", source=source, key=key)
+        raise InputError("expected a mapping with in_frustum true or false", key=key)
     in_frustum = entry["in_frustum"] is True
 
     def array(field_name: str, shape: tuple[int, ...], optional: bool = False):
         if optional and entry.get(field_name) is None:
             return None
-        return _array(entry, field_name, shape, f"{key}.{field_name}", source)
+        problem = f"expected finite numbers of shape {shape}"
+        return finite_array(entry.get(field_name), shape, f"{key}.{field_name}", problem)
 
     numbers: dict[str, float] = {}
     for field_name in ("beta", "share"):
         number = entry.get(field_name)
         where = f"{key}.{field_name}"
         if isinstance(number, bool) or not isinstance(number, (int, float)):
-            raise InputError(f"expected a number, got {excerpt(number)}", source=source, key=where)
+            raise InputError(f"expected a number, got {excerpt(number)}", key=where)
         if not 0 <= number <= 1:
-            raise InputError(
-                f"expected a number in [0, 1], got {number!r}", source=source, key=where
-            )
+            raise InputError(f"expected a number in [0, 1], got {number!r}", key=where)
         numbers[field_name] = float(number)
     reason = entry.get("N_reason")
-    try:
-        linearity = read_linearity(entry.get("linearity"), f"{key}.linearity")
-    except InputError as error:
-        raise InputError(error.problem, source=source, key=error.key) from None
     if reason is not None and not isinstance(reason, str):
-        raise InputError("expected text", source=source, key=f"{key}.N_reason")
+        raise InputError("expected text", key=f"{key}.N_reason")
     return PanelSolution(
         name=name,
         in_frustum=in_frustum,
@@ -179,21 +160,22 @@ def _one(name: str, entry: JsonValue, source: str) -> PanelSolution:
         N=array("N", (3, 3), optional=True) if in_frustum else None,
         N_reason=reason if in_frustum else None,
         black_level_offset=array("black_level_offset", (3,), optional=True) if in_frustum else None,
-        linearity=linearity,
-        ocio=read_ocio_names(entry.get("ocio"), source, f"{key}.ocio"),
+        linearity=read_linearity(entry.get("linearity"), f"{key}.linearity"),
+        ocio=read_ocio_names(entry.get("ocio"), f"{key}.ocio"),
     )
 
 
-def panel_solutions_from_dict(block: JsonValue, source: str) -> dict[str, PanelSolution] | None:
-    """The ``panels`` block of a loaded solution.json (None when absent)."""
+def panel_solutions_from_dict(block: JsonValue) -> dict[str, PanelSolution] | None:
+    """The ``panels`` block of a loaded solution.json (None when absent); InputErrors name the
+    key (:func:`~ocio_vp.formats.solution.load_solution` adds the file)."""
     if block is None:
         return None
     if not isinstance(block, Mapping) or not block:
-        raise InputError("expected a non-empty mapping of panel types", source=source, key="panels")
+        raise InputError("expected a non-empty mapping of panel types", key="panels")
     out = {}
     for name, entry in block.items():
-        check_safe_name(name, source=source, key="panels")
-        out[name] = _one(name, entry, source)
+        check_safe_name(name, key="panels")
+        out[name] = _one(name, entry)
     if not any(p.in_frustum for p in out.values()):
-        raise InputError("no in-frustum panel type", source=source, key="panels")
+        raise InputError("no in-frustum panel type", key="panels")
     return out

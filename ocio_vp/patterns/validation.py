@@ -194,7 +194,7 @@ def validation_sequence(environment_dir: str | Path, options: PatternOptions) ->
     from ocio_vp.formats.provenance import solution_identity
 
     digest = hashlib.sha256(source.read_bytes()).hexdigest()
-    identity = solution_identity(folder)
+    identity = solution_identity(folder, solution)
     reference, inner = _wall_spaces(solution)
     validation = Validation(
         environment=solution.environment,
