@@ -1,23 +1,10 @@
 """Resolve ``.cube`` files that meet a stated accuracy, or are not written.
 
-A cube is a per-channel 1D shaper (``LUT_1D_SIZE`` entries over ``LUT_1D_INPUT_RANGE``) followed
-by a ``size``^3 3D LUT (``LUT_3D_SIZE``, always 3D: also when the transform has no crosstalk,
-where OCIO's own baker would drop the 3D part). The 3D lattice holds the exact transform (the
-config's processor, evaluated by OCIO) at the points the shaper sends to the lattice knots.
-
-Accuracy is measured, not assumed: the written file is read back by OCIO's ``.cube`` reader and
-compared with the exact transform on dense uniform random samples, once with trilinear and once
-with tetrahedral interpolation (hosts use either), over two boxes: content in [0, 1]^3 and the
-whole input range. The error is ``|cube - exact| / max(1, |exact|)``: absolute for signals up to
-full scale, relative above it. A cube is kept only when the worst error of both interpolations
-over both boxes is at most :data:`CUBE_LIMIT` (1/1023: one code value of a 10-bit signal).
-
-Candidate shapers are tried in order and the first that meets the limit is kept: linear in the
-input (exact for an affine transform such as a matrix with offset, since both interpolations
-reproduce affine maps), then log2 (lattice knots dense near black, where wall encodings curve
-most). Transforms that fold (the clip of out-of-gamut drive to black, the kink of a linearity
-LUT, a PQ or gamma curve with infinite slope at black) generally cannot meet the limit with any
-shaper; then no cube is written and the caller says why and points to the exact CLF.
+A cube is a per-channel 1D shaper followed by a ``size``^3 3D LUT holding the exact transform
+(the config's processor) at the knots. The written file is read back by OCIO and compared with
+the exact transform (trilinear and tetrahedral, content in [0, 1]^3 and the whole input range);
+it is kept only when the worst error is at most :data:`CUBE_LIMIT`, else the caller says why and
+points to the exact CLF (docs/exports.md).
 """
 
 from __future__ import annotations

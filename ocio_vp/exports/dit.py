@@ -1,13 +1,9 @@
-"""``dit``: a 3D LUT for the DIT cart, log in and log out (footage recorded on the stage in the
-camera's log encoding -> the same footage post-corrected, in the same encoding).
+"""``dit``: a 3D LUT for the DIT cart, log in and log out (footage in the camera's log
+encoding -> the same footage post-corrected, in the same encoding).
 
-The cube is baked from the environment's config (``Stage Footage (LogC4)`` -> ``Camera Native
-(LogC4)``: decode, the post-correction exactly as the config carries it, encode) over the log
-signal's range [0, 1], and kept only where it meets the cube accuracy limit
-(:data:`~ocio_vp.exports.cube.CUBE_LIMIT`, measured with both interpolations by OCIO's own
-``.cube`` reader, :func:`~ocio_vp.exports.cube.fit_cube`); otherwise ``dit.json`` says why and
-names the colour spaces to use instead. Only for environments whose camera gamut is known (the
-log curve follows from it: :mod:`ocio_vp.ocio.camera_log`).
+Baked from the environment's config over the log range [0, 1] and kept only where it meets
+:data:`~ocio_vp.exports.cube.CUBE_LIMIT`; otherwise ``dit.json`` says why. Only for
+environments whose camera gamut (and so log curve) is known.
 """
 
 from __future__ import annotations

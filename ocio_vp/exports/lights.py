@@ -1,11 +1,8 @@
 """``lights``: the fixture drives of one environment for the people who run the lights.
 
-``lights.json`` and ``lights.csv`` list, per fixture and in its channel order, each channel's
-DMX universe, fixture mode and address (from the fixture's ``dmx`` patch in the measurements
-file; empty when it has none), drive (units of its ``reference_drive``), its level in [0, 1] of
-``max_drive``, and the 8- and 16-bit DMX values of that level (:mod:`ocio_vp.fixtures.dmx`);
-``lights.json`` adds, for a pixel-mapped fixture, the k x 3 matrix from content RGB to channel
-drives and its gamut limit.
+``lights.json`` and ``lights.csv``: per fixture channel its DMX patch, drive, level and 8- and
+16-bit DMX values (:mod:`ocio_vp.fixtures.dmx`); ``lights.json`` adds a pixel-mapped fixture's
+content-to-drive matrix (docs/fixtures.md).
 """
 
 from __future__ import annotations

@@ -1,20 +1,9 @@
 """Unreal nDisplay for a stage of several panel types: each type's colour space on its viewports.
 
-The wall (the first in-frustum type) keeps the stage-wide slots of :mod:`ocio_vp.exports.unreal`
-(all viewports -> its outer frustum, the ICVFX camera's inner frustum on every node). Every
-other type overrides them where it is, with nDisplay's per-viewport and per-node OCIO profiles
-(Epic's ``FDisplayClusterConfigurationOCIOProfile``: ``bIsEnabled``, ``ApplyOCIOToObjects``,
-``ColorConfiguration``; checked in Epic's API reference for UE 5.4 to 5.7):
-
-- its outer frustum on its viewports: the root actor's
-  ``StageSettings.ViewportOCIO.PerViewportOCIOProfiles`` (UI "Per-Viewport OCIO Overrides");
-  light cards set to *Use nDisplay Viewport OCIO* follow it;
-- an in-frustum type's inner frustum on the cluster nodes that drive it: the ICVFX camera
-  component's ``CameraSettings.CameraOCIO.PerNodeOCIOProfiles`` (UI "Per-Node OCIO
-  Overrides").
-
-ocio-vp does not know the nDisplay configuration's viewport and node names: each profile's
-``ApplyOCIOToObjects`` is left empty for the stage engineer to fill (UNREAL.md says which).
+The wall (the first in-frustum type) keeps the stage-wide slots of :mod:`ocio_vp.exports.unreal`;
+every other type overrides them with nDisplay's per-viewport (outer frustum) and, in frustum,
+per-node (inner frustum) OCIO profiles. Each profile's ``ApplyOCIOToObjects`` is left empty for
+the stage engineer to fill (UNREAL.md says which; docs/exports.md).
 """
 
 from __future__ import annotations

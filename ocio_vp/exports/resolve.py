@@ -1,22 +1,10 @@
 """DaVinci Resolve export: CLF of the exact transforms, a DCTL for Q, and baked ``.cube`` LUTs.
 
-- ``*.clf``: the exact post-correction Q (footage -> corrected) and the two wall transforms
-  (content -> drive: M, and N plus the black-level offset, with the panel-linearity LUT1D when
-  the config carries one), serialised by OCIO's own CLF writer from the config's processors.
-- ``post_correction_Q.dctl``: Q (LeGendre et al. 2022, eq. 5) as a DCTL in full float precision;
-  for a non-linear Q (root-polynomial, emitter-protected), the model itself (its terms and
-  coefficients, sign-preserving roots, its fades), not its 3x3 approximation. The CLFs carry a
-  non-linear Q as the config does (its LUT chain, :mod:`ocio_vp.ocio.bake`): the manifest gives
-  its measured agreement with the model and names the DCTL as the exact alternative; its
-  ``.cube`` is written only if it meets the limit.
-- ``*_<size>.cube``: the same transforms as a 1D shaper + 3D LUT over an HDR input range,
-  written only when the measured worst error meets :data:`ocio_vp.exports.cube.CUBE_LIMIT`
-  (:mod:`ocio_vp.exports.cube`): in practice the affine transforms (Q; walls without a
-  linearity LUT or encoding). A wall chain with a clip or a curve gets no cube; the manifest
-  says why and points to its CLF.
-- ``manifest.json``: every file with its accuracy, every file not written with the reason,
-  and ``resolve_file``: *the* file to grade footage with in Resolve (the post-correction's cube
-  where it meets the limit, else the exact DCTL) and why.
+``*.clf``: Q and the two wall transforms, serialised by OCIO's CLF writer from the config;
+``post_correction_Q.dctl``: Q (LeGendre et al. 2022, eq. 5), or a non-linear model itself;
+``*_<size>.cube``: written only where they meet :data:`ocio_vp.exports.cube.CUBE_LIMIT`;
+``manifest.json``: every file with its accuracy, every file not written with the reason, and
+``resolve_file``, the file to grade footage with (docs/exports.md).
 """
 
 from __future__ import annotations

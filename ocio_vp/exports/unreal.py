@@ -1,18 +1,9 @@
 """Unreal Engine nDisplay (ICVFX) export: the config folder, a ``.ocioz``, ``UNREAL.md`` and
-``unreal_ocio.json`` saying which colorspace goes where.
+``unreal_ocio.json`` saying which colorspace goes in which nDisplay OCIO slot.
 
-nDisplay picks a source and a destination colorspace per OCIO slot. Property paths and enum
-values are those of Epic's nDisplay API reference (UE 5.2+; see docs/exports.md for the pages):
-the root actor's ``StageSettings.ViewportOCIO.AllViewportsOCIOConfiguration`` (UI "All Viewports
-Color Configuration"), ``StageSettings.Lightcard.LightcardOCIO.LightcardOCIOMode`` = ``nDisplay``
-(UI "Use nDisplay Viewport OCIO"), and the ICVFX camera component's
-``CameraSettings.CameraOCIO.AllNodesOCIOConfiguration`` (UI "All Nodes Color Configuration"):
-
-- the outer viewports and the light cards light the actors: destination = out-of-frustum (M);
-- the ICVFX camera's inner frustum is the in-camera background: destination = in-frustum
-  (N = M Q^-1 plus the black-level offset; LeGendre et al. 2022, eq. 8 and Section 3.4);
-- the source is the content's working space: Unreal's own working space (Linear Rec.709) when
-  the config carries working spaces (the stage named its camera gamut), else the reference.
+The outer viewports and light cards get the out-of-frustum colour space (M), the ICVFX camera's
+inner frustum the in-frustum one (N plus the black-level offset); the source is Unreal's working
+space when the config carries working spaces, else the reference (docs/exports.md).
 """
 
 from __future__ import annotations

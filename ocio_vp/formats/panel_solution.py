@@ -1,18 +1,9 @@
 """solution.json's ``panels`` block: what was solved for each panel type of a stage.
 
-Written only for a measurements file with ``panels`` (:mod:`ocio_vp.formats.panels`)::
-
-    "panels": {
-      "wall":    {"in_frustum": true,  "SL": ..., "M": ..., "beta": ..., "w_avg": ...,
-                  "drive": ..., "share": 0.58, "N": ..., "N_reason": null,
-                  "black_level_offset": ..., "linearity": ..., "ocio": {...}},
-      "ceiling": {"in_frustum": false, "SL": ..., "M": ..., "beta": ..., "w_avg": ...,
-                  "drive": ..., "share": 0.42, "linearity": null, "ocio": {...}}
-    }
-
-The top-level ``M``, ``N``, ``SL``, ``beta``, ``w_avg``, ``black_level_offset`` and
-``linearity`` stay the first in-frustum type's, so readers of files without panels read a
-panels file's main wall unchanged. An out-of-frustum type (a ceiling) has M and no N.
+Written only for a measurements file with ``panels`` (docs/solution.md). The top-level ``M``,
+``N``, ``SL``, ``beta``, ``w_avg``, ``black_level_offset`` and ``linearity`` stay the first
+in-frustum type's, so readers of files without panels read the main wall unchanged; an
+out-of-frustum type (a ceiling) has M and no N.
 """
 
 from __future__ import annotations

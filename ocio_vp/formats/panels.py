@@ -1,33 +1,10 @@
-"""The optional ``panels`` section of a measurements file: several LED panel types on one stage.
+"""The optional ``panels`` section of a measurements file: several LED panel types on one stage
+(keys: docs/panels.md).
 
-Most volumes are built from more than one panel model (a fine-pitch wall, a brighter ceiling,
-wild walls or a floor), each with its own LEDs. A file with ``panels`` describes each type as
-the top-level ``primaries``/``lit_chart`` describe the single wall of a file without it::
-
-    panels:
-      - name: wall                  # safe name, unique
-        in_frustum: true            # shows the in-camera background (gets N)
-        calibration_panel: {width: 1.2, height: 0.8, distance: 1.5}   # or beta
-        primaries: {red: [r, g, b], green: [...], blue: [...]}       # this type's [SL]
-        lit_chart: {red: [[r, g, b], ...], green: [...], blue: [...]} # chart lit by this type
-        ramps: ...                  # optional, as the top-level ramps (docs/linearity.md)
-        region: {elevation: [-30, 45], azimuth: [-90, 90]}   # optional, for --hdri
-        encoding: pq                # optional signal encoding of this type (else --wall-encoding)
-        peak_nits: 1500             # optional, with encoding pq
-      - name: ceiling
-        in_frustum: false
-        ...
-    environments:
-      - name: overcast
-        target_chart: [...]
-        w_avg: {wall: [r, g, b], ceiling: [r, g, b]}   # the diffuse light each type delivers
-        black_level: {wall: [r, g, b]}                  # optional, in-frustum types only
-
-It replaces the top-level ``primaries``, ``lit_chart``, ``ramps`` and the stage's
-``calibration_panel``/``beta``; a file mixing both forms is refused. Like
-:mod:`ocio_vp.formats.fixtures`, this module takes the measurements file's
-:class:`~ocio_vp.formats.measurements.Validator` as ``ctx`` (every error names the file and
-the key path) and does not import :mod:`ocio_vp.formats.measurements`, which imports it.
+Each type has its own ``primaries``, ``lit_chart``, ``ramps`` and ``calibration_panel``/``beta``,
+replacing the top-level ones (a file mixing both forms is refused); environments give ``w_avg``
+and ``black_level`` per type. Takes the measurements file's validator as ``ctx`` (a
+:class:`~ocio_vp.formats.checker.Checker`), so every error names the file and key path.
 """
 
 from __future__ import annotations
