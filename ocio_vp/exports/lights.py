@@ -7,11 +7,16 @@ content-to-drive matrix (docs/fixtures.md).
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from ocio_vp.errors import InputError
-from ocio_vp.exports.source import DEFAULT_CUBES, CubeOptions, ExportSource, ExportSummary
+from ocio_vp.exports.source import (
+    DEFAULT_CUBES,
+    CubeOptions,
+    ExportSource,
+    ExportSummary,
+    write_json,
+)
 from ocio_vp.fixtures.dmx import content_matrix, dmx_csv, dmx_rows
 from ocio_vp.formats.jsontypes import JsonObject
 
@@ -39,12 +44,12 @@ def write_lights(
         if block.pixel_mapped:
             entry["content_matrix"] = content_matrix(block.drives, solution.w_avg, block.max_drive)
         fixtures.append(entry)
-    document = {
+    document: JsonObject = {
         "stage": solution.stage,
         "environment": solution.environment,
         "assumptions": ASSUMPTIONS,
         "fixtures": fixtures,
     }
-    (folder / "lights.json").write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+    write_json(folder / "lights.json", document)
     (folder / "lights.csv").write_text(dmx_csv(rows), encoding="utf-8")
     return ExportSummary()  # the line names no file, as for every fixture export

@@ -9,7 +9,6 @@
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -27,6 +26,7 @@ from ocio_vp.exports.source import (
     ExportSource,
     ExportSummary,
     post_correction_carriage,
+    write_json,
 )
 from ocio_vp.exports.templating import render_template
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
@@ -279,7 +279,7 @@ def write_resolve(
     dctl.write_text(text, encoding="utf-8")
     files[dctl.name] = {"kind": "dctl", "accuracy": accuracy}
     footage = resolve_file({k: v.max_error for k, v in baked.items()}, size=cubes.size)
-    manifest = {
+    manifest: JsonObject = {
         "format": "ocio-vp/resolve-export",
         "version": 1,
         "stage": solution.stage,
@@ -290,9 +290,7 @@ def write_resolve(
         "not_written": not_written,
         "resolve_file": footage,
     }
-    (folder / MANIFEST).write_text(
-        json.dumps(manifest, indent=2, allow_nan=False) + "\n", encoding="utf-8"
-    )
+    write_json(folder / MANIFEST, manifest)
     return ExportSummary(
         files=(*files, MANIFEST),
         line=f"the Resolve file for footage: {footage['file']} ({footage['why']}); every "

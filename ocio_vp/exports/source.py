@@ -8,6 +8,7 @@ loaded and checked before anything is exported.
 
 from __future__ import annotations
 
+import json
 import shutil
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -17,7 +18,7 @@ import PyOpenColorIO as OCIO
 
 from ocio_vp.errors import InputError
 from ocio_vp.exports.cube import CubeAccuracy
-from ocio_vp.formats.jsontypes import JsonObject
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.solution import OcioNames, Solution, load_solution
 from ocio_vp.model.footage_range import Agreement
 
@@ -50,6 +51,7 @@ __all__ = [
     "load_export_source",
     "post_correction_carriage",
     "sidecar_dirs",
+    "write_json",
 ]
 
 
@@ -150,6 +152,11 @@ def load_export_source(directory: str | Path) -> ExportSource:
         raise InputError(f"cannot load the OCIO config: {error}", source=config_path) from None
     names = _checked_names(config, solution.ocio, str(json_path))
     return ExportSource(directory, solution, config_path, config, names)
+
+
+def write_json(path: Path, document: JsonValue) -> None:
+    """Write ``document`` as indented JSON (finite numbers only) with a final newline."""
+    path.write_text(json.dumps(document, indent=2, allow_nan=False) + "\n", encoding="utf-8")
 
 
 def sidecar_dirs(source: ExportSource) -> list[Path]:

@@ -8,7 +8,6 @@ space when the config carries working spaces, else the reference (docs/exports.m
 
 from __future__ import annotations
 
-import json
 import zipfile
 from pathlib import Path
 
@@ -25,6 +24,7 @@ from ocio_vp.exports.source import (
     ExportSummary,
     copy_config,
     post_correction_carriage,
+    write_json,
 )
 from ocio_vp.exports.templating import render_template
 from ocio_vp.exports.unreal_script import SCRIPT_FILE, render_unreal_script
@@ -214,9 +214,7 @@ def write_unreal(
     ocioz = write_ocioz(copied, folder / f"{solution.environment}.ocioz")
     config_rel = f"config/{copied.name}"
     mapping = unreal_mapping(source, config=config_rel, ocioz=ocioz.name)
-    (folder / MAPPING_FILE).write_text(
-        json.dumps(mapping, indent=2, allow_nan=False) + "\n", encoding="utf-8"
-    )
+    write_json(folder / MAPPING_FILE, mapping)
     names = source.names
     content, alternatives = _content_space(source)
     carriage = post_correction_carriage(solution)

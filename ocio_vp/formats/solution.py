@@ -21,7 +21,7 @@ from ocio_vp.deprecation import warn_deprecated
 from ocio_vp.errors import InputError, excerpt
 from ocio_vp.formats.diagnostics import Diagnostics
 from ocio_vp.formats.documents import read_document
-from ocio_vp.formats.fixtures import DmxPatch
+from ocio_vp.formats.fixtures import DMX_MODES, DmxPatch
 from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
 from ocio_vp.formats.linearity import Linearity, read_linearity
 from ocio_vp.formats.measurements import check_safe_name
@@ -226,28 +226,13 @@ def _fixtures(data: JsonMapping) -> dict[str, FixtureDrive] | None:
         raise InputError("expected a mapping", key="fixtures")
     fixtures = {}
     for name, entry in block.items():
-        channels = entry.get("channels") if isinstance(entry, dict) else None
-        drive = entry.get("drive") if isinstance(entry, dict) else None
-        if not (
-            isinstance(channels, list)
-            and all(isinstance(c, str) for c in channels)
-            and isinstance(drive, dict)
-            and set(drive) == set(channels)
-        ):
-            raise InputError("expected channels and a drive for each", key=f"fixtures.{name}")
-        if not all(isinstance(v, (int, float)) and np.isfinite(v) for v in drive.values()):
-            raise InputError("expected finite drives", key=f"fixtures.{name}")
-        dmx = entry.get("dmx")
-        if dmx is not None and not (
-            isinstance(dmx, dict)
-            and all(type(dmx.get(k)) is int for k in ("universe", "address"))
-            and dmx.get("mode") in ("8-bit", "16-bit")
-        ):
-            raise InputError(
-                "expected universe, address (integers) and mode (8-bit or 16-bit)",
-                key=f"fixtures.{name}.dmx",
-            )
-        fixtures[name] = read_record(FixtureDrive, entry, f"fixtures.{name}")
+        key = f"fixtures.{name}"
+        fixture = fixtures[name] = read_record(FixtureDrive, entry, key)
+        drives = np.array(list(fixture.drive.values()))
+        if set(fixture.drive) != set(fixture.channels) or not np.all(np.isfinite(drives)):
+            raise InputError("expected channels and a finite drive for each", key=key)
+        if fixture.dmx is not None and fixture.dmx.mode not in DMX_MODES:
+            raise InputError("expected 8-bit or 16-bit", key=f"{key}.dmx.mode")
     return fixtures
 
 
