@@ -17,7 +17,7 @@ import numpy as np
 
 from ocio_vp.choices import WALL_ENCODINGS
 from ocio_vp.errors import InputError, excerpt, format_key_path
-from ocio_vp.formats.checker import Checker
+from ocio_vp.formats.checker import Checker, describe
 from ocio_vp.formats.geometry import PanelGeometry
 from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
 from ocio_vp.wall.linearity import CHANNELS, Ramp, parse_ramps, ramps_to_dict
@@ -84,17 +84,11 @@ def primary_panel(panels: tuple[PanelType, ...]) -> PanelType:
     return next(p for p in panels if p.in_frustum)
 
 
-def _kind(value: JsonValue) -> str:
-    if isinstance(value, (list, tuple)):
-        return f"a list of {len(value)}"
-    return f"{type(value).__name__} {excerpt(value)}"
-
-
 def _pair(
     ctx: Checker, value: JsonValue, key: tuple, low: float, high: float
 ) -> tuple[float, float]:
     if not isinstance(value, (list, tuple)) or len(value) != 2:
-        raise ctx.error(key, f"expected [min, max] in degrees, got {_kind(value)}")
+        raise ctx.error(key, f"expected [min, max] in degrees, got {describe(value)}")
     a, b = (ctx.number(v, (*key, i), minimum=low, maximum=high) for i, v in enumerate(value))
     if not a < b:
         raise ctx.error(key, f"expected min < max, got [{a:g}, {b:g}]")
@@ -149,7 +143,7 @@ def _parse_one(ctx: Checker, value: JsonValue, key: tuple, n: int | None) -> Pan
     name = ctx.name(entry["name"], (*key, "name"))
     in_frustum = entry["in_frustum"]
     if not isinstance(in_frustum, bool):
-        raise ctx.error((*key, "in_frustum"), f"expected true or false, got {_kind(in_frustum)}")
+        raise ctx.error((*key, "in_frustum"), f"expected true or false, got {describe(in_frustum)}")
     panel, beta = ctx.calibration(entry, key)
     primaries = ctx.mapping(entry["primaries"], (*key, "primaries"), required=CHANNELS)
     SL = np.stack([ctx.rgb(primaries[c], (*key, "primaries", c)) for c in CHANNELS], axis=1)
@@ -177,7 +171,7 @@ def parse_panels(ctx: Checker, value: JsonValue) -> tuple[PanelType, ...]:
     every ``lit_chart``, at least one in-frustum type, regions that do not overlap."""
     if not isinstance(value, list) or not value:
         raise ctx.error(
-            ("panels",), f"expected a non-empty list of panel types, got {_kind(value)}"
+            ("panels",), f"expected a non-empty list of panel types, got {describe(value)}"
         )
     panels: list[PanelType] = []
     for i, raw in enumerate(value):
@@ -219,7 +213,7 @@ def parse_panel_values(
         raise ctx.error(
             key,
             f"with panels, expected a mapping of panel type -> [r, g, b] ({', '.join(names)}), "
-            f"got {_kind(value)}",
+            f"got {describe(value)}",
         )
     for name in value:
         if name not in names:
@@ -251,8 +245,17 @@ def parse_panel_values(
     return out
 
 
-def _rows(array: np.ndarray) -> list[list[float]]:
+def rows(array: np.ndarray) -> list[JsonValue]:
+    """A 2D array as lists of plain floats."""
     return [[float(v) for v in row] for row in np.asarray(array, dtype=np.float64)]
+
+
+def lit_dicts(SL: np.ndarray, SRL: np.ndarray) -> JsonObject:
+    """``primaries`` and ``lit_chart`` blocks of [SL] (3, 3) and [SRL] (n, 3, 3)."""
+    return {
+        "primaries": {c: rows(SL.T)[k] for k, c in enumerate(CHANNELS)},
+        "lit_chart": {c: rows(SRL[:, :, k]) for k, c in enumerate(CHANNELS)},
+    }
 
 
 def _region_dict(region: PanelRegion) -> JsonObject:
@@ -268,15 +271,10 @@ def panels_to_dict(panels: tuple[PanelType, ...]) -> list[JsonObject]:
     for p in panels:
         entry: JsonObject = {"name": p.name, "in_frustum": p.in_frustum}
         if p.panel is not None:
-            geometry = {"width": p.panel.width, "height": p.panel.height}
-            geometry["distance"] = p.panel.distance
-            if p.panel.offset_x or p.panel.offset_y:
-                geometry.update(offset_x=p.panel.offset_x, offset_y=p.panel.offset_y)
-            entry["calibration_panel"] = geometry
+            entry["calibration_panel"] = p.panel.to_dict()
         if p.beta is not None:
             entry["beta"] = p.beta
-        entry["primaries"] = {c: _rows(p.SL.T)[k] for k, c in enumerate(CHANNELS)}
-        entry["lit_chart"] = {c: _rows(p.SRL[:, :, k]) for k, c in enumerate(CHANNELS)}
+        entry |= lit_dicts(p.SL, p.SRL)
         if p.ramps is not None:
             entry["ramps"] = ramps_to_dict(p.ramps)
         if p.regions:
