@@ -17,6 +17,7 @@ import numpy as np
 import PyOpenColorIO as OCIO
 
 from ocio_vp.formats.jsontypes import JsonObject
+from ocio_vp.ocio.bake import processor_function
 
 __all__ = [
     "CUBE_LIMIT",
@@ -79,12 +80,6 @@ class CubeResult:
     reason: str | None = None
 
 
-def _apply(processor: OCIO.Processor, rgb: np.ndarray) -> np.ndarray:
-    pixels = np.ascontiguousarray(rgb, dtype=np.float32).copy()
-    processor.getDefaultCPUProcessor().applyRGB(pixels)
-    return pixels.astype(np.float64)
-
-
 def shaper_table(kind: str, lo: float, hi: float, size: int = SHAPER_SIZE) -> np.ndarray:
     """The 1D shaper: ``size`` values in [0, 1] for inputs evenly spaced over [lo, hi].
 
@@ -126,7 +121,7 @@ def bake_cube(
     """Write ``processor`` as a Resolve ``.cube`` (1D shaper + ``size``^3 3D LUT)."""
     lo, hi = (float(v) for v in input_range)
     table = shaper_table(shaper, lo, hi)
-    values = _apply(processor, _lattice(table, lo, hi, size))
+    values = processor_function(processor)(_lattice(table, lo, hi, size))
     if not np.all(np.isfinite(values)):
         raise ValueError("the transform returns non-finite values inside the cube's range")
     safe_title = "".join(c if c.isprintable() else "?" for c in title)
@@ -160,11 +155,11 @@ def cube_error(
     worst, worst_input = -1.0, np.zeros(3)  # every sample's error >= 0 replaces it
     for box, (a, b) in (("content_0_1", (max(lo, 0.0), min(hi, 1.0))), ("input_range", (lo, hi))):
         rgb = rng.uniform(a, b, size=(samples, 3))
-        exact = _apply(processor, rgb)
+        exact = processor_function(processor)(rgb)
         for name, interpolation in (("trilinear", OCIO.INTERP_LINEAR),
                                     ("tetrahedral", OCIO.INTERP_TETRAHEDRAL)):  # fmt: skip
             cube = OCIO.FileTransform(src=str(path.resolve()), interpolation=interpolation)
-            error = np.abs(_apply(raw.getProcessor(cube), rgb) - exact) / np.maximum(
+            error = np.abs(processor_function(raw.getProcessor(cube))(rgb) - exact) / np.maximum(
                 1.0, np.abs(exact)
             )
             per_sample = error.max(axis=1)
