@@ -321,7 +321,7 @@ def test_via_config_runs_the_configs_chain_and_marks_its_frames(tmp_path, capsys
     got = oiio_pixels(out / "C001.0001.exr")
     config = OCIO.Config.CreateFromFile(str(folder / "config.ocio"))
     names = load_solution(folder).ocio
-    cpu = config.getProcessor(names["post_correction_colorspace"], names["reference"])
+    cpu = config.getProcessor(names.post_correction_colorspace, names.reference)
     expected = np.asarray(
         cpu.getDefaultCPUProcessor().applyRGB(rgb.astype(np.float32).ravel().tolist())
     ).reshape(rgb.shape)

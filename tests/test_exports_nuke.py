@@ -124,7 +124,7 @@ class TestNukeScript:
         assert knobs["ColorMatrix"]["disable"] == "true"
         assert knobs["Group"]["name"] == f"ocio_vp_env_{index}"
         named = knobs["OCIONamedTransform"]["named_transform"]
-        assert named == solution.ocio["post_correction"]
+        assert named == solution.ocio.post_correction
         assert "PWNED" not in classes
 
     def test_named_transform_is_Q(self, exported, tmp_path):

@@ -240,8 +240,9 @@ def test_white_patch_0_is_honoured_after_a_solve_and_a_load(tmp_path):
 
 
 def test_no_module_reads_a_solve_result_by_string():
-    """``solution.diagnostics["..."]`` and ``.get("...")`` are gone from the package: the
-    diagnostics are typed records (read by attribute, checked by type checkers)."""
+    """``solution.diagnostics["..."]``, ``solution.ocio["..."]`` and their ``.get("...")`` are
+    gone from the package: both blocks are typed records (read by attribute, checked by type
+    checkers)."""
     import ast
     from pathlib import Path
 
@@ -259,7 +260,7 @@ def test_no_module_reads_a_solve_result_by_string():
             ):
                 target = node.func.value
             while isinstance(target, ast.Attribute):  # solution.diagnostics.charts[...] too
-                if target.attr == "diagnostics":
+                if target.attr in ("diagnostics", "ocio"):
                     found.append(f"{path.relative_to(package)}:{node.lineno}")
                     break
                 target = target.value

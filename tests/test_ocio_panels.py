@@ -52,16 +52,16 @@ def test_every_type_has_its_colour_spaces_and_views(written):
     solution = load_solution(written["least-squares"])
     config = OCIO.Config.CreateFromFile(str(written["least-squares"] / "config.ocio"))
     names = {p.name: p.ocio for p in solution.panels.values()}
-    assert names["ceiling"] == {
+    assert names["ceiling"].to_dict() == {
         "out_of_frustum": "LED Ceiling - Outer Frustum",
         "view_out_of_frustum": "Ceiling Outer Frustum",
     }
-    assert names["floor"]["in_frustum"] == "LED Floor - Inner Frustum"
-    assert names["wall"]["out_of_frustum"] == "LED Wall - Outer Frustum"  # unchanged names
+    assert names["floor"].in_frustum == "LED Floor - Inner Frustum"
+    assert names["wall"].out_of_frustum == "LED Wall - Outer Frustum"  # unchanged names
     for panel in names.values():
-        for role in ("out_of_frustum", "in_frustum"):
-            if role in panel:
-                assert config.getColorSpace(panel[role]) is not None
+        for space in (panel.out_of_frustum, panel.in_frustum):
+            if space is not None:
+                assert config.getColorSpace(space) is not None
     views = list(config.getViews("LED Wall"))
     assert {"Ceiling Outer Frustum", "Floor Outer Frustum", "Floor Inner Frustum"} <= set(views)
 

@@ -119,11 +119,10 @@ def test_every_panel_type_is_soft_clipped(panel_stage_and_measurements, tmp_path
     checked = 0
     for panel in written.panels.values():
         assert panel.linearity.soft_clip.knee == KNEE
-        spaces = {"out_of_frustum": (panel.M, None)}
+        spaces = {panel.ocio.out_of_frustum: (panel.M, None)}
         if panel.in_frustum and panel.N is not None:
-            spaces["in_frustum"] = (panel.N, panel.black_level_offset)
-        for key, (matrix, offset) in spaces.items():
-            space = panel.ocio[key]
+            spaces[panel.ocio.in_frustum] = (panel.N, panel.black_level_offset)
+        for space, (matrix, offset) in spaces.items():
             got = run(configs["clipped"], REFERENCE, space, content_for(d, matrix, offset))
             want = run(configs["plain"], REFERENCE, space,
                        content_for(forward(d, KNEE), matrix, offset))  # fmt: skip

@@ -55,7 +55,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-def _check_sequence(sequence, environment_dir) -> None:
+def _check_sequence(sequence, environment_dir, solution) -> None:
     import hashlib
     from pathlib import Path
 
@@ -74,7 +74,7 @@ def _check_sequence(sequence, environment_dir) -> None:
     digest = hashlib.sha256(path.read_bytes()).hexdigest()
     if digest != v.solution_sha256:
         made = SolutionIdentity(v.environment, v.model or "?", v.solved or "?")
-        differs = made.differences(solution_identity(environment_dir))
+        differs = made.differences(solution_identity(environment_dir, solution))
         raise InputError(
             f"made from another solution: {differs}; write the patterns again from this solve "
             "and film them",
@@ -104,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
     check_replaceable(final)
     solution = load_solution(args.environment)
     sequence = load_sequence(args.sequence)
-    _check_sequence(sequence, args.environment)
+    _check_sequence(sequence, args.environment, solution)
     encoding = (
         None if args.encoding is None else canonical_encoding(args.encoding, key="--encoding")
     )

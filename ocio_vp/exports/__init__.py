@@ -227,11 +227,6 @@ def _export_show(sources, report: ExportReport, out, base_config) -> ExportResul
     return ExportResult(environments, "show", Path(out) / SHOW_FOLDER, summary)
 
 
-def _source_text(source: ExportSource) -> str:
-    solution = source.solution
-    return source_record(source.directory, solution.environment, solution.model)
-
-
 def _export_environment(
     source: ExportSource, jobs, *, cube_size: int, cube_range: tuple[float, float]
 ) -> list[ExportResult]:
@@ -244,6 +239,8 @@ def _export_environment(
         key=lambda p: len(p.parts),
         reverse=True,
     )
+    solution = source.solution
+    record = source_record(source.directory, solution.environment, solution.model)
     results = []
     try:
         with ExitStack() as stack:
@@ -253,7 +250,7 @@ def _export_environment(
                 folder = stage / target
                 folder.mkdir()
                 summary = EXPORT_TARGETS[target](source, folder, CubeOptions(cube_size, cube_range))
-                (folder / SOURCE_FILE).write_text(_source_text(source), encoding="utf-8")
+                (folder / SOURCE_FILE).write_text(record, encoding="utf-8")
                 staged.append((folder, final))
                 results.append(ExportResult(source.solution.environment, target, final, summary))
             publish_dirs(staged)  # every destination checked before any is replaced

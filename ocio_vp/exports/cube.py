@@ -1,23 +1,10 @@
 """Resolve ``.cube`` files that meet a stated accuracy, or are not written.
 
-A cube is a per-channel 1D shaper (``LUT_1D_SIZE`` entries over ``LUT_1D_INPUT_RANGE``) followed
-by a ``size``^3 3D LUT (``LUT_3D_SIZE``, always 3D: also when the transform has no crosstalk,
-where OCIO's own baker would drop the 3D part). The 3D lattice holds the exact transform (the
-config's processor, evaluated by OCIO) at the points the shaper sends to the lattice knots.
-
-Accuracy is measured, not assumed: the written file is read back by OCIO's ``.cube`` reader and
-compared with the exact transform on dense uniform random samples, once with trilinear and once
-with tetrahedral interpolation (hosts use either), over two boxes: content in [0, 1]^3 and the
-whole input range. The error is ``|cube - exact| / max(1, |exact|)``: absolute for signals up to
-full scale, relative above it. A cube is kept only when the worst error of both interpolations
-over both boxes is at most :data:`CUBE_LIMIT` (1/1023: one code value of a 10-bit signal).
-
-Candidate shapers are tried in order and the first that meets the limit is kept: linear in the
-input (exact for an affine transform such as a matrix with offset, since both interpolations
-reproduce affine maps), then log2 (lattice knots dense near black, where wall encodings curve
-most). Transforms that fold (the clip of out-of-gamut drive to black, the kink of a linearity
-LUT, a PQ or gamma curve with infinite slope at black) generally cannot meet the limit with any
-shaper; then no cube is written and the caller says why and points to the exact CLF.
+A cube is a per-channel 1D shaper followed by a ``size``^3 3D LUT holding the exact transform
+(the config's processor) at the knots. The written file is read back by OCIO and compared with
+the exact transform (trilinear and tetrahedral, content in [0, 1]^3 and the whole input range);
+it is kept only when the worst error is at most :data:`CUBE_LIMIT`, else the caller says why and
+points to the exact CLF (docs/exports.md).
 """
 
 from __future__ import annotations
@@ -30,6 +17,7 @@ import numpy as np
 import PyOpenColorIO as OCIO
 
 from ocio_vp.formats.jsontypes import JsonObject
+from ocio_vp.ocio.bake import processor_function
 
 __all__ = [
     "CUBE_LIMIT",
@@ -92,12 +80,6 @@ class CubeResult:
     reason: str | None = None
 
 
-def _apply(processor: OCIO.Processor, rgb: np.ndarray) -> np.ndarray:
-    pixels = np.ascontiguousarray(rgb, dtype=np.float32).copy()
-    processor.getDefaultCPUProcessor().applyRGB(pixels)
-    return pixels.astype(np.float64)
-
-
 def shaper_table(kind: str, lo: float, hi: float, size: int = SHAPER_SIZE) -> np.ndarray:
     """The 1D shaper: ``size`` values in [0, 1] for inputs evenly spaced over [lo, hi].
 
@@ -139,7 +121,7 @@ def bake_cube(
     """Write ``processor`` as a Resolve ``.cube`` (1D shaper + ``size``^3 3D LUT)."""
     lo, hi = (float(v) for v in input_range)
     table = shaper_table(shaper, lo, hi)
-    values = _apply(processor, _lattice(table, lo, hi, size))
+    values = processor_function(processor)(_lattice(table, lo, hi, size))
     if not np.all(np.isfinite(values)):
         raise ValueError("the transform returns non-finite values inside the cube's range")
     safe_title = "".join(c if c.isprintable() else "?" for c in title)
@@ -173,11 +155,11 @@ def cube_error(
     worst, worst_input = -1.0, np.zeros(3)  # every sample's error >= 0 replaces it
     for box, (a, b) in (("content_0_1", (max(lo, 0.0), min(hi, 1.0))), ("input_range", (lo, hi))):
         rgb = rng.uniform(a, b, size=(samples, 3))
-        exact = _apply(processor, rgb)
+        exact = processor_function(processor)(rgb)
         for name, interpolation in (("trilinear", OCIO.INTERP_LINEAR),
                                     ("tetrahedral", OCIO.INTERP_TETRAHEDRAL)):  # fmt: skip
             cube = OCIO.FileTransform(src=str(path.resolve()), interpolation=interpolation)
-            error = np.abs(_apply(raw.getProcessor(cube), rgb) - exact) / np.maximum(
+            error = np.abs(processor_function(raw.getProcessor(cube))(rgb) - exact) / np.maximum(
                 1.0, np.abs(exact)
             )
             per_sample = error.max(axis=1)

@@ -1,23 +1,25 @@
-"""``dit``: a 3D LUT for the DIT cart, log in and log out (footage recorded on the stage in the
-camera's log encoding -> the same footage post-corrected, in the same encoding).
+"""``dit``: a 3D LUT for the DIT cart, log in and log out (footage in the camera's log
+encoding -> the same footage post-corrected, in the same encoding).
 
-The cube is baked from the environment's config (``Stage Footage (LogC4)`` -> ``Camera Native
-(LogC4)``: decode, the post-correction exactly as the config carries it, encode) over the log
-signal's range [0, 1], and kept only where it meets the cube accuracy limit
-(:data:`~ocio_vp.exports.cube.CUBE_LIMIT`, measured with both interpolations by OCIO's own
-``.cube`` reader, :func:`~ocio_vp.exports.cube.fit_cube`); otherwise ``dit.json`` says why and
-names the colour spaces to use instead. Only for environments whose camera gamut is known (the
-log curve follows from it: :mod:`ocio_vp.ocio.camera_log`).
+Baked from the environment's config over the log range [0, 1] and kept only where it meets
+:data:`~ocio_vp.exports.cube.CUBE_LIMIT`; otherwise ``dit.json`` says why. Only for
+environments whose camera gamut (and so log curve) is known.
 """
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from ocio_vp.errors import InputError
 from ocio_vp.exports.cube import CUBE_LIMIT, fit_cube
-from ocio_vp.exports.source import DEFAULT_CUBES, CubeOptions, ExportSource, ExportSummary
+from ocio_vp.exports.source import (
+    DEFAULT_CUBES,
+    CubeOptions,
+    ExportSource,
+    ExportSummary,
+    write_json,
+)
+from ocio_vp.formats.jsontypes import JsonObject
 from ocio_vp.ocio.camera_log import camera_log_for
 from ocio_vp.ocio.viewing import camera_log_names
 
@@ -59,7 +61,7 @@ def write_dit(
         if result.path is not None
         else f"{result.reason}; use the config's {footage!r} -> {native!r} (exact)"
     )
-    manifest = {
+    manifest: JsonObject = {
         "format": "ocio-vp/dit-export",
         "version": 1,
         "stage": solution.stage,
@@ -74,9 +76,7 @@ def write_dit(
         else result.errors.to_dict(),
         "not_written": not_written,
     }
-    (folder / DIT_MANIFEST).write_text(
-        json.dumps(manifest, indent=2, allow_nan=False) + "\n", encoding="utf-8"
-    )
+    write_json(folder / DIT_MANIFEST, manifest)
     if result.path is not None and result.errors is not None:
         return ExportSummary(files=(DIT_MANIFEST, name), cubes={name: result.errors})
     return ExportSummary(files=(DIT_MANIFEST,), not_written={name: str(not_written)})

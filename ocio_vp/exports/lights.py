@@ -1,20 +1,22 @@
 """``lights``: the fixture drives of one environment for the people who run the lights.
 
-``lights.json`` and ``lights.csv`` list, per fixture and in its channel order, each channel's
-DMX universe, fixture mode and address (from the fixture's ``dmx`` patch in the measurements
-file; empty when it has none), drive (units of its ``reference_drive``), its level in [0, 1] of
-``max_drive``, and the 8- and 16-bit DMX values of that level (:mod:`ocio_vp.fixtures.dmx`);
-``lights.json`` adds, for a pixel-mapped fixture, the k x 3 matrix from content RGB to channel
-drives and its gamut limit.
+``lights.json`` and ``lights.csv``: per fixture channel its DMX patch, drive, level and 8- and
+16-bit DMX values (:mod:`ocio_vp.fixtures.dmx`); ``lights.json`` adds a pixel-mapped fixture's
+content-to-drive matrix (docs/fixtures.md).
 """
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from ocio_vp.errors import InputError
-from ocio_vp.exports.source import DEFAULT_CUBES, CubeOptions, ExportSource, ExportSummary
+from ocio_vp.exports.source import (
+    DEFAULT_CUBES,
+    CubeOptions,
+    ExportSource,
+    ExportSummary,
+    write_json,
+)
 from ocio_vp.fixtures.dmx import content_matrix, dmx_csv, dmx_rows
 from ocio_vp.formats.jsontypes import JsonObject
 
@@ -42,12 +44,12 @@ def write_lights(
         if block.pixel_mapped:
             entry["content_matrix"] = content_matrix(block.drives, solution.w_avg, block.max_drive)
         fixtures.append(entry)
-    document = {
+    document: JsonObject = {
         "stage": solution.stage,
         "environment": solution.environment,
         "assumptions": ASSUMPTIONS,
         "fixtures": fixtures,
     }
-    (folder / "lights.json").write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+    write_json(folder / "lights.json", document)
     (folder / "lights.csv").write_text(dmx_csv(rows), encoding="utf-8")
     return ExportSummary()  # the line names no file, as for every fixture export

@@ -1,24 +1,10 @@
 """Nuke export: one ``.nk`` script per environment with its config beside it.
 
-The script sets the Root to the exported OCIO config and holds a Group named after the
-environment: ``Input -> OCIONamedTransform (Q from the config) -> ColorMatrix (Q, disabled)
--> Output``. The ColorMatrix is the config-free fallback: enable it and disable the OCIO node
-where the config cannot be loaded. Q is the paper's post-correction (LeGendre et al. 2022,
-eq. 5), applied to camera-native linear footage.
-
-A non-linear Q (root-polynomial, emitter-protected) is carried by the named transform as the
-config's LUT chain, and a disabled ``OCIOFileTransform`` reading its CLF sidecar is the
-fallback that works under any Root config; the ColorMatrix then holds only the model's 3x3
-approximation, the last resort. The OCIO node's label says how close the chain is to the
-exact model and where it is not close enough (``ocio-vp apply`` computes it exactly).
-
-Paths are relative to the script: Nuke evaluates Tcl in file knobs when it reads them, so
-``[file dirname [value root.name]]/config/config.ocio`` names the config beside the script
-wherever the folder is moved (a bare relative path would be taken relative to Nuke's working
-directory). The OCIO node's context knob (``key1`` / ``value1``) sets ``VP_ENVIRONMENT`` to the
-environment, so the same node picks it from a show config (``export --target show``) when the
-Root points there. The config's default display and view, which Nuke's viewer starts on, are
-a monitor's (``sRGB - Display``), not the wall's drive.
+A Group named after the environment: ``Input -> OCIONamedTransform (Q from the config) ->
+ColorMatrix (Q, disabled) -> Output`` (the ColorMatrix is the config-free fallback; a
+non-linear Q adds a disabled ``OCIOFileTransform`` of its CLF). Paths are relative to the
+script through Tcl (``[file dirname [value root.name]]/config/config.ocio``), and the OCIO
+node's context sets ``VP_ENVIRONMENT`` for a show config (docs/exports.md).
 """
 
 from __future__ import annotations
@@ -33,6 +19,7 @@ from ocio_vp.errors import InputError
 from ocio_vp.exports.escape import nuke_identifier
 from ocio_vp.exports.source import (
     DEFAULT_CUBES,
+    ConfigNames,
     CubeOptions,
     ExportSource,
     ExportSummary,
@@ -72,11 +59,11 @@ def render_nuke_script(
     environment: str,
     Q: np.ndarray,
     config_path: str,
-    names: dict[str, str],
+    names: ConfigNames,
     q_lut: str | None = None,
     model_note: str | None = None,
 ) -> str:
-    """The ``.nk`` text for one environment (see the module docstring for its nodes).
+    """The ``.nk`` text for one environment (its nodes: the module docstring).
 
     ``config_path`` and ``q_lut`` (a non-linear Q's CLF; None for a matrix Q) are relative to
     the script's folder, and ``model_note`` says how the config carries a non-linear Q
@@ -90,8 +77,8 @@ def render_nuke_script(
         config_path=_relative(config_path),
         context_key=CONTEXT_VARIABLE,
         environment=environment,
-        reference=names["reference"],
-        named_transform=names["post_correction"],
+        reference=names.reference,
+        named_transform=names.post_correction,
         group_name=nuke_identifier(environment, prefix="ocio_vp_"),
         label=f"ocio-vp Q: {stage} / {environment}",
         Q=[[float(v) for v in row] for row in Q],

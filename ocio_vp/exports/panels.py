@@ -1,20 +1,9 @@
 """Unreal nDisplay for a stage of several panel types: each type's colour space on its viewports.
 
-The wall (the first in-frustum type) keeps the stage-wide slots of :mod:`ocio_vp.exports.unreal`
-(all viewports -> its outer frustum, the ICVFX camera's inner frustum on every node). Every
-other type overrides them where it is, with nDisplay's per-viewport and per-node OCIO profiles
-(Epic's ``FDisplayClusterConfigurationOCIOProfile``: ``bIsEnabled``, ``ApplyOCIOToObjects``,
-``ColorConfiguration``; checked in Epic's API reference for UE 5.4 to 5.7):
-
-- its outer frustum on its viewports: the root actor's
-  ``StageSettings.ViewportOCIO.PerViewportOCIOProfiles`` (UI "Per-Viewport OCIO Overrides");
-  light cards set to *Use nDisplay Viewport OCIO* follow it;
-- an in-frustum type's inner frustum on the cluster nodes that drive it: the ICVFX camera
-  component's ``CameraSettings.CameraOCIO.PerNodeOCIOProfiles`` (UI "Per-Node OCIO
-  Overrides").
-
-ocio-vp does not know the nDisplay configuration's viewport and node names: each profile's
-``ApplyOCIOToObjects`` is left empty for the stage engineer to fill (UNREAL.md says which).
+The wall (the first in-frustum type) keeps the stage-wide slots of :mod:`ocio_vp.exports.unreal`;
+every other type overrides them with nDisplay's per-viewport (outer frustum) and, in frustum,
+per-node (inner frustum) OCIO profiles. Each profile's ``ApplyOCIOToObjects`` is left empty for
+the stage engineer to fill (UNREAL.md says which; docs/exports.md).
 """
 
 from __future__ import annotations
@@ -75,16 +64,17 @@ def panel_assignments(solution: Solution, source: str) -> PanelAssignments:
     assignments: list[JsonValue] = []
     panels = solution.panels or {}
     primary = next((p.name for p in panels.values() if p.in_frustum), None)
-    display = solution.ocio.get("display")
+    display = solution.ocio.display
     for name, panel in panels.items():
-        if name == primary or not panel.ocio:
+        names = panel.ocio
+        outer, inner = names.out_of_frustum, names.in_frustum if panel.in_frustum else None
+        if name == primary or outer is None:
             continue
-        roles = [("out_of_frustum", "view_out_of_frustum")]
-        roles += [("in_frustum", "view_in_frustum")] if panel.in_frustum else []
-        for role, view in roles:
-            spaces.append(panel.ocio[role])
-            if display and view in panel.ocio:
-                views.append({"display": display, "view": panel.ocio[view]})
+        for space, view in ((outer, names.view_out_of_frustum), (inner, names.view_in_frustum)):
+            if space is not None:
+                spaces.append(space)
+            if space is not None and display and view is not None:
+                views.append({"display": display, "view": view})
         assignments.append(
             _profile(
                 f"nDisplay root actor > ICVFX > OCIO > Per-Viewport OCIO Overrides: the {name} "
@@ -92,11 +82,11 @@ def panel_assignments(solution: Solution, source: str) -> PanelAssignments:
                 ROOT_CONFIG,
                 "StageSettings.ViewportOCIO.PerViewportOCIOProfiles",
                 source,
-                panel.ocio["out_of_frustum"],
+                outer,
                 f"{name}.out_of_frustum",
             )
         )
-        if panel.in_frustum:
+        if inner is not None:
             assignments.append(
                 _profile(
                     f"ICVFX camera component > OCIO > Per-Node OCIO Overrides: the nodes "
@@ -104,7 +94,7 @@ def panel_assignments(solution: Solution, source: str) -> PanelAssignments:
                     CAMERA,
                     "CameraSettings.CameraOCIO.PerNodeOCIOProfiles",
                     source,
-                    panel.ocio["in_frustum"],
+                    inner,
                     f"{name}.in_frustum",
                 )
             )
@@ -117,19 +107,20 @@ def panel_notes(solution: Solution) -> list[str]:
     panels = solution.panels or {}
     primary = next((p.name for p in panels.values() if p.in_frustum), None)
     for name, panel in panels.items():
-        if name == primary or not panel.ocio:
+        outer, inner = panel.ocio.out_of_frustum, panel.ocio.in_frustum
+        if name == primary or outer is None:
             continue
         text = (
             f"Panel type `{name}`: on the nDisplay root actor, **OCIO > Per-Viewport OCIO "
             f"Overrides**, add a profile for the viewports of the {name} (list them in *Apply "
-            f"OCIO To Objects*) with *Destination* = `{panel.ocio['out_of_frustum']}` (its own "
+            f"OCIO To Objects*) with *Destination* = `{outer}` (its own "
             "M: driving it with the wall's gets the actors' light wrong)."
         )
-        if panel.in_frustum:
+        if panel.in_frustum and inner is not None:
             text += (
                 f" On each ICVFX camera component, **OCIO > Per-Node OCIO Overrides**: a "
                 f"profile for the cluster nodes that drive the {name}, *Destination* = "
-                f"`{panel.ocio['in_frustum']}` (its own N)."
+                f"`{inner}` (its own N)."
             )
         notes.append(text)
     return notes

@@ -1,27 +1,14 @@
 """DaVinci Resolve export: CLF of the exact transforms, a DCTL for Q, and baked ``.cube`` LUTs.
 
-- ``*.clf``: the exact post-correction Q (footage -> corrected) and the two wall transforms
-  (content -> drive: M, and N plus the black-level offset, with the panel-linearity LUT1D when
-  the config carries one), serialised by OCIO's own CLF writer from the config's processors.
-- ``post_correction_Q.dctl``: Q (LeGendre et al. 2022, eq. 5) as a DCTL in full float precision;
-  for a non-linear Q (root-polynomial, emitter-protected), the model itself (its terms and
-  coefficients, sign-preserving roots, its fades), not its 3x3 approximation. The CLFs carry a
-  non-linear Q as the config does (its LUT chain, :mod:`ocio_vp.ocio.bake`): the manifest gives
-  its measured agreement with the model and names the DCTL as the exact alternative; its
-  ``.cube`` is written only if it meets the limit.
-- ``*_<size>.cube``: the same transforms as a 1D shaper + 3D LUT over an HDR input range,
-  written only when the measured worst error meets :data:`ocio_vp.exports.cube.CUBE_LIMIT`
-  (:mod:`ocio_vp.exports.cube`): in practice the affine transforms (Q; walls without a
-  linearity LUT or encoding). A wall chain with a clip or a curve gets no cube; the manifest
-  says why and points to its CLF.
-- ``manifest.json``: every file with its accuracy, every file not written with the reason,
-  and ``resolve_file``: *the* file to grade footage with in Resolve (the post-correction's cube
-  where it meets the limit, else the exact DCTL) and why.
+``*.clf``: Q and the two wall transforms, serialised by OCIO's CLF writer from the config;
+``post_correction_Q.dctl``: Q (LeGendre et al. 2022, eq. 5), or a non-linear model itself;
+``*_<size>.cube``: written only where they meet :data:`ocio_vp.exports.cube.CUBE_LIMIT`;
+``manifest.json``: every file with its accuracy, every file not written with the reason, and
+``resolve_file``, the file to grade footage with (docs/exports.md).
 """
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -39,6 +26,7 @@ from ocio_vp.exports.source import (
     ExportSource,
     ExportSummary,
     post_correction_carriage,
+    write_json,
 )
 from ocio_vp.exports.templating import render_template
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
@@ -76,18 +64,18 @@ def resolve_transforms(source: ExportSource) -> dict[str, tuple[str, str, str]]:
     names = source.names
     return {
         "post_correction_Q": (
-            names["post_correction_colorspace"],
-            names["reference"],
+            names.post_correction_colorspace,
+            names.reference,
             "Post-correction Q for footage shot on the stage (camera linear in and out).",
         ),
         "wall_out_of_frustum": (
-            names["reference"],
-            names["out_of_frustum"],
+            names.reference,
+            names.out_of_frustum,
             "Content to LED drive OUTSIDE the camera frustum (M; lights the actors).",
         ),
         "wall_in_frustum": (
-            names["reference"],
-            names["in_frustum"],
+            names.reference,
+            names.in_frustum,
             "Content to LED drive INSIDE the camera frustum (N = M Q^-1 plus black-level offset).",
         ),
     }
@@ -291,7 +279,7 @@ def write_resolve(
     dctl.write_text(text, encoding="utf-8")
     files[dctl.name] = {"kind": "dctl", "accuracy": accuracy}
     footage = resolve_file({k: v.max_error for k, v in baked.items()}, size=cubes.size)
-    manifest = {
+    manifest: JsonObject = {
         "format": "ocio-vp/resolve-export",
         "version": 1,
         "stage": solution.stage,
@@ -302,9 +290,7 @@ def write_resolve(
         "not_written": not_written,
         "resolve_file": footage,
     }
-    (folder / MANIFEST).write_text(
-        json.dumps(manifest, indent=2, allow_nan=False) + "\n", encoding="utf-8"
-    )
+    write_json(folder / MANIFEST, manifest)
     return ExportSummary(
         files=(*files, MANIFEST),
         line=f"the Resolve file for footage: {footage['file']} ({footage['why']}); every "

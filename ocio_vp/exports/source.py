@@ -8,6 +8,7 @@ loaded and checked before anything is exported.
 
 from __future__ import annotations
 
+import json
 import shutil
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -17,9 +18,8 @@ import PyOpenColorIO as OCIO
 
 from ocio_vp.errors import InputError
 from ocio_vp.exports.cube import CubeAccuracy
-from ocio_vp.formats.jsontypes import JsonObject
-from ocio_vp.formats.measurements import check_safe_name
-from ocio_vp.formats.solution import Solution, load_solution
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue
+from ocio_vp.formats.solution import OcioNames, Solution, load_solution
 from ocio_vp.model.footage_range import Agreement
 
 #: Cube lattice size and input range (camera RGB) of every exported .cube.
@@ -43,6 +43,7 @@ __all__ = [
     "DEFAULT_CUBE_RANGE",
     "DEFAULT_CUBE_SIZE",
     "Carriage",
+    "ConfigNames",
     "CubeOptions",
     "ExportSource",
     "ExportSummary",
@@ -50,6 +51,7 @@ __all__ = [
     "load_export_source",
     "post_correction_carriage",
     "sidecar_dirs",
+    "write_json",
 ]
 
 
@@ -72,6 +74,18 @@ class ExportSummary:
 
 
 @dataclass(frozen=True)
+class ConfigNames:
+    """The names of solution.json's ``ocio`` block every export uses, each found in the
+    config: four colour spaces and the post-correction's named transform."""
+
+    reference: str
+    out_of_frustum: str
+    in_frustum: str
+    post_correction_colorspace: str
+    post_correction: str
+
+
+@dataclass(frozen=True)
 class ExportSource:
     """One solved environment ready to export."""
 
@@ -79,27 +93,29 @@ class ExportSource:
     solution: Solution
     config_path: Path
     config: OCIO.Config
-
-    @property
-    def names(self) -> dict[str, str]:
-        """Colorspace roles -> names in the config (the ``ocio`` block of solution.json)."""
-        return dict(self.solution.ocio)
+    names: ConfigNames
 
 
-def _check_names_in_config(config: OCIO.Config, names: dict[str, str], source: str) -> None:
-    for role in ("reference", "out_of_frustum", "in_frustum", "post_correction_colorspace"):
-        name = names.get(role)
-        if not isinstance(name, str) or config.getColorSpace(name) is None:
+def _checked_names(config: OCIO.Config, names: OcioNames, source: str) -> ConfigNames:
+    def found(name: str | None, role: str) -> str:
+        transform = role == "post_correction"
+        lookup = config.getNamedTransform if transform else config.getColorSpace
+        if name is None or lookup(name) is None:
+            kind = "named transform" if transform else "colorspace"
             raise InputError(
-                f"colorspace {name!r} is not in the config", source=source, key=f"ocio.{role}"
+                f"{kind} {name!r} is not in the config", source=source, key=f"ocio.{role}"
             )
-    named = names.get("post_correction")
-    if not isinstance(named, str) or config.getNamedTransform(named) is None:
-        raise InputError(
-            f"named transform {named!r} is not in the config",
-            source=source,
-            key="ocio.post_correction",
-        )
+        return name
+
+    return ConfigNames(
+        reference=found(names.reference, "reference"),
+        out_of_frustum=found(names.out_of_frustum, "out_of_frustum"),
+        in_frustum=found(names.in_frustum, "in_frustum"),
+        post_correction_colorspace=found(
+            names.post_correction_colorspace, "post_correction_colorspace"
+        ),
+        post_correction=found(names.post_correction, "post_correction"),
+    )
 
 
 def load_export_source(directory: str | Path) -> ExportSource:
@@ -121,12 +137,8 @@ def load_export_source(directory: str | Path) -> ExportSource:
         if isinstance(error, InputError):
             raise
         raise InputError(f"malformed solution: {error!r}", source=json_path) from None
-    if not isinstance(solution.ocio, dict):
-        raise InputError("expected a mapping", source=json_path, key="ocio")
-    check_safe_name(solution.environment, source=json_path, key="environment")
-    check_safe_name(solution.stage, source=json_path, key="stage")
-    config_name = solution.ocio.get("config", "config.ocio")
-    if not isinstance(config_name, str) or Path(config_name).name != config_name:
+    config_name = solution.ocio.config_file
+    if Path(config_name).name != config_name:
         raise InputError(
             f"config must be a file name beside solution.json, got {config_name!r}",
             source=json_path,
@@ -138,8 +150,13 @@ def load_export_source(directory: str | Path) -> ExportSource:
         config.validate()
     except (OCIO.Exception, OCIO.ExceptionMissingFile) as error:
         raise InputError(f"cannot load the OCIO config: {error}", source=config_path) from None
-    _check_names_in_config(config, solution.ocio, str(json_path))
-    return ExportSource(directory, solution, config_path, config)
+    names = _checked_names(config, solution.ocio, str(json_path))
+    return ExportSource(directory, solution, config_path, config, names)
+
+
+def write_json(path: Path, document: JsonValue) -> None:
+    """Write ``document`` as indented JSON (finite numbers only) with a final newline."""
+    path.write_text(json.dumps(document, indent=2, allow_nan=False) + "\n", encoding="utf-8")
 
 
 def sidecar_dirs(source: ExportSource) -> list[Path]:

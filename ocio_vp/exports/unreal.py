@@ -1,23 +1,13 @@
 """Unreal Engine nDisplay (ICVFX) export: the config folder, a ``.ocioz``, ``UNREAL.md`` and
-``unreal_ocio.json`` saying which colorspace goes where.
+``unreal_ocio.json`` saying which colorspace goes in which nDisplay OCIO slot.
 
-nDisplay picks a source and a destination colorspace per OCIO slot. Property paths and enum
-values are those of Epic's nDisplay API reference (UE 5.2+; see docs/exports.md for the pages):
-the root actor's ``StageSettings.ViewportOCIO.AllViewportsOCIOConfiguration`` (UI "All Viewports
-Color Configuration"), ``StageSettings.Lightcard.LightcardOCIO.LightcardOCIOMode`` = ``nDisplay``
-(UI "Use nDisplay Viewport OCIO"), and the ICVFX camera component's
-``CameraSettings.CameraOCIO.AllNodesOCIOConfiguration`` (UI "All Nodes Color Configuration"):
-
-- the outer viewports and the light cards light the actors: destination = out-of-frustum (M);
-- the ICVFX camera's inner frustum is the in-camera background: destination = in-frustum
-  (N = M Q^-1 plus the black-level offset; LeGendre et al. 2022, eq. 8 and Section 3.4);
-- the source is the content's working space: Unreal's own working space (Linear Rec.709) when
-  the config carries working spaces (the stage named its camera gamut), else the reference.
+The outer viewports and light cards get the out-of-frustum colour space (M), the ICVFX camera's
+inner frustum the in-frustum one (N plus the black-level offset); the source is Unreal's working
+space when the config carries working spaces, else the reference (docs/exports.md).
 """
 
 from __future__ import annotations
 
-import json
 import zipfile
 from pathlib import Path
 
@@ -34,10 +24,12 @@ from ocio_vp.exports.source import (
     ExportSummary,
     copy_config,
     post_correction_carriage,
+    write_json,
 )
 from ocio_vp.exports.templating import render_template
 from ocio_vp.exports.unreal_script import SCRIPT_FILE, render_unreal_script
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
+from ocio_vp.formats.solution import OcioNames
 from ocio_vp.ocio.config import WORKING_SPACE_NAMES
 
 __all__ = ["MAPPING_FILE", "unreal_mapping", "write_ocioz", "write_unreal"]
@@ -103,7 +95,7 @@ def _content_space(source: ExportSource) -> tuple[str, list[str]]:
     """The colour space content is rendered in (Unreal's working space when the config has
     it, else the camera's native linear RGB) and the alternatives the config offers."""
     has_working = source.config.getColorSpace(UNREAL_WORKING_SPACE) is not None
-    content = UNREAL_WORKING_SPACE if has_working else source.names["reference"]
+    content = UNREAL_WORKING_SPACE if has_working else source.names.reference
     alternatives = [ACESCG] if has_working and source.config.getColorSpace(ACESCG) else []
     return content, alternatives
 
@@ -112,17 +104,13 @@ def _desired_spaces(source: ExportSource, content: str) -> list[str]:
     """The colour spaces the OpenColorIO Configuration asset must offer."""
     names = source.names
     panels = panel_assignments(source.solution, content)
-    return [content, names["out_of_frustum"], names["in_frustum"], *panels.color_spaces]
+    return [content, names.out_of_frustum, names.in_frustum, *panels.color_spaces]
 
 
-def _display_views(names: dict[str, str]) -> list[JsonValue]:
-    """The wall's two display views, when the config has a display."""
-    if "display" not in names:
-        return []
-    return [
-        {"display": names["display"], "view": names[view]}
-        for view in ("view_out_of_frustum", "view_in_frustum")
-    ]
+def _display_views(names: OcioNames) -> list[JsonValue]:
+    """The wall's display views, when the config has a display."""
+    views = (names.view_out_of_frustum, names.view_in_frustum)
+    return [{"display": names.display, "view": v} for v in views if names.display and v]
 
 
 def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> JsonObject:
@@ -161,7 +149,7 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> JsonObje
             "class": "UOpenColorIOConfiguration",
             "configuration_file": config,
             "desired_color_spaces": _desired_spaces(source, content),
-            "desired_display_views": _display_views(names) + panels.display_views,
+            "desired_display_views": _display_views(solution.ocio) + panels.display_views,
         },
         "content_working_space_alternatives": alternatives,
         "unreal_versions": UNREAL_VERSIONS,
@@ -170,7 +158,7 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> JsonObje
                 "nDisplay root actor > ICVFX > OCIO > All Viewports Color Configuration",
                 ROOT_CONFIG,
                 "StageSettings.ViewportOCIO.AllViewportsOCIOConfiguration",
-                names["out_of_frustum"],
+                names.out_of_frustum,
                 "out_of_frustum",
             ),
             {
@@ -182,19 +170,19 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> JsonObje
                 "value": "nDisplay",
                 "python_value": "unreal.DisplayClusterConfigurationViewportLightcardOCIOMode"
                 ".N_DISPLAY",
-                "destination": names["out_of_frustum"],
+                "destination": names.out_of_frustum,
                 "role": "out_of_frustum",
             },
             slot(
                 "ICVFX camera component > OCIO > All Nodes Color Configuration",
                 "UDisplayClusterICVFXCameraComponent",
                 "CameraSettings.CameraOCIO.AllNodesOCIOConfiguration",
-                names["in_frustum"],
+                names.in_frustum,
                 "in_frustum",
             ),
             *panels.assignments,
         ],
-        "post_correction": names["post_correction"],
+        "post_correction": names.post_correction,
         "post_correction_carriage": None if carriage is None else carriage.to_dict(),
         "N_solved": solution.N is not None,
         "content_scale": content_scale(solution).to_dict(),
@@ -226,13 +214,11 @@ def write_unreal(
     ocioz = write_ocioz(copied, folder / f"{solution.environment}.ocioz")
     config_rel = f"config/{copied.name}"
     mapping = unreal_mapping(source, config=config_rel, ocioz=ocioz.name)
-    (folder / MAPPING_FILE).write_text(
-        json.dumps(mapping, indent=2, allow_nan=False) + "\n", encoding="utf-8"
-    )
+    write_json(folder / MAPPING_FILE, mapping)
     names = source.names
     content, alternatives = _content_space(source)
     carriage = post_correction_carriage(solution)
-    if content == names["reference"]:
+    if content == names.reference:
         note = (
             "The config has no working spaces (the stage did not name its camera gamut), so "
             "the source is the camera's native linear RGB: render content in that space."
@@ -254,9 +240,9 @@ def write_unreal(
         ocioz=ocioz.name,
         source=content,
         desired=_desired_spaces(source, content),
-        out_of_frustum=names["out_of_frustum"],
-        in_frustum=names["in_frustum"],
-        post_correction=names["post_correction"],
+        out_of_frustum=names.out_of_frustum,
+        in_frustum=names.in_frustum,
+        post_correction=names.post_correction,
         source_note=note,
         n_solved=solution.N is not None,
         n_reason=solution.diagnostics.N_reason or "Q is not invertible",
@@ -272,8 +258,8 @@ def write_unreal(
         environment=solution.environment,
         config_name=copied.name,
         source=content,
-        out_of_frustum=names["out_of_frustum"],
-        in_frustum=names["in_frustum"],
+        out_of_frustum=names.out_of_frustum,
+        in_frustum=names.in_frustum,
         context={CONTEXT_VARIABLE: solution.environment},
     )
     (folder / SCRIPT_FILE).write_text(script, encoding="utf-8")

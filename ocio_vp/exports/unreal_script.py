@@ -1,22 +1,9 @@
 """The Unreal export's editor Python script (``ocio_vp_setup.py``).
 
-Run in the Unreal Editor (Output Log, ``py "<folder>/ocio_vp_setup.py"``), it creates or updates
-the OpenColorIO Configuration asset for the exported config and sets, on every nDisplay root
-actor of the open level, the outer viewports' colour conversion, the light cards' OCIO mode and,
-on each ICVFX camera component, the inner frustum's conversion. It is written against Epic's
-published Python API (the property names below, from the ``unreal.<Class>`` pages of the
-Python API reference; docs/exports.md lists them per version); nothing here runs Unreal, and
-``tests/test_exports_unreal_script.py`` checks that the script compiles and that every editor
-property it sets is one of those pages lists for that struct.
-
-What differs per engine version (the script reads ``unreal.SystemLibrary.get_engine_version``):
-
-- 5.1, 5.2: ``OpenColorIOColorSpace``'s fields are read-only from Python, so no colour space can
-  be named from a script: it sets the configuration file and prints the names to pick by hand;
-- 5.2+: light cards have ``lightcard_ocio.lightcard_ocio_mode`` (set to ``N_DISPLAY``);
-- 5.3+: the colour spaces, the outer viewports' and the inner frustum's conversions are set;
-- 5.5+: the asset's ``context`` map sets ``VP_ENVIRONMENT`` (it selects the environment in a
-  show config; a per-environment config ignores it).
+Run in the Unreal Editor, it creates or updates the OpenColorIO Configuration asset and sets
+the nDisplay root actors' and ICVFX cameras' OCIO conversions, written against Epic's published
+Python API per engine version (the script reads ``unreal.SystemLibrary.get_engine_version``;
+docs/exports.md lists the properties and what each version allows).
 """
 
 from __future__ import annotations

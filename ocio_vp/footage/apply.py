@@ -128,16 +128,15 @@ def load_post_correction(
     solution = load_solution(solution_dir)
     folder = Path(solution_dir)
     folder = folder if folder.is_dir() else folder.parent
-    names = dict(solution.ocio or {})
-    if "post_correction_colorspace" not in names or "reference" not in names:
+    names = solution.ocio
+    source, target = names.post_correction_colorspace, names.reference
+    if source is None or target is None:
         # Deferred: the ocio package pulls in the wall's encodings (scipy: costly at start-up)
         # and solution.json names both colorspaces; only files without them need the defaults.
         from ocio_vp.ocio.config import POST_CORRECTION_COLORSPACE, REFERENCE
 
-        names.setdefault("post_correction_colorspace", POST_CORRECTION_COLORSPACE)
-        names.setdefault("reference", REFERENCE)
-    config_path = (folder / names.get("config", "config.ocio")).resolve()
-    source, target = names["post_correction_colorspace"], names["reference"]
+        source, target = source or POST_CORRECTION_COLORSPACE, target or REFERENCE
+    config_path = (folder / names.config_file).resolve()
     try:
         config = OCIO.Config.CreateFromFile(str(config_path))
         config.getProcessor(source, target)

@@ -13,13 +13,22 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from ocio_vp.errors import InputError
+from ocio_vp.errors import InputError, excerpt
 from ocio_vp.formats.geometry import PanelGeometry
 from ocio_vp.formats.jsontypes import JsonMapping, JsonValue
 
-__all__ = ["Checker"]
+__all__ = ["Checker", "describe"]
 
 Key = tuple[str | int, ...]
+
+
+def describe(value: JsonValue) -> str:
+    """What a wrong value is, for "expected ..., got ..." messages."""
+    if isinstance(value, (list, tuple)):
+        return f"a list of {len(value)}"
+    if value is None:
+        return "nothing"
+    return f"{type(value).__name__} {excerpt(value)}"
 
 
 class Checker(Protocol):

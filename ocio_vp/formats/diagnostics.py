@@ -260,136 +260,42 @@ class Inconsistency(Record):
 
 @dataclass(frozen=True)
 class Diagnostics(Record):
-    """What a solve measured about itself: ``solution.json``'s ``diagnostics`` block.
+    """What a solve measured about itself: ``solution.json``'s ``diagnostics`` block (keys and
+    meaning: docs/stability.md, docs/solution.md).
 
-    Errors are the paper's Fig. 11 metric, per channel, relative to the target white patch
-    (:func:`ocio_vp.metrics.error_relative_to_white`), over the patches the fit used. Every
-    field has one type, the same after a solve and after
-    :func:`~ocio_vp.formats.solution.load_solution` (arrays float64, blocks typed records):
-    read it by attribute. :meth:`to_dict` is the block as written, keys in file order.
+    Every field has one type, the same after a solve and after
+    :func:`~ocio_vp.formats.solution.load_solution` (arrays float64, blocks typed records): read
+    it by attribute. Errors are the paper's Fig. 11 metric, per channel, relative to the target
+    white patch (:func:`ocio_vp.metrics.error_relative_to_white`), over the patches the fit used.
 
     Attributes
     ----------
     white_patch
         Index of the chart's white patch, 0-based as in the file (0 is a valid patch; people
         see patches numbered from 1 with their names).
-    cond_SL, cond_Q
-        2-norm condition numbers of [SL] and Q.
-    rank_Q
-        Numerical rank of Q.
-    N_solved, N_reason
-        Whether N = M Q^-1 was solved (eq. 8), and why not when it was not.
-    max_condition_q_for_N
-        The cond(Q) above which N is not solved.
-    lit_chart_error_baseline, lit_chart_error
-        (3,) the lit chart (eq. 3) against the target: through M alone, and after Q.
-    residual_rms
-        RMS of the lit chart after Q minus the target, in camera units.
+    cond_SL, cond_Q, rank_Q
+        2-norm condition numbers of [SL] and Q, and Q's numerical rank.
+    N_solved, N_reason, max_condition_q_for_N
+        Whether N = M Q^-1 was solved (eq. 8), why not, and the cond(Q) above which it is not.
+    lit_chart_error_baseline, lit_chart_error, residual_rms
+        (3,) the lit chart (eq. 3) against the target through M alone and after Q; the RMS of
+        the latter in camera units.
     displayed_chart_error_baseline, displayed_chart_error
-        (3,) the chart shown on the wall in-frustum as the camera records it, against the
-        target: through M (no Q), and through N and the black-level offset, then Q.
+        (3,) the chart shown in-frustum as the camera records it, through M (no Q), and through
+        N and the black-level offset, then Q.
     out_of_frustum_drive
         (3,) the lighting drive M w_avg.
     method_notes
-        What the Q method reported about itself, for people (method specific). The model
-        itself is the solution's ``post_correction``; no module reads it from here.
-    warnings
-        Sentences for the stage engineer (also printed by ``ocio-vp solve``).
-    charts
-        Per-patch (n, 3) camera RGB for the report: ``target``, ``lit_baseline``,
-        ``lit_corrected``, ``displayed_baseline``, ``displayed_corrected``.
-    model, model_reason
-        The Q model fitted (``auto`` chooses one) and why.
-    rank_target
-        The target chart's rank as the method saw it (rank-aware methods), else None.
-    cross_validated_error
-        (3,) leave-one-patch-out lit-chart error, None for an iterative method that does not
-        report its own (re-solving once per patch would multiply the solve time by n).
-    residuals_per_patch
-        (n, 3) signed residuals after Q, relative to the target white.
-    out_of_frustum_negative_channels
-        Channels of M w_avg below zero (the light is outside the LED gamut; the wall clips).
-    lit_chart_error_clipped_drive, lit_chart_error_baseline_clipped_drive
-        (3,) the lit-chart error after Q, and through M alone, when the wall clips a negative
-        drive, else None.
-    charts_clipped_drive
-        ``lit_baseline`` and ``lit_corrected`` (n, 3) as the wall lights the chart when it clips
-        a negative drive, else None (the report draws these then, like the figures it shows).
-    in_frustum_drive_range
-        How many chart colours the in-frustum matrix drives outside [0, 1] (``below_zero``,
-        ``above_max``, ``patches_outside``, ``max_drive``, ``content_scale``,
-        ``below_zero_with_M``, ``above_max_with_M``); see
-        :func:`ocio_vp.calibration.diagnostics.in_frustum_drive_range`.
-    black_level_bounce
-        (3,) the panels' bounced light relative to the wall's white (Section 3.4), or None.
-    clipped_patches
-        Chart patches left out of the fit because they reach the clip level.
-    N_equals_M
-        True when N is exactly M (Q is the identity).
-    identity_check
-        ``max_abs_error`` of eq. 7 (``Q [SL] N = I``) and its rounding ``bound``, or None.
-    fixtures
-        The practical fixtures' drive solve (:func:`ocio_vp.fixtures.fixtures_diagnostics`):
-        whether they are used and why, the error Q cannot remove with and without them, the
-        active limits; only written when the measurements have a ``fixtures`` section.
-    patch_screening
-        Whether patches inconsistent with the rest of the chart were looked for (False with
-        ``--keep-all-patches``).
-    excluded_patches
-        The patches excluded as inconsistent: ``index``, ``name``, ``relative`` (how far off,
-        relative to the patch itself), ``z`` (robust standard deviations), ``influence`` (mean
-        ΔE2000 by which it moves the fit's colours of the other patches), ``deletion`` (how many
-        times better the other patches are predicted without it than without a typical patch)
-        and ``residual`` (the held-out prediction minus the target, per channel, relative to
-        white); for two neighbours that look swapped also ``swapped_with`` (the other's
-        index), ``swapped_name`` and ``swap_residuals`` (the pair's held-out residuals as read
-        and exchanged, fitted without both, relative to white; both patches are listed),
-        otherwise those three are null; when the data cannot tell which of two patches is the
-        bad one (both excluded), ``ambiguous_with`` and ``ambiguous_name`` name the other and
-        ``ambiguous_deletion`` is its ``deletion``, otherwise null; see
-        :mod:`ocio_vp.correction.outliers`.
-    model_description
-        The post-correction in words (kind, bounds, protection).
-    extrapolation
-        How the post-correction behaves beyond the chart
-        (:class:`ocio_vp.correction.extrapolation.Extrapolation`): ``led_damage`` and
-        ``led_damage_least_squares`` (p95 ΔE2000 of the wall's own LEDs in frame, through it
-        and through least squares), ``kept`` and ``negative`` (bright saturated inputs: least
-        share of the dominant channel kept, lowest channel relative to it; null where a
-        dominant output is at or below zero, older files say "-inf"), ``folds`` (share
-        of the reflective solid where it maps two colours to one).
-    synthesized_target
-        How a synthesized target chart was made (``ocio-vp target-chart``); only written for
-        an environment whose chart was synthesized.
-    panels
-        Only for a stage of several panel types (``panels`` in the measurements file):
-        ``primary`` (the first in-frustum type, whose M and N are the top-level ones),
-        ``shares`` (each type's part of the light on the white patch, by luminance),
-        ``lit_white_error`` (3,) (the lit white against the target's, per channel relative to
-        it, before Q) and ``lit_white_error_primary_M`` (the same with every type driven by
-        the primary's M, as a calibration of that type alone would), and
-        ``in_frustum_match`` (how the in-frustum types match in camera on the chart:
-        :func:`ocio_vp.calibration.panels.in_frustum_match`, None for one in-frustum type).
-    post_correction_ocio
-        How the config carries a non-linear post-correction (:mod:`ocio_vp.ocio.bake`):
-        ``files`` (its LUT chains' sidecars), ``lut_size``, ``chains`` (each one's design),
-        ``agreement`` (ΔE2000 of the Q chain against the exact model, ``p99`` and ``worst`` per
-        set of the camera range and over ``all``, and the ``worst_input``) and
-        ``inverse_agreement`` (the same for the content through the Q^-1 chain and back through
-        the model; null without Q^-1); only written for a non-linear post-correction.
-    skin
-        What the solve expects of skin (:class:`ocio_vp.formats.skin.SkinFigures`): mean
-        ΔE2000 on its skin samples for the post-correction and least squares, per lightness
-        band, the chart's beside them, and with skin first the default's; only written where
-        the chart gives skin samples (docs/skin.md).
-    assumed
-        What the solve assumed for optional measurements the file did not give, one sentence
-        each (no ``black_level``: no in-frustum offset; no ``stage.white_patch``: patch 19);
-        only written when something was assumed.
-    extra
-        Keys of a loaded file that this version does not know, kept so they round-trip.
+        What the Q method reported about itself, for people; no module reads it (the model is
+        the solution's ``post_correction``).
+    residuals_per_patch, cross_validated_error
+        (n, 3) signed residuals after Q, relative to the target white; (3,) leave-one-patch-out
+        lit-chart error, None for a method that does not report one.
+    *_clipped_drive
+        The same figures when the wall clips a negative drive, else None.
     present
-        The keys a loaded file had, in its order (None after a solve: every field).
+        The keys a loaded file had, in its order (None after a solve: every field); ``extra``
+        those this version does not know, kept so they round-trip.
     """
 
     white_patch: int = DEFAULT_WHITE_PATCH

@@ -1,23 +1,10 @@
 """Reading YAML/JSON documents and other input files with bounded work.
 
-Input files come from other tools, scripts and people, sometimes by mistake and sometimes
-crafted. Every reader here is bounded so that a small or odd input cannot make ocio-vp hang or
-exhaust memory:
-
-- only regular files are read (a FIFO, device or socket is refused before it is read, and it
-  is opened non-blocking so a file swapped for a FIFO cannot block either);
-- a document is at most :data:`MAX_DOCUMENT_BYTES` bytes;
-- YAML nesting is at most :data:`MAX_DEPTH` levels and a YAML document holds at most
-  :data:`MAX_YAML_VALUES` values, counted *after* aliases are expanded (an alias bomb is refused
-  before anything walks it);
-- duplicate mapping keys are errors in YAML and JSON (the last one silently winning hides
-  typos and edits gone wrong);
-- integers too long to be a float64 are errors, not ``OverflowError``/int-string-limit
-  tracebacks;
-- a YAML document holds JSON's values only (:data:`~ocio_vp.formats.jsontypes.JsonValue`): a date, and
-  an integer key, are kept as their text; other keys that are not text (``null``, ``yes``, a
-  number with a point), ``!!binary``, ``!!set``, ``!!omap`` and ``!!pairs`` are errors, so what
-  a file holds has one type whichever of the two it is.
+A small or odd input (a FIFO, a huge file, deep nesting, an alias bomb, duplicate keys, an
+integer too long for a float64, a YAML tag beyond plain data) is refused with an
+:class:`~ocio_vp.errors.InputError` before it can make ocio-vp hang or exhaust memory (limits:
+docs/measurements.md). A YAML document holds JSON's values only
+(:data:`~ocio_vp.formats.jsontypes.JsonValue`): a date and an integer key are kept as text.
 """
 
 from __future__ import annotations

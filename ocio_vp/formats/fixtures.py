@@ -1,27 +1,9 @@
-"""The optional ``fixtures`` section of a measurements file: practical lights beside the wall.
+"""The optional ``fixtures`` section of a measurements file: practical lights beside the wall
+(keys: docs/fixtures.md).
 
-Each fixture (an RGBW soft light, an RGBACL panel, a pixel-mapped tile with a white channel) is
-described by what the camera saw of it, like the wall's ``lit_chart``::
-
-    fixtures:
-      - name: key                     # same rules as environment names
-        channels: [red, green, blue, white]
-        reference_drive: 1.0          # the drive at which each channel's chart was shot
-        max_drive: 1.0                # optional, default 1.0
-        pixel_mapped: false           # optional: fed from the content (exports a k x 3 matrix)
-        lit_chart:                    # the chart lit by that channel alone, as photographed
-          red: [[r, g, b], ...]       # one row per patch, same camera/exposure as lit_chart
-          ...
-        direct:                       # optional: camera RGB of each channel seen directly
-          red: [r, g, b]
-        dmx:                          # optional: where the desk sends it
-          universe: 1                 # 0..63999 (Art-Net counts from 0, sACN from 1)
-          address: 101                # start address of the fixture, 1..512
-          mode: 16-bit                # 8-bit (one slot per channel) or 16-bit (coarse, fine)
-
-The solver assumes each channel's light is proportional to its drive (set the fixture's dimming
-curve to linear), so the chart lit by channel c at drive u is ``u / reference_drive`` times
-its ``lit_chart``.
+Each fixture is described by what the camera saw of it, like the wall's ``lit_chart``: one
+chart per channel at ``reference_drive``. The solver assumes light proportional to drive, so
+channel c at drive u lights the chart ``u / reference_drive`` times its ``lit_chart``.
 """
 
 from __future__ import annotations

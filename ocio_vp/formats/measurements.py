@@ -22,17 +22,20 @@ import yaml
 
 from ocio_vp.choices import DEFAULT_WHITE_PATCH, PRIORITIES
 from ocio_vp.errors import InputError, excerpt, format_key_path
+from ocio_vp.formats.checker import describe
 from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.fixtures import Fixture, fixtures_to_dict, parse_fixtures
 from ocio_vp.formats.geometry import PanelGeometry
 from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
 from ocio_vp.formats.panels import (
     PanelType,
+    lit_dicts,
     panel_values_to_dict,
     panels_to_dict,
     parse_panel_values,
     parse_panels,
     primary_panel,
+    rows,
 )
 from ocio_vp.formats.synthesis import SynthesisRecord, parse_synthesis, synthesis_to_dict
 from ocio_vp.formats.wall_state import WALL_STATE_KEYS, WallState, parse_wall_state
@@ -196,7 +199,7 @@ class Validator:
         optional: tuple[str, ...] = (),
     ) -> Mapping[str, Any]:
         if not isinstance(value, Mapping):
-            raise self.error(key, f"expected a mapping, got {_kind(value)}")
+            raise self.error(key, f"expected a mapping, got {describe(value)}")
         # Unknown keys first: a misspelt required key is reported as the typo it is.
         allowed = set(required) | set(optional)
         for name in value:
@@ -257,7 +260,7 @@ class Validator:
     ) -> float:
         """A finite float64 in ``[minimum, maximum]`` (``(minimum, maximum]`` when ``strict``)."""
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.error(key, f"expected a number, got {_kind(value)}")
+            raise self.error(key, f"expected a number, got {describe(value)}")
         try:
             number = float(value)
         except OverflowError:  # an integer beyond float64
@@ -281,7 +284,7 @@ class Validator:
     ) -> np.ndarray:
         """Camera ``[r, g, b]``: each value in ``[minimum, maximum]``."""
         if not isinstance(value, (list, tuple)) or len(value) != 3:
-            raise self.error(key, f"expected [r, g, b], got {_kind(value)}")
+            raise self.error(key, f"expected [r, g, b], got {describe(value)}")
         out = np.array(
             [
                 self.number(v, (*key, i), minimum=minimum, maximum=maximum)
@@ -293,7 +296,7 @@ class Validator:
 
     def chart(self, value: JsonValue, key: tuple[str | int, ...], n: int | None) -> np.ndarray:
         if not isinstance(value, (list, tuple)) or not value:
-            raise self.error(key, f"expected a list of [r, g, b] patches, got {_kind(value)}")
+            raise self.error(key, f"expected a list of [r, g, b] patches, got {describe(value)}")
         if n is not None and len(value) != n:
             raise self.error(key, f"has {len(value)} patches, expected {n} like lit_chart.red")
         return np.stack([self.rgb(v, (*key, i)) for i, v in enumerate(value)])
@@ -315,14 +318,6 @@ class Validator:
                 "starting with a letter or digit",
             )
         return value
-
-
-def _kind(value: JsonValue) -> str:
-    if isinstance(value, (list, tuple)):
-        return f"a list of {len(value)}"
-    if value is None:
-        return "nothing"
-    return f"{type(value).__name__} {excerpt(value)}"
 
 
 def check_safe_name(value: JsonValue, *, source: object = None, key: str | None = None) -> str:
@@ -502,7 +497,9 @@ def parse_stage(ctx: Validator, value: JsonValue, *, calibration: bool = True) -
                 )
     white_patch = stage.get("white_patch", DEFAULT_WHITE_PATCH)
     if isinstance(white_patch, bool) or not isinstance(white_patch, int):
-        raise ctx.error((*key, "white_patch"), f"expected a patch index, got {_kind(white_patch)}")
+        raise ctx.error(
+            (*key, "white_patch"), f"expected a patch index, got {describe(white_patch)}"
+        )
     # A "white" patch reflecting under 1% is a mistake (and would blow w_avg up).
     reflectance = ctx.number(
         stage.get("white_reflectance", 0.9), (*key, "white_reflectance"), minimum=0.01
@@ -534,7 +531,7 @@ def parse_stage(ctx: Validator, value: JsonValue, *, calibration: bool = True) -
 def _skin_patches(ctx: Validator, value: JsonValue, key: tuple[str | int, ...]) -> tuple[int, ...]:
     """``stage.skin_patches``: distinct patch indices (checked against the chart later)."""
     if not isinstance(value, list):
-        raise ctx.error(key, f"expected a list of patch indices, got {_kind(value)}")
+        raise ctx.error(key, f"expected a list of patch indices, got {describe(value)}")
     indices: list[int] = []
     for i, index in enumerate(value):
         if isinstance(index, bool) or not isinstance(index, int) or index < 0:
@@ -578,7 +575,7 @@ def _parse_environments(
     ctx: Validator, value: JsonValue, n: int | None, panels: tuple[PanelType, ...] = ()
 ) -> tuple[Environment, ...]:
     if not isinstance(value, list) or not value:
-        raise ctx.error(("environments",), f"expected a non-empty list, got {_kind(value)}")
+        raise ctx.error(("environments",), f"expected a non-empty list, got {describe(value)}")
     seen: dict[str, int] = {}
     environments = []
     for i, raw in enumerate(value):
@@ -680,14 +677,7 @@ def measurements_to_dict(measurements: Measurements) -> JsonObject:
     stage = measurements.stage
     stage_dict: JsonObject = {"name": stage.name}
     if stage.panel is not None:
-        panel: JsonObject = {
-            "width": stage.panel.width,
-            "height": stage.panel.height,
-            "distance": stage.panel.distance,
-        }
-        if stage.panel.offset_x or stage.panel.offset_y:
-            panel.update(offset_x=stage.panel.offset_x, offset_y=stage.panel.offset_y)
-        stage_dict["calibration_panel"] = panel
+        stage_dict["calibration_panel"] = stage.panel.to_dict()
     if stage.beta is not None:
         stage_dict["beta"] = stage.beta
     if stage.white_patch_stated:
@@ -701,15 +691,11 @@ def measurements_to_dict(measurements: Measurements) -> JsonObject:
         stage_dict["skin_patches"] = list(stage.skin_patches)
     stage_dict |= stage.wall.to_dict()
 
-    def rows(array: np.ndarray) -> list[JsonValue]:
-        return [[float(v) for v in row] for row in np.asarray(array, dtype=np.float64)]
-
     data: JsonObject = {"format": FORMAT, "version": VERSION, "stage": stage_dict}
     if measurements.panels:
         data["panels"] = panels_to_dict(measurements.panels)
     else:
-        data["primaries"] = {c: rows(measurements.SL.T)[k] for k, c in enumerate(CHANNELS)}
-        data["lit_chart"] = {c: rows(measurements.SRL[:, :, k]) for k, c in enumerate(CHANNELS)}
+        data |= lit_dicts(measurements.SL, measurements.SRL)
     environments: list[JsonValue] = []
     for env in measurements.environments:
         entry: JsonObject = {"name": env.name, "target_chart": rows(env.target_chart)}

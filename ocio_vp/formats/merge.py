@@ -1,16 +1,9 @@
 """Several measurements files, one solve: the wall from one file, the charts from others.
 
-The wall (``primaries``, ``ramps``) is measured once, from one take; the charts (``lit_chart``
-and each environment's ``target_chart``) on other days. ``ocio-vp solve wall.yaml charts.yaml``
-merges them here, before anything is solved:
-
-- each file is validated on its own first (:func:`~ocio_vp.formats.measurements.check_measurements_part`),
-  so an error names the file it is in;
-- ``stage`` is merged key by key; ``primaries``, ``lit_chart``, ``ramps`` are taken whole from
-  the one file that gives them; ``environments`` and ``fixtures`` are joined by name;
-- a key given in two files must have the same value there, else the merge is refused, naming
-  both files and the key;
-- the merged document is then validated as one file (its ``source`` names every file).
+Each file is validated on its own first (so an error names its file), then merged: ``stage``
+key by key, ``primaries``/``lit_chart``/``ramps`` whole from the one file giving them,
+``environments`` and ``fixtures`` joined by name; a key given twice must agree. The merged
+document is validated as one file (docs/measurements.md).
 """
 
 from __future__ import annotations

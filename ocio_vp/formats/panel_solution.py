@@ -1,37 +1,67 @@
 """solution.json's ``panels`` block: what was solved for each panel type of a stage.
 
-Written only for a measurements file with ``panels`` (:mod:`ocio_vp.formats.panels`)::
-
-    "panels": {
-      "wall":    {"in_frustum": true,  "SL": ..., "M": ..., "beta": ..., "w_avg": ...,
-                  "drive": ..., "share": 0.58, "N": ..., "N_reason": null,
-                  "black_level_offset": ..., "linearity": ..., "ocio": {...}},
-      "ceiling": {"in_frustum": false, "SL": ..., "M": ..., "beta": ..., "w_avg": ...,
-                  "drive": ..., "share": 0.42, "linearity": null, "ocio": {...}}
-    }
-
-The top-level ``M``, ``N``, ``SL``, ``beta``, ``w_avg``, ``black_level_offset`` and
-``linearity`` stay the first in-frustum type's, so readers of files without panels read a
-panels file's main wall unchanged. An out-of-frustum type (a ceiling) has M and no N.
+Written only for a measurements file with ``panels`` (docs/solution.md). The top-level ``M``,
+``N``, ``SL``, ``beta``, ``w_avg``, ``black_level_offset`` and ``linearity`` stay the first
+in-frustum type's, so readers of files without panels read the main wall unchanged; an
+out-of-frustum type (a ceiling) has M and no N.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ocio_vp.errors import InputError, excerpt
-from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.linearity import Linearity, read_linearity
 from ocio_vp.formats.measurements import check_safe_name
-from ocio_vp.formats.records import json_object
+from ocio_vp.formats.records import Record, finite_array, json_object, read_record
 
-__all__ = ["PanelSolution", "panel_solutions_from_dict", "panel_solutions_to_dict"]
+__all__ = [
+    "CONFIG_FILENAME",
+    "OcioNames",
+    "PanelSolution",
+    "panel_solutions_from_dict",
+    "panel_solutions_to_dict",
+]
 
-#: Largest magnitude of a number read back (as solution.json's other numbers).
-_MAX_VALUE = 1e30
+#: The config's file name beside solution.json when its ``ocio`` block does not name one.
+CONFIG_FILENAME = "config.ocio"
+
+
+@dataclass(frozen=True)
+class OcioNames(Record):
+    """solution.json's ``ocio`` block: the config file and the names of its colour spaces,
+    named transform, display and views by role. Empty until the config is written; a panel
+    type's names only its own colour spaces and views; an older file may lack some."""
+
+    config: str | None = None
+    reference: str | None = None
+    out_of_frustum: str | None = None
+    in_frustum: str | None = None
+    post_correction: str | None = None
+    post_correction_colorspace: str | None = None
+    display: str | None = None
+    view_out_of_frustum: str | None = None
+    view_in_frustum: str | None = None
+
+    @property
+    def config_file(self) -> str:
+        return self.config or CONFIG_FILENAME
+
+
+OcioNames.OMIT_NONE = tuple(f.name for f in dataclasses.fields(OcioNames))  # each when named
+
+
+def read_ocio_names(block: JsonValue, key: str = "ocio") -> OcioNames:
+    """The ``ocio`` block (absent: empty); only text values (InputError naming ``key``)."""
+    block = {} if block is None else block
+    if not isinstance(block, Mapping) or not all(isinstance(v, str) for v in block.values()):
+        raise InputError("expected names (text) only", key=key)
+    return read_record(OcioNames, block, key)
 
 
 @dataclass(frozen=True)
@@ -57,7 +87,7 @@ class PanelSolution:
     N_reason: str | None = None
     black_level_offset: np.ndarray | None = None
     linearity: Linearity | None = None
-    ocio: dict[str, str] = field(default_factory=dict)
+    ocio: OcioNames = field(default_factory=OcioNames)
 
     @property
     def in_frustum_matrix(self) -> np.ndarray:
@@ -80,53 +110,35 @@ def panel_solutions_to_dict(panels: Mapping[str, PanelSolution]) -> JsonObject:
         }
         if p.in_frustum:
             entry.update(N=p.N, N_reason=p.N_reason, black_level_offset=p.black_level_offset)
-        entry.update(linearity=p.linearity, ocio=dict(p.ocio))
+        entry.update(linearity=p.linearity, ocio=p.ocio)
         out[name] = json_object(entry)
     return out
 
 
-def _array(entry: JsonMapping, key: str, shape: tuple[int, ...], where: str, source: str):
-    value = entry.get(key)
-    try:
-        array = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError, OverflowError):
-        array = np.zeros(0)
-    if array.shape != shape or not np.all(np.isfinite(array)) or np.any(abs(array) > _MAX_VALUE):
-        raise InputError(f"expected finite numbers of shape {shape}", source=source, key=where)
-    return array
-
-
-def _one(name: str, entry: JsonValue, source: str) -> PanelSolution:
+def _one(name: str, entry: JsonValue) -> PanelSolution:
     key = f"panels.{name}"
     if not isinstance(entry, Mapping) or not isinstance(entry.get("in_frustum"), bool):
-        raise InputError("expected a mapping with in_frustum true or false", source=source, key=key)
+        raise InputError("expected a mapping with in_frustum true or false", key=key)
     in_frustum = entry["in_frustum"] is True
 
     def array(field_name: str, shape: tuple[int, ...], optional: bool = False):
         if optional and entry.get(field_name) is None:
             return None
-        return _array(entry, field_name, shape, f"{key}.{field_name}", source)
+        problem = f"expected finite numbers of shape {shape}"
+        return finite_array(entry.get(field_name), shape, f"{key}.{field_name}", problem)
 
     numbers: dict[str, float] = {}
     for field_name in ("beta", "share"):
         number = entry.get(field_name)
         where = f"{key}.{field_name}"
         if isinstance(number, bool) or not isinstance(number, (int, float)):
-            raise InputError(f"expected a number, got {excerpt(number)}", source=source, key=where)
+            raise InputError(f"expected a number, got {excerpt(number)}", key=where)
         if not 0 <= number <= 1:
-            raise InputError(
-                f"expected a number in [0, 1], got {number!r}", source=source, key=where
-            )
+            raise InputError(f"expected a number in [0, 1], got {number!r}", key=where)
         numbers[field_name] = float(number)
-    ocio, reason = entry.get("ocio") or {}, entry.get("N_reason")
-    try:
-        linearity = read_linearity(entry.get("linearity"), f"{key}.linearity")
-    except InputError as error:
-        raise InputError(error.problem, source=source, key=error.key) from None
-    if not isinstance(ocio, dict) or not all(isinstance(v, str) for v in ocio.values()):
-        raise InputError("expected names (text) only", source=source, key=f"{key}.ocio")
+    reason = entry.get("N_reason")
     if reason is not None and not isinstance(reason, str):
-        raise InputError("expected text", source=source, key=f"{key}.N_reason")
+        raise InputError("expected text", key=f"{key}.N_reason")
     return PanelSolution(
         name=name,
         in_frustum=in_frustum,
@@ -139,21 +151,22 @@ def _one(name: str, entry: JsonValue, source: str) -> PanelSolution:
         N=array("N", (3, 3), optional=True) if in_frustum else None,
         N_reason=reason if in_frustum else None,
         black_level_offset=array("black_level_offset", (3,), optional=True) if in_frustum else None,
-        linearity=linearity,
-        ocio=dict(ocio),
+        linearity=read_linearity(entry.get("linearity"), f"{key}.linearity"),
+        ocio=read_ocio_names(entry.get("ocio"), f"{key}.ocio"),
     )
 
 
-def panel_solutions_from_dict(block: JsonValue, source: str) -> dict[str, PanelSolution] | None:
-    """The ``panels`` block of a loaded solution.json (None when absent)."""
+def panel_solutions_from_dict(block: JsonValue) -> dict[str, PanelSolution] | None:
+    """The ``panels`` block of a loaded solution.json (None when absent); InputErrors name the
+    key (:func:`~ocio_vp.formats.solution.load_solution` adds the file)."""
     if block is None:
         return None
     if not isinstance(block, Mapping) or not block:
-        raise InputError("expected a non-empty mapping of panel types", source=source, key="panels")
+        raise InputError("expected a non-empty mapping of panel types", key="panels")
     out = {}
     for name, entry in block.items():
-        check_safe_name(name, source=source, key="panels")
-        out[name] = _one(name, entry, source)
+        check_safe_name(name, key="panels")
+        out[name] = _one(name, entry)
     if not any(p.in_frustum for p in out.values()):
-        raise InputError("no in-frustum panel type", source=source, key="panels")
+        raise InputError("no in-frustum panel type", key="panels")
     return out

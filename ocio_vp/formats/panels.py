@@ -1,33 +1,10 @@
-"""The optional ``panels`` section of a measurements file: several LED panel types on one stage.
+"""The optional ``panels`` section of a measurements file: several LED panel types on one stage
+(keys: docs/panels.md).
 
-Most volumes are built from more than one panel model (a fine-pitch wall, a brighter ceiling,
-wild walls or a floor), each with its own LEDs. A file with ``panels`` describes each type as
-the top-level ``primaries``/``lit_chart`` describe the single wall of a file without it::
-
-    panels:
-      - name: wall                  # safe name, unique
-        in_frustum: true            # shows the in-camera background (gets N)
-        calibration_panel: {width: 1.2, height: 0.8, distance: 1.5}   # or beta
-        primaries: {red: [r, g, b], green: [...], blue: [...]}       # this type's [SL]
-        lit_chart: {red: [[r, g, b], ...], green: [...], blue: [...]} # chart lit by this type
-        ramps: ...                  # optional, as the top-level ramps (docs/linearity.md)
-        region: {elevation: [-30, 45], azimuth: [-90, 90]}   # optional, for --hdri
-        encoding: pq                # optional signal encoding of this type (else --wall-encoding)
-        peak_nits: 1500             # optional, with encoding pq
-      - name: ceiling
-        in_frustum: false
-        ...
-    environments:
-      - name: overcast
-        target_chart: [...]
-        w_avg: {wall: [r, g, b], ceiling: [r, g, b]}   # the diffuse light each type delivers
-        black_level: {wall: [r, g, b]}                  # optional, in-frustum types only
-
-It replaces the top-level ``primaries``, ``lit_chart``, ``ramps`` and the stage's
-``calibration_panel``/``beta``; a file mixing both forms is refused. Like
-:mod:`ocio_vp.formats.fixtures`, this module takes the measurements file's
-:class:`~ocio_vp.formats.measurements.Validator` as ``ctx`` (every error names the file and
-the key path) and does not import :mod:`ocio_vp.formats.measurements`, which imports it.
+Each type has its own ``primaries``, ``lit_chart``, ``ramps`` and ``calibration_panel``/``beta``,
+replacing the top-level ones (a file mixing both forms is refused); environments give ``w_avg``
+and ``black_level`` per type. Takes the measurements file's validator as ``ctx`` (a
+:class:`~ocio_vp.formats.checker.Checker`), so every error names the file and key path.
 """
 
 from __future__ import annotations
@@ -40,7 +17,7 @@ import numpy as np
 
 from ocio_vp.choices import WALL_ENCODINGS
 from ocio_vp.errors import InputError, excerpt, format_key_path
-from ocio_vp.formats.checker import Checker
+from ocio_vp.formats.checker import Checker, describe
 from ocio_vp.formats.geometry import PanelGeometry
 from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
 from ocio_vp.wall.linearity import CHANNELS, Ramp, parse_ramps, ramps_to_dict
@@ -107,17 +84,11 @@ def primary_panel(panels: tuple[PanelType, ...]) -> PanelType:
     return next(p for p in panels if p.in_frustum)
 
 
-def _kind(value: JsonValue) -> str:
-    if isinstance(value, (list, tuple)):
-        return f"a list of {len(value)}"
-    return f"{type(value).__name__} {excerpt(value)}"
-
-
 def _pair(
     ctx: Checker, value: JsonValue, key: tuple, low: float, high: float
 ) -> tuple[float, float]:
     if not isinstance(value, (list, tuple)) or len(value) != 2:
-        raise ctx.error(key, f"expected [min, max] in degrees, got {_kind(value)}")
+        raise ctx.error(key, f"expected [min, max] in degrees, got {describe(value)}")
     a, b = (ctx.number(v, (*key, i), minimum=low, maximum=high) for i, v in enumerate(value))
     if not a < b:
         raise ctx.error(key, f"expected min < max, got [{a:g}, {b:g}]")
@@ -172,7 +143,7 @@ def _parse_one(ctx: Checker, value: JsonValue, key: tuple, n: int | None) -> Pan
     name = ctx.name(entry["name"], (*key, "name"))
     in_frustum = entry["in_frustum"]
     if not isinstance(in_frustum, bool):
-        raise ctx.error((*key, "in_frustum"), f"expected true or false, got {_kind(in_frustum)}")
+        raise ctx.error((*key, "in_frustum"), f"expected true or false, got {describe(in_frustum)}")
     panel, beta = ctx.calibration(entry, key)
     primaries = ctx.mapping(entry["primaries"], (*key, "primaries"), required=CHANNELS)
     SL = np.stack([ctx.rgb(primaries[c], (*key, "primaries", c)) for c in CHANNELS], axis=1)
@@ -200,7 +171,7 @@ def parse_panels(ctx: Checker, value: JsonValue) -> tuple[PanelType, ...]:
     every ``lit_chart``, at least one in-frustum type, regions that do not overlap."""
     if not isinstance(value, list) or not value:
         raise ctx.error(
-            ("panels",), f"expected a non-empty list of panel types, got {_kind(value)}"
+            ("panels",), f"expected a non-empty list of panel types, got {describe(value)}"
         )
     panels: list[PanelType] = []
     for i, raw in enumerate(value):
@@ -242,7 +213,7 @@ def parse_panel_values(
         raise ctx.error(
             key,
             f"with panels, expected a mapping of panel type -> [r, g, b] ({', '.join(names)}), "
-            f"got {_kind(value)}",
+            f"got {describe(value)}",
         )
     for name in value:
         if name not in names:
@@ -274,8 +245,17 @@ def parse_panel_values(
     return out
 
 
-def _rows(array: np.ndarray) -> list[list[float]]:
+def rows(array: np.ndarray) -> list[JsonValue]:
+    """A 2D array as lists of plain floats."""
     return [[float(v) for v in row] for row in np.asarray(array, dtype=np.float64)]
+
+
+def lit_dicts(SL: np.ndarray, SRL: np.ndarray) -> JsonObject:
+    """``primaries`` and ``lit_chart`` blocks of [SL] (3, 3) and [SRL] (n, 3, 3)."""
+    return {
+        "primaries": {c: rows(SL.T)[k] for k, c in enumerate(CHANNELS)},
+        "lit_chart": {c: rows(SRL[:, :, k]) for k, c in enumerate(CHANNELS)},
+    }
 
 
 def _region_dict(region: PanelRegion) -> JsonObject:
@@ -291,15 +271,10 @@ def panels_to_dict(panels: tuple[PanelType, ...]) -> list[JsonObject]:
     for p in panels:
         entry: JsonObject = {"name": p.name, "in_frustum": p.in_frustum}
         if p.panel is not None:
-            geometry = {"width": p.panel.width, "height": p.panel.height}
-            geometry["distance"] = p.panel.distance
-            if p.panel.offset_x or p.panel.offset_y:
-                geometry.update(offset_x=p.panel.offset_x, offset_y=p.panel.offset_y)
-            entry["calibration_panel"] = geometry
+            entry["calibration_panel"] = p.panel.to_dict()
         if p.beta is not None:
             entry["beta"] = p.beta
-        entry["primaries"] = {c: _rows(p.SL.T)[k] for k, c in enumerate(CHANNELS)}
-        entry["lit_chart"] = {c: _rows(p.SRL[:, :, k]) for k, c in enumerate(CHANNELS)}
+        entry |= lit_dicts(p.SL, p.SRL)
         if p.ramps is not None:
             entry["ramps"] = ramps_to_dict(p.ramps)
         if p.regions:

@@ -18,8 +18,12 @@ import json
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ocio_vp.formats.jsontypes import JsonObject
+
+if TYPE_CHECKING:
+    from ocio_vp.formats.solution import Solution
 
 __all__ = [
     "SOURCE_FILE",
@@ -78,19 +82,18 @@ class SolutionIdentity:
         )
 
 
-def solution_identity(folder: str | Path) -> SolutionIdentity:
-    """The :class:`SolutionIdentity` of ``folder/solution.json`` ("?" where unreadable); the
-    time is the file's modification time, UTC to the second."""
+def solution_identity(folder: str | Path, solution: Solution) -> SolutionIdentity:
+    """The :class:`SolutionIdentity` of ``solution``, loaded from ``folder/solution.json``; the
+    time is the file's modification time, UTC to the second ("?" where unreadable)."""
     from datetime import datetime, timezone
 
     path = Path(folder) / SOLUTION_FILE
-    data = _read_json(path) or {}
     try:
         stamp = datetime.fromtimestamp(path.stat().st_mtime, tz=timezone.utc)
         solved = stamp.strftime("%Y-%m-%dT%H:%M:%SZ")
     except OSError:
         solved = "?"
-    return SolutionIdentity(str(data.get("environment") or "?"), _model(Path(folder)), solved)
+    return SolutionIdentity(solution.environment, solution.model or "?", solved)
 
 
 def source_record(folder: str | Path, environment: str, model: str) -> str:
@@ -114,10 +117,14 @@ def _read_json(path: Path) -> JsonObject | None:
 
 
 def _model(folder: Path) -> str:
-    data = _read_json(folder / SOLUTION_FILE) or {}
-    diagnostics = data.get("diagnostics")
-    model = diagnostics.get("model") if isinstance(diagnostics, dict) else None
-    return str(model or data.get("method") or "?")
+    """The model of the solution now in ``folder`` ("?" where it does not load)."""
+    from ocio_vp.errors import InputError
+    from ocio_vp.formats.solution import load_solution
+
+    try:
+        return load_solution(folder).model or "?"
+    except InputError:
+        return "?"
 
 
 def _stale_exports(folder: Path, current: str) -> list[str]:

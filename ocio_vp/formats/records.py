@@ -22,7 +22,18 @@ import numpy as np
 from ocio_vp.errors import InputError, excerpt
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 
-__all__ = ["Record", "json_object", "json_value", "read_record", "read_value"]
+__all__ = [
+    "MAX_VALUE",
+    "Record",
+    "finite_array",
+    "json_object",
+    "json_value",
+    "read_record",
+    "read_value",
+]
+
+#: Largest magnitude a solved matrix or vector read back may have (far beyond any stage).
+MAX_VALUE = 1e30
 
 R = TypeVar("R")
 
@@ -133,6 +144,18 @@ def read_value(value: object, hint: Any, key: str) -> Any:
         item = args[1] if args else Any
         return {str(k): read_value(v, item, f"{key}.{k}") for k, v in value.items()}
     raise InputError(f"unexpected value {excerpt(value)}", key=key)
+
+
+def finite_array(value: object, shape: tuple[int, ...], key: str, problem: str) -> np.ndarray:
+    """``value`` (a JSON list) as a finite float64 array of ``shape``, no entry beyond
+    :data:`MAX_VALUE`; else InputError(``problem``) naming ``key``."""
+    try:
+        array = np.asarray(value if isinstance(value, list) else (), dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        array = np.zeros(0)
+    if array.shape != shape or not np.all(np.isfinite(array)) or np.any(abs(array) > MAX_VALUE):
+        raise InputError(problem, key=key)
+    return array
 
 
 def _float(value: object, key: str) -> float:

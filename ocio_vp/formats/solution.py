@@ -21,16 +21,19 @@ from ocio_vp.deprecation import warn_deprecated
 from ocio_vp.errors import InputError, excerpt
 from ocio_vp.formats.diagnostics import Diagnostics
 from ocio_vp.formats.documents import read_document
-from ocio_vp.formats.fixtures import DmxPatch
+from ocio_vp.formats.fixtures import DMX_MODES, DmxPatch
 from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
 from ocio_vp.formats.linearity import Linearity, read_linearity
 from ocio_vp.formats.measurements import check_safe_name
 from ocio_vp.formats.panel_solution import (
+    CONFIG_FILENAME,
+    OcioNames,
     PanelSolution,
     panel_solutions_from_dict,
     panel_solutions_to_dict,
+    read_ocio_names,
 )
-from ocio_vp.formats.records import Record, json_object, read_record
+from ocio_vp.formats.records import Record, finite_array, json_object, read_record
 from ocio_vp.model.correction import (
     MatrixCorrection,
     PostCorrection,
@@ -39,11 +42,17 @@ from ocio_vp.model.correction import (
     correction_to_dict,
 )
 
-__all__ = ["SOLUTION_FORMAT", "Diagnostics", "Solution", "load_solution", "solution_to_json"]
+__all__ = [
+    "CONFIG_FILENAME",
+    "SOLUTION_FORMAT",
+    "Diagnostics",
+    "OcioNames",
+    "Solution",
+    "load_solution",
+    "solution_to_json",
+]
 
 SOLUTION_FORMAT = "ocio-vp/solution"
-#: Largest magnitude a number in a solution.json may have (far beyond any solved stage).
-MAX_SOLUTION_VALUE = 1e30
 
 
 @dataclass(frozen=True)
@@ -72,9 +81,8 @@ class Solution:
     """Everything solved for one environment; all arrays float64.
 
     ``black_level_offset`` is added to the in-frustum drive after N (``drive = N c + offset``),
-    ``None`` when the environment has no black-level measurement. ``ocio`` maps the roles
-    ``config``, ``reference``, ``out_of_frustum``, ``in_frustum``, ``post_correction`` (and
-    ``post_correction_colorspace``) to names in the config; filled in when the config is written.
+    ``None`` when the environment has no black-level measurement. ``ocio`` names the config and
+    its colour spaces by role (:class:`OcioNames`), filled in when the config is written.
     ``fixtures`` maps each practical fixture to its ``channels`` and ``drive`` per channel (units
     of its ``reference_drive``), ``None`` without a ``fixtures`` section; ``M`` is then the
     matrix to light with while the fixtures are on.
@@ -103,7 +111,7 @@ class Solution:
     measurements_file: str | None = None
     measurements_sha256: str | None = None
     camera_colorspace: str | None = None
-    ocio: dict[str, str] = field(default_factory=dict)
+    ocio: OcioNames = field(default_factory=OcioNames)
     linearity: Linearity | None = None
     fixtures: Mapping[str, FixtureDrive] | None = None
     panels: Mapping[str, PanelSolution] | None = None
@@ -201,103 +209,51 @@ def solution_to_json(solution: Solution) -> str:
     return json.dumps(solution_to_dict(solution), indent=2, allow_nan=False) + "\n"
 
 
-def _matrix(data: JsonMapping, key: str, source: str) -> np.ndarray:
-    array = _finite_array(data.get(key), (3, 3))
-    if array is None:
-        raise InputError("expected a finite 3x3 matrix", source=source, key=key)
-    return array
+def _array(data: JsonMapping, key: str, shape: tuple[int, ...]) -> np.ndarray:
+    problem = "expected a finite 3x3 matrix" if shape == (3, 3) else "expected a finite [r, g, b]"
+    return finite_array(data.get(key), shape, key, problem)
 
 
-def _fixtures(data: JsonMapping, source: str) -> dict[str, FixtureDrive] | None:
+def _optional_array(data: JsonMapping, key: str, shape: tuple[int, ...]) -> np.ndarray | None:
+    return None if data.get(key) is None else _array(data, key, shape)
+
+
+def _fixtures(data: JsonMapping) -> dict[str, FixtureDrive] | None:
     block = data.get("fixtures")
     if block is None:
         return None
     if not isinstance(block, dict):
-        raise InputError("expected a mapping", source=source, key="fixtures")
+        raise InputError("expected a mapping", key="fixtures")
     fixtures = {}
     for name, entry in block.items():
-        channels = entry.get("channels") if isinstance(entry, dict) else None
-        drive = entry.get("drive") if isinstance(entry, dict) else None
-        if not (
-            isinstance(channels, list)
-            and all(isinstance(c, str) for c in channels)
-            and isinstance(drive, dict)
-            and set(drive) == set(channels)
-        ):
-            raise InputError(
-                "expected channels and a drive for each", source=source, key=f"fixtures.{name}"
-            )
-        if not all(isinstance(v, (int, float)) and np.isfinite(v) for v in drive.values()):
-            raise InputError("expected finite drives", source=source, key=f"fixtures.{name}")
-        dmx = entry.get("dmx")
-        if dmx is not None and not (
-            isinstance(dmx, dict)
-            and all(type(dmx.get(k)) is int for k in ("universe", "address"))
-            and dmx.get("mode") in ("8-bit", "16-bit")
-        ):
-            raise InputError(
-                "expected universe, address (integers) and mode (8-bit or 16-bit)",
-                source=source,
-                key=f"fixtures.{name}.dmx",
-            )
-        try:
-            fixtures[name] = read_record(FixtureDrive, entry, f"fixtures.{name}")
-        except InputError as error:
-            raise InputError(error.problem, source=source, key=error.key) from None
+        key = f"fixtures.{name}"
+        fixture = fixtures[name] = read_record(FixtureDrive, entry, key)
+        drives = np.array(list(fixture.drive.values()))
+        if set(fixture.drive) != set(fixture.channels) or not np.all(np.isfinite(drives)):
+            raise InputError("expected channels and a finite drive for each", key=key)
+        if fixture.dmx is not None and fixture.dmx.mode not in DMX_MODES:
+            raise InputError("expected 8-bit or 16-bit", key=f"{key}.dmx.mode")
     return fixtures
 
 
-def _finite_array(value: JsonValue, shape: tuple[int, ...]) -> np.ndarray | None:
-    """``value`` as a finite float64 array of ``shape``, or None when it is not one."""
-    if not isinstance(value, list):
-        return None
-    try:
-        array = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError, OverflowError):
-        return None
-    if array.shape != shape or not np.all(np.isfinite(array)):
-        return None
-    if np.any(np.abs(array) > MAX_SOLUTION_VALUE):
-        return None
-    return array
-
-
-def _rgb(data: JsonMapping, key: str, source: str) -> np.ndarray:
-    array = _finite_array(data.get(key), (3,))
-    if array is None:
-        raise InputError("expected a finite [r, g, b]", source=source, key=key)
-    return array
-
-
-def _text(data: JsonMapping, key: str, source: str, *, name: bool = False) -> str | None:
-    """An optional string field; ``name`` ones must also be safe folder/OCIO names."""
+def _text(data: JsonMapping, key: str) -> str | None:
+    """An optional short line of text."""
     value = data.get(key)
-    if value is None and not name:
-        return None
-    if name:
-        return check_safe_name(value, source=source, key=key)
-    if not isinstance(value, str) or len(value) > 200 or not value.isprintable():
-        raise InputError(
-            f"expected a short line of text, got {excerpt(value)}", source=source, key=key
-        )
+    if value is not None and (
+        not isinstance(value, str) or len(value) > 200 or not value.isprintable()
+    ):
+        raise InputError(f"expected a short line of text, got {excerpt(value)}", key=key)
     return value
 
 
-def _name(data: JsonMapping, key: str, source: str) -> str:
-    """A required name: safe as a folder and an OCIO name."""
-    return check_safe_name(data.get(key), source=source, key=key)
-
-
-def _mapping(data: JsonMapping, key: str, source: str) -> JsonObject:
+def _mapping(data: JsonMapping, key: str) -> JsonMapping:
     value = data.get(key)
-    if value is None:
-        return {}
-    if not isinstance(value, dict):
-        raise InputError(f"expected a mapping, got {excerpt(value)}", source=source, key=key)
-    return value
+    if value is not None and not isinstance(value, dict):
+        raise InputError(f"expected a mapping, got {excerpt(value)}", key=key)
+    return value or {}
 
 
-def _read(path: Path) -> JsonObject:
+def _read(path: Path) -> JsonMapping:
     source = str(path)
     if not os.path.lexists(path):
         raise InputError("no solution.json here; run `ocio-vp solve` first", source=source)
@@ -319,48 +275,41 @@ def load_solution(path: str | Path) -> Solution:
     path = Path(path)
     if path.is_dir():
         path = path / "solution.json"
-    source = str(path)
     data = _read(path)
+    try:
+        return _solution(data)
+    except InputError as error:  # every reader below names the key; the file is named here
+        raise InputError(error.problem, source=str(path), key=error.key) from None
+
+
+def _solution(data: JsonMapping) -> Solution:
     beta = data["beta"]
     if isinstance(beta, bool) or not isinstance(beta, (int, float)) or not 0 < beta <= 1:
-        raise InputError(
-            f"expected a number in (0, 1], got {excerpt(beta)}", source=source, key="beta"
-        )
-    measurements = _mapping(data, "measurements", source)
-    try:
-        linearity = read_linearity(data.get("linearity"))
-    except InputError as error:
-        raise InputError(error.problem, source=source, key=error.key) from None
-    ocio = {k: v for k, v in _mapping(data, "ocio", source).items() if isinstance(v, str)}
-    if len(ocio) != len(_mapping(data, "ocio", source)):
-        raise InputError("expected names (text) only", source=source, key="ocio")
-    Q = _matrix(data, "Q", source)
-    try:
-        diagnostics = Diagnostics.from_dict(_mapping(data, "diagnostics", source))
-    except InputError as error:
-        raise InputError(error.problem, source=source, key=error.key) from None
+        raise InputError(f"expected a number in (0, 1], got {excerpt(beta)}", key="beta")
+    measurements = _mapping(data, "measurements")
+    linearity = read_linearity(data.get("linearity"))
+    Q = _array(data, "Q", (3, 3))
+    diagnostics = Diagnostics.from_dict(_mapping(data, "diagnostics"))
     return Solution(
-        stage=_name(data, "stage", source),
-        environment=_name(data, "environment", source),
-        method=_text(data, "method", source) or "",
+        stage=check_safe_name(data.get("stage"), key="stage"),
+        environment=check_safe_name(data.get("environment"), key="environment"),
+        method=_text(data, "method") or "",
         beta=float(beta),
-        w_avg=_rgb(data, "w_avg", source),
-        SL=_matrix(data, "SL", source),
-        M=_matrix(data, "M", source),
-        post_correction=_post_correction(data, Q, source),
-        N=None if data.get("N") is None else _matrix(data, "N", source),
-        black_level_offset=None
-        if data.get("black_level_offset") is None
-        else _rgb(data, "black_level_offset", source),
-        black_level_method=_text(data, "black_level_method", source),
+        w_avg=_array(data, "w_avg", (3,)),
+        SL=_array(data, "SL", (3, 3)),
+        M=_array(data, "M", (3, 3)),
+        post_correction=_post_correction(data, Q),
+        N=_optional_array(data, "N", (3, 3)),
+        black_level_offset=_optional_array(data, "black_level_offset", (3,)),
+        black_level_method=_text(data, "black_level_method"),
         diagnostics=diagnostics,
-        measurements_file=_text(measurements, "file", source),
-        measurements_sha256=_text(measurements, "sha256", source),
-        camera_colorspace=_text(data, "camera_colorspace", source),
-        ocio=ocio,
+        measurements_file=_text(measurements, "file"),
+        measurements_sha256=_text(measurements, "sha256"),
+        camera_colorspace=_text(data, "camera_colorspace"),
+        ocio=read_ocio_names(data.get("ocio")),
         linearity=linearity,
-        fixtures=_fixtures(data, source),
-        panels=panel_solutions_from_dict(data.get("panels"), source),
+        fixtures=_fixtures(data),
+        panels=panel_solutions_from_dict(data.get("panels")),
     )
 
 
@@ -371,30 +320,25 @@ def _old_root_polynomial(data: JsonMapping) -> JsonValue:
     return notes.get("root_polynomial") if isinstance(notes, dict) else None
 
 
-def _post_correction(data: JsonMapping, Q: np.ndarray, source: str) -> PostCorrection:
+def _post_correction(data: JsonMapping, Q: np.ndarray) -> PostCorrection:
     """The ``post_correction`` block; a file written before it existed gets its model back from
     where those versions kept it (a root-polynomial's coefficients in
     ``diagnostics.method_notes``, applied unbounded as they were), otherwise Q as a matrix."""
     block = data.get("post_correction")
+    if block is not None:
+        correction = correction_from_dict(block)
+        _check_Q(Q, correction.matrix)
+        return correction
+    old = _old_root_polynomial(data)
+    if old is None:
+        return MatrixCorrection(Q)
     try:
-        if block is not None:
-            correction = correction_from_dict(block)
-            _check_Q(Q, correction.matrix, source)
-            return correction
-        old = _old_root_polynomial(data)
-        if old is None:
-            return MatrixCorrection(Q)
         if not isinstance(old, dict):
             raise TypeError("expected a mapping")
         return RootPolynomialCorrection(np.asarray(old["coefficients"], dtype=np.float64), Q)
-    except InputError as error:
-        if error.source is not None:
-            raise
-        raise InputError(error.problem, source=source, key=error.key) from None
     except (KeyError, TypeError, ValueError) as error:
         raise InputError(
             f"malformed root-polynomial model ({error})",
-            source=source,
             key="diagnostics.method_notes.root_polynomial",
         ) from None
 
@@ -410,7 +354,7 @@ def q_difference(Q: np.ndarray, matrix: np.ndarray) -> float:
     return float(np.max(np.abs(Q - matrix))) / scale
 
 
-def _check_Q(Q: np.ndarray, matrix: np.ndarray, source: str) -> None:
+def _check_Q(Q: np.ndarray, matrix: np.ndarray) -> None:
     """Refuse a ``Q`` that is not its ``post_correction``'s matrix (Q is derived from it: an
     edited Q would reach the readers of Q but not ``apply`` and ``validate``)."""
     relative = q_difference(Q, matrix)
@@ -418,6 +362,5 @@ def _check_Q(Q: np.ndarray, matrix: np.ndarray, source: str) -> None:
         raise InputError(
             f"differs from post_correction's matrix by {relative:.2g} relative (more than "
             f"{Q_TOLERANCE:g}); Q is derived from post_correction: edit that block, or restore Q",
-            source=source,
             key="Q",
         )

@@ -1,17 +1,9 @@
 """What the wall was sent while it was measured, carried from ``sequence.yaml`` to the solve.
 
-``ocio-vp patterns`` writes the wall's signal encoding, its peak (PQ) and the frames' size into
-``sequence.yaml``; ``ocio-vp measure`` copies them from a take's sequence into the ``stage``
-section of the measurements file (a capture file may state them for a wall measured from
-plates), and ``ocio-vp solve`` uses them, so a PQ wall filmed as PQ is solved as PQ without a
-flag to remember. Keys of ``stage`` (all optional; docs/measurements.md)::
-
-    wall_encoding: pq          # linear | gamma2.4 | srgb | pq
-    peak_nits: 1000            # with pq only: cd/m2 of drive 1.0
-    pattern_size: [3840, 2160] # the frames the wall played, width x height
-
-A stage of several panel types gives ``encoding`` and ``peak_nits`` per type instead
-(:mod:`ocio_vp.formats.panels`).
+``patterns`` writes the wall's encoding, peak (PQ) and frame size into ``sequence.yaml``;
+``measure`` copies them into the measurements file's ``stage`` (``wall_encoding``,
+``peak_nits``, ``pattern_size``; docs/measurements.md) and ``solve`` uses them. A stage of
+several panel types gives ``encoding`` and ``peak_nits`` per type instead.
 """
 
 from __future__ import annotations

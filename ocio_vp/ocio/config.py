@@ -25,7 +25,7 @@ from ocio_vp.calibration.diagnostics import is_identity, offset_is_negligible
 from ocio_vp.calibration.equations import condition_text
 from ocio_vp.deprecation import deprecated_names
 from ocio_vp.formats.linearity import Linearity
-from ocio_vp.formats.solution import Solution
+from ocio_vp.formats.solution import CONFIG_FILENAME, OcioNames, Solution
 from ocio_vp.model.correction import MAX_CONDITION_INVERSE, truncated_pseudo_inverse
 from ocio_vp.ocio.description import (
     FAMILY,
@@ -80,7 +80,6 @@ RAW = "Raw"
 DISPLAY = "LED Wall"
 VIEW_OUTER = "Outer Frustum"
 VIEW_INNER = "Inner Frustum"
-CONFIG_FILENAME = "config.ocio"
 
 
 def _wall_signal_encodings() -> dict[str, str]:
@@ -523,19 +522,19 @@ def _add_working_spaces(data: ConfigData, camera: str) -> tuple[dict[str, str], 
     return roles, aces_to_camera
 
 
-def ocio_names(config_filename: str = CONFIG_FILENAME) -> dict[str, str]:
+def ocio_names(config_filename: str = CONFIG_FILENAME) -> OcioNames:
     """The ``ocio`` block of ``solution.json``: which colorspace does what."""
-    return {
-        "config": config_filename,
-        "reference": REFERENCE,
-        "out_of_frustum": OUT_OF_FRUSTUM,
-        "in_frustum": IN_FRUSTUM,
-        "post_correction": POST_CORRECTION,
-        "post_correction_colorspace": POST_CORRECTION_COLORSPACE,
-        "display": DISPLAY,
-        "view_out_of_frustum": VIEW_OUTER,
-        "view_in_frustum": VIEW_INNER,
-    }
+    return OcioNames(
+        config=config_filename,
+        reference=REFERENCE,
+        out_of_frustum=OUT_OF_FRUSTUM,
+        in_frustum=IN_FRUSTUM,
+        post_correction=POST_CORRECTION,
+        post_correction_colorspace=POST_CORRECTION_COLORSPACE,
+        display=DISPLAY,
+        view_out_of_frustum=VIEW_OUTER,
+        view_in_frustum=VIEW_INNER,
+    )
 
 
 def write_config(config: OCIO.Config, directory: str | Path) -> Path:

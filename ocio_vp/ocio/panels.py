@@ -14,7 +14,7 @@ import dataclasses
 from dataclasses import dataclass, field
 
 from ocio_vp.formats.panel_solution import PanelSolution
-from ocio_vp.formats.solution import Solution
+from ocio_vp.formats.solution import OcioNames, Solution
 from ocio_vp.ocio.config import (
     DISPLAY,
     IN_FRUSTUM,
@@ -24,7 +24,6 @@ from ocio_vp.ocio.config import (
     ModelFiles,
     drive_description,
     in_frustum_text,
-    ocio_names,
     wall_chains,
     wall_space,
 )
@@ -110,12 +109,15 @@ def panel_outputs(solution: Solution, model: ModelFiles | None = None) -> PanelO
     views: list[tuple[str, str]] = []
     files: dict[str, str] = {}
     panels: dict[str, PanelSolution] = {}
-    top = ocio_names()
     for name, panel in solution.panels.items():
         if name == primary:
-            names = {k: top[k] for k in ("out_of_frustum", "in_frustum")}
-            names |= {k: top[k] for k in ("view_out_of_frustum", "view_in_frustum")}
-            panels[name] = dataclasses.replace(panel, linearity=solution.linearity, ocio=names)
+            wall_names = OcioNames(
+                out_of_frustum=OUT_OF_FRUSTUM,
+                in_frustum=IN_FRUSTUM,
+                view_out_of_frustum=VIEW_OUTER,
+                view_in_frustum=VIEW_INNER,
+            )
+            panels[name] = dataclasses.replace(panel, linearity=solution.linearity, ocio=wall_names)
             continue
         view = _view(solution, panel)
         wall = wall_outputs(view)
@@ -128,7 +130,7 @@ def panel_outputs(solution: Solution, model: ModelFiles | None = None) -> PanelO
         for role, key in roles:
             spaces.append(wall_space(names[key], texts[role], wall.linearity, chains[role]))
             views.append((names[f"view_{key}"], names[key]))
-        panels[name] = dataclasses.replace(panel, linearity=wall.linearity, ocio=names)
+        panels[name] = dataclasses.replace(panel, linearity=wall.linearity, ocio=OcioNames(**names))
     return PanelOutputs(tuple(spaces), tuple(views), files, panels)
 
 

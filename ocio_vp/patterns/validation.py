@@ -57,14 +57,20 @@ def wall_encoding_of(solution: Solution) -> tuple[str, float | None]:
     return encoding.name, encoding.peak_nits
 
 
+def _wall_spaces(solution: Solution) -> tuple[str, str]:
+    """The reference and in-frustum colour spaces solution.json names."""
+    reference, inner = solution.ocio.reference, solution.ocio.in_frustum
+    if not reference or not inner:
+        raise InputError("solution.json names no reference or in-frustum colorspace", key="ocio")
+    return reference, inner
+
+
 def wall_signal(config_path: str | Path, solution: Solution, content: np.ndarray) -> np.ndarray:
     """(n, 3) what the config sends the wall for ``content`` (n, 3) in its reference space:
     the in-frustum colorspace's output (signal for an encoded wall, drive for a linear one)."""
     import PyOpenColorIO as OCIO
 
-    reference, inner = solution.ocio.get("reference"), solution.ocio.get("in_frustum")
-    if not reference or not inner:
-        raise InputError("solution.json names no reference or in-frustum colorspace", key="ocio")
+    reference, inner = _wall_spaces(solution)
     try:
         config = OCIO.Config.CreateFromFile(str(config_path))
         cpu = config.getProcessor(reference, inner).getDefaultCPUProcessor()
@@ -164,7 +170,7 @@ def validation_sequence(environment_dir: str | Path, options: PatternOptions) ->
             key="--wall-encoding",
         )
     options = dataclasses.replace(options, encoding=encoding, peak_nits=peak)
-    config = folder / (solution.ocio.get("config") or "config.ocio")
+    config = folder / solution.ocio.config_file
     scale = content_scale(solution, target)
     target, kept = into_gamut(solution, target * scale)
     signals = wall_signal(config, solution, np.vstack([np.zeros((1, 3)), target]))
@@ -188,13 +194,14 @@ def validation_sequence(environment_dir: str | Path, options: PatternOptions) ->
     from ocio_vp.formats.provenance import solution_identity
 
     digest = hashlib.sha256(source.read_bytes()).hexdigest()
-    identity = solution_identity(folder)
+    identity = solution_identity(folder, solution)
+    reference, inner = _wall_spaces(solution)
     validation = Validation(
         environment=solution.environment,
         stage=solution.stage,
         solution_sha256=digest,
-        in_frustum=solution.ocio["in_frustum"],
-        reference=solution.ocio["reference"],
+        in_frustum=inner,
+        reference=reference,
         content_scale=scale,
         pulled=tuple((j, float(f"{k:.4g}")) for j, k in enumerate(kept) if k < 1.0),
         model=identity.model,

@@ -32,7 +32,7 @@ def panel_facts(solution: Solution) -> list[tuple[str, str]]:
         if panel.in_frustum:
             n_text = "; N solved" if panel.N is not None else f"; N not solved: {panel.N_reason}"
         spaces = ", ".join(
-            panel.ocio[k] for k in ("out_of_frustum", "in_frustum") if k in panel.ocio
+            s for s in (panel.ocio.out_of_frustum, panel.ocio.in_frustum) if s is not None
         )
         facts.append(
             (
