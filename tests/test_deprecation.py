@@ -133,3 +133,18 @@ def test_solution_without_Q_does_not_warn() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         Solution(post_correction=MatrixCorrection(Q), **_FIELDS)
+
+
+def test_dict_style_ocio_names_warn_and_read_the_field() -> None:
+    """solution.ocio was a dict of names: scripts that index it keep working for one release."""
+    from ocio_vp.formats.panel_solution import OcioNames
+
+    names = OcioNames(config="config.ocio", reference="ACES2065-1")
+    with pytest.warns(DeprecationWarning, match=f'ocio\\["config"\\].*{REMOVED_IN}.*ocio.config'):
+        assert names["config"] == "config.ocio"
+    with pytest.warns(DeprecationWarning, match=f"{REMOVED_IN}.*ocio.display"):
+        assert names.get("display", "fallback") == "fallback"
+    with pytest.warns(DeprecationWarning), pytest.raises(KeyError, match="in_frustum"):
+        names["in_frustum"]  # unnamed in this block, as a missing dict key was
+    with pytest.warns(DeprecationWarning), pytest.raises(KeyError, match="not_a_name"):
+        names["not_a_name"]

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ocio_vp.deprecation import warn_deprecated
 from ocio_vp.errors import InputError, excerpt
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.linearity import Linearity, read_linearity
@@ -51,6 +52,22 @@ class OcioNames(Record):
     @property
     def config_file(self) -> str:
         return self.config or CONFIG_FILENAME
+
+    def __getitem__(self, key: str) -> str:
+        """``ocio["config"]``, as when this block was a dict: served for one more release."""
+        value = self._old_lookup(key, f'ocio["{key}"]')
+        if value is None:
+            raise KeyError(key)
+        return value
+
+    def get(self, key: str, default: str | None = None) -> str | None:
+        """``ocio.get("config")``, as when this block was a dict: served for one more release."""
+        value = self._old_lookup(key, f'ocio.get("{key}")')
+        return default if value is None else value
+
+    def _old_lookup(self, key: str, spelled: str) -> str | None:
+        warn_deprecated(spelled, f"ocio.{key}", stacklevel=4)
+        return getattr(self, key) if key in OcioNames.OMIT_NONE else None
 
 
 OcioNames.OMIT_NONE = tuple(f.name for f in dataclasses.fields(OcioNames))  # each when named
