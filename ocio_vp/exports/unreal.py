@@ -87,7 +87,9 @@ def write_ocioz(config_path: Path, archive_path: Path) -> Path:
             info.compress_type = zipfile.ZIP_DEFLATED
             info.create_system = 3  # Unix, so the permissions below are read as such
             info.external_attr = 0o100644 << 16
-            archive.writestr(info, path.read_bytes(), compresslevel=9)
+            # zlib's default level: level 9 makes LUT text barely smaller at several times the
+            # cost (the export rows of docs/performance.md)
+            archive.writestr(info, path.read_bytes(), compresslevel=6)
     return archive_path
 
 
