@@ -9,7 +9,7 @@ from ocio_vp.cli import _defer_colour_plotting
 
 # As every ``ocio-vp`` command does (ocio_vp.cli.main): colour-science's own import of
 # colour.plotting, and with it matplotlib's pyplot, waits until something reads an attribute
-# of colour.plotting (~0.4 s of CPU in each test process; nothing here plots with it).
+# of colour.plotting (nothing here plots with it).
 _defer_colour_plotting()
 
 CHANNELS = ("red", "green", "blue")
@@ -148,8 +148,8 @@ def _writing_in_this_process():
     """``ocio-vp solve`` and ``demo`` called in-process (``ocio_vp.cli.main``) write every
     environment in this process instead of starting a helper process for each call.
 
-    The helper is a fresh "spawn" interpreter per call: ~2 s of CPU (its imports) for a
-    solve that itself takes ~0.1 s, paid by ~100 in-process solves in this suite. What it
+    The helper is a fresh "spawn" interpreter per call, whose imports cost far more than the
+    small solves of this suite, made in-process about a hundred times. What it
     writes is the same bytes (tests/test_ocio_writer.py compares both ways, byte for byte, and
     its failures), and every ``ocio-vp`` run in a subprocess (the CLI tests of exit codes,
     signals, FIFOs, concurrent runs) still starts it. A test marked ``writer_helper`` gets the

@@ -28,7 +28,7 @@ def test_a_solve_replaces_its_environment_with_the_exports_and_report_inside(tmp
 
 
 #: ``ocio-vp solve`` (``ocio_vp.cli.main``, as ``python -m ocio_vp.cli`` runs it) with one
-#: pause: when this process starts writing an environment into the staging folder (the helper
+#: pause: once this process has written an environment into the staging folder (the helper
 #: process has its share by then), it touches the file argv[1] and waits there until a stop
 #: signal ends the wait. functools.wraps keeps the real function's name, so the helper (which
 #: pickles write_environment by name) bakes its environment with the real one meanwhile.
@@ -41,6 +41,7 @@ real = writer.write_environment
 
 @functools.wraps(real)
 def wait_while_writing(solution, folder):
+    real(solution, folder)  # the staging folder holds this environment's files
     pathlib.Path(sys.argv[1]).touch()
     while True:
         time.sleep(0.01)
@@ -84,6 +85,7 @@ def test_a_stopped_solve_leaves_no_staging_folder(tmp_path):
             if writing.exists():
                 staged = [p.name for p in out.iterdir() if p.name.startswith(".ocio-vp-staging-")]
                 assert len(staged) == 1, (sig, staged)  # stopped while writing into it
+                assert any((out / staged[0]).rglob("config.ocio")), sig  # files in it
                 proc.send_signal(sig)
                 del waiting[sig]
         time.sleep(0.01)

@@ -89,7 +89,8 @@ def _fold_key(correction: PostCorrection, domain: FitDomain) -> bytes | None:
     own = correction.domain
     arrays = [correction.coefficients, correction.fallback, np.asarray(correction.fade)]
     arrays += [own.to_drive, own.hull, own.centre, domain.to_drive]
-    return b"|".join(np.ascontiguousarray(a, dtype=np.float64).tobytes() for a in arrays)
+    arrays = [np.ascontiguousarray(a, dtype=np.float64) for a in arrays]
+    return b"|".join(repr(a.shape).encode() + a.tobytes() for a in arrays)
 
 
 def fold_fraction(correction: PostCorrection, domain: FitDomain) -> float:
