@@ -14,13 +14,19 @@ from ocio_vp.formats import Solution
 from ocio_vp.model import MatrixCorrection, RootPolynomialCorrection
 from ocio_vp.model.expansion import apply_root_polynomial
 
-#: (module, old name, words the warning must contain, where the value now lives)
+SAMPLE_MATRIX = "ocio_vp.metrics:sample_camera_to_xyz"
+#: (module, old name, words the warning must contain, where the value now lives: a module holding
+#: it under the old name, or "module:new name")
 ALIASES = [
     ("ocio_vp.ocio.config", "MAX_CONDITION_Q_FOR_N", "ocio_vp.calibration", "ocio_vp.calibration"),
     ("ocio_vp.exports.resolve", "DEFAULT_CUBE_SIZE", "exports.source", "ocio_vp.exports.source"),
     ("ocio_vp.exports.resolve", "DEFAULT_CUBE_RANGE", "exports.source", "ocio_vp.exports.source"),
     ("ocio_vp.ocio.root_polynomial", "RootPolynomialOutputs", "ModelOutputs", None),
     ("ocio_vp.ocio.root_polynomial", "root_polynomial_outputs", "model_outputs", None),
+    *(
+        (module, "default_camera_to_xyz", "metrics.sample_camera_to_xyz", SAMPLE_MATRIX)
+        for module in ("ocio_vp.correction", "ocio_vp.correction.perceptual")
+    ),
 ]
 RNG = np.random.default_rng(39)
 C = np.hstack([np.diag([1.1, 0.9, 1.0]), 0.05 * RNG.standard_normal((3, 3))])  # degree 2
@@ -35,7 +41,8 @@ def _old(module: str, name: str, words: str) -> object:
 def test_alias_warns_and_is_the_new_object(module, name, words, home) -> None:
     value = _old(module, name, words)
     if home is not None:
-        assert value is getattr(importlib.import_module(home), name)
+        home, _, new = home.partition(":")
+        assert value is getattr(importlib.import_module(home), new or name)
     else:
         assert value is getattr(importlib.import_module("ocio_vp.ocio.bake"), words)
 
