@@ -86,6 +86,25 @@ def test_root_polynomial_transform(module) -> None:
     np.testing.assert_allclose(pixels, apply_root_polynomial(C, rgb.astype(np.float32)), rtol=1e-6)
 
 
+@pytest.mark.parametrize("module", ["ocio_vp.plates", "ocio_vp.plates.detection"])
+def test_detector_still_returns_detect_chart(module) -> None:
+    from ocio_vp.plates.detection import detect_chart
+
+    detector = _old(module, "detector", "detect_chart")
+    assert detector(source="plate.exr") is detect_chart
+
+
+def test_detection_found_warns_and_says_whether_corners_were_found() -> None:
+    from ocio_vp.plates.detection import Detection
+
+    def detection(corners):
+        return Detection(corners, None, "", np.zeros((1, 1, 3)), 1, np.zeros((1, 1)), np.zeros(0))
+
+    for corners, found in [(np.zeros((4, 2)), True), (None, False)]:
+        with pytest.warns(DeprecationWarning, match=f"Detection.found.*{REMOVED_IN}.*corners"):
+            assert detection(corners).found is found
+
+
 def test_correction_public_names_all_resolve() -> None:
     """``from ocio_vp.correction import *`` (every name of ``__all__`` importable)."""
     import ocio_vp.correction as correction
