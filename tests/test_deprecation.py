@@ -27,6 +27,7 @@ ALIASES = [
         (module, "default_camera_to_xyz", "metrics.sample_camera_to_xyz", SAMPLE_MATRIX)
         for module in ("ocio_vp.correction", "ocio_vp.correction.perceptual")
     ),
+    ("ocio_vp.correction.skin_priority", "default_fit", "q_auto", "ocio_vp.correction.auto:q_auto"),
 ]
 RNG = np.random.default_rng(39)
 C = np.hstack([np.diag([1.1, 0.9, 1.0]), 0.05 * RNG.standard_normal((3, 3))])  # degree 2
