@@ -2,6 +2,7 @@
 chart sampling and patch statistics, chart detection, overlays, and ``measure``.
 """
 
+from ocio_vp.deprecation import deprecated_names
 from ocio_vp.plates.alignment import Alignment, align_take, kept_frames
 from ocio_vp.plates.capture import (
     FORMAT,
@@ -15,7 +16,6 @@ from ocio_vp.plates.capture import (
     load_capture,
     save_capture_document,
 )
-from ocio_vp.deprecation import deprecated_names
 from ocio_vp.plates.detection import DEPRECATED as _DEPRECATED
 from ocio_vp.plates.detection import (
     Detection,
