@@ -14,13 +14,20 @@ from ocio_vp.formats import Solution
 from ocio_vp.model import MatrixCorrection, RootPolynomialCorrection
 from ocio_vp.model.expansion import apply_root_polynomial
 
-#: (module, old name, words the warning must contain, where the value now lives)
+SAMPLE_MATRIX = "ocio_vp.metrics:sample_camera_to_xyz"
+#: (module, old name, words the warning must contain, where the value now lives: a module holding
+#: it under the old name, or "module:new name")
 ALIASES = [
     ("ocio_vp.ocio.config", "MAX_CONDITION_Q_FOR_N", "ocio_vp.calibration", "ocio_vp.calibration"),
     ("ocio_vp.exports.resolve", "DEFAULT_CUBE_SIZE", "exports.source", "ocio_vp.exports.source"),
     ("ocio_vp.exports.resolve", "DEFAULT_CUBE_RANGE", "exports.source", "ocio_vp.exports.source"),
     ("ocio_vp.ocio.root_polynomial", "RootPolynomialOutputs", "ModelOutputs", None),
     ("ocio_vp.ocio.root_polynomial", "root_polynomial_outputs", "model_outputs", None),
+    *(
+        (module, "default_camera_to_xyz", "metrics.sample_camera_to_xyz", SAMPLE_MATRIX)
+        for module in ("ocio_vp.correction", "ocio_vp.correction.perceptual")
+    ),
+    ("ocio_vp.correction.skin_priority", "default_fit", "q_auto", "ocio_vp.correction.auto:q_auto"),
 ]
 RNG = np.random.default_rng(39)
 C = np.hstack([np.diag([1.1, 0.9, 1.0]), 0.05 * RNG.standard_normal((3, 3))])  # degree 2
@@ -35,7 +42,8 @@ def _old(module: str, name: str, words: str) -> object:
 def test_alias_warns_and_is_the_new_object(module, name, words, home) -> None:
     value = _old(module, name, words)
     if home is not None:
-        assert value is getattr(importlib.import_module(home), name)
+        home, _, new = home.partition(":")
+        assert value is getattr(importlib.import_module(home), new or name)
     else:
         assert value is getattr(importlib.import_module("ocio_vp.ocio.bake"), words)
 
@@ -77,6 +85,25 @@ def test_root_polynomial_transform(module) -> None:
     pixels = rgb.astype(np.float32)
     make(C)(pixels)  # in place, float32 buffer computed in float64
     np.testing.assert_allclose(pixels, apply_root_polynomial(C, rgb.astype(np.float32)), rtol=1e-6)
+
+
+@pytest.mark.parametrize("module", ["ocio_vp.plates", "ocio_vp.plates.detection"])
+def test_detector_still_returns_detect_chart(module) -> None:
+    from ocio_vp.plates.detection import detect_chart
+
+    detector = _old(module, "detector", "detect_chart")
+    assert detector(source="plate.exr") is detect_chart
+
+
+def test_detection_found_warns_and_says_whether_corners_were_found() -> None:
+    from ocio_vp.plates.detection import Detection
+
+    def detection(corners):
+        return Detection(corners, None, "", np.zeros((1, 1, 3)), 1, np.zeros((1, 1)), np.zeros(0))
+
+    for corners, found in [(np.zeros((4, 2)), True), (None, False)]:
+        with pytest.warns(DeprecationWarning, match=f"Detection.found.*{REMOVED_IN}.*corners"):
+            assert detection(corners).found is found
 
 
 def test_correction_public_names_all_resolve() -> None:

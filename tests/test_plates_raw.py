@@ -247,3 +247,53 @@ def test_detection_reads_a_raw_plate_as_measured(lit_chart):
     # superpixel moves a patch's edges by up to a pixel: its centre by a fraction of one
     assert np.max(np.abs(exr - CHART_CORNERS)) < 0.5
     assert np.max(np.abs(dng - CHART_CORNERS)) < 1.0
+
+
+class _Reported:
+    """A LibRaw file whose header or sensor is reported otherwise than the file holds."""
+
+    def __init__(self, raw, **reported) -> None:
+        self._raw, self._reported = raw, reported
+
+    def __getattr__(self, name):
+        return self._reported.get(name, getattr(self._raw, name))
+
+    def __enter__(self):
+        self._raw.__enter__()
+        return self
+
+    def __exit__(self, *exc):
+        return self._raw.__exit__(*exc)
+
+
+def _reporting(monkeypatch, **reported) -> None:
+    import ocio_vp.plates.raw as raw_module
+
+    opened = raw_module._open
+    monkeypatch.setattr(raw_module, "_open", lambda path: _Reported(opened(path), **reported))
+
+
+@pytest.mark.parametrize("method", ["superpixel", "linear"])
+def test_a_decoded_size_unlike_the_header_is_refused_naming_the_file(tmp_path, monkeypatch, method):
+    import rawpy
+
+    path = tmp_path / f"short_{method}.dng"  # a new file each: the decoding caches miss
+    write_dng(path, np.full((40, 60, 3), 0.2, dtype=np.float32))
+    assert open_plate(path).height == 40
+    with rawpy.imread(str(path)) as raw:
+        sizes = raw.sizes._replace(height=38)
+    _reporting(monkeypatch, sizes=sizes)
+    expected = rf"short_{method}\.dng.*decoded 60x40 pixels where the file's header states 60x38"
+    with pytest.raises(InputError, match=expected):
+        read_raw(path, (0, 0, 60, 38), method)
+
+
+@pytest.mark.parametrize("method", ["superpixel", "linear"])
+def test_a_raw_file_without_a_colour_filter_is_refused_by_either_demosaic(
+    tmp_path, monkeypatch, method
+):
+    path = tmp_path / f"stacked_{method}.dng"
+    write_dng(path, np.full((40, 60, 3), 0.2, dtype=np.float32))
+    _reporting(monkeypatch, raw_type=1, num_colors=4)
+    with pytest.raises(InputError, match="not a colour-filter-array raw file"):
+        read_raw(path, (0, 0, 60, 40), method)

@@ -99,3 +99,15 @@ class TestReadRegion:
 
 def _half(a: np.ndarray) -> np.ndarray:
     return a.astype(np.float16).astype(np.float32)
+
+
+def test_a_take_frame_missing_or_unreadable_is_named_a_frame(tmp_path, image):
+    from ocio_vp.plates.take_reader import read_frame_stats
+
+    info = open_plate(write_plate(tmp_path / "A001.0001.exr", image))
+    (tmp_path / "A001.0003.exr").write_bytes(b"not an image at all")
+    box = (0, 0, info.width, info.height)
+    with pytest.raises(InputError, match=r"A001\.0002\.exr: frame not found"):
+        read_frame_stats([tmp_path / "A001.0002.exr"], info, box, [(0, 4)])
+    with pytest.raises(InputError, match=r"A001\.0003\.exr: cannot read as an image"):
+        read_frame_stats([tmp_path / "A001.0003.exr"], info, box, [(0, 4)])

@@ -67,6 +67,7 @@ from ocio_vp.correction.outliers import (
     patch_name,
     patch_scores,
 )
+from ocio_vp.correction.perceptual import DEPRECATED as _PERCEPTUAL_DEPRECATED
 from ocio_vp.correction.perceptual import (
     PERCEPTUAL_METRICS,
     make_q_perceptual,
@@ -107,7 +108,7 @@ from ocio_vp.correction.validation import (
 )
 from ocio_vp.deprecation import deprecated_names
 
-__getattr__ = deprecated_names(__name__, _DEPRECATED)
+__getattr__ = deprecated_names(__name__, {**_DEPRECATED, **_PERCEPTUAL_DEPRECATED})
 
 __all__ = [
     "AUTO_LADDER",

@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike
 
 from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
+from ocio_vp.deprecation import deprecated_names
 from ocio_vp.metrics import sample_camera_to_xyz
 from ocio_vp.model.correction import MatrixCorrection
 
@@ -199,3 +200,13 @@ def make_q_perceptual(
 
 #: The registry's ``perceptual`` method: mean ΔE2000 with the sample camera's matrix.
 q_perceptual = make_q_perceptual()
+
+#: Names served for one more release (ocio_vp.deprecation): the sample camera's matrix is now
+#: read from the package's committed file instead of fitted here.
+DEPRECATED = {
+    "default_camera_to_xyz": (
+        "ocio_vp.metrics.sample_camera_to_xyz",
+        "ocio_vp.metrics:sample_camera_to_xyz",
+    )
+}
+__getattr__ = deprecated_names(__name__, DEPRECATED)

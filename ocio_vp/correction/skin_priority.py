@@ -30,6 +30,7 @@ from ocio_vp.correction.linear import patch_errors, problem_arrays, target_rank
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
 from ocio_vp.correction.skin import skin_delta_e, with_rows
 from ocio_vp.correction.skin_figures import background_error, clipped_background
+from ocio_vp.deprecation import deprecated_names
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import sample_camera_to_xyz, white_scale
 from ocio_vp.model.correction import (
@@ -353,3 +354,15 @@ def _q_skin_priority(problem: QProblem, default: QFit, guard: Guard | None) -> Q
         target_rank=rank,
         details={**fit.details, "skin_weight": PRIORITY_SKIN_WEIGHT, "chart_budget": CHART_BUDGET},
     )
+
+
+#: Names served for one more release (ocio_vp.deprecation): ``default_fit(problem)`` was
+#: ``q_auto(problem)`` kept in a module-level cache of the last problem.
+DEPRECATED = {
+    "default_fit": (
+        "ocio_vp.correction.auto.q_auto (the skin-first fit's default field holds the fit it "
+        "was compared with)",
+        "ocio_vp.correction.auto:q_auto",
+    )
+}
+__getattr__ = deprecated_names(__name__, DEPRECATED)

@@ -2,6 +2,7 @@
 chart sampling and patch statistics, chart detection, overlays, and ``measure``.
 """
 
+from ocio_vp.deprecation import deprecated_names
 from ocio_vp.plates.alignment import Alignment, align_take, kept_frames
 from ocio_vp.plates.capture import (
     FORMAT,
@@ -15,6 +16,7 @@ from ocio_vp.plates.capture import (
     load_capture,
     save_capture_document,
 )
+from ocio_vp.plates.detection import DEPRECATED as _DEPRECATED
 from ocio_vp.plates.detection import (
     Detection,
     DetectionError,
@@ -61,6 +63,8 @@ from ocio_vp.plates.statistics import (
 )
 from ocio_vp.plates.take import PatchReading, TakeReading, TakeRef, measure_take
 from ocio_vp.plates.wall_region import find_wall
+
+__getattr__ = deprecated_names(__name__, _DEPRECATED)
 
 __all__ = [
     "DISPLAY_FORMATS",

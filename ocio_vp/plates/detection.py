@@ -19,10 +19,12 @@ shows what was searched.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from ocio_vp.deprecation import deprecated_names, warn_deprecated
 from ocio_vp.errors import InputError
 from ocio_vp.plates.reader import PlateInfo, read_region
 from ocio_vp.plates.sampling import apply_homography
@@ -71,6 +73,12 @@ class Detection:
     #: Indices of the chart's patches found as patches (the others were covered, or as dark as
     #: the chart's frame: their samples are the corners' extrapolation, check the overlay).
     seen: tuple[int, ...] = ()
+
+    @property
+    def found(self) -> bool:
+        """Deprecated (until :data:`ocio_vp.deprecation.REMOVED_IN`): ``corners is not None``."""
+        warn_deprecated("Detection.found", "detection.corners is not None")
+        return self.corners is not None
 
     @property
     def patches_found(self) -> int:
@@ -572,3 +580,13 @@ def detection_overlay(detection: Detection) -> np.ndarray:
     labels = detection.regions.astype(np.int32) - 1
     white = float(np.percentile(detection.image.max(axis=2), 99.5)) or 1.0
     return overlay_image(detection.image, labels, states, white=white)
+
+
+def _detector(*, source: object = None) -> Callable[..., Detection]:
+    """What the deprecated ``detector`` did: return :func:`detect_chart`."""
+    return detect_chart
+
+
+#: Names served for one more release (ocio_vp.deprecation).
+DEPRECATED = {"detector": ("detect_chart (called directly)", lambda: _detector)}
+__getattr__ = deprecated_names(__name__, DEPRECATED)

@@ -111,16 +111,35 @@ def _levels(raw, path: str) -> tuple[tuple[float, ...], float]:
     return blacks, white
 
 
+def _check_cfa(raw, path: str) -> None:
+    """Refuse a file whose samples are not one colour per photosite (both demosaicing paths)."""
+    if raw.raw_type != 0 and raw.num_colors != 3:
+        raise InputError("not a colour-filter-array raw file", source=path)
+
+
+def _check_size(raw, shape: tuple[int, ...], path: str) -> None:
+    """Refuse a decoded picture whose size is not the header's (:func:`raw_size`, the size the
+    plate was opened with and its boxes checked against)."""
+    height, width = int(raw.sizes.height), int(raw.sizes.width)
+    if tuple(shape[:2]) != (height, width):
+        raise InputError(
+            f"LibRaw decoded {shape[1]}x{shape[0]} pixels where the file's header states "
+            f"{width}x{height}",
+            source=path,
+        )
+
+
 @functools.lru_cache(maxsize=2)
 def _cached(path: str, stamp: tuple[int, int]) -> RawMosaic:
     with _open(path) as raw:
-        if raw.raw_type != 0 and raw.num_colors != 3:  # pragma: no cover - unusual sensors
-            raise InputError("not a colour-filter-array raw file", source=path)
+        _check_cfa(raw, path)
+        mosaic = np.array(raw.raw_image_visible, dtype=np.uint16)
+        _check_size(raw, mosaic.shape, path)
         colours = np.array(raw.raw_colors_visible, dtype=np.uint8)
         blacks, white = _levels(raw, path)
         return RawMosaic(
             path=path,
-            mosaic=np.array(raw.raw_image_visible, dtype=np.uint16),
+            mosaic=mosaic,
             colours=colours,
             black=blacks,  # type: ignore[arg-type]
             white=white,
@@ -168,6 +187,7 @@ def _developed(path: str, stamp: tuple[int, int], method: str) -> np.ndarray:
         "aahd": rawpy.DemosaicAlgorithm.AAHD,
     }[method]
     with _open(path) as raw:
+        _check_cfa(raw, path)
         image = raw.postprocess(
             demosaic_algorithm=algorithm,
             use_camera_wb=False,
@@ -181,6 +201,7 @@ def _developed(path: str, stamp: tuple[int, int], method: str) -> np.ndarray:
             output_bps=16,
             highlight_mode=rawpy.HighlightMode.Clip,
         )
+        _check_size(raw, image.shape, path)
         blacks, white = _levels(raw, path)
     black = np.asarray(blacks, dtype=np.float32)
     # no_auto_scale: LibRaw leaves the samples in the file's units with black subtracted

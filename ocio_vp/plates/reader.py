@@ -143,11 +143,12 @@ def _find_rgb(names: tuple[str, ...], layer: str | None, path: str) -> tuple[int
     return (int(chosen[0]), int(chosen[1]), int(chosen[2]))  # type: ignore[arg-type]
 
 
-def open_input(path: str):  # -> oiio.ImageInput
+def open_input(path: str, what: str = "plate"):  # -> oiio.ImageInput
+    """``path`` opened by OpenImageIO; ``what`` it is (``plate``, ``frame``) names it when missing."""
     import OpenImageIO as oiio
 
     if not os.path.exists(path):
-        raise InputError("plate not found", source=path)
+        raise InputError(f"{what} not found", source=path)
     if os.path.isdir(path):
         raise InputError("is a folder, expected an image", source=path)
     check_regular_file(path)  # a FIFO or device would block or never end

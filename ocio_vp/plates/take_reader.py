@@ -179,7 +179,7 @@ def _read_frame(
     x0, _, x1, _ = region
     ch0, ch1 = min(info.rgb), max(info.rgb) + 1
     select = [c - ch0 for c in info.rgb]
-    inp = open_input(str(path))
+    inp = open_input(str(path), "frame")
     try:
         spec = inp.spec()
         if (spec.x, spec.y, spec.width, spec.height) != (info.x, info.y, info.width, info.height):
