@@ -308,3 +308,22 @@ def test_a_well_formed_fixture_block_loads(solution, tmp_path):
     lamp = load_solution(tmp_path).fixtures["lamp"]
     assert lamp.channels == ("red", "blue") and dict(lamp.drive) == {"red": 0.5, "blue": 0.25}
     assert (lamp.dmx.universe, lamp.dmx.address, lamp.dmx.mode) == (1, 10, "16-bit")
+
+
+def test_a_stale_export_of_a_solution_that_no_longer_loads_names_its_model(solution, tmp_path):
+    """The model of an edited solution.json is read from the file as written."""
+    from ocio_vp.formats.provenance import SOURCE_FILE, stale_outputs
+
+    data = json.loads(solution_to_json(solution))
+    data["Q"][0][0] *= 1 + 1e-6  # refused on load (see above)
+    env = tmp_path / "env"
+    _write(data, env)
+    record = {"model": "white-preserving", "solution_sha256": "an earlier solution"}
+    (env / "exports" / "nuke").mkdir(parents=True)
+    (env / "exports" / "nuke" / SOURCE_FILE).write_text(json.dumps(record))
+    [line] = stale_outputs(tmp_path, ["env"])
+    assert data["diagnostics"]["model"] and data["diagnostics"]["model"] != "white-preserving"
+    assert f"(model white-preserving, now {data['diagnostics']['model']})" in line
+    data["diagnostics"]["model"], data["method"] = None, "a-method"  # an older file: its method
+    _write(data, env)
+    assert "now a-method)" in stale_outputs(tmp_path, ["env"])[0]
