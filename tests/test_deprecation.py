@@ -175,3 +175,26 @@ def test_dict_style_ocio_names_warn_and_read_the_field() -> None:
         names["in_frustum"]  # unnamed in this block, as a missing dict key was
     with pytest.warns(DeprecationWarning), pytest.raises(KeyError, match="not_a_name"):
         names["not_a_name"]
+    # the rest of the dict API reads the named roles only: None fields are missing keys
+    named = {"config": "config.ocio", "reference": "ACES2065-1"}
+    with pytest.warns(DeprecationWarning, match=f'"config" in ocio.*{REMOVED_IN}.*ocio.config'):
+        assert "config" in names
+    with pytest.warns(DeprecationWarning, match=REMOVED_IN):
+        assert "display" not in names
+    with pytest.warns(DeprecationWarning, match=f"iterating ocio.*{REMOVED_IN}.*to_dict"):
+        assert list(names) == list(named)
+    with pytest.warns(DeprecationWarning, match=f"ocio.keys\\(\\).*{REMOVED_IN}"):
+        assert list(names.keys()) == list(named)
+    with pytest.warns(DeprecationWarning, match=f"ocio.items\\(\\).*{REMOVED_IN}"):
+        assert dict(names.items()) == named
+    with pytest.warns(DeprecationWarning, match=f"ocio.values\\(\\).*{REMOVED_IN}"):
+        assert list(names.values()) == list(named.values())
+    with pytest.warns(DeprecationWarning, match=REMOVED_IN) as caught:
+        assert dict(names) == named  # dict() reads keys(), then ocio[key] for each
+    assert [str(w.message).split(" is ")[0] for w in caught] == [
+        "ocio.keys()",
+        'ocio["config"]',
+        'ocio["reference"]',
+    ]
+    assert names == OcioNames(config="config.ocio", reference="ACES2065-1")  # no warning
+    assert OcioNames() == OcioNames() and bool(OcioNames())  # dataclass eq, always truthy

@@ -3,20 +3,30 @@ and per-node OCIO profiles, property names as in Epic's nDisplay API reference).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import pytest
 
+from ocio_vp.errors import InputError
 from ocio_vp.exports import export_solutions
+from ocio_vp.exports.panels import panel_assignments, panel_notes
+from ocio_vp.formats.solution import load_solution
 from ocio_vp.ocio.writer import write_solutions
 from ocio_vp.pipeline import solve_measurements
 
 
 @pytest.fixture(scope="module")
-def exported(panel_stage_and_measurements, tmp_path_factory):
+def solved(panel_stage_and_measurements, tmp_path_factory):
     _, m = panel_stage_and_measurements
     out = tmp_path_factory.mktemp("calib")
     write_solutions(solve_measurements(m, method="least-squares"), out)
+    return out
+
+
+@pytest.fixture(scope="module")
+def exported(solved):
+    out = solved
     export_solutions([out / "overcast"], targets=("unreal",), out=out / "exports")
     folder = out / "exports" / "overcast" / "unreal"
     return json.loads((folder / "unreal_ocio.json").read_text()), (folder / "UNREAL.md").read_text()
@@ -64,3 +74,45 @@ def test_a_stage_of_one_panel_type_has_no_profiles(tmp_path):
     mapping = json.loads((tmp_path / "e" / "env_0" / "unreal" / "unreal_ocio.json").read_text())
     assert "panel_types_checked" not in mapping
     assert not any("PerViewport" in a["property"] for a in mapping["assignments"])
+
+
+def test_a_panel_type_missing_a_name_is_refused_naming_the_key(solved, tmp_path):
+    """Not left out of the export: the stage engineer would miss a panel type's profile."""
+    folder = tmp_path / "overcast"
+    folder.mkdir()
+    for path in (solved / "overcast").iterdir():
+        if path.is_file():
+            (folder / path.name).write_bytes(path.read_bytes())
+    data = json.loads((folder / "solution.json").read_text())
+    del data["panels"]["ceiling"]["ocio"]["out_of_frustum"]
+    (folder / "solution.json").write_text(json.dumps(data))
+    with pytest.raises(InputError) as error:
+        export_solutions([folder], targets=("unreal",), out=tmp_path / "e")
+    where = f"{folder / 'solution.json'}: panels.ceiling.ocio.out_of_frustum: expected the name"
+    assert where in str(error.value)
+    assert not (tmp_path / "e" / "overcast").exists()
+
+
+@pytest.mark.parametrize("role", ["in_frustum", "out_of_frustum"])
+def test_an_in_frustum_type_needs_both_names(solved, role):
+    solution = load_solution(solved / "overcast")
+    ceiling = solution.panels["ceiling"]
+    names = dataclasses.replace(ceiling.ocio, in_frustum="LED Ceiling - Inner Frustum")
+    panel = dataclasses.replace(
+        ceiling, in_frustum=True, ocio=dataclasses.replace(names, **{role: None})
+    )
+    solution = dataclasses.replace(solution, panels={**solution.panels, "ceiling": panel})
+    for call in (
+        lambda: panel_assignments(solution, "ACEScg", "x/solution.json"),
+        lambda: panel_notes(solution, "x/solution.json"),
+    ):
+        with pytest.raises(InputError, match=f"ceiling panels' {role} colour space") as error:
+            call()
+        assert (error.value.key, error.value.source) == (
+            f"panels.ceiling.ocio.{role}",
+            "x/solution.json",
+        )
+    complete = dataclasses.replace(panel, ocio=names)
+    solution = dataclasses.replace(solution, panels={**solution.panels, "ceiling": complete})
+    roles = [a["role"] for a in panel_assignments(solution, "ACEScg").assignments]
+    assert roles == ["ceiling.out_of_frustum", "ceiling.in_frustum"]

@@ -265,3 +265,65 @@ def test_no_module_reads_a_solve_result_by_string():
                     break
                 target = target.value
     assert found == []
+
+
+def _lamp() -> dict:
+    return {
+        "channels": ["red", "blue"],
+        "drive": {"red": 0.5, "blue": 0.25},
+        "dmx": {"universe": 1, "address": 10, "mode": "16-bit"},
+    }
+
+
+CHANNELS = "fixtures.lamp: expected channels and a drive for each"
+DMX = r"fixtures.lamp.dmx: expected universe, address \(integers\) and mode \(8-bit or 16-bit\)"
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda f: f["drive"].pop("blue"), CHANNELS),
+        (lambda f: f.update(channels="red"), CHANNELS),
+        (lambda f: f["drive"].update(blue="inf"), "fixtures.lamp: expected finite drives"),
+        (lambda f: f["dmx"].update(mode="RGBW"), DMX),
+        (lambda f: f["dmx"].update(universe="1"), DMX),
+        (lambda f: f["dmx"].update(address=10.0), DMX),
+        (lambda f: f.update(dmx=[1, 10, "8-bit"]), DMX),
+    ],
+    ids=["missing-drive", "channels-text", "inf-drive", "mode", "universe", "address", "dmx-list"],
+)
+def test_a_malformed_fixture_block_says_what_it_expects(solution, tmp_path, edit, message):
+    data = json.loads(solution_to_json(solution))
+    data["fixtures"] = {"lamp": _lamp()}
+    edit(data["fixtures"]["lamp"])
+    (tmp_path / "solution.json").write_text(json.dumps(data))
+    with pytest.raises(InputError, match=f"solution.json: {message}$"):
+        load_solution(tmp_path)
+
+
+def test_a_well_formed_fixture_block_loads(solution, tmp_path):
+    data = json.loads(solution_to_json(solution))
+    data["fixtures"] = {"lamp": _lamp()}
+    (tmp_path / "solution.json").write_text(json.dumps(data))
+    lamp = load_solution(tmp_path).fixtures["lamp"]
+    assert lamp.channels == ("red", "blue") and dict(lamp.drive) == {"red": 0.5, "blue": 0.25}
+    assert (lamp.dmx.universe, lamp.dmx.address, lamp.dmx.mode) == (1, 10, "16-bit")
+
+
+def test_a_stale_export_of_a_solution_that_no_longer_loads_names_its_model(solution, tmp_path):
+    """The model of an edited solution.json is read from the file as written."""
+    from ocio_vp.formats.provenance import SOURCE_FILE, stale_outputs
+
+    data = json.loads(solution_to_json(solution))
+    data["Q"][0][0] *= 1 + 1e-6  # refused on load (see above)
+    env = tmp_path / "env"
+    _write(data, env)
+    record = {"model": "white-preserving", "solution_sha256": "an earlier solution"}
+    (env / "exports" / "nuke").mkdir(parents=True)
+    (env / "exports" / "nuke" / SOURCE_FILE).write_text(json.dumps(record))
+    [line] = stale_outputs(tmp_path, ["env"])
+    assert data["diagnostics"]["model"] and data["diagnostics"]["model"] != "white-preserving"
+    assert f"(model white-preserving, now {data['diagnostics']['model']})" in line
+    data["diagnostics"]["model"], data["method"] = None, "a-method"  # an older file: its method
+    _write(data, env)
+    assert "now a-method)" in stale_outputs(tmp_path, ["env"])[0]

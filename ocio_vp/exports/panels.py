@@ -9,8 +9,11 @@ the stage engineer to fill (UNREAL.md says which; docs/exports.md).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
+from ocio_vp.errors import InputError
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
+from ocio_vp.formats.panel_solution import OcioNames, PanelSolution
 from ocio_vp.formats.solution import Solution
 
 __all__ = ["PANEL_VERSIONS", "PanelAssignments", "panel_assignments", "panel_notes"]
@@ -56,9 +59,31 @@ class PanelAssignments:
     assignments: list[JsonValue]
 
 
-def panel_assignments(solution: Solution, source: str) -> PanelAssignments:
+def _spaces(
+    name: str, panel: PanelSolution, where: Path | str | None
+) -> tuple[str, str | None] | None:
+    """A panel type's out-of-frustum and (in frustum) in-frustum colour spaces; None while its
+    ``ocio`` block is empty (no config names its spaces yet). A block naming some but not
+    these is an InputError naming the missing key in ``where`` (its solution.json)."""
+    names = panel.ocio
+    if names == OcioNames():
+        return None
+    outer, inner = names.out_of_frustum, names.in_frustum if panel.in_frustum else None
+    if outer is None or (panel.in_frustum and inner is None):
+        role = "out_of_frustum" if outer is None else "in_frustum"
+        raise InputError(
+            f"expected the name of the {name} panels' {role} colour space",
+            source=where,
+            key=f"panels.{name}.ocio.{role}",
+        )
+    return outer, inner
+
+
+def panel_assignments(
+    solution: Solution, source: str, where: Path | str | None = None
+) -> PanelAssignments:
     """One per-viewport (and, in frustum, per-node) profile per other panel type, with the
-    colour spaces and display views they need."""
+    colour spaces and display views they need; ``where`` is solution.json (for errors)."""
     spaces: list[str] = []
     views: list[JsonValue] = []
     assignments: list[JsonValue] = []
@@ -66,10 +91,11 @@ def panel_assignments(solution: Solution, source: str) -> PanelAssignments:
     primary = next((p.name for p in panels.values() if p.in_frustum), None)
     display = solution.ocio.display
     for name, panel in panels.items():
-        names = panel.ocio
-        outer, inner = names.out_of_frustum, names.in_frustum if panel.in_frustum else None
-        if name == primary or outer is None:
+        spaces_named = None if name == primary else _spaces(name, panel, where)
+        if spaces_named is None:
             continue
+        names = panel.ocio
+        outer, inner = spaces_named
         for space, view in ((outer, names.view_out_of_frustum), (inner, names.view_in_frustum)):
             if space is not None:
                 spaces.append(space)
@@ -101,22 +127,24 @@ def panel_assignments(solution: Solution, source: str) -> PanelAssignments:
     return PanelAssignments(spaces, views, assignments)
 
 
-def panel_notes(solution: Solution) -> list[str]:
-    """One UNREAL.md step per other panel type (none for a stage of one panel type)."""
+def panel_notes(solution: Solution, where: Path | str | None = None) -> list[str]:
+    """One UNREAL.md step per other panel type (none for a stage of one panel type);
+    ``where`` is solution.json (for errors)."""
     notes = []
     panels = solution.panels or {}
     primary = next((p.name for p in panels.values() if p.in_frustum), None)
     for name, panel in panels.items():
-        outer, inner = panel.ocio.out_of_frustum, panel.ocio.in_frustum
-        if name == primary or outer is None:
+        spaces_named = None if name == primary else _spaces(name, panel, where)
+        if spaces_named is None:
             continue
+        outer, inner = spaces_named
         text = (
             f"Panel type `{name}`: on the nDisplay root actor, **OCIO > Per-Viewport OCIO "
             f"Overrides**, add a profile for the viewports of the {name} (list them in *Apply "
             f"OCIO To Objects*) with *Destination* = `{outer}` (its own "
             "M: driving it with the wall's gets the actors' light wrong)."
         )
-        if panel.in_frustum and inner is not None:
+        if inner is not None:
             text += (
                 f" On each ICVFX camera component, **OCIO > Per-Node OCIO Overrides**: a "
                 f"profile for the cluster nodes that drive the {name}, *Destination* = "

@@ -30,6 +30,7 @@ from ocio_vp.exports.templating import render_template
 from ocio_vp.exports.unreal_script import SCRIPT_FILE, render_unreal_script
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.solution import OcioNames
+from ocio_vp.formats.solution_inputs import SOLUTION_FILE
 from ocio_vp.ocio.config import WORKING_SPACE_NAMES
 
 __all__ = ["MAPPING_FILE", "unreal_mapping", "write_ocioz", "write_unreal"]
@@ -105,7 +106,7 @@ def _content_space(source: ExportSource) -> tuple[str, list[str]]:
 def _desired_spaces(source: ExportSource, content: str) -> list[str]:
     """The colour spaces the OpenColorIO Configuration asset must offer."""
     names = source.names
-    panels = panel_assignments(source.solution, content)
+    panels = panel_assignments(source.solution, content, source.directory / SOLUTION_FILE)
     return [content, names.out_of_frustum, names.in_frustum, *panels.color_spaces]
 
 
@@ -137,7 +138,7 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> JsonObje
             "role": role,
         }
 
-    panels = panel_assignments(solution, content)  # a stage's other panel types
+    panels = panel_assignments(solution, content, source.directory / SOLUTION_FILE)  # other types
     return {
         "format": "ocio-vp/unreal-ocio",
         "version": 2,
@@ -249,7 +250,7 @@ def write_unreal(
         n_solved=solution.N is not None,
         n_reason=solution.diagnostics.N_reason or "Q is not invertible",
         content_scale=content_scale(solution).lines(),
-        panel_notes=panel_notes(solution),
+        panel_notes=panel_notes(solution, source.directory / SOLUTION_FILE),
         model_note=None if carriage is None else carriage.note,
         inverse_note=_inverse_note(solution),
     )

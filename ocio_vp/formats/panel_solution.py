@@ -9,7 +9,7 @@ out-of-frustum type (a ceiling) has M and no N.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
+from collections.abc import ItemsView, Iterator, KeysView, Mapping, ValuesView
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -64,6 +64,35 @@ class OcioNames(Record):
         """``ocio.get("config")``, as when this block was a dict: served for one more release."""
         value = self._old_lookup(key, f'ocio.get("{key}")')
         return default if value is None else value
+
+    def __contains__(self, key: object) -> bool:
+        """``"config" in ocio``: served for one more release (only named roles count)."""
+        warn_deprecated(f'"{key}" in ocio', f"ocio.{key} is not None")
+        return key in self._named()
+
+    def __iter__(self) -> Iterator[str]:
+        """``for key in ocio``: the named roles, served for one more release."""
+        warn_deprecated("iterating ocio", "ocio.to_dict()")
+        return iter(self._named())
+
+    def keys(self) -> KeysView[str]:
+        """``ocio.keys()`` (with ``ocio[key]``, what ``dict(ocio)`` reads): one more release."""
+        warn_deprecated("ocio.keys()", "ocio.to_dict()")
+        return self._named().keys()
+
+    def items(self) -> ItemsView[str, str]:
+        """``ocio.items()``: the named roles and their names, served for one more release."""
+        warn_deprecated("ocio.items()", "ocio.to_dict()")
+        return self._named().items()
+
+    def values(self) -> ValuesView[str]:
+        """``ocio.values()``: the names, served for one more release."""
+        warn_deprecated("ocio.values()", "ocio.to_dict()")
+        return self._named().values()
+
+    def _named(self) -> dict[str, str]:
+        """The roles named in this block, as the old dict had them (None: no key)."""
+        return {k: v for k in OcioNames.OMIT_NONE if (v := getattr(self, k)) is not None}
 
     def _old_lookup(self, key: str, spelled: str) -> str | None:
         warn_deprecated(spelled, f"ocio.{key}", stacklevel=4)

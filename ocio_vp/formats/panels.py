@@ -1,5 +1,5 @@
 """The optional ``panels`` section of a measurements file: several LED panel types on one stage
-(keys: docs/panels.md).
+(keys: docs/measurements.md, section "panels"; what is solved: docs/panels.md).
 
 Each type has its own ``primaries``, ``lit_chart``, ``ramps`` and ``calibration_panel``/``beta``,
 replacing the top-level ones (a file mixing both forms is refused); environments give ``w_avg``

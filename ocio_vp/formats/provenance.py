@@ -117,14 +117,18 @@ def _read_json(path: Path) -> JsonObject | None:
 
 
 def _model(folder: Path) -> str:
-    """The model of the solution now in ``folder`` ("?" where it does not load)."""
+    """The model of the solution now in ``folder``; where it does not load (an edited Q), what
+    its raw ``diagnostics.model`` (or ``method``) says, "?" without either."""
     from ocio_vp.errors import InputError
     from ocio_vp.formats.solution import load_solution
 
     try:
         return load_solution(folder).model or "?"
     except InputError:
-        return "?"
+        data = _read_json(folder / SOLUTION_FILE) or {}
+        diagnostics = data.get("diagnostics")
+        model = diagnostics.get("model") if isinstance(diagnostics, dict) else None
+        return str(model or data.get("method") or "?")
 
 
 def _stale_exports(folder: Path, current: str) -> list[str]:

@@ -226,14 +226,36 @@ def _fixtures(data: JsonMapping) -> dict[str, FixtureDrive] | None:
         raise InputError("expected a mapping", key="fixtures")
     fixtures = {}
     for name, entry in block.items():
-        key = f"fixtures.{name}"
-        fixture = fixtures[name] = read_record(FixtureDrive, entry, key)
-        drives = np.array(list(fixture.drive.values()))
-        if set(fixture.drive) != set(fixture.channels) or not np.all(np.isfinite(drives)):
-            raise InputError("expected channels and a finite drive for each", key=key)
-        if fixture.dmx is not None and fixture.dmx.mode not in DMX_MODES:
-            raise InputError("expected 8-bit or 16-bit", key=f"{key}.dmx.mode")
+        _check_fixture(entry, f"fixtures.{name}")
+        fixtures[name] = read_record(FixtureDrive, entry, f"fixtures.{name}")
     return fixtures
+
+
+def _check_fixture(entry: JsonValue, key: str) -> None:
+    """A ``fixtures.<name>`` block's shape, in the words solution.json's errors have always had."""
+    channels = entry.get("channels") if isinstance(entry, dict) else None
+    drive = entry.get("drive") if isinstance(entry, dict) else None
+    if not (
+        isinstance(channels, list)
+        and all(isinstance(c, str) for c in channels)
+        and isinstance(drive, dict)
+        and set(drive) == set(channels)
+    ):
+        raise InputError("expected channels and a drive for each", key=key)
+    if not all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
+        for v in drive.values()
+    ):
+        raise InputError("expected finite drives", key=key)
+    dmx = entry.get("dmx") if isinstance(entry, dict) else None
+    if dmx is not None and not (
+        isinstance(dmx, dict)
+        and all(type(dmx.get(k)) is int for k in ("universe", "address"))
+        and dmx.get("mode") in DMX_MODES
+    ):
+        raise InputError(
+            "expected universe, address (integers) and mode (8-bit or 16-bit)", key=f"{key}.dmx"
+        )
 
 
 def _text(data: JsonMapping, key: str) -> str | None:
