@@ -1,5 +1,6 @@
 """The take's contact sheet drawn with matplotlib, as ocio_vp drew it before it moved to its SVG
-writer (``ocio_vp/plates/contact_sheet.py`` at commit fb47e70, unchanged but for this docstring):
+writer (``ocio_vp/plates/contact_sheet.py`` at commit fb47e70, unchanged but for this docstring and
+the thumbnail, strip length and colours, imported from it):
 the reference :mod:`benchmarks.bench_figures` times :mod:`ocio_vp.plates.contact_sheet`
 against. Not part of ocio_vp.
 """
@@ -10,32 +11,12 @@ from pathlib import Path
 
 import numpy as np
 
+# The thumbnail, the strip length and the colours are the package's own (the same project's
+# private names); only the drawing is matplotlib.
+from ocio_vp.plates.contact_sheet import _COLOURS, _FRAMES_PER_STRIP, _thumbnail
 from ocio_vp.plates.take import TakeReading, rows_read
 
 __all__ = ["write_contact_sheet"]
-
-_THUMB_WIDTH = 640
-_FRAMES_PER_STRIP = 400
-_COLOURS = ("#d62728", "#2ca02c", "#1f77b4")
-
-
-def _thumbnail(reading: TakeReading) -> tuple[np.ndarray, int, int]:
-    """A frame of the take, subsampled to at most 640 pixels wide: (image, step, frame)."""
-    from ocio_vp.plates.overlay import tone_map
-
-    brightest = max(reading.patches.values(), key=lambda p: float(np.max(p.mean)))
-    frame = brightest.frames[len(brightest.frames) // 2]
-    index = int(np.flatnonzero(reading.numbers == frame)[0])
-    info = reading.info
-    step = max(1, -(-info.width // _THUMB_WIDTH))
-    rows = []
-    read = reading.frame_reader(index)
-    for y in range(info.y, info.y + info.height, step * 64):
-        y1 = min(y + step * 64, info.y + info.height)
-        band = read((info.x, y, info.x + info.width, y1))
-        rows.append(band[::step, ::step])
-    image = np.concatenate(rows, axis=0)
-    return tone_map(image, white=float(np.max(brightest.mean)) * 1.1), step, frame
 
 
 def _draw_frame(ax, reading: TakeReading) -> None:

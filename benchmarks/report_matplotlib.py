@@ -1,6 +1,6 @@
 """The report's figures drawn with matplotlib, as ocio_vp drew them before its SVG writer
-(``ocio_vp/report/plots.py`` at commit cc0000c^, unchanged but for this docstring and the SVG
-backend in ``_save``): the reference :mod:`benchmarks.bench_figures` times the SVG writer
+(``ocio_vp/report/plots.py`` at commit cc0000c^, unchanged but for this docstring, the SVG
+backend in ``_save`` and the records, titles and colours, imported from the package): the reference :mod:`benchmarks.bench_figures` times the SVG writer
 against, on today's report data. Not part of ocio_vp.
 """
 
@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -16,76 +15,25 @@ import numpy as np
 
 from ocio_vp.report.data import EnvironmentData, patch_names
 
+# What is drawn and how it is recorded is the package's own; only the drawing is matplotlib.
+from ocio_vp.report.plots import (
+    BACKGROUND,
+    CHANNEL_COLOURS,
+    CHANNEL_NAMES,
+    PANELS,
+    ChartPlot,
+    DeltaEPlot,
+    ErrorBarsPlot,
+    LinearityPlot,
+    panel_titles,
+)
+
 __all__ = [
-    "ChartPlot",
-    "DeltaEPlot",
-    "ErrorBarsPlot",
-    "LinearityPlot",
-    "panel_titles",
     "plot_comparison_charts",
     "plot_delta_e",
     "plot_error_bars",
     "plot_linearity",
 ]
-
-CHANNEL_COLOURS = ("#c0392b", "#27ae60", "#2e6fbd")
-CHANNEL_NAMES = ("R", "G", "B")
-#: The four comparison panels: stage chart, rows lit/displayed, columns baseline/ours.
-PANELS = ("lit_baseline", "lit_corrected", "displayed_baseline", "displayed_corrected")
-
-
-def panel_titles(solution: Any) -> dict[str, str]:
-    """Panel titles that say what "ours" is for this solution (N or black level may be absent)."""
-    background = ["N" if solution.N is not None else "M (N not solved)"]
-    if solution.black_level_offset is not None:
-        background.append("black level")
-    if solution.N is not None:
-        background.append("Q")
-    return {
-        "lit_baseline": "Lit chart: baseline (M only)",
-        "lit_corrected": "Lit chart: ours (M, then Q on the footage)",
-        "displayed_baseline": "In-camera background: baseline (M only)",
-        "displayed_corrected": f"In-camera background: ours ({', '.join(background)})",
-    }
-
-
-BACKGROUND = "#3a3a3a"
-
-
-@dataclass(frozen=True)
-class ChartPlot:
-    """sRGB face colours drawn per panel: ``squares`` (target) and ``circles`` (stage)."""
-
-    path: Path
-    squares: dict[str, np.ndarray]
-    circles: dict[str, np.ndarray]
-    titles: dict[str, str] = field(default_factory=dict)
-
-
-@dataclass(frozen=True)
-class ErrorBarsPlot:
-    """Bar heights (fractions of white, not percent): (environments, 3) per series."""
-
-    path: Path
-    environments: list[str]
-    baseline: np.ndarray
-    ours: np.ndarray
-
-
-@dataclass(frozen=True)
-class DeltaEPlot:
-    """Per-patch ΔE drawn: ``values[metric][chart]`` is (n,)."""
-
-    path: Path
-    values: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
-
-
-@dataclass(frozen=True)
-class LinearityPlot:
-    """Curves drawn: ``curves[label] = (x, y)`` arrays."""
-
-    path: Path
-    curves: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
 
 
 def _figure(width: float, height: float, **margins: float) -> Any:

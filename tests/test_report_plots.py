@@ -219,8 +219,8 @@ def test_same_input_same_bytes_and_short_numbers(report, tmp_path):
 
 
 def test_no_figure_uses_matplotlib():
-    # One way to draw figures: ocio_vp/svg.py, 80-90x quicker than matplotlib on the report's
-    # figures and 30x on the take's contact sheet (docs/report.md, benchmarks/bench_figures.py).
+    # One way to draw figures: ocio_vp/svg.py, much quicker than matplotlib on the report's
+    # figures and the take's contact sheet (measured: docs/report.md, benchmarks/bench_figures.py).
     for source in (ROOT / "ocio_vp").rglob("*.py"):
         for node in ast.walk(ast.parse(source.read_text())):
             names = [a.name for a in node.names] if isinstance(node, ast.Import) else []
