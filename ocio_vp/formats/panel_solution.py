@@ -96,7 +96,7 @@ class OcioNames(Record):
 
     def _old_lookup(self, key: str, spelled: str) -> str | None:
         warn_deprecated(spelled, f"ocio.{key}", stacklevel=4)
-        return getattr(self, key) if key in OcioNames.OMIT_NONE else None
+        return self._named().get(key)
 
 
 OcioNames.OMIT_NONE = tuple(f.name for f in dataclasses.fields(OcioNames))  # each when named
