@@ -22,6 +22,7 @@ __all__ = [
     "DEFAULT_VALIDATION_THRESHOLD",
     "DEFAULT_WALL_ENCODING",
     "DEFAULT_WHITE_PATCH",
+    "ENCODINGS",
     "ENVIRONMENT_TARGETS",
     "EXPORT_TARGETS",
     "LINEAR_METHODS",
@@ -32,6 +33,7 @@ __all__ = [
     "SHOW_TARGETS",
     "WALL_ENCODINGS",
     "BlackLevelMethod",
+    "canonical_encoding",
 ]
 
 #: The white patch of a ColorChecker 24, 0-based in reading order (people see it as patch 19,
@@ -102,3 +104,33 @@ OPTIMIZATIONS = ("lossless", "default", "good", "draft")
 #: ``ocio-vp validate``: pass when the 95th percentile of ΔE2000 over the shown patches is at
 #: most this (docs/validation.md says why 3).
 DEFAULT_VALIDATION_THRESHOLD = 3.0
+
+
+def _encodings() -> tuple[str, ...]:
+    import colour
+
+    return ("linear", *sorted(colour.CCTF_DECODINGS.keys()))
+
+
+#: Encodings a plate may declare: ``linear`` or any decoding in colour-science's
+#: ``colour.CCTF_DECODINGS`` (``sRGB``, ``Gamma 2.4``, ``ARRI LogC4``, ``S-Log3``, ``Cineon`` ...).
+ENCODINGS = "linear or a name in colour.CCTF_DECODINGS"
+
+
+def canonical_encoding(name: object, *, source: object = None, key: str | None = None) -> str:
+    """Return the canonical spelling of a plate or footage encoding name (case-insensitive), or
+    raise :class:`~ocio_vp.errors.InputError` with close matches."""
+    import difflib
+
+    from ocio_vp.errors import InputError
+
+    if isinstance(name, str) and name.lower() == "linear":
+        return "linear"  # the default: no need to import colour-science to know it
+
+    names = _encodings()
+    by_lower = {n.lower(): n for n in names}
+    if isinstance(name, str) and name.lower() in by_lower:
+        return by_lower[name.lower()]
+    close = difflib.get_close_matches(str(name), names, n=3, cutoff=0.5)
+    hint = f"; close matches: {', '.join(close)}" if close else ""
+    raise InputError(f"unknown encoding {name!r} (use {ENCODINGS}){hint}", source=source, key=key)

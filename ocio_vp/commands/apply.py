@@ -8,7 +8,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ocio_vp.choices import DEFAULT_FOOTAGE_ENCODING
+from ocio_vp.choices import DEFAULT_FOOTAGE_ENCODING, canonical_encoding
 from ocio_vp.commands.common import warn
 from ocio_vp.commands.report import SOLUTIONS_HELP
 
@@ -148,7 +148,7 @@ def run(args: argparse.Namespace) -> int:
     if not frames:
         raise InputError("no frames given after the solution(s)", key="FRAMES")
     chosen = solution_folders(solutions, key="SOLUTION")
-    encoding = _footage_encoding(args.footage_encoding)
+    encoding = canonical_encoding(args.footage_encoding, key="--footage-encoding")
     frame_range = parse_frame_range(args.frame_range) if args.frame_range else None
     inputs = expand_frames(frames, frames=frame_range)
     workers = 1 if args.workers is None else args.workers
@@ -169,16 +169,6 @@ def run(args: argparse.Namespace) -> int:
         _refuse_other_solutions(tasks)
     check_free_space(tasks)
     return _run_tasks(tasks, args, workers)
-
-
-def _footage_encoding(name: str) -> str:
-    """The canonical spelling of ``--footage-encoding``. Linear (the default) is known without
-    importing the plates package, which every other name needs (its readers, detection...)."""
-    if name.lower() == "linear":
-        return "linear"
-    from ocio_vp.plates.reader import canonical_encoding
-
-    return canonical_encoding(name, key="--footage-encoding")
 
 
 def _refuse_other_solutions(tasks: list) -> None:

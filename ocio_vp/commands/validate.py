@@ -86,11 +86,11 @@ def _check_sequence(sequence, environment_dir, solution) -> None:
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from ocio_vp.choices import canonical_encoding
     from ocio_vp.commands.measure import TakeProgress
     from ocio_vp.errors import InputError
     from ocio_vp.formats.solution import load_solution
     from ocio_vp.patterns.sequence import load_sequence
-    from ocio_vp.plates.reader import canonical_encoding
     from ocio_vp.plates.take import TakeRef, measure_take
     from ocio_vp.staging import check_not_input, check_replaceable, publish_dir, staged_dir
     from ocio_vp.validation.compare import compare_take

@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ocio_vp.choices import ENCODINGS, canonical_encoding
 from ocio_vp.errors import InputError
 from ocio_vp.formats.documents import check_regular_file
-from ocio_vp.formats.jsontypes import JsonValue
 from ocio_vp.plates.raw import is_raw
 
 __all__ = [
@@ -37,33 +37,6 @@ DISPLAY_FORMATS = frozenset({"png", "jpeg", "webp", "heif", "gif", "bmp", "targa
 _LOG_TRANSFERS = frozenset({"Printing density", "Logarithmic"})
 #: Read this many bytes of scanlines at a time (bounds memory for wide plates).
 _BAND_BYTES = 32 * 2**20
-
-
-def _encodings() -> tuple[str, ...]:
-    import colour
-
-    return ("linear", *sorted(colour.CCTF_DECODINGS.keys()))
-
-
-#: Encodings a plate may declare: ``linear`` or any decoding in colour-science's
-#: ``colour.CCTF_DECODINGS`` (``sRGB``, ``Gamma 2.4``, ``ARRI LogC4``, ``S-Log3``, ``Cineon`` ...).
-ENCODINGS = "linear or a name in colour.CCTF_DECODINGS"
-
-
-def canonical_encoding(name: JsonValue, *, source: object = None, key: str | None = None) -> str:
-    """Return the canonical spelling of an encoding name (case-insensitive), or raise."""
-    import difflib
-
-    if isinstance(name, str) and name.lower() == "linear":
-        return "linear"  # the default: no need to import colour-science to know it
-
-    names = _encodings()
-    by_lower = {n.lower(): n for n in names}
-    if isinstance(name, str) and name.lower() in by_lower:
-        return by_lower[name.lower()]
-    close = difflib.get_close_matches(str(name), names, n=3, cutoff=0.5)
-    hint = f"; close matches: {', '.join(close)}" if close else ""
-    raise InputError(f"unknown encoding {name!r} (use {ENCODINGS}){hint}", source=source, key=key)
 
 
 def linearise(values: np.ndarray, encoding: str) -> np.ndarray:
