@@ -159,6 +159,8 @@ def test_skin_first_is_drawn_towards_the_default_where_it_costs_the_background()
     problem = with_skin(post_correction_problem(m, env, []), (), None, env.name)
     alone, _ = bounded_candidate(problem, "root-polynomial", PRIORITY_SKIN_WEIGHT)
     default = q_auto(problem)
+    # the precondition: the skin fit alone raises the background clearly (by over 1 %), so the
+    # rule has a rise to project out
     assert background_error(problem, alone.correction) > 1.01 * background_error(
         problem, default.correction
     )
@@ -166,6 +168,7 @@ def test_skin_first_is_drawn_towards_the_default_where_it_costs_the_background()
     skin = solution.diagnostics.skin
     assert skin.default.background <= skin.default.background_default * (1 + 1e-9)
     assert skin.default.led_damage <= skin.default.led_damage_default * (1 + 1e-9)
+    # and the projected step still keeps a real part (at least a tenth) of skin-first's gain
     assert skin.expected < 0.9 * skin.default.expected
     assert "of the way from the default" in solution.diagnostics.model_reason
 
