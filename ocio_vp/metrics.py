@@ -40,6 +40,7 @@ __all__ = [
     "SAMPLE_MATRIX_FILE",
     "WHITE_FLOOR",
     "ChartErrors",
+    "as_recorded",
     "camera_delta_E_2000",
     "camera_to_xyz_matrix",
     "chart_errors",
@@ -113,6 +114,16 @@ def zero_below_rounding(value: float) -> float:
     (0.0, 0.42)
     """
     return 0.0 if abs(value) < ROUNDING else float(value)
+
+
+def as_recorded(value: float, digits: int = 6) -> float:
+    """``value`` as files keep a measured figure: 0 below :data:`ROUNDING`, else rounded to
+    ``digits`` significant digits (the digits beyond differ between machines).
+
+    >>> as_recorded(0.9729297276353142), as_recorded(3.2e-8), as_recorded(1234.5678, 4)
+    (0.97293, 0.0, 1235.0)
+    """
+    return float(f"{zero_below_rounding(value):.{digits}g}")
 
 
 def white_scale(

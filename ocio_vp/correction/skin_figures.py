@@ -30,8 +30,8 @@ _MAX_CONDITION = 1e8
 
 
 def _fraction(value: float) -> float | None:
-    """An error relative to white as recorded: None where not defined, 0 below rounding."""
-    return zero_below_rounding(value) if np.isfinite(value) else None
+    """An error relative to white: None where not defined."""
+    return float(value) if np.isfinite(value) else None
 
 
 def _background_outside(problem: QProblem, correction: PostCorrection) -> int:
@@ -105,7 +105,7 @@ def skin_figures(
         SkinBand(
             name,
             int(np.sum(band == name)),
-            *(zero_below_rounding(np.mean(e[band == name])) for e in errors[:2]),
+            *(float(np.mean(e[band == name])) for e in errors[:2]),
         )
         for name, _ in ITA_BANDS
         if np.any(band == name)
@@ -114,11 +114,11 @@ def skin_figures(
     if default is not None:
         comparison = SkinDefault(
             model=default[0],
-            expected=zero_below_rounding(np.mean(errors[2])),
-            led_damage=zero_below_rounding(
+            expected=float(np.mean(errors[2])),
+            led_damage=float(
                 in_frame_led_damage(correction, problem.SL, white, camera)
             ),
-            led_damage_default=zero_below_rounding(
+            led_damage_default=float(
                 in_frame_led_damage(default[1], problem.SL, white, camera)
             ),
             background_outside=_background_outside(problem, correction),
@@ -130,10 +130,10 @@ def skin_figures(
         priority=priority,
         source=skin.source,
         samples=skin.count,
-        expected=zero_below_rounding(np.mean(errors[0])),
-        least_squares=zero_below_rounding(np.mean(errors[1])),
-        chart=zero_below_rounding(np.mean(chart[0][0][active])),
-        chart_least_squares=zero_below_rounding(np.mean(chart[0][1][active])),
+        expected=float(np.mean(errors[0])),
+        least_squares=float(np.mean(errors[1])),
+        chart=float(np.mean(chart[0][0][active])),
+        chart_least_squares=float(np.mean(chart[0][1][active])),
         bands=bands,
         default=comparison,
     )

@@ -17,7 +17,7 @@ from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.formats.jsontypes import JsonMapping
 from ocio_vp.formats.records import Record, read_record, read_value
 from ocio_vp.formats.skin import SkinFigures
-from ocio_vp.metrics import zero_below_rounding
+from ocio_vp.metrics import as_recorded
 from ocio_vp.model.footage_range import Agreement
 
 __all__ = [
@@ -110,8 +110,7 @@ class Extrapolation(Record):
         # 4 significant digits, 0 below rounding (the digits beyond differ between machines:
         # a rank-1 Q's agree to 2e-8 only).
         for key in ("led_damage", "led_damage_least_squares"):
-            value = zero_below_rounding(getattr(self, key))
-            object.__setattr__(self, key, float(f"{value:.4g}"))
+            object.__setattr__(self, key, as_recorded(getattr(self, key), 4))
         # The probe's -inf (a dominant output at or below zero: no share of it exists) is
         # written as null, never as a non-finite number; ``kept`` <= 0 says the same.
         if self.negative is not None and not np.isfinite(self.negative):
