@@ -19,7 +19,7 @@ from ocio_vp.correction.linear import patch_errors
 from ocio_vp.correction.problem import QProblem, fit_least_squares
 from ocio_vp.correction.skin import skin_delta_e
 from ocio_vp.formats.skin import SkinBand, SkinDefault, SkinFigures
-from ocio_vp.metrics import sample_camera_to_xyz, white_scale, zero_below_rounding
+from ocio_vp.metrics import sample_camera_to_xyz, white_scale
 from ocio_vp.model.correction import MatrixCorrection, PostCorrection
 from ocio_vp.skin_data import ITA_BANDS
 
