@@ -10,9 +10,9 @@ an OCIO class name, its parameters by setter name, a group's children and its di
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, TypeVar
 
 if TYPE_CHECKING:
     import PyOpenColorIO as OCIO
@@ -530,7 +530,12 @@ def _views(config: OCIO.Config) -> list[View]:
     return views
 
 
-def _yaml(item: Any) -> str:
+_O = TypeVar("_O")
+_R = TypeVar("_R")
+_N = TypeVar("_N", ColourSpace, NamedTransform, Look, ViewTransform)
+
+
+def _yaml(item: object) -> str:
     """How OCIO writes ``item`` (a colour space, named transform, look or view transform)."""
     import PyOpenColorIO as OCIO
 
@@ -539,18 +544,23 @@ def _yaml(item: Any) -> str:
     return config.serialize()
 
 
-def _split(items: Iterable[Any], record: Any, rebuild: Any) -> tuple[list[Any], list[Any]]:
+def _split(
+    items: Iterable[_O], record: Callable[[_O], _R], rebuild: Callable[[_R], object]
+) -> tuple[list[_R], list[_O]]:
     """(records of ``items`` that rebuild them exactly, as OCIO writes both; the items that do
     not: a transform without record, a field the record does not carry)."""
-    records: list[Any] = []
-    kept: list[Any] = []
+    records: list[_R] = []
+    kept: list[_O] = []
     for item in items:
         try:
             rec = record(item)
             exact = _yaml(rebuild(rec)) == _yaml(item)
         except ValueError:
             exact = False
-        (records if exact else kept).append(rec if exact else item)
+        if exact:
+            records.append(rec)
+        else:
+            kept.append(item)
     return records, kept
 
 
@@ -569,21 +579,20 @@ def split_config(config: OCIO.Config) -> tuple[ConfigData, OCIO.Config]:
     )
     for cs in spaces:
         rest.removeColorSpace(cs.name)
-    kept = [*kept_spaces]
-    parts = []
-    for items, record, rebuild, clear, add in (
-        (config.getNamedTransforms(OCIO.NAMEDTRANSFORM_ALL), _named_record,
-         _ocio_named_transform, rest.clearNamedTransforms, rest.addNamedTransform),
-        (config.getLooks(), _look_record, _ocio_look, rest.clearLooks, rest.addLook),
-        (config.getViewTransforms(), _view_transform_record, _ocio_view_transform,
-         rest.clearViewTransforms, rest.addViewTransform),
-    ):  # fmt: skip
-        records, kept_items = _split(items, record, rebuild)
-        clear()
-        for item in kept_items:
-            add(item)
-        parts.append(records)
-        kept += kept_items
+    named, kept_named = _split(
+        config.getNamedTransforms(OCIO.NAMEDTRANSFORM_ALL), _named_record, _ocio_named_transform
+    )
+    looks, kept_looks = _split(config.getLooks(), _look_record, _ocio_look)
+    vts, kept_vts = _split(config.getViewTransforms(), _view_transform_record, _ocio_view_transform)
+    rest.clearNamedTransforms()
+    rest.clearLooks()
+    rest.clearViewTransforms()
+    for nt in kept_named:
+        rest.addNamedTransform(nt)
+    for look in kept_looks:
+        rest.addLook(look)
+    for vt in kept_vts:
+        rest.addViewTransform(vt)
     rest.clearDisplays()
     rest.clearSharedViews()
     rest.clearEnvironmentVars()
@@ -596,9 +605,9 @@ def split_config(config: OCIO.Config) -> tuple[ConfigData, OCIO.Config]:
         search_path=config.getSearchPath(),
         roles=dict(config.getRoles()),
         colour_spaces=spaces,
-        named_transforms=parts[0],
-        looks=parts[1],
-        view_transforms=parts[2],
+        named_transforms=named,
+        looks=looks,
+        view_transforms=vts,
         views=_views(config),
         active_displays=tuple(name_list(config.getActiveDisplays())),
         active_views=tuple(name_list(config.getActiveViews())),
@@ -608,7 +617,7 @@ def split_config(config: OCIO.Config) -> tuple[ConfigData, OCIO.Config]:
         default_rule="" if default_rule == "default" else default_rule,
         default_view_transform=config.getDefaultViewTransformName(),
         inactive_colour_spaces=tuple(name_list(config.getInactiveColorSpaces())),
-        opaque=tuple(item.getName() for item in kept),
+        opaque=tuple(x.getName() for x in (*kept_spaces, *kept_named, *kept_looks, *kept_vts)),
     )
     return data, rest
 
@@ -630,7 +639,7 @@ def merge(base: ConfigData, overlay: ConfigData) -> ConfigData:
     paths = base.search_path.split(":") + [p for p in overlay.search_path.split(":") if p]
     views = {(v.display, v.name) for v in base.views}
 
-    def new(mine: list[Any], theirs: list[Any]) -> list[Any]:
+    def new(mine: list[_N], theirs: list[_N]) -> list[_N]:
         taken = {*base.opaque, *(n for x in mine for n in (x.name, *getattr(x, "aliases", ())))}
         return mine + [item for item in theirs if item.name not in taken]
 
