@@ -169,6 +169,41 @@ def test_the_show_merge_is_data_and_the_base_wins():
     ]
 
 
+def test_show_data_is_a_function_of_data():
+    """Without OCIO: a base display's view-transform view gets its footage twin (its Raw view,
+    a data space, none), the active lists grow by the show's views, the inactive list keeps only
+    names the config defines, the environment variable defaults to the first environment."""
+    d = description
+    base = d.ConfigData(
+        colour_spaces=[d.ColourSpace("AP0", "", ""), d.ColourSpace("Raw", "", "", is_data=True),
+                       d.ColourSpace("sRGB", "", "", display_referred=True)],
+        roles={"aces_interchange": "AP0"},
+        views=[d.View("", "Film", "<USE_DISPLAY_NAME>", "Film VT"), d.View("sRGB", "Raw", "Raw"),
+               d.View("sRGB", "Film", "", shared=True)],
+        active_views=("Film", "Raw"), inactive_colour_spaces=("sRGB", "Gone"),
+    )  # fmt: skip
+    camera = d.matrix([2.0, 0, 0, 0, 0, 2.0, 0, 0, 0, 0, 2.0, 0, 0, 0, 0, 1])
+    own = d.ConfigData(
+        colour_spaces=[d.ColourSpace(show.REFERENCE, "ocio-vp/Camera", "camera"),
+                       d.ColourSpace("Stage Footage", "ocio-vp/Camera", "footage",
+                                     to_reference=camera)],
+        views=[d.View(show.DISPLAY, "Outer Frustum", "x"), d.View(show.DISPLAY, "Raw", "Raw")],
+        active_views=("Raw", "Outer Frustum"),
+    )  # fmt: skip
+    envs = [show.EnvironmentData(name, own, camera) for name in ("a", "b")]
+    data = show.show_data(base, envs, "base")
+    names = [cs.name for cs in data.colour_spaces]
+    assert names[:3] == ["AP0", "Raw", "sRGB"] and "Stage Footage [b]" in names
+    assert names[-2:] == [show.REFERENCE, "Stage Footage"]  # picked by the context variable
+    twin = d.View("sRGB", "Film" + show.FOOTAGE_VIEW_SUFFIX, "sRGB", "Film VT",
+                  show.POST_CORRECTION_LOOK)  # fmt: skip
+    assert [v for v in data.views if v.display == "sRGB"][-1] == twin
+    assert [v.name for v in data.views if v.display == show.DISPLAY] == ["Raw", "Outer Frustum"]
+    assert data.active_views == ("Film", "Raw", twin.name, "Outer Frustum")
+    assert data.inactive_colour_spaces == ("sRGB",)
+    assert data.environment == {show.CONTEXT_VARIABLE: "a"} and data.name == "ocio-vp_show"
+
+
 def test_show_folder_loads_after_a_move(solved, tmp_path):
     moved = tmp_path / "elsewhere"
     shutil.copytree(solved / "x" / "show", moved)
