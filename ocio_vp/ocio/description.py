@@ -594,7 +594,8 @@ def split_config(config: OCIO.Config) -> tuple[ConfigData, OCIO.Config]:
     for vt in kept_vts:
         rest.addViewTransform(vt)
     rest.clearDisplays()
-    rest.clearSharedViews()
+    for name in config.getSharedViews():  # no clearSharedViews before OCIO 2.4
+        rest.removeSharedView(name)
     rest.clearEnvironmentVars()
     rules = config.getFileRules()
     default_rule = rules.getColorSpace(rules.getNumEntries() - 1)
