@@ -545,13 +545,17 @@ def _yaml(item: object) -> str:
 
 
 def _split(
-    items: Iterable[_O], record: Callable[[_O], _R], rebuild: Callable[[_R], object]
+    items: Iterable[_O], record: Callable[[_O], _R], rebuild: Callable[[_R], object], exact: bool
 ) -> tuple[list[_R], list[_O]]:
     """(records of ``items`` that rebuild them exactly, as OCIO writes both; the items that do
-    not: a transform without record, a field the record does not carry)."""
+    not: a transform without record, a field the record does not carry); not ``exact``: every
+    record, unchecked."""
     records: list[_R] = []
     kept: list[_O] = []
     for item in items:
+        if not exact:
+            records.append(record(item))
+            continue
         try:
             rec = record(item)
             exact = _yaml(rebuild(rec)) == _yaml(item)
@@ -564,39 +568,30 @@ def _split(
     return records, kept
 
 
-def split_config(config: OCIO.Config) -> tuple[ConfigData, OCIO.Config]:
+def split_config(
+    config: OCIO.Config, *, exact: bool = True
+) -> tuple[ConfigData, OCIO.Config | None]:
     """``config`` as data, and a copy of it with only what the data does not describe: the file
     rules (but the default rule's colour space), viewing rules, luma, strict parsing, family
     separator, and each colour space, named transform, look and view transform no record
     rebuilds exactly (kept as OCIO has them, named in ``opaque``; :func:`build` adds the data
-    to this copy)."""
+    to this copy). ``exact=False``: every element as data, unchecked, and no copy."""
     import PyOpenColorIO as OCIO
 
-    rest = OCIO.Config.CreateFromStream(config.serialize())
     every = (OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ALL)
     spaces, kept_spaces = _split(
-        config.getColorSpaces(*every), colour_space_record, _ocio_colour_space
+        config.getColorSpaces(*every), colour_space_record, _ocio_colour_space, exact
     )
-    for cs in spaces:
-        rest.removeColorSpace(cs.name)
     named, kept_named = _split(
-        config.getNamedTransforms(OCIO.NAMEDTRANSFORM_ALL), _named_record, _ocio_named_transform
+        config.getNamedTransforms(OCIO.NAMEDTRANSFORM_ALL),
+        _named_record,
+        _ocio_named_transform,
+        exact,
     )
-    looks, kept_looks = _split(config.getLooks(), _look_record, _ocio_look)
-    vts, kept_vts = _split(config.getViewTransforms(), _view_transform_record, _ocio_view_transform)
-    rest.clearNamedTransforms()
-    rest.clearLooks()
-    rest.clearViewTransforms()
-    for nt in kept_named:
-        rest.addNamedTransform(nt)
-    for look in kept_looks:
-        rest.addLook(look)
-    for vt in kept_vts:
-        rest.addViewTransform(vt)
-    rest.clearDisplays()
-    for name in config.getSharedViews():  # no clearSharedViews before OCIO 2.4
-        rest.removeSharedView(name)
-    rest.clearEnvironmentVars()
+    looks, kept_looks = _split(config.getLooks(), _look_record, _ocio_look, exact)
+    vts, kept_vts = _split(
+        config.getViewTransforms(), _view_transform_record, _ocio_view_transform, exact
+    )
     rules = config.getFileRules()
     default_rule = rules.getColorSpace(rules.getNumEntries() - 1)
     data = ConfigData(
@@ -620,16 +615,31 @@ def split_config(config: OCIO.Config) -> tuple[ConfigData, OCIO.Config]:
         inactive_colour_spaces=tuple(name_list(config.getInactiveColorSpaces())),
         opaque=tuple(x.getName() for x in (*kept_spaces, *kept_named, *kept_looks, *kept_vts)),
     )
+    if not exact:
+        return data, None
+    rest = OCIO.Config.CreateFromStream(config.serialize())
+    for cs in spaces:
+        rest.removeColorSpace(cs.name)
+    rest.clearNamedTransforms()
+    rest.clearLooks()
+    rest.clearViewTransforms()
+    for nt in kept_named:
+        rest.addNamedTransform(nt)
+    for look in kept_looks:
+        rest.addLook(look)
+    for vt in kept_vts:
+        rest.addViewTransform(vt)
+    rest.clearDisplays()
+    for name in config.getSharedViews():  # no clearSharedViews before OCIO 2.4
+        rest.removeSharedView(name)
+    rest.clearEnvironmentVars()
     return data, rest
 
 
 def config_record(config: OCIO.Config) -> ConfigData:
-    """The data of an OCIO config whose every element has a record (what :func:`build` makes;
-    ValueError otherwise)."""
-    data, _ = split_config(config)
-    if data.opaque:
-        raise ValueError(f"no exact record for {', '.join(data.opaque)}")
-    return data
+    """The data of an OCIO config whose every transform has a record (what :func:`build`
+    makes; ValueError otherwise)."""
+    return split_config(config, exact=False)[0]
 
 
 def merge(base: ConfigData, overlay: ConfigData) -> ConfigData:
