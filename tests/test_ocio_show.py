@@ -133,16 +133,20 @@ def test_each_environment_equals_its_own_config(solved):
 )
 def test_a_base_read_into_data_builds_back_to_the_same_file(base, tmp_path):
     """OCIO's own writing of the base and of the config built from its data are the same bytes;
-    a look whose transform has no record (CDL) stays as OCIO has it (first of its kind)."""
+    looks whose transform has no record (CDL) stay as OCIO has them (first of their kind)."""
     if base == "own":
         config = OCIO.Config.CreateFromFile(show.DEFAULT_BASE_CONFIG)
+        aces_look = config.getLook(config.getLookNames()[0])
         config.clearLooks()
-        config.addLook(OCIO.Look(name="Warm", processSpace="ACEScg",
-                                 transform=OCIO.CDLTransform(slope=[1.1, 1.0, 0.9])))  # fmt: skip
+        for name in ("Warm", "Cool"):
+            cdl = OCIO.CDLTransform(slope=[1.1, 1.0, 0.9] if name == "Warm" else [0.9, 1.0, 1.1])
+            config.addLook(OCIO.Look(name=name, processSpace="ACEScg", transform=cdl))
+        config.addLook(aces_look)
     else:
         config = OCIO.Config.CreateFromFile(base)
     data, rest = description.split_config(config)
-    assert data.opaque == (("Warm",) if base == "own" else ())
+    assert data.opaque == (("Warm", "Cool") if base == "own" else ())
+    assert len(data.looks) == 1
     assert description.build(data, start=rest).serialize() == config.serialize()
 
 

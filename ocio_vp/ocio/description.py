@@ -558,10 +558,10 @@ def _split(
             continue
         try:
             rec = record(item)
-            exact = _yaml(rebuild(rec)) == _yaml(item)
+            same = _yaml(rebuild(rec)) == _yaml(item)
         except ValueError:
-            exact = False
-        if exact:
+            same = False
+        if same:
             records.append(rec)
         else:
             kept.append(item)
