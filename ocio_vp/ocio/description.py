@@ -633,6 +633,8 @@ def split_config(
     for name in config.getSharedViews():  # no clearSharedViews before OCIO 2.4
         rest.removeSharedView(name)
     rest.clearEnvironmentVars()
+    for setter in (rest.setActiveDisplays, rest.setActiveViews, rest.setInactiveColorSpaces):
+        setter("")  # the data's lists (build sets them only when not empty)
     return data, rest
 
 
