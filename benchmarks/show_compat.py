@@ -5,8 +5,7 @@
 Solves the demo stage with a camera gamut (``--camera-colorspace "ARRI Wide Gamut 4"``; the
 default method, so several environments get a root-polynomial Q baked as LUTs, and sodium's
 rank-1 Q), once with a linear wall and once with a PQ wall with a linearity LUT, exports one
-show config of all seven environments per solve on OCIO's built-in ACES CG config twice (OCIO's
-own merging, and the API path), then, in a throwaway venv per OCIO version (``pip install
+show config of all seven environments per solve on OCIO's built-in ACES CG config, then, in a throwaway venv per OCIO version (``pip install
 opencolorio==V numpy``), runs :mod:`benchmarks.show_compat_worker`: every show config loads and
 validates, and per environment (``VP_ENVIRONMENT``) ACEScg -> each wall space, Stage Footage ->
 ACEScg and Stage Footage (LogC4) -> ACEScg are compared with the environment's own config on
@@ -42,8 +41,6 @@ CAMERA = "ARRI Wide Gamut 4"
 def build(root: Path) -> list[tuple[str, Path, list[Path]]]:
     """(label, calibration folder, [show configs]) for a linear and a PQ wall."""
     from ocio_vp.cli import main as cli
-    from ocio_vp.exports.source import load_export_source
-    from ocio_vp.ocio.show import ShowEnvironment, build_show_config
 
     def run(*args: str) -> None:
         if cli(list(args)) != 0:
@@ -62,12 +59,7 @@ def build(root: Path) -> list[tuple[str, Path, list[Path]]]:
         run("solve", str(measurements), "--out", str(calib), "--camera-colorspace", CAMERA,
             "--wall-encoding", wall)  # fmt: skip
         run("export", str(calib), "--target", "show", "--out", str(root / f"show-{wall}"))
-        show = root / f"show-{wall}" / "show"
-        sources = [load_export_source(p.parent) for p in sorted(calib.glob("*/solution.json"))]
-        envs = [ShowEnvironment(s.solution.environment, s.config) for s in sources]
-        api = show / "config_api.ocio"  # beside the first, so it finds the same LUT sidecars
-        api.write_text(build_show_config(envs, use_merger=False).serialize())
-        cases.append((label, calib, [show / "config.ocio", api]))
+        cases.append((label, calib, [root / f"show-{wall}" / "show" / "config.ocio"]))
     return cases
 
 
@@ -89,7 +81,7 @@ def main(argv: list[str] | None = None) -> int:
                 subprocess.run([str(python), str(WORKER), str(result), *map(str, shows), "--",
                                 str(calib)], check=True)  # fmt: skip
                 data = json.loads(result.read_text())
-                for show, how in zip(shows, ("OCIO ConfigMerger", "API"), strict=True):
+                for show, how in zip(shows, ("data merge",), strict=True):
                     rows = data["shows"][str(show)]
                     worst = [max((v for k, v in rows.items() if test(k)), default=0.0) for test in (
                         lambda k: "LED Wall" in k,

@@ -4,6 +4,7 @@ checked by meaning against each environment's own config (OCIO's processors on b
 from __future__ import annotations
 
 import copy
+import dataclasses
 import shutil
 from pathlib import Path
 
@@ -15,7 +16,7 @@ from conftest import make_measurements_dict
 
 from ocio_vp.cli import main
 from ocio_vp.errors import InputError
-from ocio_vp.ocio import show
+from ocio_vp.ocio import description, show
 
 RNG = np.random.default_rng(3)
 LINEAR = np.concatenate([RNG.uniform(0, 1, (400, 3)), RNG.uniform(-0.2, 8, (200, 3))])
@@ -127,26 +128,84 @@ def test_each_environment_equals_its_own_config(solved):
     np.testing.assert_allclose(got, want, rtol=TOLERANCE, atol=TOLERANCE)
 
 
-@pytest.mark.skipif(not show.has_config_merger(), reason="this OCIO has no config merging")
-def test_ocio_merging_and_the_api_give_the_same_config(solved):
-    environments = _environments(solved / "rp")
-    by_ocio = show.build_show_config(environments, use_merger=True)
-    by_api = show.build_show_config(environments, use_merger=False)
-    all_spaces = (OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ALL)
-    names = [cs.getName() for cs in by_ocio.getColorSpaces(*all_spaces)]
-    assert names == [cs.getName() for cs in by_api.getColorSpaces(*all_spaces)]
-    assert list(by_ocio.getDisplaysAll()) == list(by_api.getDisplaysAll())
-    for display in by_ocio.getDisplaysAll():
-        assert list(by_ocio.getViews(display)) == list(by_api.getViews(display))
-    assert dict(by_ocio.getRoles()) == dict(by_api.getRoles())
-    for config in (by_ocio, by_api):
-        config.setSearchPath(str(solved / "rp" / "env_1" / "luts"))
-        config.addSearchPath(str(solved / "rp" / "env_0" / "luts"))
-    for env in ("env_0", "env_1"):
-        for src, dst, rgb in PAIRS:
-            a = _run(by_ocio, _context(by_ocio, env), src, dst, rgb)
-            b = _run(by_api, _context(by_api, env), src, dst, rgb)
-            np.testing.assert_array_equal(a, b)
+@pytest.mark.parametrize(
+    "base", [show.DEFAULT_BASE_CONFIG, "ocio://studio-config-v1.0.0_aces-v1.3_ocio-v2.1", "own"]
+)
+def test_a_base_read_into_data_builds_back_to_the_same_file(base, tmp_path):
+    """OCIO's own writing of the base and of the config built from its data are the same bytes;
+    looks whose transform has no record (CDL) stay as OCIO has them (first of their kind)."""
+    if base == "own":
+        config = OCIO.Config.CreateFromFile(show.DEFAULT_BASE_CONFIG)
+        aces_look = config.getLook(config.getLookNames()[0])
+        config.clearLooks()
+        for name in ("Warm", "Cool"):
+            cdl = OCIO.CDLTransform(slope=[1.1, 1.0, 0.9] if name == "Warm" else [0.9, 1.0, 1.1])
+            config.addLook(OCIO.Look(name=name, processSpace="ACEScg", transform=cdl))
+        config.addLook(aces_look)
+    else:
+        config = OCIO.Config.CreateFromFile(base)
+    data, rest = description.split_config(config)
+    assert data.opaque == (("Warm", "Cool") if base == "own" else ())
+    assert len(data.looks) == 1
+    assert description.build(data, start=rest).serialize() == config.serialize()
+
+
+def test_the_show_merge_is_data_and_the_base_wins():
+    """Without OCIO: a name the base has keeps the base's element, the rest is added."""
+    ap0 = description.ColourSpace("ACES2065-1", "ACES", "base's", aliases=("aces",))
+    base = description.ConfigData(
+        name="base", colour_spaces=[ap0], roles={"aces_interchange": "ACES2065-1"},
+        search_path="", views=[description.View("d", "v", "ACES2065-1")],
+    )  # fmt: skip
+    overlay = description.ConfigData(
+        name="show", colour_spaces=[dataclasses.replace(ap0, description="overlay's"),
+        description.ColourSpace("aces", "x", "an alias"), description.ColourSpace("New", "x", "")],
+        roles={"aces_interchange": "New", "scene_linear": "New"}, search_path="luts",
+        views=[description.View("d", "v", "New"), description.View("e", "v", "New")],
+    )  # fmt: skip
+    merged = description.merge(base, overlay)
+    assert [cs.description for cs in merged.colour_spaces] == ["base's", ""]
+    assert merged.roles == {"aces_interchange": "ACES2065-1", "scene_linear": "New"}
+    assert merged.search_path == ":luts" and merged.name == "show"
+    assert [(v.display, v.colour_space) for v in merged.views] == [
+        ("d", "ACES2065-1"),
+        ("e", "New"),
+    ]
+
+
+def test_show_data_is_a_function_of_data():
+    """Without OCIO: a base display's view-transform view gets its footage twin (its Raw view,
+    a data space, none), the active lists grow by the show's views, the inactive list keeps only
+    names the config defines, the environment variable defaults to the first environment."""
+    d = description
+    base = d.ConfigData(
+        colour_spaces=[d.ColourSpace("AP0", "", ""), d.ColourSpace("Raw", "", "", is_data=True),
+                       d.ColourSpace("sRGB", "", "", display_referred=True)],
+        roles={"aces_interchange": "AP0"},
+        views=[d.View("", "Film", "<USE_DISPLAY_NAME>", "Film VT"), d.View("sRGB", "Raw", "Raw"),
+               d.View("sRGB", "Film", "", shared=True)],
+        active_views=("Film", "Raw"), inactive_colour_spaces=("sRGB", "Gone"),
+    )  # fmt: skip
+    camera = d.matrix([2.0, 0, 0, 0, 0, 2.0, 0, 0, 0, 0, 2.0, 0, 0, 0, 0, 1])
+    own = d.ConfigData(
+        colour_spaces=[d.ColourSpace(show.REFERENCE, "ocio-vp/Camera", "camera"),
+                       d.ColourSpace("Stage Footage", "ocio-vp/Camera", "footage",
+                                     to_reference=camera)],
+        views=[d.View(show.DISPLAY, "Outer Frustum", "x"), d.View(show.DISPLAY, "Raw", "Raw")],
+        active_views=("Raw", "Outer Frustum"),
+    )  # fmt: skip
+    envs = [show.EnvironmentData(name, own, camera) for name in ("a", "b")]
+    data = show.show_data(base, envs, "base")
+    names = [cs.name for cs in data.colour_spaces]
+    assert names[:3] == ["AP0", "Raw", "sRGB"] and "Stage Footage [b]" in names
+    assert names[-2:] == [show.REFERENCE, "Stage Footage"]  # picked by the context variable
+    twin = d.View("sRGB", "Film" + show.FOOTAGE_VIEW_SUFFIX, "sRGB", "Film VT",
+                  show.POST_CORRECTION_LOOK)  # fmt: skip
+    assert [v for v in data.views if v.display == "sRGB"][-1] == twin
+    assert [v.name for v in data.views if v.display == show.DISPLAY] == ["Raw", "Outer Frustum"]
+    assert data.active_views == ("Film", "Raw", twin.name, "Outer Frustum")
+    assert data.inactive_colour_spaces == ("sRGB",)
+    assert data.environment == {show.CONTEXT_VARIABLE: "a"} and data.name == "ocio-vp_show"
 
 
 def test_show_folder_loads_after_a_move(solved, tmp_path):

@@ -10,9 +10,9 @@ an OCIO class name, its parameters by setter name, a group's children and its di
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 if TYPE_CHECKING:
     import PyOpenColorIO as OCIO
@@ -34,6 +34,8 @@ __all__ = [
     "file",
     "group",
     "matrix",
+    "merge",
+    "split_config",
     "transform_record",
 ]
 
@@ -51,12 +53,14 @@ Value = str | float | bool | tuple[float, ...] | Enum
 @dataclass(frozen=True)
 class Transform:
     """One OCIO transform as data: class name, parameters (setter name without ``set``, in the
-    order they are set), a group's children, and whether it runs inverted."""
+    order they are set), a group's children, whether it runs inverted, and its metadata's
+    attributes (``name``, ``id``)."""
 
     type: str
     params: tuple[tuple[str, Value], ...] = ()
     children: tuple[Transform, ...] = ()
     inverse: bool = False
+    metadata: tuple[tuple[str, str], ...] = ()
 
     def inverted(self) -> Transform:
         """The same transform in the other direction."""
@@ -186,6 +190,8 @@ class NamedTransform:
     forward: Transform | None
     inverse: Transform | None = None
     categories: tuple[str, ...] = ()
+    aliases: tuple[str, ...] = ()
+    encoding: str = ""
 
 
 @dataclass(frozen=True)
@@ -206,13 +212,19 @@ class ViewTransform:
 
 @dataclass(frozen=True)
 class View:
-    """A view of a display: a colour space, or a view transform to a display colour space."""
+    """A view of a display: a colour space, or a view transform to a display colour space.
+
+    ``display`` "": a shared view's definition; ``shared``: the display lists the shared view
+    ``name`` (nothing else is read)."""
 
     display: str
     name: str
     colour_space: str
     view_transform: str = ""
     looks: str = ""
+    rule: str = ""
+    description: str = ""
+    shared: bool = False
 
 
 @dataclass
@@ -235,6 +247,10 @@ class ConfigData:
     environment: dict[str, str] = field(default_factory=dict)
     #: The colour space of the file rules' default rule ("": OCIO's, the ``default`` role).
     default_rule: str = ""
+    default_view_transform: str = ""
+    inactive_colour_spaces: tuple[str, ...] = ()
+    #: Names of elements a config read by :func:`split_config` keeps as OCIO objects.
+    opaque: tuple[str, ...] = ()
 
     def colour_space(self, name: str) -> ColourSpace:
         """The colour space called ``name`` (KeyError when there is none)."""
@@ -277,7 +293,9 @@ def transform_record(transform: OCIO.Transform) -> Transform:
         params.append((name, _enum(value)))
     children = tuple(transform_record(t) for t in transform) if kind == "GroupTransform" else ()
     inverse = transform.getDirection() == OCIO.TRANSFORM_DIR_INVERSE
-    return Transform(kind, tuple(params), children, inverse)
+    get = getattr(transform, "getFormatMetadata", None)  # BuiltinTransform has none
+    metadata = () if get is None else tuple(get().getAttributes())
+    return Transform(kind, tuple(params), children, inverse, metadata)
 
 
 def _optional_record(transform: OCIO.Transform | None) -> Transform | None:
@@ -321,6 +339,8 @@ def ocio_transform(record: Transform) -> OCIO.Transform:
         setter(getattr(OCIO, value.name) if isinstance(value, Enum) else value)
     if record.inverse:
         transform.setDirection(OCIO.TRANSFORM_DIR_INVERSE)
+    for key, text in record.metadata:
+        transform.getFormatMetadata()[key] = text
     return transform
 
 
@@ -351,23 +371,25 @@ def _ocio_colour_space(record: ColourSpace) -> OCIO.ColorSpace:
     return cs
 
 
-def _add_named_transform(config: OCIO.Config, record: NamedTransform) -> None:
+def _ocio_named_transform(record: NamedTransform) -> OCIO.NamedTransform:
     import PyOpenColorIO as OCIO
 
     named = OCIO.NamedTransform(
         name=record.name,
+        aliases=list(record.aliases),
         family=record.family,
         description=record.description,
         categories=list(record.categories),
     )
+    named.setEncoding(record.encoding)
     if record.forward is not None:
         named.setTransform(ocio_transform(record.forward), OCIO.TRANSFORM_DIR_FORWARD)
     if record.inverse is not None:
         named.setTransform(ocio_transform(record.inverse), OCIO.TRANSFORM_DIR_INVERSE)
-    config.addNamedTransform(named)
+    return named
 
 
-def _add_look(config: OCIO.Config, record: Look) -> None:
+def _ocio_look(record: Look) -> OCIO.Look:
     import PyOpenColorIO as OCIO
 
     look = OCIO.Look(
@@ -378,25 +400,42 @@ def _add_look(config: OCIO.Config, record: Look) -> None:
     )
     if record.inverse is not None:
         look.setInverseTransform(ocio_transform(record.inverse))
-    config.addLook(look)
+    return look
 
 
-def _add_view_transform(config: OCIO.Config, record: ViewTransform) -> None:
+def _ocio_view_transform(record: ViewTransform) -> OCIO.ViewTransform:
     import PyOpenColorIO as OCIO
 
     vt = OCIO.ViewTransform(
         referenceSpace=OCIO.REFERENCE_SPACE_SCENE, name=record.name, description=record.description
     )
     vt.setTransform(ocio_transform(record.from_reference), OCIO.VIEWTRANSFORM_DIR_FROM_REFERENCE)
-    config.addViewTransform(vt)
+    return vt
 
 
-def build(data: ConfigData, *, validate: bool = True) -> OCIO.Config:
-    """The OCIO config of ``data``, validated (``PyOpenColorIO.Exception``: a bug) unless
-    ``validate=False`` (a part merged into another config, validated then)."""
+def _add_view(config: OCIO.Config, view: View) -> None:
+    if view.shared:
+        config.addDisplaySharedView(view.display, view.name)
+    elif not view.display:
+        config.addSharedView(
+            view.name, view.view_transform, view.colour_space, view.looks, view.rule,
+            view.description,
+        )  # fmt: skip
+    else:
+        config.addDisplayView(
+            view.display, view.name, view.view_transform, view.colour_space, view.looks,
+            view.rule, view.description,
+        )  # fmt: skip
+
+
+def build(data: ConfigData, *, start: OCIO.Config | None = None) -> OCIO.Config:
+    """The OCIO config of ``data``, validated (``PyOpenColorIO.Exception``: a bug).
+
+    ``start``: the config to add to (taken, not copied; :func:`split_config`'s second half),
+    else an empty one."""
     import PyOpenColorIO as OCIO
 
-    config = OCIO.Config()
+    config = OCIO.Config() if start is None else start
     config.setMajorVersion(data.version[0])
     config.setMinorVersion(data.version[1])
     config.setName(data.name)
@@ -406,18 +445,15 @@ def build(data: ConfigData, *, validate: bool = True) -> OCIO.Config:
     for cs in data.colour_spaces:
         config.addColorSpace(_ocio_colour_space(cs))
     for named in data.named_transforms:
-        _add_named_transform(config, named)
+        config.addNamedTransform(_ocio_named_transform(named))
     for look in data.looks:
-        _add_look(config, look)
+        config.addLook(_ocio_look(look))
     for vt in data.view_transforms:
-        _add_view_transform(config, vt)
+        config.addViewTransform(_ocio_view_transform(vt))
+    if data.default_view_transform:
+        config.setDefaultViewTransformName(data.default_view_transform)
     for view in data.views:
-        if view.view_transform:
-            config.addDisplayView(
-                view.display, view.name, view.view_transform, view.colour_space, view.looks, "", ""
-            )
-        else:
-            config.addDisplayView(view.display, view.name, view.colour_space)
+        _add_view(config, view)
     for role, space in data.roles.items():
         config.setRole(role, space)
     if data.default_rule:
@@ -430,70 +466,212 @@ def build(data: ConfigData, *, validate: bool = True) -> OCIO.Config:
         config.setActiveDisplays(", ".join(data.active_displays))
     if data.active_views:
         config.setActiveViews(", ".join(data.active_views))
-    if validate:
-        config.validate()
+    if data.inactive_colour_spaces:
+        config.setInactiveColorSpaces(", ".join(data.inactive_colour_spaces))
+    config.validate()
     return config
 
 
-def config_record(config: OCIO.Config) -> ConfigData:
-    """The data of an OCIO config this module can describe (what :func:`build` makes)."""
+def _named_record(nt: OCIO.NamedTransform) -> NamedTransform:
+    import PyOpenColorIO as OCIO
+
+    return NamedTransform(
+        nt.getName(),
+        nt.getFamily(),
+        nt.getDescription(),
+        _optional_record(nt.getTransform(OCIO.TRANSFORM_DIR_FORWARD)),
+        _optional_record(nt.getTransform(OCIO.TRANSFORM_DIR_INVERSE)),
+        tuple(nt.getCategories()),
+        tuple(nt.getAliases()),
+        nt.getEncoding(),
+    )
+
+
+def _look_record(look: OCIO.Look) -> Look:
+    return Look(
+        look.getName(),
+        look.getProcessSpace(),
+        transform_record(look.getTransform()),
+        look.getDescription(),
+        _optional_record(look.getInverseTransform()),
+    )
+
+
+def _view_transform_record(vt: OCIO.ViewTransform) -> ViewTransform:
+    import PyOpenColorIO as OCIO
+
+    transform = vt.getTransform(OCIO.VIEWTRANSFORM_DIR_FROM_REFERENCE)
+    if transform is None:
+        raise ValueError(f"view transform {vt.getName()!r} has no from_reference")
+    return ViewTransform(vt.getName(), vt.getDescription(), transform_record(transform))
+
+
+def _views(config: OCIO.Config) -> list[View]:
+    """Shared views' definitions, then per display its own views and the shared ones it lists."""
+    import PyOpenColorIO as OCIO
+
+    def view(display: str, name: str) -> View:
+        return View(
+            display,
+            name,
+            config.getDisplayViewColorSpaceName(display, name),
+            config.getDisplayViewTransformName(display, name),
+            config.getDisplayViewLooks(display, name),
+            config.getDisplayViewRule(display, name),
+            config.getDisplayViewDescription(display, name),
+        )
+
+    views = [view("", name) for name in config.getSharedViews()]
+    for display in config.getDisplaysAll():
+        views += [view(display, v) for v in config.getViews(OCIO.VIEW_DISPLAY_DEFINED, display)]
+        views += [
+            View(display, v, "", shared=True) for v in config.getViews(OCIO.VIEW_SHARED, display)
+        ]
+    return views
+
+
+_O = TypeVar("_O")
+_R = TypeVar("_R")
+_N = TypeVar("_N", ColourSpace, NamedTransform, Look, ViewTransform)
+
+
+def _yaml(item: object) -> str:
+    """How OCIO writes ``item`` (a colour space, named transform, look or view transform)."""
+    import PyOpenColorIO as OCIO
+
+    config = OCIO.Config()
+    getattr(config, f"add{type(item).__name__}")(item)
+    return config.serialize()
+
+
+def _split(
+    items: Iterable[_O], record: Callable[[_O], _R], rebuild: Callable[[_R], object], exact: bool
+) -> tuple[list[_R], list[_O]]:
+    """(records of ``items`` that rebuild them exactly, as OCIO writes both; the items that do
+    not: a transform without record, a field the record does not carry); not ``exact``: every
+    record, unchecked."""
+    records: list[_R] = []
+    kept: list[_O] = []
+    for item in items:
+        if not exact:
+            records.append(record(item))
+            continue
+        try:
+            rec = record(item)
+            same = _yaml(rebuild(rec)) == _yaml(item)
+        except ValueError:
+            same = False
+        if same:
+            records.append(rec)
+        else:
+            kept.append(item)
+    return records, kept
+
+
+def split_config(
+    config: OCIO.Config, *, exact: bool = True
+) -> tuple[ConfigData, OCIO.Config | None]:
+    """``config`` as data, and a copy of it with only what the data does not describe: the file
+    rules (but the default rule's colour space), viewing rules, luma, strict parsing, family
+    separator, and each colour space, named transform, look and view transform no record
+    rebuilds exactly (kept as OCIO has them, named in ``opaque``; :func:`build` adds the data
+    to this copy). ``exact=False``: every element as data, unchecked, and no copy."""
     import PyOpenColorIO as OCIO
 
     every = (OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ALL)
-    named = [
-        NamedTransform(
-            nt.getName(),
-            nt.getFamily(),
-            nt.getDescription(),
-            _optional_record(nt.getTransform(OCIO.TRANSFORM_DIR_FORWARD)),
-            _optional_record(nt.getTransform(OCIO.TRANSFORM_DIR_INVERSE)),
-            tuple(nt.getCategories()),
-        )
-        for nt in map(
-            config.getNamedTransform, config.getNamedTransformNames(OCIO.NAMEDTRANSFORM_ALL)
-        )
-    ]
-    looks = [
-        Look(
-            look.getName(),
-            look.getProcessSpace(),
-            transform_record(look.getTransform()),
-            look.getDescription(),
-            _optional_record(look.getInverseTransform()),
-        )
-        for look in config.getLooks()
-    ]
-    views = [
-        View(
-            display,
-            view,
-            config.getDisplayViewColorSpaceName(display, view),
-            config.getDisplayViewTransformName(display, view),
-            config.getDisplayViewLooks(display, view),
-        )
-        for display in config.getDisplaysAll()
-        for view in config.getViews(OCIO.VIEW_DISPLAY_DEFINED, display)
-    ]
-    return ConfigData(
+    spaces, kept_spaces = _split(
+        config.getColorSpaces(*every), colour_space_record, _ocio_colour_space, exact
+    )
+    named, kept_named = _split(
+        config.getNamedTransforms(OCIO.NAMEDTRANSFORM_ALL),
+        _named_record,
+        _ocio_named_transform,
+        exact,
+    )
+    looks, kept_looks = _split(config.getLooks(), _look_record, _ocio_look, exact)
+    vts, kept_vts = _split(
+        config.getViewTransforms(), _view_transform_record, _ocio_view_transform, exact
+    )
+    rules = config.getFileRules()
+    default_rule = rules.getColorSpace(rules.getNumEntries() - 1)
+    data = ConfigData(
         name=config.getName(),
         description=config.getDescription(),
         version=(config.getMajorVersion(), config.getMinorVersion()),
         search_path=config.getSearchPath(),
         roles=dict(config.getRoles()),
-        colour_spaces=[colour_space_record(cs) for cs in config.getColorSpaces(*every)],
+        colour_spaces=spaces,
         named_transforms=named,
         looks=looks,
-        view_transforms=[
-            ViewTransform(
-                vt.getName(),
-                vt.getDescription(),
-                transform_record(vt.getTransform(OCIO.VIEWTRANSFORM_DIR_FROM_REFERENCE)),
-            )
-            for vt in config.getViewTransforms()
-        ],
-        views=views,
+        view_transforms=vts,
+        views=_views(config),
         active_displays=tuple(name_list(config.getActiveDisplays())),
         active_views=tuple(name_list(config.getActiveViews())),
+        environment={
+            n: config.getEnvironmentVarDefault(n) for n in config.getEnvironmentVarNames()
+        },
+        default_rule="" if default_rule == "default" else default_rule,
+        default_view_transform=config.getDefaultViewTransformName(),
+        inactive_colour_spaces=tuple(name_list(config.getInactiveColorSpaces())),
+        opaque=tuple(x.getName() for x in (*kept_spaces, *kept_named, *kept_looks, *kept_vts)),
+    )
+    if not exact:
+        return data, None
+    rest = OCIO.Config.CreateFromStream(config.serialize())
+    for cs in spaces:
+        rest.removeColorSpace(cs.name)
+    rest.clearNamedTransforms()
+    rest.clearLooks()
+    rest.clearViewTransforms()
+    for nt in kept_named:
+        rest.addNamedTransform(nt)
+    for look in kept_looks:
+        rest.addLook(look)
+    for vt in kept_vts:
+        rest.addViewTransform(vt)
+    rest.clearDisplays()
+    for name in config.getSharedViews():  # no clearSharedViews before OCIO 2.4
+        rest.removeSharedView(name)
+    rest.clearEnvironmentVars()
+    for setter in (rest.setActiveDisplays, rest.setActiveViews, rest.setInactiveColorSpaces):
+        setter("")  # the data's lists (build sets them only when not empty)
+    return data, rest
+
+
+def config_record(config: OCIO.Config) -> ConfigData:
+    """The data of an OCIO config whose every transform has a record (what :func:`build`
+    makes; ValueError otherwise)."""
+    return split_config(config, exact=False)[0]
+
+
+def merge(base: ConfigData, overlay: ConfigData) -> ConfigData:
+    """``overlay`` merged onto ``base``: every element of the base as it is, and the overlay's
+    where the base has none of that name or alias (the base wins, as OCIO's
+    ``STRATEGY_PREFER_BASE``); the overlay's name and description where given; the newer
+    version; the base's file rule, active and inactive lists and default view transform."""
+    paths = base.search_path.split(":") + [p for p in overlay.search_path.split(":") if p]
+    views = {(v.display, v.name) for v in base.views}
+
+    def new(mine: list[_N], theirs: list[_N]) -> list[_N]:
+        taken = {*base.opaque, *(n for x in mine for n in (x.name, *getattr(x, "aliases", ())))}
+        return mine + [item for item in theirs if item.name not in taken]
+
+    def add(mine: dict[str, str], theirs: dict[str, str]) -> dict[str, str]:
+        return {**mine, **{k: v for k, v in theirs.items() if k not in mine}}
+
+    return dataclasses.replace(
+        base,
+        name=overlay.name or base.name,
+        description=overlay.description or base.description,
+        version=max(base.version, overlay.version),
+        search_path=":".join(dict.fromkeys(paths)),
+        roles=add(base.roles, overlay.roles),
+        colour_spaces=new(base.colour_spaces, overlay.colour_spaces),
+        named_transforms=new(base.named_transforms, overlay.named_transforms),
+        looks=new(base.looks, overlay.looks),
+        view_transforms=new(base.view_transforms, overlay.view_transforms),
+        views=base.views + [v for v in overlay.views if (v.display, v.name) not in views],
+        environment=add(base.environment, overlay.environment),
     )
 
 

@@ -11,14 +11,14 @@ ACES CG config) and adds, as data (:func:`_overlay`):
 - the named transform ``Post-Correction Q``, its look, a footage-after-Q view on every base
   display, and the ``LED Wall`` display.
 
-The base and the overlay are merged by OCIO's own merging (2.5+; the base wins) where the
-installed OCIO has it, else by :func:`merge_by_api`, which gives the same config.
+The base is read into the same data (:func:`~ocio_vp.ocio.description.split_config`; an element
+no record rebuilds exactly stays as OCIO has it), the show is merged onto it as data
+(:func:`show_data`, the base wins by name) and the one builder makes the config.
 """
 
 from __future__ import annotations
 
 import contextlib
-import copy
 import dataclasses
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
@@ -45,7 +45,8 @@ from ocio_vp.ocio.description import (
     colour_space_record,
     config_record,
     group,
-    name_list,
+    merge,
+    split_config,
     transform_record,
 )
 from ocio_vp.ocio.viewing import (
@@ -59,18 +60,20 @@ __all__ = [
     "CONTEXT_VARIABLE",
     "DEFAULT_BASE_CONFIG",
     "ENVIRONMENT_FAMILIES",
+    "EnvironmentData",
     "ShowEnvironment",
     "build_show_config",
+    "environment_data",
     "environment_space",
-    "has_config_merger",
     "load_base_config",
-    "merge_by_api",
+    "show_data",
 ]
 
 DEFAULT_BASE_CONFIG = ACES_CG_CONFIG
 #: Families (after ``ocio-vp/``) of an environment config's own colour spaces.
 ENVIRONMENT_FAMILIES = ("LED Wall", "Camera")
 AP0_ROLE = "aces_interchange"
+USE_DISPLAY_NAME = "<USE_DISPLAY_NAME>"  # OCIO.OCIO_VIEW_USE_DISPLAY_NAME
 
 
 @dataclass(frozen=True)
@@ -86,9 +89,14 @@ def environment_space(name: str, environment: str) -> str:
     return f"{name} [{environment}]"
 
 
-def has_config_merger() -> bool:
-    """Whether the installed OCIO merges configs itself (2.5+)."""
-    return hasattr(OCIO, "ConfigMergingHelpers")
+@dataclass(frozen=True)
+class EnvironmentData:
+    """One environment as the show reads it: its config's data and its reference (the camera
+    gamut) -> its ``aces_interchange`` space."""
+
+    name: str
+    data: ConfigData
+    camera_to_aces: Transform
 
 
 def load_base_config(base: str) -> OCIO.Config:
@@ -118,9 +126,9 @@ def _own_spaces(config: ConfigData) -> list[ColourSpace]:
     ]
 
 
-def _base_to_reference(base: OCIO.Config) -> Transform:
+def _base_to_reference(base: ConfigData) -> Transform:
     """The base's ``aces_interchange`` space -> the base's reference (empty when equal)."""
-    aces = _record(base.getColorSpace(base.getRoleColorSpace(AP0_ROLE)))
+    aces = base.colour_space(base.roles[AP0_ROLE])
     if aces.to_reference is not None:
         return group([aces.to_reference])
     if aces.from_reference is None:
@@ -139,8 +147,8 @@ def _record(cs: OCIO.ColorSpace) -> ColourSpace:
         ) from None
 
 
-def _camera_to_reference(env: ShowEnvironment, aces_to_base: Transform) -> Transform:
-    """The environment's reference (its camera gamut) -> the base's reference."""
+def environment_data(env: ShowEnvironment) -> EnvironmentData:
+    """``env`` read into data (InputError where its camera gamut is not stated)."""
     config = env.config
     if not config.hasRole(AP0_ROLE):
         raise InputError(
@@ -150,7 +158,9 @@ def _camera_to_reference(env: ShowEnvironment, aces_to_base: Transform) -> Trans
             key="SOLUTION",
         )
     link = config.getProcessor(REFERENCE, config.getRoleColorSpace(AP0_ROLE))
-    return group([transform_record(link.createGroupTransform()), aces_to_base])
+    return EnvironmentData(
+        env.name, config_record(config), transform_record(link.createGroupTransform())
+    )
 
 
 def _renamed(transform: Transform, names: dict[str, str]) -> Transform:
@@ -170,11 +180,10 @@ def _renamed(transform: Transform, names: dict[str, str]) -> Transform:
     return dataclasses.replace(transform, params=params)
 
 
-def _environment_spaces(
-    env: ShowEnvironment, own: list[ColourSpace], aces_to_base: Transform
-) -> list[ColourSpace]:
-    """The environment's own colour spaces ``own``, converted from the base's reference."""
-    to_base = _camera_to_reference(env, aces_to_base)
+def _environment_spaces(env: EnvironmentData, aces_to_base: Transform) -> list[ColourSpace]:
+    """The environment's own colour spaces, converted from the base's reference."""
+    own = _own_spaces(env.data)
+    to_base = group([env.camera_to_aces, aces_to_base])
     names = {cs.name: environment_space(cs.name, env.name) for cs in own}
     spaces = []
     for cs in own:
@@ -219,23 +228,16 @@ def _space_transform(src: str, dst: str) -> Transform:
     return Transform("ColorSpaceTransform", (("Src", src), ("Dst", dst), ("DataBypass", True)))
 
 
-def _overlay(base: OCIO.Config, environments: Sequence[ShowEnvironment]) -> ConfigData:
-    """Everything the show adds to the base, as data (merged into it afterwards)."""
-    aces = base.getRoleColorSpace(AP0_ROLE)
-    overlay = ConfigData(
-        colour_spaces=[_record(base.getColorSpace(aces))],
-        roles={AP0_ROLE: aces},
-        default_rule=aces,
-        environment={CONTEXT_VARIABLE: environments[0].name},
-        search_path=LUT_DIR,
-    )
+def _overlay(base: ConfigData, environments: Sequence[EnvironmentData]) -> ConfigData:
+    """Everything the show adds to the base, as data."""
+    aces = base.roles[AP0_ROLE]
+    overlay = ConfigData(environment={CONTEXT_VARIABLE: environments[0].name}, search_path=LUT_DIR)
     aces_to_base = _base_to_reference(base)
     shared: dict[str, ColourSpace] | None = None
     for env in environments:
-        own = _own_spaces(config_record(env.config))
-        names = {cs.name: cs for cs in own}
+        names = {cs.name: cs for cs in _own_spaces(env.data)}
         shared = names if shared is None else {k: v for k, v in shared.items() if k in names}
-        overlay.colour_spaces += _environment_spaces(env, own, aces_to_base)
+        overlay.colour_spaces += _environment_spaces(env, aces_to_base)
     for name, template in (shared or {}).items():
         overlay.colour_spaces.append(_switched_space(name, template, aces, aces_to_base))
     q = _space_transform(POST_CORRECTION_COLORSPACE, REFERENCE)
@@ -258,16 +260,15 @@ def _overlay(base: OCIO.Config, environments: Sequence[ShowEnvironment]) -> Conf
             "for monitor views of footage recorded on the stage.",
         )
     )
-    first = environments[0].config
-    for view in first.getViews(DISPLAY):
-        overlay.views.append(View(DISPLAY, view, first.getDisplayViewColorSpaceName(DISPLAY, view)))
+    led = {v.name: v for v in environments[0].data.views if v.display == DISPLAY}
+    active = environments[0].data.active_views  # OCIO lists a display's views in this order
+    overlay.views += [led[n] for n in active if n in led] if active else list(led.values())
     return overlay
 
 
 @contextlib.contextmanager
 def _quiet(level: OCIO.LoggingLevel = OCIO.LOGGING_LEVEL_NONE) -> Iterator[None]:
-    """OCIO logging at most at ``level`` meanwhile (the merger logs every base-over-input
-    choice as a warning: expected here)."""
+    """OCIO logging at most at ``level`` meanwhile."""
     before = OCIO.GetLoggingLevel()
     OCIO.SetLoggingLevel(min(level, before, key=int))
     try:
@@ -276,84 +277,52 @@ def _quiet(level: OCIO.LoggingLevel = OCIO.LOGGING_LEVEL_NONE) -> Iterator[None]
         OCIO.SetLoggingLevel(before)
 
 
-def merge_by_ocio(base: OCIO.Config, overlay: OCIO.Config) -> OCIO.Config:
-    """OCIO's own merging (2.5+): the base wins wherever both define something."""
-    params = OCIO.ConfigMergingParameters.Create()
-    params.setDefaultStrategy(OCIO.ConfigMergingParameters.STRATEGY_PREFER_BASE)
-    for setter in (
-        "setRoles",
-        "setFileRules",
-        "setDisplayViews",
-        "setViewTransforms",
-        "setLooks",
-        "setColorspaces",
-        "setNamedTransforms",
-    ):
-        getattr(params, setter)(OCIO.ConfigMergingParameters.STRATEGY_PREFER_BASE)
-    params.setAdjustInputReferenceSpace(False)  # the overlay is already on the base's reference
-    params.setInputFirst(False)
-    with _quiet():
-        return OCIO.ConfigMergingHelpers.MergeConfigs(params, base, overlay)
-
-
-def merge_by_api(base: OCIO.Config, overlay: OCIO.Config) -> OCIO.Config:
-    """What :func:`merge_by_ocio` does for this overlay, by the API (any OCIO 2.2+)."""
-    merged = OCIO.Config.CreateFromStream(base.serialize())
-    all_spaces = (OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ALL)
-    for cs in overlay.getColorSpaces(*all_spaces):
-        if merged.getColorSpace(cs.getName()) is None:
-            merged.addColorSpace(copy.deepcopy(cs))
-    for role, space in overlay.getRoles():
-        if not merged.hasRole(role):
-            merged.setRole(role, space)
-    for name in overlay.getNamedTransformNames(OCIO.NAMEDTRANSFORM_ALL):
-        if merged.getNamedTransform(name) is None:
-            merged.addNamedTransform(copy.deepcopy(overlay.getNamedTransform(name)))
-    for name in overlay.getLookNames():
-        if merged.getLook(name) is None:
-            merged.addLook(copy.deepcopy(overlay.getLook(name)))
-    for name in overlay.getEnvironmentVarNames():
-        if name not in list(merged.getEnvironmentVarNames()):
-            merged.addEnvironmentVar(name, overlay.getEnvironmentVarDefault(name))
-    paths = list(merged.getSearchPaths())
-    for path in overlay.getSearchPaths():
-        if path not in paths:
-            merged.addSearchPath(path)
-    for display in overlay.getDisplaysAll():
-        for view in overlay.getViews(OCIO.VIEW_DISPLAY_DEFINED, display):
-            if view not in merged.getViews(OCIO.VIEW_DISPLAY_DEFINED, display):
-                merged.addDisplayView(
-                    display, view, overlay.getDisplayViewColorSpaceName(display, view)
-                )
-    return merged
-
-
-def _view_target(config: OCIO.Config, display: str, view: str) -> tuple[str, str]:
-    space = config.getDisplayViewColorSpaceName(display, view)
-    if space == OCIO.OCIO_VIEW_USE_DISPLAY_NAME:
-        space = display
-    return config.getDisplayViewTransformName(display, view), space
-
-
-def _footage_views(config: OCIO.Config, displays: Sequence[str]) -> list[str]:
+def _footage_views(data: ConfigData, displays: Sequence[str]) -> list[View]:
     """On every base display, each view's footage twin: the same view after the Q look."""
+    shared = {v.name: v for v in data.views if not v.display}
+    spaces = {n: cs for cs in data.colour_spaces for n in (cs.name, *cs.aliases)}
     added = []
     for display in displays:
-        views = [
-            *config.getViews(OCIO.VIEW_DISPLAY_DEFINED, display),
-            *config.getViews(OCIO.VIEW_SHARED, display),
-        ]
-        for view in views:
-            view_transform, space = _view_target(config, display, view)
-            cs = config.getColorSpace(space)
-            if not view_transform or cs is None or cs.isData():
+        mine = [v for v in data.views if v.display == display]
+        for view in [v for v in mine if not v.shared] + [shared[v.name] for v in mine if v.shared]:
+            space = display if view.colour_space == USE_DISPLAY_NAME else view.colour_space
+            cs = spaces.get(space)
+            if not view.view_transform or cs is None or cs.is_data:
                 continue  # Raw and plain colour space views: nothing to post-correct for
-            name = view + FOOTAGE_VIEW_SUFFIX
-            config.addDisplayView(
-                display, name, view_transform, space, POST_CORRECTION_LOOK, "", ""
-            )
-            added.append(name)
+            name = view.name + FOOTAGE_VIEW_SUFFIX
+            added.append(View(display, name, space, view.view_transform, POST_CORRECTION_LOOK))
     return added
+
+
+def show_data(base: ConfigData, environments: Sequence[EnvironmentData], label: str) -> ConfigData:
+    """The show config of ``environments`` on ``base`` (``label``: how its description names
+    the base), as data: the overlay merged onto the base, the footage views, the active and
+    inactive lists."""
+    overlay = _overlay(base, environments)
+    names = ", ".join(env.name for env in environments)
+    first = environments[0].name
+    overlay.name = f"ocio-vp_show_{first}" if len(environments) == 1 else "ocio-vp_show"
+    overlay.description = (
+        f"ocio_vp show config: the environments {names} on {label}. The context variable "
+        f"{CONTEXT_VARIABLE} picks the environment (default {first}); each also has its own "
+        "colour spaces, '<name> [<environment>]'."
+    )
+    merged = merge(base, overlay)
+    displays = base.active_displays or tuple(
+        dict.fromkeys(v.display for v in base.views if v.display)
+    )
+    footage = _footage_views(base, [d for d in displays if d != DISPLAY])
+    merged.views += footage
+    if base.active_views:
+        led = [v.name for v in overlay.views if v.name not in base.active_views]
+        footage_names = dict.fromkeys(v.name for v in footage)
+        merged.active_views = (*base.active_views, *footage_names, *led)
+    if base.active_displays:
+        merged.active_displays = (*base.active_displays, DISPLAY)
+    # the base may list inactive names it does not define (OCIO logs each one on every load)
+    defined = {n for cs in merged.colour_spaces for n in (cs.name, *cs.aliases)} | {*base.opaque}
+    merged.inactive_colour_spaces = tuple(n for n in base.inactive_colour_spaces if n in defined)
+    return merged
 
 
 def _check_environments(environments: Sequence[ShowEnvironment]) -> None:
@@ -371,47 +340,25 @@ def _check_environments(environments: Sequence[ShowEnvironment]) -> None:
 
 
 def build_show_config(
-    environments: Sequence[ShowEnvironment],
-    base: str = DEFAULT_BASE_CONFIG,
-    *,
-    use_merger: bool | None = None,
+    environments: Sequence[ShowEnvironment], base: str = DEFAULT_BASE_CONFIG
 ) -> OCIO.Config:
     """The show config of ``environments`` on ``base`` (see the module docstring).
-
-    ``use_merger``: OCIO's merging (True), :func:`merge_by_api` (False), or OCIO's if it has
-    one (None).
 
     Raises
     ------
     InputError
         No environment, an environment twice, a base config that does not load or has no
-        ``aces_interchange`` role, an environment whose camera gamut is not stated.
+        ``aces_interchange`` role (or one without a record), an environment whose camera gamut
+        is not stated.
     """
     _check_environments(environments)
     base_config = load_base_config(base)
-    # the overlay names the base's spaces (Raw, displays) it does not hold: validated merged
-    overlay = build(_overlay(base_config, environments), validate=False)
-    merge = has_config_merger() if use_merger is None else use_merger
-    merged = merge_by_ocio(base_config, overlay) if merge else merge_by_api(base_config, overlay)
-    names = ", ".join(env.name for env in environments)
-    merged.setName(
-        f"ocio-vp_show_{environments[0].name}" if len(environments) == 1 else "ocio-vp_show"
-    )
-    merged.setDescription(
-        f"ocio_vp show config: the environments {names} on {base} ({base_config.getName()}). "
-        f"The context variable {CONTEXT_VARIABLE} picks the environment (default "
-        f"{environments[0].name}); each also has its own colour spaces, '<name> [<environment>]'."
-    )
-    displays = name_list(base_config.getActiveDisplays()) or list(base_config.getDisplaysAll())
-    footage = _footage_views(merged, [d for d in displays if d != DISPLAY])
-    active_views = name_list(base_config.getActiveViews())
-    if active_views:
-        led = [v for v in overlay.getViews(DISPLAY) if v not in active_views]
-        merged.setActiveViews(", ".join([*active_views, *dict.fromkeys(footage), *led]))
-    if name_list(base_config.getActiveDisplays()):
-        merged.setActiveDisplays(", ".join([*displays, DISPLAY]))
-    # the base may list inactive names it does not define (OCIO logs each one on every load)
-    inactive = name_list(merged.getInactiveColorSpaces())
-    merged.setInactiveColorSpaces(", ".join(n for n in inactive if merged.getColorSpace(n)))
-    merged.validate()
-    return merged
+    with _quiet(OCIO.LOGGING_LEVEL_WARNING):
+        data, rest = split_config(base_config)
+    aces = base_config.getColorSpace(base_config.getRoleColorSpace(AP0_ROLE))
+    if not data.has_colour_space(aces.getName()):
+        _record(aces)  # the reason, as an InputError
+    inputs = [environment_data(env) for env in environments]
+    label = f"{base} ({base_config.getName()})"
+    with _quiet(OCIO.LOGGING_LEVEL_WARNING):
+        return build(show_data(data, inputs, label), start=rest)
