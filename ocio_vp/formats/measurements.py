@@ -10,8 +10,6 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import json
-import math
-import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,8 +19,16 @@ import numpy as np
 import yaml
 
 from ocio_vp.choices import DEFAULT_WHITE_PATCH, PRIORITIES
-from ocio_vp.errors import InputError, excerpt, format_key_path
-from ocio_vp.formats.checker import describe
+from ocio_vp.errors import InputError, excerpt
+from ocio_vp.formats.checker import (
+    CHANNELS,
+    MAX_CAMERA_VALUE,
+    MIN_BETA,
+    MIN_SIGNAL,
+    PANEL_RANGE,
+    SAFE_NAME,
+    Validator,
+)
 from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.fixtures import Fixture, fixtures_to_dict, parse_fixtures
 from ocio_vp.formats.geometry import PanelGeometry
@@ -39,7 +45,7 @@ from ocio_vp.formats.panels import (
 )
 from ocio_vp.formats.synthesis import SynthesisRecord, parse_synthesis, synthesis_to_dict
 from ocio_vp.formats.wall_state import WALL_STATE_KEYS, WallState, parse_wall_state
-from ocio_vp.wall.linearity import CHANNELS, parse_ramps, ramps_to_dict
+from ocio_vp.wall.linearity import parse_ramps, ramps_to_dict
 
 __all__ = [
     "CHANNELS",
@@ -72,22 +78,10 @@ __all__ = [
 
 FORMAT = "ocio-vp/measurements"
 VERSION = 1
-#: Names that are safe as folder names and inside Tcl, C, YAML and OCIO names.
-#: (``\Z``, not ``$``: ``$`` also matches before a final newline.)
-SAFE_NAME = re.compile(r"\A[A-Za-z0-9][A-Za-z0-9_-]{0,63}\Z")
-#: Largest magnitude of a camera RGB value (raw 16-bit code values and HDR merges stay far below).
-MAX_CAMERA_VALUE = 1e9
-#: A block of camera values (primaries, a chart) whose largest value is positive but below this
-#: is refused: it is not a photographed signal but data scaled by mistake.
-MIN_SIGNAL = 1e-12
 #: The sections of the file that hold measurements; :data:`REQUIRED_SECTIONS` are needed to
 #: solve (a file holding only some of them is merged with others, docs/measurements.md).
 SECTIONS = ("primaries", "lit_chart", "environments", "ramps", "fixtures")
 REQUIRED_SECTIONS = ("primaries", "lit_chart", "environments")
-#: Smallest form factor ``beta`` (a panel ~500x farther away than it is wide).
-MIN_BETA = 1e-6
-#: Calibration panel width, height and distance (and |offset|) in metres.
-PANEL_RANGE = (1e-3, 1e3)
 
 
 @dataclass(frozen=True)
@@ -175,151 +169,6 @@ class Measurements:
         )
 
 
-# --------------------------------------------------------------------------------------------
-# Validation helpers: each takes the value, the source and the key path for its messages.
-
-
-class Validator:
-    """Checks values of a parsed document; every error names ``source`` and the key path.
-
-    Shared by the measurements and capture file loaders.
-    """
-
-    def __init__(self, source: str) -> None:
-        self.source = source
-
-    def error(self, key: tuple[str | int, ...], problem: str) -> InputError:
-        return InputError(problem, source=self.source, key=format_key_path(*key) or None)
-
-    def mapping(
-        self,
-        value: JsonValue,
-        key: tuple[str | int, ...],
-        required: tuple[str, ...],
-        optional: tuple[str, ...] = (),
-    ) -> Mapping[str, Any]:
-        if not isinstance(value, Mapping):
-            raise self.error(key, f"expected a mapping, got {describe(value)}")
-        # Unknown keys first: a misspelt required key is reported as the typo it is.
-        allowed = set(required) | set(optional)
-        for name in value:
-            if name not in allowed:
-                hint = difflib.get_close_matches(str(name)[:100], sorted(allowed), n=1)
-                suggestion = f" (did you mean {hint[0]!r}?)" if hint else ""
-                expected = ", ".join(sorted(allowed))
-                raise self.error(
-                    (*key, str(name)[:60]),
-                    f"unknown key{suggestion}; expected one of: {expected}",
-                )
-        for name in required:
-            if name not in value:
-                raise self.error(key, f"missing required key {excerpt(name)}")
-        return value
-
-    def calibration(
-        self, value: JsonMapping, key: tuple[str | int, ...]
-    ) -> tuple[PanelGeometry | None, float | None]:
-        """``calibration_panel`` and/or ``beta`` of a mapping (the stage, or a panel type):
-        the lit-chart setup that gives beta; one of them is required."""
-        panel = None
-        if "calibration_panel" in value:
-            pkey = (*key, "calibration_panel")
-            raw = self.mapping(
-                value["calibration_panel"],
-                pkey,
-                required=("width", "height", "distance"),
-                optional=("offset_x", "offset_y"),
-            )
-            low, high = PANEL_RANGE  # metres: a panel from a millimetre to a kilometre
-            sizes = {
-                name: self.number(raw[name], (*pkey, name), minimum=low, maximum=high)
-                for name in ("width", "height", "distance")
-            }
-            offsets = {
-                name: self.number(raw.get(name, 0.0), (*pkey, name), minimum=-high, maximum=high)
-                for name in ("offset_x", "offset_y")
-            }
-            panel = PanelGeometry(**sizes, **offsets)
-        beta = None
-        if "beta" in value:
-            beta = self.number(value["beta"], (*key, "beta"), minimum=MIN_BETA)
-            if beta > 1.0:
-                raise self.error((*key, "beta"), f"a form factor is at most 1, got {beta:.6g}")
-        if panel is None and beta is None:
-            raise self.error(key, "give either calibration_panel {width, height, distance} or beta")
-        return panel, beta
-
-    def number(
-        self,
-        value: JsonValue,
-        key: tuple[str | int, ...],
-        *,
-        minimum: float = 0.0,
-        strict: bool = False,
-        maximum: float = math.inf,
-    ) -> float:
-        """A finite float64 in ``[minimum, maximum]`` (``(minimum, maximum]`` when ``strict``)."""
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.error(key, f"expected a number, got {describe(value)}")
-        try:
-            number = float(value)
-        except OverflowError:  # an integer beyond float64
-            raise self.error(key, "expected a number, got an integer too large for one") from None
-        if not math.isfinite(number):
-            raise self.error(key, f"expected a finite number, got {excerpt(value)}")
-        if number < minimum or (strict and number == minimum):
-            relation = ">" if strict else ">="
-            raise self.error(key, f"expected a number {relation} {minimum:g}, got {number:.6g}")
-        if number > maximum:
-            raise self.error(key, f"expected a number <= {maximum:g}, got {number:.6g}")
-        return number
-
-    def rgb(
-        self,
-        value: JsonValue,
-        key: tuple[str | int, ...],
-        *,
-        minimum: float = 0.0,
-        maximum: float = MAX_CAMERA_VALUE,
-    ) -> np.ndarray:
-        """Camera ``[r, g, b]``: each value in ``[minimum, maximum]``."""
-        if not isinstance(value, (list, tuple)) or len(value) != 3:
-            raise self.error(key, f"expected [r, g, b], got {describe(value)}")
-        out = np.array(
-            [
-                self.number(v, (*key, i), minimum=minimum, maximum=maximum)
-                for i, v in enumerate(value)
-            ],
-            dtype=np.float64,
-        )
-        return out
-
-    def chart(self, value: JsonValue, key: tuple[str | int, ...], n: int | None) -> np.ndarray:
-        if not isinstance(value, (list, tuple)) or not value:
-            raise self.error(key, f"expected a list of [r, g, b] patches, got {describe(value)}")
-        if n is not None and len(value) != n:
-            raise self.error(key, f"has {len(value)} patches, expected {n} like lit_chart.red")
-        return np.stack([self.rgb(v, (*key, i)) for i, v in enumerate(value)])
-
-    def signal(self, values: np.ndarray, key: tuple[str | int, ...]) -> np.ndarray:
-        """Refuse camera values that are all positive-but-tiny: scaled data, not a photograph."""
-        peak = float(np.max(np.abs(values))) if values.size else 0.0
-        if 0.0 < peak < MIN_SIGNAL:
-            raise self.error(
-                key, f"largest value is {peak:.3g}, below {MIN_SIGNAL:g}: is the data scaled?"
-            )
-        return values
-
-    def name(self, value: JsonValue, key: tuple[str | int, ...]) -> str:
-        if not isinstance(value, str) or not SAFE_NAME.match(value):
-            raise self.error(
-                key,
-                f"unsafe name {excerpt(value)}: use 1-64 letters, digits, '_' or '-', "
-                "starting with a letter or digit",
-            )
-        return value
-
-
 def check_safe_name(value: JsonValue, *, source: object = None, key: str | None = None) -> str:
     """Return ``value`` if it is a safe environment/stage name, else raise :class:`InputError`."""
     return Validator(str(source) if source else "input").name(value, (key or "name",))
@@ -382,16 +231,11 @@ def _parse_sections(ctx: Validator, data: JsonValue, *, partial: bool) -> dict[s
         raise ctx.error((), f"holds no measurements: give at least one of {', '.join(SECTIONS)}")
     out: dict[str, Any] = {"stage": parse_stage(ctx, top["stage"])}
     if "primaries" in top:
-        primaries = ctx.mapping(top["primaries"], ("primaries",), required=CHANNELS)
-        SL = np.stack([ctx.rgb(primaries[c], ("primaries", c)) for c in CHANNELS], axis=1)
-        out["SL"] = ctx.signal(SL, ("primaries",))
+        out["SL"] = ctx.primaries(top["primaries"], ("primaries",))
     n = None
     if "lit_chart" in top:
-        lit = ctx.mapping(top["lit_chart"], ("lit_chart",), required=CHANNELS)
-        red = ctx.chart(lit["red"], ("lit_chart", "red"), None)
-        n = len(red)
-        charts = [red] + [ctx.chart(lit[c], ("lit_chart", c), n) for c in CHANNELS[1:]]
-        out["SRL"] = ctx.signal(np.stack(charts, axis=2), ("lit_chart",))  # (n, camera, LED)
+        out["SRL"] = ctx.lit_chart(top["lit_chart"], ("lit_chart",), None)
+        n = len(out["SRL"])
         _check_white_patch(ctx, out["stage"], n)
     if "environments" in top:
         out["environments"] = _parse_environments(ctx, top["environments"], n)
@@ -495,11 +339,9 @@ def parse_stage(ctx: Validator, value: JsonValue, *, calibration: bool = True) -
                     (*key, field_name),
                     "with panels, each panel type gives its own calibration_panel or beta",
                 )
-    white_patch = stage.get("white_patch", DEFAULT_WHITE_PATCH)
-    if isinstance(white_patch, bool) or not isinstance(white_patch, int):
-        raise ctx.error(
-            (*key, "white_patch"), f"expected a patch index, got {describe(white_patch)}"
-        )
+    white_patch = ctx.whole(
+        stage.get("white_patch", DEFAULT_WHITE_PATCH), (*key, "white_patch"), None
+    )
     # A "white" patch reflecting under 1% is a mistake (and would blow w_avg up).
     reflectance = ctx.number(
         stage.get("white_reflectance", 0.9), (*key, "white_reflectance"), minimum=0.01
@@ -530,13 +372,8 @@ def parse_stage(ctx: Validator, value: JsonValue, *, calibration: bool = True) -
 
 def _skin_patches(ctx: Validator, value: JsonValue, key: tuple[str | int, ...]) -> tuple[int, ...]:
     """``stage.skin_patches``: distinct patch indices (checked against the chart later)."""
-    if not isinstance(value, list):
-        raise ctx.error(key, f"expected a list of patch indices, got {describe(value)}")
-    indices: list[int] = []
-    for i, index in enumerate(value):
-        if isinstance(index, bool) or not isinstance(index, int) or index < 0:
-            raise ctx.error((*key, i), f"expected a patch index (0 or more), got {excerpt(index)}")
-        indices.append(index)
+    raw = ctx.items(value, key, "patch indices", empty=True)
+    indices = [ctx.whole(index, (*key, i)) for i, index in enumerate(raw)]
     if len(set(indices)) != len(indices):
         raise ctx.error(key, "names a patch twice")
     return tuple(indices)
@@ -574,11 +411,9 @@ def with_camera_colorspace(measurements: Measurements, value: str, *, key: str) 
 def _parse_environments(
     ctx: Validator, value: JsonValue, n: int | None, panels: tuple[PanelType, ...] = ()
 ) -> tuple[Environment, ...]:
-    if not isinstance(value, list) or not value:
-        raise ctx.error(("environments",), f"expected a non-empty list, got {describe(value)}")
     seen: dict[str, int] = {}
     environments = []
-    for i, raw in enumerate(value):
+    for i, raw in enumerate(ctx.items(value, ("environments",))):
         key: tuple[str | int, ...] = ("environments", i)
         env = ctx.mapping(
             raw,
@@ -586,21 +421,13 @@ def _parse_environments(
             required=("name", "target_chart"),
             optional=("w_avg", "black_level", "synthesized", "priority"),
         )
-        name = ctx.name(env["name"], (*key, "name"))
-        if name in seen:
-            raise ctx.error(
-                (*key, "name"), f"duplicate name {name!r} (also environments[{seen[name]}])"
-            )
-        seen[name] = i
+        name = ctx.unique_name(env["name"], key, seen)
         target = ctx.signal(
             ctx.chart(env["target_chart"], (*key, "target_chart"), n), (*key, "target_chart")
         )
         priority = env.get("priority")
-        if priority is not None and priority not in PRIORITIES:
-            raise ctx.error(
-                (*key, "priority"),
-                f"expected one of {', '.join(PRIORITIES)}, got {excerpt(priority)}",
-            )
+        if priority is not None:
+            priority = ctx.choice(priority, (*key, "priority"), PRIORITIES)
         if panels:
             environments.append(
                 dataclasses.replace(
