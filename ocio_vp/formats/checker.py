@@ -11,7 +11,7 @@ from __future__ import annotations
 import difflib
 import math
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping
 from typing import Any
 
 import numpy as np
@@ -96,6 +96,15 @@ class Validator:
                 raise self.error(key, f"missing required key {excerpt(name)}")
         return value
 
+    def header(self, top: JsonMapping, fmt: str, version: int) -> None:
+        """Refuse a document whose ``format`` is not ``fmt`` or ``version`` not ``version``."""
+        if top["format"] != fmt:
+            raise self.error(("format",), f"expected {fmt!r}, got {excerpt(top['format'])}")
+        if top["version"] != version or isinstance(top["version"], bool):
+            raise self.error(
+                ("version",), f"this ocio-vp reads version {version}, got {excerpt(top['version'])}"
+            )
+
     def items(self, value: JsonValue, key: Key, what: str = "", *, empty: bool = False) -> list:
         """A list (non-empty unless ``empty``) of ``what``."""
         if not isinstance(value, list) or (not value and not empty):
@@ -151,7 +160,7 @@ class Validator:
             raise self.error(key, f"expected true or false, got {describe(value)}")
         return value
 
-    def choice(self, value: JsonValue, key: Key, allowed: Sequence[str], *, what: str = "") -> str:
+    def choice(self, value: JsonValue, key: Key, allowed: Collection[str], *, what: str = "") -> str:
         """One of ``allowed``; ``what`` names the kind of value in the message."""
         if not isinstance(value, str) or value not in allowed:
             listed = ", ".join(allowed)
@@ -222,6 +231,20 @@ class Validator:
             self.number(v, (*key, i), minimum=minimum, maximum=maximum) for i, v in enumerate(value)
         ]
         return np.array(numbers, dtype=np.float64)
+
+    def matrix(self, value: JsonValue, key: Key, shape: tuple[int, int], what: str) -> np.ndarray:
+        """A (rows, columns) float64 matrix of finite numbers of any sign, given as rows."""
+        rows, columns = shape
+        if not isinstance(value, list) or len(value) != rows:
+            raise self.error(key, f"expected {what}, got {describe(value)}")
+        out = []
+        for i, row in enumerate(value):
+            if not isinstance(row, list) or len(row) != columns:
+                raise self.error(
+                    (*key, i), f"expected a row of {columns} numbers, got {describe(row)}"
+                )
+            out.append([self.number(v, (*key, i, k), minimum=-math.inf) for k, v in enumerate(row)])
+        return np.array(out, dtype=np.float64)
 
     def chart(
         self, value: JsonValue, key: Key, n: int | None, like: str = "lit_chart.red"

@@ -226,7 +226,7 @@ def _parse_sections(ctx: Validator, data: JsonValue, *, partial: bool) -> dict[s
     required = ("format", "version", "stage") + (() if partial else REQUIRED_SECTIONS)
     optional = (REQUIRED_SECTIONS if partial else ()) + ("ramps", "fixtures")
     top = ctx.mapping(data, (), required=required, optional=optional)
-    _check_header(ctx, top)
+    ctx.header(top, FORMAT, VERSION)
     if not any(name in top for name in SECTIONS):
         raise ctx.error((), f"holds no measurements: give at least one of {', '.join(SECTIONS)}")
     out: dict[str, Any] = {"stage": parse_stage(ctx, top["stage"])}
@@ -246,15 +246,6 @@ def _parse_sections(ctx: Validator, data: JsonValue, *, partial: bool) -> dict[s
             raise ctx.error(("fixtures",), "fixtures need lit_chart in the same file")
         out["fixtures"] = parse_fixtures(ctx, top["fixtures"], n)
     return out
-
-
-def _check_header(ctx: Validator, top: JsonMapping) -> None:
-    if top["format"] != FORMAT:
-        raise ctx.error(("format",), f"expected {FORMAT!r}, got {excerpt(top['format'])}")
-    if top["version"] != VERSION or isinstance(top["version"], bool):
-        raise ctx.error(
-            ("version",), f"this ocio-vp reads version {VERSION}, got {excerpt(top['version'])}"
-        )
 
 
 def _check_white_patch(ctx: Validator, stage: Stage, n: int) -> None:
@@ -280,7 +271,7 @@ def _measurements_with_panels(
         required=("format", "version", "stage", "panels", "environments"),
         optional=("primaries", "lit_chart", "ramps", "fixtures"),
     )
-    _check_header(ctx, top)
+    ctx.header(top, FORMAT, VERSION)
     for key in ("primaries", "lit_chart", "ramps"):
         if key in top:
             raise ctx.error(
