@@ -31,6 +31,7 @@ __all__ = [
     "SAFE_NAME",
     "Key",
     "Validator",
+    "check_safe_name",
     "describe",
 ]
 
@@ -65,7 +66,7 @@ def describe(value: JsonValue) -> str:
 class Validator:
     """Reads fields of a parsed document; every error names ``source`` and the key path."""
 
-    def __init__(self, source: str) -> None:
+    def __init__(self, source: str = "") -> None:
         self.source = source
 
     def error(self, key: Key, problem: str) -> InputError:
@@ -160,7 +161,9 @@ class Validator:
             raise self.error(key, f"expected true or false, got {describe(value)}")
         return value
 
-    def choice(self, value: JsonValue, key: Key, allowed: Collection[str], *, what: str = "") -> str:
+    def choice(
+        self, value: JsonValue, key: Key, allowed: Collection[str], *, what: str = ""
+    ) -> str:
         """One of ``allowed``; ``what`` names the kind of value in the message."""
         if not isinstance(value, str) or value not in allowed:
             listed = ", ".join(allowed)
@@ -299,3 +302,8 @@ class Validator:
             raise self.error((*key, "name"), f"duplicate name {name!r} (also {where})")
         seen[name] = int(key[-1])
         return name
+
+
+def check_safe_name(value: JsonValue, *, source: object = None, key: str | None = None) -> str:
+    """Return ``value`` if it is a safe environment/stage name, else raise :class:`InputError`."""
+    return Validator(str(source) if source else "input").name(value, (key or "name",))

@@ -28,6 +28,7 @@ from ocio_vp.formats.checker import (
     PANEL_RANGE,
     SAFE_NAME,
     Validator,
+    check_safe_name,
 )
 from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.fixtures import Fixture, fixtures_to_dict, parse_fixtures
@@ -167,11 +168,6 @@ class Measurements:
         raise InputError(
             f"no environment named {excerpt(name)} (have: {names})", source=self.source
         )
-
-
-def check_safe_name(value: JsonValue, *, source: object = None, key: str | None = None) -> str:
-    """Return ``value`` if it is a safe environment/stage name, else raise :class:`InputError`."""
-    return Validator(str(source) if source else "input").name(value, (key or "name",))
 
 
 # --------------------------------------------------------------------------------------------

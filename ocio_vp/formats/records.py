@@ -146,15 +146,16 @@ def read_value(value: object, hint: Any, key: str) -> Any:
     raise InputError(f"unexpected value {excerpt(value)}", key=key)
 
 
-def finite_array(value: object, shape: tuple[int, ...], key: str, problem: str) -> np.ndarray:
+def finite_array(value: object, shape: tuple[int, ...], key: str) -> np.ndarray:
     """``value`` (a JSON list) as a finite float64 array of ``shape``, no entry beyond
-    :data:`MAX_VALUE`; else InputError(``problem``) naming ``key``."""
+    :data:`MAX_VALUE`; else InputError naming ``key``."""
     try:
         array = np.asarray(value if isinstance(value, list) else (), dtype=np.float64)
     except (TypeError, ValueError, OverflowError):
         array = np.zeros(0)
     if array.shape != shape or not np.all(np.isfinite(array)) or np.any(abs(array) > MAX_VALUE):
-        raise InputError(problem, key=key)
+        what = {(3, 3): "3x3 matrix", (3,): "[r, g, b]"}.get(shape, f"array of shape {shape}")
+        raise InputError(f"expected a finite {what}", key=key)
     return array
 
 
