@@ -20,6 +20,7 @@ from typing import Any, ClassVar, TypeVar
 import numpy as np
 
 from ocio_vp.errors import InputError, excerpt
+from ocio_vp.formats.checker import Validator
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 
 __all__ = [
@@ -168,18 +169,6 @@ def _float(value: object, key: str) -> float:
     return float(value)
 
 
-def _int(value: object, key: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise InputError(f"expected a whole number, got {excerpt(value)}", key=key)
-    return value
-
-
-def _bool(value: object, key: str) -> bool:
-    if not isinstance(value, bool):
-        raise InputError(f"expected true or false, got {excerpt(value)}", key=key)
-    return value
-
-
 def _str(value: object, key: str) -> str:
     if not isinstance(value, str):
         raise InputError(f"expected text, got {excerpt(value)}", key=key)
@@ -211,8 +200,8 @@ def _numbers(value: object) -> object:
 
 _SCALARS: dict[Any, Any] = {
     float: _float,
-    int: _int,
-    bool: _bool,
+    int: lambda value, key: Validator().whole(value, (key,), None),
+    bool: lambda value, key: Validator().flag(value, (key,)),
     str: _str,
     np.ndarray: _array,
 }
