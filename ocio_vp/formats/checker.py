@@ -156,6 +156,13 @@ class Validator:
             raise self.error(key, f"expected {expected}, got {excerpt(value)}")
         return value
 
+    def size(self, value: JsonValue, key: Key, maximum: int | None = None) -> tuple[int, int]:
+        """``[width, height]`` in pixels, each 1 or more (at most ``maximum``)."""
+        if not isinstance(value, list) or len(value) != 2:
+            raise self.error(key, f"expected [width, height] in pixels, got {describe(value)}")
+        width, height = (self.whole(v, (*key, i), 1, maximum) for i, v in enumerate(value))
+        return width, height
+
     def flag(self, value: JsonValue, key: Key) -> bool:
         if not isinstance(value, bool):
             raise self.error(key, f"expected true or false, got {describe(value)}")

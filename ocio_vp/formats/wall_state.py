@@ -63,18 +63,7 @@ def parse_wall_state(ctx: Validator, stage: JsonMapping, key: tuple[str | int, .
     elif "peak_nits" in stage:
         raise ctx.error((*key, "peak_nits"), "only with wall_encoding: pq")
     size = stage.get("pattern_size")
-    pattern_size = None
-    if size is not None:
-        pixels = [
-            v
-            for v in (size if isinstance(size, list) else ())
-            if isinstance(v, int) and not isinstance(v, bool) and 0 < v <= _MAX_SIZE
-        ]
-        if not (isinstance(size, list) and len(size) == len(pixels) == 2):
-            raise ctx.error(
-                (*key, "pattern_size"), f"expected [width, height] in pixels, got {excerpt(size)}"
-            )
-        pattern_size = (pixels[0], pixels[1])
+    pattern_size = None if size is None else ctx.size(size, (*key, "pattern_size"), _MAX_SIZE)
     return WallState(encoding, None if peak is None else float(peak), pattern_size)
 
 

@@ -312,10 +312,7 @@ def sequence_from_dict(
         peak = ctx.peak_nits(peak, ("peak_nits",))
     elif peak is not None:
         raise ctx.error(("peak_nits",), f"only a pq sequence has a peak, this one is {encoding}")
-    size = top["size"]
-    if not isinstance(size, list) or len(size) != 2:
-        raise ctx.error(("size",), "expected [width, height]")
-    width, height = (ctx.whole(v, ("size", i), 1) for i, v in enumerate(size))
+    width, height = ctx.size(top["size"], ("size",))
     file_format = top.get("file_format", Path(frames).suffix.lstrip(".").lower())
     if file_format == "tif":
         file_format = "tiff"
