@@ -78,7 +78,10 @@ class Validator:
         key: Key,
         required: tuple[str, ...],
         optional: tuple[str, ...] = (),
+        *,
+        what: str = "key",
     ) -> Mapping[str, Any]:
+        """A mapping with every ``required`` key and no key (``what``) beyond ``optional``."""
         if not isinstance(value, Mapping):
             raise self.error(key, f"expected a mapping, got {describe(value)}")
         # Unknown keys first: a misspelt required key is reported as the typo it is.
@@ -90,7 +93,7 @@ class Validator:
                 expected = ", ".join(sorted(allowed))
                 raise self.error(
                     (*key, str(name)[:60]),
-                    f"unknown key{suggestion}; expected one of: {expected}",
+                    f"unknown {what}{suggestion}; expected one of: {expected}",
                 )
         for name in required:
             if name not in value:

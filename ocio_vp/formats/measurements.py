@@ -415,59 +415,38 @@ def _parse_environments(
         priority = env.get("priority")
         if priority is not None:
             priority = ctx.choice(priority, (*key, "priority"), PRIORITIES)
-        if panels:
-            environments.append(
-                dataclasses.replace(
-                    _panel_environment(ctx, env, key, name, target, panels), priority=priority
-                )
-            )
-            continue
-        w_avg = ctx.rgb(env["w_avg"], (*key, "w_avg")) if "w_avg" in env else None
-        if w_avg is not None and not np.any(w_avg > 0):
-            raise ctx.error((*key, "w_avg"), "is black: the environment gives no light")
-        black = ctx.rgb(env["black_level"], (*key, "black_level")) if "black_level" in env else None
+        light = _environment_light(ctx, env, key, panels)
         synthesized = None
         if "synthesized" in env:
             synthesized = parse_synthesis(ctx, env["synthesized"], (*key, "synthesized"))
         environments.append(
-            Environment(
-                name=name,
-                target_chart=target,
-                w_avg=w_avg,
-                black_level=black,
-                synthesized=synthesized,
-                priority=priority,
-            )
+            Environment(name, target, synthesized=synthesized, priority=priority, **light)
         )
     return tuple(environments)
 
 
-def _panel_environment(
-    ctx: Validator,
-    env: JsonMapping,
-    key: tuple[str | int, ...],
-    name: str,
-    target: np.ndarray,
-    panels: tuple[PanelType, ...],
-) -> Environment:
-    """An environment of a file with ``panels``: ``w_avg`` and ``black_level`` per panel type."""
-    w_avg = None
+def _environment_light(
+    ctx: Validator, env: JsonMapping, key: tuple[str | int, ...], panels: tuple[PanelType, ...]
+) -> dict[str, Any]:
+    """An environment's ``w_avg`` and ``black_level`` as :class:`Environment` fields: each an
+    ``[r, g, b]``, or with ``panels`` one per panel type (``panel_w_avg``, ...)."""
+    out: dict[str, Any] = {}
+    if panels:
+        if "w_avg" in env:
+            out["panel_w_avg"] = parse_panel_values(ctx, env["w_avg"], (*key, "w_avg"), panels)
+        if "black_level" in env:
+            black_key = (*key, "black_level")
+            out["panel_black_level"] = parse_panel_values(
+                ctx, env["black_level"], black_key, panels, in_frustum_only=True
+            )
+        return out
     if "w_avg" in env:
-        w_avg = parse_panel_values(ctx, env["w_avg"], (*key, "w_avg"), panels)
-    black = None
+        out["w_avg"] = ctx.rgb(env["w_avg"], (*key, "w_avg"))
+        if not np.any(out["w_avg"] > 0):
+            raise ctx.error((*key, "w_avg"), "is black: the environment gives no light")
     if "black_level" in env:
-        black_key = (*key, "black_level")
-        black = parse_panel_values(ctx, env["black_level"], black_key, panels, in_frustum_only=True)
-    synthesized = None
-    if "synthesized" in env:
-        synthesized = parse_synthesis(ctx, env["synthesized"], (*key, "synthesized"))
-    return Environment(
-        name=name,
-        target_chart=target,
-        synthesized=synthesized,
-        panel_w_avg=w_avg,
-        panel_black_level=black,
-    )
+        out["black_level"] = ctx.rgb(env["black_level"], (*key, "black_level"))
+    return out
 
 
 # --------------------------------------------------------------------------------------------

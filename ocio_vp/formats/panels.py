@@ -9,7 +9,6 @@ and ``black_level`` per type. Takes the measurements file's validator as ``ctx``
 
 from __future__ import annotations
 
-import difflib
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -184,14 +183,7 @@ def parse_panel_values(
             f"with panels, expected a mapping of panel type -> [r, g, b] ({', '.join(names)}), "
             f"got {describe(value)}",
         )
-    for name in value:
-        if name not in names:
-            hint = difflib.get_close_matches(str(name)[:100], names, n=1)
-            suggestion = f" (did you mean {hint[0]!r}?)" if hint else ""
-            raise ctx.error(
-                (*key, str(name)[:60]),
-                f"unknown panel type{suggestion}; panel types: {', '.join(names)}",
-            )
+    ctx.mapping(value, key, (), tuple(names), what="panel type")
     out = {}
     for panel in panels:
         if panel.name not in value:
