@@ -331,10 +331,8 @@ def parse_stage(ctx: Validator, value: JsonValue, *, calibration: bool = True) -
     )
     # A "white" patch reflecting under 1% is a mistake (and would blow w_avg up).
     reflectance = ctx.number(
-        stage.get("white_reflectance", 0.9), (*key, "white_reflectance"), minimum=0.01
+        stage.get("white_reflectance", 0.9), (*key, "white_reflectance"), minimum=0.01, maximum=1.0
     )
-    if reflectance > 1.0:
-        raise ctx.error((*key, "white_reflectance"), f"expected at most 1, got {reflectance:.6g}")
     camera = stage.get("camera_colorspace")
     if camera is not None:
         camera = _check_colourspace(ctx, camera, (*key, "camera_colorspace"))
