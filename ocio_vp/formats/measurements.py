@@ -183,20 +183,8 @@ def measurements_from_dict(
     InputError
         Naming ``source``, the key path and the problem, for any deviation from the format.
     """
-    ctx = Validator(source)
-    if isinstance(data, Mapping) and "panels" in data:
-        return _measurements_with_panels(ctx, data, sha256)
-    parsed = _parse_sections(ctx, data, partial=False)
-    return Measurements(
-        stage=parsed["stage"],
-        SL=parsed["SL"],
-        SRL=parsed["SRL"],
-        environments=parsed["environments"],
-        ramps=parsed.get("ramps"),
-        fixtures=parsed.get("fixtures", ()),
-        source=source,
-        sha256=sha256,
-    )
+    parsed = _parse_sections(Validator(source), data, partial=False)
+    return Measurements(**parsed, source=source, sha256=sha256)
 
 
 def check_measurements_part(data: JsonValue, *, source: str = "<measurements>") -> tuple[str, ...]:
@@ -209,32 +197,49 @@ def check_measurements_part(data: JsonValue, *, source: str = "<measurements>") 
     InputError
         As :func:`measurements_from_dict`, for every section present; or no section at all.
     """
-    if isinstance(data, Mapping) and "panels" in data:
-        # A stage of several panel types comes whole: its panels replace primaries and lit_chart.
-        measurements_from_dict(data, source=source)
-        return (*(name for name in SECTIONS if name in data), "primaries", "lit_chart")
-    _parse_sections(Validator(source), data, partial=True)
-    return tuple(name for name in SECTIONS if isinstance(data, dict) and name in data)
+    parsed = _parse_sections(Validator(source), data, partial=True)
+    # A stage of several panel types comes whole: its panels replace primaries and lit_chart.
+    given = tuple(name for name in SECTIONS if isinstance(data, dict) and name in data)
+    return (*given, "primaries", "lit_chart") if "panels" in parsed else given
 
 
 def _parse_sections(ctx: Validator, data: JsonValue, *, partial: bool) -> dict[str, Any]:
-    """Every section present, validated (all of :data:`REQUIRED_SECTIONS` unless ``partial``)."""
-    required = ("format", "version", "stage") + (() if partial else REQUIRED_SECTIONS)
-    optional = (REQUIRED_SECTIONS if partial else ()) + ("ramps", "fixtures")
+    """Every section present, validated, as :class:`Measurements` fields: all of
+    :data:`REQUIRED_SECTIONS` unless ``partial``; a file with ``panels`` (several panel types,
+    :mod:`ocio_vp.formats.panels`) comes whole, with the first in-frustum type's [SL], [SRL]
+    and ramps."""
+    with_panels = isinstance(data, Mapping) and "panels" in data
+    required: tuple[str, ...] = ("format", "version", "stage", "panels", "environments")
+    optional: tuple[str, ...] = ("primaries", "lit_chart", "ramps", "fixtures")
+    if not with_panels:
+        required = ("format", "version", "stage") + (() if partial else REQUIRED_SECTIONS)
+        optional = (REQUIRED_SECTIONS if partial else ()) + ("ramps", "fixtures")
     top = ctx.mapping(data, (), required=required, optional=optional)
     ctx.header(top, FORMAT, VERSION)
+    for key in ("primaries", "lit_chart", "ramps") if with_panels else ():
+        if key in top:
+            raise ctx.error(
+                (key,),
+                "a file with panels gives each panel type its own primaries, lit_chart and "
+                "ramps: remove the top-level one (or the panels section)",
+            )
     if not any(name in top for name in SECTIONS):
         raise ctx.error((), f"holds no measurements: give at least one of {', '.join(SECTIONS)}")
-    out: dict[str, Any] = {"stage": parse_stage(ctx, top["stage"])}
+    out: dict[str, Any] = {"stage": parse_stage(ctx, top["stage"], calibration=not with_panels)}
+    panels: tuple[PanelType, ...] = ()
+    if with_panels:
+        panels = parse_panels(ctx, top["panels"])
+        primary = primary_panel(panels)
+        out |= {"SL": primary.SL, "SRL": primary.SRL, "ramps": primary.ramps, "panels": panels}
     if "primaries" in top:
         out["SL"] = ctx.primaries(top["primaries"], ("primaries",))
-    n = None
     if "lit_chart" in top:
         out["SRL"] = ctx.lit_chart(top["lit_chart"], ("lit_chart",), None)
-        n = len(out["SRL"])
+    n = len(out["SRL"]) if "SRL" in out else None
+    if n is not None:
         _check_white_patch(ctx, out["stage"], n)
     if "environments" in top:
-        out["environments"] = _parse_environments(ctx, top["environments"], n)
+        out["environments"] = _parse_environments(ctx, top["environments"], n, panels)
     if "ramps" in top:
         out["ramps"] = parse_ramps(top["ramps"], source=ctx.source)
     if "fixtures" in top:
@@ -255,42 +260,6 @@ def _check_white_patch(ctx: Validator, stage: Stage, n: int) -> None:
             raise ctx.error(
                 ("stage", "skin_patches", i), f"index {index} is outside the {n} chart patches"
             )
-
-
-def _measurements_with_panels(
-    ctx: Validator, data: JsonMapping, sha256: str | None
-) -> Measurements:
-    """A file with ``panels`` (:mod:`ocio_vp.formats.panels`): several panel types."""
-    top = ctx.mapping(
-        data,
-        (),
-        required=("format", "version", "stage", "panels", "environments"),
-        optional=("primaries", "lit_chart", "ramps", "fixtures"),
-    )
-    ctx.header(top, FORMAT, VERSION)
-    for key in ("primaries", "lit_chart", "ramps"):
-        if key in top:
-            raise ctx.error(
-                (key,),
-                "a file with panels gives each panel type its own primaries, lit_chart and "
-                "ramps: remove the top-level one (or the panels section)",
-            )
-    stage = parse_stage(ctx, top["stage"], calibration=False)
-    panels = parse_panels(ctx, top["panels"])
-    primary = primary_panel(panels)
-    n = primary.SRL.shape[0]
-    _check_white_patch(ctx, stage, n)
-    return Measurements(
-        stage=stage,
-        SL=primary.SL,
-        SRL=primary.SRL,
-        environments=_parse_environments(ctx, top["environments"], n, panels),
-        ramps=primary.ramps,
-        fixtures=parse_fixtures(ctx, top["fixtures"], n) if "fixtures" in top else (),
-        panels=panels,
-        source=ctx.source,
-        sha256=sha256,
-    )
 
 
 def parse_stage(ctx: Validator, value: JsonValue, *, calibration: bool = True) -> Stage:
@@ -335,7 +304,9 @@ def parse_stage(ctx: Validator, value: JsonValue, *, calibration: bool = True) -
     )
     camera = stage.get("camera_colorspace")
     if camera is not None:
-        camera = _check_colourspace(ctx, camera, (*key, "camera_colorspace"))
+        camera, problem = _colourspace_problem(camera)
+        if camera is None:
+            raise ctx.error((*key, "camera_colorspace"), problem)
     clip_level = None
     if "clip_level" in stage:
         clip_level = ctx.number(
@@ -374,13 +345,6 @@ def _colourspace_problem(value: JsonValue) -> tuple[str | None, str]:
     close = difflib.get_close_matches(str(value)[:100], names, n=3, cutoff=0.5)
     hint = f"; close matches: {', '.join(close)}" if close else ""
     return None, f"unknown colour space {excerpt(value)} (colour.RGB_COLOURSPACES){hint}"
-
-
-def _check_colourspace(ctx: Validator, value: JsonValue, key: tuple[str | int, ...]) -> str:
-    name, problem = _colourspace_problem(value)
-    if name is None:
-        raise ctx.error(key, problem)
-    return name
 
 
 def with_camera_colorspace(measurements: Measurements, value: str, *, key: str) -> Measurements:
