@@ -14,6 +14,7 @@ import numpy as np
 
 from ocio_vp.formats.checker import Validator
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
+from ocio_vp.formats.records import floats
 
 __all__ = ["DMX_MODES", "DmxPatch", "Fixture", "fixtures_to_dict", "parse_fixtures"]
 
@@ -123,11 +124,9 @@ def fixtures_to_dict(fixtures: tuple[Fixture, ...]) -> list[JsonObject]:
         }
         if f.pixel_mapped:
             entry["pixel_mapped"] = True
-        entry["lit_chart"] = {
-            c: [[float(v) for v in row] for row in f.lit_chart[k]] for k, c in enumerate(f.channels)
-        }
+        entry["lit_chart"] = {c: floats(f.lit_chart[k]) for k, c in enumerate(f.channels)}
         if f.direct is not None:
-            entry["direct"] = {c: [float(v) for v in f.direct[k]] for k, c in enumerate(f.channels)}
+            entry["direct"] = {c: floats(f.direct[k]) for k, c in enumerate(f.channels)}
         if f.dmx is not None:
             entry["dmx"] = f.dmx.to_dict()
         out.append(entry)

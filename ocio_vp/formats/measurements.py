@@ -42,8 +42,8 @@ from ocio_vp.formats.panels import (
     parse_panel_values,
     parse_panels,
     primary_panel,
-    rows,
 )
+from ocio_vp.formats.records import floats
 from ocio_vp.formats.synthesis import SynthesisRecord, parse_synthesis, synthesis_to_dict
 from ocio_vp.formats.wall_state import WALL_STATE_KEYS, WallState, parse_wall_state
 from ocio_vp.wall.linearity import parse_ramps, ramps_to_dict
@@ -453,13 +453,13 @@ def measurements_to_dict(measurements: Measurements) -> JsonObject:
         data |= lit_dicts(measurements.SL, measurements.SRL)
     environments: list[JsonValue] = []
     for env in measurements.environments:
-        entry: JsonObject = {"name": env.name, "target_chart": rows(env.target_chart)}
+        entry: JsonObject = {"name": env.name, "target_chart": floats(env.target_chart)}
         if env.w_avg is not None:
-            entry["w_avg"] = rows(env.w_avg[None])[0]
+            entry["w_avg"] = floats(env.w_avg)
         if env.panel_w_avg is not None:
             entry["w_avg"] = panel_values_to_dict(env.panel_w_avg)
         if env.black_level is not None:
-            entry["black_level"] = rows(env.black_level[None])[0]
+            entry["black_level"] = floats(env.black_level)
         if env.panel_black_level:
             entry["black_level"] = panel_values_to_dict(env.panel_black_level)
         if env.synthesized is not None:

@@ -17,6 +17,7 @@ import numpy as np
 from ocio_vp.formats.checker import CHANNELS, Validator, describe
 from ocio_vp.formats.geometry import PanelGeometry
 from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
+from ocio_vp.formats.records import floats
 from ocio_vp.wall.linearity import Ramp, parse_ramps, ramps_to_dict
 
 __all__ = [
@@ -206,16 +207,11 @@ def parse_panel_values(
     return out
 
 
-def rows(array: np.ndarray) -> list[JsonValue]:
-    """A 2D array as lists of plain floats."""
-    return [[float(v) for v in row] for row in np.asarray(array, dtype=np.float64)]
-
-
 def lit_dicts(SL: np.ndarray, SRL: np.ndarray) -> JsonObject:
     """``primaries`` and ``lit_chart`` blocks of [SL] (3, 3) and [SRL] (n, 3, 3)."""
     return {
-        "primaries": {c: rows(SL.T)[k] for k, c in enumerate(CHANNELS)},
-        "lit_chart": {c: rows(SRL[:, :, k]) for k, c in enumerate(CHANNELS)},
+        "primaries": {c: floats(SL[:, k]) for k, c in enumerate(CHANNELS)},
+        "lit_chart": {c: floats(SRL[:, :, k]) for k, c in enumerate(CHANNELS)},
     }
 
 
@@ -251,4 +247,4 @@ def panels_to_dict(panels: tuple[PanelType, ...]) -> list[JsonObject]:
 
 def panel_values_to_dict(values: Mapping[str, np.ndarray]) -> JsonObject:
     """``{name: [r, g, b]}`` of per-panel values (plain floats)."""
-    return {name: [float(v) for v in rgb] for name, rgb in values.items()}
+    return {name: floats(rgb) for name, rgb in values.items()}

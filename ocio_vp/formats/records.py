@@ -18,6 +18,7 @@ from collections.abc import Mapping
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ocio_vp.errors import InputError, excerpt
 from ocio_vp.formats.checker import Validator
@@ -27,6 +28,7 @@ __all__ = [
     "MAX_VALUE",
     "Record",
     "finite_array",
+    "floats",
     "json_object",
     "json_value",
     "read_record",
@@ -145,6 +147,11 @@ def read_value(value: object, hint: Any, key: str) -> Any:
         item = args[1] if args else Any
         return {str(k): read_value(v, item, f"{key}.{k}") for k, v in value.items()}
     raise InputError(f"unexpected value {excerpt(value)}", key=key)
+
+
+def floats(array: ArrayLike) -> Any:
+    """``array`` as (nested) lists of plain floats, as YAML and JSON write it."""
+    return np.asarray(array, dtype=np.float64).tolist()
 
 
 def finite_array(value: object, shape: tuple[int, ...], key: str) -> np.ndarray:

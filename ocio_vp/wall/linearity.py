@@ -45,6 +45,7 @@ from ocio_vp.formats.linearity import (
     LinearityChannel,
     ShadowDeviation,
 )
+from ocio_vp.formats.records import floats
 
 __all__ = [
     "CHANNELS",
@@ -197,15 +198,15 @@ def ramps_to_dict(ramps: Mapping[str, Ramp]) -> JsonObject:
     """The inverse of :func:`parse_ramps` (plain Python types)."""
     data: JsonObject = {
         c: {
-            "drive": [float(v) for v in ramps[c].drive],
-            "camera": [[float(v) for v in row] for row in ramps[c].camera],
+            "drive": floats(ramps[c].drive),
+            "camera": floats(ramps[c].camera),
         }
         for c in CHANNELS
         if c in ramps
     }
     first = next(iter(ramps.values()), None)
     if first is not None and first.black is not None:
-        data["black"] = [float(v) for v in first.black]
+        data["black"] = floats(first.black)
     if first is not None and first.noise_floor is not None:
         data["noise_floor"] = float(first.noise_floor)
     return data
