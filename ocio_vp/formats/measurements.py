@@ -361,54 +361,54 @@ def _parse_environments(
     ctx: Validator, value: JsonValue, n: int | None, panels: tuple[PanelType, ...] = ()
 ) -> tuple[Environment, ...]:
     seen: dict[str, int] = {}
-    environments = []
-    for i, raw in enumerate(ctx.items(value, ("environments",))):
-        key: tuple[str | int, ...] = ("environments", i)
-        env = ctx.mapping(
-            raw,
-            key,
-            required=("name", "target_chart"),
-            optional=("w_avg", "black_level", "synthesized", "priority"),
-        )
-        name = ctx.unique_name(env["name"], key, seen)
-        target = ctx.signal(
-            ctx.chart(env["target_chart"], (*key, "target_chart"), n), (*key, "target_chart")
-        )
-        priority = env.get("priority")
-        if priority is not None:
-            priority = ctx.choice(priority, (*key, "priority"), PRIORITIES)
-        light = _environment_light(ctx, env, key, panels)
-        synthesized = None
-        if "synthesized" in env:
-            synthesized = parse_synthesis(ctx, env["synthesized"], (*key, "synthesized"))
-        environments.append(
-            Environment(name, target, synthesized=synthesized, priority=priority, **light)
-        )
-    return tuple(environments)
+    listed = ctx.items(value, ("environments",))
+    return tuple(
+        _environment(ctx, raw, ("environments", i), n, panels, seen) for i, raw in enumerate(listed)
+    )
 
 
-def _environment_light(
-    ctx: Validator, env: JsonMapping, key: tuple[str | int, ...], panels: tuple[PanelType, ...]
-) -> dict[str, Any]:
-    """An environment's ``w_avg`` and ``black_level`` as :class:`Environment` fields: each an
-    ``[r, g, b]``, or with ``panels`` one per panel type (``panel_w_avg``, ...)."""
-    out: dict[str, Any] = {}
-    if panels:
-        if "w_avg" in env:
-            out["panel_w_avg"] = parse_panel_values(ctx, env["w_avg"], (*key, "w_avg"), panels)
-        if "black_level" in env:
-            black_key = (*key, "black_level")
-            out["panel_black_level"] = parse_panel_values(
-                ctx, env["black_level"], black_key, panels, in_frustum_only=True
-            )
-        return out
-    if "w_avg" in env:
-        out["w_avg"] = ctx.rgb(env["w_avg"], (*key, "w_avg"))
-        if not np.any(out["w_avg"] > 0):
+def _environment(
+    ctx: Validator,
+    raw: JsonValue,
+    key: tuple[str | int, ...],
+    n: int | None,
+    panels: tuple[PanelType, ...],
+    seen: dict[str, int],
+) -> Environment:
+    """One environment; its ``w_avg`` and ``black_level`` an [r, g, b] each or, with
+    ``panels``, one per panel type."""
+    env = ctx.mapping(
+        raw,
+        key,
+        required=("name", "target_chart"),
+        optional=("w_avg", "black_level", "synthesized", "priority"),
+    )
+    name = ctx.unique_name(env["name"], key, seen)
+    target = ctx.signal(
+        ctx.chart(env["target_chart"], (*key, "target_chart"), n), (*key, "target_chart")
+    )
+    priority = env.get("priority")
+    if priority is not None:
+        priority = ctx.choice(priority, (*key, "priority"), PRIORITIES)
+    w_avg = black = None
+    panel_w_avg = panel_black = None
+    if panels and "w_avg" in env:
+        panel_w_avg = parse_panel_values(ctx, env["w_avg"], (*key, "w_avg"), panels)
+    if panels and "black_level" in env:
+        black_key = (*key, "black_level")
+        panel_black = parse_panel_values(
+            ctx, env["black_level"], black_key, panels, in_frustum_only=True
+        )
+    if not panels and "w_avg" in env:
+        w_avg = ctx.rgb(env["w_avg"], (*key, "w_avg"))
+        if not np.any(w_avg > 0):
             raise ctx.error((*key, "w_avg"), "is black: the environment gives no light")
-    if "black_level" in env:
-        out["black_level"] = ctx.rgb(env["black_level"], (*key, "black_level"))
-    return out
+    if not panels and "black_level" in env:
+        black = ctx.rgb(env["black_level"], (*key, "black_level"))
+    synthesized = None
+    if "synthesized" in env:
+        synthesized = parse_synthesis(ctx, env["synthesized"], (*key, "synthesized"))
+    return Environment(name, target, w_avg, black, synthesized, priority, panel_w_avg, panel_black)
 
 
 # --------------------------------------------------------------------------------------------

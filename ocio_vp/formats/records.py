@@ -149,7 +149,7 @@ def read_value(value: object, hint: Any, key: str) -> Any:
     raise InputError(f"unexpected value {excerpt(value)}", key=key)
 
 
-def floats(array: ArrayLike) -> Any:
+def floats(array: ArrayLike) -> JsonValue:
     """``array`` as (nested) lists of plain floats, as YAML and JSON write it."""
     return np.asarray(array, dtype=np.float64).tolist()
 
