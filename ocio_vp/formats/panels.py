@@ -3,8 +3,8 @@
 
 Each type has its own ``primaries``, ``lit_chart``, ``ramps`` and ``calibration_panel``/``beta``,
 replacing the top-level ones (a file mixing both forms is refused); environments give ``w_avg``
-and ``black_level`` per type. Takes the measurements file's validator as ``ctx`` (a
-:class:`~ocio_vp.formats.checker.Checker`), so every error names the file and key path.
+and ``black_level`` per type. Read with the measurements file's
+:class:`~ocio_vp.formats.checker.Validator` (``ctx``), so every error names the file and key path.
 """
 
 from __future__ import annotations
