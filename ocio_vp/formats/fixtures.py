@@ -12,8 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ocio_vp.formats.checker import Checker
+from ocio_vp.formats.checker import Validator
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
+from ocio_vp.formats.records import floats
 
 __all__ = ["DMX_MODES", "DmxPatch", "Fixture", "fixtures_to_dict", "parse_fixtures"]
 
@@ -53,7 +54,7 @@ class Fixture:
         return np.moveaxis(self.lit_chart, 0, 2) / self.reference_drive
 
 
-def _parse_one(ctx: Checker, value: JsonValue, key: tuple, n: int) -> Fixture:
+def _parse_one(ctx: Validator, value: JsonValue, key: tuple, n: int) -> Fixture:
     entry = ctx.mapping(
         value,
         key,
@@ -61,17 +62,13 @@ def _parse_one(ctx: Checker, value: JsonValue, key: tuple, n: int) -> Fixture:
         optional=("max_drive", "pixel_mapped", "direct", "dmx"),
     )
     name = ctx.name(entry["name"], (*key, "name"))
-    channels = entry["channels"]
-    if not isinstance(channels, list) or not channels:
-        raise ctx.error((*key, "channels"), "expected a non-empty list of channel names")
-    channels = tuple(ctx.name(c, (*key, "channels", i)) for i, c in enumerate(channels))
+    listed = ctx.items(entry["channels"], (*key, "channels"), "channel names")
+    channels = tuple(ctx.name(c, (*key, "channels", i)) for i, c in enumerate(listed))
     if len(set(channels)) != len(channels):
         raise ctx.error((*key, "channels"), f"channel names repeat: {list(channels)}")
     reference = ctx.number(entry["reference_drive"], (*key, "reference_drive"), strict=True)
     max_drive = ctx.number(entry.get("max_drive", 1.0), (*key, "max_drive"), strict=True)
-    pixel_mapped = entry.get("pixel_mapped", False)
-    if not isinstance(pixel_mapped, bool):
-        raise ctx.error((*key, "pixel_mapped"), f"expected true or false, got {pixel_mapped!r}")
+    pixel_mapped = ctx.flag(entry.get("pixel_mapped", False), (*key, "pixel_mapped"))
     lit = ctx.mapping(entry["lit_chart"], (*key, "lit_chart"), required=channels)
     chart = np.stack([ctx.chart(lit[c], (*key, "lit_chart", c), n) for c in channels])
     for k, c in enumerate(channels):
@@ -87,19 +84,11 @@ def _parse_one(ctx: Checker, value: JsonValue, key: tuple, n: int) -> Fixture:
     return Fixture(name, channels, reference, chart, max_drive, pixel_mapped, direct, dmx)
 
 
-def _integer(ctx: Checker, value: JsonValue, key: tuple, low: int, high: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
-        raise ctx.error(key, f"expected an integer {low}..{high}, got {value!r}"[:200])
-    return value
-
-
-def _parse_dmx(ctx: Checker, value: JsonValue, key: tuple, channels: int) -> DmxPatch:
+def _parse_dmx(ctx: Validator, value: JsonValue, key: tuple, channels: int) -> DmxPatch:
     entry = ctx.mapping(value, key, required=("universe", "address", "mode"))
-    universe = _integer(ctx, entry["universe"], (*key, "universe"), 0, MAX_UNIVERSE)
-    address = _integer(ctx, entry["address"], (*key, "address"), 1, 512)
-    mode = entry["mode"]
-    if mode not in DMX_MODES:
-        raise ctx.error((*key, "mode"), f"expected one of {list(DMX_MODES)}, got {mode!r}"[:200])
+    universe = ctx.whole(entry["universe"], (*key, "universe"), 0, MAX_UNIVERSE)
+    address = ctx.whole(entry["address"], (*key, "address"), 1, 512)
+    mode = ctx.choice(entry["mode"], (*key, "mode"), tuple(DMX_MODES))
     last = address + channels * DMX_MODES[mode] - 1
     if last > 512:
         raise ctx.error(
@@ -109,15 +98,13 @@ def _parse_dmx(ctx: Checker, value: JsonValue, key: tuple, channels: int) -> Dmx
     return DmxPatch(universe, address, mode)
 
 
-def parse_fixtures(ctx: Checker, value: JsonValue, n: int) -> tuple[Fixture, ...]:
+def parse_fixtures(ctx: Validator, value: JsonValue, n: int) -> tuple[Fixture, ...]:
     """Validate the ``fixtures`` list (``n`` chart patches).
 
-    ``ctx`` is the measurements file's :class:`~ocio_vp.formats.measurements.Validator`, so every
-    error names the file and the key path (``fixtures[0].lit_chart.white[3][1]``).
+    Every error names the file and the key path (``fixtures[0].lit_chart.white[3][1]``).
     """
-    if not isinstance(value, list) or not value:
-        raise ctx.error(("fixtures",), "expected a non-empty list of fixtures")
-    fixtures = tuple(_parse_one(ctx, v, ("fixtures", i), n) for i, v in enumerate(value))
+    listed = ctx.items(value, ("fixtures",), "fixtures")
+    fixtures = tuple(_parse_one(ctx, v, ("fixtures", i), n) for i, v in enumerate(listed))
     names = [f.name for f in fixtures]
     for i, name in enumerate(names):
         if name in names[:i]:
@@ -137,11 +124,9 @@ def fixtures_to_dict(fixtures: tuple[Fixture, ...]) -> list[JsonObject]:
         }
         if f.pixel_mapped:
             entry["pixel_mapped"] = True
-        entry["lit_chart"] = {
-            c: [[float(v) for v in row] for row in f.lit_chart[k]] for k, c in enumerate(f.channels)
-        }
+        entry["lit_chart"] = {c: floats(f.lit_chart[k]) for k, c in enumerate(f.channels)}
         if f.direct is not None:
-            entry["direct"] = {c: [float(v) for v in f.direct[k]] for k, c in enumerate(f.channels)}
+            entry["direct"] = {c: floats(f.direct[k]) for k, c in enumerate(f.channels)}
         if f.dmx is not None:
             entry["dmx"] = f.dmx.to_dict()
         out.append(entry)

@@ -10,8 +10,6 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import json
-import math
-import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,8 +19,17 @@ import numpy as np
 import yaml
 
 from ocio_vp.choices import DEFAULT_WHITE_PATCH, PRIORITIES
-from ocio_vp.errors import InputError, excerpt, format_key_path
-from ocio_vp.formats.checker import describe
+from ocio_vp.errors import InputError, excerpt
+from ocio_vp.formats.checker import (
+    CHANNELS,
+    MAX_CAMERA_VALUE,
+    MIN_BETA,
+    MIN_SIGNAL,
+    PANEL_RANGE,
+    SAFE_NAME,
+    Validator,
+    check_safe_name,
+)
 from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.fixtures import Fixture, fixtures_to_dict, parse_fixtures
 from ocio_vp.formats.geometry import PanelGeometry
@@ -35,11 +42,11 @@ from ocio_vp.formats.panels import (
     parse_panel_values,
     parse_panels,
     primary_panel,
-    rows,
 )
+from ocio_vp.formats.records import floats
 from ocio_vp.formats.synthesis import SynthesisRecord, parse_synthesis, synthesis_to_dict
 from ocio_vp.formats.wall_state import WALL_STATE_KEYS, WallState, parse_wall_state
-from ocio_vp.wall.linearity import CHANNELS, parse_ramps, ramps_to_dict
+from ocio_vp.wall.linearity import parse_ramps, ramps_to_dict
 
 __all__ = [
     "CHANNELS",
@@ -72,22 +79,10 @@ __all__ = [
 
 FORMAT = "ocio-vp/measurements"
 VERSION = 1
-#: Names that are safe as folder names and inside Tcl, C, YAML and OCIO names.
-#: (``\Z``, not ``$``: ``$`` also matches before a final newline.)
-SAFE_NAME = re.compile(r"\A[A-Za-z0-9][A-Za-z0-9_-]{0,63}\Z")
-#: Largest magnitude of a camera RGB value (raw 16-bit code values and HDR merges stay far below).
-MAX_CAMERA_VALUE = 1e9
-#: A block of camera values (primaries, a chart) whose largest value is positive but below this
-#: is refused: it is not a photographed signal but data scaled by mistake.
-MIN_SIGNAL = 1e-12
 #: The sections of the file that hold measurements; :data:`REQUIRED_SECTIONS` are needed to
 #: solve (a file holding only some of them is merged with others, docs/measurements.md).
 SECTIONS = ("primaries", "lit_chart", "environments", "ramps", "fixtures")
 REQUIRED_SECTIONS = ("primaries", "lit_chart", "environments")
-#: Smallest form factor ``beta`` (a panel ~500x farther away than it is wide).
-MIN_BETA = 1e-6
-#: Calibration panel width, height and distance (and |offset|) in metres.
-PANEL_RANGE = (1e-3, 1e3)
 
 
 @dataclass(frozen=True)
@@ -176,156 +171,6 @@ class Measurements:
 
 
 # --------------------------------------------------------------------------------------------
-# Validation helpers: each takes the value, the source and the key path for its messages.
-
-
-class Validator:
-    """Checks values of a parsed document; every error names ``source`` and the key path.
-
-    Shared by the measurements and capture file loaders.
-    """
-
-    def __init__(self, source: str) -> None:
-        self.source = source
-
-    def error(self, key: tuple[str | int, ...], problem: str) -> InputError:
-        return InputError(problem, source=self.source, key=format_key_path(*key) or None)
-
-    def mapping(
-        self,
-        value: JsonValue,
-        key: tuple[str | int, ...],
-        required: tuple[str, ...],
-        optional: tuple[str, ...] = (),
-    ) -> Mapping[str, Any]:
-        if not isinstance(value, Mapping):
-            raise self.error(key, f"expected a mapping, got {describe(value)}")
-        # Unknown keys first: a misspelt required key is reported as the typo it is.
-        allowed = set(required) | set(optional)
-        for name in value:
-            if name not in allowed:
-                hint = difflib.get_close_matches(str(name)[:100], sorted(allowed), n=1)
-                suggestion = f" (did you mean {hint[0]!r}?)" if hint else ""
-                expected = ", ".join(sorted(allowed))
-                raise self.error(
-                    (*key, str(name)[:60]),
-                    f"unknown key{suggestion}; expected one of: {expected}",
-                )
-        for name in required:
-            if name not in value:
-                raise self.error(key, f"missing required key {excerpt(name)}")
-        return value
-
-    def calibration(
-        self, value: JsonMapping, key: tuple[str | int, ...]
-    ) -> tuple[PanelGeometry | None, float | None]:
-        """``calibration_panel`` and/or ``beta`` of a mapping (the stage, or a panel type):
-        the lit-chart setup that gives beta; one of them is required."""
-        panel = None
-        if "calibration_panel" in value:
-            pkey = (*key, "calibration_panel")
-            raw = self.mapping(
-                value["calibration_panel"],
-                pkey,
-                required=("width", "height", "distance"),
-                optional=("offset_x", "offset_y"),
-            )
-            low, high = PANEL_RANGE  # metres: a panel from a millimetre to a kilometre
-            sizes = {
-                name: self.number(raw[name], (*pkey, name), minimum=low, maximum=high)
-                for name in ("width", "height", "distance")
-            }
-            offsets = {
-                name: self.number(raw.get(name, 0.0), (*pkey, name), minimum=-high, maximum=high)
-                for name in ("offset_x", "offset_y")
-            }
-            panel = PanelGeometry(**sizes, **offsets)
-        beta = None
-        if "beta" in value:
-            beta = self.number(value["beta"], (*key, "beta"), minimum=MIN_BETA)
-            if beta > 1.0:
-                raise self.error((*key, "beta"), f"a form factor is at most 1, got {beta:.6g}")
-        if panel is None and beta is None:
-            raise self.error(key, "give either calibration_panel {width, height, distance} or beta")
-        return panel, beta
-
-    def number(
-        self,
-        value: JsonValue,
-        key: tuple[str | int, ...],
-        *,
-        minimum: float = 0.0,
-        strict: bool = False,
-        maximum: float = math.inf,
-    ) -> float:
-        """A finite float64 in ``[minimum, maximum]`` (``(minimum, maximum]`` when ``strict``)."""
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.error(key, f"expected a number, got {describe(value)}")
-        try:
-            number = float(value)
-        except OverflowError:  # an integer beyond float64
-            raise self.error(key, "expected a number, got an integer too large for one") from None
-        if not math.isfinite(number):
-            raise self.error(key, f"expected a finite number, got {excerpt(value)}")
-        if number < minimum or (strict and number == minimum):
-            relation = ">" if strict else ">="
-            raise self.error(key, f"expected a number {relation} {minimum:g}, got {number:.6g}")
-        if number > maximum:
-            raise self.error(key, f"expected a number <= {maximum:g}, got {number:.6g}")
-        return number
-
-    def rgb(
-        self,
-        value: JsonValue,
-        key: tuple[str | int, ...],
-        *,
-        minimum: float = 0.0,
-        maximum: float = MAX_CAMERA_VALUE,
-    ) -> np.ndarray:
-        """Camera ``[r, g, b]``: each value in ``[minimum, maximum]``."""
-        if not isinstance(value, (list, tuple)) or len(value) != 3:
-            raise self.error(key, f"expected [r, g, b], got {describe(value)}")
-        out = np.array(
-            [
-                self.number(v, (*key, i), minimum=minimum, maximum=maximum)
-                for i, v in enumerate(value)
-            ],
-            dtype=np.float64,
-        )
-        return out
-
-    def chart(self, value: JsonValue, key: tuple[str | int, ...], n: int | None) -> np.ndarray:
-        if not isinstance(value, (list, tuple)) or not value:
-            raise self.error(key, f"expected a list of [r, g, b] patches, got {describe(value)}")
-        if n is not None and len(value) != n:
-            raise self.error(key, f"has {len(value)} patches, expected {n} like lit_chart.red")
-        return np.stack([self.rgb(v, (*key, i)) for i, v in enumerate(value)])
-
-    def signal(self, values: np.ndarray, key: tuple[str | int, ...]) -> np.ndarray:
-        """Refuse camera values that are all positive-but-tiny: scaled data, not a photograph."""
-        peak = float(np.max(np.abs(values))) if values.size else 0.0
-        if 0.0 < peak < MIN_SIGNAL:
-            raise self.error(
-                key, f"largest value is {peak:.3g}, below {MIN_SIGNAL:g}: is the data scaled?"
-            )
-        return values
-
-    def name(self, value: JsonValue, key: tuple[str | int, ...]) -> str:
-        if not isinstance(value, str) or not SAFE_NAME.match(value):
-            raise self.error(
-                key,
-                f"unsafe name {excerpt(value)}: use 1-64 letters, digits, '_' or '-', "
-                "starting with a letter or digit",
-            )
-        return value
-
-
-def check_safe_name(value: JsonValue, *, source: object = None, key: str | None = None) -> str:
-    """Return ``value`` if it is a safe environment/stage name, else raise :class:`InputError`."""
-    return Validator(str(source) if source else "input").name(value, (key or "name",))
-
-
-# --------------------------------------------------------------------------------------------
 
 
 def measurements_from_dict(
@@ -338,20 +183,8 @@ def measurements_from_dict(
     InputError
         Naming ``source``, the key path and the problem, for any deviation from the format.
     """
-    ctx = Validator(source)
-    if isinstance(data, Mapping) and "panels" in data:
-        return _measurements_with_panels(ctx, data, sha256)
-    parsed = _parse_sections(ctx, data, partial=False)
-    return Measurements(
-        stage=parsed["stage"],
-        SL=parsed["SL"],
-        SRL=parsed["SRL"],
-        environments=parsed["environments"],
-        ramps=parsed.get("ramps"),
-        fixtures=parsed.get("fixtures", ()),
-        source=source,
-        sha256=sha256,
-    )
+    parsed = _parse_sections(Validator(source), data, partial=False)
+    return Measurements(**parsed, source=source, sha256=sha256)
 
 
 def check_measurements_part(data: JsonValue, *, source: str = "<measurements>") -> tuple[str, ...]:
@@ -364,37 +197,49 @@ def check_measurements_part(data: JsonValue, *, source: str = "<measurements>") 
     InputError
         As :func:`measurements_from_dict`, for every section present; or no section at all.
     """
-    if isinstance(data, Mapping) and "panels" in data:
-        # A stage of several panel types comes whole: its panels replace primaries and lit_chart.
-        measurements_from_dict(data, source=source)
-        return (*(name for name in SECTIONS if name in data), "primaries", "lit_chart")
-    _parse_sections(Validator(source), data, partial=True)
-    return tuple(name for name in SECTIONS if isinstance(data, dict) and name in data)
+    parsed = _parse_sections(Validator(source), data, partial=True)
+    # A stage of several panel types comes whole: its panels replace primaries and lit_chart.
+    given = tuple(name for name in SECTIONS if isinstance(data, dict) and name in data)
+    return (*given, "primaries", "lit_chart") if "panels" in parsed else given
 
 
 def _parse_sections(ctx: Validator, data: JsonValue, *, partial: bool) -> dict[str, Any]:
-    """Every section present, validated (all of :data:`REQUIRED_SECTIONS` unless ``partial``)."""
-    required = ("format", "version", "stage") + (() if partial else REQUIRED_SECTIONS)
-    optional = (REQUIRED_SECTIONS if partial else ()) + ("ramps", "fixtures")
+    """Every section present, validated, as :class:`Measurements` fields: all of
+    :data:`REQUIRED_SECTIONS` unless ``partial``; a file with ``panels`` (several panel types,
+    :mod:`ocio_vp.formats.panels`) comes whole, with the first in-frustum type's [SL], [SRL]
+    and ramps."""
+    with_panels = isinstance(data, Mapping) and "panels" in data
+    required: tuple[str, ...] = ("format", "version", "stage", "panels", "environments")
+    optional: tuple[str, ...] = ("primaries", "lit_chart", "ramps", "fixtures")
+    if not with_panels:
+        required = ("format", "version", "stage") + (() if partial else REQUIRED_SECTIONS)
+        optional = (REQUIRED_SECTIONS if partial else ()) + ("ramps", "fixtures")
     top = ctx.mapping(data, (), required=required, optional=optional)
-    _check_header(ctx, top)
+    ctx.header(top, FORMAT, VERSION)
+    for key in ("primaries", "lit_chart", "ramps") if with_panels else ():
+        if key in top:
+            raise ctx.error(
+                (key,),
+                "a file with panels gives each panel type its own primaries, lit_chart and "
+                "ramps: remove the top-level one (or the panels section)",
+            )
     if not any(name in top for name in SECTIONS):
         raise ctx.error((), f"holds no measurements: give at least one of {', '.join(SECTIONS)}")
-    out: dict[str, Any] = {"stage": parse_stage(ctx, top["stage"])}
+    out: dict[str, Any] = {"stage": parse_stage(ctx, top["stage"], calibration=not with_panels)}
+    panels: tuple[PanelType, ...] = ()
+    if with_panels:
+        panels = parse_panels(ctx, top["panels"])
+        primary = primary_panel(panels)
+        out |= {"SL": primary.SL, "SRL": primary.SRL, "ramps": primary.ramps, "panels": panels}
     if "primaries" in top:
-        primaries = ctx.mapping(top["primaries"], ("primaries",), required=CHANNELS)
-        SL = np.stack([ctx.rgb(primaries[c], ("primaries", c)) for c in CHANNELS], axis=1)
-        out["SL"] = ctx.signal(SL, ("primaries",))
-    n = None
+        out["SL"] = ctx.primaries(top["primaries"], ("primaries",))
     if "lit_chart" in top:
-        lit = ctx.mapping(top["lit_chart"], ("lit_chart",), required=CHANNELS)
-        red = ctx.chart(lit["red"], ("lit_chart", "red"), None)
-        n = len(red)
-        charts = [red] + [ctx.chart(lit[c], ("lit_chart", c), n) for c in CHANNELS[1:]]
-        out["SRL"] = ctx.signal(np.stack(charts, axis=2), ("lit_chart",))  # (n, camera, LED)
+        out["SRL"] = ctx.lit_chart(top["lit_chart"], ("lit_chart",), None)
+    n = len(out["SRL"]) if "SRL" in out else None
+    if n is not None:
         _check_white_patch(ctx, out["stage"], n)
     if "environments" in top:
-        out["environments"] = _parse_environments(ctx, top["environments"], n)
+        out["environments"] = _parse_environments(ctx, top["environments"], n, panels)
     if "ramps" in top:
         out["ramps"] = parse_ramps(top["ramps"], source=ctx.source)
     if "fixtures" in top:
@@ -402,15 +247,6 @@ def _parse_sections(ctx: Validator, data: JsonValue, *, partial: bool) -> dict[s
             raise ctx.error(("fixtures",), "fixtures need lit_chart in the same file")
         out["fixtures"] = parse_fixtures(ctx, top["fixtures"], n)
     return out
-
-
-def _check_header(ctx: Validator, top: JsonMapping) -> None:
-    if top["format"] != FORMAT:
-        raise ctx.error(("format",), f"expected {FORMAT!r}, got {excerpt(top['format'])}")
-    if top["version"] != VERSION or isinstance(top["version"], bool):
-        raise ctx.error(
-            ("version",), f"this ocio-vp reads version {VERSION}, got {excerpt(top['version'])}"
-        )
 
 
 def _check_white_patch(ctx: Validator, stage: Stage, n: int) -> None:
@@ -424,42 +260,6 @@ def _check_white_patch(ctx: Validator, stage: Stage, n: int) -> None:
             raise ctx.error(
                 ("stage", "skin_patches", i), f"index {index} is outside the {n} chart patches"
             )
-
-
-def _measurements_with_panels(
-    ctx: Validator, data: JsonMapping, sha256: str | None
-) -> Measurements:
-    """A file with ``panels`` (:mod:`ocio_vp.formats.panels`): several panel types."""
-    top = ctx.mapping(
-        data,
-        (),
-        required=("format", "version", "stage", "panels", "environments"),
-        optional=("primaries", "lit_chart", "ramps", "fixtures"),
-    )
-    _check_header(ctx, top)
-    for key in ("primaries", "lit_chart", "ramps"):
-        if key in top:
-            raise ctx.error(
-                (key,),
-                "a file with panels gives each panel type its own primaries, lit_chart and "
-                "ramps: remove the top-level one (or the panels section)",
-            )
-    stage = parse_stage(ctx, top["stage"], calibration=False)
-    panels = parse_panels(ctx, top["panels"])
-    primary = primary_panel(panels)
-    n = primary.SRL.shape[0]
-    _check_white_patch(ctx, stage, n)
-    return Measurements(
-        stage=stage,
-        SL=primary.SL,
-        SRL=primary.SRL,
-        environments=_parse_environments(ctx, top["environments"], n, panels),
-        ramps=primary.ramps,
-        fixtures=parse_fixtures(ctx, top["fixtures"], n) if "fixtures" in top else (),
-        panels=panels,
-        source=ctx.source,
-        sha256=sha256,
-    )
 
 
 def parse_stage(ctx: Validator, value: JsonValue, *, calibration: bool = True) -> Stage:
@@ -495,20 +295,18 @@ def parse_stage(ctx: Validator, value: JsonValue, *, calibration: bool = True) -
                     (*key, field_name),
                     "with panels, each panel type gives its own calibration_panel or beta",
                 )
-    white_patch = stage.get("white_patch", DEFAULT_WHITE_PATCH)
-    if isinstance(white_patch, bool) or not isinstance(white_patch, int):
-        raise ctx.error(
-            (*key, "white_patch"), f"expected a patch index, got {describe(white_patch)}"
-        )
+    white_patch = ctx.whole(
+        stage.get("white_patch", DEFAULT_WHITE_PATCH), (*key, "white_patch"), None
+    )
     # A "white" patch reflecting under 1% is a mistake (and would blow w_avg up).
     reflectance = ctx.number(
-        stage.get("white_reflectance", 0.9), (*key, "white_reflectance"), minimum=0.01
+        stage.get("white_reflectance", 0.9), (*key, "white_reflectance"), minimum=0.01, maximum=1.0
     )
-    if reflectance > 1.0:
-        raise ctx.error((*key, "white_reflectance"), f"expected at most 1, got {reflectance:.6g}")
     camera = stage.get("camera_colorspace")
     if camera is not None:
-        camera = _check_colourspace(ctx, camera, (*key, "camera_colorspace"))
+        camera, problem = _colourspace_problem(camera)
+        if camera is None:
+            raise ctx.error((*key, "camera_colorspace"), problem)
     clip_level = None
     if "clip_level" in stage:
         clip_level = ctx.number(
@@ -530,13 +328,8 @@ def parse_stage(ctx: Validator, value: JsonValue, *, calibration: bool = True) -
 
 def _skin_patches(ctx: Validator, value: JsonValue, key: tuple[str | int, ...]) -> tuple[int, ...]:
     """``stage.skin_patches``: distinct patch indices (checked against the chart later)."""
-    if not isinstance(value, list):
-        raise ctx.error(key, f"expected a list of patch indices, got {describe(value)}")
-    indices: list[int] = []
-    for i, index in enumerate(value):
-        if isinstance(index, bool) or not isinstance(index, int) or index < 0:
-            raise ctx.error((*key, i), f"expected a patch index (0 or more), got {excerpt(index)}")
-        indices.append(index)
+    raw = ctx.items(value, key, "patch indices", empty=True)
+    indices = [ctx.whole(index, (*key, i)) for i, index in enumerate(raw)]
     if len(set(indices)) != len(indices):
         raise ctx.error(key, "names a patch twice")
     return tuple(indices)
@@ -554,13 +347,6 @@ def _colourspace_problem(value: JsonValue) -> tuple[str | None, str]:
     return None, f"unknown colour space {excerpt(value)} (colour.RGB_COLOURSPACES){hint}"
 
 
-def _check_colourspace(ctx: Validator, value: JsonValue, key: tuple[str | int, ...]) -> str:
-    name, problem = _colourspace_problem(value)
-    if name is None:
-        raise ctx.error(key, problem)
-    return name
-
-
 def with_camera_colorspace(measurements: Measurements, value: str, *, key: str) -> Measurements:
     """``measurements`` with ``stage.camera_colorspace`` set to ``value`` (a
     ``colour.RGB_COLOURSPACES`` name; an unknown one raises, listing close matches)."""
@@ -574,86 +360,55 @@ def with_camera_colorspace(measurements: Measurements, value: str, *, key: str) 
 def _parse_environments(
     ctx: Validator, value: JsonValue, n: int | None, panels: tuple[PanelType, ...] = ()
 ) -> tuple[Environment, ...]:
-    if not isinstance(value, list) or not value:
-        raise ctx.error(("environments",), f"expected a non-empty list, got {describe(value)}")
     seen: dict[str, int] = {}
-    environments = []
-    for i, raw in enumerate(value):
-        key: tuple[str | int, ...] = ("environments", i)
-        env = ctx.mapping(
-            raw,
-            key,
-            required=("name", "target_chart"),
-            optional=("w_avg", "black_level", "synthesized", "priority"),
-        )
-        name = ctx.name(env["name"], (*key, "name"))
-        if name in seen:
-            raise ctx.error(
-                (*key, "name"), f"duplicate name {name!r} (also environments[{seen[name]}])"
-            )
-        seen[name] = i
-        target = ctx.signal(
-            ctx.chart(env["target_chart"], (*key, "target_chart"), n), (*key, "target_chart")
-        )
-        priority = env.get("priority")
-        if priority is not None and priority not in PRIORITIES:
-            raise ctx.error(
-                (*key, "priority"),
-                f"expected one of {', '.join(PRIORITIES)}, got {excerpt(priority)}",
-            )
-        if panels:
-            environments.append(
-                dataclasses.replace(
-                    _panel_environment(ctx, env, key, name, target, panels), priority=priority
-                )
-            )
-            continue
-        w_avg = ctx.rgb(env["w_avg"], (*key, "w_avg")) if "w_avg" in env else None
-        if w_avg is not None and not np.any(w_avg > 0):
-            raise ctx.error((*key, "w_avg"), "is black: the environment gives no light")
-        black = ctx.rgb(env["black_level"], (*key, "black_level")) if "black_level" in env else None
-        synthesized = None
-        if "synthesized" in env:
-            synthesized = parse_synthesis(ctx, env["synthesized"], (*key, "synthesized"))
-        environments.append(
-            Environment(
-                name=name,
-                target_chart=target,
-                w_avg=w_avg,
-                black_level=black,
-                synthesized=synthesized,
-                priority=priority,
-            )
-        )
-    return tuple(environments)
+    listed = ctx.items(value, ("environments",))
+    return tuple(
+        _environment(ctx, raw, ("environments", i), n, panels, seen) for i, raw in enumerate(listed)
+    )
 
 
-def _panel_environment(
+def _environment(
     ctx: Validator,
-    env: JsonMapping,
+    raw: JsonValue,
     key: tuple[str | int, ...],
-    name: str,
-    target: np.ndarray,
+    n: int | None,
     panels: tuple[PanelType, ...],
+    seen: dict[str, int],
 ) -> Environment:
-    """An environment of a file with ``panels``: ``w_avg`` and ``black_level`` per panel type."""
-    w_avg = None
-    if "w_avg" in env:
-        w_avg = parse_panel_values(ctx, env["w_avg"], (*key, "w_avg"), panels)
-    black = None
-    if "black_level" in env:
+    """One environment; its ``w_avg`` and ``black_level`` an [r, g, b] each or, with
+    ``panels``, one per panel type."""
+    env = ctx.mapping(
+        raw,
+        key,
+        required=("name", "target_chart"),
+        optional=("w_avg", "black_level", "synthesized", "priority"),
+    )
+    name = ctx.unique_name(env["name"], key, seen)
+    target = ctx.signal(
+        ctx.chart(env["target_chart"], (*key, "target_chart"), n), (*key, "target_chart")
+    )
+    priority = env.get("priority")
+    if priority is not None:
+        priority = ctx.choice(priority, (*key, "priority"), PRIORITIES)
+    w_avg = black = None
+    panel_w_avg = panel_black = None
+    if panels and "w_avg" in env:
+        panel_w_avg = parse_panel_values(ctx, env["w_avg"], (*key, "w_avg"), panels)
+    if panels and "black_level" in env:
         black_key = (*key, "black_level")
-        black = parse_panel_values(ctx, env["black_level"], black_key, panels, in_frustum_only=True)
+        panel_black = parse_panel_values(
+            ctx, env["black_level"], black_key, panels, in_frustum_only=True
+        )
+    if not panels and "w_avg" in env:
+        w_avg = ctx.rgb(env["w_avg"], (*key, "w_avg"))
+        if not np.any(w_avg > 0):
+            raise ctx.error((*key, "w_avg"), "is black: the environment gives no light")
+    if not panels and "black_level" in env:
+        black = ctx.rgb(env["black_level"], (*key, "black_level"))
     synthesized = None
     if "synthesized" in env:
         synthesized = parse_synthesis(ctx, env["synthesized"], (*key, "synthesized"))
-    return Environment(
-        name=name,
-        target_chart=target,
-        synthesized=synthesized,
-        panel_w_avg=w_avg,
-        panel_black_level=black,
-    )
+    return Environment(name, target, w_avg, black, synthesized, priority, panel_w_avg, panel_black)
 
 
 # --------------------------------------------------------------------------------------------
@@ -698,13 +453,13 @@ def measurements_to_dict(measurements: Measurements) -> JsonObject:
         data |= lit_dicts(measurements.SL, measurements.SRL)
     environments: list[JsonValue] = []
     for env in measurements.environments:
-        entry: JsonObject = {"name": env.name, "target_chart": rows(env.target_chart)}
+        entry: JsonObject = {"name": env.name, "target_chart": floats(env.target_chart)}
         if env.w_avg is not None:
-            entry["w_avg"] = rows(env.w_avg[None])[0]
+            entry["w_avg"] = floats(env.w_avg)
         if env.panel_w_avg is not None:
             entry["w_avg"] = panel_values_to_dict(env.panel_w_avg)
         if env.black_level is not None:
-            entry["black_level"] = rows(env.black_level[None])[0]
+            entry["black_level"] = floats(env.black_level)
         if env.panel_black_level:
             entry["black_level"] = panel_values_to_dict(env.panel_black_level)
         if env.synthesized is not None:

@@ -15,10 +15,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ocio_vp.deprecation import warn_deprecated
-from ocio_vp.errors import InputError, excerpt
+from ocio_vp.errors import InputError
+from ocio_vp.formats.checker import Validator, check_safe_name
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.linearity import Linearity, read_linearity
-from ocio_vp.formats.measurements import check_safe_name
 from ocio_vp.formats.records import Record, finite_array, json_object, read_record
 
 __all__ = [
@@ -170,18 +170,11 @@ def _one(name: str, entry: JsonValue) -> PanelSolution:
     def array(field_name: str, shape: tuple[int, ...], optional: bool = False):
         if optional and entry.get(field_name) is None:
             return None
-        problem = f"expected finite numbers of shape {shape}"
-        return finite_array(entry.get(field_name), shape, f"{key}.{field_name}", problem)
+        return finite_array(entry.get(field_name), shape, f"{key}.{field_name}")
 
-    numbers: dict[str, float] = {}
-    for field_name in ("beta", "share"):
-        number = entry.get(field_name)
-        where = f"{key}.{field_name}"
-        if isinstance(number, bool) or not isinstance(number, (int, float)):
-            raise InputError(f"expected a number, got {excerpt(number)}", key=where)
-        if not 0 <= number <= 1:
-            raise InputError(f"expected a number in [0, 1], got {number!r}", key=where)
-        numbers[field_name] = float(number)
+    numbers = {
+        f: Validator().number(entry.get(f), (key, f), maximum=1.0) for f in ("beta", "share")
+    }
     reason = entry.get("N_reason")
     if reason is not None and not isinstance(reason, str):
         raise InputError("expected text", key=f"{key}.N_reason")

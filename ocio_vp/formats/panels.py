@@ -3,24 +3,22 @@
 
 Each type has its own ``primaries``, ``lit_chart``, ``ramps`` and ``calibration_panel``/``beta``,
 replacing the top-level ones (a file mixing both forms is refused); environments give ``w_avg``
-and ``black_level`` per type. Takes the measurements file's validator as ``ctx`` (a
-:class:`~ocio_vp.formats.checker.Checker`), so every error names the file and key path.
+and ``black_level`` per type. Read with the measurements file's
+:class:`~ocio_vp.formats.checker.Validator` (``ctx``), so every error names the file and key path.
 """
 
 from __future__ import annotations
 
-import difflib
 from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
-from ocio_vp.choices import WALL_ENCODINGS
-from ocio_vp.errors import InputError, excerpt, format_key_path
-from ocio_vp.formats.checker import Checker, describe
+from ocio_vp.formats.checker import CHANNELS, Validator, describe
 from ocio_vp.formats.geometry import PanelGeometry
 from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
-from ocio_vp.wall.linearity import CHANNELS, Ramp, parse_ramps, ramps_to_dict
+from ocio_vp.formats.records import floats
+from ocio_vp.wall.linearity import Ramp, parse_ramps, ramps_to_dict
 
 __all__ = [
     "PANEL_KEYS",
@@ -85,7 +83,7 @@ def primary_panel(panels: tuple[PanelType, ...]) -> PanelType:
 
 
 def _pair(
-    ctx: Checker, value: JsonValue, key: tuple, low: float, high: float
+    ctx: Validator, value: JsonValue, key: tuple, low: float, high: float
 ) -> tuple[float, float]:
     if not isinstance(value, (list, tuple)) or len(value) != 2:
         raise ctx.error(key, f"expected [min, max] in degrees, got {describe(value)}")
@@ -95,7 +93,7 @@ def _pair(
     return a, b
 
 
-def _region(ctx: Checker, value: JsonValue, key: tuple) -> PanelRegion:
+def _region(ctx: Validator, value: JsonValue, key: tuple) -> PanelRegion:
     raw = ctx.mapping(value, key, required=("elevation",), optional=("azimuth",))
     elevation = _pair(ctx, raw["elevation"], (*key, "elevation"), -90.0, 90.0)
     azimuth = (-180.0, 180.0)
@@ -104,7 +102,7 @@ def _region(ctx: Checker, value: JsonValue, key: tuple) -> PanelRegion:
     return PanelRegion(elevation, azimuth)
 
 
-def _regions(ctx: Checker, value: JsonValue, key: tuple) -> tuple[PanelRegion, ...]:
+def _regions(ctx: Validator, value: JsonValue, key: tuple) -> tuple[PanelRegion, ...]:
     """One ``{elevation, azimuth}`` box or a non-empty list of them."""
     if isinstance(value, list):
         if not value:
@@ -113,68 +111,39 @@ def _regions(ctx: Checker, value: JsonValue, key: tuple) -> tuple[PanelRegion, .
     return (_region(ctx, value, key),)
 
 
-def _encoding(ctx: Checker, entry: JsonMapping, key: tuple) -> tuple[str | None, float | None]:
+def _encoding(ctx: Validator, entry: JsonMapping, key: tuple) -> tuple[str | None, float | None]:
     encoding = entry.get("encoding")
-    if encoding is not None and encoding not in WALL_ENCODINGS:
-        raise ctx.error(
-            (*key, "encoding"),
-            f"unknown encoding {excerpt(encoding)}; expected one of: {', '.join(WALL_ENCODINGS)}",
-        )
+    if encoding is not None:
+        encoding = ctx.wall_encoding(encoding, (*key, "encoding"))
     peak = None
     if "peak_nits" in entry:
         if encoding != "pq":
             raise ctx.error((*key, "peak_nits"), "only with encoding: pq")
-        peak = ctx.number(entry["peak_nits"], (*key, "peak_nits"), strict=True, maximum=10000.0)
+        peak = ctx.peak_nits(entry["peak_nits"], (*key, "peak_nits"))
     return encoding, peak
 
 
-def _ramps(ctx: Checker, value: JsonValue, key: tuple) -> dict[str, Ramp]:
-    """``parse_ramps`` with its errors placed under ``panels[i].ramps``."""
-    try:
-        return parse_ramps(value, source=ctx.source)
-    except InputError as error:
-        where = format_key_path(*key[:-1])
-        raise InputError(error.problem, source=ctx.source, key=f"{where}.{error.key}") from None
-
-
-def _parse_one(ctx: Checker, value: JsonValue, key: tuple, n: int | None) -> PanelType:
+def _parse_one(ctx: Validator, value: JsonValue, key: tuple, n: int | None) -> PanelType:
     required, optional = PANEL_KEYS
     entry = ctx.mapping(value, key, required=required, optional=optional)
     name = ctx.name(entry["name"], (*key, "name"))
-    in_frustum = entry["in_frustum"]
-    if not isinstance(in_frustum, bool):
-        raise ctx.error((*key, "in_frustum"), f"expected true or false, got {describe(in_frustum)}")
+    in_frustum = ctx.flag(entry["in_frustum"], (*key, "in_frustum"))
     panel, beta = ctx.calibration(entry, key)
-    primaries = ctx.mapping(entry["primaries"], (*key, "primaries"), required=CHANNELS)
-    SL = np.stack([ctx.rgb(primaries[c], (*key, "primaries", c)) for c in CHANNELS], axis=1)
-    ctx.signal(SL, (*key, "primaries"))
-    lit = ctx.mapping(entry["lit_chart"], (*key, "lit_chart"), required=CHANNELS)
-    charts: list[np.ndarray] = []
-    for c in CHANNELS:
-        chart_key = (*key, "lit_chart", c)
-        expected, like = n, "panels[0].lit_chart.red"
-        if n is None and charts:
-            expected, like = len(charts[0]), f"{format_key_path(*key)}.lit_chart.red"
-        count = len(lit[c]) if isinstance(lit[c], list) else None
-        if expected is not None and count and count != expected:
-            raise ctx.error(chart_key, f"has {count} patches, expected {expected} like {like}")
-        charts.append(ctx.chart(lit[c], chart_key, None))
-    SRL = ctx.signal(np.stack(charts, axis=2), (*key, "lit_chart"))
-    ramps = _ramps(ctx, entry["ramps"], (*key, "ramps")) if "ramps" in entry else None
+    SL = ctx.primaries(entry["primaries"], (*key, "primaries"))
+    SRL = ctx.lit_chart(entry["lit_chart"], (*key, "lit_chart"), n, "panels[0].lit_chart.red")
+    ramps = None
+    if "ramps" in entry:
+        ramps = parse_ramps(entry["ramps"], source=ctx.source, key=(*key, "ramps"))
     regions = _regions(ctx, entry["region"], (*key, "region")) if "region" in entry else ()
     encoding, peak = _encoding(ctx, entry, key)
     return PanelType(name, in_frustum, SL, SRL, panel, beta, ramps, regions, encoding, peak)
 
 
-def parse_panels(ctx: Checker, value: JsonValue) -> tuple[PanelType, ...]:
+def parse_panels(ctx: Validator, value: JsonValue) -> tuple[PanelType, ...]:
     """Validate the ``panels`` list: safe, unique names, the same number of chart patches in
     every ``lit_chart``, at least one in-frustum type, regions that do not overlap."""
-    if not isinstance(value, list) or not value:
-        raise ctx.error(
-            ("panels",), f"expected a non-empty list of panel types, got {describe(value)}"
-        )
     panels: list[PanelType] = []
-    for i, raw in enumerate(value):
+    for i, raw in enumerate(ctx.items(value, ("panels",), "panel types")):
         panel = _parse_one(ctx, raw, ("panels", i), panels[0].SRL.shape[0] if panels else None)
         for j, other in enumerate(panels):
             if other.name == panel.name:
@@ -199,7 +168,7 @@ def parse_panels(ctx: Checker, value: JsonValue) -> tuple[PanelType, ...]:
 
 
 def parse_panel_values(
-    ctx: Checker,
+    ctx: Validator,
     value: JsonValue,
     key: tuple,
     panels: tuple[PanelType, ...],
@@ -215,14 +184,7 @@ def parse_panel_values(
             f"with panels, expected a mapping of panel type -> [r, g, b] ({', '.join(names)}), "
             f"got {describe(value)}",
         )
-    for name in value:
-        if name not in names:
-            hint = difflib.get_close_matches(str(name)[:100], names, n=1)
-            suggestion = f" (did you mean {hint[0]!r}?)" if hint else ""
-            raise ctx.error(
-                (*key, str(name)[:60]),
-                f"unknown panel type{suggestion}; panel types: {', '.join(names)}",
-            )
+    ctx.mapping(value, key, (), tuple(names), what="panel type")
     out = {}
     for panel in panels:
         if panel.name not in value:
@@ -245,16 +207,11 @@ def parse_panel_values(
     return out
 
 
-def rows(array: np.ndarray) -> list[JsonValue]:
-    """A 2D array as lists of plain floats."""
-    return [[float(v) for v in row] for row in np.asarray(array, dtype=np.float64)]
-
-
 def lit_dicts(SL: np.ndarray, SRL: np.ndarray) -> JsonObject:
     """``primaries`` and ``lit_chart`` blocks of [SL] (3, 3) and [SRL] (n, 3, 3)."""
     return {
-        "primaries": {c: rows(SL.T)[k] for k, c in enumerate(CHANNELS)},
-        "lit_chart": {c: rows(SRL[:, :, k]) for k, c in enumerate(CHANNELS)},
+        "primaries": {c: floats(SL[:, k]) for k, c in enumerate(CHANNELS)},
+        "lit_chart": {c: floats(SRL[:, :, k]) for k, c in enumerate(CHANNELS)},
     }
 
 
@@ -290,4 +247,4 @@ def panels_to_dict(panels: tuple[PanelType, ...]) -> list[JsonObject]:
 
 def panel_values_to_dict(values: Mapping[str, np.ndarray]) -> JsonObject:
     """``{name: [r, g, b]}`` of per-panel values (plain floats)."""
-    return {name: [float(v) for v in rgb] for name, rgb in values.items()}
+    return {name: floats(rgb) for name, rgb in values.items()}

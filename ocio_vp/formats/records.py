@@ -18,14 +18,17 @@ from collections.abc import Mapping
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ocio_vp.errors import InputError, excerpt
+from ocio_vp.formats.checker import Validator
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 
 __all__ = [
     "MAX_VALUE",
     "Record",
     "finite_array",
+    "floats",
     "json_object",
     "json_value",
     "read_record",
@@ -146,15 +149,21 @@ def read_value(value: object, hint: Any, key: str) -> Any:
     raise InputError(f"unexpected value {excerpt(value)}", key=key)
 
 
-def finite_array(value: object, shape: tuple[int, ...], key: str, problem: str) -> np.ndarray:
+def floats(array: ArrayLike) -> JsonValue:
+    """``array`` as (nested) lists of plain floats, as YAML and JSON write it."""
+    return np.asarray(array, dtype=np.float64).tolist()
+
+
+def finite_array(value: object, shape: tuple[int, ...], key: str) -> np.ndarray:
     """``value`` (a JSON list) as a finite float64 array of ``shape``, no entry beyond
-    :data:`MAX_VALUE`; else InputError(``problem``) naming ``key``."""
+    :data:`MAX_VALUE`; else InputError naming ``key``."""
     try:
         array = np.asarray(value if isinstance(value, list) else (), dtype=np.float64)
     except (TypeError, ValueError, OverflowError):
         array = np.zeros(0)
     if array.shape != shape or not np.all(np.isfinite(array)) or np.any(abs(array) > MAX_VALUE):
-        raise InputError(problem, key=key)
+        what = {(3, 3): "3x3 matrix", (3,): "[r, g, b]"}.get(shape, f"array of shape {shape}")
+        raise InputError(f"expected a finite {what}", key=key)
     return array
 
 
@@ -165,18 +174,6 @@ def _float(value: object, key: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise InputError(f"expected a number, got {excerpt(value)}", key=key)
     return float(value)
-
-
-def _int(value: object, key: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise InputError(f"expected a whole number, got {excerpt(value)}", key=key)
-    return value
-
-
-def _bool(value: object, key: str) -> bool:
-    if not isinstance(value, bool):
-        raise InputError(f"expected true or false, got {excerpt(value)}", key=key)
-    return value
 
 
 def _str(value: object, key: str) -> str:
@@ -210,8 +207,8 @@ def _numbers(value: object) -> object:
 
 _SCALARS: dict[Any, Any] = {
     float: _float,
-    int: _int,
-    bool: _bool,
+    int: lambda value, key: Validator().whole(value, (key,), None),
+    bool: lambda value, key: Validator().flag(value, (key,)),
     str: _str,
     np.ndarray: _array,
 }

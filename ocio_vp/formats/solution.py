@@ -19,12 +19,12 @@ import numpy as np
 
 from ocio_vp.deprecation import warn_deprecated
 from ocio_vp.errors import InputError, excerpt
+from ocio_vp.formats.checker import Validator, check_safe_name
 from ocio_vp.formats.diagnostics import Diagnostics
 from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.fixtures import DMX_MODES, DmxPatch
 from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
 from ocio_vp.formats.linearity import Linearity, read_linearity
-from ocio_vp.formats.measurements import check_safe_name
 from ocio_vp.formats.panel_solution import (
     CONFIG_FILENAME,
     OcioNames,
@@ -210,8 +210,7 @@ def solution_to_json(solution: Solution) -> str:
 
 
 def _array(data: JsonMapping, key: str, shape: tuple[int, ...]) -> np.ndarray:
-    problem = "expected a finite 3x3 matrix" if shape == (3, 3) else "expected a finite [r, g, b]"
-    return finite_array(data.get(key), shape, key, problem)
+    return finite_array(data.get(key), shape, key)
 
 
 def _optional_array(data: JsonMapping, key: str, shape: tuple[int, ...]) -> np.ndarray | None:
@@ -305,9 +304,7 @@ def load_solution(path: str | Path) -> Solution:
 
 
 def _solution(data: JsonMapping) -> Solution:
-    beta = data["beta"]
-    if isinstance(beta, bool) or not isinstance(beta, (int, float)) or not 0 < beta <= 1:
-        raise InputError(f"expected a number in (0, 1], got {excerpt(beta)}", key="beta")
+    beta = Validator().number(data["beta"], ("beta",), strict=True, maximum=1.0)
     measurements = _mapping(data, "measurements")
     linearity = read_linearity(data.get("linearity"))
     Q = _array(data, "Q", (3, 3))
@@ -316,7 +313,7 @@ def _solution(data: JsonMapping) -> Solution:
         stage=check_safe_name(data.get("stage"), key="stage"),
         environment=check_safe_name(data.get("environment"), key="environment"),
         method=_text(data, "method") or "",
-        beta=float(beta),
+        beta=beta,
         w_avg=_array(data, "w_avg", (3,)),
         SL=_array(data, "SL", (3, 3)),
         M=_array(data, "M", (3, 3)),

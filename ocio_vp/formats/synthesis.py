@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ocio_vp.formats.checker import Checker
+from ocio_vp.formats.checker import Key, Validator
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 
 __all__ = [
@@ -23,7 +23,6 @@ __all__ = [
 
 #: Where the environment's light came from.
 SYNTHESIS_SOURCES = ("hdri", "average-rgb")
-_MAX_TEXT = 500
 _REQUIRED = ("source", "colorspace", "illuminant", "camera", "chart", "assumptions")
 _OPTIONAL = ("hdri", "cct", "duv", "warnings")
 
@@ -51,30 +50,17 @@ class SynthesisRecord:
     warnings: tuple[str, ...] = ()
 
 
-def _text(ctx: Checker, value: JsonValue, key: tuple[str | int, ...]) -> str:
-    if not isinstance(value, str) or not value.strip() or len(value) > _MAX_TEXT:
-        raise ctx.error(key, f"expected a non-empty text of at most {_MAX_TEXT} characters")
-    if "\n" in value or "\r" in value:
-        raise ctx.error(key, "expected one line of text")
-    return value
+def _texts(ctx: Validator, value: JsonValue, key: Key, *, empty: bool) -> tuple[str, ...]:
+    listed = ctx.items(value, key, "texts", empty=empty)
+    return tuple(ctx.text(v, (*key, i)) for i, v in enumerate(listed))
 
 
-def _texts(
-    ctx: Checker, value: JsonValue, key: tuple[str | int, ...], *, empty: bool
-) -> tuple[str, ...]:
-    if not isinstance(value, list) or (not value and not empty):
-        raise ctx.error(
-            key, "expected a non-empty list of texts" if not empty else "expected a list"
-        )
-    return tuple(_text(ctx, v, (*key, i)) for i, v in enumerate(value))
-
-
-def parse_synthesis(ctx: Checker, value: JsonValue, key: tuple[str | int, ...]) -> SynthesisRecord:
+def parse_synthesis(
+    ctx: Validator, value: JsonValue, key: tuple[str | int, ...]
+) -> SynthesisRecord:
     """Validate an environment's ``synthesized`` mapping (``ctx``: a measurements ``Validator``)."""
     raw = ctx.mapping(value, key, required=_REQUIRED, optional=_OPTIONAL)
-    source = raw["source"]
-    if source not in SYNTHESIS_SOURCES:
-        raise ctx.error((*key, "source"), f"expected one of {', '.join(SYNTHESIS_SOURCES)}")
+    source = ctx.choice(raw["source"], (*key, "source"), SYNTHESIS_SOURCES)
     cct = None
     if "cct" in raw:
         cct = ctx.number(raw["cct"], (*key, "cct"), strict=True)
@@ -85,12 +71,12 @@ def parse_synthesis(ctx: Checker, value: JsonValue, key: tuple[str | int, ...]) 
             raise ctx.error((*key, "duv"), f"expected a number in [-1, 1], got {duv!r}")
     return SynthesisRecord(
         source=source,
-        colorspace=_text(ctx, raw["colorspace"], (*key, "colorspace")),
-        illuminant=_text(ctx, raw["illuminant"], (*key, "illuminant")),
-        camera=_text(ctx, raw["camera"], (*key, "camera")),
-        chart=_text(ctx, raw["chart"], (*key, "chart")),
+        colorspace=ctx.text(raw["colorspace"], (*key, "colorspace")),
+        illuminant=ctx.text(raw["illuminant"], (*key, "illuminant")),
+        camera=ctx.text(raw["camera"], (*key, "camera")),
+        chart=ctx.text(raw["chart"], (*key, "chart")),
         assumptions=_texts(ctx, raw["assumptions"], (*key, "assumptions"), empty=False),
-        hdri=_text(ctx, raw["hdri"], (*key, "hdri")) if "hdri" in raw else None,
+        hdri=ctx.text(raw["hdri"], (*key, "hdri")) if "hdri" in raw else None,
         cct=cct,
         duv=duv,
         warnings=_texts(ctx, raw.get("warnings", []), (*key, "warnings"), empty=True),

@@ -11,9 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Protocol
 
-from ocio_vp.choices import WALL_ENCODINGS
 from ocio_vp.errors import InputError, excerpt
-from ocio_vp.formats.checker import Checker
+from ocio_vp.formats.checker import Validator
 from ocio_vp.formats.jsontypes import JsonMapping, JsonObject
 
 __all__ = ["WALL_STATE_KEYS", "WallState", "parse_wall_state", "stage_with_sequence"]
@@ -51,34 +50,20 @@ class WallState:
         return f"{self.encoding}{peak}"
 
 
-def parse_wall_state(ctx: Checker, stage: JsonMapping, key: tuple[str | int, ...]) -> WallState:
+def parse_wall_state(ctx: Validator, stage: JsonMapping, key: tuple[str | int, ...]) -> WallState:
     """The :class:`WallState` of a ``stage`` mapping (``ctx``: the file's Validator)."""
     encoding = stage.get("wall_encoding")
-    if encoding is not None and encoding not in WALL_ENCODINGS:
-        raise ctx.error(
-            (*key, "wall_encoding"),
-            f"unknown encoding {excerpt(encoding)}; expected one of: {', '.join(WALL_ENCODINGS)}",
-        )
+    if encoding is not None:
+        encoding = ctx.wall_encoding(encoding, (*key, "wall_encoding"))
     peak = None
     if encoding == "pq":
         if "peak_nits" not in stage:
             raise ctx.error((*key, "peak_nits"), "a pq wall needs its peak (cd/m2 of drive 1.0)")
-        peak = ctx.number(stage["peak_nits"], (*key, "peak_nits"), strict=True, maximum=10000.0)
+        peak = ctx.peak_nits(stage["peak_nits"], (*key, "peak_nits"))
     elif "peak_nits" in stage:
         raise ctx.error((*key, "peak_nits"), "only with wall_encoding: pq")
     size = stage.get("pattern_size")
-    pattern_size = None
-    if size is not None:
-        pixels = [
-            v
-            for v in (size if isinstance(size, list) else ())
-            if isinstance(v, int) and not isinstance(v, bool) and 0 < v <= _MAX_SIZE
-        ]
-        if not (isinstance(size, list) and len(size) == len(pixels) == 2):
-            raise ctx.error(
-                (*key, "pattern_size"), f"expected [width, height] in pixels, got {excerpt(size)}"
-            )
-        pattern_size = (pixels[0], pixels[1])
+    pattern_size = None if size is None else ctx.size(size, (*key, "pattern_size"), _MAX_SIZE)
     return WallState(encoding, None if peak is None else float(peak), pattern_size)
 
 

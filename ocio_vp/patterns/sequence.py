@@ -21,7 +21,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ocio_vp.choices import WALL_ENCODINGS
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue, YamlValue
 from ocio_vp.formats.measurements import CHANNELS, Validator, read_document
 
@@ -171,24 +170,18 @@ def _rgb(ctx: Validator, value: JsonValue, key: tuple[str | int, ...], low: floa
     return tuple(float(v) for v in ctx.rgb(value, key, minimum=low, maximum=1e4))
 
 
-def _integer(ctx: Validator, value: JsonValue, key: tuple[str | int, ...], minimum: int = 0) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-        raise ctx.error(key, f"expected a whole number >= {minimum}, got {value!r}"[:120])
-    return int(value)
-
-
 _PATCH_KEYS = ("channel", "step", "flashes", "index", "content")
 
 
-def _patch(ctx: Validator, raw: JsonValue, i: int, previous_last: int) -> Patch:
+def _patch(
+    ctx: Validator, raw: JsonValue, i: int, previous_last: int, seen: dict[str, int]
+) -> Patch:
     key: tuple[str | int, ...] = ("patches", i)
     entry = ctx.mapping(raw, key, ("name", "kind", "first", "last", "drive", "signal"), _PATCH_KEYS)
-    name = ctx.name(entry["name"], (*key, "name"))
-    kind = entry["kind"]
-    if kind not in PATCH_KINDS:
-        raise ctx.error((*key, "kind"), f"unknown kind {kind!r}; expected one of {PATCH_KINDS}")
-    first = _integer(ctx, entry["first"], (*key, "first"), minimum=-_MAX_FRAMES)
-    last = _integer(ctx, entry["last"], (*key, "last"), minimum=-_MAX_FRAMES)
+    name = ctx.unique_name(entry["name"], key, seen)
+    kind = ctx.choice(entry["kind"], (*key, "kind"), PATCH_KINDS, what="kind")
+    first = ctx.whole(entry["first"], (*key, "first"), -_MAX_FRAMES)
+    last = ctx.whole(entry["last"], (*key, "last"), -_MAX_FRAMES)
     if first != previous_last + 1 or last < first:
         raise ctx.error(
             (*key, "first"),
@@ -196,11 +189,11 @@ def _patch(ctx: Validator, raw: JsonValue, i: int, previous_last: int) -> Patch:
             f"{previous_last}): patches must cover the frames in order, without gaps",
         )
     channel = entry.get("channel")
-    if kind in ("primary", "ramp") and channel not in CHANNELS:
-        raise ctx.error((*key, "channel"), f"expected one of {CHANNELS}, got {channel!r}")
+    if kind in ("primary", "ramp"):
+        channel = ctx.choice(channel, (*key, "channel"), CHANNELS)
     step = entry.get("step")
     if kind == "ramp":
-        step = _integer(ctx, step, (*key, "step"))
+        step = ctx.whole(step, (*key, "step"))
     flashes: list[tuple[int, int]] = []
     if kind == "sync":
         raw_flashes = entry.get("flashes")
@@ -212,7 +205,7 @@ def _patch(ctx: Validator, raw: JsonValue, i: int, previous_last: int) -> Patch:
         for j, pair in enumerate(raw_flashes):
             if not isinstance(pair, list) or len(pair) != 2:
                 raise ctx.error((*key, "flashes", j), "expected [first, last]")
-            a, b = (_integer(ctx, v, (*key, "flashes", j), minimum=-_MAX_FRAMES) for v in pair)
+            a, b = (ctx.whole(v, (*key, "flashes", j), -_MAX_FRAMES) for v in pair)
             if a < low or b < a or b > last:
                 raise ctx.error((*key, "flashes", j), "flashes must be in order, inside the patch")
             flashes.append((a, b))
@@ -220,7 +213,7 @@ def _patch(ctx: Validator, raw: JsonValue, i: int, previous_last: int) -> Patch:
     index = entry.get("index")
     content = None
     if kind == "chart":
-        index = _integer(ctx, index, (*key, "index"))
+        index = ctx.whole(index, (*key, "index"))
         content = _rgb(ctx, entry.get("content"), (*key, "content"), -1e4)
     return Patch(
         name=name,
@@ -242,8 +235,7 @@ def _validation(ctx: Validator, raw: JsonValue) -> Validation:
     optional = ("model", "solved")
     entry = ctx.mapping(raw, ("validation",), keys, ("content_scale", "pulled", *optional))
     for name in (*keys, *(k for k in optional if k in entry)):
-        if not isinstance(entry[name], str) or not entry[name]:
-            raise ctx.error(("validation", name), "expected a non-empty text")
+        ctx.text(entry[name], ("validation", name))
     scale = ctx.number(
         entry.get("content_scale", 1.0), ("validation", "content_scale"), strict=True
     )
@@ -269,16 +261,12 @@ def _validation(ctx: Validator, raw: JsonValue) -> Validation:
 
 
 def _checked_patches(ctx: Validator, raw: JsonValue, first_frame: int) -> tuple[Patch, ...]:
-    if not isinstance(raw, list) or not raw:
-        raise ctx.error(("patches",), "expected a non-empty list of patches")
     patches: list[Patch] = []
-    names: set[str] = set()
-    for i, entry in enumerate(raw):
-        patch = _patch(ctx, entry, i, patches[-1].last if patches else first_frame - 1)
-        if patch.name in names:
-            raise ctx.error(("patches", i, "name"), f"duplicate name {patch.name!r}")
-        names.add(patch.name)
-        patches.append(patch)
+    seen: dict[str, int] = {}
+    for i, entry in enumerate(ctx.items(raw, ("patches",), "patches")):
+        patches.append(
+            _patch(ctx, entry, i, patches[-1].last if patches else first_frame - 1, seen)
+        )
     if patches[-1].last - first_frame + 1 > _MAX_FRAMES:
         raise ctx.error(("patches",), f"more than {_MAX_FRAMES} frames")
     ramps: dict[str, list[Patch]] = {}
@@ -309,35 +297,26 @@ def sequence_from_dict(
     required = ("format", "version", "frames", "first_frame", "fps", "encoding", "size", "patches")
     optional = ("peak_nits", "file_format", "hold", "validation")
     top = ctx.mapping(data, (), required, optional)
-    if top["format"] != FORMAT:
-        raise ctx.error(("format",), f"expected {FORMAT!r}, got {top['format']!r}"[:120])
-    if top["version"] != VERSION or isinstance(top["version"], bool):
-        raise ctx.error(("version",), f"this ocio-vp reads version {VERSION}")
+    ctx.header(top, FORMAT, VERSION)
     frames = top["frames"]
     if not isinstance(frames, str) or not _ONE_FRAME_FIELD.fullmatch(frames):
         raise ctx.error(("frames",), "expected a file pattern with one run of '#', e.g. a.####.exr")
     if Path(frames).is_absolute() or ".." in Path(frames).parts:
         raise ctx.error(("frames",), "expected a path relative to the sequence file's folder")
-    first_frame = _integer(ctx, top["first_frame"], ("first_frame",), minimum=-_MAX_FRAMES)
+    first_frame = ctx.whole(top["first_frame"], ("first_frame",), -_MAX_FRAMES)
     fps = ctx.number(top["fps"], ("fps",), strict=True, maximum=1000.0)
-    encoding = top["encoding"]
-    if encoding not in WALL_ENCODINGS:
-        raise ctx.error(("encoding",), f"expected one of {WALL_ENCODINGS}, got {encoding!r}"[:120])
+    encoding = ctx.wall_encoding(top["encoding"], ("encoding",))
     peak = top.get("peak_nits")
     if encoding == "pq":
-        peak = ctx.number(peak, ("peak_nits",), strict=True, maximum=10000.0)
+        peak = ctx.peak_nits(peak, ("peak_nits",))
     elif peak is not None:
         raise ctx.error(("peak_nits",), f"only a pq sequence has a peak, this one is {encoding}")
-    size = top["size"]
-    if not isinstance(size, list) or len(size) != 2:
-        raise ctx.error(("size",), "expected [width, height]")
-    width, height = (_integer(ctx, v, ("size", i), minimum=1) for i, v in enumerate(size))
+    width, height = ctx.size(top["size"], ("size",))
     file_format = top.get("file_format", Path(frames).suffix.lstrip(".").lower())
     if file_format == "tif":
         file_format = "tiff"
-    if file_format not in FILE_FORMATS:
-        raise ctx.error(("file_format",), f"expected one of {tuple(FILE_FORMATS)}")
-    hold = _integer(ctx, top.get("hold", 1), ("hold",), minimum=1)
+    file_format = ctx.choice(file_format, ("file_format",), FILE_FORMATS)
+    hold = ctx.whole(top.get("hold", 1), ("hold",), 1)
     patches = _checked_patches(ctx, top["patches"], first_frame)
     validation = _validation(ctx, top["validation"]) if "validation" in top else None
     return PatternSequence(

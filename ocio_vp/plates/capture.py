@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from ocio_vp.errors import format_key_path
 from ocio_vp.formats.jsontypes import JsonMapping, JsonValue
 from ocio_vp.formats.measurements import CHANNELS, Validator, parse_stage, read_document
 from ocio_vp.plates.movie import MATRICES, RANGES, is_movie
@@ -215,7 +216,12 @@ def _plate(
         flat = None if value is None else _paths(ctx, value, (*key, "flat_field"), where.base)
     encoding, layer = _encoding_layer(ctx, raw, key)
     return PlateRef(
-        paths=paths, encoding=encoding, layer=layer, key=_key(*key), name=name, flat_field=flat
+        paths=paths,
+        encoding=encoding,
+        layer=layer,
+        key=format_key_path(*key),
+        name=name,
+        flat_field=flat,
     )
 
 
@@ -225,17 +231,13 @@ def _encoding_layer(
     """A plate's or take's ``encoding`` (canonical spelling) and ``layer``, if given."""
     encoding = raw.get("encoding")
     if encoding is not None:
-        encoding = canonical_encoding(encoding, source=ctx.source, key=_key(*key, "encoding"))
+        encoding = canonical_encoding(
+            encoding, source=ctx.source, key=format_key_path(*key, "encoding")
+        )
     layer = raw.get("layer")
     if layer is not None and not isinstance(layer, str):
         raise ctx.error((*key, "layer"), f"expected a layer name, got {layer!r}")
     return encoding, layer
-
-
-def _key(*parts: str | int) -> str:
-    from ocio_vp.errors import format_key_path
-
-    return format_key_path(*parts)
 
 
 def _region(
@@ -255,14 +257,7 @@ def _region(
 def _corners(ctx: Validator, value: JsonValue, key: tuple[str | int, ...]) -> np.ndarray | None:
     if value == DETECT:
         return None
-    if not isinstance(value, list) or len(value) != 4:
-        raise ctx.error(key, "expected 4 corners [[x, y], ...] (TL, TR, BR, BL) or 'detect'")
-    points = []
-    for i, point in enumerate(value):
-        if not isinstance(point, list) or len(point) != 2:
-            raise ctx.error((*key, i), f"expected [x, y], got {point!r}")
-        points.append([ctx.number(v, (*key, i, k), minimum=-np.inf) for k, v in enumerate(point)])
-    return np.array(points, dtype=np.float64)
+    return ctx.matrix(value, key, (4, 2), "4 corners [[x, y], ...] (TL, TR, BR, BL) or 'detect'")
 
 
 def _chart(
@@ -340,9 +335,9 @@ def _raw_options(ctx: Validator, value: JsonValue, stage: JsonMapping) -> RawOpt
     """``raw``: ``demosaic`` (default superpixel) and ``to_camera`` (a 3x3 matrix or ``dng``,
     only with ``stage.camera_colorspace``)."""
     raw = ctx.mapping(value, ("raw",), (), ("demosaic", "to_camera"))
-    demosaic = raw.get("demosaic", DEFAULT_DEMOSAIC)
-    if demosaic not in DEMOSAIC_METHODS:
-        raise ctx.error(("raw", "demosaic"), f"expected one of {', '.join(DEMOSAIC_METHODS)}")
+    demosaic = ctx.choice(
+        raw.get("demosaic", DEFAULT_DEMOSAIC), ("raw", "demosaic"), DEMOSAIC_METHODS
+    )
     to_camera = raw.get("to_camera")
     if to_camera is None:
         return RawOptions(demosaic)
@@ -352,15 +347,9 @@ def _raw_options(ctx: Validator, value: JsonValue, stage: JsonMapping) -> RawOpt
         )
     if to_camera == "dng":
         return RawOptions(demosaic, "dng")
-    if not isinstance(to_camera, list) or len(to_camera) != 3:
-        raise ctx.error(("raw", "to_camera"), "expected a 3x3 matrix [[r], [g], [b]] or 'dng'")
-    rows = []
-    for i, row in enumerate(to_camera):
-        if not isinstance(row, list) or len(row) != 3:
-            raise ctx.error(("raw", "to_camera", i), "expected a row of 3 numbers")
-        rows.append([ctx.number(v, ("raw", "to_camera", i, k), minimum=-np.inf)
-                     for k, v in enumerate(row)])  # fmt: skip
-    matrix = np.array(rows, dtype=np.float64)
+    matrix = ctx.matrix(
+        to_camera, ("raw", "to_camera"), (3, 3), "a 3x3 matrix [[r], [g], [b]] or 'dng'"
+    )
     condition = np.linalg.cond(matrix)
     if not np.isfinite(condition) or condition > 1e6:
         raise ctx.error(("raw", "to_camera"), f"singular matrix (condition number {condition:.3g})")
@@ -488,16 +477,13 @@ _PANEL_SETTINGS = ("in_frustum", "calibration_panel", "beta", "region", "encodin
 def _panels(ctx: Validator, value: JsonValue, where: _Where) -> tuple[PanelCapture, ...]:
     """``panels``: each type's name, settings and plates (the settings are checked when the
     measurements file is built from them, under the same key paths)."""
-    if not isinstance(value, list) or not value:
-        raise ctx.error(("panels",), "expected a non-empty list of panel types")
     panels: list[PanelCapture] = []
-    for i, raw in enumerate(value):
+    seen: dict[str, int] = {}
+    for i, raw in enumerate(ctx.items(value, ("panels",), "panel types")):
         key: tuple[str | int, ...] = ("panels", i)
         entry = ctx.mapping(raw, key, ("name", "in_frustum", "primaries", "lit_chart"),
                             _PANEL_SETTINGS[1:])  # fmt: skip
-        name = ctx.name(entry["name"], (*key, "name"))
-        if any(p.name == name for p in panels):
-            raise ctx.error((*key, "name"), f"duplicate name {name!r}")
+        name = ctx.unique_name(entry["name"], key, seen)
         primaries, lit_chart = _wall_shots(ctx, entry, key, where, f"{name}_")
         settings = {k: entry[k] for k in _PANEL_SETTINGS if k in entry}
         panels.append(PanelCapture(name, settings, primaries, lit_chart))
@@ -526,12 +512,7 @@ def _header(ctx: Validator, data: JsonValue) -> Mapping[str, Any]:
             raise ctx.error(
                 (key,), "a capture file with panels gives each panel type its own: remove it"
             )
-    if top["format"] != FORMAT:
-        raise ctx.error(("format",), f"expected {FORMAT!r}, got {top['format']!r}")
-    if top["version"] != VERSION or isinstance(top["version"], bool):
-        raise ctx.error(
-            ("version",), f"this ocio-vp reads version {VERSION}, got {top['version']!r}"
-        )
+    ctx.header(top, FORMAT, VERSION)
     # Same rules as the measurements file it is copied to.
     parse_stage(ctx, top["stage"], calibration=not panels)
     if panels and "take" in top:
@@ -550,10 +531,8 @@ def _header(ctx: Validator, data: JsonValue) -> Mapping[str, Any]:
 def _chart_grid(ctx: Validator, value: JsonValue) -> tuple[int, int, float]:
     """``chart``: (rows, columns, inset), defaults 4, 6, 0.25."""
     chart = ctx.mapping(value, ("chart",), (), ("rows", "columns", "inset"))
-    rows, columns = chart.get("rows", 4), chart.get("columns", 6)
-    for name, number in (("rows", rows), ("columns", columns)):
-        if isinstance(number, bool) or not isinstance(number, int) or number < 1:
-            raise ctx.error(("chart", name), f"expected a whole number >= 1, got {number!r}")
+    rows = ctx.whole(chart.get("rows", 4), ("chart", "rows"), 1)
+    columns = ctx.whole(chart.get("columns", 6), ("chart", "columns"), 1)
     inset = ctx.number(chart.get("inset", 0.25), ("chart", "inset"))
     if inset > 0.45:
         raise ctx.error(("chart", "inset"), f"expected at most 0.45, got {inset!r}")
@@ -571,9 +550,8 @@ def _sampling(ctx: Validator, value: JsonValue) -> dict[str, Any]:
         sampling["clip_level"] = ctx.number(
             sampling["clip_level"], ("sampling", "clip_level"), strict=True
         )
-    if "method" in sampling and sampling["method"] not in ROBUST_MEAN_METHODS:
-        valid = ", ".join(ROBUST_MEAN_METHODS)
-        raise ctx.error(("sampling", "method"), f"unknown method; expected one of: {valid}")
+    if "method" in sampling:
+        ctx.choice(sampling["method"], ("sampling", "method"), ROBUST_MEAN_METHODS, what="method")
     return sampling
 
 
@@ -582,17 +560,12 @@ def _environments(
 ) -> tuple[EnvironmentCapture, ...]:
     """``environments``: a non-empty list, unique names, each with its target chart (with
     ``panels``: ``black_level`` a region per in-frustum type, ``w_avg`` per type)."""
-    if not isinstance(envs, list) or not envs:
-        raise ctx.error(("environments",), "expected a non-empty list")
     environments = []
-    seen: set[str] = set()
-    for i, raw in enumerate(envs):
+    seen: dict[str, int] = {}
+    for i, raw in enumerate(ctx.items(envs, ("environments",))):
         key: tuple[str | int, ...] = ("environments", i)
         env = ctx.mapping(raw, key, ("name", "target_chart"), ("black_level", "w_avg"))
-        name = ctx.name(env["name"], (*key, "name"))
-        if name in seen:
-            raise ctx.error((*key, "name"), f"duplicate name {name!r}")
-        seen.add(name)
+        name = ctx.unique_name(env["name"], key, seen)
         target = _chart(ctx, env["target_chart"], (*key, "target_chart"), where, f"{name}_target")
         if panels:
             environments.append(_panel_environment(ctx, env, key, where, name, target))

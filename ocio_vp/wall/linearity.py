@@ -29,12 +29,13 @@ alone; when every channel is, no LUT is written (``solution.json`` says so).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ocio_vp.errors import InputError, format_key_path
+from ocio_vp.formats.checker import CHANNELS, Key, Validator
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.linearity import (
     MEASURED_KEYS,
@@ -44,6 +45,7 @@ from ocio_vp.formats.linearity import (
     LinearityChannel,
     ShadowDeviation,
 )
+from ocio_vp.formats.records import floats
 
 __all__ = [
     "CHANNELS",
@@ -65,7 +67,6 @@ __all__ = [
     "response_model",
 ]
 
-CHANNELS = ("red", "green", "blue")
 #: A channel whose normalised response is within this of the identity (fraction of the top
 #: step) at every knot, and within :data:`RELATIVE_TOLERANCE` of each level, is linear.
 LINEARITY_TOLERANCE = 0.002
@@ -94,8 +95,6 @@ _TRIM = 0.8  # the noise is refitted on this fraction of the residuals, the best
 _TRIMMED_NORMAL = math.sqrt(
     1 - 2 * 1.2815516 * math.exp(-(1.2815516**2) / 2) / math.sqrt(2 * math.pi) / 0.8
 )
-_RAMP_KEYS = ("drive", "camera")
-_SECTION_KEYS = ("black", "noise_floor")
 
 
 @dataclass(frozen=True)
@@ -113,88 +112,57 @@ class Ramp:
 # The ``ramps`` section of the measurements file.
 
 
-def _error(source: str | None, key: tuple[str | int, ...], problem: str) -> InputError:
+def _error(source: str | None, key: Key, problem: str) -> InputError:
+    """A ramp that cannot be fitted (found after parsing), named under ``ramps``."""
     return InputError(problem, source=source, key=format_key_path("ramps", *key))
 
 
-def _number(
-    value: JsonValue, source: str | None, key: tuple[str | int, ...], *, negative: bool = False
-) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise _error(source, key, f"expected a number, got {type(value).__name__} {value!r}"[:80])
-    number = float(value)
-    if not math.isfinite(number):
-        raise _error(source, key, f"expected a finite number, got {value!r}")
-    if number < 0 and not negative:
-        raise _error(source, key, f"expected a number >= 0, got {value!r}")
-    return number
-
-
-def _rgb(value: JsonValue, source: str | None, key: tuple[str | int, ...]) -> list[float]:
-    """Camera RGB: finite, may be slightly negative (after the camera's black subtraction)."""
-    if not isinstance(value, (list, tuple)) or len(value) != 3:
-        raise _error(source, key, "expected [r, g, b]")
-    return [_number(v, source, (*key, j), negative=True) for j, v in enumerate(value)]
-
-
-def _check_lengths(
-    drive_raw: JsonValue, camera_raw: JsonValue, source: str | None, channel: str
-) -> tuple[Sequence[JsonValue], Sequence[JsonValue]]:
-    """The ramp's drive and camera lists, checked to be lists of the same, sufficient length."""
+def _parse_ramp(ctx: Validator, raw: JsonValue, key: Key) -> Ramp:
+    ramp = ctx.mapping(raw, key, required=("drive", "camera"))
+    drive_raw, camera_raw = ramp["drive"], ramp["camera"]
     if not isinstance(drive_raw, (list, tuple)):
-        raise _error(source, (channel, "drive"), "expected a list of drive values")
+        raise ctx.error((*key, "drive"), "expected a list of drive values")
     if not isinstance(camera_raw, (list, tuple)):
-        raise _error(source, (channel, "camera"), "expected a list of [r, g, b]")
+        raise ctx.error((*key, "camera"), "expected a list of [r, g, b]")
     if len(drive_raw) < MIN_STEPS:
-        raise _error(
-            source,
-            (channel, "drive"),
+        raise ctx.error(
+            (*key, "drive"),
             f"has {len(drive_raw)} steps; at least {MIN_STEPS} are needed to fit a response",
         )
     if len(camera_raw) != len(drive_raw):
-        raise _error(
-            source,
-            (channel, "camera"),
+        raise ctx.error(
+            (*key, "camera"),
             f"has {len(camera_raw)} entries but drive has {len(drive_raw)}; give one camera "
             "RGB per drive step",
         )
-    return drive_raw, camera_raw
-
-
-def _parse_ramp(raw: JsonValue, source: str | None, channel: str) -> Ramp:
-    if not isinstance(raw, Mapping):
-        raise _error(source, (channel,), "expected a mapping with 'drive' and 'camera'")
-    for name in raw:
-        if name not in _RAMP_KEYS:
-            raise _error(source, (channel, str(name)), "unknown key; expected drive, camera")
-    for name in _RAMP_KEYS:
-        if name not in raw:
-            raise _error(source, (channel,), f"missing required key {name!r}")
-    drive_raw, camera_raw = _check_lengths(raw["drive"], raw["camera"], source, channel)
-    drive = np.array([_number(v, source, (channel, "drive", i)) for i, v in enumerate(drive_raw)])
-    camera = np.array(
-        [_rgb(rgb, source, (channel, "camera", i)) for i, rgb in enumerate(camera_raw)]
-    )
+    drive = np.array([ctx.number(v, (*key, "drive", i)) for i, v in enumerate(drive_raw)])
+    camera = np.stack([_rgb(ctx, rgb, (*key, "camera", i)) for i, rgb in enumerate(camera_raw)])
     for i in range(1, len(drive)):
         if drive[i] <= drive[i - 1]:
-            raise _error(
-                source,
-                (channel, "drive", i),
+            raise ctx.error(
+                (*key, "drive", i),
                 f"drive values must increase strictly: {drive[i]:g} follows {drive[i - 1]:g}",
             )
     if drive[-1] != 1.0:
-        raise _error(
-            source,
-            (channel, "drive", len(drive) - 1),
+        raise ctx.error(
+            (*key, "drive", len(drive) - 1),
             f"the top step must be drive 1.0 (the level of `primaries`), got {drive[-1]:g}",
         )
     if not np.any(camera[-1] > 0):
-        raise _error(source, (channel, "camera", len(drive) - 1), "the top step is black (zero)")
+        raise ctx.error((*key, "camera", len(drive) - 1), "the top step is black (zero)")
     return Ramp(drive=drive, camera=camera)
 
 
-def parse_ramps(raw: JsonValue, *, source: str | None = None) -> dict[str, Ramp]:
-    """Validate the ``ramps`` section of a measurements file (see ``docs/measurements.md``).
+def _rgb(ctx: Validator, value: JsonValue, key: Key) -> np.ndarray:
+    """Camera RGB: finite, may be negative (after the camera's black subtraction)."""
+    return ctx.rgb(value, key, minimum=-math.inf, maximum=math.inf)
+
+
+def parse_ramps(
+    raw: JsonValue, *, source: str | None = None, key: Key = ("ramps",)
+) -> dict[str, Ramp]:
+    """Validate the ``ramps`` section of a measurements file (see ``docs/measurements.md``);
+    ``key`` is where it is in the file.
 
     Camera values may be negative (a camera's black subtraction leaves the zero step slightly
     below 0); what is done with noise and dips is decided when the response is fitted.
@@ -207,27 +175,19 @@ def parse_ramps(raw: JsonValue, *, source: str | None = None) -> dict[str, Ramp]
         not increase, a top step that is not drive 1.0 or is black, a bad ``black`` or
         ``noise_floor``.
     """
-    if not isinstance(raw, Mapping):
-        raise _error(source, (), "expected a mapping with red, green and blue ramps")
-    for name in raw:
-        if name not in CHANNELS + _SECTION_KEYS:
-            raise _error(
-                source, (str(name),), "unknown key; expected red, green, blue, black, noise_floor"
-            )
-    for name in CHANNELS:
-        if name not in raw:
-            raise _error(source, (), f"missing the {name!r} ramp (all three channels are needed)")
-    black = None if raw.get("black") is None else np.array(_rgb(raw["black"], source, ("black",)))
-    noise = raw.get("noise_floor")
+    ctx = Validator(source or "")
+    section = ctx.mapping(raw, key, required=CHANNELS, optional=("black", "noise_floor"))
+    black = section.get("black")
+    black = None if black is None else _rgb(ctx, black, (*key, "black"))
+    noise = section.get("noise_floor")
     if noise is not None:
-        noise = _number(noise, source, ("noise_floor",))
+        noise = ctx.number(noise, (*key, "noise_floor"))
         if not 0 < noise < 0.5:
-            raise _error(
-                source,
-                ("noise_floor",),
+            raise ctx.error(
+                (*key, "noise_floor"),
                 f"expected a fraction of the top step in (0, 0.5), got {noise:g}",
             )
-    ramps = {c: _parse_ramp(raw[c], source, c) for c in CHANNELS}
+    ramps = {c: _parse_ramp(ctx, section[c], (*key, c)) for c in CHANNELS}
     return {
         c: Ramp(drive=r.drive, camera=r.camera, black=black, noise_floor=noise)
         for c, r in ramps.items()
@@ -238,15 +198,15 @@ def ramps_to_dict(ramps: Mapping[str, Ramp]) -> JsonObject:
     """The inverse of :func:`parse_ramps` (plain Python types)."""
     data: JsonObject = {
         c: {
-            "drive": [float(v) for v in ramps[c].drive],
-            "camera": [[float(v) for v in row] for row in ramps[c].camera],
+            "drive": floats(ramps[c].drive),
+            "camera": floats(ramps[c].camera),
         }
         for c in CHANNELS
         if c in ramps
     }
     first = next(iter(ramps.values()), None)
     if first is not None and first.black is not None:
-        data["black"] = [float(v) for v in first.black]
+        data["black"] = floats(first.black)
     if first is not None and first.noise_floor is not None:
         data["noise_floor"] = float(first.noise_floor)
     return data
