@@ -646,10 +646,12 @@ def newton_inverse(
     tolerance: float = 1e-12,
     max_iterations: int = 50,
     start: ArrayLike | None = None,
+    jacobian: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> np.ndarray:
     """x with ``function(x) = rgb`` for (..., 3) ``rgb``: damped Newton with a finite-difference
-    Jacobian, started from ``start_matrix^-1 rgb`` (or from ``start``, the same shape as
-    ``rgb``: a close guess, e.g. a neighbour's solution); every colour at once.
+    Jacobian (or ``jacobian``: (n, 3) -> (n, 3, 3)), started from ``start_matrix^-1 rgb`` (or
+    from ``start``, the same shape as ``rgb``: a close guess, e.g. a neighbour's solution); every
+    colour at once.
 
     A ``homogeneous`` function is solved on each colour's direction (divided by its largest
     absolute channel, then scaled back) and maps black to black. A colour whose iteration does
@@ -675,7 +677,7 @@ def newton_inverse(
         todo = np.flatnonzero(active & (norm > tolerance))
         if len(todo) == 0:
             break
-        step = _newton_step(function, x[todo], residual[todo], start_matrix)
+        step = _newton_step(function, x[todo], residual[todo], start_matrix, jacobian)
         for alpha in 2.0 ** -np.arange(0, 16):
             trial = x[todo] + alpha * step
             r = function(trial) - target[todo]
@@ -692,16 +694,21 @@ def newton_inverse(
     return out.reshape(y.shape)
 
 
-def _newton_step(function, x: np.ndarray, residual: np.ndarray, fallback: np.ndarray) -> np.ndarray:
-    """``-J^-1 r`` with a central-difference Jacobian; the fallback matrix where J is singular."""
-    h = 1e-6 * np.maximum(np.max(np.abs(x), axis=1, keepdims=True), 1e-12)
-    J = np.empty((len(x), 3, 3))
-    for k in range(3):
-        e = np.zeros(3)
-        e[k] = 1.0
-        J[:, :, k] = (function(x + h * e) - function(x - h * e)) / (2 * h)
-    det = np.linalg.det(J)
-    bad = ~np.isfinite(det) | (np.abs(det) < 1e-12 * abs(np.linalg.det(fallback)))
+def _newton_step(function, x: np.ndarray, residual: np.ndarray, fallback: np.ndarray, jacobian):
+    """``-J^-1 r`` with ``jacobian``'s J or a central-difference one; the fallback matrix where
+    J is singular or not finite."""
+    if jacobian is not None:
+        J = jacobian(x)
+    else:
+        h = 1e-6 * np.maximum(np.max(np.abs(x), axis=1, keepdims=True), 1e-12)
+        J = np.empty((len(x), 3, 3))
+        for k in range(3):
+            e = np.zeros(3)
+            e[k] = 1.0
+            J[:, :, k] = (function(x + h * e) - function(x - h * e)) / (2 * h)
+    finite = np.all(np.isfinite(J), axis=(1, 2))
+    det = np.linalg.det(np.where(finite[:, None, None], J, fallback))
+    bad = ~finite | (np.abs(det) < 1e-12 * abs(np.linalg.det(fallback)))
     J[bad] = fallback
     return -np.linalg.solve(J, residual[..., None])[..., 0]
 
