@@ -17,6 +17,7 @@ https://doi.org/10.1109/TIP.2015.2405336
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Iterator
 
 import numpy as np
@@ -32,7 +33,6 @@ from ocio_vp.model.correction import (
     FitDomain,
     MatrixCorrection,
     RootPolynomialCorrection,
-    fit_domain,
     newton_inverse,
 )
 from ocio_vp.model.expansion import (
@@ -205,7 +205,7 @@ def _loo_domains(problem: QProblem, w: np.ndarray) -> Iterator[tuple[int, FitDom
     hull as it is: those patches share the full domain, and only the few vertices are refitted,
     so the cost grows with the chart, not with its square.
     """
-    full = _domain(problem, w)
+    full = problem.domain
     fitted = np.flatnonzero(w > 0)
     u = problem.predicted[w > 0] @ full.to_drive.T  # as fit_domain computes the hull's points
     total = u.sum(axis=-1)
@@ -220,19 +220,9 @@ def _loo_domains(problem: QProblem, w: np.ndarray) -> Iterator[tuple[int, FitDom
         if point in vertices and counts[point] == 1:
             others = w.copy()
             others[j] = 0.0
-            yield int(j), _domain(problem, others)
+            yield int(j), dataclasses.replace(problem, weights=others).domain
         else:
             yield int(j), full
-
-
-def _domain(problem: QProblem, weights: np.ndarray) -> FitDomain:
-    return fit_domain(
-        problem.predicted,
-        M=problem.M,
-        white_patch=problem.white_patch,
-        white_reflectance=problem.white_reflectance,
-        weights=weights,
-    )
 
 
 def _held_out(

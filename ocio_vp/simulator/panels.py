@@ -28,6 +28,7 @@ from ocio_vp.simulator.stage import (
     SpectralStage,
     camera_rgb,
     environment_spectrum,
+    named_lights,
     spectral_stage,
     white_reflectance,
 )
@@ -260,16 +261,6 @@ def _panel_type(name: str, spectral: SpectralStage, region: PanelRegion) -> Pane
     )
 
 
-def _environments(environments: Scenes) -> list[tuple[str, SceneLight]]:
-    if environments is None:
-        environments = tuple(SCENES)
-    if isinstance(environments, str):
-        environments = (environments,)
-    if isinstance(environments, Mapping):
-        return list(environments.items())
-    return [(name, name) for name in environments]
-
-
 def simulate_panel_measurements(stage: PanelStage, environments: Scenes = None) -> Measurements:
     """The measurements file of ``stage`` (``panels``: wall, ceiling) for ``environments``
     (default every scene of :data:`SCENES`; see :func:`scene_light` for what else they may be).
@@ -286,7 +277,7 @@ def simulate_panel_measurements(stage: PanelStage, environments: Scenes = None) 
         _panel_type("ceiling", stage.ceiling, CEILING_REGION),
     )
     envs = []
-    for name, environment in _environments(environments):
+    for name, environment in named_lights(environments, tuple(SCENES)):
         check_safe_name(name, key="environment")
         light = scene_light(wall, environment)
         w_avg = {k: camera_rgb(wall, v) for k, v in light.items()}
