@@ -42,7 +42,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, partial
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -176,6 +176,17 @@ def smoothstep(t: ArrayLike) -> np.ndarray:
 
 def _fade_out(t: np.ndarray) -> np.ndarray:
     return 1.0 - smoothstep(t)
+
+
+def _blend(
+    base: np.ndarray, weight: np.ndarray, model: Callable[[np.ndarray], np.ndarray], x: np.ndarray
+) -> np.ndarray:
+    """``base + weight (model(x) - base)``, calling ``model`` only where ``weight > 0``."""
+    out = base.copy()
+    inside = weight > 0
+    if np.any(inside):
+        out[inside] += weight[inside][:, None] * (model(x[inside]) - base[inside])
+    return out
 
 
 def _array(value: JsonValue) -> np.ndarray:
@@ -482,16 +493,10 @@ class RootPolynomialCorrection:
     def apply(self, rgb: ArrayLike) -> np.ndarray:
         """(..., 3) the correction of ``rgb`` (float64)."""
         x = np.asarray(rgb, dtype=np.float64)
-        linear = x @ self.fallback.T
         if self.domain is None:
             return apply_root_polynomial(self.coefficients, x)
-        g = self.weight(x)[..., None]
-        out = linear.copy()
-        inside = g[..., 0] > 0
-        if np.any(inside):
-            poly = apply_root_polynomial(self.coefficients, x[inside])
-            out[inside] += g[inside] * (poly - linear[inside])
-        return out
+        polynomial = partial(apply_root_polynomial, self.coefficients)
+        return _blend(x @ self.fallback.T, self.weight(x), polynomial, x)
 
     def inverse(self, rgb: ArrayLike) -> np.ndarray:
         return newton_inverse(self.apply, rgb, self.fallback, homogeneous=True)
@@ -586,12 +591,7 @@ class ProtectedCorrection:
 
     def apply(self, rgb: ArrayLike) -> np.ndarray:
         x = np.asarray(rgb, dtype=np.float64)
-        g = self.weight(x)[..., None]
-        out = x.copy()
-        inside = g[..., 0] > 0
-        if np.any(inside):
-            out[inside] += g[inside] * (self.inner.apply(x[inside]) - x[inside])
-        return out
+        return _blend(x, self.weight(x), self.inner.apply, x)
 
     def inverse(self, rgb: ArrayLike) -> np.ndarray:
         return newton_inverse(self.apply, rgb, self.inner.matrix, homogeneous=False)
