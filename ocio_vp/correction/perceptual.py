@@ -116,13 +116,11 @@ def mean_delta_e(
     metric: str = "CIE 2000",
     weights: ArrayLike | None = None,
 ) -> float:
-    """Weighted mean ΔE (``metric``) of ``predicted`` against ``target``, both (n, 3) camera RGB."""
-    import colour
-
-    target = np.asarray(target, dtype=np.float64)
-    encode = _encoder(target, np.asarray(camera_to_xyz, float), white_patch, metric)
-    de = colour.delta_E(encode(target), encode(np.asarray(predicted, float)), method=metric)
-    w = np.ones(len(target)) if weights is None else np.asarray(weights, float)
+    """Weighted mean of :func:`patch_delta_e`: ``predicted`` against ``target``, (n, 3) each."""
+    de = patch_delta_e(
+        predicted, target, camera_to_xyz=camera_to_xyz, white_patch=white_patch, metric=metric
+    )
+    w = np.ones(len(de)) if weights is None else np.asarray(weights, float)
     return float(np.sum(w * de) / np.sum(w))
 
 
