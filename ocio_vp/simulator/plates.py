@@ -197,8 +197,10 @@ def write_plate(
     channels: tuple[str, ...] = ("R", "G", "B"),
     scale: float = 1.0,
     tile: int = 0,
+    compression: str | None = None,
 ) -> Path:
-    """Write ``image * scale`` with OpenImageIO as ``dtype`` ("half", "float", "uint16", ...).
+    """Write ``image * scale`` with OpenImageIO as ``dtype`` ("half", "float", "uint16", ...),
+    with the format's default ``compression`` unless one is named.
 
     Channel names beyond R, G, B get zeros; another order is honoured by name (``layer.R``
     counts as R). Integer types are clipped to [0, 1] first.
@@ -224,6 +226,8 @@ def write_plate(
     spec.channelnames = channels
     if tile:
         spec.tile_width = spec.tile_height = tile
+    if compression:
+        spec.attribute("compression", compression)
     out = oiio.ImageOutput.create(str(path))
     if out is None or not out.open(str(path), spec):
         raise OSError(f"{path}: cannot write: {oiio.geterror()}")

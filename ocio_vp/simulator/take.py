@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ocio_vp.patterns.sequence import FILE_FORMATS, PatternSequence
+from ocio_vp.simulator.plates import write_plate
 
 #: The rolling shutter is modelled in this many bands of rows.
 _ROW_BANDS = 64
@@ -267,27 +268,6 @@ def render_frames(
         yield image.astype(np.float32)
 
 
-def _write_frame(path: Path, image: np.ndarray, dtype: str) -> None:
-    """One frame with OpenImageIO (ZIP for EXR; integer types clipped to [0, 1] first)."""
-    import OpenImageIO as oiio
-
-    data = np.ascontiguousarray(image, dtype=np.float32)
-    if dtype != "half":
-        data = np.clip(data, 0.0, 1.0)
-    spec = oiio.ImageSpec(data.shape[1], data.shape[0], 3, dtype)
-    spec.channelnames = ("R", "G", "B")
-    if dtype == "half":
-        spec.attribute("compression", "zip")
-    out = oiio.ImageOutput.create(str(path))
-    if out is None or not out.open(str(path), spec):
-        raise OSError(f"{path}: cannot write: {oiio.geterror()}")
-    try:
-        if not out.write_image(data):
-            raise OSError(f"{path}: cannot write: {out.geterror()}")
-    finally:
-        out.close()
-
-
 def write_take(
     sequence: PatternSequence,
     SL: np.ndarray,
@@ -311,7 +291,8 @@ def write_take(
 
             image = np.asarray(colour.cctf_encoding(np.maximum(image, 0.0), function=encoding))
         path = folder / f"{name}.{options.first_frame + k:04d}.{extension}"
-        _write_frame(path, image, "half" if file_format == "exr" else "uint16")
+        dtype, compression = ("half", "zip") if file_format == "exr" else ("uint16", None)
+        write_plate(path, image, dtype=dtype, compression=compression)
         if on_frame is not None:
             on_frame()
     return f"{name}.####.{extension}"
