@@ -262,15 +262,15 @@ def stage_footage_range(stage: SpectralStage, environment, solution, seed: int =
     reflectances and the chart lit by what the wall emits for ``solution`` (``clip(M w_avg)``
     through the stage's LEDs), the white diffuser under the real light as the scene white,
     :func:`narrow_band_emitters`, and the stage camera's own RGB -> XYZ matrix."""
-    spectrum = environment_spectrum(stage, environment)
-    drive = np.clip(np.asarray(solution.M) @ np.asarray(solution.w_avg, dtype=np.float64), 0, None)
-    emitted = stage.leds @ drive
     sets = held_out_reflectances(stage.chart_name)
     reflectances = np.vstack([sets["rawtoaces"], sets["cie2017"], sets["skin"], stage.reflectances])
+    lit, target = held_out_colours(
+        stage, environment, M=solution.M, w_avg=solution.w_avg, reflectances=reflectances
+    )
     return footage_range(
-        lit=camera_rgb(stage, reflectances * emitted),
-        lit_white=camera_rgb(stage, emitted),
-        white=camera_rgb(stage, spectrum),
+        lit=lit[:-1],
+        lit_white=lit[-1],
+        white=target[-1],
         emitters=narrow_band_emitters(stage, environment),
         camera_to_xyz=camera_matrix(stage),
         seed=seed,
