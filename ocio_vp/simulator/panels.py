@@ -173,9 +173,7 @@ def panel_stage(
     as panel vendors calibrate), ``"camera"`` to the wall's white as this camera sees it (the
     most a calibration of the wall alone could hope for).
     """
-    import colour
-
-    from ocio_vp.spectra import spectral_shape
+    from ocio_vp.synthesis.camera import cie_cmfs
 
     if wall is None:
         wall = spectral_stage(**wall_options)
@@ -200,8 +198,7 @@ def panel_stage(
         raise InputError(error.problem, key="ceiling_leds") from None  # not the wall's LEDs
     observer = wall.camera  # camera: the ceiling is already matched to D65 as the wall is
     if white == "xyz":
-        cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
-        observer = np.asarray(cmfs.copy().align(spectral_shape()).values, dtype=np.float64)
+        observer = cie_cmfs()
     target = observer.T @ wall.leds.sum(axis=1)
     gains = np.linalg.solve(observer.T @ ceiling.leds, target)
     if np.any(gains <= 0):
