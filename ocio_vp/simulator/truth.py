@@ -30,7 +30,7 @@ from ocio_vp.formats.measurements import Measurements
 from ocio_vp.formats.solution import Solution
 from ocio_vp.metrics import camera_to_xyz_matrix, chart_errors
 from ocio_vp.model.footage_range import FootageRange, footage_range
-from ocio_vp.simulator.data import chart_reflectances
+from ocio_vp.simulator.data import DEFAULT_CHART, chart_reflectances
 from ocio_vp.simulator.stage import SpectralStage, camera_rgb, environment_spectrum
 from ocio_vp.spectra import align, spectral_shape
 
@@ -55,7 +55,7 @@ _SKIN_PMC = ("Caucasian", "Oriental", "South Asian", "African")
 
 
 @functools.lru_cache(maxsize=4)
-def held_out_reflectances(chart: str = "ColorChecker N Ohta") -> dict[str, np.ndarray]:
+def held_out_reflectances(chart: str = DEFAULT_CHART) -> dict[str, np.ndarray]:
     """Reflectance sets not on ``chart``: ``{"rawtoaces": (k, W), "cie2017": ..., "skin": ...}``.
 
     Read-only arrays on the simulator's grid; see the module docstring for the sources.
