@@ -161,9 +161,6 @@ def truncated_pseudo_inverse(Q: ArrayLike) -> tuple[np.ndarray, int]:
     return (Vt.T[:, keep] / sigma[keep]) @ U[:, keep].T, int(keep.sum())
 
 
-_CHANNEL_NAMES = ("red", "green", "blue")
-
-
 def smoothstep(t: ArrayLike) -> np.ndarray:
     """``3t^2 - 2t^3`` on [0, 1], clamped outside: 0 -> 0, 1 -> 1, zero slope at both ends.
 

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
-from ocio_vp.formats.measurements import Measurements
+from ocio_vp.formats.measurements import CHANNELS, Measurements
 
 if TYPE_CHECKING:
     from ocio_vp.patterns.sequence import PatternSequence
@@ -303,11 +303,11 @@ def _plates(measurements: Measurements, options: PlateOptions) -> Iterator[tuple
     panels = measurements.panels
     walls = [(f"{p.name}_", p.SL, p.SRL) for p in panels]
     for prefix, SL, SRL in walls or [("", measurements.SL, measurements.SRL)]:
-        for k, channel in enumerate(("red", "green", "blue")):
+        for k, channel in enumerate(CHANNELS):
             image = camera.panel(SL[:, k])
             if panels or options.take is None:
                 yield f"{prefix}primary_{channel}.exr", image
-        for k, channel in enumerate(("red", "green", "blue")):
+        for k, channel in enumerate(CHANNELS):
             yield f"{prefix}lit_{channel}.exr", camera.chart(SRL[:, :, k])
     M = None if panels else solve_M(measurements.SL)
     for env in measurements.environments:
@@ -347,12 +347,10 @@ def _panel_capture(measurements: Measurements, names: set[str]) -> dict:
     for entry in panels_to_dict(measurements.panels):
         name = entry["name"]
         entry["primaries"] = {
-            c: {"plate": f"{name}_primary_{c}.exr", "region": list(PANEL_REGION)}
-            for c in ("red", "green", "blue")
+            c: {"plate": f"{name}_primary_{c}.exr", "region": list(PANEL_REGION)} for c in CHANNELS
         }
         entry["lit_chart"] = {
-            c: {"plate": f"{name}_lit_{c}.exr", "corners": CHART_CORNERS.tolist()}
-            for c in ("red", "green", "blue")
+            c: {"plate": f"{name}_lit_{c}.exr", "corners": CHART_CORNERS.tolist()} for c in CHANNELS
         }
         panels.append(entry)
     environments: list[JsonValue] = []
@@ -398,8 +396,7 @@ def _capture_document(
         return document | _panel_capture(measurements, names)
     if options.take is None:
         document["primaries"] = {
-            c: {"plate": f"primary_{c}.exr", "region": list(PANEL_REGION)}
-            for c in ("red", "green", "blue")
+            c: {"plate": f"primary_{c}.exr", "region": list(PANEL_REGION)} for c in CHANNELS
         }
     else:
         document["take"] = {"frames": f"{TAKE_FOLDER}/{TAKE_NAME}", "sequence": sequence_ref}
@@ -411,7 +408,7 @@ def _capture_document(
             }
     document["lit_chart"] = {
         c: {"plate": f"lit_{c}.{options.lit_format}", "corners": CHART_CORNERS.tolist()}
-        for c in ("red", "green", "blue")
+        for c in CHANNELS
     }
     environments = []
     for env in measurements.environments:
