@@ -239,13 +239,6 @@ def scene_light(stage: SpectralStage, environment: SceneLight) -> dict[str, np.n
     return {k: v / scale for k, v in parts.items()}
 
 
-def _wall_black_level(stage: PanelStage, emitted: np.ndarray) -> np.ndarray | None:
-    """The dark in-frustum wall reflects the whole stage's light (both types)."""
-    if stage.wall.panel_albedo is None:
-        return None
-    return stage.wall.panel_albedo * camera_rgb(stage.wall, emitted)
-
-
 def _panel_type(name: str, spectral: SpectralStage, region: PanelRegion) -> PanelType:
     return PanelType(
         name=name,
@@ -281,7 +274,7 @@ def simulate_panel_measurements(stage: PanelStage, environments: Scenes = None) 
         emitted = sum(
             s.leds @ np.clip(np.linalg.solve(s.SL, w_avg[k]), 0.0, None) for k, s in stage.types
         )
-        black = _wall_black_level(stage, emitted)
+        albedo = wall.panel_albedo  # the dark in-frustum wall reflects both types' light
         envs.append(
             Environment(
                 name=name,
@@ -289,7 +282,9 @@ def simulate_panel_measurements(stage: PanelStage, environments: Scenes = None) 
                     wall, wall.reflectances * (light["wall"] + light["ceiling"])
                 ),
                 panel_w_avg=w_avg,
-                panel_black_level=None if black is None else {"wall": black},
+                panel_black_level=None
+                if albedo is None
+                else {"wall": albedo * camera_rgb(wall, emitted)},
             )
         )
     return Measurements(

@@ -165,6 +165,7 @@ def _swatches(result: ValidationResult) -> str:
 
 def _html(result: ValidationResult, reading: TakeReading, lines: list[str]) -> str:
     import jinja2
+    from markupsafe import Markup
 
     from ocio_vp.exports.templating import read_template
 
@@ -173,16 +174,10 @@ def _html(result: ValidationResult, reading: TakeReading, lines: list[str]) -> s
     return template.render(
         result=result,
         lines=lines,
-        swatches=_markup(_swatches(result)),
+        swatches=Markup(_swatches(result)),
         sheet=SHEET,
         verdict="PASS" if result.passed else "FAIL",
     )
-
-
-def _markup(text: str):
-    from markupsafe import Markup
-
-    return Markup(text)
 
 
 def write_validation(
