@@ -19,9 +19,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ocio_vp.patterns.sequence import FILE_FORMATS, PatternSequence
-from ocio_vp.simulator.plates import write_plate
 
 #: The rolling shutter is modelled in this many bands of rows.
 _ROW_BANDS = 64
@@ -266,6 +266,56 @@ def render_frames(
         sigma = np.sqrt((options.noise * image) ** 2 + options.read_noise**2)
         image = image + sigma * rng.standard_normal(image.shape)
         yield image.astype(np.float32)
+
+
+def write_plate(
+    path: str | Path,
+    image: ArrayLike,
+    *,
+    dtype: str = "half",
+    channels: tuple[str, ...] = ("R", "G", "B"),
+    scale: float = 1.0,
+    tile: int = 0,
+    compression: str | None = None,
+) -> Path:
+    """Write ``image * scale`` with OpenImageIO as ``dtype`` ("half", "float", "uint16", ...),
+    with the format's default ``compression`` unless one is named.
+
+    Channel names beyond R, G, B get zeros; another order is honoured by name (``layer.R``
+    counts as R). Integer types are clipped to [0, 1] first.
+
+    Raises
+    ------
+    OSError
+        When OpenImageIO cannot write the file.
+    """
+    import OpenImageIO as oiio  # deferred: heavy, and only plate writing needs it
+
+    path = Path(path)
+    data = np.asarray(image, dtype=np.float32) * np.float32(scale)
+    h, w, _ = data.shape
+    planes = []
+    for name in channels:
+        index = {"R": 0, "G": 1, "B": 2}.get(name.rpartition(".")[2])
+        planes.append(data[..., index] if index is not None else np.zeros((h, w), np.float32))
+    full = np.ascontiguousarray(np.stack(planes, axis=-1))
+    if dtype.startswith("uint"):
+        full = np.clip(full, 0, 1)
+    spec = oiio.ImageSpec(w, h, len(channels), dtype)
+    spec.channelnames = channels
+    if tile:
+        spec.tile_width = spec.tile_height = tile
+    if compression:
+        spec.attribute("compression", compression)
+    out = oiio.ImageOutput.create(str(path))
+    if out is None or not out.open(str(path), spec):
+        raise OSError(f"{path}: cannot write: {oiio.geterror()}")
+    ok = out.write_image(full)
+    error = out.geterror()
+    out.close()
+    if not ok:
+        raise OSError(f"{path}: cannot write: {error}")
+    return path
 
 
 def write_take(
