@@ -258,9 +258,10 @@ def invert_root_polynomial(
     Homogeneity makes this a problem on the colour's direction: ``rgb`` is divided by its
     largest absolute channel ``s``, ``Q(y) = rgb / s`` is solved by
     :func:`~ocio_vp.model.correction.newton_inverse` (analytic Jacobian) from the 3x3
-    approximation's inverse, and ``x = s y``. Black maps to black. A colour whose iteration does not reach ``tolerance``
-    (relative to ``s``; outside the range where Q is injective) keeps its best iterate, which
-    is always finite; ``return_residual=True`` also returns the (...,) relative residuals.
+    approximation's inverse, and ``x = s y``. Black maps to black. A colour whose iteration
+    does not reach ``tolerance`` (relative to ``s``; outside the range where Q is injective)
+    keeps its best iterate, which is always finite; ``return_residual=True`` also returns the
+    (...,) relative residuals.
 
     Raises
     ------
