@@ -350,13 +350,11 @@ def _capture_document(
             c: {"plate": f"primary_{c}.exr", "region": list(PANEL_REGION)} for c in CHANNELS
         }
     else:
-        document["take"] = {"frames": f"{TAKE_FOLDER}/{TAKE_NAME}", "sequence": sequence_ref}
-        if options.take_format != "exr":
-            document["take"] = {
-                "frames": f"{TAKE_FOLDER}/{TAKE_MOVIE}",
-                "sequence": sequence_ref,
-                "encoding": MOVIE_ENCODING,
-            }
+        movie = options.take_format != "exr"
+        frames = f"{TAKE_FOLDER}/{TAKE_MOVIE if movie else TAKE_NAME}"
+        document["take"] = {"frames": frames, "sequence": sequence_ref}
+        if movie:
+            document["take"]["encoding"] = MOVIE_ENCODING
     document["lit_chart"] = {
         c: {"plate": f"lit_{c}.{options.lit_format}", "corners": CHART_CORNERS.tolist()}
         for c in CHANNELS
