@@ -18,11 +18,13 @@ from ocio_vp.errors import InputError
 
 __all__ = [
     "DEFAULT_CAMERA",
+    "DEFAULT_CHART",
     "SPECTRAL_SHAPE",
     "VENDORED_CAMERAS",
     "align",
     "camera_names",
     "camera_sensitivities",
+    "checker_reflectances",
     "spectral_shape",
     "unknown_name",
     "wavelengths",
@@ -31,6 +33,7 @@ __all__ = [
 #: (start, end, interval) in nm: the grid of colour's camera sensitivity datasets.
 SPECTRAL_SHAPE = (380.0, 780.0, 5.0)
 DEFAULT_CAMERA = "Nikon 5100 (NPL)"
+DEFAULT_CHART = "ColorChecker N Ohta"
 #: Measured sensitivities shipped with ocio_vp (``ocio_vp/data/camera_sensitivities.json``, from
 #: the rawtoaces project's data, and :data:`VENDORED_CAMERA_FILES`; licences in
 #: ``ocio_vp/data/CAMERAS_LICENSE.md``), beside colour-science's ``MSDS_CAMERA_SENSITIVITIES``.
@@ -61,6 +64,13 @@ def align(sd) -> np.ndarray:
     and reflectance are never negative.
     """
     return np.maximum(np.asarray(sd.copy().align(spectral_shape()).values, dtype=np.float64), 0.0)
+
+
+def checker_reflectances(name: str = DEFAULT_CHART) -> np.ndarray:
+    """(n, W) reflectances of ``colour.SDS_COLOURCHECKERS[name]`` in reading order."""
+    import colour
+
+    return np.stack([align(sd) for sd in colour.SDS_COLOURCHECKERS[name].values()])
 
 
 def camera_sensitivities(name: str = DEFAULT_CAMERA) -> np.ndarray:

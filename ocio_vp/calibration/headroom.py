@@ -20,11 +20,11 @@ import numpy as np
 
 from ocio_vp.formats.solution import Solution
 from ocio_vp.wall.encoding import WallEncoding
+from ocio_vp.wall.linearity import CHANNELS
 from ocio_vp.wall.softclip import soft_clip_knee
 
 __all__ = ["ContentScale", "content_scale", "content_scale_lines"]
 
-CHANNELS = ("red", "green", "blue")
 #: Unreal's working space, the content source of the Unreal export when the gamut is known.
 CONTENT_SPACE = "ITU-R BT.709"
 CONTENT_SPACE_NAME = "Linear Rec.709 (sRGB)"

@@ -125,9 +125,10 @@ def _auto_reduced_rank(X, P, w, white, rank: int, singular: np.ndarray, details:
     name = f"rank-{rank}"
     held = loo_predictions(name, X, P, w, white)
     active = w > 0
+    figures = ", ".join(relative_figure(v) for v in singular)
     reason = (
         f"the target chart has rank {rank} (its singular values relative to the largest, over "
-        f"the lit chart's: {_singular_text(singular)}; a second one below "
+        f"the lit chart's: {figures}; a second one below "
         f"{LINE_SPECTRUM_TOLERANCE:g} is measurement noise, a third below "
         f"{RANK_RELATIVE_TOLERANCE:g} counts as absent): a near-monochromatic light, so Q is "
         f"fitted with rank {rank} and cannot be inverted; N is not solved"
@@ -142,10 +143,6 @@ def _auto_reduced_rank(X, P, w, white, rank: int, singular: np.ndarray, details:
         target_rank=rank,
         details=details,
     )
-
-
-def _singular_text(singular: np.ndarray) -> str:
-    return ", ".join(relative_figure(v) for v in singular)
 
 
 def bounded_candidate(

@@ -38,7 +38,7 @@ from ocio_vp.model.correction import (
     PostCorrection,
     RootPolynomialCorrection,
 )
-from ocio_vp.model.footage_range import EMITTER_LEVELS
+from ocio_vp.model.footage_range import EMITTER_LEVELS, wall_emitters
 
 __all__ = [
     "FADES",
@@ -155,20 +155,6 @@ def saturation_probe(correction: PostCorrection, white: np.ndarray) -> tuple[flo
     return float(kept.min()), float(relative.min())
 
 
-def _led_colours(SL: np.ndarray, white: np.ndarray, camera_to_xyz: np.ndarray) -> np.ndarray:
-    """The wall's primaries and pairwise mixes as camera RGB, at :data:`EMITTER_LEVELS` of the
-    white patch's luminance."""
-    SL = np.asarray(SL, dtype=np.float64)
-    mixes = [SL[:, k] for k in range(3)]
-    mixes += [SL[:, a] + SL[:, b] for a, b in ((0, 1), (1, 2), (0, 2))]
-    colours = np.asarray(mixes)
-    luminance = colours @ camera_to_xyz[1]
-    white_y = float(white @ camera_to_xyz[1])
-    keep = luminance > 0
-    unit = colours[keep] / luminance[keep, None] * white_y
-    return np.vstack([unit * level for level in EMITTER_LEVELS])
-
-
 def in_frame_led_damage(
     correction: PostCorrection,
     SL: np.ndarray,
@@ -177,7 +163,8 @@ def in_frame_led_damage(
 ) -> float:
     """p95 ΔE2000 between Q(x) and x over the wall's own LEDs in frame (module docstring);
     ``white`` is the target white patch (camera RGB), the reference white of the ΔE."""
-    x = _led_colours(SL, white, camera_to_xyz)
+    leds = wall_emitters(SL, white, camera_to_xyz)
+    x = np.vstack([leds * level for level in EMITTER_LEVELS])
     if len(x) == 0:
         return 0.0
     moved = camera_delta_E_2000(x, correction.apply(x), camera_to_xyz=camera_to_xyz, white=white)

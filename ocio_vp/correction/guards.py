@@ -14,6 +14,7 @@ import numpy as np
 from ocio_vp.correction.problem import QProblem
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import patch_label
+from ocio_vp.wall.linearity import CHANNELS
 
 __all__ = [
     "MAX_DYNAMIC_RANGE",
@@ -30,7 +31,6 @@ MAX_DYNAMIC_RANGE = 1e9
 #: value of their (unit-length) colours at least this fraction of the largest.
 MIN_LIT_DIRECTION = 1e-6
 
-_CHANNELS = ("red", "green", "blue")
 #: A relative singular value below this is rounding, not colour: printed as "< 1e-6" so that
 #: texts do not depend on the machine's arithmetic (it varies by 10x there).
 NOISE_FLOOR = 1e-6
@@ -90,7 +90,7 @@ def check_problem(problem: QProblem) -> None:
         raise InputError("the target chart is black on every fitted patch", key="target_chart")
     dark = [c for c in range(3) if not np.any(SRL[active][:, c, :] != 0)]
     if dark:
-        names = ", ".join(_CHANNELS[c] for c in dark)
+        names = ", ".join(CHANNELS[c] for c in dark)
         raise InputError(
             f"the lit chart reads 0 in the camera's {names} channel on every patch: that "
             "channel carries no signal, so Q cannot be fitted (check the plates' channels)",

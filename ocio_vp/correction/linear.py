@@ -114,17 +114,20 @@ Kernel = Callable[[np.ndarray, np.ndarray, np.ndarray, int], np.ndarray]
 # Normal equations, whole and with one patch removed.
 
 
-def _normal_equations(X: np.ndarray, P: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, ...]:
+def normal_equations(X: np.ndarray, P: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, ...]:
     """``G = X^T W X`` (d, d) and ``B = X^T W P`` (d, k)."""
     return np.einsum("j,jc,jd->cd", w, X, X), np.einsum("j,jc,jd->cd", w, X, P)
 
 
+def weighted_outer(weight: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(m, d, k) ``weight a b^T`` per row: a patch's part of the normal equations."""
+    return weight[:, None, None] * a[:, :, None] * b[:, None, :]
+
+
 def _downdated(X: np.ndarray, P: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, ...]:
     """(n, d, d) and (n, d, k): the normal equations without patch j, for every j."""
-    G, B = _normal_equations(X, P, w)
-    Gj = G[None] - w[:, None, None] * X[:, :, None] * X[:, None, :]
-    Bj = B[None] - w[:, None, None] * X[:, :, None] * P[:, None, :]
-    return Gj, Bj
+    G, B = normal_equations(X, P, w)
+    return G[None] - weighted_outer(w, X, X), B[None] - weighted_outer(w, X, P)
 
 
 def _solve(G: np.ndarray, B: np.ndarray) -> np.ndarray:
@@ -196,7 +199,7 @@ def _white_basis(x_w: np.ndarray, p_w: np.ndarray) -> tuple[np.ndarray, np.ndarr
 
 def _ridge(X: np.ndarray, P: np.ndarray, w: np.ndarray, alpha: float) -> np.ndarray:
     """Least squares + ``alpha tr(X^T W X)/3 ||Q - D||_F^2``, D the diagonal fit."""
-    G, B = _normal_equations(X, P, w)
+    G, B = normal_equations(X, P, w)
     D = _fit_diagonal(X, P, w, 0)
     lam = alpha * np.trace(G) / 3.0
     return _solve(G + lam * np.eye(3), B + lam * D).T
@@ -229,7 +232,7 @@ def patch_errors(held: np.ndarray, P: np.ndarray, w: np.ndarray, white: int):
 def choose_shrinkage(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> float:
     """The grid strength with the lowest mean leave-one-out ΔE2000 (ties: more shrinkage)."""
     active = w > 0
-    if not np.trace(_normal_equations(X, P, w)[0]) > 0 or np.count_nonzero(active) < 2:
+    if not np.trace(normal_equations(X, P, w)[0]) > 0 or np.count_nonzero(active) < 2:
         return float("inf")
     grid = np.asarray(REGULARISATION_GRID)
     held = _loo_ridge(X, P, w, grid)  # (g, n, 3): every strength's held-out predictions

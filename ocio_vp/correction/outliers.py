@@ -26,6 +26,8 @@ from ocio_vp.correction.linear import (
     colour_spread,
     fit_least_squares,
     loo_predictions,
+    normal_equations,
+    weighted_outer,
 )
 from ocio_vp.correction.perceptual import (
     normalising_white,
@@ -134,16 +136,6 @@ def _robust_sd(values: np.ndarray) -> float:
     return 1.4826 * float(np.median(values))
 
 
-def _normal_equations(X: np.ndarray, P: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, ...]:
-    """``G = sum w x x^T`` and ``B = sum w x p^T`` of the weighted 3x3 least squares."""
-    return np.einsum("j,jc,jd->cd", w, X, X), np.einsum("j,jc,jd->cd", w, X, P)
-
-
-def _outer(weight, a, b):
-    """(m, 3, 3) ``weight a b^T`` per row."""
-    return weight[:, None, None] * a[:, :, None] * b[:, None, :]
-
-
 def _robust_weights(X, P, w, scale, steps: int = 8) -> np.ndarray:
     """Weights of a Huber fit (iteratively reweighted least squares, threshold 2 robust
     standard deviations): several bad patches cannot drag the fit that judges them."""
@@ -198,7 +190,7 @@ def patch_influence(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> 
     3
     """
     w = np.asarray(w, dtype=np.float64)
-    G, B = _normal_equations(X, P, w)
+    G, B = normal_equations(X, P, w)
     fitted = X @ (np.linalg.pinv(G, hermitian=True) @ B)
     luminance = fitted @ sample_camera_to_xyz()[1]
     influence = np.zeros(len(w))
@@ -207,8 +199,8 @@ def patch_influence(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> 
     judges, white_at = _judges(w, white, luminance)
     for start in range(0, len(w), _INFLUENCE_BLOCK):
         i = np.arange(start, min(start + _INFLUENCE_BLOCK, len(w)))
-        G_without = G[None] - _outer(w[i], X[i], X[i])
-        B_without = B[None] - _outer(w[i], X[i], P[i])
+        G_without = G[None] - weighted_outer(w[i], X[i], X[i])
+        B_without = B[None] - weighted_outer(w[i], X[i], P[i])
         without = X[judges][None] @ (np.linalg.pinv(G_without, hermitian=True) @ B_without)
         de = patch_delta_e(
             without, fitted[judges], white_patch=white_at, weights=w[judges]
@@ -244,9 +236,9 @@ def pair_residuals(
     w = np.asarray(w, dtype=np.float64)
     j = np.arange(len(w) - 1)
     k = j + 1
-    G, B = _normal_equations(X, P, w)
-    G_without = G[None] - _outer(w[j], X[j], X[j]) - _outer(w[k], X[k], X[k])
-    B_without = B[None] - _outer(w[j], X[j], P[j]) - _outer(w[k], X[k], P[k])
+    G, B = normal_equations(X, P, w)
+    G_without = G[None] - weighted_outer(w[j], X[j], X[j]) - weighted_outer(w[k], X[k], X[k])
+    B_without = B[None] - weighted_outer(w[j], X[j], P[j]) - weighted_outer(w[k], X[k], P[k])
     Qt = np.linalg.pinv(G_without, hermitian=True) @ B_without  # (n - 1, 3, 3)
     pred_j = np.einsum("pc,pcd->pd", X[j], Qt) / scale
     pred_k = np.einsum("pc,pcd->pd", X[k], Qt) / scale
@@ -283,15 +275,15 @@ def deletion_gain(X: np.ndarray, P: np.ndarray, w: np.ndarray, scale: np.ndarray
     (5, True, True)
     """
     w = np.asarray(w, dtype=np.float64)
-    G, B = _normal_equations(X, P, w)
+    G, B = normal_equations(X, P, w)
     active = np.flatnonzero(w > 0)
     judges = _spread(active)
     Xk, Pk, wk = X[judges], P[judges] / scale, w[judges]
     cost = np.zeros(len(w))
     for start in range(0, len(active), _INFLUENCE_BLOCK):
         j = active[start : start + _INFLUENCE_BLOCK]
-        inverse = np.linalg.pinv(G[None] - _outer(w[j], X[j], X[j]), hermitian=True)
-        Qt = inverse @ (B[None] - _outer(w[j], X[j], P[j]))  # (block, 3, 3)
+        inverse = np.linalg.pinv(G[None] - weighted_outer(w[j], X[j], X[j]), hermitian=True)
+        Qt = inverse @ (B[None] - weighted_outer(w[j], X[j], P[j]))  # (block, 3, 3)
         residual = Pk[None] - (Xk[None] @ Qt) / scale  # (block, judges, 3)
         leverage = wk[None] * np.einsum("kc,bcd,kd->bk", Xk, inverse, Xk)
         held = residual / np.maximum(1.0 - leverage, 1e-12)[..., None]

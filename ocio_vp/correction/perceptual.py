@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike
 from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
 from ocio_vp.deprecation import deprecated_names
-from ocio_vp.metrics import sample_camera_to_xyz
+from ocio_vp.metrics import ITP_WHITE_NITS, sample_camera_to_xyz
 from ocio_vp.model.correction import MatrixCorrection
 
 __all__ = [
@@ -44,7 +44,6 @@ __all__ = [
 #: ``metric=`` values: colour-science's ``delta_E`` method names.
 PERCEPTUAL_METRICS = ("CIE 2000", "ITP")
 
-_ITP_WHITE_NITS = 100.0  # as ocio_vp.metrics.ITP_WHITE_NITS
 _STEP = 1e-6  # finite-difference step on Q's entries (which are ~1)
 
 
@@ -62,7 +61,7 @@ def _encoder(
         white_xy = colour.XYZ_to_xy(xyz_white * scale)
         return lambda rgb: colour.XYZ_to_Lab(rgb @ (camera_to_xyz.T * scale), white_xy)
     if metric == "ITP":
-        factor = camera_to_xyz.T * (scale * _ITP_WHITE_NITS)
+        factor = camera_to_xyz.T * (scale * ITP_WHITE_NITS)
         return lambda rgb: colour.XYZ_to_ICtCp(rgb @ factor, method="ITU-R BT.2100-2 PQ")
     raise ValueError(f"metric must be one of {PERCEPTUAL_METRICS}, got {metric!r}")
 
@@ -116,13 +115,11 @@ def mean_delta_e(
     metric: str = "CIE 2000",
     weights: ArrayLike | None = None,
 ) -> float:
-    """Weighted mean ΔE (``metric``) of ``predicted`` against ``target``, both (n, 3) camera RGB."""
-    import colour
-
-    target = np.asarray(target, dtype=np.float64)
-    encode = _encoder(target, np.asarray(camera_to_xyz, float), white_patch, metric)
-    de = colour.delta_E(encode(target), encode(np.asarray(predicted, float)), method=metric)
-    w = np.ones(len(target)) if weights is None else np.asarray(weights, float)
+    """Weighted mean of :func:`patch_delta_e`: ``predicted`` against ``target``, (n, 3) each."""
+    de = patch_delta_e(
+        predicted, target, camera_to_xyz=camera_to_xyz, white_patch=white_patch, metric=metric
+    )
+    w = np.ones(len(de)) if weights is None else np.asarray(weights, float)
     return float(np.sum(w * de) / np.sum(w))
 
 

@@ -95,7 +95,7 @@ class QProblem:
         lit = predict_lit_chart(self.SRL, self.beta, np.eye(3), self.drive)
         return _read_only(lit if self.extra_light is None else lit + self.extra_light)
 
-    @property
+    @cached_property
     def domain(self) -> FitDomain:
         """Where the post-correction is fitted (:func:`ocio_vp.model.correction.fit_domain`):
         the lit chart as the wall really lights it, the calibrated M, the fitted patches."""

@@ -17,6 +17,7 @@ https://doi.org/10.1109/TIP.2015.2405336
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Iterator
 
 import numpy as np
@@ -32,7 +33,7 @@ from ocio_vp.model.correction import (
     FitDomain,
     MatrixCorrection,
     RootPolynomialCorrection,
-    fit_domain,
+    newton_inverse,
 )
 from ocio_vp.model.expansion import (
     ROOT_POLYNOMIAL_TERMS,
@@ -204,7 +205,7 @@ def _loo_domains(problem: QProblem, w: np.ndarray) -> Iterator[tuple[int, FitDom
     hull as it is: those patches share the full domain, and only the few vertices are refitted,
     so the cost grows with the chart, not with its square.
     """
-    full = _domain(problem, w)
+    full = problem.domain
     fitted = np.flatnonzero(w > 0)
     u = problem.predicted[w > 0] @ full.to_drive.T  # as fit_domain computes the hull's points
     total = u.sum(axis=-1)
@@ -219,19 +220,9 @@ def _loo_domains(problem: QProblem, w: np.ndarray) -> Iterator[tuple[int, FitDom
         if point in vertices and counts[point] == 1:
             others = w.copy()
             others[j] = 0.0
-            yield int(j), _domain(problem, others)
+            yield int(j), dataclasses.replace(problem, weights=others).domain
         else:
             yield int(j), full
-
-
-def _domain(problem: QProblem, weights: np.ndarray) -> FitDomain:
-    return fit_domain(
-        problem.predicted,
-        M=problem.M,
-        white_patch=problem.white_patch,
-        white_reflectance=problem.white_reflectance,
-        weights=weights,
-    )
 
 
 def _held_out(
@@ -254,16 +245,6 @@ def _linear_approximation(C: np.ndarray) -> np.ndarray:
     return fit_least_squares(grid, apply_root_polynomial(C, grid), np.ones(len(grid)))
 
 
-def _newton_step(C: np.ndarray, A: np.ndarray, y: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """Newton direction -J^-1 r; the 3x3 approximation's where J is singular or not finite."""
-    J = root_polynomial_jacobian(C, y)
-    with np.errstate(invalid="ignore", over="ignore"):
-        det = np.linalg.det(np.where(np.isfinite(J), J, 0.0))
-    bad = ~np.all(np.isfinite(J), axis=(1, 2)) | (np.abs(det) < 1e-12 * abs(np.linalg.det(A)))
-    J[bad] = A
-    return -np.linalg.solve(J, r[..., None])[..., 0]
-
-
 def invert_root_polynomial(
     coefficients: np.ndarray,
     rgb: np.ndarray,
@@ -275,11 +256,12 @@ def invert_root_polynomial(
     """Q^-1(rgb): the x with ``C e(x) = rgb``, for (..., 3) ``rgb``.
 
     Homogeneity makes this a problem on the colour's direction: ``rgb`` is divided by its
-    largest absolute channel ``s``, ``Q(y) = rgb / s`` is solved by damped Newton iterations
-    from the 3x3 approximation's inverse (each step halved until the residual falls), and
-    ``x = s y``. Black maps to black. A colour whose iteration does not reach ``tolerance``
-    (relative to ``s``; outside the range where Q is injective) keeps its best iterate, which
-    is always finite; ``return_residual=True`` also returns the (...,) relative residuals.
+    largest absolute channel ``s``, ``Q(y) = rgb / s`` is solved by
+    :func:`~ocio_vp.model.correction.newton_inverse` (analytic Jacobian) from the 3x3
+    approximation's inverse, and ``x = s y``. Black maps to black. A colour whose iteration
+    does not reach ``tolerance`` (relative to ``s``; outside the range where Q is injective)
+    keeps its best iterate, which is always finite; ``return_residual=True`` also returns the
+    (...,) relative residuals.
 
     Raises
     ------
@@ -293,57 +275,21 @@ def invert_root_polynomial(
             "root-polynomial Q is not invertible (singular 3x3 approximation)",
             key="root_polynomial.coefficients",
         )
-    c = np.asarray(rgb, dtype=np.float64)
-    flat = c.reshape(-1, 3)
-    s = np.max(np.abs(flat), axis=1)
-    live = np.isfinite(s) & (s > 0)
-    t = np.zeros_like(flat)
-    t[live] = flat[live] / s[live, None]
-    y = t @ np.linalg.inv(A).T
-    r = apply_root_polynomial(C, y) - t
-    norm = np.max(np.abs(r), axis=1)
-    stalled = np.zeros(len(flat), dtype=bool)  # no step lowers the residual: the best iterate
-    for _ in range(max_iterations):
-        todo = live & ~stalled & (norm > tolerance)
-        if not todo.any():
-            break
-        dy = _newton_step(C, A, y[todo], r[todo])
-        stalled[_line_search(C, t, y, r, norm, todo, dy)] = True
-    x = np.where(live[:, None], y * np.where(live, s, 0.0)[:, None], 0.0).reshape(c.shape)
-    if return_residual:
-        return x, np.where(live, norm, 0.0).reshape(c.shape[:-1])
-    return x
-
-
-def _line_search(C, t, y, r, norm, todo, dy, halvings: int = 30) -> np.ndarray:
-    """Move y[todo] along dy by the largest 2^-k step (k < ``halvings``) that lowers the
-    residual (in place); returns the indices where no step did.
-
-    The full step is tried first; where it fails, every shorter step is evaluated at once
-    (one batched call instead of one per halving) and the longest one that helps is taken.
-    """
-    index = np.flatnonzero(todo)
-    trial = y[index] + dy
-    r_trial = apply_root_polynomial(C, trial) - t[index]
-    n_trial = np.max(np.abs(r_trial), axis=1)
-    better = np.isfinite(n_trial) & (n_trial < norm[index])
-    done = index[better]
-    y[done], r[done], norm[done] = trial[better], r_trial[better], n_trial[better]
-    rest, dy = index[~better], dy[~better]
-    if len(rest) == 0:
-        return rest
-    alpha = 2.0 ** -np.arange(1, halvings)
-    trials = y[rest][:, None, :] + alpha[None, :, None] * dy[:, None, :]  # (m, k, 3)
-    r_trials = apply_root_polynomial(C, trials.reshape(-1, 3)).reshape(trials.shape)
-    r_trials -= t[rest][:, None, :]
-    n_trials = np.max(np.abs(r_trials), axis=2)
-    ok = np.isfinite(n_trials) & (n_trials < norm[rest][:, None])
-    found = ok.any(axis=1)
-    k = np.argmax(ok, axis=1)[found]  # the longest step that helps
-    done = rest[found]
-    rows = np.flatnonzero(found)
-    y[done], r[done], norm[done] = trials[rows, k], r_trials[rows, k], n_trials[rows, k]
-    return rest[~found]
+    x = newton_inverse(
+        lambda y: apply_root_polynomial(C, y),
+        rgb,
+        A,
+        homogeneous=True,
+        tolerance=tolerance,
+        max_iterations=max_iterations,
+        jacobian=lambda y: root_polynomial_jacobian(C, y),
+    )
+    if not return_residual:
+        return x
+    size = np.max(np.abs(np.asarray(rgb, dtype=np.float64)), axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        residual = np.max(np.abs(apply_root_polynomial(C, x) - rgb), axis=-1) / size
+    return x, np.where(np.isfinite(size) & (size > 0), residual, 0.0)
 
 
 def _post_correction(Q: np.ndarray, notes: dict | None) -> Callable[[np.ndarray], np.ndarray]:

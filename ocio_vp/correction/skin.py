@@ -29,6 +29,7 @@ import numpy as np
 from ocio_vp.calibration.equations import predict_lit_chart
 from ocio_vp.metrics import sample_camera_to_xyz
 from ocio_vp.skin_data import SkinSet, band_of, ita_degrees, training_skin
+from ocio_vp.spectra import checker_reflectances
 
 __all__ = [
     "SKIN_CHART",
@@ -86,11 +87,7 @@ class SkinSamples:
 @functools.lru_cache(maxsize=2)
 def chart_reflectances(name: str = SKIN_CHART) -> np.ndarray:
     """(24, W) the reference reflectances of a ColorChecker 24 in reading order."""
-    import colour
-
-    from ocio_vp.spectra import align
-
-    values = np.stack([align(sd) for sd in colour.SDS_COLOURCHECKERS[name].values()])
+    values = checker_reflectances(name)
     values.setflags(write=False)
     return values
 

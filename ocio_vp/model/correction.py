@@ -42,7 +42,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, partial
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -161,9 +161,6 @@ def truncated_pseudo_inverse(Q: ArrayLike) -> tuple[np.ndarray, int]:
     return (Vt.T[:, keep] / sigma[keep]) @ U[:, keep].T, int(keep.sum())
 
 
-_CHANNEL_NAMES = ("red", "green", "blue")
-
-
 def smoothstep(t: ArrayLike) -> np.ndarray:
     """``3t^2 - 2t^3`` on [0, 1], clamped outside: 0 -> 0, 1 -> 1, zero slope at both ends.
 
@@ -176,6 +173,17 @@ def smoothstep(t: ArrayLike) -> np.ndarray:
 
 def _fade_out(t: np.ndarray) -> np.ndarray:
     return 1.0 - smoothstep(t)
+
+
+def _blend(
+    base: np.ndarray, weight: np.ndarray, model: Callable[[np.ndarray], np.ndarray], x: np.ndarray
+) -> np.ndarray:
+    """``base + weight (model(x) - base)``, calling ``model`` only where ``weight > 0``."""
+    out = base.copy()
+    inside = weight > 0
+    if np.any(inside):
+        out[inside] += weight[inside][:, None] * (model(x[inside]) - base[inside])
+    return out
 
 
 def _array(value: JsonValue) -> np.ndarray:
@@ -482,16 +490,10 @@ class RootPolynomialCorrection:
     def apply(self, rgb: ArrayLike) -> np.ndarray:
         """(..., 3) the correction of ``rgb`` (float64)."""
         x = np.asarray(rgb, dtype=np.float64)
-        linear = x @ self.fallback.T
         if self.domain is None:
             return apply_root_polynomial(self.coefficients, x)
-        g = self.weight(x)[..., None]
-        out = linear.copy()
-        inside = g[..., 0] > 0
-        if np.any(inside):
-            poly = apply_root_polynomial(self.coefficients, x[inside])
-            out[inside] += g[inside] * (poly - linear[inside])
-        return out
+        polynomial = partial(apply_root_polynomial, self.coefficients)
+        return _blend(x @ self.fallback.T, self.weight(x), polynomial, x)
 
     def inverse(self, rgb: ArrayLike) -> np.ndarray:
         return newton_inverse(self.apply, rgb, self.fallback, homogeneous=True)
@@ -586,12 +588,7 @@ class ProtectedCorrection:
 
     def apply(self, rgb: ArrayLike) -> np.ndarray:
         x = np.asarray(rgb, dtype=np.float64)
-        g = self.weight(x)[..., None]
-        out = x.copy()
-        inside = g[..., 0] > 0
-        if np.any(inside):
-            out[inside] += g[inside] * (self.inner.apply(x[inside]) - x[inside])
-        return out
+        return _blend(x, self.weight(x), self.inner.apply, x)
 
     def inverse(self, rgb: ArrayLike) -> np.ndarray:
         return newton_inverse(self.apply, rgb, self.inner.matrix, homogeneous=False)
@@ -646,10 +643,12 @@ def newton_inverse(
     tolerance: float = 1e-12,
     max_iterations: int = 50,
     start: ArrayLike | None = None,
+    jacobian: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> np.ndarray:
     """x with ``function(x) = rgb`` for (..., 3) ``rgb``: damped Newton with a finite-difference
-    Jacobian, started from ``start_matrix^-1 rgb`` (or from ``start``, the same shape as
-    ``rgb``: a close guess, e.g. a neighbour's solution); every colour at once.
+    Jacobian (or ``jacobian``: (n, 3) -> (n, 3, 3)), started from ``start_matrix^-1 rgb`` (or
+    from ``start``, the same shape as ``rgb``: a close guess, e.g. a neighbour's solution); every
+    colour at once.
 
     A ``homogeneous`` function is solved on each colour's direction (divided by its largest
     absolute channel, then scaled back) and maps black to black. A colour whose iteration does
@@ -675,7 +674,7 @@ def newton_inverse(
         todo = np.flatnonzero(active & (norm > tolerance))
         if len(todo) == 0:
             break
-        step = _newton_step(function, x[todo], residual[todo], start_matrix)
+        step = _newton_step(function, x[todo], residual[todo], start_matrix, jacobian)
         for alpha in 2.0 ** -np.arange(0, 16):
             trial = x[todo] + alpha * step
             r = function(trial) - target[todo]
@@ -692,16 +691,21 @@ def newton_inverse(
     return out.reshape(y.shape)
 
 
-def _newton_step(function, x: np.ndarray, residual: np.ndarray, fallback: np.ndarray) -> np.ndarray:
-    """``-J^-1 r`` with a central-difference Jacobian; the fallback matrix where J is singular."""
-    h = 1e-6 * np.maximum(np.max(np.abs(x), axis=1, keepdims=True), 1e-12)
-    J = np.empty((len(x), 3, 3))
-    for k in range(3):
-        e = np.zeros(3)
-        e[k] = 1.0
-        J[:, :, k] = (function(x + h * e) - function(x - h * e)) / (2 * h)
-    det = np.linalg.det(J)
-    bad = ~np.isfinite(det) | (np.abs(det) < 1e-12 * abs(np.linalg.det(fallback)))
+def _newton_step(function, x: np.ndarray, residual: np.ndarray, fallback: np.ndarray, jacobian):
+    """``-J^-1 r`` with ``jacobian``'s J or a central-difference one; the fallback matrix where
+    J is singular or not finite."""
+    if jacobian is not None:
+        J = jacobian(x)
+    else:
+        h = 1e-6 * np.maximum(np.max(np.abs(x), axis=1, keepdims=True), 1e-12)
+        J = np.empty((len(x), 3, 3))
+        for k in range(3):
+            e = np.zeros(3)
+            e[k] = 1.0
+            J[:, :, k] = (function(x + h * e) - function(x - h * e)) / (2 * h)
+    finite = np.all(np.isfinite(J), axis=(1, 2))
+    det = np.linalg.det(np.where(finite[:, None, None], J, fallback))
+    bad = ~finite | (np.abs(det) < 1e-12 * abs(np.linalg.det(fallback)))
     J[bad] = fallback
     return -np.linalg.solve(J, residual[..., None])[..., 0]
 

@@ -17,9 +17,11 @@ import numpy as np
 from ocio_vp.errors import InputError
 from ocio_vp.spectra import (
     DEFAULT_CAMERA,
+    DEFAULT_CHART,
     SPECTRAL_SHAPE,
     align,
     camera_sensitivities,
+    checker_reflectances,
     spectral_shape,
     wavelengths,
 )
@@ -41,7 +43,6 @@ __all__ = [
     "wavelengths",
 ]
 
-DEFAULT_CHART = "ColorChecker N Ohta"
 #: Paper-like narrow-band RGB LEDs: (peak nm, FWHM nm) for red, green, blue. Red AlInGaP and
 #: blue InGaN LEDs are ~20 nm wide; green InGaN is broader (~35 nm).
 DEFAULT_LEDS = ((630.0, 20.0), (525.0, 35.0), (460.0, 22.0))
@@ -49,15 +50,12 @@ DEFAULT_LEDS = ((630.0, 20.0), (525.0, 35.0), (460.0, 22.0))
 
 def chart_reflectances(name: str = DEFAULT_CHART) -> np.ndarray:
     """(24, W) reflectances of a chart in ``colour.SDS_COLOURCHECKERS``, in reading order."""
-    import colour
-
     if name not in ("ColorChecker N Ohta", "BabelColor Average"):
         raise InputError(
             f"unknown chart {name!r}; expected 'ColorChecker N Ohta' or 'BabelColor Average'",
             key="chart",
         )
-    sds = colour.SDS_COLOURCHECKERS[name]
-    return np.stack([align(sd) for sd in sds.values()])
+    return checker_reflectances(name)
 
 
 def gaussian_leds(primaries=DEFAULT_LEDS) -> np.ndarray:

@@ -45,8 +45,6 @@ class Evaluation:
     lit: np.ndarray
     displayed_baseline: np.ndarray
     displayed: np.ndarray
-    drive_clipped: bool
-    displayed_patches_clipped: int
 
 
 def evaluate_solution(stage: SpectralStage, solution, environment=None) -> Evaluation:
@@ -72,8 +70,6 @@ def evaluate_solution(stage: SpectralStage, solution, environment=None) -> Evalu
         lit=error_relative_to_white(ours.lit_corrected, ours.target, white),
         displayed_baseline=error_relative_to_white(baseline.displayed, ours.target, white),
         displayed=error_relative_to_white(ours.displayed_corrected, ours.target, white),
-        drive_clipped=ours.lit_drive_clipped,
-        displayed_patches_clipped=int(np.count_nonzero(ours.displayed_drive_clipped)),
     )
 
 

@@ -19,7 +19,7 @@ from ocio_vp.formats.fixtures import Fixture
 from ocio_vp.formats.measurements import Measurements
 from ocio_vp.simulator.data import DEFAULT_LEDS, gaussian_leds
 from ocio_vp.simulator.stage import SpectralStage, camera_rgb
-from ocio_vp.spectra import align, spectral_shape, unknown_name
+from ocio_vp.spectra import align, unknown_name
 
 __all__ = [
     "FIXTURE_KINDS",
@@ -28,7 +28,6 @@ __all__ = [
     "with_simulated_fixtures",
 ]
 
-_CMFS = "CIE 1931 2 Degree Standard Observer"
 _RGB = (("red", DEFAULT_LEDS[0]), ("green", DEFAULT_LEDS[1]), ("blue", DEFAULT_LEDS[2]))
 
 #: kind -> channels as (name, (peak nm, FWHM nm) for a Gaussian LED, or a colour dataset key).
@@ -52,10 +51,9 @@ def _spectrum(source: object) -> np.ndarray:
 
 
 def _luminance(spectra: np.ndarray) -> np.ndarray:
-    import colour
+    from ocio_vp.synthesis.camera import cie_cmfs
 
-    y_bar = colour.MSDS_CMFS[_CMFS].copy().align(spectral_shape()).values[:, 1]
-    return y_bar @ spectra
+    return cie_cmfs()[:, 1] @ spectra
 
 
 def fixture_spectra(stage: SpectralStage, kind: str) -> tuple[tuple[str, ...], np.ndarray]:

@@ -28,6 +28,7 @@ from ocio_vp.simulator.stage import (
     SpectralStage,
     camera_rgb,
     environment_spectrum,
+    named_lights,
     spectral_stage,
     white_reflectance,
 )
@@ -172,9 +173,7 @@ def panel_stage(
     as panel vendors calibrate), ``"camera"`` to the wall's white as this camera sees it (the
     most a calibration of the wall alone could hope for).
     """
-    import colour
-
-    from ocio_vp.spectra import spectral_shape
+    from ocio_vp.synthesis.camera import cie_cmfs
 
     if wall is None:
         wall = spectral_stage(**wall_options)
@@ -199,8 +198,7 @@ def panel_stage(
         raise InputError(error.problem, key="ceiling_leds") from None  # not the wall's LEDs
     observer = wall.camera  # camera: the ceiling is already matched to D65 as the wall is
     if white == "xyz":
-        cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
-        observer = np.asarray(cmfs.copy().align(spectral_shape()).values, dtype=np.float64)
+        observer = cie_cmfs()
     target = observer.T @ wall.leds.sum(axis=1)
     gains = np.linalg.solve(observer.T @ ceiling.leds, target)
     if np.any(gains <= 0):
@@ -241,13 +239,6 @@ def scene_light(stage: SpectralStage, environment: SceneLight) -> dict[str, np.n
     return {k: v / scale for k, v in parts.items()}
 
 
-def _wall_black_level(stage: PanelStage, emitted: np.ndarray) -> np.ndarray | None:
-    """The dark in-frustum wall reflects the whole stage's light (both types)."""
-    if stage.wall.panel_albedo is None:
-        return None
-    return stage.wall.panel_albedo * camera_rgb(stage.wall, emitted)
-
-
 def _panel_type(name: str, spectral: SpectralStage, region: PanelRegion) -> PanelType:
     return PanelType(
         name=name,
@@ -258,16 +249,6 @@ def _panel_type(name: str, spectral: SpectralStage, region: PanelRegion) -> Pane
         beta=None if spectral.panel is not None else spectral.beta,
         regions=(region,),
     )
-
-
-def _environments(environments: Scenes) -> list[tuple[str, SceneLight]]:
-    if environments is None:
-        environments = tuple(SCENES)
-    if isinstance(environments, str):
-        environments = (environments,)
-    if isinstance(environments, Mapping):
-        return list(environments.items())
-    return [(name, name) for name in environments]
 
 
 def simulate_panel_measurements(stage: PanelStage, environments: Scenes = None) -> Measurements:
@@ -286,14 +267,14 @@ def simulate_panel_measurements(stage: PanelStage, environments: Scenes = None) 
         _panel_type("ceiling", stage.ceiling, CEILING_REGION),
     )
     envs = []
-    for name, environment in _environments(environments):
+    for name, environment in named_lights(environments, tuple(SCENES)):
         check_safe_name(name, key="environment")
         light = scene_light(wall, environment)
         w_avg = {k: camera_rgb(wall, v) for k, v in light.items()}
         emitted = sum(
             s.leds @ np.clip(np.linalg.solve(s.SL, w_avg[k]), 0.0, None) for k, s in stage.types
         )
-        black = _wall_black_level(stage, emitted)
+        albedo = wall.panel_albedo  # the dark in-frustum wall reflects both types' light
         envs.append(
             Environment(
                 name=name,
@@ -301,7 +282,9 @@ def simulate_panel_measurements(stage: PanelStage, environments: Scenes = None) 
                     wall, wall.reflectances * (light["wall"] + light["ceiling"])
                 ),
                 panel_w_avg=w_avg,
-                panel_black_level=None if black is None else {"wall": black},
+                panel_black_level=None
+                if albedo is None
+                else {"wall": albedo * camera_rgb(wall, emitted)},
             )
         )
     return Measurements(

@@ -18,7 +18,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
-from ocio_vp.formats.measurements import Measurements
+from ocio_vp.formats.measurements import CHANNELS, Measurements
+from ocio_vp.simulator.take import write_plate
 
 if TYPE_CHECKING:
     from ocio_vp.patterns.sequence import PatternSequence
@@ -189,52 +190,6 @@ def render_regions(
     return _sensor(image, vignetting=vignetting, noise=noise, read_noise=read_noise, seed=seed)
 
 
-def write_plate(
-    path: str | Path,
-    image: ArrayLike,
-    *,
-    dtype: str = "half",
-    channels: tuple[str, ...] = ("R", "G", "B"),
-    scale: float = 1.0,
-    tile: int = 0,
-) -> Path:
-    """Write ``image * scale`` with OpenImageIO as ``dtype`` ("half", "float", "uint16", ...).
-
-    Channel names beyond R, G, B get zeros; another order is honoured by name (``layer.R``
-    counts as R). Integer types are clipped to [0, 1] first.
-
-    Raises
-    ------
-    OSError
-        When OpenImageIO cannot write the file.
-    """
-    import OpenImageIO as oiio  # deferred: heavy, and only plate writing needs it
-
-    path = Path(path)
-    data = np.asarray(image, dtype=np.float32) * np.float32(scale)
-    h, w, _ = data.shape
-    planes = []
-    for name in channels:
-        index = {"R": 0, "G": 1, "B": 2}.get(name.rpartition(".")[2])
-        planes.append(data[..., index] if index is not None else np.zeros((h, w), np.float32))
-    full = np.ascontiguousarray(np.stack(planes, axis=-1))
-    if dtype.startswith("uint"):
-        full = np.clip(full, 0, 1)
-    spec = oiio.ImageSpec(w, h, len(channels), dtype)
-    spec.channelnames = channels
-    if tile:
-        spec.tile_width = spec.tile_height = tile
-    out = oiio.ImageOutput.create(str(path))
-    if out is None or not out.open(str(path), spec):
-        raise OSError(f"{path}: cannot write: {oiio.geterror()}")
-    ok = out.write_image(full)
-    error = out.geterror()
-    out.close()
-    if not ok:
-        raise OSError(f"{path}: cannot write: {error}")
-    return path
-
-
 @dataclass(frozen=True)
 class PlateOptions:
     """How the simulated camera shoots: lens fall-off, noise, flat-field and footage frames.
@@ -299,11 +254,11 @@ def _plates(measurements: Measurements, options: PlateOptions) -> Iterator[tuple
     panels = measurements.panels
     walls = [(f"{p.name}_", p.SL, p.SRL) for p in panels]
     for prefix, SL, SRL in walls or [("", measurements.SL, measurements.SRL)]:
-        for k, channel in enumerate(("red", "green", "blue")):
+        for k, channel in enumerate(CHANNELS):
             image = camera.panel(SL[:, k])
             if panels or options.take is None:
                 yield f"{prefix}primary_{channel}.exr", image
-        for k, channel in enumerate(("red", "green", "blue")):
+        for k, channel in enumerate(CHANNELS):
             yield f"{prefix}lit_{channel}.exr", camera.chart(SRL[:, :, k])
     M = None if panels else solve_M(measurements.SL)
     for env in measurements.environments:
@@ -343,12 +298,10 @@ def _panel_capture(measurements: Measurements, names: set[str]) -> dict:
     for entry in panels_to_dict(measurements.panels):
         name = entry["name"]
         entry["primaries"] = {
-            c: {"plate": f"{name}_primary_{c}.exr", "region": list(PANEL_REGION)}
-            for c in ("red", "green", "blue")
+            c: {"plate": f"{name}_primary_{c}.exr", "region": list(PANEL_REGION)} for c in CHANNELS
         }
         entry["lit_chart"] = {
-            c: {"plate": f"{name}_lit_{c}.exr", "corners": CHART_CORNERS.tolist()}
-            for c in ("red", "green", "blue")
+            c: {"plate": f"{name}_lit_{c}.exr", "corners": CHART_CORNERS.tolist()} for c in CHANNELS
         }
         panels.append(entry)
     environments: list[JsonValue] = []
@@ -394,20 +347,17 @@ def _capture_document(
         return document | _panel_capture(measurements, names)
     if options.take is None:
         document["primaries"] = {
-            c: {"plate": f"primary_{c}.exr", "region": list(PANEL_REGION)}
-            for c in ("red", "green", "blue")
+            c: {"plate": f"primary_{c}.exr", "region": list(PANEL_REGION)} for c in CHANNELS
         }
     else:
-        document["take"] = {"frames": f"{TAKE_FOLDER}/{TAKE_NAME}", "sequence": sequence_ref}
-        if options.take_format != "exr":
-            document["take"] = {
-                "frames": f"{TAKE_FOLDER}/{TAKE_MOVIE}",
-                "sequence": sequence_ref,
-                "encoding": MOVIE_ENCODING,
-            }
+        movie = options.take_format != "exr"
+        frames = f"{TAKE_FOLDER}/{TAKE_MOVIE if movie else TAKE_NAME}"
+        document["take"] = {"frames": frames, "sequence": sequence_ref}
+        if movie:
+            document["take"]["encoding"] = MOVIE_ENCODING
     document["lit_chart"] = {
         c: {"plate": f"lit_{c}.{options.lit_format}", "corners": CHART_CORNERS.tolist()}
-        for c in ("red", "green", "blue")
+        for c in CHANNELS
     }
     environments = []
     for env in measurements.environments:

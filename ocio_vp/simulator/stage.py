@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, TypeAlias
+from typing import TYPE_CHECKING, Any, TypeAlias, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -51,6 +51,7 @@ Environments: TypeAlias = "str | Sequence[str] | Mapping[str, EnvironmentLight] 
 #: An LED set: three (peak, FWHM) pairs (nm), (W, 3) spectra, or a colour
 #: ``MultiSpectralDistributions`` of three channels (None: the default LEDs).
 Leds: TypeAlias = "ArrayLike | colour.MultiSpectralDistributions | None"
+_Light = TypeVar("_Light")
 
 __all__ = [
     "DEFAULT_PANEL",
@@ -276,9 +277,13 @@ def environment_spectrum(stage: SpectralStage, environment: EnvironmentLight) ->
     return spectrum / green
 
 
-def _environments(environments: Environments) -> list[tuple[str, EnvironmentLight]]:
+def named_lights(
+    environments: str | Sequence[str] | Mapping[str, _Light] | None,
+    default: Sequence[str] = PAPER_ENVIRONMENTS,
+) -> list[tuple[str, _Light | str]]:
+    """(name, light) pairs of a name, names or name -> light mapping (None: ``default``)."""
     if environments is None:
-        environments = PAPER_ENVIRONMENTS
+        environments = default
     if isinstance(environments, str):
         environments = (environments,)
     if isinstance(environments, Mapping):
@@ -334,7 +339,7 @@ def simulate_measurements(
     SL = stage.SL
     M = np.linalg.inv(SL)
     envs = []
-    for name, environment in _environments(environments):
+    for name, environment in named_lights(environments):
         check_safe_name(name, key="environment")
         spectrum = environment_spectrum(stage, environment)
         target = camera_rgb(stage, stage.reflectances * spectrum)

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ocio_vp.patterns.sequence import FILE_FORMATS, PatternSequence
 
@@ -267,25 +268,54 @@ def render_frames(
         yield image.astype(np.float32)
 
 
-def _write_frame(path: Path, image: np.ndarray, dtype: str) -> None:
-    """One frame with OpenImageIO (ZIP for EXR; integer types clipped to [0, 1] first)."""
-    import OpenImageIO as oiio
+def write_plate(
+    path: str | Path,
+    image: ArrayLike,
+    *,
+    dtype: str = "half",
+    channels: tuple[str, ...] = ("R", "G", "B"),
+    scale: float = 1.0,
+    tile: int = 0,
+    compression: str | None = None,
+) -> Path:
+    """Write ``image * scale`` with OpenImageIO as ``dtype`` ("half", "float", "uint16", ...),
+    with the format's default ``compression`` unless one is named.
 
-    data = np.ascontiguousarray(image, dtype=np.float32)
-    if dtype != "half":
-        data = np.clip(data, 0.0, 1.0)
-    spec = oiio.ImageSpec(data.shape[1], data.shape[0], 3, dtype)
-    spec.channelnames = ("R", "G", "B")
-    if dtype == "half":
-        spec.attribute("compression", "zip")
+    Channel names beyond R, G, B get zeros; another order is honoured by name (``layer.R``
+    counts as R). Integer types are clipped to [0, 1] first.
+
+    Raises
+    ------
+    OSError
+        When OpenImageIO cannot write the file.
+    """
+    import OpenImageIO as oiio  # deferred: heavy, and only plate writing needs it
+
+    path = Path(path)
+    data = np.asarray(image, dtype=np.float32) * np.float32(scale)
+    h, w, _ = data.shape
+    planes = []
+    for name in channels:
+        index = {"R": 0, "G": 1, "B": 2}.get(name.rpartition(".")[2])
+        planes.append(data[..., index] if index is not None else np.zeros((h, w), np.float32))
+    full = np.ascontiguousarray(np.stack(planes, axis=-1))
+    if dtype.startswith("uint"):
+        full = np.clip(full, 0, 1)
+    spec = oiio.ImageSpec(w, h, len(channels), dtype)
+    spec.channelnames = channels
+    if tile:
+        spec.tile_width = spec.tile_height = tile
+    if compression:
+        spec.attribute("compression", compression)
     out = oiio.ImageOutput.create(str(path))
     if out is None or not out.open(str(path), spec):
         raise OSError(f"{path}: cannot write: {oiio.geterror()}")
-    try:
-        if not out.write_image(data):
-            raise OSError(f"{path}: cannot write: {out.geterror()}")
-    finally:
-        out.close()
+    ok = out.write_image(full)
+    error = out.geterror()
+    out.close()
+    if not ok:
+        raise OSError(f"{path}: cannot write: {error}")
+    return path
 
 
 def write_take(
@@ -311,7 +341,8 @@ def write_take(
 
             image = np.asarray(colour.cctf_encoding(np.maximum(image, 0.0), function=encoding))
         path = folder / f"{name}.{options.first_frame + k:04d}.{extension}"
-        _write_frame(path, image, "half" if file_format == "exr" else "uint16")
+        dtype, compression = ("half", "zip") if file_format == "exr" else ("uint16", None)
+        write_plate(path, image, dtype=dtype, compression=compression)
         if on_frame is not None:
             on_frame()
     return f"{name}.####.{extension}"

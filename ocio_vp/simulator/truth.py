@@ -30,7 +30,7 @@ from ocio_vp.formats.measurements import Measurements
 from ocio_vp.formats.solution import Solution
 from ocio_vp.metrics import camera_to_xyz_matrix, chart_errors
 from ocio_vp.model.footage_range import FootageRange, footage_range
-from ocio_vp.simulator.data import chart_reflectances
+from ocio_vp.simulator.data import DEFAULT_CHART, chart_reflectances
 from ocio_vp.simulator.stage import SpectralStage, camera_rgb, environment_spectrum
 from ocio_vp.spectra import align, spectral_shape
 
@@ -55,7 +55,7 @@ _SKIN_PMC = ("Caucasian", "Oriental", "South Asian", "African")
 
 
 @functools.lru_cache(maxsize=4)
-def held_out_reflectances(chart: str = "ColorChecker N Ohta") -> dict[str, np.ndarray]:
+def held_out_reflectances(chart: str = DEFAULT_CHART) -> dict[str, np.ndarray]:
     """Reflectance sets not on ``chart``: ``{"rawtoaces": (k, W), "cie2017": ..., "skin": ...}``.
 
     Read-only arrays on the simulator's grid; see the module docstring for the sources.
@@ -262,15 +262,15 @@ def stage_footage_range(stage: SpectralStage, environment, solution, seed: int =
     reflectances and the chart lit by what the wall emits for ``solution`` (``clip(M w_avg)``
     through the stage's LEDs), the white diffuser under the real light as the scene white,
     :func:`narrow_band_emitters`, and the stage camera's own RGB -> XYZ matrix."""
-    spectrum = environment_spectrum(stage, environment)
-    drive = np.clip(np.asarray(solution.M) @ np.asarray(solution.w_avg, dtype=np.float64), 0, None)
-    emitted = stage.leds @ drive
     sets = held_out_reflectances(stage.chart_name)
     reflectances = np.vstack([sets["rawtoaces"], sets["cie2017"], sets["skin"], stage.reflectances])
+    lit, target = held_out_colours(
+        stage, environment, M=solution.M, w_avg=solution.w_avg, reflectances=reflectances
+    )
     return footage_range(
-        lit=camera_rgb(stage, reflectances * emitted),
-        lit_white=camera_rgb(stage, emitted),
-        white=camera_rgb(stage, spectrum),
+        lit=lit[:-1],
+        lit_white=lit[-1],
+        white=target[-1],
         emitters=narrow_band_emitters(stage, environment),
         camera_to_xyz=camera_matrix(stage),
         seed=seed,

@@ -16,11 +16,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.errors import InputError
-from ocio_vp.spectra import align, unknown_name
+from ocio_vp.spectra import DEFAULT_CHART, checker_reflectances, unknown_name
 
 __all__ = ["DEFAULT_CHART", "ScaledChart", "chart_spectra", "scaled_to_white"]
-
-DEFAULT_CHART = "ColorChecker N Ohta"
 
 
 def chart_spectra(name: str = DEFAULT_CHART) -> np.ndarray:
@@ -29,7 +27,7 @@ def chart_spectra(name: str = DEFAULT_CHART) -> np.ndarray:
 
     if name not in colour.SDS_COLOURCHECKERS:
         raise InputError(unknown_name("chart", name, colour.SDS_COLOURCHECKERS), key="--chart")
-    return np.stack([align(sd) for sd in colour.SDS_COLOURCHECKERS[name].values()])
+    return checker_reflectances(name)
 
 
 @dataclass(frozen=True)

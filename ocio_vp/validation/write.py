@@ -17,6 +17,7 @@ from ocio_vp.formats.jsontypes import JsonMapping, JsonObject
 from ocio_vp.plates.contact_sheet import SHEET
 from ocio_vp.plates.take import TakeReading
 from ocio_vp.validation.compare import ValidationResult
+from ocio_vp.wall.encoding import encode
 
 __all__ = ["VALIDATION_FORMAT", "summary_lines", "validation_document", "write_validation"]
 
@@ -148,8 +149,8 @@ def _swatches(result: ValidationResult) -> str:
     ]
     for k, p in enumerate(result.patches):
         x, y = (k % columns) * (size + 10), (k // columns) * (size + 26)
-        top = _srgb(matrix @ p.intended * scale)
-        bottom = _srgb(matrix @ p.corrected * scale)
+        top = encode(np.clip(matrix @ p.intended * scale, 0.0, 1.0), "srgb")
+        bottom = encode(np.clip(matrix @ p.corrected * scale, 0.0, 1.0), "srgb")
         parts.append(
             f'<rect x="{x}" y="{y}" width="{size}" height="{size // 2}" fill="{hex_colour(top)}"/>'
         )
@@ -162,13 +163,9 @@ def _swatches(result: ValidationResult) -> str:
     return "\n".join(parts)
 
 
-def _srgb(linear: np.ndarray) -> np.ndarray:
-    x = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * x ** (1 / 2.4) - 0.055)
-
-
 def _html(result: ValidationResult, reading: TakeReading, lines: list[str]) -> str:
     import jinja2
+    from markupsafe import Markup
 
     from ocio_vp.exports.templating import read_template
 
@@ -177,16 +174,10 @@ def _html(result: ValidationResult, reading: TakeReading, lines: list[str]) -> s
     return template.render(
         result=result,
         lines=lines,
-        swatches=_markup(_swatches(result)),
+        swatches=Markup(_swatches(result)),
         sheet=SHEET,
         verdict="PASS" if result.passed else "FAIL",
     )
-
-
-def _markup(text: str):
-    from markupsafe import Markup
-
-    return Markup(text)
 
 
 def write_validation(
