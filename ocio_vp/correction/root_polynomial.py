@@ -283,6 +283,7 @@ def invert_root_polynomial(
         tolerance=tolerance,
         max_iterations=max_iterations,
         jacobian=lambda y: root_polynomial_jacobian(C, y),
+        halvings=30,  # as this inverse always searched: near a fold, more colours converge
     )
     if not return_residual:
         return x

@@ -644,11 +644,12 @@ def newton_inverse(
     max_iterations: int = 50,
     start: ArrayLike | None = None,
     jacobian: Callable[[np.ndarray], np.ndarray] | None = None,
+    halvings: int = 16,
 ) -> np.ndarray:
     """x with ``function(x) = rgb`` for (..., 3) ``rgb``: damped Newton with a finite-difference
     Jacobian (or ``jacobian``: (n, 3) -> (n, 3, 3)), started from ``start_matrix^-1 rgb`` (or
     from ``start``, the same shape as ``rgb``: a close guess, e.g. a neighbour's solution); every
-    colour at once.
+    colour at once; a step is halved at most ``halvings`` times until it lowers the residual.
 
     A ``homogeneous`` function is solved on each colour's direction (divided by its largest
     absolute channel, then scaled back) and maps black to black. A colour whose iteration does
@@ -675,7 +676,7 @@ def newton_inverse(
         if len(todo) == 0:
             break
         step = _newton_step(function, x[todo], residual[todo], start_matrix, jacobian)
-        for alpha in 2.0 ** -np.arange(0, 16):
+        for alpha in 2.0 ** -np.arange(0, halvings):
             trial = x[todo] + alpha * step
             r = function(trial) - target[todo]
             n = np.max(np.abs(r), axis=1) / size[todo]
