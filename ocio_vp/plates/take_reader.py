@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ocio_vp.errors import InputError
+from ocio_vp.footage.sequences import numbered_files
 from ocio_vp.plates.reader import PlateInfo, check_read, linearise, open_input
 
 __all__ = [
@@ -45,7 +46,6 @@ _EXR_CHUNK = {
     "dwab": 256,
     "htj2k": 32,
 }
-_MAX_TAKE_FRAMES = 1_000_000
 #: A band has at least this many rows (fewer makes too many small reads).
 _MIN_BAND = 16
 
@@ -92,20 +92,7 @@ def list_take_frames(pattern: str | Path) -> list[tuple[int, Path]]:
         )
     prefix, hashes, suffix = match.groups()
     digits = r"\d+" if len(hashes) == 1 else rf"\d{{{len(hashes)},}}"
-    regex = re.compile(re.escape(prefix) + f"({digits})" + re.escape(suffix))
-    folder = path.parent
-    found = []
-    if folder.is_dir():
-        with os.scandir(folder) as entries:
-            for entry in entries:
-                m = regex.fullmatch(entry.name)
-                if m and entry.is_file():
-                    found.append((int(m.group(1)), folder / entry.name))
-                    if len(found) > _MAX_TAKE_FRAMES:
-                        raise InputError(f"more than {_MAX_TAKE_FRAMES} frames", source=pattern)
-    if not found:
-        raise InputError("no frames match this pattern", source=pattern)
-    return sorted(found)
+    return numbered_files(path.parent, prefix, digits, suffix, pattern)
 
 
 def chunk_rows(path: str | Path) -> int:
