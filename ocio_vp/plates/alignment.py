@@ -97,7 +97,6 @@ class Alignment:
     anchor_offsets: np.ndarray
     marks_found: tuple[int, ...]
     marks_expected: int
-    mark_residual: float
     changes_used: int
     steps: tuple[tuple[float, int], ...]
 
@@ -400,16 +399,6 @@ def align_take(
     keep = _filter(T_all, r_all, trusted_all)
     T_all, r_all = T_all[keep], r_all[keep]
     r_all, steps = _smooth(T_all, r_all)
-    residual = max(
-        float(
-            np.max(
-                np.abs(
-                    marks[k][2] - offset - rate * marks[k][1] - np.interp(marks[k][1], T_all, r_all)
-                )
-            )
-        )
-        for k in agree
-    )
     return Alignment(
         rate=rate,
         offset=offset,
@@ -417,7 +406,6 @@ def align_take(
         anchor_offsets=r_all,
         marks_found=tuple(sorted({marks[k][0] for k in agree})),
         marks_expected=len(sequence.of_kind("sync")),
-        mark_residual=residual,
         changes_used=int(np.count_nonzero(~trusted_all[keep])),
         steps=steps,
     )
