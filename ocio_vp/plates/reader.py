@@ -64,17 +64,16 @@ class PlateInfo:
 
     path: str
     file_format: str
-    x: int
-    y: int
     width: int
     height: int
-    channel_names: tuple[str, ...]
-    rgb: tuple[int, int, int]
     bits: int
     is_float: bool
-    tile_width: int
-    tile_height: int
     encoding: str
+    x: int = 0
+    y: int = 0
+    rgb: tuple[int, int, int] = (0, 1, 2)
+    tile_width: int = 0
+    tile_height: int = 0
     subimage: int = 0
     #: A camera raw plate's demosaicing method (:data:`ocio_vp.plates.raw.DEMOSAIC_METHODS`).
     demosaic: str | None = None
@@ -202,7 +201,6 @@ def open_plate(
         y=int(spec.y),
         width=int(spec.width),
         height=int(spec.height),
-        channel_names=names,
         rgb=rgb,
         bits=bits,
         is_float=is_float,
@@ -227,16 +225,10 @@ def _open_raw(source: str, encoding: str | None, demosaic: str | None) -> PlateI
     return PlateInfo(
         path=source,
         file_format=f"raw (LibRaw, {demosaic} demosaic)",
-        x=0,
-        y=0,
         width=int(width),
         height=int(height),
-        channel_names=("R", "G", "B"),
-        rgb=(0, 1, 2),
         bits=16,
         is_float=False,
-        tile_width=0,
-        tile_height=0,
         encoding="linear",
         demosaic=demosaic,
     )
