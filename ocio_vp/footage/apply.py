@@ -65,12 +65,14 @@ __all__ = [
     "frame_failure",
     "load_frame",
     "load_post_correction",
+    "load_task",
     "other_solution_reason",
     "pixel_transform",
     "run_task",
     "set_io_threads",
     "solution_identity",
     "store_frame",
+    "store_task",
     "transform_frame",
     "write_failure",
 ]
@@ -577,20 +579,37 @@ def other_solution_reason(dst: str | Path, made_by: str | None, wanted: str) -> 
 
 def run_task(task: FrameTask) -> FrameResult:
     """Do one :class:`FrameTask`, never raising: failures become a result."""
+    set_io_threads(task.threads)
+    start, parts = load_task(task)
+    if isinstance(parts, FrameResult):
+        return parts
+    try:
+        transform_frame(parts, task.post_correction, threads=task.threads, source=task.src)
+    except Exception as exc:  # no RGB in this frame...: reported, the others go on
+        return frame_failure(task, exc)
+    return store_task(task, start, parts)
+
+
+def load_task(task: FrameTask) -> tuple[float, Any]:
+    """(start time, the frame's parts or the FrameResult that ends it: skipped or failed)."""
     start = time.perf_counter()
     ended = existing_output(task)
     if ended is not None:
-        return ended
+        return start, ended
     try:
-        set_io_threads(task.threads)
-        parts = load_frame(task.src)
-        transform_frame(parts, task.post_correction, threads=task.threads, source=task.src)
-    except Exception as exc:  # this frame's input (or a bug): reported, the others go on
-        return frame_failure(task, exc)
+        return start, load_frame(task.src)
+    except Exception as exc:  # reported in its result, the other frames go on
+        return start, frame_failure(task, exc)
+
+
+def store_task(task: FrameTask, start: float, parts: Any) -> FrameResult:
+    """Write the transformed ``parts`` of ``task``: its result, timed from ``start``."""
     try:
         store_frame(task.dst, parts)
-    except OSError as exc:  # out of disk, read-only...: the caller stops the run
+    except OSError as exc:  # out of disk, read-only...: the run stops after this frame
         return write_failure(task, exc)
+    except Exception as exc:  # a bug: reported, the others go on
+        return frame_failure(task, exc)
     return FrameResult(task.src, task.dst, "done", seconds=time.perf_counter() - start)
 
 
