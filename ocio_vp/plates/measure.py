@@ -457,18 +457,14 @@ def _overlay(sampling: PlateSampling) -> np.ndarray:
     return overlay_image(pixels, labels, states)
 
 
-def samples_document(
-    result: MeasureResult, *, relative_to: str | Path | None = None
-) -> dict[str, Any]:
+def samples_document(result: MeasureResult, *, relative_to: str | Path) -> dict[str, Any]:
     """Per-plate, per-patch statistics (``samples.json`` beside the overlays).
 
-    Plate paths are written relative to ``relative_to`` (the overlay folder) when given, so
-    the file does not depend on where the project lives.
+    Plate paths are written relative to ``relative_to`` (the overlay folder), so the file does
+    not depend on where the project lives.
     """
 
     def where(path: Path) -> str:
-        if relative_to is None:
-            return str(path)
         return Path(os.path.relpath(os.path.abspath(path), os.path.abspath(relative_to))).as_posix()
 
     plates = []
