@@ -9,7 +9,6 @@ are read on a few threads (OpenImageIO decodes without holding Python's lock).
 
 from __future__ import annotations
 
-import os
 import re
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
@@ -19,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ocio_vp.errors import InputError
+from ocio_vp.footage.distributed import default_workers
 from ocio_vp.footage.sequences import numbered_files
 from ocio_vp.plates.reader import PlateInfo, check_read, linearise, open_input
 
@@ -192,11 +192,7 @@ def _read_frame(
 
 def take_threads() -> int:
     """Threads reading frames: the cores this process may use, at most 8."""
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - not Linux
-        cores = os.cpu_count() or 1
-    return max(1, min(8, cores))
+    return min(8, default_workers())
 
 
 def read_frame_stats(
