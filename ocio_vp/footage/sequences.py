@@ -85,26 +85,6 @@ def _format(prefix: str, suffix: str, padding: int, frame: int) -> str:
     return f"{prefix}{frame:0{padding}d}{suffix}" if padding else f"{prefix}{frame}{suffix}"
 
 
-def numbered_files(
-    folder: Path, prefix: str, digits: str, suffix: str, source: object
-) -> list[tuple[int, Path]]:
-    """(number, path) of the files in ``folder`` named prefix, ``digits`` (a regex), suffix,
-    by number; none, or more than :data:`MAX_FRAMES`, is an :class:`InputError` on ``source``."""
-    regex = re.compile(re.escape(prefix) + f"({digits})" + re.escape(suffix))
-    found = []
-    if folder.is_dir():
-        with os.scandir(folder) as entries:
-            for entry in entries:
-                m = regex.fullmatch(entry.name)
-                if m and entry.is_file():
-                    found.append((int(m.group(1)), folder / entry.name))
-                    if len(found) > MAX_FRAMES:
-                        raise InputError(f"more than {MAX_FRAMES} frames", source=source)
-    if not found:
-        raise InputError("no frames match this pattern", source=source)
-    return sorted(found)
-
-
 def expand_frames(args: Sequence[str], *, frames: range | None = None) -> list[Path]:
     """The input files named by ``args`` (patterns or plain paths), in order, without repeats.
 
@@ -131,7 +111,16 @@ def expand_frames(args: Sequence[str], *, frames: range | None = None) -> list[P
                 found = [folder / _format(prefix, suffix, padding, f) for f in frames]
             else:
                 digits = r"-?\d+" if padding == 0 else rf"-?\d{{{padding},}}"
-                found = [p for _, p in numbered_files(folder, prefix, digits, suffix, arg)]
+                regex = re.compile(re.escape(prefix) + f"({digits})" + re.escape(suffix))
+                numbered = []
+                if folder.is_dir():
+                    for entry in folder.iterdir():
+                        m = regex.fullmatch(entry.name)
+                        if m and entry.is_file():
+                            numbered.append((int(m.group(1)), entry))
+                if not numbered:
+                    raise InputError("no frames match this pattern", source=arg)
+                found = [p for _, p in sorted(numbered)]
         for p in found:
             if p not in seen:
                 seen.add(p)

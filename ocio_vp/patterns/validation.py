@@ -70,15 +70,15 @@ def wall_signal(config_path: str | Path, solution: Solution, content: np.ndarray
     the in-frustum colorspace's output (signal for an encoded wall, drive for a linear one)."""
     import PyOpenColorIO as OCIO
 
-    from ocio_vp.ocio.bake import processor_function
-
     reference, inner = _wall_spaces(solution)
     try:
         config = OCIO.Config.CreateFromFile(str(config_path))
-        to_wall = processor_function(config.getProcessor(reference, inner))
+        cpu = config.getProcessor(reference, inner).getDefaultCPUProcessor()
     except OCIO.Exception as error:
         raise InputError(f"OpenColorIO: {error}"[:200], source=config_path) from None
-    return to_wall(np.asarray(content).reshape(-1, 3))
+    pixels = np.ascontiguousarray(np.asarray(content, dtype=np.float32).reshape(-1, 3))
+    cpu.applyRGB(pixels)
+    return pixels.astype(np.float64)
 
 
 def content_scale(solution: Solution, target: np.ndarray) -> float:

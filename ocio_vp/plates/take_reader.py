@@ -9,6 +9,7 @@ are read on a few threads (OpenImageIO decodes without holding Python's lock).
 
 from __future__ import annotations
 
+import os
 import re
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
@@ -18,8 +19,6 @@ from pathlib import Path
 import numpy as np
 
 from ocio_vp.errors import InputError
-from ocio_vp.footage.distributed import default_workers
-from ocio_vp.footage.sequences import numbered_files
 from ocio_vp.plates.reader import PlateInfo, check_read, linearise, open_input
 
 __all__ = [
@@ -46,6 +45,7 @@ _EXR_CHUNK = {
     "dwab": 256,
     "htj2k": 32,
 }
+_MAX_TAKE_FRAMES = 1_000_000
 #: A band has at least this many rows (fewer makes too many small reads).
 _MIN_BAND = 16
 
@@ -92,7 +92,20 @@ def list_take_frames(pattern: str | Path) -> list[tuple[int, Path]]:
         )
     prefix, hashes, suffix = match.groups()
     digits = r"\d+" if len(hashes) == 1 else rf"\d{{{len(hashes)},}}"
-    return numbered_files(path.parent, prefix, digits, suffix, pattern)
+    regex = re.compile(re.escape(prefix) + f"({digits})" + re.escape(suffix))
+    folder = path.parent
+    found = []
+    if folder.is_dir():
+        with os.scandir(folder) as entries:
+            for entry in entries:
+                m = regex.fullmatch(entry.name)
+                if m and entry.is_file():
+                    found.append((int(m.group(1)), folder / entry.name))
+                    if len(found) > _MAX_TAKE_FRAMES:
+                        raise InputError(f"more than {_MAX_TAKE_FRAMES} frames", source=pattern)
+    if not found:
+        raise InputError("no frames match this pattern", source=pattern)
+    return sorted(found)
 
 
 def chunk_rows(path: str | Path) -> int:
@@ -192,7 +205,11 @@ def _read_frame(
 
 def take_threads() -> int:
     """Threads reading frames: the cores this process may use, at most 8."""
-    return min(8, default_workers())
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(8, cores))
 
 
 def read_frame_stats(
