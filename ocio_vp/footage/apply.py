@@ -344,11 +344,6 @@ def pixel_transform(pc: PostCorrection) -> PixelTransform:
 _THREADS: dict[int, ThreadPoolExecutor] = {}
 
 
-def _as_transform(transform: Any) -> PixelTransform:
-    # An OCIO float32 CPU processor (what cpu_processor returns) is accepted as it is.
-    return OcioTransform(transform) if hasattr(transform, "applyRGB") else transform
-
-
 def apply_in_place(
     transform: Any,
     pixels: np.ndarray,
@@ -375,7 +370,8 @@ def apply_in_place(
             "expected a (height, width, channels) float32 or float16 image, got "
             f"{pixels.dtype} {pixels.shape}"
         )
-    transform = _as_transform(transform)
+    if hasattr(transform, "applyRGB"):  # an OCIO float32 CPU processor, as cpu_processor's
+        transform = OcioTransform(transform)
     direct = pixels.shape[2] == 3 and tuple(rgb) == (0, 1, 2) and pixels.flags.c_contiguous
     work = pixels if direct else np.ascontiguousarray(pixels[..., list(rgb)])
     if threads <= 1 or work.shape[0] < 2 * threads:
