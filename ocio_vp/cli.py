@@ -98,13 +98,7 @@ def build_parser() -> argparse.ArgumentParser:
         parser_class=functools.partial(OneLineParser, formatter_class=HelpFormatter),
     )
     for name in COMMANDS:
-        try:
-            module = importlib.import_module(f"ocio_vp.commands.{name}")
-        except ModuleNotFoundError as error:
-            if error.name == f"ocio_vp.commands.{name}":
-                continue  # verb not built in this version
-            raise
-        module.add_parser(subparsers)
+        importlib.import_module(f"ocio_vp.commands.{name}").add_parser(subparsers)
     return parser
 
 

@@ -362,7 +362,9 @@ def test_pipeline_holds_a_bounded_number_of_frames(tmp_path, solution_dir, monke
             live[key] += step
             live[f"max_{key}"] = max(live[f"max_{key}"], live[key])
 
-    real_load, real_store = stream.load_frame, stream.store_frame
+    from ocio_vp.footage import apply as frame_io  # where the stream's tasks read and write
+
+    real_load, real_store = frame_io.load_frame, frame_io.store_frame
 
     def load(src):
         parts = real_load(src)
@@ -379,8 +381,8 @@ def test_pipeline_holds_a_bounded_number_of_frames(tmp_path, solution_dir, monke
             count("writes", -1)
             count("frames", -1)
 
-    monkeypatch.setattr(stream, "load_frame", load)
-    monkeypatch.setattr(stream, "store_frame", store)
+    monkeypatch.setattr(frame_io, "load_frame", load)
+    monkeypatch.setattr(frame_io, "store_frame", store)
     pc = load_post_correction(solution_dir)
     tasks = []
     for i in range(8):

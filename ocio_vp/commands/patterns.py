@@ -5,11 +5,10 @@ from __future__ import annotations
 import argparse
 import re
 
+from ocio_vp.choices import WALL_ENCODINGS
 from ocio_vp.commands.common import progress
 
 __all__ = ["add_parser", "parse_size", "run"]
-
-_ENCODINGS = ("linear", "gamma2.4", "srgb", "pq")
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -39,7 +38,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--wall-encoding",
         type=str.lower,
-        choices=_ENCODINGS,
+        choices=WALL_ENCODINGS,
         default="linear",
         help="the wall's signal: ramps are spaced in it, and TIFF/DPX frames hold it "
         "(EXR frames always hold linear drive)",

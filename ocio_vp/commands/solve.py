@@ -29,8 +29,6 @@ __all__ = [
     "wall_encoding",
 ]
 
-PEAK_NITS_DEFAULT = DEFAULT_PEAK_NITS
-
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
@@ -144,7 +142,7 @@ def _add_wall_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="with a PQ wall only: luminance (cd/m2) of drive 1.0, the level of the measured "
         "primaries (default: stage.peak_nits of the measurements file, else "
-        f"{PEAK_NITS_DEFAULT:g}); a value contradicting the file is refused",
+        f"{DEFAULT_PEAK_NITS:g}); a value contradicting the file is refused",
     )
     parser.add_argument(
         "--soft-clip",
@@ -348,7 +346,7 @@ def wall_encoding(args: argparse.Namespace, measurements) -> tuple[str, float]:
             "flag out, or correct the file",
             key="--peak-nits",
         )
-    return encoding, PEAK_NITS_DEFAULT if peak is None else float(peak)
+    return encoding, DEFAULT_PEAK_NITS if peak is None else float(peak)
 
 
 def _solve_and_write(args: argparse.Namespace, pool) -> list:

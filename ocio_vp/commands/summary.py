@@ -9,7 +9,7 @@ import.
 from __future__ import annotations
 
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING, TextIO
 
 if TYPE_CHECKING:
@@ -136,13 +136,12 @@ def _wall_line(solutions: Sequence[Solution]) -> str:
     )
 
 
-def _grouped(solutions: Sequence[Solution]) -> list[str]:
-    """Every warning once, with the environments it concerns."""
+def _once(kind: str, found: Iterable[tuple[str, str]]) -> list[str]:
+    """``kind: <environments>: <text>``, each text of the (text, environment) pairs once."""
     where: dict[str, list[str]] = {}
-    for s in solutions:
-        for warning in s.diagnostics.warnings:
-            where.setdefault(str(warning), []).append(s.environment)
-    return [f"warning: {', '.join(names)}: {text}" for text, names in where.items()]
+    for text, environment in found:
+        where.setdefault(text, []).append(environment)
+    return [f"{kind}: {', '.join(names)}: {text}" for text, names in where.items()]
 
 
 def summary_lines(solutions: Sequence[Solution]) -> tuple[list[str], list[str]]:
@@ -163,7 +162,8 @@ def summary_lines(solutions: Sequence[Solution]) -> tuple[list[str], list[str]]:
         "why each model: solution.json (diagnostics.model_reason) and the report; "
         "`ocio-vp report DIR` draws them"
     )
-    return out + _gamut_notes(solutions), _grouped(solutions)
+    warnings = ((str(w), s.environment) for s in solutions for w in s.diagnostics.warnings)
+    return out + _gamut_notes(solutions), _once("warning", warnings)
 
 
 def _skin_first_lines(solutions: Sequence[Solution]) -> list[str]:
@@ -179,7 +179,7 @@ def _skin_first_lines(solutions: Sequence[Solution]) -> list[str]:
 def _gamut_notes(solutions: Sequence[Solution]) -> list[str]:
     """The LEDs' gamut (chart colours the wall cannot show in frustum, light outside it out of
     the frustum) and the assumptions, once per fact with the environments it concerns."""
-    where: dict[str, list[str]] = {}
+    found = []
     for s in solutions:
         d = s.diagnostics
         ranges = d.in_frustum_drive_range
@@ -191,17 +191,16 @@ def _gamut_notes(solutions: Sequence[Solution]) -> list[str]:
                 f"({with_M} with M): the wall shows them clipped, as any calibration of these "
                 "LEDs would (validation shows them pulled into the gamut)"
             )
-            where.setdefault(text, []).append(s.environment)
+            found.append((text, s.environment))
         if d.out_of_frustum_negative_channels:
             text = (
                 "this light is outside the LEDs' gamut (M w_avg has a negative channel): the "
                 "wall lights the actors with the nearest colour it can make"
             )
-            where.setdefault(text, []).append(s.environment)
-    for s in solutions:  # optional measurements the file did not give
-        for text in s.diagnostics.assumed or []:
-            where.setdefault(text, []).append(s.environment)
-    return [f"note: {', '.join(names)}: {text}" for text, names in where.items()]
+            found.append((text, s.environment))
+    # then the optional measurements the file did not give
+    found += [(text, s.environment) for s in solutions for text in s.diagnostics.assumed or []]
+    return _once("note", found)
 
 
 def print_summary(

@@ -65,12 +65,14 @@ __all__ = [
     "frame_failure",
     "load_frame",
     "load_post_correction",
+    "load_task",
     "other_solution_reason",
     "pixel_transform",
     "run_task",
     "set_io_threads",
     "solution_identity",
     "store_frame",
+    "store_task",
     "transform_frame",
     "write_failure",
 ]
@@ -146,28 +148,22 @@ def load_post_correction(
         ) from None
     model = json.dumps(correction_to_dict(solution.correction), sort_keys=True)
     identity = solution_identity(solution.stage, solution.environment, model, encoding)
+    kind = "model"  # the exact model, not the config's LUT bake of it
     if encoding:  # decode, the exact post-correction, encode
-        return PostCorrection(
-            str(config_path),
-            f"{source} ({encoding})",
-            f"{target} ({encoding})",
-            solution.environment,
-            "encoded",
-            model,
-            encoding,
-            identity,
-        )
-    if solution.correction.linear:
-        return PostCorrection(
-            str(config_path), source, target, solution.environment, solution=identity
-        )
-    if via == "config":  # the config's LUT chains: the same pixels as every host, not the model
-        identity = f"{identity}, via config"
-        return PostCorrection(
-            str(config_path), source, target, solution.environment, solution=identity
-        )
-    return PostCorrection(  # the exact model, not the config's LUT bake of it
-        str(config_path), source, target, solution.environment, "model", model, "", identity
+        kind, source, target = "encoded", f"{source} ({encoding})", f"{target} ({encoding})"
+    elif solution.correction.linear:
+        kind = "ocio"
+    elif via == "config":  # the config's LUT chains: the same pixels as every host, not the model
+        kind, identity = "ocio", f"{identity}, via config"
+    return PostCorrection(
+        str(config_path),
+        source,
+        target,
+        solution.environment,
+        kind,
+        model if kind != "ocio" else "",
+        encoding,
+        identity,
     )
 
 
@@ -268,11 +264,10 @@ class ModelTransform:
         }
 
     def __call__(self, rgb: np.ndarray) -> None:
-        flat = rgb.reshape(-1, 3)  # a view when rgb is C-contiguous (the protocol), else a copy
-        arithmetic, f = self.functions[flat.dtype]
-        planes = np.empty((3, min(self.band, len(flat))), dtype=arithmetic)
-        for start in range(0, len(flat), self.band):
-            block = flat[start : start + self.band]
+        arithmetic, f = self.functions[rgb.dtype]
+        planes = np.empty((3, min(self.band, rgb.size // 3)), dtype=arithmetic)
+
+        def step(block: np.ndarray) -> None:
             X = planes[:, : len(block)]
             for k in range(3):
                 np.copyto(X[k], block[:, k])
@@ -280,12 +275,17 @@ class ModelTransform:
             with np.errstate(over="ignore"):  # half overflow: inf, documented above
                 for k in range(3):
                     np.copyto(block[:, k], out[k], casting="same_kind")
-        if not np.shares_memory(flat, rgb):
-            rgb[...] = flat.reshape(rgb.shape)
+
+        _in_bands(rgb, self.band, step)
 
 
-def _model(pc: PostCorrection) -> ModelTransform:
-    return ModelTransform(correction_from_dict(json.loads(pc.model)))
+def _in_bands(rgb: np.ndarray, band: int, step: Callable[[np.ndarray], None]) -> None:
+    """Run ``step`` on (n, 3) bands of ``band`` pixels of ``rgb``, which it modifies in place."""
+    flat = rgb.reshape(-1, 3)  # a view when rgb is C-contiguous (the protocol), else a copy
+    for start in range(0, len(flat), band):
+        step(flat[start : start + band])
+    if not np.shares_memory(flat, rgb):
+        rgb[...] = flat.reshape(rgb.shape)
 
 
 @dataclass(frozen=True)
@@ -315,18 +315,12 @@ class EncodedTransform:
     def __call__(self, rgb: np.ndarray) -> None:
         import colour
 
-        flat = rgb.reshape(-1, 3)
-        for start in range(0, len(flat), self.band):
-            block = flat[start : start + self.band]
+        def step(block: np.ndarray) -> None:
             with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
                 linear = colour.cctf_decoding(block.astype(np.float64), function=self.encoding)
                 block[...] = self._encode(self.correction.apply(linear))
-        if not np.shares_memory(flat, rgb):
-            rgb[...] = flat.reshape(rgb.shape)
 
-
-def _encoded(pc: PostCorrection) -> EncodedTransform:
-    return EncodedTransform(correction_from_dict(json.loads(pc.model)), pc.encoding)
+        _in_bands(rgb, self.band, step)
 
 
 #: How to build the per-pixel transform of a :class:`PostCorrection`, by its ``kind``: an OCIO
@@ -334,8 +328,8 @@ def _encoded(pc: PostCorrection) -> EncodedTransform:
 #: only carry as a LUT bake). Another kind registers its factory here.
 TRANSFORMS: dict[str, Callable[[PostCorrection], PixelTransform]] = {
     "ocio": lambda pc: OcioTransform(cpu_processor(pc), cpu_processor(pc, bit_depth="f16")),
-    "model": _model,
-    "encoded": _encoded,
+    "model": lambda pc: ModelTransform(correction_from_dict(json.loads(pc.model))),
+    "encoded": lambda pc: EncodedTransform(correction_from_dict(json.loads(pc.model)), pc.encoding),
 }
 
 
@@ -348,11 +342,6 @@ def pixel_transform(pc: PostCorrection) -> PixelTransform:
 
 
 _THREADS: dict[int, ThreadPoolExecutor] = {}
-
-
-def _as_transform(transform: Any) -> PixelTransform:
-    # An OCIO float32 CPU processor (what cpu_processor returns) is accepted as it is.
-    return OcioTransform(transform) if hasattr(transform, "applyRGB") else transform
 
 
 def apply_in_place(
@@ -381,7 +370,8 @@ def apply_in_place(
             "expected a (height, width, channels) float32 or float16 image, got "
             f"{pixels.dtype} {pixels.shape}"
         )
-    transform = _as_transform(transform)
+    if hasattr(transform, "applyRGB"):  # an OCIO float32 CPU processor, as cpu_processor's
+        transform = OcioTransform(transform)
     direct = pixels.shape[2] == 3 and tuple(rgb) == (0, 1, 2) and pixels.flags.c_contiguous
     work = pixels if direct else np.ascontiguousarray(pixels[..., list(rgb)])
     if threads <= 1 or work.shape[0] < 2 * threads:
@@ -585,20 +575,37 @@ def other_solution_reason(dst: str | Path, made_by: str | None, wanted: str) -> 
 
 def run_task(task: FrameTask) -> FrameResult:
     """Do one :class:`FrameTask`, never raising: failures become a result."""
+    set_io_threads(task.threads)
+    start, parts = load_task(task)
+    if isinstance(parts, FrameResult):
+        return parts
+    try:
+        transform_frame(parts, task.post_correction, threads=task.threads, source=task.src)
+    except Exception as exc:  # no RGB in this frame...: reported, the others go on
+        return frame_failure(task, exc)
+    return store_task(task, start, parts)
+
+
+def load_task(task: FrameTask) -> tuple[float, Any]:
+    """(start time, the frame's parts or the FrameResult that ends it: skipped or failed)."""
     start = time.perf_counter()
     ended = existing_output(task)
     if ended is not None:
-        return ended
+        return start, ended
     try:
-        set_io_threads(task.threads)
-        parts = load_frame(task.src)
-        transform_frame(parts, task.post_correction, threads=task.threads, source=task.src)
-    except Exception as exc:  # this frame's input (or a bug): reported, the others go on
-        return frame_failure(task, exc)
+        return start, load_frame(task.src)
+    except Exception as exc:  # reported in its result, the other frames go on
+        return start, frame_failure(task, exc)
+
+
+def store_task(task: FrameTask, start: float, parts: Any) -> FrameResult:
+    """Write the transformed ``parts`` of ``task``: its result, timed from ``start``."""
     try:
         store_frame(task.dst, parts)
-    except OSError as exc:  # out of disk, read-only...: the caller stops the run
+    except OSError as exc:  # out of disk, read-only...: the run stops after this frame
         return write_failure(task, exc)
+    except Exception as exc:  # a bug: reported, the others go on
+        return frame_failure(task, exc)
     return FrameResult(task.src, task.dst, "done", seconds=time.perf_counter() - start)
 
 

@@ -85,11 +85,8 @@ def _dask(
         futures = client.map(func, list(items), pure=False)
         index = {f.key: i for i, f in enumerate(futures)}
         for future in as_completed(futures):
-            i = index[future.key]
-            if future.status == "error":
-                yield i, future.exception()
-            else:
-                yield i, future.result()
+            failed = future.status == "error"
+            yield index[future.key], future.exception() if failed else future.result()
             future.release()
     finally:
         client.close()

@@ -13,7 +13,6 @@ being written), whatever the length of the sequence.
 
 from __future__ import annotations
 
-import time
 from collections import deque
 from collections.abc import Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
@@ -22,13 +21,11 @@ from typing import Any
 from ocio_vp.footage.apply import (
     FrameResult,
     FrameTask,
-    existing_output,
     frame_failure,
-    load_frame,
+    load_task,
     set_io_threads,
-    store_frame,
+    store_task,
     transform_frame,
-    write_failure,
 )
 
 __all__ = ["HELD", "WRITERS", "apply_frames"]
@@ -37,28 +34,6 @@ __all__ = ["HELD", "WRITERS", "apply_frames"]
 WRITERS = 2
 #: The most frames held in memory at once: one being read, one transformed, the writers'.
 HELD = 2 + WRITERS
-
-
-def _load(task: FrameTask) -> tuple[float, Any]:
-    """(start time, the frame's parts or the FrameResult that ends it: skipped or failed)."""
-    start = time.perf_counter()
-    ended = existing_output(task)
-    if ended is not None:
-        return start, ended
-    try:
-        return start, load_frame(task.src)
-    except Exception as exc:  # reported in its result, the other frames go on
-        return start, frame_failure(task, exc)
-
-
-def _store(task: FrameTask, start: float, parts: Any) -> FrameResult:
-    try:
-        store_frame(task.dst, parts)
-    except OSError as exc:  # out of disk, permissions...: the run stops after this frame
-        return write_failure(task, exc)
-    except Exception as exc:  # a bug: reported, the others go on
-        return frame_failure(task, exc)
-    return FrameResult(task.src, task.dst, "done", seconds=time.perf_counter() - start)
 
 
 def apply_frames(tasks: Sequence[FrameTask], *, threads: int) -> Iterator[tuple[int, FrameResult]]:
@@ -73,12 +48,12 @@ def apply_frames(tasks: Sequence[FrameTask], *, threads: int) -> Iterator[tuple[
         return
     set_io_threads(threads)
     with ThreadPoolExecutor(1) as reader, ThreadPoolExecutor(WRITERS) as writer:
-        ahead = reader.submit(_load, tasks[0])
+        ahead = reader.submit(load_task, tasks[0])
         behind: deque[tuple[int, Any]] = deque()  # frames being written, oldest first
         for i, task in enumerate(tasks):
             start, parts = ahead.result()
             if i + 1 < len(tasks):
-                ahead = reader.submit(_load, tasks[i + 1])
+                ahead = reader.submit(load_task, tasks[i + 1])
             if isinstance(parts, FrameResult):
                 yield i, parts
                 continue
@@ -90,7 +65,7 @@ def apply_frames(tasks: Sequence[FrameTask], *, threads: int) -> Iterator[tuple[
             while len(behind) >= WRITERS:  # bounded memory: wait for the oldest write
                 j, written = behind.popleft()
                 yield j, written.result()
-            behind.append((i, writer.submit(_store, task, start, parts)))
+            behind.append((i, writer.submit(store_task, task, start, parts)))
             del parts  # the writer holds the frame now, and only it
         while behind:
             j, written = behind.popleft()

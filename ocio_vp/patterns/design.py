@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ocio_vp.choices import WALL_ENCODINGS
+from ocio_vp.choices import DEFAULT_PEAK_NITS, WALL_ENCODINGS
 from ocio_vp.errors import InputError
 from ocio_vp.patterns.sequence import FILE_FORMATS, Patch, PatternSequence
 from ocio_vp.wall.encoding import decode, encode
@@ -122,17 +122,6 @@ def flash_frames(fps: float) -> int:
     return max(2, round(fps * FLASH_SECONDS))
 
 
-def _spacing(options: PatternOptions) -> tuple[str, float | None]:
-    """The signal ramps are spaced in: the wall's, or gamma 2.4 for a linear wall."""
-    if options.encoding == "linear":
-        return "gamma2.4", None
-    return options.encoding, options.peak_nits
-
-
-def _peak(options: PatternOptions) -> float:
-    return 1000.0 if options.peak_nits is None else options.peak_nits
-
-
 def quantise(drive: np.ndarray, options: PatternOptions) -> tuple[np.ndarray, np.ndarray]:
     """(drive shown, signal written) for requested linear ``drive`` (..., 3).
 
@@ -150,7 +139,7 @@ def quantise(drive: np.ndarray, options: PatternOptions) -> tuple[np.ndarray, np
     if options.file_format == "exr":
         half = drive.astype(np.float16).astype(np.float64)
         return half, half
-    peak, top = _peak(options), options.max_code
+    peak, top = options.peak_nits or DEFAULT_PEAK_NITS, options.max_code
     codes = np.round(encode(drive, options.encoding, peak_nits=peak) * top)
     top_code = np.round(encode(np.array(1.0), options.encoding, peak_nits=peak) * top)
     signal = np.minimum(codes, top) / top
@@ -167,8 +156,9 @@ def ramp_levels(options: PatternOptions) -> tuple[np.ndarray, np.ndarray]:
     InputError
         When the frames' code values cannot hold that many distinct steps.
     """
-    encoding, peak = _spacing(options)
-    peak = peak or 1000.0
+    # Spaced in the wall's signal, or in gamma 2.4 for a linear wall.
+    encoding = "gamma2.4" if options.encoding == "linear" else options.encoding
+    peak = options.peak_nits or DEFAULT_PEAK_NITS
     top = float(encode(np.array(1.0), encoding, peak_nits=peak))
     top = 1.0 if abs(top - 1.0) < 1e-12 else top  # sRGB's 1.055 - 0.055 is 1 - 1 ulp
     spaced = np.linspace(0.0, top, options.steps)

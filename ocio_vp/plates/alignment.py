@@ -97,7 +97,6 @@ class Alignment:
     anchor_offsets: np.ndarray
     marks_found: tuple[int, ...]
     marks_expected: int
-    mark_residual: float
     changes_used: int
     steps: tuple[tuple[float, int], ...]
 
@@ -306,7 +305,7 @@ def _flat_frames(patch: Patch, *, at_end: bool) -> int:
     return patch.last - patch.flashes[-1][1] if at_end else patch.flashes[0][0] - patch.first
 
 
-def _filter(T: np.ndarray, r: np.ndarray, keep_mask: np.ndarray) -> np.ndarray:
+def _filter(r: np.ndarray, keep_mask: np.ndarray) -> np.ndarray:
     """Anchors whose offset agrees with the median of 3 neighbours on either side:
     an outlier agrees with neither, a step (dropped frame) with one side."""
     keep = np.ones(len(r), dtype=bool)
@@ -397,19 +396,9 @@ def align_take(
     T_all, r_all, trusted_all = np.array(T_list), np.array(r_list), np.array(trusted)
     order = np.argsort(T_all, kind="stable")
     T_all, r_all, trusted_all = T_all[order], r_all[order], trusted_all[order]
-    keep = _filter(T_all, r_all, trusted_all)
+    keep = _filter(r_all, trusted_all)
     T_all, r_all = T_all[keep], r_all[keep]
     r_all, steps = _smooth(T_all, r_all)
-    residual = max(
-        float(
-            np.max(
-                np.abs(
-                    marks[k][2] - offset - rate * marks[k][1] - np.interp(marks[k][1], T_all, r_all)
-                )
-            )
-        )
-        for k in agree
-    )
     return Alignment(
         rate=rate,
         offset=offset,
@@ -417,7 +406,6 @@ def align_take(
         anchor_offsets=r_all,
         marks_found=tuple(sorted({marks[k][0] for k in agree})),
         marks_expected=len(sequence.of_kind("sync")),
-        mark_residual=residual,
         changes_used=int(np.count_nonzero(~trusted_all[keep])),
         steps=steps,
     )

@@ -26,7 +26,7 @@ import numpy as np
 
 from ocio_vp.deprecation import deprecated_names, warn_deprecated
 from ocio_vp.errors import InputError
-from ocio_vp.plates.reader import PlateInfo, read_region
+from ocio_vp.plates.reader import PlateInfo, block_means
 from ocio_vp.plates.sampling import apply_homography
 
 __all__ = [
@@ -107,21 +107,6 @@ class DetectionError(InputError):
 
 
 # -- the working image -------------------------------------------------------------------------
-
-
-def _working_image(info: PlateInfo) -> tuple[np.ndarray, int]:
-    """The plate block-averaged by a whole factor to at most WORKING_WIDTH across, float64."""
-    f = max(1, -(-info.width // WORKING_WIDTH))
-    w, h = info.width // f, info.height // f
-    out = np.empty((h, w, 3), dtype=np.float64)
-    band = max(1, 256 // f)
-    for row in range(0, h, band):
-        n = min(band, h - row)
-        y0 = info.y + row * f
-        pixels = read_region(info, (info.x, y0, info.x + w * f, y0 + n * f))
-        pixels = np.nan_to_num(np.asarray(pixels, dtype=np.float64), posinf=0.0, neginf=0.0)
-        out[row : row + n] = pixels.reshape(n, f, w, f, 3).mean(axis=(1, 3))
-    return out, f
 
 
 def _noise(lum: np.ndarray) -> float:
@@ -528,7 +513,8 @@ def _cells(corners: np.ndarray, points: np.ndarray, rows: int, columns: int) -> 
 
 def detect_chart(info: PlateInfo, *, rows: int = 4, columns: int = 6) -> Detection:
     """Search a plate for a chart of ``rows`` x ``columns`` patches (see the module docstring)."""
-    image, f = _working_image(info)
+    f = max(1, -(-info.width // WORKING_WIDTH))  # at most WORKING_WIDTH across
+    image = block_means(info, f)
     lum = image.mean(axis=2)
     bright, noise = float(np.percentile(lum, 99)), _noise(lum)
     early = None

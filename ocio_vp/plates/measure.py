@@ -189,9 +189,7 @@ def _sample_chart(
     return sampling, found
 
 
-def _sample_regions(
-    capture: Capture, shots: Mapping[str, RegionShot], name: str
-) -> list[PlateSampling]:
+def _sample_regions(capture: Capture, shots: Mapping[str, RegionShot]) -> list[PlateSampling]:
     """Sample regions, grouping those that share a plate into one :class:`PlateSampling`."""
     from ocio_vp.errors import format_key_path
 
@@ -333,8 +331,8 @@ def measure_capture(
         step()
         return sampling.samples.means
 
-    def black_level(shot: RegionShot, name: str) -> list[float]:
-        black = _sample_regions(capture, {"black_level": shot}, name)
+    def black_level(shot: RegionShot) -> list[float]:
+        black = _sample_regions(capture, {"black_level": shot})
         plates.extend(black)
         step()
         return black[0].samples.means[0].tolist()
@@ -387,11 +385,10 @@ def _environment(env, chart, black_level) -> JsonObject:
     """One environment's entry: its target chart, black level(s) and w_avg as given."""
     entry: dict[str, Any] = {"name": env.name, "target_chart": chart(env.target_chart).tolist()}
     if env.black_level is not None:
-        entry["black_level"] = black_level(env.black_level, env.name)
+        entry["black_level"] = black_level(env.black_level)
     if env.panel_black_level:
         entry["black_level"] = {
-            name: black_level(shot, f"{env.name}_{name}")
-            for name, shot in env.panel_black_level.items()
+            name: black_level(shot) for name, shot in env.panel_black_level.items()
         }
     if env.w_avg is not None:
         entry["w_avg"] = env.w_avg.tolist()
@@ -425,7 +422,7 @@ def _primaries(
     step: Callable[[], None],
 ) -> dict[str, list[float]]:
     """The mean camera RGB of each primary's region (the plates' samplings go to ``plates``)."""
-    sampled = _sample_regions(capture, primaries, "primaries")
+    sampled = _sample_regions(capture, primaries)
     plates.extend(sampled)
     step()
     means = {}
@@ -460,18 +457,14 @@ def _overlay(sampling: PlateSampling) -> np.ndarray:
     return overlay_image(pixels, labels, states)
 
 
-def samples_document(
-    result: MeasureResult, *, relative_to: str | Path | None = None
-) -> dict[str, Any]:
+def samples_document(result: MeasureResult, *, relative_to: str | Path) -> dict[str, Any]:
     """Per-plate, per-patch statistics (``samples.json`` beside the overlays).
 
-    Plate paths are written relative to ``relative_to`` (the overlay folder) when given, so
-    the file does not depend on where the project lives.
+    Plate paths are written relative to ``relative_to`` (the overlay folder), so the file does
+    not depend on where the project lives.
     """
 
     def where(path: Path) -> str:
-        if relative_to is None:
-            return str(path)
         return Path(os.path.relpath(os.path.abspath(path), os.path.abspath(relative_to))).as_posix()
 
     plates = []

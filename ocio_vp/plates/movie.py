@@ -96,16 +96,10 @@ class MovieInfo:
         return PlateInfo(
             path=str(self.path),
             file_format=f"movie ({self.codec})",
-            x=0,
-            y=0,
             width=self.width,
             height=self.height,
-            channel_names=("R", "G", "B"),
-            rgb=(0, 1, 2),
             bits=self.bits,
             is_float=False,
-            tile_width=0,
-            tile_height=0,
             encoding=self.encoding,
         )
 

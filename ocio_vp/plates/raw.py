@@ -59,7 +59,6 @@ class RawMosaic:
     black: tuple[float, float, float, float]
     white: float
     pattern: np.ndarray
-    make: str
 
     @property
     def bayer(self) -> bool:
@@ -144,7 +143,6 @@ def _cached(path: str, stamp: tuple[int, int]) -> RawMosaic:
             black=blacks,  # type: ignore[arg-type]
             white=white,
             pattern=np.array(raw.raw_pattern),
-            make=str(getattr(raw, "camera_make", "") or ""),
         )
 
 

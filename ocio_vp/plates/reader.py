@@ -25,6 +25,7 @@ __all__ = [
     "DISPLAY_FORMATS",
     "ENCODINGS",
     "PlateInfo",
+    "block_means",
     "canonical_encoding",
     "linearise",
     "open_plate",
@@ -64,17 +65,16 @@ class PlateInfo:
 
     path: str
     file_format: str
-    x: int
-    y: int
     width: int
     height: int
-    channel_names: tuple[str, ...]
-    rgb: tuple[int, int, int]
     bits: int
     is_float: bool
-    tile_width: int
-    tile_height: int
     encoding: str
+    x: int = 0
+    y: int = 0
+    rgb: tuple[int, int, int] = (0, 1, 2)
+    tile_width: int = 0
+    tile_height: int = 0
     subimage: int = 0
     #: A camera raw plate's demosaicing method (:data:`ocio_vp.plates.raw.DEMOSAIC_METHODS`).
     demosaic: str | None = None
@@ -202,7 +202,6 @@ def open_plate(
         y=int(spec.y),
         width=int(spec.width),
         height=int(spec.height),
-        channel_names=names,
         rgb=rgb,
         bits=bits,
         is_float=is_float,
@@ -227,16 +226,10 @@ def _open_raw(source: str, encoding: str | None, demosaic: str | None) -> PlateI
     return PlateInfo(
         path=source,
         file_format=f"raw (LibRaw, {demosaic} demosaic)",
-        x=0,
-        y=0,
         width=int(width),
         height=int(height),
-        channel_names=("R", "G", "B"),
-        rgb=(0, 1, 2),
         bits=16,
         is_float=False,
-        tile_width=0,
-        tile_height=0,
         encoding="linear",
         demosaic=demosaic,
     )
@@ -318,6 +311,20 @@ def read_region(
         raise InputError(f"{bad} NaN/Inf samples in region {list(box)}", source=info.path)
     if info.encoding != "linear":
         return linearise(out, info.encoding)
+    return out
+
+
+def block_means(info: PlateInfo, factor: int) -> np.ndarray:
+    """(height // factor, width // factor, 3) float64: the plate averaged over blocks of
+    ``factor`` x ``factor`` pixels (whole blocks only; NaN and Inf count as 0), read in bands."""
+    cells_x, cells_y = info.width // factor, info.height // factor
+    out = np.empty((cells_y, cells_x, 3), dtype=np.float64)
+    band = max(1, (1 << 21) // max(1, info.width * factor * 3))
+    for cy in range(0, cells_y, band):
+        cy1 = min(cells_y, cy + band)
+        box = (info.x, info.y + cy * factor, info.x + cells_x * factor, info.y + cy1 * factor)
+        pixels = np.nan_to_num(read_region(info, box).astype(np.float64), posinf=0.0, neginf=0.0)
+        out[cy:cy1] = pixels.reshape(cy1 - cy, factor, cells_x, factor, 3).mean(axis=(1, 3))
     return out
 
 

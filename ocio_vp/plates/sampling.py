@@ -250,7 +250,6 @@ def sample_chart(
         outlier_sigma=outlier_sigma,
         max_outlier_fraction=max_outlier_fraction,
         max_spread=max_spread,
-        source=where,
         raw_groups=raw_groups,
     )
     _check_not_mostly_clipped(stats["clipped_fraction"], rows * columns, where)
@@ -358,7 +357,6 @@ def sample_region(
         outlier_sigma=outlier_sigma,
         max_outlier_fraction=max_outlier_fraction,
         max_spread=np.inf,  # a region has no brightest patch to compare with
-        source=where,
         raw_groups=[raw],
     )
     return ChartSamples(box=b, method=method, frames=n_frames, **stats)  # type: ignore[arg-type]

@@ -81,7 +81,6 @@ def patch_statistics(
     outlier_sigma: float,
     max_outlier_fraction: float,
     max_spread: float,
-    source: object,
     raw_groups: Sequence[np.ndarray] | None = None,
 ) -> dict[str, np.ndarray | tuple[float, float, float] | None]:
     """Statistics of each pixel group (one (k, 3) array per patch or region).

@@ -197,15 +197,16 @@ def _reading(patch: Patch, numbers, kept, stats: list[FrameStats], floor, window
     )
 
 
+def _check_length(count: int, take: TakeRef, source) -> None:
+    if count < 8:
+        message = f"the take has {count} frames: too short to hold the sequence"
+        raise InputError(message, source=source, key=take.key)
+
+
 def _take_frames(take: TakeRef, source) -> tuple[np.ndarray, list[Path]]:
     """The take's frame numbers (the time coordinate) and files; too few is a refusal."""
     listed = list_take_frames(take.frames)
-    if len(listed) < 8:
-        raise InputError(
-            f"the take has {len(listed)} frames: too short to hold the sequence",
-            source=source,
-            key=take.key,
-        )
+    _check_length(len(listed), take, source)
     return np.array([n for n, _ in listed], dtype=np.float64), [p for _, p in listed]
 
 
@@ -284,12 +285,7 @@ def _scan(take, frames, region, clip, on_progress, source) -> _Scan:
         numbers, signal_stats, band_stats = scan_movie(
             movie, region, signal_rows, rows, clip=clip, on_frame=tick
         )
-        if len(numbers) < 8:
-            raise InputError(
-                f"the take has {len(numbers)} frames: too short to hold the sequence",
-                source=source,
-                key=take.key,
-            )
+        _check_length(len(numbers), take, source)
         return _Scan(
             numbers,
             np.array([s.mean for s in signal_stats]),

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ocio_vp.errors import InputError
-from ocio_vp.plates.reader import PlateInfo, read_region
+from ocio_vp.plates.reader import PlateInfo, block_means
 
 __all__ = ["GRID", "INSET", "SAMPLES", "find_wall", "largest_rectangle", "wall_mask"]
 
@@ -33,20 +33,6 @@ GRID = 256
 INSET = 0.05
 #: The wall must be at least this many pixels each way once found.
 MIN_SIZE = 8
-
-
-def _reduced(info: PlateInfo, factor: int) -> np.ndarray:
-    """The frame block-averaged by ``factor`` (whole blocks only), read in bands of rows."""
-    cells_x, cells_y = info.width // factor, info.height // factor
-    out = np.empty((cells_y, cells_x, 3), dtype=np.float64)
-    band = max(1, (1 << 21) // max(1, info.width * factor * 3)) * factor
-    for cy in range(0, cells_y, max(1, band // factor)):
-        cy1 = min(cells_y, cy + max(1, band // factor))
-        y0, y1 = info.y + cy * factor, info.y + cy1 * factor
-        pixels = read_region(info, (info.x, y0, info.x + cells_x * factor, y1))
-        blocks = pixels.reshape(cy1 - cy, factor, cells_x, factor, 3)
-        out[cy:cy1] = blocks.mean(axis=(1, 3), dtype=np.float64)
-    return out
 
 
 def wall_mask(stack: np.ndarray) -> np.ndarray:
@@ -121,7 +107,7 @@ def find_wall(
             reduced.append(np.asarray(frames[1](int(k), factor), dtype=np.float64))
             continue
         frame_info = info if k == 0 else dataclasses.replace(info, path=str(paths[k]))
-        reduced.append(_reduced(frame_info, factor))
+        reduced.append(block_means(frame_info, factor))
     mask = wall_mask(np.stack(reduced))
     rect = largest_rectangle(mask)
     hint = "give the take's region: [x0, y0, x1, y1] in the capture file"

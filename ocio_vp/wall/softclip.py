@@ -94,24 +94,21 @@ def soft_clip_knee(linearity: Linearity | None) -> float | None:
     return linearity.soft_clip.knee
 
 
-def _block(knee: float) -> SoftClip:
-    return SoftClip(
-        knee=float(knee),
-        curve=SOFT_CLIP_CURVE,
-        full_drive=round(full_drive(knee), 6),
-        inverse_cap=INVERSE_CAP,
-    )
-
-
 def with_soft_clip(solution: Solution, knee: float | None) -> Solution:
     """A copy of ``solution`` whose ``linearity`` block (and every panel type's) records the
     soft clip; ``knee`` None returns ``solution`` unchanged."""
     if knee is None:
         return solution
     check_knee(knee)
+    block = SoftClip(
+        knee=float(knee),
+        curve=SOFT_CLIP_CURVE,
+        full_drive=round(full_drive(knee), 6),
+        inverse_cap=INVERSE_CAP,
+    )
 
     def clipped(linearity: Linearity | None) -> Linearity:
-        return (linearity or assumed_linearity()).updated(soft_clip=_block(knee))
+        return (linearity or assumed_linearity()).updated(soft_clip=block)
 
     panels = solution.panels
     if panels:
