@@ -115,12 +115,8 @@ def skin_figures(
         comparison = SkinDefault(
             model=default[0],
             expected=float(np.mean(errors[2])),
-            led_damage=float(
-                in_frame_led_damage(correction, problem.SL, white, camera)
-            ),
-            led_damage_default=float(
-                in_frame_led_damage(default[1], problem.SL, white, camera)
-            ),
+            led_damage=float(in_frame_led_damage(correction, problem.SL, white, camera)),
+            led_damage_default=float(in_frame_led_damage(default[1], problem.SL, white, camera)),
             background_outside=_background_outside(problem, correction),
             background_outside_default=_background_outside(problem, default[1]),
             background=_fraction(background_error(problem, correction)),
