@@ -25,6 +25,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -61,8 +62,9 @@ def _run(cmd: list[str], env: dict[str, str], cwd: Path) -> tuple[float, float]:
     return wall, after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
 
 
-def _inputs(root: Path, quick: bool) -> dict[str, Path]:
-    """Measurement files (24 patches, 1000 patches, 150 environments) and 6 master frames."""
+def _inputs(root: Path, quick: bool, frames: bool = True) -> dict[str, Path]:
+    """Measurement files (24 patches, 1000 patches, 150 environments) and 6 master frames
+    (none when ``frames`` is false: only the ``apply`` rows read them)."""
     from benchmarks.bench_apply import write_frames
     from benchmarks.bench_solve_scaling import _mixtures
     from ocio_vp.formats.measurements import save_measurements
@@ -95,6 +97,8 @@ def _inputs(root: Path, quick: bool) -> dict[str, Path]:
     save_measurements(one, files["one"])
     save_measurements(chart, files["chart"])
     save_measurements(dataclasses.replace(six, environments=tuple(many)), files["many"])
+    if not frames:
+        return files
     height, width = (1080, 2048) if quick else (2160, 4096)
     files["master"] = write_frames(root / "master", 6, height, width)[0].parent
     return files
@@ -437,16 +441,26 @@ def _solve_calibrations(pythons, files, root: Path, env) -> None:
             _run([*cmd, str(root / who / method), "--method", method], env, root)
 
 
-def run(quick: bool = False) -> str:
+#: The sections of :func:`run`, in the order they run.
+SECTIONS = ("apply", "export", "solve")
+
+
+def run(quick: bool = False, sections: Sequence[str] = SECTIONS, rounds: int | None = None) -> str:
+    """The whole-command sections named in ``sections`` (all by default, as
+    ``python -m benchmarks.run`` runs them); ``rounds`` overrides the rounds of the export
+    and solve sections (``python -m benchmarks.bench_regression --sections export --rounds 5``
+    times the export rows alone, a minute or so, to iterate on them)."""
     baseline = os.environ.get(BASELINE_ENV)
     pythons = {"this": sys.executable}
     if baseline:
         pythons["baseline"] = baseline = os.path.abspath(baseline)  # commands run elsewhere
+    repeats = rounds or (1 if quick else 2)
     with tempfile.TemporaryDirectory() as tmp, cached_bytecode() as env:
         root = Path(tmp)
         env = {**env, "PYTHONPATH": ""}  # each interpreter imports its own checkout
-        files = _inputs(root, quick)
-        _solve_calibrations(pythons, files, root, env)
+        files = _inputs(root, quick, frames="apply" in sections)
+        if "apply" in sections or "export" in sections:
+            _solve_calibrations(pythons, files, root, env)
         parts = [
             "## Whole commands against last round",
             "",
@@ -456,19 +470,37 @@ def run(quick: bool = False) -> str:
             "",
         ]
         costs = []
-        for count in (3,) if quick else (6, 48):
-            rounds = 1 if (quick or count > 8) else 3
-            text, per_frame = _apply_section(pythons, files, root, env, count, rounds)
+        for count in () if "apply" not in sections else (3,) if quick else (6, 48):
+            apply_rounds = 1 if (quick or count > 8) else 3
+            text, per_frame = _apply_section(pythons, files, root, env, count, apply_rounds)
             costs.append((count, per_frame))
             parts += [text, ""]
             shutil.rmtree(root / f"frames{count}")
             shutil.rmtree(root / "o", ignore_errors=True)
         if len(costs) == 2:
             parts[-1:] = [_per_frame_line(*costs), ""]
-        parts += [_export_section(pythons, root, env, 1 if quick else 2), ""]
-        parts += [_solve_section(pythons, files, root, env, 1 if quick else 2)]
+        if "export" in sections:
+            parts += [_export_section(pythons, root, env, repeats), ""]
+        if "solve" in sections:
+            parts += [_solve_section(pythons, files, root, env, repeats)]
     return "\n".join(parts)
 
 
+def main(argv: list[str] | None = None) -> int:
+    import argparse
+
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.bench_regression",
+        description="Some of the whole-command sections alone, printed (docs/performance.md "
+        "is written by python -m benchmarks.run --only regression).",
+    )
+    parser.add_argument("--quick", action="store_true", help="smaller inputs, one round")
+    parser.add_argument("--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS))
+    parser.add_argument("--rounds", type=int, default=None, help="rounds of export and solve")
+    args = parser.parse_args(argv)
+    print(run(quick=args.quick, sections=args.sections, rounds=args.rounds))
+    return 0
+
+
 if __name__ == "__main__":
-    print(run(quick="--quick" in sys.argv))
+    sys.exit(main())

@@ -241,6 +241,44 @@ def test_the_package_exports_load_on_first_use():
         ocio_vp.nope  # noqa: B018
 
 
+@pytest.mark.parametrize("package", ["ocio_vp.formats", "ocio_vp.ocio"])
+def test_subpackage_names_load_on_first_use(package):
+    # formats/ and ocio/ publish their names lazily (export and apply import one module of
+    # each): every public name still resolves, to what its module defines.
+    module = importlib.import_module(package)
+    assert sorted(module.__all__) == sorted(module._EXPORTS)
+    for name in module.__all__:
+        value = getattr(module, name)
+        assert value is getattr(importlib.import_module(module._EXPORTS[name]), name)
+        assert name in dir(module)
+    with pytest.raises(AttributeError, match="no attribute 'nope'"):
+        module.nope  # noqa: B018
+
+
+#: What ``export --target nuke`` or ``unreal`` never runs: the solvers, the fixture drives, the
+#: cube baker, the bake of the LUT chains and the config writer.
+NOT_EXPORTED_BY_NUKE_OR_UNREAL = (
+    "ocio_vp.correction",
+    "ocio_vp.fixtures",
+    "ocio_vp.exports.cube",
+    "ocio_vp.exports.lights",
+    "ocio_vp.ocio.bake",
+    "ocio_vp.ocio.writer",
+)
+
+
+def test_an_export_loads_its_own_targets_modules_only():
+    code = (
+        "import sys, ocio_vp.exports, ocio_vp.exports.nuke, ocio_vp.exports.unreal; "
+        "print(sorted(m for m in sys.modules if m.startswith('ocio_vp.')))"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr.strip().splitlines()[-1:]
+    loaded = ast.literal_eval(run.stdout)
+    assert "ocio_vp.formats.solution" in loaded  # the check sees what an export reads
+    assert [m for m in loaded if m.startswith(NOT_EXPORTED_BY_NUKE_OR_UNREAL)] == []
+
+
 def _tested_source(test_name: str) -> list[Path]:
     """Where ``test_<package>_<module>.py`` (or ``test_<module>.py``) may point in ocio_vp/."""
     parts = test_name.removeprefix("test_").split("_")

@@ -10,6 +10,7 @@ environment that cannot be exported is reported and never stops the others.
 from __future__ import annotations
 
 import contextlib
+import importlib
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack
 from dataclasses import dataclass, field
@@ -19,12 +20,7 @@ import PyOpenColorIO as OCIO
 
 from ocio_vp.choices import SHOW_TARGETS
 from ocio_vp.errors import InputError
-from ocio_vp.exports.dit import has_camera_log, write_dit
 from ocio_vp.exports.escape import inside
-from ocio_vp.exports.lights import write_lights
-from ocio_vp.exports.nuke import write_nuke
-from ocio_vp.exports.resolve import write_resolve
-from ocio_vp.exports.show import SHOW_FOLDER, write_show
 from ocio_vp.exports.source import (
     DEFAULT_CUBE_RANGE,
     DEFAULT_CUBE_SIZE,
@@ -33,7 +29,6 @@ from ocio_vp.exports.source import (
     ExportSummary,
     load_export_source,
 )
-from ocio_vp.exports.unreal import write_unreal
 from ocio_vp.formats.provenance import SOURCE_FILE, source_record
 from ocio_vp.staging import publish_dirs, staged_dir
 
@@ -46,14 +41,27 @@ __all__ = [
     "export_solutions",
 ]
 
+Writer = Callable[[ExportSource, Path, CubeOptions], ExportSummary]
+
+
+def _writer(module: str, name: str) -> Writer:
+    """The writer ``name`` of ``ocio_vp.exports.<module>``, imported when first called: an
+    export loads its own targets' modules only (``lights`` alone loads the fixture solver,
+    ``resolve`` and ``dit`` the cube baker)."""
+
+    def write(source: ExportSource, folder: Path, cubes: CubeOptions) -> ExportSummary:
+        function: Writer = getattr(importlib.import_module(f"ocio_vp.exports.{module}"), name)
+        return function(source, folder, cubes)
+
+    write.__name__ = write.__qualname__ = name
+    return write
+
+
 #: Target name -> writer(source, folder, cubes) -> summary (cubes: what a writer that bakes a
 #: .cube uses; the others take it and ignore it).
-EXPORT_TARGETS: dict[str, Callable[[ExportSource, Path, CubeOptions], ExportSummary]] = {
-    "unreal": write_unreal,
-    "nuke": write_nuke,
-    "resolve": write_resolve,
-    "lights": write_lights,
-    "dit": write_dit,
+EXPORT_TARGETS: dict[str, Writer] = {
+    target: _writer(target, f"write_{target}")
+    for target in ("unreal", "nuke", "resolve", "lights", "dit")
 }
 
 
@@ -124,6 +132,12 @@ def _check_options(targets, cube_size, cube_range) -> tuple[float, float]:
     return lo, hi
 
 
+def _has_camera_log(source: ExportSource) -> bool:
+    from ocio_vp.exports.dit import has_camera_log
+
+    return has_camera_log(source)
+
+
 def _plan(sources, targets, out_path) -> list[tuple[ExportSource, list[tuple[str, Path]]]]:
     """Each source with its (target, final folder) jobs; refuses two sources writing one
     folder (a usage error: nothing is exported)."""
@@ -134,7 +148,7 @@ def _plan(sources, targets, out_path) -> list[tuple[ExportSource, list[tuple[str
         for target in dict.fromkeys(targets):
             if target == "lights" and not source.solution.fixtures:
                 continue  # nothing for the lighting desk without fixtures
-            if target == "dit" and not has_camera_log(source):
+            if target == "dit" and not _has_camera_log(source):
                 continue  # no log footage without a camera gamut
             final = _final_folder(source, target, out_path)
             key = final.resolve()
@@ -215,6 +229,8 @@ def export_solutions(
 
 def _export_show(sources, report: ExportReport, out, base_config) -> ExportResult:
     """The show config of every loaded source (refused when one could not be loaded)."""
+    from ocio_vp.exports.show import SHOW_FOLDER, write_show
+
     if out is None:
         raise InputError("--target show writes OUT/show/: give --out OUT", key="--out")
     if report.failures:

@@ -132,8 +132,9 @@ def bake_cube(
         f"LUT_3D_SIZE {size}",
         "LUT_3D_INPUT_RANGE 0.0 1.0",
     ]
-    lines += [f"{v:.9g} {v:.9g} {v:.9g}" for v in table]
-    lines += [f"{r:.9g} {g:.9g} {b:.9g}" for r, g, b in values]
+    # as Python floats: the same text as numpy scalars formatted one by one, in less time
+    lines += map("{0:.9g} {0:.9g} {0:.9g}".format, table.tolist())
+    lines += map("{:.9g} {:.9g} {:.9g}".format, *values.T.tolist())
     path.write_text("\n".join(lines) + "\n", encoding="ascii")
     return path
 
@@ -153,15 +154,21 @@ def cube_error(
     raw = OCIO.Config.CreateRaw()
     boxes: dict[str, float] = {}
     worst, worst_input = -1.0, np.zeros(3)  # every sample's error >= 0 replaces it
+    hosts = {  # the file read once for each interpolation (each box's samples go through it)
+        name: processor_function(
+            raw.getProcessor(OCIO.FileTransform(src=str(path.resolve()), interpolation=how))
+        )
+        for name, how in (
+            ("trilinear", OCIO.INTERP_LINEAR),
+            ("tetrahedral", OCIO.INTERP_TETRAHEDRAL),
+        )
+    }
+    exact_function = processor_function(processor)
     for box, (a, b) in (("content_0_1", (max(lo, 0.0), min(hi, 1.0))), ("input_range", (lo, hi))):
         rgb = rng.uniform(a, b, size=(samples, 3))
-        exact = processor_function(processor)(rgb)
-        for name, interpolation in (("trilinear", OCIO.INTERP_LINEAR),
-                                    ("tetrahedral", OCIO.INTERP_TETRAHEDRAL)):  # fmt: skip
-            cube = OCIO.FileTransform(src=str(path.resolve()), interpolation=interpolation)
-            error = np.abs(processor_function(raw.getProcessor(cube))(rgb) - exact) / np.maximum(
-                1.0, np.abs(exact)
-            )
+        exact = exact_function(rgb)
+        for name, host in hosts.items():
+            error = np.abs(host(rgb) - exact) / np.maximum(1.0, np.abs(exact))
             per_sample = error.max(axis=1)
             boxes[f"{box}_{name}"] = float(per_sample.max())
             if per_sample.max() > worst:

@@ -16,7 +16,6 @@ import numpy as np
 import PyOpenColorIO as OCIO
 from numpy.typing import ArrayLike
 
-from ocio_vp.correction.root_polynomial import root_polynomial_term_powers
 from ocio_vp.deprecation import deprecated_names
 from ocio_vp.exports.cube import CUBE_LIMIT, CubeAccuracy, fit_cube
 from ocio_vp.exports.source import (
@@ -37,6 +36,7 @@ from ocio_vp.model.correction import (
     RootPolynomialCorrection,
     unprotected,
 )
+from ocio_vp.model.expansion import root_polynomial_term_powers
 from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
 
 __all__ = [

@@ -13,14 +13,17 @@ import shutil
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import PyOpenColorIO as OCIO
 
 from ocio_vp.errors import InputError
-from ocio_vp.exports.cube import CubeAccuracy
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.solution import OcioNames, Solution, load_solution
-from ocio_vp.model.footage_range import Agreement
+from ocio_vp.model.footage_range import AGREEMENT_P99, AGREEMENT_WORST, Agreement
+
+if TYPE_CHECKING:  # the cube baker (numpy, OCIO's processors) is loaded by the targets baking one
+    from ocio_vp.exports.cube import CubeAccuracy
 
 #: Cube lattice size and input range (camera RGB) of every exported .cube.
 DEFAULT_CUBE_SIZE = 33
@@ -211,12 +214,11 @@ def post_correction_carriage(solution: Solution) -> Carriage | None:
 
     ``agreement``: ΔE2000 of the config's LUT chain against the exact model over the camera
     range, measured when the config was written (``diagnostics.post_correction_ocio``);
-    ``beyond``: the sets where it exceeds :data:`ocio_vp.ocio.bake.AGREEMENT_P99` (p99) or
-    :data:`~ocio_vp.ocio.bake.AGREEMENT_WORST` (worst); ``exact``: where the model is computed
-    exactly; ``note``: all of it in one sentence, for labels and descriptions.
+    ``beyond``: the sets where it exceeds
+    :data:`~ocio_vp.model.footage_range.AGREEMENT_P99` (p99) or
+    :data:`~ocio_vp.model.footage_range.AGREEMENT_WORST` (worst); ``exact``: where the model
+    is computed exactly; ``note``: all of it in one sentence, for labels and descriptions.
     """
-    from ocio_vp.ocio.bake import AGREEMENT_P99, AGREEMENT_WORST
-
     correction = solution.correction
     if correction.linear:
         return None

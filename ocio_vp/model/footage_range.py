@@ -40,6 +40,8 @@ if TYPE_CHECKING:  # formats imports model: the JSON types for annotations only
 
 
 __all__ = [
+    "AGREEMENT_P99",
+    "AGREEMENT_WORST",
     "EMITTER_LEVELS",
     "EXPOSURES",
     "HDR",
@@ -185,6 +187,12 @@ def calibration_footage_range(
         camera_to_xyz=camera_to_xyz,
         seed=seed,
     )
+
+
+#: The agreement with the exact model the hosts are held to (ΔE2000, p99 and worst): the
+#: config's LUT chains when they are baked, and the exports' notes when they are read back.
+AGREEMENT_P99 = 0.5
+AGREEMENT_WORST = 2.0
 
 
 @dataclass(frozen=True)

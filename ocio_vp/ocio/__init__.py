@@ -1,31 +1,38 @@
 """OpenColorIO output: the config of one environment (as data, then built), the wall
 colorspaces' LUT and encoding tail, and the all-or-nothing writer of ``OUT/<environment>/``.
+
+The names below are imported on first use (PEP 562): a module of this package imported alone
+(``ocio_vp.ocio.clf``, ``ocio_vp.ocio.bake``, as the exports do) loads what it needs, not the
+config builder and the writer with it.
 """
 
-from ocio_vp.ocio.config import (
-    DISPLAY,
-    IN_FRUSTUM,
-    OUT_OF_FRUSTUM,
-    POST_CORRECTION,
-    POST_CORRECTION_COLORSPACE,
-    RAW,
-    REFERENCE,
-    build_config,
-    config_data,
-    matrix_transform,
-    write_config,
-)
-from ocio_vp.ocio.description import ConfigData, build
-from ocio_vp.ocio.wall import (
-    WallOutputs,
-    encoding_transforms,
-    lut_transform,
-    wall_outputs,
-)
-from ocio_vp.ocio.writer import (
-    write_environment,
-    write_solutions,
-)
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
+
+#: Public name -> the module of this package that defines it.
+_EXPORTS = {
+    "DISPLAY": "ocio_vp.ocio.config",
+    "IN_FRUSTUM": "ocio_vp.ocio.config",
+    "OUT_OF_FRUSTUM": "ocio_vp.ocio.config",
+    "POST_CORRECTION": "ocio_vp.ocio.config",
+    "POST_CORRECTION_COLORSPACE": "ocio_vp.ocio.config",
+    "RAW": "ocio_vp.ocio.config",
+    "REFERENCE": "ocio_vp.ocio.config",
+    "build_config": "ocio_vp.ocio.config",
+    "config_data": "ocio_vp.ocio.config",
+    "matrix_transform": "ocio_vp.ocio.config",
+    "write_config": "ocio_vp.ocio.config",
+    "ConfigData": "ocio_vp.ocio.description",
+    "build": "ocio_vp.ocio.description",
+    "WallOutputs": "ocio_vp.ocio.wall",
+    "encoding_transforms": "ocio_vp.ocio.wall",
+    "lut_transform": "ocio_vp.ocio.wall",
+    "wall_outputs": "ocio_vp.ocio.wall",
+    "write_environment": "ocio_vp.ocio.writer",
+    "write_solutions": "ocio_vp.ocio.writer",
+}
 
 __all__ = [
     "DISPLAY",
@@ -48,3 +55,42 @@ __all__ = [
     "write_environment",
     "write_solutions",
 ]
+
+if TYPE_CHECKING:  # what type checkers and IDEs see; at run time, __getattr__ below
+    from ocio_vp.ocio.config import (
+        DISPLAY,
+        IN_FRUSTUM,
+        OUT_OF_FRUSTUM,
+        POST_CORRECTION,
+        POST_CORRECTION_COLORSPACE,
+        RAW,
+        REFERENCE,
+        build_config,
+        config_data,
+        matrix_transform,
+        write_config,
+    )
+    from ocio_vp.ocio.description import ConfigData, build
+    from ocio_vp.ocio.wall import (
+        WallOutputs,
+        encoding_transforms,
+        lut_transform,
+        wall_outputs,
+    )
+    from ocio_vp.ocio.writer import (
+        write_environment,
+        write_solutions,
+    )
+
+
+def __getattr__(name: str) -> object:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # later lookups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_EXPORTS])

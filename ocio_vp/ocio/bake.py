@@ -61,9 +61,14 @@ from ocio_vp.formats.diagnostics import PostCorrectionOCIO
 from ocio_vp.formats.solution import Solution
 from ocio_vp.metrics import sample_camera_to_xyz
 from ocio_vp.model.correction import PostCorrection, ProtectedCorrection, newton_inverse
-from ocio_vp.model.footage_range import Agreement, agreement, calibration_footage_range
+from ocio_vp.model.footage_range import (
+    AGREEMENT_P99,
+    AGREEMENT_WORST,
+    Agreement,
+    agreement,
+    calibration_footage_range,
+)
 from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
-from ocio_vp.ocio.wall import sidecar_name
 from ocio_vp.wall.encoding import LUT_DIR
 
 __all__ = [
@@ -123,9 +128,6 @@ DIRECTION_SHARES = (0.55, 0.3, 0.15)
 PHYSICAL = 0.02
 #: Grid the curvature of the departure from L is measured on (per axis).
 CURVATURE_GRID = 96
-#: The agreement with the exact model the hosts are held to (ΔE2000, p99 and worst).
-AGREEMENT_P99 = 0.5
-AGREEMENT_WORST = 2.0
 _BASIS = np.array([[1 / 3, 1 / 3, 1 / 3], [1.0, -1.0, 0.0], [0.0, -1.0, 1.0]])
 
 
@@ -780,6 +782,8 @@ def content_range(footage, correction):
 
 
 def _outputs(solution, chains, measured, measured_inverse) -> ModelOutputs:
+    from ocio_vp.ocio.wall import sidecar_name  # the config's side (loads the config builder)
+
     correction = solution.correction
     files, names, designs = {}, [], {}
     for stem, chain, lut, what in chains:
