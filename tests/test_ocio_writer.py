@@ -103,3 +103,6 @@ def test_no_pool_for_a_linear_method():
         assert pool is None
     with writer_pool("root-polynomial") as pool:
         assert pool is not None
+    # one environment is written where it is solved: nothing to share
+    with writer_pool("root-polynomial", environments=1) as pool:
+        assert pool is None

@@ -285,7 +285,6 @@ def print_camera_gamut(solutions: Sequence) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ocio_vp.errors import InputError
-    from ocio_vp.ocio.writer import writer_pool
 
     if args.peak_nits is not None and not 0 < args.peak_nits <= 10000:
         raise InputError(f"expected 0 < cd/m2 <= 10000, got {args.peak_nits:g}", key="--peak-nits")
@@ -296,9 +295,7 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.hdri_width is not None and not args.hdri:
         raise InputError("applies only with --hdri", key="--hdri-width")
-    # The writing helper starts first, so that its imports overlap loading and solving.
-    with writer_pool(args.method, protect_emitters=args.protect_emitters) as pool:
-        written = _solve_and_write(args, pool)
+    written = _solve_and_write(args)
     print_summary(written)
     print_fixtures(written)
     print_panels(written)
@@ -349,14 +346,11 @@ def wall_encoding(args: argparse.Namespace, measurements) -> tuple[str, float]:
     return encoding, DEFAULT_PEAK_NITS if peak is None else float(peak)
 
 
-def _solve_and_write(args: argparse.Namespace, pool) -> list:
+def _solve_and_write(args: argparse.Namespace) -> list:
     """Load, solve every environment asked for, and write them to ``args.out``."""
-    from ocio_vp.errors import InputError
     from ocio_vp.formats.measurements import with_camera_colorspace
     from ocio_vp.formats.merge import load_measurement_files
-    from ocio_vp.ocio.writer import write_solutions
-    from ocio_vp.wall.encoding import with_wall_encoding
-    from ocio_vp.wall.softclip import with_soft_clip
+    from ocio_vp.ocio.writer import writer_pool
 
     measurements = load_measurement_files(args.measurements)
     if args.camera_colorspace is not None:
@@ -366,6 +360,21 @@ def _solve_and_write(args: argparse.Namespace, pool) -> list:
     environments = measurements.environments
     if args.environment:
         environments = tuple(measurements.environment(name) for name in args.environment)
+    # The writing helper starts before solving, so that its imports overlap the solves; one
+    # environment is written here, with no helper.
+    with writer_pool(
+        args.method, protect_emitters=args.protect_emitters, environments=len(environments)
+    ) as pool:
+        return _solve_environments(args, measurements, environments, pool)
+
+
+def _solve_environments(args: argparse.Namespace, measurements, environments, pool) -> list:
+    """Solve ``environments`` (HDRIs, wall encoding, soft clip as asked) and write them."""
+    from ocio_vp.errors import InputError
+    from ocio_vp.ocio.writer import write_solutions
+    from ocio_vp.wall.encoding import with_wall_encoding
+    from ocio_vp.wall.softclip import with_soft_clip
+
     if args.hdri:
         from ocio_vp.hdri.diffuse import DEFAULT_HDRI_WIDTH, environments_with_hdri
 

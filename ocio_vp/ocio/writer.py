@@ -86,11 +86,12 @@ def _ready() -> bool:
 
 @contextlib.contextmanager
 def writer_pool(
-    method: str | None = None, *, protect_emitters: bool = False
+    method: str | None = None, *, protect_emitters: bool = False, environments: int | None = None
 ) -> Iterator[Executor | None]:
     """One helper process for :func:`write_solutions` of solves by ``method``, started now;
     None for a linear method without ``protect_emitters`` (no environment bakes LUTs: the
-    helper would cost more than it saves). ``None``: any method.
+    helper would cost more than it saves) and for fewer than two ``environments`` (one is
+    written here). ``None``: any method, any number.
 
     Start it before loading and solving, so its imports overlap that work. "spawn", as for
     footage: the parent has threads (OpenColorIO, OpenBLAS) and forking them can deadlock.
@@ -98,7 +99,8 @@ def writer_pool(
     # Deferred: the helper imports this module and needs none of the solvers.
     from ocio_vp.correction.registry import NON_LINEAR_METHODS
 
-    if method is not None and method not in NON_LINEAR_METHODS and not protect_emitters:
+    linear = method is not None and method not in NON_LINEAR_METHODS and not protect_emitters
+    if linear or (environments is not None and environments < 2):
         yield None
         return
     context = multiprocessing.get_context("spawn")
