@@ -149,16 +149,7 @@ def _write_into(stage: Path, solutions: Sequence[Solution], pool: Executor | Non
             if i not in futures:
                 written[i] = write_environment(solution, folders[i])
         for i, future in futures.items():
-            try:
-                written[i] = future.result()
-            except InputError:
-                raise
-            except Exception:
-                # The helper crashed, or an error that does not survive between processes:
-                # write it again here, where the same error (if any) is raised as itself.
-                shutil.rmtree(folders[i], ignore_errors=True)
-                folders[i].mkdir()
-                written[i] = write_environment(solutions[i], folders[i])
+            written[i] = _helper_result(future, solutions[i], folders[i])
     except KeyboardInterrupt:  # stopped (Ctrl-C, kill): the helper's bake is not waited for
         _stop_helper(pool)
         raise
@@ -170,6 +161,56 @@ def _write_into(stage: Path, solutions: Sequence[Solution], pool: Executor | Non
     return written
 
 
+def _write_streamed(stage: Path, solutions: Iterator[Solution], pool: Executor) -> list:
+    """Write each solution into ``stage/<environment>`` as ``solutions`` yields it (it may solve
+    them on the way): each goes to the helper first, which writes while this process solves;
+    once all are in, this process takes back, from the last, every write the helper has not
+    started, so both finish together. In order."""
+    todo: list[tuple[Solution, Path]] = []
+    futures: dict[int, Future] = {}
+    written: list = []
+    try:
+        for solution in solutions:
+            folder = stage / solution.environment
+            folder.mkdir()
+            todo.append((solution, folder))
+            written.append(None)
+            try:
+                futures[len(todo) - 1] = pool.submit(write_environment, solution, folder)
+            except (BrokenProcessPool, RuntimeError):  # the helper died: written below
+                pass
+        for i in sorted(futures, reverse=True):
+            if not futures[i].cancel():
+                break  # the helper has it (and every one before it)
+            del futures[i]
+        for i, (solution, folder) in enumerate(todo):
+            if i not in futures:
+                written[i] = write_environment(solution, folder)
+        for i, future in futures.items():
+            written[i] = _helper_result(future, *todo[i])
+    except KeyboardInterrupt:  # stopped (Ctrl-C, kill): the helper's bake is not waited for
+        _stop_helper(pool)
+        raise
+    finally:
+        for future in futures.values():
+            future.cancel()
+        wait(list(futures.values()))
+    return written
+
+
+def _helper_result(future: Future, solution: Solution, folder: Path) -> Solution:
+    """What the helper wrote; written again here if it crashed (or its error does not survive
+    between processes), where the same error, if any, is raised as itself."""
+    try:
+        return future.result()
+    except InputError:
+        raise
+    except Exception:
+        shutil.rmtree(folder, ignore_errors=True)
+        folder.mkdir()
+        return write_environment(solution, folder)
+
+
 def _stop_helper(pool: Executor | None) -> None:
     """End the helper process of ``pool`` now (its futures fail; the pool is broken)."""
     for process in list((getattr(pool, "_processes", None) or {}).values()):
@@ -178,7 +219,7 @@ def _stop_helper(pool: Executor | None) -> None:
 
 
 def write_solutions(
-    solutions: Sequence[Solution],
+    solutions: Iterable[Solution],
     out_dir: str | Path,
     *,
     inputs: Iterable[str | os.PathLike[str]] = (),
@@ -188,11 +229,16 @@ def write_solutions(
 
     An existing environment folder is replaced only if ocio-vp wrote it and it holds nothing
     else, and none may be one of ``inputs`` (see :mod:`ocio_vp.staging`). With ``pool`` (see
-    :func:`writer_pool`) its process writes some of the environments.
+    :func:`writer_pool`) its process writes some of the environments: shared by their cost for
+    a sequence; for an iterator (solving as it goes), each as it comes while this process
+    solves the next, this process taking back the last ones (:func:`_write_streamed`).
     """
     out_dir = Path(out_dir)
     with staged_dir(out_dir) as stage:
-        written = _write_into(stage, solutions, pool)
-        pairs = [(stage / s.environment, out_dir / s.environment) for s in solutions]
+        if pool is not None and not isinstance(solutions, Sequence):
+            written = _write_streamed(stage, iter(solutions), pool)
+        else:
+            written = _write_into(stage, list(solutions), pool)
+        pairs = [(stage / s.environment, out_dir / s.environment) for s in written]
         publish_dirs(pairs, inputs=inputs)
     return written
