@@ -179,13 +179,14 @@ def _write_streamed(stage: Path, solutions: Iterator[Solution], pool: Executor) 
                 futures[len(todo) - 1] = pool.submit(write_environment, solution, folder)
             except (BrokenProcessPool, RuntimeError):  # the helper died: written below
                 pass
-        for i in sorted(futures, reverse=True):
+        for i, (solution, folder) in enumerate(todo):  # the helper refused these
+            if i not in futures:
+                written[i] = write_environment(solution, folder)
+        for i in sorted(futures, reverse=True):  # one at a time: both meet in the middle
             if not futures[i].cancel():
                 break  # the helper has it (and every one before it)
             del futures[i]
-        for i, (solution, folder) in enumerate(todo):
-            if i not in futures:
-                written[i] = write_environment(solution, folder)
+            written[i] = write_environment(*todo[i])
         for i, future in futures.items():
             written[i] = _helper_result(future, *todo[i])
     except KeyboardInterrupt:  # stopped (Ctrl-C, kill): the helper's bake is not waited for
