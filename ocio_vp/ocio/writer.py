@@ -163,9 +163,11 @@ def _write_into(stage: Path, solutions: Sequence[Solution], pool: Executor | Non
 
 def _write_streamed(stage: Path, solutions: Iterator[Solution], pool: Executor) -> list:
     """Write each solution into ``stage/<environment>`` as ``solutions`` yields it (it may solve
-    them on the way): each goes to the helper first, which writes while this process solves;
-    once all are in, this process takes back, from the last, every write the helper has not
-    started, so both finish together. In order."""
+    them on the way): each goes to the helper once the next one has come, and the helper writes
+    while this process solves; the last is written here, and then this process takes back,
+    from the last, every write the helper has not started, so both finish together (the
+    helper's queue takes two at once: the last one kept here is what this process writes even
+    when there are only two). In order."""
     todo: list[tuple[Solution, Path]] = []
     futures: dict[int, Future] = {}
     written: list = []
@@ -175,11 +177,12 @@ def _write_streamed(stage: Path, solutions: Iterator[Solution], pool: Executor) 
             folder.mkdir()
             todo.append((solution, folder))
             written.append(None)
-            try:
-                futures[len(todo) - 1] = pool.submit(write_environment, solution, folder)
-            except (BrokenProcessPool, RuntimeError):  # the helper died: written below
-                pass
-        for i, (solution, folder) in enumerate(todo):  # the helper refused these
+            if len(todo) > 1:  # one behind: the latest may be the last, written here
+                try:
+                    futures[len(todo) - 2] = pool.submit(write_environment, *todo[-2])
+                except (BrokenProcessPool, RuntimeError):  # the helper died: written below
+                    pass
+        for i, (solution, folder) in enumerate(todo):  # the last, and any the helper refused
             if i not in futures:
                 written[i] = write_environment(solution, folder)
         for i in sorted(futures, reverse=True):  # one at a time: both meet in the middle
