@@ -535,8 +535,9 @@ def _charts(
     )
 
 
-def _extrapolation(problem: QProblem, correction: PostCorrection) -> Extrapolation:
-    """The post-correction beyond the chart against least squares on the same patches."""
+def _extrapolation(problem: QProblem, fit: QFit, correction: PostCorrection) -> Extrapolation:
+    """The post-correction beyond the chart against least squares on the same patches (its fold
+    fraction as the fit measured it, where it did)."""
     X, P, w = problem.predicted, np.asarray(problem.target, dtype=np.float64), problem.fit_weights
     return extrapolation(
         correction,
@@ -546,6 +547,7 @@ def _extrapolation(problem: QProblem, correction: PostCorrection) -> Extrapolati
         lit_white=X[problem.white_patch],
         camera_to_xyz=sample_camera_to_xyz(),
         domain=problem.domain,
+        folds=None if fit.folds is None else fit.folds.of(correction, problem.domain),
     )
 
 
@@ -620,7 +622,7 @@ def _diagnostics(
         patch_screening=excluded is not None,
         excluded_patches=list(excluded or []),
         model_description=correction.describe(),
-        extrapolation=_extrapolation(problem, correction),
+        extrapolation=_extrapolation(problem, fit, correction),
     )
 
 

@@ -159,7 +159,7 @@ def _writing_in_this_process():
     from ocio_vp.ocio import writer
 
     @contextlib.contextmanager
-    def no_helper(method=None, *, protect_emitters=False):
+    def no_helper(method=None, *, protect_emitters=False, environments=None):
         yield None
 
     real = writer.writer_pool

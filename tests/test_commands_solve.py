@@ -238,37 +238,6 @@ def test_soft_clip_is_written_and_said(tmp_path, capsys) -> None:
     assert "LogCameraTransform" in (tmp_path / "calib" / "env_0" / "config.ocio").read_text()
 
 
-def test_solving_shared_with_the_helper_gives_the_same_solutions_in_order(tmp_path) -> None:
-    """``_solve_shared`` (the writing helper solves every other environment): the solutions of
-    a plain loop, in the file's order, with a stand-in helper (threads: no process start in a
-    unit test); a helper that dies has its share solved here."""
-    import dataclasses
-    from concurrent.futures import ThreadPoolExecutor
-    from concurrent.futures.process import BrokenProcessPool
-
-    from ocio_vp.commands.solve import SHARED_SOLVE_MIN, _solve_shared
-    from ocio_vp.formats.measurements import load_measurements
-    from ocio_vp.formats.solution import solution_to_json
-    from ocio_vp.pipeline import SolveOptions, solve_environment
-
-    path = _write(tmp_path, make_measurements_dict(environments=SHARED_SOLVE_MIN))
-    m = load_measurements(path)
-    options = SolveOptions(method="least-squares")
-    plain = [solution_to_json(solve_environment(m, env, options)) for env in m.environments]
-    with ThreadPoolExecutor(1) as pool:
-        shared = _solve_shared(m, m.environments, options, pool)
-    assert [solution_to_json(s) for s in shared] == plain
-
-    class Dead:
-        def submit(self, *args, **kwargs):
-            raise BrokenProcessPool("gone")
-
-    again = _solve_shared(m, m.environments, options, Dead())
-    assert [solution_to_json(s) for s in again] == plain
-    assert [s.environment for s in shared] == [e.name for e in m.environments]
-    assert dataclasses.is_dataclass(shared[0])
-
-
 def test_missing_optional_measurements_are_stated(tmp_path, capsys) -> None:
     """No black_level, no stage.white_patch: the terminal and solution.json say what was
     assumed; a file that gives both says nothing of the kind."""

@@ -103,24 +103,25 @@ def test_choose_fade_takes_the_first_that_folds_nowhere(problem):
     assert fold_fraction(RootPolynomialCorrection(C, A, problem.domain, fade), problem.domain) == 0
 
 
-def test_a_remembered_fold_fraction_is_each_fades_own(problem, monkeypatch):
-    """The chosen fade's fold fraction is measured once a solve (then remembered): a repeat
-    gives the measured value and a different fade is measured anew, never the other's."""
-    import importlib
-
+def test_choose_fade_measures_each_fade_as_fold_fraction_does(problem):
+    """The fades share the solid's points, fallback, gauge and polynomial: each fade's figure is
+    still exactly its own correction's :func:`fold_fraction`, and a root-polynomial fit carries
+    its chosen fade's, which the solve's extrapolation diagnostics read instead of measuring."""
     from ocio_vp.correction.problem import fit_least_squares
-    from ocio_vp.correction.root_polynomial import fit_root_polynomial
+    from ocio_vp.correction.root_polynomial import fit_root_polynomial, q_root_polynomial
 
-    module = importlib.import_module("ocio_vp.correction.extrapolation")  # not the function
     X, P, w = problem.predicted, problem.target, problem.fit_weights
     C, A = fit_root_polynomial(X, P, w, 2), fit_least_squares(X, P, w)
-    monkeypatch.setattr(module, "_FOLDS", {})
-    measured = []
-    real = module._measured_folds
-    monkeypatch.setattr(module, "_measured_folds", lambda *a: measured.append(1) or real(*a))
-    wide, narrow = (RootPolynomialCorrection(C, A, problem.domain, f) for f in FADES[::2])
-    first = fold_fraction(wide, problem.domain)
-    assert fold_fraction(dataclasses.replace(wide), problem.domain) == first
-    assert len(measured) == 1
-    assert fold_fraction(narrow, problem.domain) == real(narrow, problem.domain)
-    assert len(measured) == 2
+    fade, tried = choose_fade(C, A, problem.domain)
+    assert len(tried) >= 2  # more than one fade tried: the shared parts are reused
+    for f in FADES[: len(tried)]:
+        alone = fold_fraction(RootPolynomialCorrection(C, A, problem.domain, f), problem.domain)
+        assert tried[f"{f[0]:g}-{f[1]:g}"] == alone
+    fit = q_root_polynomial(problem)
+    assert fit.folds is not None
+    assert fit.folds.of(fit.correction, problem.domain) == fold_fraction(
+        fit.correction, problem.domain
+    )
+    # only for that correction over that domain: another one is measured anew
+    assert fit.folds.of(dataclasses.replace(fit.correction), problem.domain) is None
+    assert fit.folds.of(fit.correction, dataclasses.replace(problem.domain)) is None

@@ -108,3 +108,9 @@ def test_monitors_show_content_and_footage_after_q(arri):
         rgb,
     )
     np.testing.assert_allclose(got, want, atol=1e-5)
+
+
+def test_rec709_matrix_is_colour_sciences_to_the_bit():
+    # the packaged matrix the un-tone-mapped view uses (so config writing needs no colour)
+    want = colour.RGB_COLOURSPACES["ITU-R BT.709"].matrix_RGB_to_XYZ
+    assert np.array_equal(viewing.rec709_to_xyz(), want)

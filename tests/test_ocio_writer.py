@@ -63,6 +63,28 @@ def test_a_helper_that_dies_is_replaced_by_this_process(solutions, alone, tmp_pa
     assert [solution_to_json(s) for s in written] == alone[1]
 
 
+def test_solutions_streamed_to_a_helper_give_the_same_files_in_order(solutions, alone, tmp_path):
+    """An iterator (solve's: solved as they are written) goes to the helper one by one and this
+    process takes back the writes not started; a stand-in helper (a thread: no process start)
+    and one that refuses every task give the files written alone, in order."""
+    from concurrent.futures import ThreadPoolExecutor
+    from concurrent.futures.process import BrokenProcessPool
+
+    with ThreadPoolExecutor(1) as pool:
+        written = write_solutions(iter(solutions), tmp_path / "out", pool=pool)
+    assert _files(tmp_path / "out") == alone[0]
+    assert [solution_to_json(s) for s in written] == alone[1]
+
+    class Dead(ThreadPoolExecutor):
+        def submit(self, *args, **kwargs):
+            raise BrokenProcessPool("gone")
+
+    with Dead(1) as pool:
+        written = write_solutions(iter(solutions), tmp_path / "dead", pool=pool)
+    assert _files(tmp_path / "dead") == alone[0]
+    assert [solution_to_json(s) for s in written] == alone[1]
+
+
 def test_an_input_error_in_the_helper_is_reported_and_nothing_is_written(solutions, tmp_path):
     # A root-polynomial Q that is all zeros has no inverse, yet the solution keeps its N: an
     # InputError in write_environment. It is the second root-polynomial environment: the
@@ -103,3 +125,6 @@ def test_no_pool_for_a_linear_method():
         assert pool is None
     with writer_pool("root-polynomial") as pool:
         assert pool is not None
+    # one environment is written where it is solved: nothing to share
+    with writer_pool("root-polynomial", environments=1) as pool:
+        assert pool is None

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterable, Iterator, Sequence
 
 from ocio_vp.choices import (
     BLACK_LEVEL_METHODS,
@@ -285,7 +285,6 @@ def print_camera_gamut(solutions: Sequence) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ocio_vp.errors import InputError
-    from ocio_vp.ocio.writer import writer_pool
 
     if args.peak_nits is not None and not 0 < args.peak_nits <= 10000:
         raise InputError(f"expected 0 < cd/m2 <= 10000, got {args.peak_nits:g}", key="--peak-nits")
@@ -296,9 +295,7 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.hdri_width is not None and not args.hdri:
         raise InputError("applies only with --hdri", key="--hdri-width")
-    # The writing helper starts first, so that its imports overlap loading and solving.
-    with writer_pool(args.method, protect_emitters=args.protect_emitters) as pool:
-        written = _solve_and_write(args, pool)
+    written = _solve_and_write(args)
     print_summary(written)
     print_fixtures(written)
     print_panels(written)
@@ -349,14 +346,11 @@ def wall_encoding(args: argparse.Namespace, measurements) -> tuple[str, float]:
     return encoding, DEFAULT_PEAK_NITS if peak is None else float(peak)
 
 
-def _solve_and_write(args: argparse.Namespace, pool) -> list:
+def _solve_and_write(args: argparse.Namespace) -> list:
     """Load, solve every environment asked for, and write them to ``args.out``."""
-    from ocio_vp.errors import InputError
     from ocio_vp.formats.measurements import with_camera_colorspace
     from ocio_vp.formats.merge import load_measurement_files
-    from ocio_vp.ocio.writer import write_solutions
-    from ocio_vp.wall.encoding import with_wall_encoding
-    from ocio_vp.wall.softclip import with_soft_clip
+    from ocio_vp.ocio.writer import writer_pool
 
     measurements = load_measurement_files(args.measurements)
     if args.camera_colorspace is not None:
@@ -366,6 +360,21 @@ def _solve_and_write(args: argparse.Namespace, pool) -> list:
     environments = measurements.environments
     if args.environment:
         environments = tuple(measurements.environment(name) for name in args.environment)
+    # The writing helper starts before solving, so that its imports overlap the solves; one
+    # environment is written here, with no helper.
+    with writer_pool(
+        args.method, protect_emitters=args.protect_emitters, environments=len(environments)
+    ) as pool:
+        return _solve_environments(args, measurements, environments, pool)
+
+
+def _solve_environments(args: argparse.Namespace, measurements, environments, pool) -> list:
+    """Solve ``environments`` (HDRIs, wall encoding, soft clip as asked) and write them."""
+    from ocio_vp.errors import InputError
+    from ocio_vp.ocio.writer import write_solutions
+    from ocio_vp.wall.encoding import with_wall_encoding
+    from ocio_vp.wall.softclip import with_soft_clip
+
     if args.hdri:
         from ocio_vp.hdri.diffuse import DEFAULT_HDRI_WIDTH, environments_with_hdri
 
@@ -377,20 +386,22 @@ def _solve_and_write(args: argparse.Namespace, pool) -> list:
         )
         print("\n".join(notes))
     encoding, peak_nits = wall_encoding(args, measurements)
-    solutions = _solve(measurements, environments, args, pool)
-    solutions = [with_wall_encoding(s, encoding, peak_nits=peak_nits) for s in solutions]
-    solutions = [with_soft_clip(s, args.soft_clip) for s in solutions]
+    solved = _solve(measurements, environments, _options(measurements, args), args.scheduler)
+    solutions: Iterable = (
+        with_soft_clip(with_wall_encoding(s, encoding, peak_nits=peak_nits), args.soft_clip)
+        for s in solved
+    )  # with the helper, solved as they are written: it writes while this process solves
+    if pool is None:
+        solutions = list(solutions)
     hdri_files = [spec.partition("=")[2] or spec for spec in args.hdri]
     return write_solutions(solutions, args.out, inputs=[*args.measurements, *hdri_files], pool=pool)
 
 
-def _solve(measurements, environments, args: argparse.Namespace, pool=None) -> list:
-    """Every environment, on a Dask cluster or here (with a progress bar on a terminal); with
-    the writing helper ``pool`` (:func:`ocio_vp.ocio.writer.writer_pool`), every other one there
-    while this process solves the rest, so both cores solve as both write."""
+def _options(measurements, args: argparse.Namespace):
+    """The :class:`~ocio_vp.pipeline.SolveOptions` of the command line."""
     from ocio_vp.correction.skin_spectra import stage_spectra
     from ocio_vp.errors import InputError
-    from ocio_vp.pipeline import SolveOptions, solve_environment
+    from ocio_vp.pipeline import SolveOptions
 
     spectra = stage_spectra(args.led_spectra, args.camera_sensitivities, args.location_light)
     if spectra is not None:
@@ -398,7 +409,7 @@ def _solve(measurements, environments, args: argparse.Namespace, pool=None) -> l
         for name in spectra.lights:
             if name not in names:
                 raise InputError(f"no environment named {name!r}", key="--location-light")
-    options = SolveOptions(
+    return SolveOptions(
         method=args.method,
         black_level=args.black_level,
         fixtures=not args.no_fixtures,
@@ -407,49 +418,18 @@ def _solve(measurements, environments, args: argparse.Namespace, pool=None) -> l
         priority=args.priority,
         spectra=spectra,
     )
-    if args.scheduler:
-        from ocio_vp.footage.distributed import solve_environments
-
-        return solve_environments(measurements, environments, options, scheduler=args.scheduler)
-    if pool is not None and len(environments) >= SHARED_SOLVE_MIN:
-        return _solve_shared(measurements, environments, options, pool)
-    bar = progress(environments, desc="solving", unit="environment")
-    return [solve_environment(measurements, env, options) for env in bar]
 
 
-#: Environments from which ``solve`` shares the solving with its writing helper (fewer: the
-#: helper's own imports would cost more than it saves).
-SHARED_SOLVE_MIN = 8
-
-
-def _solve_shared(measurements, environments, options, pool) -> list:
-    """Odd-numbered environments solved by the helper process, the others here; in order. The
-    helper's results are the same solve (same code, same inputs); if it dies, its share is
-    solved here."""
-    from concurrent.futures.process import BrokenProcessPool
-
+def _solve(measurements, environments, options, scheduler: str | None = None) -> Iterator:
+    """Every environment, on a Dask cluster or here (with a progress bar on a terminal), one
+    at a time as they are asked for (:func:`ocio_vp.ocio.writer.write_solutions` writes each
+    while the next is solved)."""
     from ocio_vp.pipeline import solve_environment
 
-    futures = {}
-    for i in range(1, len(environments), 2):
-        try:
-            futures[i] = pool.submit(solve_environment, measurements, environments[i], options)
-        except (BrokenProcessPool, RuntimeError):
-            break
-    solutions: list = [None] * len(environments)
-    with progress(total=len(environments), desc="solving", unit="environment") as bar:
-        try:
-            for i, env in enumerate(environments):
-                if i not in futures:
-                    solutions[i] = solve_environment(measurements, env, options)
-                    bar.update(1)
-            for i, future in futures.items():
-                try:
-                    solutions[i] = future.result()
-                except (BrokenProcessPool, RuntimeError):  # the helper died: solve it here
-                    solutions[i] = solve_environment(measurements, environments[i], options)
-                bar.update(1)
-        finally:
-            for future in futures.values():
-                future.cancel()
-    return solutions
+    if scheduler:
+        from ocio_vp.footage.distributed import solve_environments
+
+        yield from solve_environments(measurements, environments, options, scheduler=scheduler)
+        return
+    for env in progress(environments, desc="solving", unit="environment"):
+        yield solve_environment(measurements, env, options)

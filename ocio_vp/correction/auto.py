@@ -179,7 +179,10 @@ def _chosen_fit(chosen: str, X, P, w, white, alpha: float, model: QFit | None, *
     auto's reason and figures on top."""
     if model is not None:
         details = {**typed.pop("details"), **model.details}
-        return QFit(model.correction, chosen, model.description, details=details, **typed)
+        return QFit(
+            model.correction, chosen, model.description, details=details, folds=model.folds,
+            **typed,
+        )  # fmt: skip
     if chosen == "regularised":
         typed["details"]["shrinkage"] = alpha
     description = {"identity": "Q = I, no post-correction", "diagonal": "white balance"}

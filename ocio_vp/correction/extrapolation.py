@@ -38,6 +38,7 @@ from ocio_vp.model.correction import (
     PostCorrection,
     RootPolynomialCorrection,
 )
+from ocio_vp.model.expansion import apply_root_polynomial
 from ocio_vp.model.footage_range import EMITTER_LEVELS, wall_emitters
 
 __all__ = [
@@ -47,6 +48,7 @@ __all__ = [
     "Extrapolation",
     "choose_fade",
     "extrapolation",
+    "fade_label",
     "fold_fraction",
     "in_frame_led_damage",
     "lowest_channel_words",
@@ -76,60 +78,79 @@ def _halton(n: int, base: int) -> np.ndarray:
 _REFLECTIVE = np.stack([_halton(FOLD_SAMPLES, b) for b in (2, 3, 5)], axis=-1)
 
 
-#: Fold fractions already measured, by :func:`_fold_key`: a solve measures the chosen fade's
-#: twice (choosing it, then in the diagnostics); a few entries suffice.
-_FOLDS: dict[bytes, float] = {}
-
-
-def _fold_key(correction: PostCorrection, domain: FitDomain) -> bytes | None:
-    """Everything a bounded root-polynomial's fold fraction depends on, as bytes (None for
-    other corrections: not remembered)."""
-    if not isinstance(correction, RootPolynomialCorrection) or correction.domain is None:
-        return None
-    own = correction.domain
-    arrays = [correction.coefficients, correction.fallback, np.asarray(correction.fade)]
-    arrays += [own.to_drive, own.hull, own.centre, domain.to_drive]
-    arrays = [np.ascontiguousarray(a, dtype=np.float64) for a in arrays]
-    return b"|".join(repr(a.shape).encode() + a.tobytes() for a in arrays)
-
-
 def fold_fraction(correction: PostCorrection, domain: FitDomain) -> float:
     """Share of the reflective solid where the correction folds (see the module docstring)."""
-    key = _fold_key(correction, domain)
-    if key is not None and key in _FOLDS:
-        return _FOLDS[key]
-    folds = _measured_folds(correction, domain)
-    if key is not None:
-        if len(_FOLDS) >= 32:
-            _FOLDS.pop(next(iter(_FOLDS)))  # the oldest
-        _FOLDS[key] = folds
-    return folds
-
-
-def _measured_folds(correction: PostCorrection, domain: FitDomain) -> float:
-    x = _REFLECTIVE @ np.linalg.inv(domain.to_drive).T
-    h = 1e-7 * np.max(np.abs(x))
+    x, h = _solid(domain)
     columns = []
     for k in range(3):
         step = np.zeros(3)
         step[k] = h
         columns.append((correction.apply(x + step) - correction.apply(x - step)) / (2 * h))
+    return _folded(columns, correction.matrix)
+
+
+def _solid(domain: FitDomain) -> tuple[np.ndarray, float]:
+    """The reflective solid's sample points as camera RGB, and the derivatives' step there."""
+    x = _REFLECTIVE @ np.linalg.inv(domain.to_drive).T
+    return x, 1e-7 * float(np.max(np.abs(x)))
+
+
+def _folded(columns: list[np.ndarray], matrix: np.ndarray) -> float:
+    """The share of points whose Jacobian (its ``columns``) has the other sign than ``matrix``."""
     det = np.linalg.det(np.stack(columns, axis=-1))
-    reference = np.sign(np.linalg.det(correction.matrix)) or 1.0
+    reference = np.sign(np.linalg.det(matrix)) or 1.0
     return float(np.mean(np.sign(det) != reference))
+
+
+class _Side:
+    """One shifted copy of the solid's points and what every fade shares there: the fallback's
+    output, the gauge, and the polynomial on the last set of points a fade weighted."""
+
+    def __init__(self, x: np.ndarray, fallback: np.ndarray, domain: FitDomain) -> None:
+        self.x, self.linear, self.gauge = x, x @ fallback.T, domain.gauge(x)
+        self._points: np.ndarray | None = None
+        self._poly = np.empty((0, 3))
+
+    def apply(self, correction: RootPolynomialCorrection) -> np.ndarray:
+        """``correction.apply(self.x)``, the same operations on the shared parts."""
+
+        def polynomial(points: np.ndarray) -> np.ndarray:
+            if self._points is None or not np.array_equal(points, self._points):
+                self._points = points
+                self._poly = apply_root_polynomial(correction.coefficients, points)
+            return self._poly
+
+        weight = correction.weight_at(self.gauge)
+        return correction.blend(self.x, self.linear, weight, polynomial)
+
+
+def fade_label(fade: tuple[float, float]) -> str:
+    """A fade's key in :func:`choose_fade`'s table, e.g. ``"0.75-1.5"``."""
+    return f"{fade[0]:g}-{fade[1]:g}"
 
 
 def choose_fade(
     coefficients: np.ndarray, fallback: np.ndarray, domain: FitDomain
 ) -> tuple[tuple[float, float] | None, dict[str, float]]:
     """The first of :data:`FADES` whose bounded root-polynomial folds nowhere in the reflective
-    solid (None when every one folds), and each tried fade's fold fraction."""
+    solid (None when every one folds), and each tried fade's fold fraction (by
+    :func:`fade_label`): :func:`fold_fraction` of each, with the fallback's output, the gauge
+    and the polynomial at the solid's points computed once for all the fades."""
+    corrections = [RootPolynomialCorrection(coefficients, fallback, domain, f) for f in FADES]
+    x, h = _solid(domain)
+    sides = []
+    for k in range(3):
+        step = np.zeros(3)
+        step[k] = h
+        sides.append([_Side(x + step, corrections[0].fallback, domain)])
+        sides[-1].append(_Side(x - step, corrections[0].fallback, domain))
     tried: dict[str, float] = {}
-    for fade in FADES:
-        folds = fold_fraction(
-            RootPolynomialCorrection(coefficients, fallback, domain, fade), domain
-        )
-        tried[f"{fade[0]:g}-{fade[1]:g}"] = folds
+    for fade, correction in zip(FADES, corrections, strict=True):
+        columns = [
+            (plus.apply(correction) - minus.apply(correction)) / (2 * h) for plus, minus in sides
+        ]
+        folds = _folded(columns, correction.matrix)
+        tried[fade_label(fade)] = folds
         if folds == 0.0:
             return fade, tried
     return None, tried
@@ -180,9 +201,12 @@ def extrapolation(
     lit_white: np.ndarray,
     camera_to_xyz: np.ndarray,
     domain: FitDomain,
+    folds: float | None = None,
 ) -> Extrapolation:
     """:class:`Extrapolation` of ``correction`` against the least-squares matrix; ``white`` is
-    the target white patch (the ΔE's reference), ``lit_white`` the lit one (the probes' scale)."""
+    the target white patch (the ΔE's reference), ``lit_white`` the lit one (the probes' scale);
+    ``folds`` the fold fraction where the solve already measured it (:attr:`QFit.folds
+    <ocio_vp.correction.problem.QFit.folds>`), else it is measured here."""
     kept, negative = saturation_probe(correction, lit_white)
     return Extrapolation(
         led_damage=in_frame_led_damage(correction, SL, white, camera_to_xyz),
@@ -191,13 +215,16 @@ def extrapolation(
         ),
         kept=kept,
         negative=negative,
-        folds=_folds(correction, domain),
+        folds=_folds(correction, domain, folds),
     )
 
 
-def _folds(correction: PostCorrection, domain: FitDomain) -> float | None:
-    """The fold fraction; 0 for an invertible matrix, None where Q's matrix is singular (its
-    Jacobian's sign is rounding there, not a property of the correction)."""
+def _folds(correction: PostCorrection, domain: FitDomain, known: float | None) -> float | None:
+    """The fold fraction (``known``, else measured); 0 for an invertible matrix, None where Q's
+    matrix is singular (its Jacobian's sign is rounding there, not a property of the
+    correction)."""
     if not correction.invertible:
         return None
-    return 0.0 if correction.linear else fold_fraction(correction, domain)
+    if correction.linear:
+        return 0.0
+    return fold_fraction(correction, domain) if known is None else known

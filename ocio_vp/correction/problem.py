@@ -27,7 +27,7 @@ from ocio_vp.model.correction import FitDomain, fit_domain
 if TYPE_CHECKING:
     from ocio_vp.model.correction import PostCorrection
 
-__all__ = ["QFit", "QProblem", "fit_least_squares"]
+__all__ = ["Folds", "QFit", "QProblem", "fit_least_squares"]
 
 
 @dataclass(frozen=True)
@@ -98,7 +98,8 @@ class QProblem:
     @cached_property
     def domain(self) -> FitDomain:
         """Where the post-correction is fitted (:func:`ocio_vp.model.correction.fit_domain`):
-        the lit chart as the wall really lights it, the calibrated M, the fitted patches."""
+        the lit chart as the wall really lights it, the calibrated M, the fitted patches. One
+        object per problem: a measurement made over it (:class:`Folds`) knows it by identity."""
         return fit_domain(
             self.predicted,
             M=self.M,
@@ -116,6 +117,21 @@ class QProblem:
 def _read_only(array: np.ndarray) -> np.ndarray:
     array.setflags(write=False)
     return array
+
+
+@dataclass(frozen=True)
+class Folds:
+    """The fold fraction (:func:`ocio_vp.correction.extrapolation.fold_fraction`) a method
+    measured for its ``correction`` over ``domain``, so that the solve's diagnostics read it
+    instead of measuring it again; :meth:`of` gives it only for those very objects."""
+
+    correction: PostCorrection
+    domain: FitDomain
+    fraction: float
+
+    def of(self, correction: PostCorrection, domain: FitDomain) -> float | None:
+        """The fraction if it was measured for ``correction`` over ``domain``, else None."""
+        return self.fraction if correction is self.correction and domain is self.domain else None
 
 
 @dataclass(frozen=True)
@@ -146,6 +162,8 @@ class QFit:
     #: With skin first: the default's fit that this one was judged against (the solve reports
     #: the two side by side).
     default: QFit | None = None
+    #: The fold fraction the method measured for ``correction`` (None: not measured).
+    folds: Folds | None = None
 
     @property
     def Q(self) -> np.ndarray:

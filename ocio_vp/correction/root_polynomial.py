@@ -22,9 +22,9 @@ from collections.abc import Callable, Iterator
 
 import numpy as np
 
-from ocio_vp.correction.extrapolation import FADES, choose_fade
+from ocio_vp.correction.extrapolation import FADES, choose_fade, fade_label
 from ocio_vp.correction.linear import LOO_KERNELS, loo_root_polynomial
-from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
+from ocio_vp.correction.problem import Folds, QFit, QProblem, fit_least_squares
 from ocio_vp.correction.skin import SkinRows, with_rows
 from ocio_vp.deprecation import deprecated_names
 from ocio_vp.errors import InputError
@@ -128,6 +128,7 @@ def make_q_root_polynomial(degree: int = 2, skin_weight: float = 0.0) -> Callabl
                 "prefer a 3x3 method for this environment"
             )
         correction = RootPolynomialCorrection(C, A, domain, fade)
+        folds = Folds(correction, domain, tried[fade_label(fade)])
         anchored = "" if rows is None else f", fitted to {len(rows.x)} skin samples too"
         details: dict = {"folds_by_fade": tried}
         if rows is not None:
@@ -144,6 +145,7 @@ def make_q_root_polynomial(degree: int = 2, skin_weight: float = 0.0) -> Callabl
             warnings=tuple(warnings),
             details=details,
             loo_predictions=held,
+            folds=folds,
         )
 
     q_root_polynomial_method.__name__ = f"q_root_polynomial_{degree}"

@@ -484,8 +484,12 @@ class RootPolynomialCorrection:
         """(...,) 1 where the polynomial applies, 0 where the fallback does."""
         if self.domain is None:
             return np.ones(np.shape(rgb)[:-1])
+        return self.weight_at(self.domain.gauge(rgb))
+
+    def weight_at(self, gauge: np.ndarray) -> np.ndarray:
+        """(...,) the weight at a :meth:`FitDomain.gauge` of the domain (this fade's)."""
         start, end = self.fade
-        return _fade_out((self.domain.gauge(rgb) - start) / (end - start))
+        return _fade_out((gauge - start) / (end - start))
 
     def apply(self, rgb: ArrayLike) -> np.ndarray:
         """(..., 3) the correction of ``rgb`` (float64)."""
@@ -494,6 +498,18 @@ class RootPolynomialCorrection:
             return apply_root_polynomial(self.coefficients, x)
         polynomial = partial(apply_root_polynomial, self.coefficients)
         return _blend(x @ self.fallback.T, self.weight(x), polynomial, x)
+
+    def blend(
+        self,
+        x: np.ndarray,
+        linear: np.ndarray,
+        weight: np.ndarray,
+        polynomial: Callable[[np.ndarray], np.ndarray],
+    ) -> np.ndarray:
+        """(..., 3) :meth:`apply` of ``x`` from its parts: the fallback's output ``linear``,
+        :meth:`weight` and ``polynomial`` (``C e(.)`` of the points where the weight is
+        positive), for callers that evaluate several fades at the same points."""
+        return _blend(linear, weight, polynomial, x)
 
     def inverse(self, rgb: ArrayLike) -> np.ndarray:
         return newton_inverse(self.apply, rgb, self.fallback, homogeneous=True)

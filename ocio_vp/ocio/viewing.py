@@ -230,11 +230,27 @@ def _clamped_display(display: ColourSpace) -> ColourSpace:
     )
 
 
+#: colour-science's ITU-R BT.709 RGB-to-XYZ matrix, in the package (written by
+#: ``python -m benchmarks.make_sample_matrix``): the process writing configs imports no
+#: colour-science for it.
+REC709_MATRIX_FILE = "data/rec709_to_xyz.json"
+
+
+@functools.lru_cache(maxsize=1)
+def rec709_to_xyz() -> np.ndarray:
+    """(3, 3) ITU-R BT.709 linear RGB to CIE XYZ (D65), as colour-science computes it (read
+    from :data:`REC709_MATRIX_FILE`; tests/test_ocio_viewing.py checks every bit). Read-only."""
+    import json
+    from importlib import resources
+
+    text = resources.files("ocio_vp").joinpath(REC709_MATRIX_FILE).read_text(encoding="utf-8")
+    matrix = np.array(json.loads(text)["rgb_to_xyz"], dtype=np.float64)
+    matrix.setflags(write=False)
+    return matrix
+
+
 def _view_transform(aces, name: str, camera_to_aces) -> ViewTransform:
     if camera_to_aces is None:
-        import colour
-
-        rec709 = colour.RGB_COLOURSPACES["ITU-R BT.709"]
         # clamped to [0, 100] (10000 nits on the PQ monitor): there is no tone curve to bound it
         bound = clamp(min_in=0.0, max_in=100.0, min_out=0.0, max_out=100.0)
         return ViewTransform(
@@ -242,7 +258,7 @@ def _view_transform(aces, name: str, camera_to_aces) -> ViewTransform:
             "The camera gamut is not stated (set stage.camera_colorspace or solve "
             "--camera-colorspace): camera RGB is shown as if it were linear Rec.709, "
             "un-tone-mapped. Colours are only indicative.",
-            group([matrix_record(rec709.matrix_RGB_to_XYZ), bound]),
+            group([matrix_record(rec709_to_xyz()), bound]),
         )
     source = aces.getViewTransform(name)
     builtin = source.getTransform(OCIO.VIEWTRANSFORM_DIR_FROM_REFERENCE)

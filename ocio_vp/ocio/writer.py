@@ -86,11 +86,12 @@ def _ready() -> bool:
 
 @contextlib.contextmanager
 def writer_pool(
-    method: str | None = None, *, protect_emitters: bool = False
+    method: str | None = None, *, protect_emitters: bool = False, environments: int | None = None
 ) -> Iterator[Executor | None]:
     """One helper process for :func:`write_solutions` of solves by ``method``, started now;
     None for a linear method without ``protect_emitters`` (no environment bakes LUTs: the
-    helper would cost more than it saves). ``None``: any method.
+    helper would cost more than it saves) and for fewer than two ``environments`` (one is
+    written here). ``None``: any method, any number.
 
     Start it before loading and solving, so its imports overlap that work. "spawn", as for
     footage: the parent has threads (OpenColorIO, OpenBLAS) and forking them can deadlock.
@@ -98,7 +99,8 @@ def writer_pool(
     # Deferred: the helper imports this module and needs none of the solvers.
     from ocio_vp.correction.registry import NON_LINEAR_METHODS
 
-    if method is not None and method not in NON_LINEAR_METHODS and not protect_emitters:
+    linear = method is not None and method not in NON_LINEAR_METHODS and not protect_emitters
+    if linear or (environments is not None and environments < 2):
         yield None
         return
     context = multiprocessing.get_context("spawn")
@@ -147,16 +149,7 @@ def _write_into(stage: Path, solutions: Sequence[Solution], pool: Executor | Non
             if i not in futures:
                 written[i] = write_environment(solution, folders[i])
         for i, future in futures.items():
-            try:
-                written[i] = future.result()
-            except InputError:
-                raise
-            except Exception:
-                # The helper crashed, or an error that does not survive between processes:
-                # write it again here, where the same error (if any) is raised as itself.
-                shutil.rmtree(folders[i], ignore_errors=True)
-                folders[i].mkdir()
-                written[i] = write_environment(solutions[i], folders[i])
+            written[i] = _helper_result(future, solutions[i], folders[i])
     except KeyboardInterrupt:  # stopped (Ctrl-C, kill): the helper's bake is not waited for
         _stop_helper(pool)
         raise
@@ -168,6 +161,60 @@ def _write_into(stage: Path, solutions: Sequence[Solution], pool: Executor | Non
     return written
 
 
+def _write_streamed(stage: Path, solutions: Iterator[Solution], pool: Executor) -> list:
+    """Write each solution into ``stage/<environment>`` as ``solutions`` yields it (it may solve
+    them on the way): each goes to the helper once the next one has come, and the helper writes
+    while this process solves; the last is written here, and then this process takes back,
+    from the last, every write the helper has not started, so both finish together (the
+    helper's queue takes two at once: the last one kept here is what this process writes even
+    when there are only two). In order."""
+    todo: list[tuple[Solution, Path]] = []
+    futures: dict[int, Future] = {}
+    written: list = []
+    try:
+        for solution in solutions:
+            folder = stage / solution.environment
+            folder.mkdir()
+            todo.append((solution, folder))
+            written.append(None)
+            if len(todo) > 1:  # one behind: the latest may be the last, written here
+                try:
+                    futures[len(todo) - 2] = pool.submit(write_environment, *todo[-2])
+                except (BrokenProcessPool, RuntimeError):  # the helper died: written below
+                    pass
+        for i, (solution, folder) in enumerate(todo):  # the last, and any the helper refused
+            if i not in futures:
+                written[i] = write_environment(solution, folder)
+        for i in sorted(futures, reverse=True):  # one at a time: both meet in the middle
+            if not futures[i].cancel():
+                break  # the helper has it (and every one before it)
+            del futures[i]
+            written[i] = write_environment(*todo[i])
+        for i, future in futures.items():
+            written[i] = _helper_result(future, *todo[i])
+    except KeyboardInterrupt:  # stopped (Ctrl-C, kill): the helper's bake is not waited for
+        _stop_helper(pool)
+        raise
+    finally:
+        for future in futures.values():
+            future.cancel()
+        wait(list(futures.values()))
+    return written
+
+
+def _helper_result(future: Future, solution: Solution, folder: Path) -> Solution:
+    """What the helper wrote; written again here if it crashed (or its error does not survive
+    between processes), where the same error, if any, is raised as itself."""
+    try:
+        return future.result()
+    except InputError:
+        raise
+    except Exception:
+        shutil.rmtree(folder, ignore_errors=True)
+        folder.mkdir()
+        return write_environment(solution, folder)
+
+
 def _stop_helper(pool: Executor | None) -> None:
     """End the helper process of ``pool`` now (its futures fail; the pool is broken)."""
     for process in list((getattr(pool, "_processes", None) or {}).values()):
@@ -176,7 +223,7 @@ def _stop_helper(pool: Executor | None) -> None:
 
 
 def write_solutions(
-    solutions: Sequence[Solution],
+    solutions: Iterable[Solution],
     out_dir: str | Path,
     *,
     inputs: Iterable[str | os.PathLike[str]] = (),
@@ -186,11 +233,16 @@ def write_solutions(
 
     An existing environment folder is replaced only if ocio-vp wrote it and it holds nothing
     else, and none may be one of ``inputs`` (see :mod:`ocio_vp.staging`). With ``pool`` (see
-    :func:`writer_pool`) its process writes some of the environments.
+    :func:`writer_pool`) its process writes some of the environments: shared by their cost for
+    a sequence; for an iterator (solving as it goes), each as it comes while this process
+    solves the next, this process taking back the last ones (:func:`_write_streamed`).
     """
     out_dir = Path(out_dir)
     with staged_dir(out_dir) as stage:
-        written = _write_into(stage, solutions, pool)
-        pairs = [(stage / s.environment, out_dir / s.environment) for s in solutions]
+        if pool is not None and not isinstance(solutions, Sequence):
+            written = _write_streamed(stage, iter(solutions), pool)
+        else:
+            written = _write_into(stage, list(solutions), pool)
+        pairs = [(stage / s.environment, out_dir / s.environment) for s in written]
         publish_dirs(pairs, inputs=inputs)
     return written
