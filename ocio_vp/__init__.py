@@ -2,7 +2,7 @@
 
 Implements LeGendre, Lepicovsky & Debevec, "Jointly Optimizing Color Rendition and In-Camera
 Backgrounds in an RGB Virtual Production Stage", DigiPro 2022,
-https://doi.org/10.1145/3543664.3543699.
+https://doi.org/10.1145/3543664.3543681.
 
 The public names below are imported on first use (PEP 562), so ``import ocio_vp`` and every
 ``ocio-vp`` command load only what they use.

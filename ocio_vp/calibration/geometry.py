@@ -4,7 +4,7 @@ References
 ----------
 LeGendre, C., Lepicovsky, L., Debevec, P. (2022). Jointly Optimizing Color Rendition and
 In-Camera Backgrounds in an RGB Virtual Production Stage. DigiPro '22.
-https://doi.org/10.1145/3543664.3543699 (Section 3.3, the scale factor beta and w_avg).
+https://doi.org/10.1145/3543664.3543681 (Section 3.3, the scale factor beta and w_avg).
 
 Howell, J. R. A Catalog of Radiation Heat Transfer Configuration Factors, factor B-3
 ("differential planar element to parallel rectangle, normal through a corner").

@@ -25,7 +25,7 @@ References
 ----------
 LeGendre, C., Lepicovsky, L., Debevec, P. (2022). Jointly Optimizing Color Rendition and
 In-Camera Backgrounds in an RGB Virtual Production Stage. DigiPro '22, eqs. 3, 5, 7 and
-Future Work. https://doi.org/10.1145/3543664.3543699
+Future Work. https://doi.org/10.1145/3543664.3543681
 CIE 142-2001, Improvement to industrial colour-difference evaluation (CIEDE2000).
 """
 

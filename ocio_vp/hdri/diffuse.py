@@ -16,7 +16,7 @@ References
 LeGendre, C., Lepicovsky, L., Debevec, P. (2022). Jointly Optimizing Color Rendition and
 In-Camera Backgrounds in an RGB Virtual Production Stage. DigiPro '22, Section 3.3 ("the
 diffuse integral of the frontal hemisphere of the HDRI map", w_avg).
-https://doi.org/10.1145/3543664.3543699
+https://doi.org/10.1145/3543664.3543681
 """
 
 from __future__ import annotations

@@ -31,7 +31,7 @@ References
 ----------
 LeGendre, C., Lepicovsky, L., Debevec, P. (2022). Jointly Optimizing Color Rendition and
 In-Camera Backgrounds in an RGB Virtual Production Stage. DigiPro '22, eq. 5.
-https://doi.org/10.1145/3543664.3543699
+https://doi.org/10.1145/3543664.3543681
 
 Finlayson, G. D., Mackiewicz, M., Hurlbert, A. (2015). Color Correction Using Root-Polynomial
 Regression. IEEE Transactions on Image Processing 24(5), 1460-1470.
