@@ -152,9 +152,12 @@ def _solve_commands(pythons, files, root: Path) -> dict[tuple[str, str], list]:
             *cli, str(files["chart"]), "--out", o, "--method", "least-squares",
         ]  # fmt: skip
         out[("`solve`, 1000 patches, default", who)] = [*cli, str(files["chart"]), "--out", o]
-        out[(f"`solve`, {files['many'].stem.removeprefix('env')} environments, default", who)] = [
-            *cli, str(files["many"]), "--out", o,
-        ]  # fmt: skip
+        many = f"`solve`, {files['many'].stem.removeprefix('env')} environments, default"
+        out[(many, who)] = [*cli, str(files["many"]), "--out", o]
+    # What running OpenBLAS single-threaded (ocio_vp.cli.SMALL_MATRIX_COMMANDS) buys: the same
+    # solve with a thread a core, as numpy would start them and as 1631fec ran.
+    threads = ["env", f"OPENBLAS_NUM_THREADS={os.cpu_count()}"]
+    out[(f"{many}, OpenBLAS on every core", "this")] = [*threads, *out[(many, "this")]]
     return out
 
 
@@ -389,11 +392,15 @@ def _solve_section(pythons, files, root, env, rounds: int) -> str:
     cells.update(_rounds(longest, 1, env, root, warmup=False))  # the longest: once
     rows = list(dict.fromkeys(row for row, _ in commands))
     many = files["many"].stem.removeprefix("env")
-    targets = {
-        "`solve`, 1000 patches, least squares": "<= 2 s",
-        "`solve`, 1000 patches, default": "<= 3 s",
-        f"`solve`, {many} environments, default": "<= 20 s" if many == "150" else "",
-    }
+    within = f"<= 1.05x {BASELINE_COMMIT}"
+    targets = dict.fromkeys(rows[:2], within)
+    targets.update({
+        "`solve`, 1000 patches, least squares": f"<= 2 s, {within}",
+        "`solve`, 1000 patches, default": f"<= 3 s, {within}",
+        f"`solve`, {many} environments, default": (
+            f"<= 20 s, {within}" if many == "150" else within
+        ),
+    })  # fmt: skip
     return "\n".join(
         [
             f"### `solve`, best of {rounds} rounds ({many} environments: one run)",

@@ -38,6 +38,12 @@ COMMANDS = (
 )
 
 
+#: Commands whose numbers are many small matrices (chart-sized fits, Newton steps on colour
+#: batches): OpenBLAS's threads cost them more than they give (docs/performance.md), in this
+#: process and in the solve's writing helper, which inherits the setting.
+SMALL_MATRIX_COMMANDS = frozenset({"demo", "solve"})
+
+
 class OneLineParser(argparse.ArgumentParser):
     """An argument parser whose errors are one line (``--help`` still shows the usage), with a
     did-you-mean for a mistyped option, command or choice."""
@@ -122,6 +128,13 @@ def _defer_colour_plotting() -> None:
         sys.modules[name] = _DeferredModule(name)
 
 
+def _one_blas_thread() -> None:
+    """OpenBLAS single-threaded in this process and those it starts, unless the user chose its
+    threads (``OPENBLAS_NUM_THREADS``); only before numpy is loaded, when OpenBLAS reads it."""
+    if "numpy" not in sys.modules:
+        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     from ocio_vp.staging import stop_on_signals
 
@@ -129,6 +142,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     parser = build_parser()
     args = parser.parse_args(argv)
+    if args.command in SMALL_MATRIX_COMMANDS:
+        _one_blas_thread()
     try:
         with stop_on_signals():  # kill, timeout: staging folders removed as on Ctrl-C
             return int(args.func(args) or 0)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import subprocess
 import sys
 
@@ -100,3 +101,32 @@ def test_options_without_effect_are_refused_and_encodings_ignore_case(tmp_path, 
     assert main([*args, "--peak-nits", "600"]) == 0
     out = capsys.readouterr().out
     assert "wall signal: PQ (SMPTE ST 2084), drive 1.0 = 600 cd/m2" in out
+
+
+def test_solve_runs_openblas_single_threaded_unless_the_user_chose(tmp_path):
+    """A fresh solve (or demo) sets OPENBLAS_NUM_THREADS=1 for itself and the processes it
+    starts, before numpy loads; another command, or a user's own setting, is left alone."""
+    script = (
+        "import os, sys\n"
+        "from ocio_vp.cli import main\n"
+        "main(sys.argv[1:])\n"  # each stops with one line, exit 2: the file is missing
+        "print(os.environ.get('OPENBLAS_NUM_THREADS'))\n"
+    )
+    missing = str(tmp_path / "missing.yaml")
+    commands = {"solve": ["solve", missing, "--out", str(tmp_path / "out")]}
+    commands["export"] = ["export", missing]
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    for given, command, expected in (
+        (None, "solve", "1"),
+        (None, "export", "None"),
+        ("2", "solve", "2"),
+    ):
+        if given:
+            env["OPENBLAS_NUM_THREADS"] = given
+        run = subprocess.run(
+            [sys.executable, "-c", script, *commands[command]],
+            env=env,
+            capture_output=True,
+            text=True,
+        )
+        assert run.stdout.split() == [expected], (command, run.stderr)
