@@ -499,7 +499,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m benchmarks.bench_regression",
         description="Some of the whole-command sections alone, printed (docs/performance.md "
-        "is written by python -m benchmarks.run --only regression).",
+        "is written by python -m benchmarks.run --only regression --update).",
     )
     parser.add_argument("--quick", action="store_true", help="smaller inputs, one round")
     parser.add_argument("--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS))
