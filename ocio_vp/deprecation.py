@@ -1,18 +1,22 @@
-"""Names that left the public API, served for one more release with a DeprecationWarning.
+"""Module attributes served on first use (PEP 562): names that left the public API, for one
+more release with a DeprecationWarning, and a package's public names, imported when first read.
 
-A module sets ``__getattr__ = deprecated_names(__name__, table)`` (PEP 562), the table mapping
-each old name to (what to use instead, in words; where its value lives, ``"module:name"``, or a
-function returning it), imported only when the old name is used.
+A module sets ``__getattr__ = deprecated_names(__name__, table)``, the table mapping each old
+name to (what to use instead, in words; where its value lives, ``"module:name"``, or a function
+returning it), imported only when the old name is used; a subpackage sets ``__getattr__,
+__dir__ = published_on_first_use(__name__, exports)`` (``ocio_vp`` itself writes the same two
+functions out, so that ``import ocio_vp`` loads none of its modules).
 """
 
 from __future__ import annotations
 
 import importlib
+import sys
 import warnings
 from collections.abc import Callable, Mapping
 from typing import Any
 
-__all__ = ["REMOVED_IN", "deprecated_names", "warn_deprecated"]
+__all__ = ["REMOVED_IN", "deprecated_names", "published_on_first_use", "warn_deprecated"]
 
 #: The release that removes every name served here (deprecated from the release after 0.1.0).
 REMOVED_IN = "0.3.0"
@@ -43,3 +47,25 @@ def deprecated_names(
         return value()
 
     return __getattr__
+
+
+def published_on_first_use(
+    package: str, exports: Mapping[str, str]
+) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
+    """The ``__getattr__`` and ``__dir__`` of ``package`` (a module being imported), whose
+    public names ``exports`` maps to the modules defining them: the first read of a name imports
+    its module and keeps the value in the package, so later reads skip the lookup."""
+    namespace = sys.modules[package].__dict__
+
+    def __getattr__(name: str) -> Any:
+        module = exports.get(name)
+        if module is None:
+            raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        value = getattr(importlib.import_module(module), name)
+        namespace[name] = value
+        return value
+
+    def __dir__() -> list[str]:
+        return sorted([*namespace, *exports])
+
+    return __getattr__, __dir__

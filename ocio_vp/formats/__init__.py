@@ -13,8 +13,9 @@ loads that module and what it imports, not every format of the package.
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
+
+from ocio_vp.deprecation import published_on_first_use
 
 #: Public name -> the module of this package that defines it.
 _EXPORTS = {
@@ -124,14 +125,4 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time, __getattr__ b
     from ocio_vp.formats.synthesis import SynthesisRecord
 
 
-def __getattr__(name: str) -> object:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value  # later lookups skip this function
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted([*globals(), *_EXPORTS])
+__getattr__, __dir__ = published_on_first_use(__name__, _EXPORTS)
