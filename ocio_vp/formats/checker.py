@@ -177,14 +177,16 @@ class Validator:
     ) -> tuple[int, int]:
         """``[width, height]`` in pixels, each 1 or more (at most ``maximum``). A wrong value is
         named by its place in the list, or (``whole_list``) the whole list is quoted."""
-        if whole_list:
-            sizes = value if isinstance(value, list) and len(value) == 2 else ()
-            fine = [v for v in sizes if isinstance(v, int) and not isinstance(v, bool)]
-            if len(fine) != 2 or not all(1 <= v <= (maximum or math.inf) for v in fine):
-                raise self.error(key, f"expected [width, height] in pixels, got {excerpt(value)}")
-        elif not isinstance(value, list) or len(value) != 2:
+        high = math.inf if maximum is None else maximum
+        pair = value if isinstance(value, list) and len(value) == 2 else None
+        whole = pair is not None and all(
+            isinstance(v, int) and not isinstance(v, bool) and 1 <= v <= high for v in pair
+        )
+        if whole_list and not whole:
+            raise self.error(key, f"expected [width, height] in pixels, got {excerpt(value)}")
+        if pair is None:
             raise self.error(key, "expected [width, height]")
-        width, height = (self.whole(v, (*key, i), 1, maximum) for i, v in enumerate(value))
+        width, height = (self.whole(v, (*key, i), 1, maximum) for i, v in enumerate(pair))
         return width, height
 
     def flag(self, value: JsonValue, key: Key) -> bool:
