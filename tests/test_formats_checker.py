@@ -4,9 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import make_measurements_dict
 
 from ocio_vp.errors import InputError
 from ocio_vp.formats.checker import Validator
+from ocio_vp.formats.fixtures import parse_fixtures
+from ocio_vp.formats.measurements import measurements_from_dict
+from ocio_vp.formats.panels import PanelType, parse_panel_values
+from ocio_vp.formats.wall_state import parse_wall_state
 
 CTX = Validator("f.yaml")
 KEY = ("a", 0, "b")
@@ -27,7 +32,8 @@ KEY = ("a", 0, "b")
         ),
         (lambda: CTX.items({}, KEY, empty=True), "expected a list, got dict {}"),
         (lambda: CTX.text("a\nb", KEY), "expected one line of text"),
-        (lambda: CTX.size([1, 2, 3], KEY), "expected [width, height] in pixels, got a list of 3"),
+        (lambda: CTX.size([1, 2, 3], KEY), "expected [width, height]"),
+        (lambda: CTX.size([0, 2], KEY), "[0]: expected a whole number >= 1, got 0"),
         (lambda: CTX.matrix([[1, 2]], KEY, (2, 2), "a 2x2 matrix"), "expected a 2x2 matrix"),
         (lambda: CTX.mapping({"nme": 1}, KEY, ("name",)), "unknown key (did you mean 'name'?)"),
         (lambda: CTX.mapping({}, KEY, ("name",)), "missing required key 'name'"),
@@ -62,3 +68,63 @@ def test_unique_names_say_where_the_first_one_is():
         InputError, match=r"panels\[1\]\.name: duplicate name 'wall' \(also panels\[0\]\)"
     ):
         CTX.unique_name("wall", ("panels", 1), seen)
+
+
+def _dmx(**patch):
+    dmx = {"universe": 1, "address": 1, "mode": "8-bit"} | patch
+    chart = [[0.5, 0.5, 0.5]] * 2
+    fixture = {
+        "name": "a",
+        "channels": ["red"],
+        "reference_drive": 1.0,
+        "lit_chart": {"red": chart},
+    }
+    return parse_fixtures(CTX, [fixture | {"dmx": dmx}], 2)
+
+
+def _white_reflectance(value):
+    data = make_measurements_dict(environments=1)
+    data["stage"]["white_reflectance"] = value
+    return measurements_from_dict(data, source="f.yaml")
+
+
+def _w_avg(value):
+    panels = tuple(PanelType(n, True, np.eye(3), np.ones((2, 3, 3))) for n in ("wall", "ceiling"))
+    return parse_panel_values(CTX, value, ("environments", 0, "w_avg"), panels)
+
+
+# Each file's refusals read as they did before the files shared these rules (6e08b78's texts).
+@pytest.mark.parametrize(
+    ("read", "message"),
+    [
+        (lambda: _dmx(address=0), "fixtures[0].dmx.address: expected an integer 1..512, got 0"),
+        (
+            lambda: _dmx(universe=-1),
+            "fixtures[0].dmx.universe: expected an integer 0..63999, got -1",
+        ),
+        (
+            lambda: _dmx(mode="RGBW"),
+            "fixtures[0].dmx.mode: expected one of ['8-bit', '16-bit'], got 'RGBW'",
+        ),
+        (
+            lambda: parse_wall_state(CTX, {"pattern_size": [1, 2, 3]}, ("stage",)),
+            "stage.pattern_size: expected [width, height] in pixels, got [1, 2, 3]",
+        ),
+        (
+            lambda: parse_wall_state(CTX, {"pattern_size": [0, 5]}, ("stage",)),
+            "stage.pattern_size: expected [width, height] in pixels, got [0, 5]",
+        ),
+        (
+            lambda: _white_reflectance(1.5),
+            "stage.white_reflectance: expected at most 1, got 1.5",
+        ),
+        (
+            lambda: _w_avg({"wall": [1, 1, 1], "ceiling": [1, 1, 1], "roof": [1, 1, 1]}),
+            "environments[0].w_avg.roof: unknown panel type; panel types: wall, ceiling",
+        ),
+    ],
+)
+def test_messages_read_as_before(read, message):
+    with pytest.raises(InputError) as error:
+        read()
+    assert str(error.value) == f"f.yaml: {message}"

@@ -68,3 +68,28 @@ def test_a_valid_document_loads(document):
     sequence = sequence_from_dict(document, source="seq.yaml")
     assert sequence.patch("white").kind == "white"
     assert sequence.validation is None and sequence.hold == 4
+
+
+_VALIDATION = {"environment": "e", "stage": "s", "solution_sha256": "ab", "in_frustum": "x"}
+
+
+@pytest.mark.parametrize("reference", ["two\nlines", "x" * 600, "   "])
+def test_validation_texts_that_loaded_before_still_load(document, reference):
+    data = _mutated(document, lambda d: d.update(validation=_VALIDATION | {"reference": reference}))
+    assert sequence_from_dict(data, source="seq.yaml").validation.reference == reference
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (
+            lambda d: d.update(validation=_VALIDATION | {"reference": ""}),
+            "validation.reference: expected a non-empty text",
+        ),
+        (lambda d: d.update(size=[1, 2, 3]), "size: expected [width, height]"),
+    ],
+)
+def test_sequence_messages_read_as_before(document, change, message):
+    with pytest.raises(InputError) as raised:
+        sequence_from_dict(_mutated(document, change), source="seq.yaml")
+    assert str(raised.value) == f"seq.yaml: {message}"

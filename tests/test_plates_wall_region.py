@@ -32,3 +32,19 @@ def test_the_mask_is_the_part_that_changes():
     stack[:, 25:28, 2:5] += 0.2 * levels  # a small practical light in the set, dimmer
     mask = wall_mask(stack)
     assert mask[5:20, 10:35].all() and mask.sum() == 15 * 25
+
+
+def test_an_inf_block_is_bright_for_the_wall_finder_and_zero_for_the_chart_detector(monkeypatch):
+    # read_region refuses a plate file with NaN/Inf samples; the block average's own rule is
+    # tested on the pixels it would be given: one block overflowed to +Inf (a half-float
+    # highlight), the rest 0.5.
+    from ocio_vp.plates import reader
+
+    pixels = np.full((8, 8, 3), 0.5, dtype=np.float32)
+    pixels[4:8, 0:4] = np.inf
+    monkeypatch.setattr(reader, "read_region", lambda info, box: pixels[box[1] : box[3]])
+    info = reader.PlateInfo("p.exr", "openexr", 8, 8, 16, True, "linear")
+    wall = reader.block_means(info, 4, zero_non_finite=False)
+    chart = reader.block_means(info, 4)
+    assert np.isposinf(wall[1, 0]).all() and (wall[[0, 0, 1], [0, 1, 1]] == 0.5).all()
+    assert (chart[1, 0] == 0).all() and (chart[[0, 0, 1], [0, 1, 1]] == 0.5).all()

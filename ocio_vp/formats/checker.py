@@ -80,8 +80,11 @@ class Validator:
         optional: tuple[str, ...] = (),
         *,
         what: str = "key",
+        listing: str = "",
     ) -> Mapping[str, Any]:
-        """A mapping with every ``required`` key and no key (``what``) beyond ``optional``."""
+        """A mapping with every ``required`` key and no key (``what``) beyond ``optional``; an
+        unknown key's message names the allowed ones sorted, or in their order after ``listing``
+        (e.g. "panel types") when given."""
         if not isinstance(value, Mapping):
             raise self.error(key, f"expected a mapping, got {describe(value)}")
         # Unknown keys first: a misspelt required key is reported as the typo it is.
@@ -90,11 +93,11 @@ class Validator:
             if name not in allowed:
                 hint = difflib.get_close_matches(str(name)[:100], sorted(allowed), n=1)
                 suggestion = f" (did you mean {hint[0]!r}?)" if hint else ""
-                expected = ", ".join(sorted(allowed))
-                raise self.error(
-                    (*key, str(name)[:60]),
-                    f"unknown {what}{suggestion}; expected one of: {expected}",
-                )
+                if listing:
+                    expected = f"{listing}: {', '.join((*required, *optional))}"
+                else:
+                    expected = f"expected one of: {', '.join(sorted(allowed))}"
+                raise self.error((*key, str(name)[:60]), f"unknown {what}{suggestion}; {expected}")
         for name in required:
             if name not in value:
                 raise self.error(key, f"missing required key {excerpt(name)}")
@@ -126,8 +129,10 @@ class Validator:
         minimum: float = 0.0,
         strict: bool = False,
         maximum: float = math.inf,
+        at_most: str = "",
     ) -> float:
-        """A finite float64 in ``[minimum, maximum]`` (``(minimum, maximum]`` when ``strict``)."""
+        """A finite float64 in ``[minimum, maximum]`` (``(minimum, maximum]`` when ``strict``);
+        ``at_most`` words the upper bound in its message (default "a number <= maximum")."""
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise self.error(key, f"expected a number, got {describe(value)}")
         try:
@@ -140,30 +145,48 @@ class Validator:
             relation = ">" if strict else ">="
             raise self.error(key, f"expected a number {relation} {minimum:g}, got {number:.6g}")
         if number > maximum:
-            raise self.error(key, f"expected a number <= {maximum:g}, got {number:.6g}")
+            bound = at_most or f"a number <= {maximum:g}"
+            raise self.error(key, f"expected {bound}, got {number:.6g}")
         return number
 
     def whole(
-        self, value: JsonValue, key: Key, minimum: int | None = 0, maximum: int | None = None
+        self,
+        value: JsonValue,
+        key: Key,
+        minimum: int | None = 0,
+        maximum: int | None = None,
+        *,
+        noun: str = "a whole number",
     ) -> int:
-        """An integer (not a bool) in ``[minimum, maximum]`` (None: unbounded)."""
+        """An integer (not a bool) in ``[minimum, maximum]`` (None: unbounded); ``noun`` names
+        it in the message."""
         low = -math.inf if minimum is None else minimum
         high = math.inf if maximum is None else maximum
         if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
             if minimum is None:
-                expected = "a whole number"
+                expected = noun
             elif maximum is None:
-                expected = f"a whole number >= {minimum}"
+                expected = f"{noun} >= {minimum}"
             else:
-                expected = f"a whole number {minimum}..{maximum}"
+                expected = f"{noun} {minimum}..{maximum}"
             raise self.error(key, f"expected {expected}, got {excerpt(value)}")
         return value
 
-    def size(self, value: JsonValue, key: Key, maximum: int | None = None) -> tuple[int, int]:
-        """``[width, height]`` in pixels, each 1 or more (at most ``maximum``)."""
-        if not isinstance(value, list) or len(value) != 2:
-            raise self.error(key, f"expected [width, height] in pixels, got {describe(value)}")
-        width, height = (self.whole(v, (*key, i), 1, maximum) for i, v in enumerate(value))
+    def size(
+        self, value: JsonValue, key: Key, maximum: int | None = None, *, whole_list: bool = False
+    ) -> tuple[int, int]:
+        """``[width, height]`` in pixels, each 1 or more (at most ``maximum``). A wrong value is
+        named by its place in the list, or (``whole_list``) the whole list is quoted."""
+        high = math.inf if maximum is None else maximum
+        pair = value if isinstance(value, list) and len(value) == 2 else None
+        whole = pair is not None and all(
+            isinstance(v, int) and not isinstance(v, bool) and 1 <= v <= high for v in pair
+        )
+        if whole_list and not whole:
+            raise self.error(key, f"expected [width, height] in pixels, got {excerpt(value)}")
+        if pair is None:
+            raise self.error(key, "expected [width, height]")
+        width, height = (self.whole(v, (*key, i), 1, maximum) for i, v in enumerate(pair))
         return width, height
 
     def flag(self, value: JsonValue, key: Key) -> bool:
@@ -172,18 +195,30 @@ class Validator:
         return value
 
     def choice(
-        self, value: JsonValue, key: Key, allowed: Collection[str], *, what: str = ""
+        self,
+        value: JsonValue,
+        key: Key,
+        allowed: Collection[str],
+        *,
+        what: str = "",
+        quoted: bool = False,
     ) -> str:
-        """One of ``allowed``; ``what`` names the kind of value in the message."""
+        """One of ``allowed``; ``what`` names the kind of value in the message, ``quoted`` lists
+        the choices as a Python list (``['a', 'b']``) rather than ``a, b``."""
         if not isinstance(value, str) or value not in allowed:
-            listed = ", ".join(allowed)
+            listed = str(list(allowed)) if quoted else ", ".join(allowed)
             if what:
                 raise self.error(key, f"unknown {what} {excerpt(value)}; expected one of: {listed}")
             raise self.error(key, f"expected one of {listed}, got {excerpt(value)}")
         return value
 
-    def text(self, value: JsonValue, key: Key, *, limit: int = 500) -> str:
-        """One line of non-blank text of at most ``limit`` characters."""
+    def text(self, value: JsonValue, key: Key, *, limit: int | None = 500) -> str:
+        """One line of non-blank text of at most ``limit`` characters; with ``limit`` None, any
+        non-empty text (several lines, blanks) as files written before this rule held."""
+        if limit is None:
+            if not isinstance(value, str) or not value:
+                raise self.error(key, "expected a non-empty text")
+            return value
         if not isinstance(value, str) or not value.strip() or len(value) > limit:
             raise self.error(key, f"expected a non-empty text of at most {limit} characters")
         if "\n" in value or "\r" in value:

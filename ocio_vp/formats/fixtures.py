@@ -86,9 +86,9 @@ def _parse_one(ctx: Validator, value: JsonValue, key: tuple, n: int) -> Fixture:
 
 def _parse_dmx(ctx: Validator, value: JsonValue, key: tuple, channels: int) -> DmxPatch:
     entry = ctx.mapping(value, key, required=("universe", "address", "mode"))
-    universe = ctx.whole(entry["universe"], (*key, "universe"), 0, MAX_UNIVERSE)
-    address = ctx.whole(entry["address"], (*key, "address"), 1, 512)
-    mode = ctx.choice(entry["mode"], (*key, "mode"), tuple(DMX_MODES))
+    universe = ctx.whole(entry["universe"], (*key, "universe"), 0, MAX_UNIVERSE, noun="an integer")
+    address = ctx.whole(entry["address"], (*key, "address"), 1, 512, noun="an integer")
+    mode = ctx.choice(entry["mode"], (*key, "mode"), tuple(DMX_MODES), quoted=True)
     last = address + channels * DMX_MODES[mode] - 1
     if last > 512:
         raise ctx.error(

@@ -300,7 +300,11 @@ def parse_stage(ctx: Validator, value: JsonValue, *, calibration: bool = True) -
     )
     # A "white" patch reflecting under 1% is a mistake (and would blow w_avg up).
     reflectance = ctx.number(
-        stage.get("white_reflectance", 0.9), (*key, "white_reflectance"), minimum=0.01, maximum=1.0
+        stage.get("white_reflectance", 0.9),
+        (*key, "white_reflectance"),
+        minimum=0.01,
+        maximum=1.0,
+        at_most="at most 1",
     )
     camera = stage.get("camera_colorspace")
     if camera is not None:

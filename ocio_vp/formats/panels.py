@@ -184,7 +184,7 @@ def parse_panel_values(
             f"with panels, expected a mapping of panel type -> [r, g, b] ({', '.join(names)}), "
             f"got {describe(value)}",
         )
-    ctx.mapping(value, key, (), tuple(names), what="panel type")
+    ctx.mapping(value, key, (), tuple(names), what="panel type", listing="panel types")
     out = {}
     for panel in panels:
         if panel.name not in value:

@@ -63,7 +63,9 @@ def parse_wall_state(ctx: Validator, stage: JsonMapping, key: tuple[str | int, .
     elif "peak_nits" in stage:
         raise ctx.error((*key, "peak_nits"), "only with wall_encoding: pq")
     size = stage.get("pattern_size")
-    pattern_size = None if size is None else ctx.size(size, (*key, "pattern_size"), _MAX_SIZE)
+    pattern_size = (
+        None if size is None else ctx.size(size, (*key, "pattern_size"), _MAX_SIZE, whole_list=True)
+    )
     return WallState(encoding, None if peak is None else float(peak), pattern_size)
 
 

@@ -235,7 +235,7 @@ def _validation(ctx: Validator, raw: JsonValue) -> Validation:
     optional = ("model", "solved")
     entry = ctx.mapping(raw, ("validation",), keys, ("content_scale", "pulled", *optional))
     for name in (*keys, *(k for k in optional if k in entry)):
-        ctx.text(entry[name], ("validation", name))
+        ctx.text(entry[name], ("validation", name), limit=None)
     scale = ctx.number(
         entry.get("content_scale", 1.0), ("validation", "content_scale"), strict=True
     )
