@@ -215,7 +215,7 @@ def test_a_kept_aces_space_without_a_record_is_refused(solved, tmp_path):
     base.addColorSpace(aces)
     (tmp_path / "base.ocio").write_text(base.serialize())
     environments = _environments(solved / "calib")
-    with pytest.raises(InputError, match="^--base-config: .*'ACES2065-1'"):
+    with pytest.raises(InputError, match=r"^--base-config: .*'ACES2065-1'"):
         show.build_show_config(environments, str(tmp_path / "base.ocio"))
 
 

@@ -654,12 +654,12 @@ def split_config(
         default_view_transform=config.getDefaultViewTransformName(),
         inactive_colour_spaces=tuple(name_list(config.getInactiveColorSpaces())),
         opaque=tuple(x.getName() for x in (*kept_spaces, *kept_named, *kept_looks, *kept_vts)),
-        order=ElementOrder(
-            *(tuple(x.getName() for x in xs) for xs in (all_spaces, all_named, all_looks, all_vts))
-        ),
     )
     if not exact:
         return data, None
+    data.order = ElementOrder(
+        *(tuple(x.getName() for x in xs) for xs in (all_spaces, all_named, all_looks, all_vts))
+    )
     rest = OCIO.Config.CreateFromStream(config.serialize())
     for cs in spaces:
         rest.removeColorSpace(cs.name)

@@ -130,20 +130,22 @@ def _own_spaces(config: ConfigData) -> list[ColourSpace]:
 @dataclass(frozen=True)
 class KeptSpace:
     """A base colour space kept as OCIO has it (no record rebuilds it exactly): what the show
-    reads of it; ``record`` its data where its transforms have records (not rebuilt), else None."""
+    reads of it; ``record`` its data where its transforms have records (not rebuilt), else None
+    and ``problem`` says why."""
 
     name: str
     aliases: tuple[str, ...]
     is_data: bool
     record: ColourSpace | None
+    problem: str = ""
 
 
 def kept_space(cs: OCIO.ColorSpace) -> KeptSpace:
     """What the show reads of a base colour space kept as an OCIO object."""
     try:
-        record: ColourSpace | None = colour_space_record(cs)
-    except ValueError:
-        record = None
+        record = colour_space_record(cs)
+    except ValueError as error:
+        return KeptSpace(cs.getName(), tuple(cs.getAliases()), cs.isData(), None, str(error))
     return KeptSpace(cs.getName(), tuple(cs.getAliases()), cs.isData(), record)
 
 
@@ -157,8 +159,8 @@ def _aces_space(base: ConfigData, kept: Sequence[KeptSpace]) -> ColourSpace:
         if name == space.name or name in space.aliases:
             if space.record is None:
                 raise InputError(
-                    f"the base config's {AP0_ROLE} space {space.name!r} has a transform this "
-                    "tool cannot read, so the environments' camera gamuts cannot be placed in it",
+                    f"the base config's {AP0_ROLE} space {space.name!r}: {space.problem} (the "
+                    "environments' camera gamuts cannot be placed in it)",
                     key="--base-config",
                 )
             return space.record
@@ -394,6 +396,7 @@ def build_show_config(
     every = (OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ALL)
     spaces = base_config.getColorSpaces(*every)
     kept = [kept_space(cs) for cs in spaces if cs.getName() in data.opaque]
+    _aces_space(data, kept)  # a base that cannot take the environments, before reading them
     merged = show_data(data, [environment_data(env) for env in environments],
                        f"{base} ({base_config.getName()})", kept)  # fmt: skip
     with _quiet(OCIO.LOGGING_LEVEL_WARNING):
