@@ -5,7 +5,8 @@
 Solves the demo stage with a camera gamut (``--camera-colorspace "ARRI Wide Gamut 4"``; the
 default method, so several environments get a root-polynomial Q baked as LUTs, and sodium's
 rank-1 Q), once with a linear wall and once with a PQ wall with a linearity LUT, exports one
-show config of all seven environments per solve on OCIO's built-in ACES CG config, then, in a throwaway venv per OCIO version (``pip install
+show config of all seven environments per solve on each of OCIO's built-in ACES CG and
+studio configs (``--base-config``), then, in a throwaway venv per OCIO version (``pip install
 opencolorio==V numpy``), runs :mod:`benchmarks.show_compat_worker`: every show config loads and
 validates, and per environment (``VP_ENVIRONMENT``) ACEScg -> each wall space, Stage Footage ->
 ACEScg and Stage Footage (LogC4) -> ACEScg are compared with the environment's own config on
@@ -36,6 +37,8 @@ WORKER = Path(__file__).resolve().parent / "show_compat_worker.py"
 VERSIONS = ("2.2.1", "2.6.0")
 TOLERANCE = 1e-4
 CAMERA = "ARRI Wide Gamut 4"
+#: (label, --base-config or None for the default) of the show configs per solve.
+BASES = (("ACES CG", None), ("ACES studio", "ocio://studio-config-v1.0.0_aces-v1.3_ocio-v2.1"))
 
 
 def build(root: Path) -> list[tuple[str, Path, list[Path]]]:
@@ -58,8 +61,13 @@ def build(root: Path) -> list[tuple[str, Path, list[Path]]]:
         calib = root / wall
         run("solve", str(measurements), "--out", str(calib), "--camera-colorspace", CAMERA,
             "--wall-encoding", wall)  # fmt: skip
-        run("export", str(calib), "--target", "show", "--out", str(root / f"show-{wall}"))
-        cases.append((label, calib, [root / f"show-{wall}" / "show" / "config.ocio"]))
+        shows = []
+        for i, (_, base) in enumerate(BASES):
+            out = root / f"show-{wall}-{i}"
+            run("export", str(calib), "--target", "show", "--out", str(out),
+                *(("--base-config", base) if base else ()))  # fmt: skip
+            shows.append(out / "show" / "config.ocio")
+        cases.append((label, calib, shows))
     return cases
 
 
@@ -71,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
     work = Path(tempfile.mkdtemp(prefix="show-compat-"))
     try:
         cases = build(work)
-        lines = ["| OCIO | wall | merged by | ACEScg -> wall | footage -> ACEScg | LogC4 footage -> ACEScg | result |",
+        lines = ["| OCIO | wall | base config | ACEScg -> wall | footage -> ACEScg | LogC4 footage -> ACEScg | result |",
                  "|---|---|---|---|---|---|---|"]  # fmt: skip
         failed = False
         for version in args.versions:
@@ -81,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
                 subprocess.run([str(python), str(WORKER), str(result), *map(str, shows), "--",
                                 str(calib)], check=True)  # fmt: skip
                 data = json.loads(result.read_text())
-                for show, how in zip(shows, ("data merge",), strict=True):
+                for show, (how, _) in zip(shows, BASES, strict=True):
                     rows = data["shows"][str(show)]
                     worst = [max((v for k, v in rows.items() if test(k)), default=0.0) for test in (
                         lambda k: "LED Wall" in k,

@@ -150,6 +150,75 @@ def test_a_base_read_into_data_builds_back_to_the_same_file(base, tmp_path):
     assert description.build(data, start=rest).serialize() == config.serialize()
 
 
+KEPT = ("sRGB - Display", "ACES2065-1", "ACEScct")  # the CG config's 2nd, 7th and 9th spaces
+
+
+def _tampered_base() -> OCIO.Config:
+    """The CG config with ``aces_interchange`` naming an alias of ACES2065-1, and :data:`KEPT`
+    kept as OCIO objects (allocation variables: no record carries them)."""
+    config = OCIO.Config.CreateFromFile(show.DEFAULT_BASE_CONFIG)
+    for name in KEPT:
+        cs = config.getColorSpace(name)
+        cs.setAllocation(OCIO.ALLOCATION_LG2)
+        cs.setAllocationVars([-8.0, 5.0, 0.00390625])
+        config.addColorSpace(cs)  # replaces the space of that name, in its place
+    config.setRole("aces_interchange", "aces2065_1")
+    return config
+
+
+@pytest.fixture(scope="module")
+def tampered(solved, tmp_path_factory) -> tuple[OCIO.Config, OCIO.Config]:
+    """The tampered base and the show of both environments on it (LUTs from the CG show)."""
+    path = tmp_path_factory.mktemp("base") / "base.ocio"
+    path.write_text(_tampered_base().serialize())
+    config = show.build_show_config(_environments(solved / "calib"), str(path))
+    config.setWorkingDir(str(solved / "x" / "show"))
+    return OCIO.Config.CreateFromFile(str(path)), config
+
+
+def test_a_base_keeps_its_order_with_kept_spaces_between(tampered):
+    """Kept spaces stay where the base has them (not first), read back or in the show."""
+    base, config = tampered
+    data, rest = description.split_config(base)
+    assert data.opaque == KEPT
+    every = (OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ALL)
+    names = [cs.getName() for cs in base.getColorSpaces(*every)]
+    assert names.index("ACEScct") == 8
+    assert description.build(data, start=rest).serialize() == base.serialize()
+    assert [cs.getName() for cs in config.getColorSpaces(*every)][: len(names)] == names
+
+
+def test_a_base_naming_aces_by_alias_or_kept_makes_the_same_show(solved, tampered):
+    """The alias role and the kept ACES2065-1: every environment as in its own config, and
+    every footage twin of the CG show on the kept sRGB - Display too."""
+    _, config = tampered
+    assert config.getRoleColorSpace("aces_interchange") == "aces2065_1"
+    assert config.getColorSpace("ACES2065-1").getAllocationVars() == [-8.0, 5.0, 0.00390625]
+    for env in ("env_0", "env_1"):
+        own = OCIO.Config.CreateFromFile(str(solved / "calib" / env / "config.ocio"))
+        for src, dst, rgb in PAIRS[::2]:
+            want = _run(own, own.getCurrentContext(), src, dst, rgb)
+            got = _run(config, _context(config, env), src, dst, rgb)
+            error = np.abs(got - want) / np.maximum(1.0, np.abs(want))
+            assert error.max() < TOLERANCE, (env, src, dst, error.max())
+    cg = OCIO.Config.CreateFromFile(str(solved / "x" / "show" / "config.ocio"))
+    views = list(cg.getViews("sRGB - Display"))
+    assert sum(v.endswith(show.FOOTAGE_VIEW_SUFFIX) for v in views) >= 2
+    assert list(config.getViews("sRGB - Display")) == views
+    assert config.getSearchPath() == cg.getSearchPath() == "luts"
+
+
+def test_a_kept_aces_space_without_a_record_is_refused(solved, tmp_path):
+    base = _tampered_base()
+    aces = base.getColorSpace("ACES2065-1")
+    aces.setTransform(OCIO.CDLTransform(slope=[1.1, 1.0, 0.9]), OCIO.COLORSPACE_DIR_TO_REFERENCE)
+    base.addColorSpace(aces)
+    (tmp_path / "base.ocio").write_text(base.serialize())
+    environments = _environments(solved / "calib")
+    with pytest.raises(InputError, match=r"^--base-config: .*'ACES2065-1'"):
+        show.build_show_config(environments, str(tmp_path / "base.ocio"))
+
+
 def test_the_show_merge_is_data_and_the_base_wins():
     """Without OCIO: a name the base has keeps the base's element, the rest is added."""
     ap0 = description.ColourSpace("ACES2065-1", "ACES", "base's", aliases=("aces",))
@@ -166,7 +235,7 @@ def test_the_show_merge_is_data_and_the_base_wins():
     merged = description.merge(base, overlay)
     assert [cs.description for cs in merged.colour_spaces] == ["base's", ""]
     assert merged.roles == {"aces_interchange": "ACES2065-1", "scene_linear": "New"}
-    assert merged.search_path == ":luts" and merged.name == "show"
+    assert merged.search_path == "luts" and merged.name == "show"
     assert [(v.display, v.colour_space) for v in merged.views] == [
         ("d", "ACES2065-1"),
         ("e", "New"),

@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 if TYPE_CHECKING:
     import PyOpenColorIO as OCIO
@@ -21,6 +21,7 @@ __all__ = [
     "FAMILY",
     "ColourSpace",
     "ConfigData",
+    "ElementOrder",
     "Enum",
     "Look",
     "NamedTransform",
@@ -227,6 +228,17 @@ class View:
     shared: bool = False
 
 
+@dataclass(frozen=True)
+class ElementOrder:
+    """The names of a read config's elements of each kind in its order: :func:`build` puts the
+    elements kept as OCIO objects back in their place among the rebuilt ones."""
+
+    colour_spaces: tuple[str, ...] = ()
+    named_transforms: tuple[str, ...] = ()
+    looks: tuple[str, ...] = ()
+    view_transforms: tuple[str, ...] = ()
+
+
 @dataclass
 class ConfigData:
     """Everything a config holds, in the order it is added (the serialized order)."""
@@ -251,16 +263,18 @@ class ConfigData:
     inactive_colour_spaces: tuple[str, ...] = ()
     #: Names of elements a config read by :func:`split_config` keeps as OCIO objects.
     opaque: tuple[str, ...] = ()
+    #: Where a config read by :func:`split_config` had each element (empty: as listed here).
+    order: ElementOrder = ElementOrder()
 
     def colour_space(self, name: str) -> ColourSpace:
-        """The colour space called ``name`` (KeyError when there is none)."""
+        """The colour space called ``name`` or with that alias (KeyError when there is none)."""
         for cs in self.colour_spaces:
-            if cs.name == name:
+            if name == cs.name or name in cs.aliases:
                 return cs
         raise KeyError(name)
 
     def has_colour_space(self, name: str) -> bool:
-        return any(cs.name == name for cs in self.colour_spaces)
+        return any(name == cs.name or name in cs.aliases for cs in self.colour_spaces)
 
     def view_names(self, display: str) -> list[str]:
         return [v.name for v in self.views if v.display == display]
@@ -442,14 +456,18 @@ def build(data: ConfigData, *, start: OCIO.Config | None = None) -> OCIO.Config:
     config.setDescription(data.description)
     if data.search_path:
         config.setSearchPath(data.search_path)
-    for cs in data.colour_spaces:
-        config.addColorSpace(_ocio_colour_space(cs))
-    for named in data.named_transforms:
-        config.addNamedTransform(_ocio_named_transform(named))
-    for look in data.looks:
-        config.addLook(_ocio_look(look))
-    for vt in data.view_transforms:
-        config.addViewTransform(_ocio_view_transform(vt))
+    spaces, named, looks, vts = _take_kept(config) if start is not None else ({}, {}, {}, {})
+    order = data.order
+    for cs in _in_order(data.colour_spaces, spaces, order.colour_spaces, _ocio_colour_space):
+        config.addColorSpace(cs)
+    for nt in _in_order(
+        data.named_transforms, named, order.named_transforms, _ocio_named_transform
+    ):
+        config.addNamedTransform(nt)
+    for look in _in_order(data.looks, looks, order.looks, _ocio_look):
+        config.addLook(look)
+    for vt in _in_order(data.view_transforms, vts, order.view_transforms, _ocio_view_transform):
+        config.addViewTransform(vt)
     if data.default_view_transform:
         config.setDefaultViewTransformName(data.default_view_transform)
     for view in data.views:
@@ -470,6 +488,34 @@ def build(data: ConfigData, *, start: OCIO.Config | None = None) -> OCIO.Config:
         config.setInactiveColorSpaces(", ".join(data.inactive_colour_spaces))
     config.validate()
     return config
+
+
+def _take_kept(config: OCIO.Config) -> tuple[dict[str, Any], ...]:
+    """The colour spaces, named transforms, looks and view transforms ``config`` holds (the
+    elements :func:`split_config` kept), by name, taken out of it."""
+    import PyOpenColorIO as OCIO
+
+    every = (OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ALL)
+    spaces = {cs.getName(): cs for cs in config.getColorSpaces(*every)}
+    for name in spaces:
+        config.removeColorSpace(name)
+    named = {nt.getName(): nt for nt in config.getNamedTransforms(OCIO.NAMEDTRANSFORM_ALL)}
+    looks = {look.getName(): look for look in config.getLooks()}
+    vts = {vt.getName(): vt for vt in config.getViewTransforms()}
+    config.clearNamedTransforms()
+    config.clearLooks()
+    config.clearViewTransforms()
+    return spaces, named, looks, vts
+
+
+def _in_order(
+    records: Iterable[_R], kept: dict[str, object], order: tuple[str, ...], make: Callable
+) -> list[Any]:
+    """The OCIO objects of ``records`` and the ``kept`` ones, those ``order`` names in its
+    order, then the others as given."""
+    position = {name: i for i, name in enumerate(order)}
+    items = [(r.name, make(r)) for r in records] + list(kept.items())  # type: ignore[attr-defined]
+    return [item for _, item in sorted(items, key=lambda x: position.get(x[0], len(order)))]
 
 
 def _named_record(nt: OCIO.NamedTransform) -> NamedTransform:
@@ -579,19 +625,13 @@ def split_config(
     import PyOpenColorIO as OCIO
 
     every = (OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ALL)
-    spaces, kept_spaces = _split(
-        config.getColorSpaces(*every), colour_space_record, _ocio_colour_space, exact
-    )
-    named, kept_named = _split(
-        config.getNamedTransforms(OCIO.NAMEDTRANSFORM_ALL),
-        _named_record,
-        _ocio_named_transform,
-        exact,
-    )
-    looks, kept_looks = _split(config.getLooks(), _look_record, _ocio_look, exact)
-    vts, kept_vts = _split(
-        config.getViewTransforms(), _view_transform_record, _ocio_view_transform, exact
-    )
+    all_spaces = list(config.getColorSpaces(*every))
+    all_named = list(config.getNamedTransforms(OCIO.NAMEDTRANSFORM_ALL))
+    all_looks, all_vts = list(config.getLooks()), list(config.getViewTransforms())
+    spaces, kept_spaces = _split(all_spaces, colour_space_record, _ocio_colour_space, exact)
+    named, kept_named = _split(all_named, _named_record, _ocio_named_transform, exact)
+    looks, kept_looks = _split(all_looks, _look_record, _ocio_look, exact)
+    vts, kept_vts = _split(all_vts, _view_transform_record, _ocio_view_transform, exact)
     rules = config.getFileRules()
     default_rule = rules.getColorSpace(rules.getNumEntries() - 1)
     data = ConfigData(
@@ -617,6 +657,9 @@ def split_config(
     )
     if not exact:
         return data, None
+    data.order = ElementOrder(
+        *(tuple(x.getName() for x in xs) for xs in (all_spaces, all_named, all_looks, all_vts))
+    )
     rest = OCIO.Config.CreateFromStream(config.serialize())
     for cs in spaces:
         rest.removeColorSpace(cs.name)
@@ -649,7 +692,7 @@ def merge(base: ConfigData, overlay: ConfigData) -> ConfigData:
     where the base has none of that name or alias (the base wins, as OCIO's
     ``STRATEGY_PREFER_BASE``); the overlay's name and description where given; the newer
     version; the base's file rule, active and inactive lists and default view transform."""
-    paths = base.search_path.split(":") + [p for p in overlay.search_path.split(":") if p]
+    paths = [p for p in (*base.search_path.split(":"), *overlay.search_path.split(":")) if p]
     views = {(v.display, v.name) for v in base.views}
 
     def new(mine: list[_N], theirs: list[_N]) -> list[_N]:

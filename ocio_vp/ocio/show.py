@@ -61,6 +61,7 @@ __all__ = [
     "DEFAULT_BASE_CONFIG",
     "ENVIRONMENT_FAMILIES",
     "EnvironmentData",
+    "KeptSpace",
     "ShowEnvironment",
     "build_show_config",
     "environment_data",
@@ -126,25 +127,53 @@ def _own_spaces(config: ConfigData) -> list[ColourSpace]:
     ]
 
 
-def _base_to_reference(base: ConfigData) -> Transform:
+@dataclass(frozen=True)
+class KeptSpace:
+    """A base colour space kept as OCIO has it (no record rebuilds it exactly): what the show
+    reads of it; ``record`` its data where its transforms have records (not rebuilt), else None
+    and ``problem`` says why."""
+
+    name: str
+    aliases: tuple[str, ...]
+    is_data: bool
+    record: ColourSpace | None
+    problem: str = ""
+
+
+def kept_space(cs: OCIO.ColorSpace) -> KeptSpace:
+    """What the show reads of a base colour space kept as an OCIO object."""
+    try:
+        record = colour_space_record(cs)
+    except ValueError as error:
+        return KeptSpace(cs.getName(), tuple(cs.getAliases()), cs.isData(), None, str(error))
+    return KeptSpace(cs.getName(), tuple(cs.getAliases()), cs.isData(), record)
+
+
+def _aces_space(base: ConfigData, kept: Sequence[KeptSpace]) -> ColourSpace:
+    """The base's ``aces_interchange`` space, named by name or alias, rebuilt or kept
+    (InputError where its transform has no record)."""
+    name = base.roles[AP0_ROLE]
+    if base.has_colour_space(name):
+        return base.colour_space(name)
+    for space in kept:
+        if name == space.name or name in space.aliases:
+            if space.record is None:
+                raise InputError(
+                    f"the base config's {AP0_ROLE} space {space.name!r}: {space.problem} (the "
+                    "environments' camera gamuts cannot be placed in it)",
+                    key="--base-config",
+                )
+            return space.record
+    raise InputError(f"the base config has no {AP0_ROLE} space {name!r}", key="--base-config")
+
+
+def _base_to_reference(aces: ColourSpace) -> Transform:
     """The base's ``aces_interchange`` space -> the base's reference (empty when equal)."""
-    aces = base.colour_space(base.roles[AP0_ROLE])
     if aces.to_reference is not None:
         return group([aces.to_reference])
     if aces.from_reference is None:
         return group([])
     return group([aces.from_reference], inverse=True)
-
-
-def _record(cs: OCIO.ColorSpace) -> ColourSpace:
-    """The base's colour space as data (InputError where a transform has no record)."""
-    try:
-        return colour_space_record(cs)
-    except ValueError as error:
-        raise InputError(
-            f"the base config's {cs.getName()!r}: {error} (a show config copies it)",
-            key="--base-config",
-        ) from None
 
 
 def environment_data(env: ShowEnvironment) -> EnvironmentData:
@@ -228,11 +257,13 @@ def _space_transform(src: str, dst: str) -> Transform:
     return Transform("ColorSpaceTransform", (("Src", src), ("Dst", dst), ("DataBypass", True)))
 
 
-def _overlay(base: ConfigData, environments: Sequence[EnvironmentData]) -> ConfigData:
-    """Everything the show adds to the base, as data."""
-    aces = base.roles[AP0_ROLE]
+def _overlay(
+    base: ConfigData, environments: Sequence[EnvironmentData], aces_space: ColourSpace
+) -> ConfigData:
+    """Everything the show adds to the base (its ``aces_interchange`` space ``aces_space``)."""
+    aces = aces_space.name
     overlay = ConfigData(environment={CONTEXT_VARIABLE: environments[0].name}, search_path=LUT_DIR)
-    aces_to_base = _base_to_reference(base)
+    aces_to_base = _base_to_reference(aces_space)
     shared: dict[str, ColourSpace] | None = None
     for env in environments:
         names = {cs.name: cs for cs in _own_spaces(env.data)}
@@ -277,28 +308,35 @@ def _quiet(level: OCIO.LoggingLevel = OCIO.LOGGING_LEVEL_NONE) -> Iterator[None]
         OCIO.SetLoggingLevel(before)
 
 
-def _footage_views(data: ConfigData, displays: Sequence[str]) -> list[View]:
+def _footage_views(
+    data: ConfigData, displays: Sequence[str], kept: Sequence[KeptSpace]
+) -> list[View]:
     """On every base display, each view's footage twin: the same view after the Q look."""
     shared = {v.name: v for v in data.views if not v.display}
-    spaces = {n: cs for cs in data.colour_spaces for n in (cs.name, *cs.aliases)}
+    is_data = {n: cs.is_data for cs in data.colour_spaces for n in (cs.name, *cs.aliases)}
+    is_data.update({n: cs.is_data for cs in kept for n in (cs.name, *cs.aliases)})
     added = []
     for display in displays:
         mine = [v for v in data.views if v.display == display]
         for view in [v for v in mine if not v.shared] + [shared[v.name] for v in mine if v.shared]:
             space = display if view.colour_space == USE_DISPLAY_NAME else view.colour_space
-            cs = spaces.get(space)
-            if not view.view_transform or cs is None or cs.is_data:
+            if not view.view_transform or is_data.get(space, True):
                 continue  # Raw and plain colour space views: nothing to post-correct for
             name = view.name + FOOTAGE_VIEW_SUFFIX
             added.append(View(display, name, space, view.view_transform, POST_CORRECTION_LOOK))
     return added
 
 
-def show_data(base: ConfigData, environments: Sequence[EnvironmentData], label: str) -> ConfigData:
+def show_data(
+    base: ConfigData,
+    environments: Sequence[EnvironmentData],
+    label: str,
+    kept: Sequence[KeptSpace] = (),
+) -> ConfigData:
     """The show config of ``environments`` on ``base`` (``label``: how its description names
-    the base), as data: the overlay merged onto the base, the footage views, the active and
-    inactive lists."""
-    overlay = _overlay(base, environments)
+    the base; ``kept``: its colour spaces kept as OCIO objects), as data: the overlay merged onto
+    the base, the footage views, the active and inactive lists."""
+    overlay = _overlay(base, environments, _aces_space(base, kept))
     names = ", ".join(env.name for env in environments)
     first = environments[0].name
     overlay.name = f"ocio-vp_show_{first}" if len(environments) == 1 else "ocio-vp_show"
@@ -311,7 +349,7 @@ def show_data(base: ConfigData, environments: Sequence[EnvironmentData], label: 
     displays = base.active_displays or tuple(
         dict.fromkeys(v.display for v in base.views if v.display)
     )
-    footage = _footage_views(base, [d for d in displays if d != DISPLAY])
+    footage = _footage_views(base, [d for d in displays if d != DISPLAY], kept)
     merged.views += footage
     if base.active_views:
         led = [v.name for v in overlay.views if v.name not in base.active_views]
@@ -355,10 +393,11 @@ def build_show_config(
     base_config = load_base_config(base)
     with _quiet(OCIO.LOGGING_LEVEL_WARNING):
         data, rest = split_config(base_config)
-    aces = base_config.getColorSpace(base_config.getRoleColorSpace(AP0_ROLE))
-    if not data.has_colour_space(aces.getName()):
-        _record(aces)  # the reason, as an InputError
-    inputs = [environment_data(env) for env in environments]
-    label = f"{base} ({base_config.getName()})"
+    every = (OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ALL)
+    spaces = base_config.getColorSpaces(*every)
+    kept = [kept_space(cs) for cs in spaces if cs.getName() in data.opaque]
+    _aces_space(data, kept)  # a base that cannot take the environments, before reading them
+    merged = show_data(data, [environment_data(env) for env in environments],
+                       f"{base} ({base_config.getName()})", kept)  # fmt: skip
     with _quiet(OCIO.LOGGING_LEVEL_WARNING):
-        return build(show_data(data, inputs, label), start=rest)
+        return build(merged, start=rest)
