@@ -7,7 +7,7 @@
 - A single output file is replaced only if it starts with :data:`FILE_SIGNATURE` or already
   holds the same bytes; no output may be, or contain, an input (:func:`check_not_input`).
 - A run holds an exclusive lock on the folder it writes into (a second run fails at once);
-  ``solve`` only while it publishes (its staging folder fills as it solves: minutes).
+  ``solve`` and ``demo`` only while they publish (their staging folder fills as they solve).
 - A stopped run (Ctrl-C, ``kill``, ``timeout``, a CPU-time limit) removes its staging folders
   (:func:`stop_on_signals`, and ``atexit``).
 """
