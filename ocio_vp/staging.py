@@ -6,7 +6,8 @@
   folder is replaced only if it is empty or holds nothing else.
 - A single output file is replaced only if it starts with :data:`FILE_SIGNATURE` or already
   holds the same bytes; no output may be, or contain, an input (:func:`check_not_input`).
-- A run holds an exclusive lock on the folder it writes into (a second run fails at once).
+- A run holds an exclusive lock on the folder it writes into (a second run fails at once);
+  ``solve`` and ``demo`` only while they publish (their staging folder fills as they solve).
 - A stopped run (Ctrl-C, ``kill``, ``timeout``, a CPU-time limit) removes its staging folders
   (:func:`stop_on_signals`, and ``atexit``).
 """
@@ -193,33 +194,83 @@ def _remove_live_stages() -> None:
 
 
 @contextlib.contextmanager
-def staged_dir(parent: str | os.PathLike[str]) -> Iterator[Path]:
-    """Yield a fresh staging folder inside ``parent`` (created if needed, and locked
-    meanwhile); removed on exit, with the folders this call created if still empty."""
+def staged_dir(parent: str | os.PathLike[str], *, locked: bool = True) -> Iterator[Path]:
+    """Yield a fresh staging folder inside ``parent`` (created if needed, and locked meanwhile
+    unless not ``locked``); removed on exit, with the folders this call created if still empty.
+
+    Unlocked, the caller takes :func:`output_lock` only to publish, so that other runs may
+    publish into ``parent`` while it fills its staging folder (solve writes each environment
+    as it solves the next: minutes)."""
     parent = Path(parent)
     if os.path.lexists(parent) and not parent.is_dir():
         raise InputError(f"exists and is not a folder; {_MOVE_HINT}", source=parent)
+    if not locked:
+        with _unlocked_stage(parent) as stage:
+            yield stage
+        return
     created = _make_dirs(parent)
     # Folders this call created are removed only while it holds the lock: a run that finds the
     # folder locked leaves it to the run that holds it (removing it under that run made its
     # staging folder fail, and a third run could then lock a new folder of the same name).
     with output_lock(parent):
-        # Named and registered before it exists: a stop signal arriving just as the folder
-        # is made still finds it (mkdtemp's name would be lost if it came before returning).
-        stage = parent / f".ocio-vp-staging-{os.getpid()}-{secrets.token_hex(6)}"
-        _LIVE_STAGES.add(stage)
         try:
-            try:
-                stage.mkdir(mode=0o700)
-            except OSError as error:
-                raise InputError(f"cannot write: {error.strerror}", source=parent) from None
-            stage.chmod(default_mode(folder=True))  # it may itself be published
-            yield stage
+            with _stage(parent) as stage:
+                yield stage
         finally:
-            shutil.rmtree(stage, ignore_errors=True)
-            if not os.path.lexists(stage):  # else a straggler wrote into it: atexit
-                _LIVE_STAGES.discard(stage)
             _remove_empty(created)
+
+
+@contextlib.contextmanager
+def _unlocked_stage(parent: Path) -> Iterator[Path]:
+    """:func:`staged_dir` without the lock. ``parent`` may be removed by the run that made it
+    (once empty, under its lock) between finding it and making the staging folder in it:
+    then made again."""
+    for attempt in range(3):
+        created = _make_dirs(parent)
+        try:
+            with _stage(parent, retry=attempt < 2) as stage:
+                yield stage
+            return
+        except _ParentGone:
+            continue
+        finally:  # the staging folder is gone by now
+            _remove_empty_locked(created)
+
+
+class _ParentGone(Exception):
+    """The folder a staging folder was being made in is gone (:func:`_unlocked_stage`)."""
+
+
+def _remove_empty_locked(created: Sequence[Path]) -> None:
+    """Remove the empty ``created`` folders (deepest first) under the lock on the first, if
+    no other run holds it: else they are that run's now (see :func:`staged_dir`)."""
+    if not created:
+        return
+    with contextlib.suppress(InputError), output_lock(created[0]):
+        _remove_empty(created)
+
+
+@contextlib.contextmanager
+def _stage(parent: Path, *, retry: bool = False) -> Iterator[Path]:
+    """A fresh staging folder in the existing ``parent``, removed on exit; :class:`_ParentGone`
+    if ``parent`` vanished before it was made and ``retry``."""
+    # Named and registered before it exists: a stop signal arriving just as the folder
+    # is made still finds it (mkdtemp's name would be lost if it came before returning).
+    stage = parent / f".ocio-vp-staging-{os.getpid()}-{secrets.token_hex(6)}"
+    _LIVE_STAGES.add(stage)
+    try:
+        try:
+            stage.mkdir(mode=0o700)
+        except OSError as error:
+            if retry and isinstance(error, FileNotFoundError):
+                raise _ParentGone() from None
+            raise InputError(f"cannot write: {error.strerror}", source=parent) from None
+        stage.chmod(default_mode(folder=True))  # it may itself be published
+        yield stage
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+        if not os.path.lexists(stage):  # else a straggler wrote into it: atexit
+            _LIVE_STAGES.discard(stage)
 
 
 def _files(folder: Path) -> list[str]:

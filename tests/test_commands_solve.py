@@ -262,3 +262,23 @@ def test_missing_optional_measurements_are_stated(tmp_path, capsys) -> None:
     printed = capsys.readouterr().out
     assert "assumed" not in solution["diagnostics"] and "no black_level" not in printed
     assert "no stage.white_patch" not in printed
+
+
+def test_a_repeated_environment_is_refused_before_solving(tmp_path, capsys, monkeypatch) -> None:
+    """``--environment X --environment X`` would write X's folder twice (a FileExistsError
+    traceback once both were solved): one line naming the option and the name, exit 2,
+    nothing solved or written."""
+    import ocio_vp.pipeline
+
+    def no_solving(*args, **kwargs):
+        raise AssertionError("solved although the command line was refused")
+
+    monkeypatch.setattr(ocio_vp.pipeline, "solve_environment", no_solving)
+    path = _write(tmp_path, make_measurements_dict(environments=2))
+    out = tmp_path / "calib"
+    picks = ["--environment", "env_1", "--environment", "env_0", "--environment", "env_1"]
+    assert main(["solve", str(path), "--out", str(out), *picks]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    assert "--environment" in err and "'env_1' is given more than once" in err, err
+    assert not out.exists()

@@ -128,3 +128,56 @@ def test_no_pool_for_a_linear_method():
     # one environment is written where it is solved: nothing to share
     with writer_pool("root-polynomial", environments=1) as pool:
         assert pool is None
+
+
+def _lock_elsewhere(folder: Path) -> int:
+    """Lock ``folder`` as another run's ``output_lock`` would (flock is per open file: a second
+    descriptor conflicts with this process's own lock); BlockingIOError if a run holds it."""
+    import fcntl
+
+    fd = os.open(folder, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BaseException:
+        os.close(fd)
+        raise
+    return fd
+
+
+def test_a_streamed_write_locks_the_folder_only_to_publish(solutions, alone, tmp_path):
+    """While solve streams its environments into the staging folder (solving the next), the
+    output folder is not locked: another run (two --environment solves side by side) may
+    publish into it meanwhile; the lock is taken to publish, and a run holding it then stops
+    this one on one line with nothing published and no staging folder left."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    out = tmp_path / "out"
+    other = dataclasses.replace(solutions[2], environment="other_stage")
+
+    def solving(out: Path, hold_at_the_end: list[int] | None = None):
+        for i, solution in enumerate(solutions):
+            yield solution
+            staged = [p for p in out.iterdir() if p.name.startswith(".ocio-vp-staging-")]
+            assert len(staged) == 1  # being written, unpublished
+            fd = _lock_elsewhere(out)  # refused if this run held the lock while solving
+            if hold_at_the_end is not None and i == len(solutions) - 1:
+                hold_at_the_end.append(fd)  # another run is publishing as this one ends
+                continue
+            os.close(fd)
+            if i == 0 and hold_at_the_end is None:  # another run writes and publishes now
+                write_solutions([other], out)
+
+    with ThreadPoolExecutor(1) as pool:
+        written = write_solutions(solving(out), out, pool=pool)
+    assert [solution_to_json(s) for s in written] == alone[1]
+    assert {k: v for k, v in _files(out).items() if not k.startswith("other_stage")} == alone[0]
+    assert (out / "other_stage" / "config.ocio").is_file()
+
+    again, held = tmp_path / "again", []
+    try:
+        with ThreadPoolExecutor(1) as pool, pytest.raises(InputError, match="another ocio-vp"):
+            write_solutions(solving(again, held), again, pool=pool)
+    finally:
+        for fd in held:
+            os.close(fd)
+    assert held and list(again.iterdir()) == []  # nothing published, no staging folder

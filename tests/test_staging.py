@@ -175,3 +175,32 @@ def test_a_lock_on_a_folder_removed_meanwhile_is_refused(tmp_path, monkeypatch):
         with staging.output_lock(out):
             pass
     assert staging._LOCKS == {}
+
+
+def test_an_unlocked_stage_remakes_a_folder_removed_meanwhile(tmp_path, monkeypatch):
+    """solve's staging folder (unlocked: solve locks only to publish). The run that made the
+    output folder removes it, empty, as it gives up, between this run finding it and making
+    its staging folder in it: this run makes it again, leaves it unlocked while staging, and
+    removes it at the end (it made it, and it is empty)."""
+    import os
+
+    from ocio_vp import staging
+
+    out = tmp_path / "out"
+    out.mkdir()
+    real = staging._make_dirs
+    calls = []
+
+    def then_removed(folder):
+        created = real(folder)
+        calls.append(created)
+        if len(calls) == 1:
+            folder.rmdir()  # the other run gave up
+        return created
+
+    monkeypatch.setattr(staging, "_make_dirs", then_removed)
+    with staging.staged_dir(out, locked=False) as stage:
+        assert stage.parent == out and stage.is_dir()
+        os.close(_held_elsewhere(out))  # another run may lock it meanwhile
+    assert calls == [[], [out]]
+    assert not out.exists()

@@ -284,7 +284,7 @@ def print_camera_gamut(solutions: Sequence) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ocio_vp.errors import InputError
+    from ocio_vp.errors import InputError, excerpt
 
     if args.peak_nits is not None and not 0 < args.peak_nits <= 10000:
         raise InputError(f"expected 0 < cd/m2 <= 10000, got {args.peak_nits:g}", key="--peak-nits")
@@ -295,6 +295,10 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.hdri_width is not None and not args.hdri:
         raise InputError("applies only with --hdri", key="--hdri-width")
+    picked = args.environment or []
+    for i, name in enumerate(picked):
+        if name in picked[:i]:  # its folder would be written twice
+            raise InputError(f"{excerpt(name)} is given more than once", key="--environment")
     written = _solve_and_write(args)
     print_summary(written)
     print_fixtures(written)

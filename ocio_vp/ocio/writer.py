@@ -1,7 +1,8 @@
 """Write solved environments to disk: ``OUT/<environment>/config.ocio`` and ``solution.json``.
 
 All environments are written into a staging folder first and renamed into place only when
-every one of them succeeded, so a failure never leaves a half-written output folder.
+every one of them succeeded, so a failure never leaves a half-written output folder. The
+output folder is locked only while they are renamed into place (:func:`write_solutions`).
 
 A non-linear environment costs far more to write than a 3x3 one (it designs, bakes, checks and
 formats two LUT chains; more with emitter protection, whose inverse is solved slice by slice;
@@ -31,7 +32,7 @@ from ocio_vp.ocio.config import ModelFiles, config_data, ocio_names, write_confi
 from ocio_vp.ocio.description import build
 from ocio_vp.ocio.panels import add_panel_spaces, panel_outputs
 from ocio_vp.ocio.wall import wall_outputs
-from ocio_vp.staging import publish_dirs, staged_dir
+from ocio_vp.staging import output_lock, publish_dirs, staged_dir
 from ocio_vp.wall.encoding import LUT_DIR
 
 __all__ = ["write_environment", "write_solutions", "writer_pool"]
@@ -238,11 +239,14 @@ def write_solutions(
     solves the next, this process taking back the last ones (:func:`_write_streamed`).
     """
     out_dir = Path(out_dir)
-    with staged_dir(out_dir) as stage:
+    # Locked only to publish: another run may publish into out_dir while these are solved and
+    # written (and it is refused at once only while this run publishes).
+    with staged_dir(out_dir, locked=False) as stage:
         if pool is not None and not isinstance(solutions, Sequence):
             written = _write_streamed(stage, iter(solutions), pool)
         else:
             written = _write_into(stage, list(solutions), pool)
         pairs = [(stage / s.environment, out_dir / s.environment) for s in written]
-        publish_dirs(pairs, inputs=inputs)
+        with output_lock(out_dir):
+            publish_dirs(pairs, inputs=inputs)
     return written
