@@ -51,13 +51,13 @@ def deprecated_names(
 
 def published_on_first_use(
     package: str, exports: Mapping[str, str]
-) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
+) -> tuple[Callable[[str], object], Callable[[], list[str]]]:
     """The ``__getattr__`` and ``__dir__`` of ``package`` (a module being imported), whose
     public names ``exports`` maps to the modules defining them: the first read of a name imports
     its module and keeps the value in the package, so later reads skip the lookup."""
     namespace = sys.modules[package].__dict__
 
-    def __getattr__(name: str) -> Any:
+    def __getattr__(name: str) -> object:
         module = exports.get(name)
         if module is None:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")

@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, TypeVar
 
 if TYPE_CHECKING:
     import PyOpenColorIO as OCIO
@@ -490,7 +490,7 @@ def build(data: ConfigData, *, start: OCIO.Config | None = None) -> OCIO.Config:
     return config
 
 
-def _take_kept(config: OCIO.Config) -> tuple[dict[str, Any], ...]:
+def _take_kept(config: OCIO.Config) -> tuple[dict[str, object], ...]:
     """The colour spaces, named transforms, looks and view transforms ``config`` holds (the
     elements :func:`split_config` kept), by name, taken out of it."""
     import PyOpenColorIO as OCIO
@@ -510,7 +510,7 @@ def _take_kept(config: OCIO.Config) -> tuple[dict[str, Any], ...]:
 
 def _in_order(
     records: Iterable[_R], kept: dict[str, object], order: tuple[str, ...], make: Callable
-) -> list[Any]:
+) -> list[object]:
     """The OCIO objects of ``records`` and the ``kept`` ones, those ``order`` names in its
     order, then the others as given."""
     position = {name: i for i, name in enumerate(order)}
