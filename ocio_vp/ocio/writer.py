@@ -139,7 +139,7 @@ def _write_into(stage: Path, solutions: Sequence[Solution], pool: Executor | Non
         folder.mkdir()
     futures: dict[int, Future] = {}
     written: list = [None] * len(solutions)
-    try:  # an interrupt while submitting still waits for what was submitted (finally)
+    with _helper_writes(pool, futures):  # an interrupt while submitting still waits
         if pool is not None and len(solutions) > 1:
             for i in sorted(_share(solutions)):
                 try:
@@ -151,14 +151,6 @@ def _write_into(stage: Path, solutions: Sequence[Solution], pool: Executor | Non
                 written[i] = write_environment(solution, folders[i])
         for i, future in futures.items():
             written[i] = _helper_result(future, solutions[i], folders[i])
-    except KeyboardInterrupt:  # stopped (Ctrl-C, kill): the helper's bake is not waited for
-        _stop_helper(pool)
-        raise
-    finally:
-        # Nothing may still be writing into the staging folder once it is removed.
-        for future in futures.values():
-            future.cancel()
-        wait(list(futures.values()))
     return written
 
 
@@ -172,7 +164,7 @@ def _write_streamed(stage: Path, solutions: Iterator[Solution], pool: Executor) 
     todo: list[tuple[Solution, Path]] = []
     futures: dict[int, Future] = {}
     written: list = []
-    try:
+    with _helper_writes(pool, futures):
         for solution in solutions:
             folder = stage / solution.environment
             folder.mkdir()
@@ -193,14 +185,23 @@ def _write_streamed(stage: Path, solutions: Iterator[Solution], pool: Executor) 
             written[i] = write_environment(*todo[i])
         for i, future in futures.items():
             written[i] = _helper_result(future, *todo[i])
-    except KeyboardInterrupt:  # stopped (Ctrl-C, kill): the helper's bake is not waited for
+    return written
+
+
+@contextlib.contextmanager
+def _helper_writes(pool: Executor | None, futures: dict[int, Future]) -> Iterator[None]:
+    """Around writes of which ``futures`` (filled inside) run on ``pool``'s helper: a stop
+    (Ctrl-C, kill) ends the helper without waiting for its bake, and whatever the exit, nothing
+    is still writing into the staging folder when it is removed."""
+    try:
+        yield
+    except KeyboardInterrupt:
         _stop_helper(pool)
         raise
     finally:
         for future in futures.values():
             future.cancel()
         wait(list(futures.values()))
-    return written
 
 
 def _helper_result(future: Future, solution: Solution, folder: Path) -> Solution:
