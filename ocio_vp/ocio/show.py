@@ -74,7 +74,6 @@ DEFAULT_BASE_CONFIG = ACES_CG_CONFIG
 #: Families (after ``ocio-vp/``) of an environment config's own colour spaces.
 ENVIRONMENT_FAMILIES = ("LED Wall", "Camera")
 AP0_ROLE = "aces_interchange"
-USE_DISPLAY_NAME = "<USE_DISPLAY_NAME>"  # OCIO.OCIO_VIEW_USE_DISPLAY_NAME
 
 
 @dataclass(frozen=True)
@@ -319,7 +318,11 @@ def _footage_views(
     for display in displays:
         mine = [v for v in data.views if v.display == display]
         for view in [v for v in mine if not v.shared] + [shared[v.name] for v in mine if v.shared]:
-            space = display if view.colour_space == USE_DISPLAY_NAME else view.colour_space
+            space = (
+                display
+                if view.colour_space == OCIO.OCIO_VIEW_USE_DISPLAY_NAME
+                else view.colour_space
+            )
             if not view.view_transform or is_data.get(space, True):
                 continue  # Raw and plain colour space views: nothing to post-correct for
             name = view.name + FOOTAGE_VIEW_SUFFIX
