@@ -8,7 +8,7 @@ from __future__ import annotations
 import dataclasses
 import multiprocessing
 import os
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -103,6 +103,15 @@ def test_an_input_error_in_the_helper_is_reported_and_nothing_is_written(solutio
     assert str(helper.value) == str(here.value)
     assert "no inverse" in str(helper.value)
     for out in ("here", "helper"):  # all or nothing: no environment folder, no staging left
+        assert not (tmp_path / out).exists() or not any((tmp_path / out).iterdir())
+
+
+def test_an_environment_written_twice_is_refused_and_nothing_is_written(solutions, tmp_path):
+    # demo and library callers reach the writer without solve's own check of --environment
+    twice = [solutions[2], solutions[2]]
+    for out, given in (("list", twice), ("stream", iter(twice))):
+        with ThreadPoolExecutor(1) as pool, pytest.raises(InputError, match="more than once"):
+            write_solutions(given, tmp_path / out, pool=pool)
         assert not (tmp_path / out).exists() or not any((tmp_path / out).iterdir())
 
 

@@ -134,9 +134,7 @@ def _share(solutions: Sequence[Solution]) -> set[int]:
 
 def _write_into(stage: Path, solutions: Sequence[Solution], pool: Executor | None) -> list:
     """Write each solution into ``stage/<environment>``; the helper's share on ``pool``."""
-    folders = [stage / s.environment for s in solutions]
-    for folder in folders:
-        folder.mkdir()
+    folders = [_environment_folder(stage, s) for s in solutions]
     futures: dict[int, Future] = {}
     written: list = [None] * len(solutions)
     with _helper_writes(pool, futures):  # an interrupt while submitting still waits
@@ -166,8 +164,7 @@ def _write_streamed(stage: Path, solutions: Iterator[Solution], pool: Executor) 
     written: list = []
     with _helper_writes(pool, futures):
         for solution in solutions:
-            folder = stage / solution.environment
-            folder.mkdir()
+            folder = _environment_folder(stage, solution)
             todo.append((solution, folder))
             written.append(None)
             if len(todo) > 1:  # one behind: the latest may be the last, written here
@@ -202,6 +199,17 @@ def _helper_writes(pool: Executor | None, futures: dict[int, Future]) -> Iterato
         for future in futures.values():
             future.cancel()
         wait(list(futures.values()))
+
+
+def _environment_folder(stage: Path, solution: Solution) -> Path:
+    """``stage/<environment>``, made (the staging folder is new: a folder already there is an
+    environment written twice, refused)."""
+    folder = stage / solution.environment
+    try:
+        folder.mkdir()
+    except FileExistsError:
+        raise InputError(f"environment {solution.environment!r} is given more than once") from None
+    return folder
 
 
 def _helper_result(future: Future, solution: Solution, folder: Path) -> Solution:
