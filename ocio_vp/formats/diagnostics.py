@@ -15,9 +15,8 @@ import numpy as np
 
 from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.formats.jsontypes import JsonMapping
-from ocio_vp.formats.records import Record, read_record, read_value
+from ocio_vp.formats.records import Figures, Record, read_record, read_value
 from ocio_vp.formats.skin import SkinFigures
-from ocio_vp.metrics import as_recorded
 from ocio_vp.model.footage_range import Agreement
 
 __all__ = [
@@ -90,7 +89,7 @@ class DriveRange(Record):
 
 
 @dataclass(frozen=True)
-class Extrapolation(Record):
+class Extrapolation(Figures):
     """What a solve measured of its post-correction beyond the chart
     (:mod:`ocio_vp.correction.extrapolation`).
 
@@ -105,12 +104,12 @@ class Extrapolation(Record):
     negative: float | None
     folds: float | None
 
+    # The LEDs' ΔE2000 to 4 significant digits (a rank-1 Q's agree to 2e-8 only).
+    DIGITS = 4
+    FIGURES = ("led_damage", "led_damage_least_squares")
+
     def __post_init__(self) -> None:
-        # The LEDs' ΔE2000 as the file keeps them, so that a solve and a load hold the same:
-        # 4 significant digits, 0 below rounding (the digits beyond differ between machines:
-        # a rank-1 Q's agree to 2e-8 only).
-        for key in ("led_damage", "led_damage_least_squares"):
-            object.__setattr__(self, key, as_recorded(getattr(self, key), 4))
+        super().__post_init__()
         # The probe's -inf (a dominant output at or below zero: no share of it exists) is
         # written as null, never as a non-finite number; ``kept`` <= 0 says the same.
         if self.negative is not None and not np.isfinite(self.negative):

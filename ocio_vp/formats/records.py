@@ -26,6 +26,7 @@ from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 
 __all__ = [
     "MAX_VALUE",
+    "Figures",
     "Record",
     "finite_array",
     "floats",
@@ -62,6 +63,25 @@ class Record:
             keys = [n for n in names if n not in self.OMIT_NONE or getattr(self, n) is not None]
             present = (*keys, *extra)
         return {k: extra[k] if k in extra else getattr(self, k) for k in present}
+
+
+class Figures(Record):
+    """Mixin for a record of measured figures kept as files keep them
+    (:func:`ocio_vp.metrics.as_recorded`: ``DIGITS`` significant digits, 0 below rounding), so
+    that a solve and a load hold the same digits and none of them is machine noise.
+    ``FIGURES`` names the fields so kept (None: every float field)."""
+
+    DIGITS: ClassVar[int] = 6
+    FIGURES: ClassVar[tuple[str, ...] | None] = None
+
+    def __post_init__(self) -> None:
+        from ocio_vp.metrics import as_recorded
+
+        names = self.FIGURES or [f.name for f in dataclasses.fields(self)]  # type: ignore[arg-type]
+        for name in names:
+            value = getattr(self, name)
+            if isinstance(value, float):
+                object.__setattr__(self, name, as_recorded(value, self.DIGITS))
 
 
 #: Fields a record may have that are not keys of its block.

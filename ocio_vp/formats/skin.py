@@ -9,27 +9,16 @@ With skin first, the default's figures beside them (what the priority cost or bo
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
-from ocio_vp.formats.records import Record
-from ocio_vp.metrics import ROUNDING, as_recorded
+from ocio_vp.formats.records import Figures
+from ocio_vp.metrics import ROUNDING
 
 __all__ = ["ROUNDING", "SkinBand", "SkinDefault", "SkinFigures"]
 
 
-class _Figures(Record):
-    """A record whose float fields are kept as files keep them (:func:`as_recorded`), so that
-    a solve and a load hold the same digits and none of them is machine noise."""
-
-    def __post_init__(self) -> None:
-        for field in fields(self):  # type: ignore[arg-type]
-            value = getattr(self, field.name)
-            if isinstance(value, float):
-                object.__setattr__(self, field.name, as_recorded(value))
-
-
 @dataclass(frozen=True)
-class SkinBand(_Figures):
+class SkinBand(Figures):
     """One lightness band (ITA°): its sample count and mean ΔE2000, this solve and least
     squares."""
 
@@ -40,7 +29,7 @@ class SkinBand(_Figures):
 
 
 @dataclass(frozen=True)
-class SkinDefault(_Figures):
+class SkinDefault(Figures):
     """The default post-correction on the same problem (written with skin first): its model,
     its expected skin ΔE2000, the wall's LEDs in frame (p95 ΔE2000) through it and through this
     solve, the chart patches the in-frustum matrix drives outside [0, 1] for each, and the
@@ -74,7 +63,7 @@ class SkinDefault(_Figures):
 
 
 @dataclass(frozen=True)
-class SkinFigures(_Figures):
+class SkinFigures(Figures):
     """What a solve expects of skin (module docstring).
 
     ``priority``: ``general`` or ``skin``; ``source``: where the skin samples came from (in
