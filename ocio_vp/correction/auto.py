@@ -44,9 +44,13 @@ from ocio_vp.correction.linear import (
 )
 from ocio_vp.correction.problem import QFit, QProblem
 from ocio_vp.correction.root_polynomial import make_q_root_polynomial
-from ocio_vp.correction.skin import skin_delta_e
 from ocio_vp.errors import InputError
-from ocio_vp.metrics import error_relative_to_white, sample_camera_to_xyz, zero_below_rounding
+from ocio_vp.metrics import (
+    camera_delta_E_2000,
+    error_relative_to_white,
+    sample_camera_to_xyz,
+    zero_below_rounding,
+)
 from ocio_vp.model.correction import MatrixCorrection, PostCorrection
 
 __all__ = [
@@ -232,7 +236,7 @@ def candidate_skin_errors(
     camera = sample_camera_to_xyz()
     white = target[problem.white_patch]
     corrected = np.stack([c.apply(lit) for c in corrections.values()])
-    errors = skin_delta_e(corrected, problem.skin.target, white, camera)
+    errors = camera_delta_E_2000(problem.skin.target, corrected, camera_to_xyz=camera, white=white)
     return dict(zip(corrections, errors, strict=True))
 
 

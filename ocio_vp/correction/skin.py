@@ -39,7 +39,6 @@ __all__ = [
     "chart_skin_weights",
     "joined",
     "patch_skin_samples",
-    "skin_delta_e",
     "skin_patch_weights",
     "skin_rows",
     "with_rows",
@@ -240,14 +239,3 @@ def _lab(xyz: np.ndarray, white_xyz: np.ndarray) -> np.ndarray:
     return np.asarray(
         colour.XYZ_to_Lab(xyz * scale, colour.XYZ_to_xy(white_xyz * scale)), dtype=np.float64
     )
-
-
-def skin_delta_e(
-    corrected: np.ndarray, target: np.ndarray, white: np.ndarray, camera_to_xyz: np.ndarray
-) -> np.ndarray:
-    """(..., k) ΔE2000 of corrected skin samples (..., k, 3) against the location's (k, 3),
-    through ``camera_to_xyz``, normalised on the location white's camera RGB ``white``: the
-    package's one camera RGB -> ΔE2000, :func:`ocio_vp.metrics.camera_delta_E_2000`."""
-    from ocio_vp.metrics import camera_delta_E_2000
-
-    return camera_delta_E_2000(target, corrected, camera_to_xyz=camera_to_xyz, white=white)
