@@ -30,12 +30,11 @@ from ocio_vp.correction.linear import (
     AUTO_SE_FACTOR,
     AUTO_TIE,
     LINE_SPECTRUM_TOLERANCE,
-    NARROW_TARGET,
     RANK_RELATIVE_TOLERANCE,
     ROOT_POLYNOMIAL_DEGREES,
     choose_model,
-    colour_spread,
     fit_model,
+    is_narrow,
     ladder_predictions,
     loo_predictions,
     patch_errors,
@@ -52,6 +51,7 @@ from ocio_vp.metrics import (
     zero_below_rounding,
 )
 from ocio_vp.model.correction import MatrixCorrection, PostCorrection
+from ocio_vp.model.expansion import ROOT_POLYNOMIAL_TERMS
 
 __all__ = [
     "AUTO_SKIN_WEIGHT",
@@ -281,7 +281,7 @@ def _root_polynomial_candidates(
     models, excluded = {}, []
     active = int(np.count_nonzero(problem.fit_weights > 0))
     for name in (m for m in ladder if m in ROOT_POLYNOMIAL_DEGREES):
-        if active <= {2: 6, 3: 13}[ROOT_POLYNOMIAL_DEGREES[name]]:
+        if active <= ROOT_POLYNOMIAL_TERMS[ROOT_POLYNOMIAL_DEGREES[name]]:
             continue
         fit, why = bounded_candidate(problem, name, AUTO_SKIN_WEIGHT)
         if fit is None:
@@ -323,7 +323,7 @@ def q_auto(problem: QProblem) -> QFit:
     if rank < 3:
         return _auto_reduced_rank(X, P, w, white, rank, singular, details)
     active = w > 0
-    narrow = colour_spread(P[active]) < NARROW_TARGET * colour_spread(X[active])
+    narrow = is_narrow(X, P, w)
     ladder = AUTO_LADDER_NARROW if narrow else AUTO_LADDER
     held, alpha = ladder_predictions(
         [m for m in ladder if m not in ROOT_POLYNOMIAL_DEGREES], X, P, w, white

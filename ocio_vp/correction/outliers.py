@@ -22,9 +22,8 @@ from __future__ import annotations
 import numpy as np
 
 from ocio_vp.correction.linear import (
-    NARROW_TARGET,
-    colour_spread,
     fit_least_squares,
+    is_narrow,
     loo_predictions,
     normal_equations,
     weighted_outer,
@@ -295,13 +294,6 @@ def deletion_gain(X: np.ndarray, P: np.ndarray, w: np.ndarray, scale: np.ndarray
     typical = float(np.median(cost[active])) if len(active) else 0.0
     gain = np.divide(typical, cost, out=np.ones(len(w)), where=cost > 0)
     return np.where(w > 0, gain, 0.0)
-
-
-def is_narrow(X: np.ndarray, P: np.ndarray, w: np.ndarray) -> bool:
-    """Whether the target's colours spread much less than the lit chart's (a line-spectrum
-    light the wall cannot reproduce: :data:`~ocio_vp.correction.linear.NARROW_TARGET`)."""
-    active = np.asarray(w) > 0
-    return bool(colour_spread(P[active]) < NARROW_TARGET * colour_spread(X[active]))
 
 
 def patch_scores(
