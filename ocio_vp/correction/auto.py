@@ -1,16 +1,11 @@
 """``auto``: the simplest post-correction model the scene needs, judged on colours it was not
 fitted to.
 
-The candidates (:data:`~ocio_vp.correction.linear.AUTO_LADDER`, simplest first) are the linear
-family of :mod:`ocio_vp.correction.linear` and the bounded root-polynomial of degree 2. Each is
-judged by its leave-one-patch-out predictions in ΔE2000
-(:func:`ocio_vp.correction.perceptual.patch_delta_e`). The paper's least squares is kept unless
-another model is better by more than :data:`~ocio_vp.correction.linear.AUTO_SE_FACTOR`
-standard errors of the paired per-patch differences (:data:`SHRUNK_SE_FACTOR` for
-``regularised``), and no model that renders the skin samples worse is taken; among equals the
-simplest wins. A target chart of rank below 3 (a monochromatic light such as low-pressure
-sodium) gets a reduced-rank Q and N is not solved. docs/accuracy.md measures the rule on
-held-out colours; docs/stability.md explains it.
+The candidates (:data:`~ocio_vp.correction.linear.AUTO_LADDER`) are judged by their
+leave-one-patch-out ΔE2000 (:func:`~ocio_vp.correction.linear.choose_model`); none that renders
+the skin samples worse than least squares is taken, and a target chart of rank below 3 gets a
+reduced-rank Q. docs/stability.md ("What auto does") explains the rule; docs/accuracy.md
+measures it on held-out colours.
 """
 
 from __future__ import annotations

@@ -1,25 +1,9 @@
 """The ``joint`` Q-solve method: optimise the out-of-frustum matrix and Q together, within limits.
 
-The paper (Future Work, "Joint Optimization of M and Q") fixes ``M = [SL]^-1`` and then
-solves Q (eq. 5); minimising eq. 5 over both gave non-neutral stage light and out-of-gamut
-drives. This method minimises the same lit-chart error
-
-    ``J(M', Q) = sum_j w_j || (1/beta) Q [SRL]_j M' w_avg - p_j ||^2``
-
-from the sequential solution (M, least-squares Q), with scipy's SLSQP, subject to:
-
-- **white point**: the stage light as the camera sees it, ``[SL] M' w_avg``, stays within
-  ``max_delta_e`` CIEDE2000 (chromatic only: both at Y = 1, the baseline the Lab white) of the
-  baseline ``[SL] M w_avg``, through a camera RGB -> XYZ matrix (the sample camera's unless
-  given);
-- **gamut**: the drive ``d = M' w_avg`` stays in ``[0, max_drive]`` (default: the baseline's
-  largest drive channel);
-- **conditioning**: ``cond(Q) <= max_condition``, so N = [SL]^-1 Q^-1 stays usable.
-
-The scale ambiguity ``(s M', Q / s)`` is fixed by keeping the luminance of ``[SL] M' w_avg``.
-J and the limits depend on M' only through ``d``, so the optimiser works on (d, Q) and M' is
-the smallest (Frobenius) change of M with that drive. N is still ``[SL]^-1 Q^-1`` (eq. 7),
-from the calibrated wall, so the background stays exact after Q.
+Eq. 5 is minimised over the drive ``d = M' w_avg`` and Q (scipy's SLSQP, from the sequential
+solution), with the stage light's white point (CIEDE2000), its drive range and cond(Q) bounded
+and its luminance kept; M' is the smallest change of M with that drive, and N stays
+``[SL]^-1 Q^-1`` (eq. 7). docs/joint.md explains the limits, their defaults and the convention.
 
 References
 ----------

@@ -1,20 +1,12 @@
 """Patches inconsistent with the rest of the chart, found before any Q is fitted.
 
-One bad patch (a mis-placed sampling box, flare, a reflection on the chart, a swapped row)
-moves a least-squares Q by tens of percent. :func:`inconsistent_patches` finds such patches
-from the data alone, so that every method fits without them and the engineer is told which.
-Each patch is predicted by a Huber-weighted least-squares 3x3 fitted on the other patches
-(closed-form leave-one-out); it is suspect by its **residual** (large relative to itself, to
-the chart's residuals and to white), its **influence** (leaving it out moves the other
-patches' colours visibly, :func:`patch_influence`) or **explanation** (the rest of the chart is
-far more consistent without it, :func:`deletion_gain`); two reading-order neighbours are
-**swapped** when the rest predicts them far better exchanged (:func:`pair_residuals`). The
-worst suspect is excluded and the search repeats, with a higher bar for later patches, up to
-:data:`MAX_EXCLUDED_FRACTION` of the chart; past that the chart is refused.
-
-docs/stability.md explains the tests; each threshold below was set on the spectral simulator
-for no false alarm on clean charts with 1 % noise, and docs/accuracy.md ("Bad patches",
-``python -m benchmarks.bench_accuracy --screening-only``) measures false alarms and detection.
+:func:`inconsistent_patches` judges each patch by its held-out **residual** under a
+Huber-weighted least-squares 3x3 fitted on the others, its **influence** on the other patches'
+colours (:func:`patch_influence`) and how much it **explains** of the chart's inconsistency
+(:func:`deletion_gain`), and each reading-order pair by whether it looks **swapped**
+(:func:`pair_residuals`); the worst is excluded and the search repeats, up to
+:data:`MAX_EXCLUDED_FRACTION` of the chart. docs/stability.md ("A bad patch") explains the tests
+and how the thresholds below were set; docs/accuracy.md measures them.
 """
 
 from __future__ import annotations

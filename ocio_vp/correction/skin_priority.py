@@ -1,19 +1,10 @@
 """``--priority skin``: the post-correction fitted with faces first.
 
-The bounded root-polynomial of degree 2 is fitted to the chart and the problem's skin samples
-(:mod:`ocio_vp.correction.skin`) with weight :data:`PRIORITY_SKIN_WEIGHT`, each sample scaled
-by its luminance to the power -2/3 (skin of every lightness counts alike); a 3x3 is fitted to
-the same rows where the root-polynomial is not safe. Its fallback outside the chart's domain
-stays the chart's least squares. The chart's error is bounded (:data:`CHART_BUDGET` times least
-squares'); a target chart of rank below 3 has no colour to put first and is solved as the
-default (``auto``) solves it.
-
-Faces first must not cost the rest of the frame: the in-frustum background's expected error,
-the wall's LEDs in frame and the skin samples may be no worse than through the default's
-post-correction. Where the skin fit is, the model is drawn from the default towards it
-(parameters ``D + a step``): first along the step with the background's first-order rise
-projected out (in the skin fit's own metric), then straight, for a in 1 and
-:data:`BLEND_STEPS`, largest first; the default itself where none holds.
+The bounded root-polynomial of degree 2 (a 3x3 where it is not safe) fitted to the chart and
+the skin samples with weight :data:`PRIORITY_SKIN_WEIGHT`, the chart's error bounded by
+:data:`CHART_BUDGET` times least squares'; where it is worse than the default (``auto``) on the
+in-frustum background, the LEDs in frame or the skin, it is drawn towards the default (projected,
+then straight, at :data:`BLEND_STEPS`). docs/skin.md ("--priority skin") explains the rule.
 """
 
 from __future__ import annotations
