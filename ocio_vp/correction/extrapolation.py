@@ -202,7 +202,14 @@ def extrapolation(
     """:class:`Extrapolation` of ``correction`` against the least-squares matrix; ``white`` is
     the target white patch (the ΔE's reference), ``lit_white`` the lit one (the probes' scale);
     ``folds`` the fold fraction where the solve already measured it (:attr:`QFit.folds
-    <ocio_vp.correction.problem.QFit.folds>`), else it is measured here."""
+    <ocio_vp.correction.problem.QFit.folds>`), else it is measured here: 0 for an invertible
+    matrix, None where Q's matrix is singular (its Jacobian's sign is rounding there)."""
+    if not correction.invertible:
+        folds = None
+    elif correction.linear:
+        folds = 0.0
+    elif folds is None:
+        folds = fold_fraction(correction, domain)
     kept, negative = saturation_probe(correction, lit_white)
     return Extrapolation(
         led_damage=in_frame_led_damage(correction, SL, white, camera_to_xyz),
@@ -211,16 +218,5 @@ def extrapolation(
         ),
         kept=kept,
         negative=negative,
-        folds=_folds(correction, domain, folds),
+        folds=folds,
     )
-
-
-def _folds(correction: PostCorrection, domain: FitDomain, known: float | None) -> float | None:
-    """The fold fraction (``known``, else measured); 0 for an invertible matrix, None where Q's
-    matrix is singular (its Jacobian's sign is rounding there, not a property of the
-    correction)."""
-    if not correction.invertible:
-        return None
-    if correction.linear:
-        return 0.0
-    return fold_fraction(correction, domain) if known is None else known

@@ -133,7 +133,8 @@ def make_q_root_polynomial(degree: int = 2, skin_weight: float = 0.0) -> Callabl
         details: dict = {"folds_by_fade": tried}
         if rows is not None:
             details["skin_weight"] = skin_weight
-        held = _held_out(problem, correction, rows)
+        spare = int(np.count_nonzero(w > 0)) > ROOT_POLYNOMIAL_TERMS[degree]
+        held = bounded_loo_predictions(problem, correction, rows) if spare else None
         return QFit(
             correction,
             f"root-polynomial-{degree}" + ("" if rows is None else "-skin"),
@@ -169,12 +170,8 @@ def root_polynomial_loo_predictions(
         The fit itself is impossible (see :func:`fit_root_polynomial`).
     """
     fit_root_polynomial(X, P, w, degree)  # its guards: too few or dependent patches
-    return loo_root_polynomial(
-        np.asarray(X, dtype=np.float64),
-        np.asarray(P, dtype=np.float64),
-        np.asarray(w, dtype=np.float64),
-        degree,
-    )
+    X, P, w = (np.asarray(a, dtype=np.float64) for a in (X, P, w))
+    return loo_root_polynomial(X, P, w, degree)
 
 
 def bounded_loo_predictions(
@@ -225,15 +222,6 @@ def _loo_domains(problem: QProblem, w: np.ndarray) -> Iterator[tuple[int, FitDom
             yield int(j), dataclasses.replace(problem, weights=others).domain
         else:
             yield int(j), full
-
-
-def _held_out(
-    problem: QProblem, correction: RootPolynomialCorrection, rows: SkinRows | None
-) -> np.ndarray | None:
-    """:func:`bounded_loo_predictions`; None with no patch to spare."""
-    if int(np.count_nonzero(problem.fit_weights > 0)) <= ROOT_POLYNOMIAL_TERMS[correction.degree]:
-        return None
-    return bounded_loo_predictions(problem, correction, rows)
 
 
 #: The registry's ``root-polynomial`` method: degree 2 (6 terms).
