@@ -14,7 +14,7 @@ import numpy as np
 from ocio_vp.correction.perceptual import patch_delta_e
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
 from ocio_vp.errors import InputError
-from ocio_vp.metrics import error_relative_to_white, white_scale
+from ocio_vp.metrics import white_scale
 from ocio_vp.model.correction import MatrixCorrection
 from ocio_vp.model.expansion import ROOT_POLYNOMIAL_TERMS, root_polynomial_expansion
 
@@ -37,7 +37,6 @@ __all__ = [
     "fit_model",
     "is_narrow",
     "ladder_predictions",
-    "loo_cv_error",
     "loo_predictions",
     "loo_root_polynomial",
     "patch_errors",
@@ -61,9 +60,7 @@ AUTO_TIE = 1e-6
 #: singular value, relative to the lit chart's (:func:`target_rank`), is treated as absent.
 RANK_RELATIVE_TOLERANCE = 1e-3
 #: A target chart whose *second* relative singular value is below this has one colour: a line
-#: spectrum whose other directions carry only measurement noise (halfway, on a log scale,
-#: between low-pressure sodium's noise and high-pressure sodium, the narrowest broadband light
-#: simulated), so the rank does not depend on how noisy the plates are.
+#: spectrum whose other directions carry only measurement noise (docs/stability.md).
 LINE_SPECTRUM_TOLERANCE = 0.2
 
 #: A target chart whose colours spread less than this fraction of the lit chart's
@@ -378,14 +375,6 @@ def fit_model(name: str, X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int
     return MODEL_KERNELS[name](X, P, w, white)
 
 
-def loo_cv_error(name: str, X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int):
-    """(3,) leave-one-patch-out chart error of a model, per channel, relative to white.
-
-    :func:`ocio_vp.calibration.diagnostics.error_relative_to_white` of the held-out predictions.
-    """
-    return error_relative_to_white(loo_predictions(name, X, P, w, white), P, white, w)
-
-
 def colour_spread(chart: np.ndarray) -> float:
     """How far a chart's colours spread beyond one direction: the second singular value over
     the first, of the patches scaled to unit length (so no single bright patch dominates)."""
@@ -406,12 +395,10 @@ def target_rank(
 ) -> tuple[int, np.ndarray]:
     """Numerical rank of the (weighted) target chart and its relative singular values.
 
-    With the lit chart ``X``, each relative singular value of the target is compared with the
-    lit chart's (``(s_P[i] / s_P[0]) / (s_X[i] / s_X[0])``, at most 1): a camera whose channels
-    overlap strongly sees *every* chart with small minor singular values, and only a light with
-    much less colour than the wall shows (a line spectrum) should count as rank-deficient. A
-    second relative singular value below :data:`LINE_SPECTRUM_TOLERANCE` makes the rank 1,
-    whatever the third (noise there is amplified by the lit chart's small minor values).
+    With the lit chart ``X``, each relative singular value is the target's over the lit chart's
+    (``(s_P[i] / s_P[0]) / (s_X[i] / s_X[0])``, at most 1), so that only a light with much less
+    colour than the wall counts as rank-deficient; a second one below
+    :data:`LINE_SPECTRUM_TOLERANCE` makes the rank 1 (docs/stability.md).
 
     Raises
     ------

@@ -156,13 +156,10 @@ def make_q_root_polynomial(degree: int = 2, skin_weight: float = 0.0) -> Callabl
 def root_polynomial_loo_predictions(
     X: np.ndarray, P: np.ndarray, w: np.ndarray, degree: int = 2
 ) -> np.ndarray:
-    """(n, 3) leave-one-patch-out predictions of the root-polynomial fit, in closed form.
-
-    The fit is weighted least squares, linear in its parameters, so removing patch j changes
-    its residual to ``r_j / (1 - h_j)`` (``h_j`` the hat matrix's diagonal): one fit instead of
-    one per patch. The kernel is :func:`ocio_vp.correction.linear.loo_root_polynomial`, the one
-    ``auto`` compares models with; a patch that alone decides a term is refitted without it, and
-    patches with weight 0 get the full fit's prediction.
+    """(n, 3) leave-one-patch-out predictions of the root-polynomial fit, in closed form
+    (:func:`ocio_vp.correction.linear.loo_root_polynomial`, the kernel ``auto`` compares models
+    with, after :func:`fit_root_polynomial`'s guards); patches with weight 0 get the full fit's
+    prediction.
 
     Raises
     ------
