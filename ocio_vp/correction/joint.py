@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike
 from ocio_vp.calibration.equations import condition_number
 from ocio_vp.correction.linear import fit_least_squares
 from ocio_vp.correction.problem import QFit, QProblem
+from ocio_vp.metrics import sample_camera_to_xyz
 from ocio_vp.model.correction import MatrixCorrection
 
 __all__ = [
@@ -130,19 +131,13 @@ def make_q_joint(
         )
 
     def q_joint_method(problem: QProblem) -> QFit:
-        if camera_to_xyz is None:
-            from ocio_vp.metrics import sample_camera_to_xyz
-
-            matrix = sample_camera_to_xyz()
-        else:
-            matrix = np.asarray(camera_to_xyz, dtype=np.float64)
+        given = camera_to_xyz is not None
+        matrix = np.asarray(camera_to_xyz if given else sample_camera_to_xyz(), dtype=np.float64)
         joint = _JointProblem(
             problem, matrix, max_delta_e=max_delta_e, max_drive=max_drive,
             max_condition=max_condition,
         )  # fmt: skip
-        return _solve_joint(
-            joint, max_iterations, "sample camera" if camera_to_xyz is None else "given"
-        )
+        return _solve_joint(joint, max_iterations, "given" if given else "sample camera")
 
     return q_joint_method
 

@@ -92,15 +92,15 @@ _INFLUENCE_BLOCK = 256
 #: the patches (Huber).
 HUBER = 2.0
 #: A patch found after another was excluded needs a score of 1 if it scored at least
-#: FIRST_PASS_SUPPORT on the whole chart, else UNSUPPORTED_SCORE (a patch read as zero scores
-#: 3.3 on the relative test; a patch merely missing a similar neighbour stays near 1).
+#: FIRST_PASS_SUPPORT on the whole chart, else UNSUPPORTED_SCORE.
 FIRST_PASS_SUPPORT = 0.5
 UNSUPPORTED_SCORE = 2.0
 #: After the worst patch is excluded, a further patch scoring below UNSUPPORTED_SCORE must also
 #: move the other patches' colours by LATER_INFLUENCE mean ΔE2000 (one just-noticeable
 #: difference) or miss its held-out prediction by LATER_RELATIVE times the relative limit
-#: (capped at :data:`OUTLIER_RELATIVE_NARROW` under line-spectrum light): once a bad patch is
-#: gone, a clean one of a similar colour is predicted worse without being wrong.
+#: (capped at :data:`OUTLIER_RELATIVE_NARROW`: a patch read as zero misses by exactly 100 %):
+#: once a bad patch is gone, a clean one of a similar colour is predicted worse without being
+#: wrong, and keeping the chart's only red costs less than losing it.
 LATER_INFLUENCE = 1.0
 LATER_RELATIVE = 1.5
 #: More inconsistent patches than this fraction of the chart: refuse rather than guess.
@@ -384,13 +384,8 @@ def _swap_scores(as_read: np.ndarray, exchanged: np.ndarray) -> np.ndarray:
 def _next_patch(scores: dict, first: np.ndarray, after_exclusion: bool) -> int | None:
     """The patch to exclude next, or None."""
     score = scores["score"]
-    if after_exclusion:
-        # A patch of a similar colour is predicted from fewer neighbours once one is gone:
-        # unless it already looked suspect on the whole chart and either drags the other
-        # patches' colours visibly or is almost entirely wrong (read as zero), it needs
-        # stronger evidence: keeping the chart's only red costs less than losing it.
+    if after_exclusion:  # stronger evidence needed (LATER_INFLUENCE, LATER_RELATIVE)
         visible = scores["influence"] >= LATER_INFLUENCE
-        # (capped at the narrow limit: a patch read as zero misses by exactly 100 % of itself)
         wrong = scores["relative"] >= min(LATER_RELATIVE * scores["limit"], OUTLIER_RELATIVE_NARROW)
         supported = (first >= FIRST_PASS_SUPPORT) & (visible | wrong)
         score = score / np.where(supported, 1.0, UNSUPPORTED_SCORE)
