@@ -38,13 +38,9 @@ from ocio_vp.correction.linear import (
 )
 from ocio_vp.correction.problem import QFit, QProblem
 from ocio_vp.correction.root_polynomial import make_q_root_polynomial
+from ocio_vp.correction.skin_figures import skin_errors
 from ocio_vp.errors import InputError
-from ocio_vp.metrics import (
-    camera_delta_E_2000,
-    error_relative_to_white,
-    sample_camera_to_xyz,
-    zero_below_rounding,
-)
+from ocio_vp.metrics import error_relative_to_white, zero_below_rounding
 from ocio_vp.model.correction import MatrixCorrection, PostCorrection
 from ocio_vp.model.expansion import ROOT_POLYNOMIAL_TERMS
 
@@ -224,14 +220,9 @@ def candidate_skin_errors(
 ) -> dict[str, np.ndarray]:
     """Each candidate's ΔE2000 on the problem's skin samples (:mod:`ocio_vp.correction.skin`),
     through the sample camera's matrix; empty where the problem has no skin."""
-    lit = problem.skin_predicted
-    if lit is None or problem.skin is None or problem.skin.count == 0:
+    if problem.skin is None or problem.skin.count == 0:
         return {}
-    target = np.asarray(problem.target, dtype=np.float64)
-    camera = sample_camera_to_xyz()
-    white = target[problem.white_patch]
-    corrected = np.stack([c.apply(lit) for c in corrections.values()])
-    errors = camera_delta_E_2000(problem.skin.target, corrected, camera_to_xyz=camera, white=white)
+    errors = skin_errors(problem, list(corrections.values()))
     return dict(zip(corrections, errors, strict=True))
 
 

@@ -10,6 +10,7 @@ shown in frustum through each (the background, :func:`background_error`).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,6 +31,8 @@ __all__ = [
     "chart_error",
     "clipped_background",
     "judged",
+    "shown_error",
+    "skin_errors",
     "skin_figures",
 ]
 
@@ -73,13 +76,21 @@ def background_error(
     """
     if not correction.invertible or not condition_number(correction.matrix) < _MAX_CONDITION:
         return float("nan")
-    SL, M = np.asarray(problem.SL, dtype=np.float64), np.asarray(problem.M, dtype=np.float64)
     P = np.asarray(problem.target, dtype=np.float64)
     mask = np.ones(len(P), dtype=bool) if patches is None else np.asarray(patches, dtype=bool)
+    return shown_error(problem, correction, correction.inverse(P[mask]), P[mask])
+
+
+def shown_error(
+    problem: QProblem, correction: PostCorrection, content: np.ndarray, P: np.ndarray
+) -> float:
+    """Mean error, relative to the target white, of colours ``P`` (k, 3) shown in frustum as
+    ``content`` (k, 3) and corrected by ``correction``, as :func:`background_error` models it."""
+    SL, M = np.asarray(problem.SL, dtype=np.float64), np.asarray(problem.M, dtype=np.float64)
     b = np.zeros(3) if problem.black_level is None else np.asarray(problem.black_level, float)
-    drive = (correction.inverse(P[mask]) - b) @ M.T
-    shown = correction.apply(np.clip(drive, 0.0, None) @ SL.T + b)
-    return float(np.mean(np.abs(shown - P[mask]) / white_scale(P, problem.white_patch)))
+    shown = correction.apply(np.clip((content - b) @ M.T, 0.0, None) @ SL.T + b)
+    scale = white_scale(np.asarray(problem.target, dtype=np.float64), problem.white_patch)
+    return float(np.mean(np.abs(shown - P) / scale))
 
 
 def clipped_background(problem: QProblem, correction: PostCorrection) -> np.ndarray:
@@ -89,6 +100,19 @@ def clipped_background(problem: QProblem, correction: PostCorrection) -> np.ndar
     P = np.asarray(problem.target, dtype=np.float64)
     b = np.zeros(3) if problem.black_level is None else np.asarray(problem.black_level, float)
     return np.any((correction.inverse(P) - b) @ M.T < 0, axis=1)
+
+
+def skin_errors(problem: QProblem, corrections: Sequence[PostCorrection]) -> np.ndarray:
+    """(m, k) ΔE2000 of the problem's skin samples corrected by each of ``corrections`` against
+    the location's, through the sample camera's matrix (a ValueError without skin samples)."""
+    lit, skin = problem.skin_predicted, problem.skin
+    if lit is None or skin is None:
+        raise ValueError("no skin samples")
+    white = np.asarray(problem.target, dtype=np.float64)[problem.white_patch]
+    corrected = np.stack([c.apply(lit) for c in corrections])
+    return camera_delta_E_2000(
+        skin.target, corrected, camera_to_xyz=sample_camera_to_xyz(), white=white
+    )
 
 
 def chart_error(problem: QProblem, corrected: np.ndarray) -> float:
@@ -135,18 +159,12 @@ def _no_worse(value: float, bound: float) -> bool:
 
 def judged(problem: QProblem, correction: PostCorrection) -> Judged:
     """:class:`Judged` of ``correction`` on ``problem`` (a ValueError without skin samples)."""
+    skin = float(np.mean(skin_errors(problem, [correction])[0]))
     white = np.asarray(problem.target, dtype=np.float64)[problem.white_patch]
-    camera = sample_camera_to_xyz()
-    skin, lit = problem.skin, problem.skin_predicted
-    if skin is None or lit is None:
-        raise ValueError("skin first without skin samples")
-    skin_errors = camera_delta_E_2000(
-        skin.target, correction.apply(lit), camera_to_xyz=camera, white=white
-    )
     return Judged(
         background=background_error(problem, correction),
-        leds=in_frame_led_damage(correction, problem.SL, white, camera),
-        skin=float(np.mean(skin_errors)),
+        leds=in_frame_led_damage(correction, problem.SL, white, sample_camera_to_xyz()),
+        skin=skin,
         chart=chart_error(problem, correction.apply(problem.predicted)),
     )
 
@@ -163,11 +181,8 @@ def skin_figures(
     if lit is None or skin is None or skin.count == 0:
         return None
     X, P, w = problem.predicted, np.asarray(problem.target, dtype=np.float64), problem.fit_weights
-    white = P[problem.white_patch]
-    camera = sample_camera_to_xyz()
     corrections = (correction, MatrixCorrection(fit_least_squares(X, P, w)))
-    corrected = np.stack([c.apply(lit) for c in corrections])
-    errors = camera_delta_E_2000(skin.target, corrected, camera_to_xyz=camera, white=white)
+    errors = skin_errors(problem, corrections)
     active = w > 0
     chart = patch_errors(np.stack([c.apply(X) for c in corrections]), P, w, problem.white_patch)
     band = np.asarray(skin.band)

@@ -19,10 +19,14 @@ from ocio_vp.correction.auto import bounded_candidate, q_auto
 from ocio_vp.correction.linear import problem_arrays, target_rank
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
 from ocio_vp.correction.skin import with_rows
-from ocio_vp.correction.skin_figures import chart_error, clipped_background, judged
+from ocio_vp.correction.skin_figures import (
+    chart_error,
+    clipped_background,
+    judged,
+    shown_error,
+)
 from ocio_vp.deprecation import deprecated_names
 from ocio_vp.errors import InputError
-from ocio_vp.metrics import white_scale
 from ocio_vp.model.correction import (
     FitDomain,
     MatrixCorrection,
@@ -99,11 +103,7 @@ def _gradient(problem: QProblem, skin: PostCorrection, at: np.ndarray) -> np.nda
     gradient = np.zeros_like(at)
     if not np.any(clipped):
         return gradient
-    P = np.asarray(problem.target, dtype=np.float64)
-    scale = white_scale(P, problem.white_patch)
-    P = P[clipped]
-    SL, M = np.asarray(problem.SL, dtype=np.float64), np.asarray(problem.M, dtype=np.float64)
-    b = np.zeros(3) if problem.black_level is None else np.asarray(problem.black_level, float)
+    P = np.asarray(problem.target, dtype=np.float64)[clipped]
     u = model.inverse(P)
     h = _STEP * np.maximum(np.max(np.abs(u), axis=1), 1e-12)
     J = np.stack(
@@ -114,8 +114,7 @@ def _gradient(problem: QProblem, skin: PostCorrection, at: np.ndarray) -> np.nda
 
     def error(moved: PostCorrection) -> float:
         content = u - np.linalg.solve(J, (moved.apply(u) - P)[..., None])[..., 0]
-        seen = np.clip((content - b) @ M.T, 0.0, None) @ SL.T + b
-        return float(np.mean(np.abs(moved.apply(seen) - P) / scale))
+        return shown_error(problem, moved, content, P)
 
     base = error(model)
     step = _STEP * max(float(np.max(np.abs(at))), 1.0)
