@@ -1,16 +1,11 @@
 """``auto``: the simplest post-correction model the scene needs, judged on colours it was not
 fitted to.
 
-The candidates (:data:`~ocio_vp.correction.linear.AUTO_LADDER`, simplest first) are the linear
-family of :mod:`ocio_vp.correction.linear` and the bounded root-polynomial of degree 2. Each is
-judged by its leave-one-patch-out predictions in ΔE2000
-(:func:`ocio_vp.correction.perceptual.patch_delta_e`). The paper's least squares is kept unless
-another model is better by more than :data:`~ocio_vp.correction.linear.AUTO_SE_FACTOR`
-standard errors of the paired per-patch differences (:data:`SHRUNK_SE_FACTOR` for
-``regularised``), and no model that renders the skin samples worse is taken; among equals the
-simplest wins. A target chart of rank below 3 (a monochromatic light such as low-pressure
-sodium) gets a reduced-rank Q and N is not solved. docs/accuracy.md measures the rule on
-held-out colours; docs/stability.md explains it.
+The candidates (:data:`~ocio_vp.correction.linear.AUTO_LADDER`) are judged by their
+leave-one-patch-out ΔE2000 (:func:`~ocio_vp.correction.linear.choose_model`); none that renders
+the skin samples worse than least squares is taken, and a target chart of rank below 3 gets a
+reduced-rank Q. docs/stability.md ("What auto does") explains the rule; docs/accuracy.md
+measures it on held-out colours.
 """
 
 from __future__ import annotations
@@ -30,12 +25,11 @@ from ocio_vp.correction.linear import (
     AUTO_SE_FACTOR,
     AUTO_TIE,
     LINE_SPECTRUM_TOLERANCE,
-    NARROW_TARGET,
     RANK_RELATIVE_TOLERANCE,
     ROOT_POLYNOMIAL_DEGREES,
     choose_model,
-    colour_spread,
     fit_model,
+    is_narrow,
     ladder_predictions,
     loo_predictions,
     patch_errors,
@@ -44,10 +38,11 @@ from ocio_vp.correction.linear import (
 )
 from ocio_vp.correction.problem import QFit, QProblem
 from ocio_vp.correction.root_polynomial import make_q_root_polynomial
-from ocio_vp.correction.skin import skin_delta_e
+from ocio_vp.correction.skin_figures import skin_errors
 from ocio_vp.errors import InputError
-from ocio_vp.metrics import error_relative_to_white, sample_camera_to_xyz, zero_below_rounding
+from ocio_vp.metrics import error_relative_to_white, zero_below_rounding
 from ocio_vp.model.correction import MatrixCorrection, PostCorrection
+from ocio_vp.model.expansion import ROOT_POLYNOMIAL_TERMS
 
 __all__ = [
     "AUTO_SKIN_WEIGHT",
@@ -225,14 +220,9 @@ def candidate_skin_errors(
 ) -> dict[str, np.ndarray]:
     """Each candidate's ΔE2000 on the problem's skin samples (:mod:`ocio_vp.correction.skin`),
     through the sample camera's matrix; empty where the problem has no skin."""
-    lit = problem.skin_predicted
-    if lit is None or problem.skin is None or problem.skin.count == 0:
+    if problem.skin is None or problem.skin.count == 0:
         return {}
-    target = np.asarray(problem.target, dtype=np.float64)
-    camera = sample_camera_to_xyz()
-    white = target[problem.white_patch]
-    corrected = np.stack([c.apply(lit) for c in corrections.values()])
-    errors = skin_delta_e(corrected, problem.skin.target, white, camera)
+    errors = skin_errors(problem, list(corrections.values()))
     return dict(zip(corrections, errors, strict=True))
 
 
@@ -277,7 +267,7 @@ def _root_polynomial_candidates(
     models, excluded = {}, []
     active = int(np.count_nonzero(problem.fit_weights > 0))
     for name in (m for m in ladder if m in ROOT_POLYNOMIAL_DEGREES):
-        if active <= {2: 6, 3: 13}[ROOT_POLYNOMIAL_DEGREES[name]]:
+        if active <= ROOT_POLYNOMIAL_TERMS[ROOT_POLYNOMIAL_DEGREES[name]]:
             continue
         fit, why = bounded_candidate(problem, name, AUTO_SKIN_WEIGHT)
         if fit is None:
@@ -319,7 +309,7 @@ def q_auto(problem: QProblem) -> QFit:
     if rank < 3:
         return _auto_reduced_rank(X, P, w, white, rank, singular, details)
     active = w > 0
-    narrow = colour_spread(P[active]) < NARROW_TARGET * colour_spread(X[active])
+    narrow = is_narrow(X, P, w)
     ladder = AUTO_LADDER_NARROW if narrow else AUTO_LADDER
     held, alpha = ladder_predictions(
         [m for m in ladder if m not in ROOT_POLYNOMIAL_DEGREES], X, P, w, white

@@ -80,19 +80,19 @@ _REFLECTIVE = np.stack([_halton(FOLD_SAMPLES, b) for b in (2, 3, 5)], axis=-1)
 
 def fold_fraction(correction: PostCorrection, domain: FitDomain) -> float:
     """Share of the reflective solid where the correction folds (see the module docstring)."""
-    x, h = _solid(domain)
-    columns = []
-    for k in range(3):
-        step = np.zeros(3)
-        step[k] = h
-        columns.append((correction.apply(x + step) - correction.apply(x - step)) / (2 * h))
+    pairs, h = _shifted(domain)
+    columns = [
+        (correction.apply(plus) - correction.apply(minus)) / (2 * h) for plus, minus in pairs
+    ]
     return _folded(columns, correction.matrix)
 
 
-def _solid(domain: FitDomain) -> tuple[np.ndarray, float]:
-    """The reflective solid's sample points as camera RGB, and the derivatives' step there."""
+def _shifted(domain: FitDomain) -> tuple[list[tuple[np.ndarray, np.ndarray]], float]:
+    """The reflective solid's sample points as camera RGB, shifted by +/- the derivatives' step
+    along each channel (the central differences' pairs), and that step."""
     x = _REFLECTIVE @ np.linalg.inv(domain.to_drive).T
-    return x, 1e-7 * float(np.max(np.abs(x)))
+    h = 1e-7 * float(np.max(np.abs(x)))
+    return [(x + h * e, x - h * e) for e in np.eye(3)], h
 
 
 def _folded(columns: list[np.ndarray], matrix: np.ndarray) -> float:
@@ -137,13 +137,9 @@ def choose_fade(
     :func:`fade_label`): :func:`fold_fraction` of each, with the fallback's output, the gauge
     and the polynomial at the solid's points computed once for all the fades."""
     corrections = [RootPolynomialCorrection(coefficients, fallback, domain, f) for f in FADES]
-    x, h = _solid(domain)
-    sides = []
-    for k in range(3):
-        step = np.zeros(3)
-        step[k] = h
-        sides.append([_Side(x + step, corrections[0].fallback, domain)])
-        sides[-1].append(_Side(x - step, corrections[0].fallback, domain))
+    pairs, h = _shifted(domain)
+    matrix = corrections[0].fallback
+    sides = [(_Side(plus, matrix, domain), _Side(minus, matrix, domain)) for plus, minus in pairs]
     tried: dict[str, float] = {}
     for fade, correction in zip(FADES, corrections, strict=True):
         columns = [
@@ -206,7 +202,14 @@ def extrapolation(
     """:class:`Extrapolation` of ``correction`` against the least-squares matrix; ``white`` is
     the target white patch (the ΔE's reference), ``lit_white`` the lit one (the probes' scale);
     ``folds`` the fold fraction where the solve already measured it (:attr:`QFit.folds
-    <ocio_vp.correction.problem.QFit.folds>`), else it is measured here."""
+    <ocio_vp.correction.problem.QFit.folds>`), else it is measured here: 0 for an invertible
+    matrix, None where Q's matrix is singular (its Jacobian's sign is rounding there)."""
+    if not correction.invertible:
+        folds = None
+    elif correction.linear:
+        folds = 0.0
+    elif folds is None:
+        folds = fold_fraction(correction, domain)
     kept, negative = saturation_probe(correction, lit_white)
     return Extrapolation(
         led_damage=in_frame_led_damage(correction, SL, white, camera_to_xyz),
@@ -215,16 +218,5 @@ def extrapolation(
         ),
         kept=kept,
         negative=negative,
-        folds=_folds(correction, domain, folds),
+        folds=folds,
     )
-
-
-def _folds(correction: PostCorrection, domain: FitDomain, known: float | None) -> float | None:
-    """The fold fraction (``known``, else measured); 0 for an invertible matrix, None where Q's
-    matrix is singular (its Jacobian's sign is rounding there, not a property of the
-    correction)."""
-    if not correction.invertible:
-        return None
-    if correction.linear:
-        return 0.0
-    return fold_fraction(correction, domain) if known is None else known

@@ -1,25 +1,9 @@
 """The ``joint`` Q-solve method: optimise the out-of-frustum matrix and Q together, within limits.
 
-The paper (Future Work, "Joint Optimization of M and Q") fixes ``M = [SL]^-1`` and then
-solves Q (eq. 5); minimising eq. 5 over both gave non-neutral stage light and out-of-gamut
-drives. This method minimises the same lit-chart error
-
-    ``J(M', Q) = sum_j w_j || (1/beta) Q [SRL]_j M' w_avg - p_j ||^2``
-
-from the sequential solution (M, least-squares Q), with scipy's SLSQP, subject to:
-
-- **white point**: the stage light as the camera sees it, ``[SL] M' w_avg``, stays within
-  ``max_delta_e`` CIEDE2000 (chromatic only: both at Y = 1, the baseline the Lab white) of the
-  baseline ``[SL] M w_avg``, through a camera RGB -> XYZ matrix (the sample camera's unless
-  given);
-- **gamut**: the drive ``d = M' w_avg`` stays in ``[0, max_drive]`` (default: the baseline's
-  largest drive channel);
-- **conditioning**: ``cond(Q) <= max_condition``, so N = [SL]^-1 Q^-1 stays usable.
-
-The scale ambiguity ``(s M', Q / s)`` is fixed by keeping the luminance of ``[SL] M' w_avg``.
-J and the limits depend on M' only through ``d``, so the optimiser works on (d, Q) and M' is
-the smallest (Frobenius) change of M with that drive. N is still ``[SL]^-1 Q^-1`` (eq. 7),
-from the calibrated wall, so the background stays exact after Q.
+Eq. 5 is minimised over the drive ``d = M' w_avg`` and Q (scipy's SLSQP, from the sequential
+solution), with the stage light's white point (CIEDE2000), its drive range and cond(Q) bounded
+and its luminance kept; M' is the smallest change of M with that drive, and N stays
+``[SL]^-1 Q^-1`` (eq. 7). docs/joint.md explains the limits, their defaults and the convention.
 
 References
 ----------
@@ -39,6 +23,7 @@ from numpy.typing import ArrayLike
 from ocio_vp.calibration.equations import condition_number
 from ocio_vp.correction.linear import fit_least_squares
 from ocio_vp.correction.problem import QFit, QProblem
+from ocio_vp.metrics import sample_camera_to_xyz
 from ocio_vp.model.correction import MatrixCorrection
 
 __all__ = [
@@ -146,19 +131,13 @@ def make_q_joint(
         )
 
     def q_joint_method(problem: QProblem) -> QFit:
-        if camera_to_xyz is None:
-            from ocio_vp.metrics import sample_camera_to_xyz
-
-            matrix = sample_camera_to_xyz()
-        else:
-            matrix = np.asarray(camera_to_xyz, dtype=np.float64)
+        given = camera_to_xyz is not None
+        matrix = np.asarray(camera_to_xyz if given else sample_camera_to_xyz(), dtype=np.float64)
         joint = _JointProblem(
             problem, matrix, max_delta_e=max_delta_e, max_drive=max_drive,
             max_condition=max_condition,
         )  # fmt: skip
-        return _solve_joint(
-            joint, max_iterations, "sample camera" if camera_to_xyz is None else "given"
-        )
+        return _solve_joint(joint, max_iterations, "given" if given else "sample camera")
 
     return q_joint_method
 

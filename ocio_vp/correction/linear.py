@@ -1,25 +1,8 @@
-"""Post-correction models beyond the paper's full least squares, and ``auto`` that picks one.
-
-Every model fits ``Q`` so that ``Q x_j ~ p_j`` (eq. 5 of the paper; ``x_j`` is the lit chart
-under M, eq. 3) with patch weights ``w_j`` (0 = excluded, e.g. clipped):
-
-==================  ====  ==================================================================
-model               dof   what it fits
-==================  ====  ==================================================================
-identity            0     ``Q = I``: the stage's LEDs already light the scene like the real one
-diagonal            3     white balance: per-channel gains, least squares over all patches
-regularised         3..9  least squares shrunk toward the diagonal model, the strength with the
-                          lowest leave-one-out ΔE2000
-least-squares       9     the paper's eq. 5
-white-preserving    6     full Q with ``Q x_w = p_w`` exactly, the rest least squares (not in
-                          auto's ladder: one patch's noise goes straight into Q and N)
-rank-r              5, 8  reduced-rank least squares, for a (nearly) monochromatic target
-==================  ====  ==================================================================
-
-``auto`` (:mod:`ocio_vp.correction.auto`) picks among these and the root-polynomial model
-by their leave-one-patch-out ΔE2000 (:func:`choose_model`); its kernels live here. Every
-leave-one-out is in closed form (rank-one downdates of the normal equations), linear in the
-number of patches.
+"""The linear post-correction models (identity, diagonal, regularised, least squares,
+white-preserving, reduced-rank ``rank-r``), each fitting ``Q x_j ~ p_j`` (eq. 5) with patch
+weights ``w_j`` (0 = excluded), their leave-one-patch-out predictions in closed form (rank-one
+downdates of the normal equations) and ``auto``'s rule (:func:`choose_model`). The models and
+the rule are described in docs/stability.md.
 """
 
 from __future__ import annotations
@@ -31,8 +14,9 @@ import numpy as np
 from ocio_vp.correction.perceptual import patch_delta_e
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
 from ocio_vp.errors import InputError
-from ocio_vp.metrics import error_relative_to_white, white_scale
+from ocio_vp.metrics import white_scale
 from ocio_vp.model.correction import MatrixCorrection
+from ocio_vp.model.expansion import ROOT_POLYNOMIAL_TERMS, root_polynomial_expansion
 
 __all__ = [
     "AUTO_LADDER",
@@ -51,8 +35,8 @@ __all__ = [
     "colour_spread",
     "fit_least_squares",
     "fit_model",
+    "is_narrow",
     "ladder_predictions",
-    "loo_cv_error",
     "loo_predictions",
     "loo_root_polynomial",
     "patch_errors",
@@ -76,9 +60,7 @@ AUTO_TIE = 1e-6
 #: singular value, relative to the lit chart's (:func:`target_rank`), is treated as absent.
 RANK_RELATIVE_TOLERANCE = 1e-3
 #: A target chart whose *second* relative singular value is below this has one colour: a line
-#: spectrum whose other directions carry only measurement noise (halfway, on a log scale,
-#: between low-pressure sodium's noise and high-pressure sodium, the narrowest broadband light
-#: simulated), so the rank does not depend on how noisy the plates are.
+#: spectrum whose other directions carry only measurement noise (docs/stability.md).
 LINE_SPECTRUM_TOLERANCE = 0.2
 
 #: A target chart whose colours spread less than this fraction of the lit chart's
@@ -241,11 +223,13 @@ def choose_shrinkage(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) ->
     return float(grid[np.flatnonzero(scores <= np.min(scores) + AUTO_TIE)[-1]])
 
 
-def _fit_regularised(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> np.ndarray:
-    alpha = choose_shrinkage(X, P, w, white)
-    if not np.isfinite(alpha):
-        return _fit_diagonal(X, P, w, white)
-    return _ridge(X, P, w, alpha)
+def _fit_regularised(
+    X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int, alpha: float | None = None
+) -> np.ndarray:
+    """The ridge fit at ``alpha`` (:func:`choose_shrinkage`'s when None); the diagonal fit
+    where no strength is defined."""
+    alpha = choose_shrinkage(X, P, w, white) if alpha is None else alpha
+    return _ridge(X, P, w, alpha) if np.isfinite(alpha) else _fit_diagonal(X, P, w, white)
 
 
 def _fit_reduced_rank(X: np.ndarray, P: np.ndarray, w: np.ndarray, rank: int) -> np.ndarray:
@@ -283,9 +267,12 @@ def _loo_least_squares(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) 
     return _loo(_solve(*_downdated(X, P, w)), X)
 
 
-def _loo_regularised(X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int) -> np.ndarray:
-    """Held out at the strength chosen on all patches (the choice itself is not re-made)."""
-    alpha = choose_shrinkage(X, P, w, white)
+def _loo_regularised(
+    X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int, alpha: float | None = None
+) -> np.ndarray:
+    """Held out at the strength ``alpha`` chosen on all patches (:func:`choose_shrinkage`'s
+    when None; the choice itself is not re-made)."""
+    alpha = choose_shrinkage(X, P, w, white) if alpha is None else alpha
     if not np.isfinite(alpha):
         return _loo_diagonal(X, P, w, white)
     return _loo_ridge(X, P, w, np.array([alpha]))[0]
@@ -334,8 +321,6 @@ def loo_root_polynomial(X: np.ndarray, P: np.ndarray, w: np.ndarray, degree: int
     SVD of the weighted expansion (better conditioned than the normal equations). A patch
     that alone decides a term (h_jj ~ 1) falls back to the normal equations.
     """
-    from ocio_vp.model.expansion import root_polynomial_expansion
-
     E = root_polynomial_expansion(np.asarray(X, dtype=np.float64), degree).reshape(len(X), -1)
     sw = np.sqrt(w)[:, None]
     U, s, vt = np.linalg.svd(E * sw, full_matrices=False)
@@ -371,11 +356,10 @@ def ladder_predictions(ladder, X: np.ndarray, P: np.ndarray, w: np.ndarray, whit
     held = {}
     for name in ladder:
         if name in ROOT_POLYNOMIAL_DEGREES:
-            terms = {2: 6, 3: 13}[ROOT_POLYNOMIAL_DEGREES[name]]
-            if fitted <= terms:
+            if fitted <= ROOT_POLYNOMIAL_TERMS[ROOT_POLYNOMIAL_DEGREES[name]]:
                 continue
-        if name == "regularised" and np.isfinite(alpha):
-            held[name] = _loo_ridge(X, P, w, np.array([alpha]))[0]
+        if name == "regularised":
+            held[name] = _loo_regularised(X, P, w, white, alpha)
         else:
             held[name] = loo_predictions(name, X, P, w, white)
     return held, alpha
@@ -387,17 +371,8 @@ def fit_model(name: str, X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int
     if name.startswith("rank-"):
         return _fit_reduced_rank(X, P, w, int(name.removeprefix("rank-")))
     if name == "regularised":
-        alpha = choose_shrinkage(X, P, w, white) if alpha is None else alpha
-        return _ridge(X, P, w, alpha) if np.isfinite(alpha) else _fit_diagonal(X, P, w, white)
+        return _fit_regularised(X, P, w, white, alpha)
     return MODEL_KERNELS[name](X, P, w, white)
-
-
-def loo_cv_error(name: str, X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int):
-    """(3,) leave-one-patch-out chart error of a model, per channel, relative to white.
-
-    :func:`ocio_vp.calibration.diagnostics.error_relative_to_white` of the held-out predictions.
-    """
-    return error_relative_to_white(loo_predictions(name, X, P, w, white), P, white, w)
 
 
 def colour_spread(chart: np.ndarray) -> float:
@@ -408,17 +383,22 @@ def colour_spread(chart: np.ndarray) -> float:
     return float(s[1] / s[0]) if s[0] > 0 else 0.0
 
 
+def is_narrow(X: np.ndarray, P: np.ndarray, w: np.ndarray) -> bool:
+    """Whether the target's colours spread much less than the lit chart's (a line-spectrum
+    light the wall cannot reproduce: :data:`NARROW_TARGET`)."""
+    active = np.asarray(w) > 0
+    return bool(colour_spread(P[active]) < NARROW_TARGET * colour_spread(X[active]))
+
+
 def target_rank(
     P: np.ndarray, w: np.ndarray, X: np.ndarray | None = None
 ) -> tuple[int, np.ndarray]:
     """Numerical rank of the (weighted) target chart and its relative singular values.
 
-    With the lit chart ``X``, each relative singular value of the target is compared with the
-    lit chart's (``(s_P[i] / s_P[0]) / (s_X[i] / s_X[0])``, at most 1): a camera whose channels
-    overlap strongly sees *every* chart with small minor singular values, and only a light with
-    much less colour than the wall shows (a line spectrum) should count as rank-deficient. A
-    second relative singular value below :data:`LINE_SPECTRUM_TOLERANCE` makes the rank 1,
-    whatever the third (noise there is amplified by the lit chart's small minor values).
+    With the lit chart ``X``, each relative singular value is the target's over the lit chart's
+    (``(s_P[i] / s_P[0]) / (s_X[i] / s_X[0])``, at most 1), so that only a light with much less
+    colour than the wall counts as rank-deficient; a second one below
+    :data:`LINE_SPECTRUM_TOLERANCE` makes the rank 1 (docs/stability.md).
 
     Raises
     ------
@@ -479,9 +459,8 @@ def q_regularised(problem: QProblem) -> QFit:
     """Least squares shrunk toward the white-balance (diagonal) Q; strength by LOO ΔE2000."""
     X, P, w, white = problem_arrays(problem)
     alpha = choose_shrinkage(X, P, w, white)
-    Q = _fit_diagonal(X, P, w, white) if not np.isfinite(alpha) else _ridge(X, P, w, alpha)
     return QFit(
-        MatrixCorrection(Q),
+        MatrixCorrection(_fit_regularised(X, P, w, white, alpha)),
         "regularised",
         "least squares + alpha*trace(X^T W X)/3*||Q - D||^2, D = white balance, alpha with the "
         "lowest leave-one-patch-out ΔE2000",

@@ -1,20 +1,12 @@
 """Patches inconsistent with the rest of the chart, found before any Q is fitted.
 
-One bad patch (a mis-placed sampling box, flare, a reflection on the chart, a swapped row)
-moves a least-squares Q by tens of percent. :func:`inconsistent_patches` finds such patches
-from the data alone, so that every method fits without them and the engineer is told which.
-Each patch is predicted by a Huber-weighted least-squares 3x3 fitted on the other patches
-(closed-form leave-one-out); it is suspect by its **residual** (large relative to itself, to
-the chart's residuals and to white), its **influence** (leaving it out moves the other
-patches' colours visibly, :func:`patch_influence`) or **explanation** (the rest of the chart is
-far more consistent without it, :func:`deletion_gain`); two reading-order neighbours are
-**swapped** when the rest predicts them far better exchanged (:func:`pair_residuals`). The
-worst suspect is excluded and the search repeats, with a higher bar for later patches, up to
-:data:`MAX_EXCLUDED_FRACTION` of the chart; past that the chart is refused.
-
-docs/stability.md explains the tests; each threshold below was set on the spectral simulator
-for no false alarm on clean charts with 1 % noise, and docs/accuracy.md ("Bad patches",
-``python -m benchmarks.bench_accuracy --screening-only``) measures false alarms and detection.
+:func:`inconsistent_patches` judges each patch by its held-out **residual** under a
+Huber-weighted least-squares 3x3 fitted on the others, its **influence** on the other patches'
+colours (:func:`patch_influence`) and how much it **explains** of the chart's inconsistency
+(:func:`deletion_gain`), and each reading-order pair by whether it looks **swapped**
+(:func:`pair_residuals`); the worst is excluded and the search repeats, up to
+:data:`MAX_EXCLUDED_FRACTION` of the chart. docs/stability.md ("A bad patch") explains the tests
+and how the thresholds below were set; docs/accuracy.md measures them.
 """
 
 from __future__ import annotations
@@ -22,9 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from ocio_vp.correction.linear import (
-    NARROW_TARGET,
-    colour_spread,
     fit_least_squares,
+    is_narrow,
     loo_predictions,
     normal_equations,
     weighted_outer,
@@ -101,15 +92,15 @@ _INFLUENCE_BLOCK = 256
 #: the patches (Huber).
 HUBER = 2.0
 #: A patch found after another was excluded needs a score of 1 if it scored at least
-#: FIRST_PASS_SUPPORT on the whole chart, else UNSUPPORTED_SCORE (a patch read as zero scores
-#: 3.3 on the relative test; a patch merely missing a similar neighbour stays near 1).
+#: FIRST_PASS_SUPPORT on the whole chart, else UNSUPPORTED_SCORE.
 FIRST_PASS_SUPPORT = 0.5
 UNSUPPORTED_SCORE = 2.0
 #: After the worst patch is excluded, a further patch scoring below UNSUPPORTED_SCORE must also
 #: move the other patches' colours by LATER_INFLUENCE mean ΔE2000 (one just-noticeable
 #: difference) or miss its held-out prediction by LATER_RELATIVE times the relative limit
-#: (capped at :data:`OUTLIER_RELATIVE_NARROW` under line-spectrum light): once a bad patch is
-#: gone, a clean one of a similar colour is predicted worse without being wrong.
+#: (capped at :data:`OUTLIER_RELATIVE_NARROW`: a patch read as zero misses by exactly 100 %):
+#: once a bad patch is gone, a clean one of a similar colour is predicted worse without being
+#: wrong, and keeping the chart's only red costs less than losing it.
 LATER_INFLUENCE = 1.0
 LATER_RELATIVE = 1.5
 #: More inconsistent patches than this fraction of the chart: refuse rather than guess.
@@ -297,13 +288,6 @@ def deletion_gain(X: np.ndarray, P: np.ndarray, w: np.ndarray, scale: np.ndarray
     return np.where(w > 0, gain, 0.0)
 
 
-def is_narrow(X: np.ndarray, P: np.ndarray, w: np.ndarray) -> bool:
-    """Whether the target's colours spread much less than the lit chart's (a line-spectrum
-    light the wall cannot reproduce: :data:`~ocio_vp.correction.linear.NARROW_TARGET`)."""
-    active = np.asarray(w) > 0
-    return bool(colour_spread(P[active]) < NARROW_TARGET * colour_spread(X[active]))
-
-
 def patch_scores(
     X: np.ndarray,
     P: np.ndarray,
@@ -400,13 +384,8 @@ def _swap_scores(as_read: np.ndarray, exchanged: np.ndarray) -> np.ndarray:
 def _next_patch(scores: dict, first: np.ndarray, after_exclusion: bool) -> int | None:
     """The patch to exclude next, or None."""
     score = scores["score"]
-    if after_exclusion:
-        # A patch of a similar colour is predicted from fewer neighbours once one is gone:
-        # unless it already looked suspect on the whole chart and either drags the other
-        # patches' colours visibly or is almost entirely wrong (read as zero), it needs
-        # stronger evidence: keeping the chart's only red costs less than losing it.
+    if after_exclusion:  # stronger evidence needed (LATER_INFLUENCE, LATER_RELATIVE)
         visible = scores["influence"] >= LATER_INFLUENCE
-        # (capped at the narrow limit: a patch read as zero misses by exactly 100 % of itself)
         wrong = scores["relative"] >= min(LATER_RELATIVE * scores["limit"], OUTLIER_RELATIVE_NARROW)
         supported = (first >= FIRST_PASS_SUPPORT) & (visible | wrong)
         score = score / np.where(supported, 1.0, UNSUPPORTED_SCORE)

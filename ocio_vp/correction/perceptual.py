@@ -1,17 +1,11 @@
 """The ``perceptual`` Q-solve method: minimise the mean ΔE2000 (or ΔE ITP) of the lit chart.
 
-The paper's eq. 5 minimises squared camera-RGB error, which weighs a dark patch's visible hue
-shift less than a bright patch's invisible one. This method starts from that least-squares Q
-and lets scipy minimise the mean perceptual difference between the corrected lit chart
-``Q x_j`` and the target ``p_j`` instead (weighted patches only). The colour differences are
-colour-science's own ``delta_E`` ("CIE 2000" or "ITP"), in the normalisation of
-:mod:`ocio_vp.metrics` (target white at Y = 1 and the Lab reference white for ΔE2000; at
-100 cd/m^2 for ΔE ITP), after a camera RGB -> XYZ matrix.
-
-That matrix comes from the caller (``make_q_perceptual(camera_to_xyz=...)``) when the camera is
-characterised; the registry's ``perceptual`` uses the sample camera's
-(:func:`ocio_vp.metrics.sample_camera_to_xyz`): a stand-in good enough to weigh errors
-perceptually, not a colorimetric characterisation of *your* camera.
+Eq. 5 weighs a dark patch's visible hue shift less than a bright patch's invisible one. This
+method starts from its least-squares Q and lets scipy minimise the mean of colour-science's
+``delta_E`` ("CIE 2000" or "ITP") between the corrected lit chart ``Q x_j`` and the target
+``p_j`` (weighted patches only), normalised on the target white, through a camera RGB -> XYZ
+matrix (the sample camera's unless given: a stand-in good enough to weigh errors perceptually,
+not a characterisation of *your* camera).
 
 References
 ----------

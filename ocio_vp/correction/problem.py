@@ -1,13 +1,7 @@
-"""The data of a post-correction (Q) solve and its result.
+"""The data of a post-correction (Q) solve (eq. 5 of the paper) and its result.
 
 :class:`QProblem` and :class:`QFit` live apart from :mod:`ocio_vp.correction.registry`
 (which re-exports them) so that the methods can import them without an import cycle.
-
-References
-----------
-LeGendre, C., Lepicovsky, L., Debevec, P. (2022). Jointly Optimizing Color Rendition and
-In-Camera Backgrounds in an RGB Virtual Production Stage. DigiPro '22, eq. 5.
-https://doi.org/10.1145/3543664.3543681
 """
 
 from __future__ import annotations

@@ -133,7 +133,8 @@ def make_q_root_polynomial(degree: int = 2, skin_weight: float = 0.0) -> Callabl
         details: dict = {"folds_by_fade": tried}
         if rows is not None:
             details["skin_weight"] = skin_weight
-        held = _held_out(problem, correction, rows)
+        spare = int(np.count_nonzero(w > 0)) > ROOT_POLYNOMIAL_TERMS[degree]
+        held = bounded_loo_predictions(problem, correction, rows) if spare else None
         return QFit(
             correction,
             f"root-polynomial-{degree}" + ("" if rows is None else "-skin"),
@@ -155,13 +156,10 @@ def make_q_root_polynomial(degree: int = 2, skin_weight: float = 0.0) -> Callabl
 def root_polynomial_loo_predictions(
     X: np.ndarray, P: np.ndarray, w: np.ndarray, degree: int = 2
 ) -> np.ndarray:
-    """(n, 3) leave-one-patch-out predictions of the root-polynomial fit, in closed form.
-
-    The fit is weighted least squares, linear in its parameters, so removing patch j changes
-    its residual to ``r_j / (1 - h_j)`` (``h_j`` the hat matrix's diagonal): one fit instead of
-    one per patch. The kernel is :func:`ocio_vp.correction.linear.loo_root_polynomial`, the one
-    ``auto`` compares models with; a patch that alone decides a term is refitted without it, and
-    patches with weight 0 get the full fit's prediction.
+    """(n, 3) leave-one-patch-out predictions of the root-polynomial fit, in closed form
+    (:func:`ocio_vp.correction.linear.loo_root_polynomial`, the kernel ``auto`` compares models
+    with, after :func:`fit_root_polynomial`'s guards); patches with weight 0 get the full fit's
+    prediction.
 
     Raises
     ------
@@ -169,12 +167,8 @@ def root_polynomial_loo_predictions(
         The fit itself is impossible (see :func:`fit_root_polynomial`).
     """
     fit_root_polynomial(X, P, w, degree)  # its guards: too few or dependent patches
-    return loo_root_polynomial(
-        np.asarray(X, dtype=np.float64),
-        np.asarray(P, dtype=np.float64),
-        np.asarray(w, dtype=np.float64),
-        degree,
-    )
+    X, P, w = (np.asarray(a, dtype=np.float64) for a in (X, P, w))
+    return loo_root_polynomial(X, P, w, degree)
 
 
 def bounded_loo_predictions(
@@ -225,15 +219,6 @@ def _loo_domains(problem: QProblem, w: np.ndarray) -> Iterator[tuple[int, FitDom
             yield int(j), dataclasses.replace(problem, weights=others).domain
         else:
             yield int(j), full
-
-
-def _held_out(
-    problem: QProblem, correction: RootPolynomialCorrection, rows: SkinRows | None
-) -> np.ndarray | None:
-    """:func:`bounded_loo_predictions`; None with no patch to spare."""
-    if int(np.count_nonzero(problem.fit_weights > 0)) <= ROOT_POLYNOMIAL_TERMS[correction.degree]:
-        return None
-    return bounded_loo_predictions(problem, correction, rows)
 
 
 #: The registry's ``root-polynomial`` method: degree 2 (6 terms).

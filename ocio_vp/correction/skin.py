@@ -1,22 +1,11 @@
-"""Skin as the stage and the location see it, from the measurements a stage already takes.
+"""Skin samples for every solve, from the measurements a stage already takes.
 
-Faces are what an LED stage is judged by, and skin is not a general reflectance: a model
-chosen by the chart's leave-one-patch-out error can render it worse than the paper's least
-squares (docs/skin.md). The chart's two skin patches are too few to see it, so this module
-makes **skin samples** for every solve:
-
-- **virtual skin** (:func:`chart_skin_weights`): each training skin reflectance written as a
-  regularised linear combination ``s ≈ Σ_j a_j ρ_j`` of the chart's known patch reflectances
-  (a ColorChecker 24: colour-science's ``BabelColor Average``). Camera RGB is linear in
-  reflectance, so the skin's lit chart under LED channel k is ``Σ_j a_j [SRL]_j`` and its
-  location RGB ``Σ_j a_j p_j``: skin pairs for any stage, with no spectral knowledge;
-- **named or found patches** (:func:`skin_patch_weights`): on another chart, the patches the
-  measurements file names as skin, or those whose colour in the location is a skin colour;
-- **exact** (:mod:`ocio_vp.correction.skin_spectra`): measured LED spectra and camera
-  sensitivities given, each skin's RGB computed from its reflectance.
-
-Each sample carries its lightness band (ITA°, :mod:`ocio_vp.skin_data`), so a figure can be
-given per band: a fit on light skin alone generalises poorly to darker skin.
+Three sources (docs/skin.md explains each): **virtual skin** (:func:`chart_skin_samples`),
+measured skin reflectances as combinations of a ColorChecker 24's patch reflectances, whose
+camera RGB is then the same combination of the lit and target charts; the chart's own **skin
+patches**, named or found by colour (:func:`patch_skin_samples`); and skin computed **from
+spectra** (:mod:`ocio_vp.correction.skin_spectra`). Each sample carries its lightness band
+(ITA°, :mod:`ocio_vp.skin_data`).
 """
 
 from __future__ import annotations
@@ -39,7 +28,6 @@ __all__ = [
     "chart_skin_weights",
     "joined",
     "patch_skin_samples",
-    "skin_delta_e",
     "skin_patch_weights",
     "skin_rows",
     "with_rows",
@@ -240,14 +228,3 @@ def _lab(xyz: np.ndarray, white_xyz: np.ndarray) -> np.ndarray:
     return np.asarray(
         colour.XYZ_to_Lab(xyz * scale, colour.XYZ_to_xy(white_xyz * scale)), dtype=np.float64
     )
-
-
-def skin_delta_e(
-    corrected: np.ndarray, target: np.ndarray, white: np.ndarray, camera_to_xyz: np.ndarray
-) -> np.ndarray:
-    """(..., k) ΔE2000 of corrected skin samples (..., k, 3) against the location's (k, 3),
-    through ``camera_to_xyz``, normalised on the location white's camera RGB ``white``: the
-    package's one camera RGB -> ΔE2000, :func:`ocio_vp.metrics.camera_delta_E_2000`."""
-    from ocio_vp.metrics import camera_delta_E_2000
-
-    return camera_delta_E_2000(target, corrected, camera_to_xyz=camera_to_xyz, white=white)

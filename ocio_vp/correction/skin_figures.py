@@ -10,6 +10,9 @@ shown in frustum through each (the background, :func:`background_error`).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from dataclasses import dataclass
+
 import numpy as np
 
 from ocio_vp.calibration.diagnostics import in_frustum_drive_range
@@ -17,16 +20,26 @@ from ocio_vp.calibration.equations import condition_number
 from ocio_vp.correction.extrapolation import in_frame_led_damage
 from ocio_vp.correction.linear import patch_errors
 from ocio_vp.correction.problem import QProblem, fit_least_squares
-from ocio_vp.correction.skin import skin_delta_e
 from ocio_vp.formats.skin import SkinBand, SkinDefault, SkinFigures
-from ocio_vp.metrics import sample_camera_to_xyz, white_scale
+from ocio_vp.metrics import camera_delta_E_2000, sample_camera_to_xyz, white_scale
 from ocio_vp.model.correction import MatrixCorrection, PostCorrection
 from ocio_vp.skin_data import ITA_BANDS
 
-__all__ = ["background_error", "clipped_background", "skin_figures"]
+__all__ = [
+    "Judged",
+    "background_error",
+    "chart_error",
+    "clipped_background",
+    "judged",
+    "shown_error",
+    "skin_errors",
+    "skin_figures",
+]
 
 #: An in-frustum matrix is not formed from a Q less well conditioned than this (as N's solve).
 _MAX_CONDITION = 1e8
+#: "No worse" up to rounding: a figure may exceed the default's by this fraction of itself.
+_ROUNDING = 1e-9
 
 
 def _fraction(value: float) -> float | None:
@@ -63,13 +76,21 @@ def background_error(
     """
     if not correction.invertible or not condition_number(correction.matrix) < _MAX_CONDITION:
         return float("nan")
-    SL, M = np.asarray(problem.SL, dtype=np.float64), np.asarray(problem.M, dtype=np.float64)
     P = np.asarray(problem.target, dtype=np.float64)
     mask = np.ones(len(P), dtype=bool) if patches is None else np.asarray(patches, dtype=bool)
+    return shown_error(problem, correction, correction.inverse(P[mask]), P[mask])
+
+
+def shown_error(
+    problem: QProblem, correction: PostCorrection, content: np.ndarray, P: np.ndarray
+) -> float:
+    """Mean error, relative to the target white, of colours ``P`` (k, 3) shown in frustum as
+    ``content`` (k, 3) and corrected by ``correction``, as :func:`background_error` models it."""
+    SL, M = np.asarray(problem.SL, dtype=np.float64), np.asarray(problem.M, dtype=np.float64)
     b = np.zeros(3) if problem.black_level is None else np.asarray(problem.black_level, float)
-    drive = (correction.inverse(P[mask]) - b) @ M.T
-    shown = correction.apply(np.clip(drive, 0.0, None) @ SL.T + b)
-    return float(np.mean(np.abs(shown - P[mask]) / white_scale(P, problem.white_patch)))
+    shown = correction.apply(np.clip((content - b) @ M.T, 0.0, None) @ SL.T + b)
+    scale = white_scale(np.asarray(problem.target, dtype=np.float64), problem.white_patch)
+    return float(np.mean(np.abs(shown - P) / scale))
 
 
 def clipped_background(problem: QProblem, correction: PostCorrection) -> np.ndarray:
@@ -79,6 +100,73 @@ def clipped_background(problem: QProblem, correction: PostCorrection) -> np.ndar
     P = np.asarray(problem.target, dtype=np.float64)
     b = np.zeros(3) if problem.black_level is None else np.asarray(problem.black_level, float)
     return np.any((correction.inverse(P) - b) @ M.T < 0, axis=1)
+
+
+def skin_errors(problem: QProblem, corrections: Sequence[PostCorrection]) -> np.ndarray:
+    """(m, k) ΔE2000 of the problem's skin samples corrected by each of ``corrections`` against
+    the location's, through the sample camera's matrix (a ValueError without skin samples)."""
+    lit, skin = problem.skin_predicted, problem.skin
+    if lit is None or skin is None:
+        raise ValueError("no skin samples")
+    white = np.asarray(problem.target, dtype=np.float64)[problem.white_patch]
+    corrected = np.stack([c.apply(lit) for c in corrections])
+    return camera_delta_E_2000(
+        skin.target, corrected, camera_to_xyz=sample_camera_to_xyz(), white=white
+    )
+
+
+def chart_error(problem: QProblem, corrected: np.ndarray) -> float:
+    """Mean ΔE2000 (:func:`~ocio_vp.correction.linear.patch_errors`) over the fitted patches of
+    the lit chart corrected to ``corrected`` (n, 3), against the target."""
+    P, w = np.asarray(problem.target, dtype=np.float64), problem.fit_weights
+    return float(np.mean(patch_errors(corrected, P, w, problem.white_patch)[0][w > 0]))
+
+
+@dataclass(frozen=True)
+class Judged:
+    """What a post-correction is judged on against the default with skin first: the background
+    error (relative to white), the LEDs in frame (p95 ΔE2000), the skin samples and the chart
+    (mean ΔE2000 each)."""
+
+    background: float
+    leds: float
+    skin: float
+    chart: float
+
+    def no_worse(self, default: Judged, chart: float) -> bool:
+        """Background and LEDs no worse than ``default``'s, skin no worse either, and the
+        chart's mean ΔE2000 at most ``chart``."""
+        return all(
+            _no_worse(mine, theirs)
+            for mine, theirs in zip(
+                (self.background, self.leds, self.skin, self.chart),
+                (default.background, default.leds, default.skin, chart),
+                strict=True,
+            )
+        )
+
+    def words(self, default: Judged) -> str:
+        return (
+            f"background {100 * self.background:.3g} % of white (default "
+            f"{100 * default.background:.3g} %), LEDs in frame p95 ΔE2000 {self.leds:.3g} "
+            f"(default {default.leds:.3g})"
+        )
+
+
+def _no_worse(value: float, bound: float) -> bool:
+    return not np.isfinite(bound) or value <= bound + _ROUNDING * abs(bound)
+
+
+def judged(problem: QProblem, correction: PostCorrection) -> Judged:
+    """:class:`Judged` of ``correction`` on ``problem`` (a ValueError without skin samples)."""
+    skin = float(np.mean(skin_errors(problem, [correction])[0]))
+    white = np.asarray(problem.target, dtype=np.float64)[problem.white_patch]
+    return Judged(
+        background=background_error(problem, correction),
+        leds=in_frame_led_damage(correction, problem.SL, white, sample_camera_to_xyz()),
+        skin=skin,
+        chart=chart_error(problem, correction.apply(problem.predicted)),
+    )
 
 
 def skin_figures(
@@ -93,13 +181,10 @@ def skin_figures(
     if lit is None or skin is None or skin.count == 0:
         return None
     X, P, w = problem.predicted, np.asarray(problem.target, dtype=np.float64), problem.fit_weights
-    white = P[problem.white_patch]
-    camera = sample_camera_to_xyz()
-    least_squares = MatrixCorrection(fit_least_squares(X, P, w))
-    corrections = [correction, least_squares] + ([default[1]] if default else [])
-    errors = skin_delta_e(np.stack([c.apply(lit) for c in corrections]), skin.target, white, camera)
+    corrections = (correction, MatrixCorrection(fit_least_squares(X, P, w)))
+    errors = skin_errors(problem, corrections)
     active = w > 0
-    chart = patch_errors(np.stack([c.apply(X) for c in corrections[:2]]), P, w, problem.white_patch)
+    chart = patch_errors(np.stack([c.apply(X) for c in corrections]), P, w, problem.white_patch)
     band = np.asarray(skin.band)
     bands = tuple(
         SkinBand(
@@ -112,15 +197,16 @@ def skin_figures(
     )
     comparison = None
     if default is not None:
+        mine, theirs = judged(problem, correction), judged(problem, default[1])
         comparison = SkinDefault(
             model=default[0],
-            expected=float(np.mean(errors[2])),
-            led_damage=float(in_frame_led_damage(correction, problem.SL, white, camera)),
-            led_damage_default=float(in_frame_led_damage(default[1], problem.SL, white, camera)),
+            expected=theirs.skin,
+            led_damage=mine.leds,
+            led_damage_default=theirs.leds,
             background_outside=_background_outside(problem, correction),
             background_outside_default=_background_outside(problem, default[1]),
-            background=_fraction(background_error(problem, correction)),
-            background_default=_fraction(background_error(problem, default[1])),
+            background=_fraction(mine.background),
+            background_default=_fraction(theirs.background),
         )
     return SkinFigures(
         priority=priority,

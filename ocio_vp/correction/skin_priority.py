@@ -1,19 +1,10 @@
 """``--priority skin``: the post-correction fitted with faces first.
 
-The bounded root-polynomial of degree 2 is fitted to the chart and the problem's skin samples
-(:mod:`ocio_vp.correction.skin`) with weight :data:`PRIORITY_SKIN_WEIGHT`, each sample scaled
-by its luminance to the power -2/3 (skin of every lightness counts alike); a 3x3 is fitted to
-the same rows where the root-polynomial is not safe. Its fallback outside the chart's domain
-stays the chart's least squares. The chart's error is bounded (:data:`CHART_BUDGET` times least
-squares'); a target chart of rank below 3 has no colour to put first and is solved as the
-default (``auto``) solves it.
-
-Faces first must not cost the rest of the frame: the in-frustum background's expected error,
-the wall's LEDs in frame and the skin samples may be no worse than through the default's
-post-correction. Where the skin fit is, the model is drawn from the default towards it
-(parameters ``D + a step``): first along the step with the background's first-order rise
-projected out (in the skin fit's own metric), then straight, for a in 1 and
-:data:`BLEND_STEPS`, largest first; the default itself where none holds.
+The bounded root-polynomial of degree 2 (a 3x3 where it is not safe) fitted to the chart and
+the skin samples with weight :data:`PRIORITY_SKIN_WEIGHT`, the chart's error bounded by
+:data:`CHART_BUDGET` times least squares'; where it is worse than the default (``auto``) on the
+in-frustum background, the LEDs in frame or the skin, it is drawn towards the default (projected,
+then straight, at :data:`BLEND_STEPS`). docs/skin.md ("--priority skin") explains the rule.
 """
 
 from __future__ import annotations
@@ -25,14 +16,17 @@ import numpy as np
 
 from ocio_vp.calibration.equations import condition_number
 from ocio_vp.correction.auto import bounded_candidate, q_auto
-from ocio_vp.correction.extrapolation import in_frame_led_damage
-from ocio_vp.correction.linear import patch_errors, problem_arrays, target_rank
+from ocio_vp.correction.linear import problem_arrays, target_rank
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
-from ocio_vp.correction.skin import skin_delta_e, with_rows
-from ocio_vp.correction.skin_figures import background_error, clipped_background
+from ocio_vp.correction.skin import with_rows
+from ocio_vp.correction.skin_figures import (
+    chart_error,
+    clipped_background,
+    judged,
+    shown_error,
+)
 from ocio_vp.deprecation import deprecated_names
 from ocio_vp.errors import InputError
-from ocio_vp.metrics import sample_camera_to_xyz, white_scale
 from ocio_vp.model.correction import (
     FitDomain,
     MatrixCorrection,
@@ -60,8 +54,6 @@ PROJECTION_MARGIN = 0.25
 Guard = Callable[[PostCorrection], PostCorrection]
 #: Forward-difference step of the background's gradient, relative to the largest parameter.
 _STEP = 1e-6
-#: "No worse" up to rounding: a figure may exceed the default's by this fraction of itself.
-_ROUNDING = 1e-9
 
 
 def _parameters(
@@ -111,11 +103,7 @@ def _gradient(problem: QProblem, skin: PostCorrection, at: np.ndarray) -> np.nda
     gradient = np.zeros_like(at)
     if not np.any(clipped):
         return gradient
-    P = np.asarray(problem.target, dtype=np.float64)
-    scale = white_scale(P, problem.white_patch)
-    P = P[clipped]
-    SL, M = np.asarray(problem.SL, dtype=np.float64), np.asarray(problem.M, dtype=np.float64)
-    b = np.zeros(3) if problem.black_level is None else np.asarray(problem.black_level, float)
+    P = np.asarray(problem.target, dtype=np.float64)[clipped]
     u = model.inverse(P)
     h = _STEP * np.maximum(np.max(np.abs(u), axis=1), 1e-12)
     J = np.stack(
@@ -126,8 +114,7 @@ def _gradient(problem: QProblem, skin: PostCorrection, at: np.ndarray) -> np.nda
 
     def error(moved: PostCorrection) -> float:
         content = u - np.linalg.solve(J, (moved.apply(u) - P)[..., None])[..., 0]
-        seen = np.clip((content - b) @ M.T, 0.0, None) @ SL.T + b
-        return float(np.mean(np.abs(moved.apply(seen) - P) / scale))
+        return shown_error(problem, moved, content, P)
 
     base = error(model)
     step = _STEP * max(float(np.max(np.abs(at))), 1.0)
@@ -176,58 +163,6 @@ def _same_domain(a: FitDomain | None, b: FitDomain | None) -> bool:
     return a is b or (a is not None and b is not None and a.to_dict() == b.to_dict())
 
 
-@dataclasses.dataclass(frozen=True)
-class _Figures:
-    """What a candidate is judged on against the default: the background error (relative to
-    white), the LEDs in frame (p95 ΔE2000) and the skin samples (mean ΔE2000)."""
-
-    background: float
-    leds: float
-    skin: float
-    chart: float
-
-    def no_worse(self, default: _Figures, chart: float) -> bool:
-        """Background and LEDs no worse than ``default``'s, skin no worse either, and the
-        chart's mean ΔE2000 at most ``chart``."""
-        return all(
-            _no_worse(mine, theirs)
-            for mine, theirs in zip(
-                (self.background, self.leds, self.skin, self.chart),
-                (default.background, default.leds, default.skin, chart),
-                strict=True,
-            )
-        )
-
-    def words(self, default: _Figures) -> str:
-        return (
-            f"background {100 * self.background:.3g} % of white (default "
-            f"{100 * default.background:.3g} %), LEDs in frame p95 ΔE2000 {self.leds:.3g} "
-            f"(default {default.leds:.3g})"
-        )
-
-
-def _figures(problem: QProblem, correction: PostCorrection) -> _Figures:
-    """:class:`_Figures` of ``correction`` on ``problem``."""
-    white = np.asarray(problem.target, dtype=np.float64)[problem.white_patch]
-    camera = sample_camera_to_xyz()
-    skin = problem.skin
-    lit = problem.skin_predicted
-    if skin is None or lit is None:
-        raise ValueError("skin first without skin samples")
-    X, P, w, _ = problem_arrays(problem)
-    chart = patch_errors(correction.apply(X), P, w, problem.white_patch)[0][w > 0]
-    return _Figures(
-        background=background_error(problem, correction),
-        leds=in_frame_led_damage(correction, problem.SL, white, camera),
-        skin=float(np.mean(skin_delta_e(correction.apply(lit), skin.target, white, camera))),
-        chart=float(np.mean(chart)),
-    )
-
-
-def _no_worse(value: float, bound: float) -> bool:
-    return not np.isfinite(bound) or value <= bound + _ROUNDING * abs(bound)
-
-
 def within_default(
     problem: QProblem, fit: QFit, default: QFit, guard: Guard | None = None
 ) -> tuple[QFit, str, float]:
@@ -237,8 +172,8 @@ def within_default(
     words, and the share of the way from the default to the skin fit taken (1: the skin fit
     unchanged, 0: the default); ``default`` is ``auto``'s fit of ``problem``."""
     guarded = guard or (lambda correction: correction)
-    reference = _figures(problem, guarded(default.correction))
-    figures = _figures(problem, guarded(fit.correction))
+    reference = judged(problem, guarded(default.correction))
+    figures = judged(problem, guarded(fit.correction))
     chart = max(figures.chart, reference.chart)  # both the default's and the skin fit's are fine
     chosen, share, way = fit.correction, 1.0, "straight"
     if not figures.no_worse(reference, chart):
@@ -250,9 +185,9 @@ def within_default(
                 if way == "straight" and a == 1.0:
                     continue  # the skin fit itself, judged above
                 candidate = _model(fit.correction, D + a * step)
-                judged = _figures(problem, guarded(candidate))
-                if judged.no_worse(reference, chart):
-                    chosen, share, figures = candidate, a, judged
+                candidate_figures = judged(problem, guarded(candidate))
+                if candidate_figures.no_worse(reference, chart):
+                    chosen, share, figures = candidate, a, candidate_figures
                     break
             if share > 0:
                 break
@@ -300,7 +235,7 @@ def q_skin_priority(problem: QProblem, guard: Guard | None = None) -> QFit:
 
 
 def _q_skin_priority(problem: QProblem, default: QFit, guard: Guard | None) -> QFit:
-    X, P, w, white = problem_arrays(problem)
+    X, P, w, _ = problem_arrays(problem)
     rank, _ = target_rank(P, w, X)
     if rank < 3:
         fit = default
@@ -309,9 +244,7 @@ def _q_skin_priority(problem: QProblem, default: QFit, guard: Guard | None) -> Q
             fit.correction, fit.model, fit.description, reason=reason, target_rank=rank,
             cross_validated_error=fit.cross_validated_error, details=fit.details,
         )  # fmt: skip
-    active = w > 0
-    Q_ls = fit_least_squares(X, P, w)
-    chart_ls = float(np.mean(patch_errors(X @ Q_ls.T, P, w, white)[0][active]))
+    chart_ls = chart_error(problem, X @ fit_least_squares(X, P, w).T)
     if chart_ls < EXACT:
         fit = default  # the stage reproduces the light: no colour, skin or other, to fix
         return QFit(
@@ -329,7 +262,7 @@ def _q_skin_priority(problem: QProblem, default: QFit, guard: Guard | None) -> Q
             "skin-weighted",
             "3x3 least squares over the chart and the skin samples",
         )
-    chart = float(np.mean(patch_errors(fit.correction.apply(X), P, w, white)[0][active]))
+    chart = chart_error(problem, fit.correction.apply(X))
     if not chart <= CHART_BUDGET * chart_ls:
         reason = (
             f"faces first, but the skin fit's chart error {chart:.3g} is above "
@@ -339,7 +272,7 @@ def _q_skin_priority(problem: QProblem, default: QFit, guard: Guard | None) -> Q
     fit, elsewhere, share = within_default(problem, fit, default, guard)
     if share == 0.0:  # the default itself, its reason saying why
         return fit
-    chart = float(np.mean(patch_errors(fit.correction.apply(X), P, w, white)[0][active]))
+    chart = chart_error(problem, fit.correction.apply(X))
     notes = [elsewhere] if why is None else [elsewhere, why]
     reason = (
         f"faces first: {fit.description} (skin weight {PRIORITY_SKIN_WEIGHT:g}); chart mean "

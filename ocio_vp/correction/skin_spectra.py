@@ -1,15 +1,10 @@
 """Skin samples computed from spectra, where the stage knows them (``solve --led-spectra FILE
 --camera-sensitivities FILE|NAME [--location-light ENV=FILE]``).
 
-Virtual skin (:mod:`ocio_vp.correction.skin`) approximates each skin reflectance by the chart's
-patches; with the panel's measured LED spectra ``L`` (W, 3) and the camera's sensitivities
-``C`` (W, 3) each skin reflectance ``s`` is lit exactly: ``[SRL]_s[c, l] = g[c, l] Σ C_c s L_l``.
-The units of the files are unknown, so the nine gains ``g`` are fitted to the photographed lit
-chart (the ColorChecker's reference spectra through the same files, least squares per camera
-and LED channel). In the location, the skin under the light's spectrum ``E`` with three gains
-fitted to the target chart alike; without a measured ``E`` it is estimated from the target
-chart: the non-negative combination of smooth bumps (:data:`LIGHT_BASIS_NM` apart) whose
-chart, through ``C``, best matches the photographed one (said so in the samples' source).
+Each skin reflectance is lit through the LED spectra and camera sensitivities, with gains
+fitted to the photographed lit and target charts (the files' units are unknown); a location
+light not measured is estimated from the target chart (:func:`estimate_light`). docs/skin.md
+("From spectra") explains it.
 """
 
 from __future__ import annotations
