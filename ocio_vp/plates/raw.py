@@ -175,15 +175,7 @@ def _developed(path: str, stamp: tuple[int, int], method: str) -> np.ndarray:
     """The whole picture demosaiced by LibRaw with no processing, float32 normalised."""
     import rawpy
 
-    algorithm = {
-        "linear": rawpy.DemosaicAlgorithm.LINEAR,
-        "vng": rawpy.DemosaicAlgorithm.VNG,
-        "ppg": rawpy.DemosaicAlgorithm.PPG,
-        "ahd": rawpy.DemosaicAlgorithm.AHD,
-        "dcb": rawpy.DemosaicAlgorithm.DCB,
-        "dht": rawpy.DemosaicAlgorithm.DHT,
-        "aahd": rawpy.DemosaicAlgorithm.AAHD,
-    }[method]
+    algorithm = rawpy.DemosaicAlgorithm[method.upper()]  # DEMOSAIC_METHODS[1:] are its names
     with _open(path) as raw:
         _check_cfa(raw, path)
         image = raw.postprocess(
