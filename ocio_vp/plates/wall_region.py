@@ -107,7 +107,7 @@ def find_wall(
             reduced.append(np.asarray(frames[1](int(k), factor), dtype=np.float64))
             continue
         frame_info = info if k == 0 else dataclasses.replace(info, path=str(paths[k]))
-        reduced.append(block_means(frame_info, factor, zero_non_finite=False))
+        reduced.append(block_means(frame_info, factor))
     mask = wall_mask(np.stack(reduced))
     rect = largest_rectangle(mask)
     hint = "give the take's region: [x0, y0, x1, y1] in the capture file"
