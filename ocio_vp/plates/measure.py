@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from ocio_vp.errors import InputError
+from ocio_vp.errors import InputError, format_key_path
 from ocio_vp.formats.jsontypes import JsonObject
 from ocio_vp.formats.measurements import (
     CHANNELS,
@@ -142,8 +142,6 @@ def _named(error: InputError, ref: PlateRef, key: str) -> InputError:
 def _sample_chart(
     capture: Capture, shot: ChartShot, detect: Callable[..., Detection] | None
 ) -> tuple[PlateSampling, np.ndarray | None]:
-    from ocio_vp.errors import format_key_path
-
     key = format_key_path(*shot.key)
     detection = None
     try:
@@ -191,8 +189,6 @@ def _sample_chart(
 
 def _sample_regions(capture: Capture, shots: Mapping[str, RegionShot]) -> list[PlateSampling]:
     """Sample regions, grouping those that share a plate into one :class:`PlateSampling`."""
-    from ocio_vp.errors import format_key_path
-
     groups: dict[PlateRef, list[tuple[str, RegionShot]]] = {}
     for label, shot in shots.items():
         groups.setdefault(shot.plate, []).append((label, shot))
