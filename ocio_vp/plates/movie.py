@@ -1,12 +1,10 @@
-"""Reading a camera take recorded as a movie file (QuickTime, MP4, MXF) with PyAV.
+"""Reading a camera take recorded as a movie file (QuickTime, MP4, MXF) with PyAV;
+docs/capture.md (*A take as a movie*) gives the in/out points, timecode and refusals.
 
-A movie is decoded once, front to back (:func:`scan_movie`), giving the alignment's band and
-the measuring bands of every frame as :class:`~ocio_vp.plates.take_reader.FrameStats` (memory
-does not grow with the take's length). Y'CbCr is converted here, at the decoder's bit depth,
-with the matrix and range the stream declares or the capture file gives (``take.matrix``,
-``take.range``), subsampled chroma repeated onto its luma pixels; then the declared log
-encoding is decoded. Frame numbers count from 0 in the file; docs/capture.md (*A take as a
-movie*) gives the in/out points, timecode and refusals (variable frame rate among them).
+A movie is decoded once, front to back (:func:`scan_movie`), keeping per frame only
+:class:`~ocio_vp.plates.take_reader.FrameStats`. Y'CbCr is converted here, at the decoder's bit
+depth, with the matrix and range the stream declares or the capture file gives, subsampled
+chroma repeated onto its luma pixels; then the log encoding is decoded. Frames count from 0.
 """
 
 from __future__ import annotations
@@ -371,11 +369,10 @@ def _table(encoding: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def decode_log(values: np.ndarray, encoding: str) -> np.ndarray:
-    """Linear values of encoded R'G'B' (float64): colour-science's decoding sampled at 65,537
-    evenly spaced points over [-0.25, 1.5] and interpolated linearly (within 2e-5 of it,
-    relative, above 1e-4 linear: tests/test_plates_movie.py); values outside the table are
-    decoded directly, as are those next to a value the curve does not
-    define (a pure power's negative side). ``linear`` returns the values as float64."""
+    """Linear values of encoded R'G'B' (float64): colour-science's decoding sampled evenly over
+    :data:`_TABLE` and interpolated linearly; values outside the table, or next to a value the
+    curve does not define (a pure power's negative side), are decoded directly. ``linear``
+    returns the values as float64."""
     values = np.asarray(values)
     if encoding == "linear":
         return values.astype(np.float64)

@@ -1,15 +1,9 @@
 """Sample a colour chart (and plain regions) from a plate: perspective-correct patch grid, robust
-statistics, flags.
+statistics (:mod:`ocio_vp.plates.statistics`), flags; docs/capture.md, *Coordinates*.
 
-The chart is given by the four outer corners of its patch grid (TL, TR, BR, BL of the chart;
-docs/capture.md, *Coordinates*). A homography maps grid coordinates ``(u, v)`` in ``[0, columns]
-x [0, rows]`` to the image; a pixel belongs to patch ``(r, c)`` when its centre's grid
-coordinates fall in ``[c + inset, c + 1 - inset] x [r + inset, r + 1 - inset]``.
-
-Each patch's value is a robust mean of its pixels (:data:`ROBUST_MEAN_METHODS`) after rejecting
-outliers (farther than 6 robust sigmas, 1.4826 MAD, from the patch median: a glint, dust, hot
-pixels), so the trim stays symmetric about the noise. Patches are flagged when pixels are
-clipped or too many are outliers. A ``flat_field`` plate divides out the lens's vignetting.
+A homography maps grid coordinates ``(u, v)`` in ``[0, columns] x [0, rows]`` onto the corners;
+a pixel belongs to patch ``(r, c)`` when its centre's grid coordinates fall in
+``[c + inset, c + 1 - inset] x [r + inset, r + 1 - inset]``.
 """
 
 from __future__ import annotations
@@ -196,7 +190,7 @@ def sample_chart(
     """Sample every patch of a chart photographed in perspective, in reading order.
 
     The camera RGB the paper samples from its calibration photographs (the lit-chart columns of
-    [SRL]_j, eq. 3; the target chart p_j, eq. 5). The module docstring explains the statistics.
+    [SRL]_j, eq. 3; the target chart p_j, eq. 5), with :mod:`ocio_vp.plates.statistics`.
 
     Parameters
     ----------
