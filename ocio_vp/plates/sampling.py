@@ -338,12 +338,10 @@ def sample_region(
     pixels, is_float, n_frames = frames_pixels(
         frames, b, encoding=encoding, source=where, what="region"
     )
-    raw = pixels.reshape(-1, 3)
-    corrected = raw
-    if flat_field is not None:
-        corrected = (pixels / _gain(flat_field, b, encoding, frames[0], where)).reshape(-1, 3)
+    gain = None if flat_field is None else _gain(flat_field, b, encoding, frames[0], where)
+    raw, corrected = _patch_pixels(pixels, np.zeros(pixels.shape[:2], np.int32), 1, gain)
     stats = patch_statistics(
-        [corrected],
+        corrected,
         method=method,
         trim=trim,
         clip_level=clip_level,
@@ -351,6 +349,6 @@ def sample_region(
         outlier_sigma=outlier_sigma,
         max_outlier_fraction=max_outlier_fraction,
         max_spread=np.inf,  # a region has no brightest patch to compare with
-        raw_groups=[raw],
+        raw_groups=raw,
     )
     return ChartSamples(box=b, method=method, frames=n_frames, **stats)  # type: ignore[arg-type]
