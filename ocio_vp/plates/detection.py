@@ -335,12 +335,8 @@ def _placements(ij: np.ndarray, rows: int, columns: int):
         lo, hi = corners.min(axis=0), corners.max(axis=0)
         for oi in range(-hi[0], -lo[0] + 1):
             for oj in range(-hi[1], -lo[1] + 1):
-                if (
-                    lo[0] + oi <= 0
-                    and lo[1] + oj <= 0
-                    and hi[0] + oi >= span[0]
-                    and (hi[1] + oj >= span[1])
-                ):
+                shift = np.array([oi, oj])
+                if np.all(lo + shift <= 0) and np.all(hi + shift >= span):
                     yield np.array([[R[0, 0], R[0, 1], oi], [R[1, 0], R[1, 1], oj], [0, 0, 1]])
 
 

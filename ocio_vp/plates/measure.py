@@ -293,8 +293,6 @@ def measure_capture(
 
     Parameters
     ----------
-    capture
-        A validated capture file.
     detect
         ``detect(plate_info, rows=, columns=) -> Detection`` for charts given without corners
         (default :func:`ocio_vp.plates.detection.detect_chart`); a chart not found raises
