@@ -408,15 +408,7 @@ def _jacobian(H: np.ndarray, point: np.ndarray) -> np.ndarray:
     u, v = float(point[0]), float(point[1])
     w = H[2, 0] * u + H[2, 1] * v + H[2, 2]
     x, y = apply_homography(H, np.array([[u, v]]))[0]
-    return (
-        np.array(
-            [
-                [H[0, 0] - x * H[2, 0], H[0, 1] - x * H[2, 1]],
-                [H[1, 0] - y * H[2, 0], H[1, 1] - y * H[2, 1]],
-            ]
-        )
-        / w
-    )
+    return (H[:2, :2] - np.outer([x, y], H[2, :2])) / w
 
 
 # -- the search --------------------------------------------------------------------------------

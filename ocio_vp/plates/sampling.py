@@ -92,10 +92,8 @@ def _check_corners(corners: object, source: object) -> np.ndarray:
         )
     # Cross products of consecutive edges: all the same sign for a convex quadrilateral.
     edges = np.roll(c, -1, axis=0) - c
-    cross = (
-        edges[:, 0] * np.roll(edges, -1, axis=0)[:, 1]
-        - edges[:, 1] * np.roll(edges, -1, axis=0)[:, 0]
-    )
+    following = np.roll(edges, -1, axis=0)
+    cross = edges[:, 0] * following[:, 1] - edges[:, 1] * following[:, 0]
     if not (np.all(cross > 0) or np.all(cross < 0)):
         raise InputError(
             "corners do not form a convex quadrilateral in the order TL, TR, BR, BL",
