@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from ocio_vp.plates.wall_region import largest_rectangle, wall_mask
 
@@ -34,17 +35,37 @@ def test_the_mask_is_the_part_that_changes():
     assert mask[5:20, 10:35].all() and mask.sum() == 15 * 25
 
 
-def test_an_inf_block_is_bright_for_the_wall_finder_and_zero_for_the_chart_detector(monkeypatch):
+def test_a_non_finite_block_counts_as_zero(monkeypatch):
     # read_region refuses a plate file with NaN/Inf samples; the block average's own rule is
-    # tested on the pixels it would be given: one block overflowed to +Inf (a half-float
-    # highlight), the rest 0.5.
+    # tested on the pixels it would be given: one block overflowed to +Inf, one NaN, the rest 0.5.
     from ocio_vp.plates import reader
 
     pixels = np.full((8, 8, 3), 0.5, dtype=np.float32)
     pixels[4:8, 0:4] = np.inf
+    pixels[0:4, 4:8] = np.nan
     monkeypatch.setattr(reader, "read_region", lambda info, box: pixels[box[1] : box[3]])
     info = reader.PlateInfo("p.exr", "openexr", 8, 8, 16, True, "linear")
-    wall = reader.block_means(info, 4, zero_non_finite=False)
-    chart = reader.block_means(info, 4)
-    assert np.isposinf(wall[1, 0]).all() and (wall[[0, 0, 1], [0, 1, 1]] == 0.5).all()
-    assert (chart[1, 0] == 0).all() and (chart[[0, 0, 1], [0, 1, 1]] == 0.5).all()
+    means = reader.block_means(info, 4)
+    assert (means[1, 0] == 0).all() and (means[0, 1] == 0).all()
+    assert (means[0, 0] == 0.5).all() and (means[1, 1] == 0.5).all()
+
+
+@pytest.mark.filterwarnings("ignore:invalid value encountered in power:RuntimeWarning")
+def test_the_wall_is_found_where_decoding_gives_nan(tmp_path):
+    # A float take with a stated pure-power encoding: the set's noise below black decodes to
+    # NaN (colour-science's Gamma 2.4 of a negative value), which must not hide the wall.
+    from exr_helpers import write_exr
+
+    from ocio_vp.plates.reader import open_plate
+    from ocio_vp.plates.wall_region import find_wall
+
+    rng = np.random.default_rng(1)
+    paths = []
+    for k in range(8):
+        frame = 0.01 * rng.standard_normal((48, 64, 3))
+        frame[10:40, 12:56] += 0.9 * (k % 2)
+        paths.append(tmp_path / f"f.{k:04d}.exr")
+        write_exr(paths[-1], frame)
+    info = open_plate(paths[0], encoding="Gamma 2.4")
+    x0, y0, x1, y1 = find_wall(paths, info)
+    assert 12 <= x0 < x1 <= 56 and 10 <= y0 < y1 <= 40 and (x1 - x0) * (y1 - y0) > 600

@@ -1,34 +1,21 @@
-"""Placing a camera take in the time of the pattern sequence it filmed.
+"""Placing a camera take in the time of the pattern sequence it filmed (docs/capture.md, *The take*).
 
-The camera and the player are not synchronised: the camera may run at another rate (25 fps
-against 24), start early or late, blend two patches in the frames that straddle a change, drop
-a frame, and flicker. Nothing about the wall's colours is known before the take is measured, so
-the take is placed by the sequence's **sync marks** alone (:mod:`ocio_vp.patterns.design`):
-white flashes, told apart by their number, found in any camera's RGB as frames far brighter
-than black in *every* channel. Then every patch change the take shows clearly refines it.
+Camera and player are not synchronised (another rate, a late start, blended, dropped or repeated
+frames, flicker) and the wall's colours are not known yet, so the take is placed by the
+sequence's **sync marks** (:mod:`ocio_vp.patterns.design`): white flashes, told apart by number.
 
-1. **Brightness**: per frame, ``min_c (x_c - lo_c) / (hi_c - lo_c)`` with ``lo``/``hi`` the
-   2nd/99.5th percentiles of each channel over the take: ~1 for the white flashes, ~0 for
-   black, low for a primary or a ramp (some camera channel sees little of it).
-2. **Runs** of bright frames, with hysteresis (bright above 0.6, dark below 0.4, so flicker
-   near one threshold cannot split a run); each edge timed where the brightness crosses 0.5,
-   interpolated between the two frames around it (blended frames make this sub-frame).
-3. **Marks**: chains of at least two runs of similar length separated by gaps of about the same
-   length; a chain of ``k`` flashes is mark ``k - 2``. Runs cut by the take's first or last
-   frame are left out.
-4. **Rate and offset**: ``t = offset + rate * T`` (camera frame against player frame) from
-   every edge of a consistent set of marks: each pair of marks proposes a line, the one most
-   marks agree with (every edge within 0.6 camera frame) wins, and is refitted on them all.
-5. **Anchors**: every mark's own offset, and every patch change whose two colours differ well
-   above the frames' scatter, timed where the frames' projection onto the colour difference
-   crosses half-way. The final map interpolates the anchors' offsets, so a dropped (or
-   repeated) frame between two anchors is a step in the map, found and reported.
-6. **Frames kept** per patch: those whose time lies inside the patch, :data:`GUARD` camera
-   frames away from both changes (the blended frames, the shutter and a rolling-shutter
-   readout).
-
-Everything is a pure function of the per-frame signal, so it is tested on the simulated
-signals of many takes (``tests/test_plates_alignment.py``).
+1. **Brightness** per frame: ``min_c (x_c - lo_c) / (hi_c - lo_c)``, ``lo``/``hi`` each channel's
+   2nd/99.5th percentiles over the take: ~1 for a flash, low for black, a primary or a ramp.
+2. **Runs** of bright frames by hysteresis, each edge timed where the brightness crosses
+   half-way, interpolated between two frames (blended frames make this sub-frame).
+3. **Marks**: chains of runs of similar length and gaps; ``k`` flashes are mark ``k - 2``. Runs
+   cut by the take's first or last frame are left out.
+4. **Rate and offset** of ``t = offset + rate * T`` (camera against player frames): of the lines
+   through pairs of marks, the one most marks agree with, refitted on them all.
+5. **Anchors**: every mark, and every patch change whose colours differ well above the frames'
+   scatter, timed where the frames cross half-way; the map interpolates the anchors' offsets,
+   so a dropped (or repeated) frame is a step in it, found and reported.
+6. **Frames kept** per patch: inside it, :data:`GUARD` camera frames from both changes.
 """
 
 from __future__ import annotations
@@ -170,15 +157,6 @@ def _mark_edges(patch: Patch) -> np.ndarray:
     return np.array([t for a, b in patch.flashes for t in (a, b + 1)], dtype=np.float64)
 
 
-def _camera_edges(chain: list[Run]) -> np.ndarray:
-    return np.array([t for r in chain for t in (r.rise, r.fall)], dtype=np.float64)
-
-
-def _fit(T: np.ndarray, t: np.ndarray) -> tuple[float, float]:
-    rate, offset = np.polyfit(T, t, 1)
-    return float(offset), float(rate)
-
-
 def _marks(runs: list[Run], sequence: PatternSequence) -> list[tuple[int, np.ndarray, np.ndarray]]:
     """(mark number, player edges, camera edges) of every chain whose count names a mark."""
     by_count = {len(p.flashes): (g, p) for g, p in enumerate(sequence.of_kind("sync"))}
@@ -186,7 +164,8 @@ def _marks(runs: list[Run], sequence: PatternSequence) -> list[tuple[int, np.nda
     for chain in _chains(runs):
         if len(chain) in by_count:
             g, patch = by_count[len(chain)]
-            out.append((g, _mark_edges(patch), _camera_edges(chain)))
+            edges = np.array([t for r in chain for t in (r.rise, r.fall)], dtype=np.float64)
+            out.append((g, _mark_edges(patch), edges))
     return out
 
 
@@ -202,12 +181,12 @@ def _mark_shift(mark: tuple, offset: float, rate: float) -> int | None:
     return whole if abs(whole) <= MAX_STEP else None
 
 
-def _level_fit(marks: list, level: list[int]) -> tuple[float, float, float]:
-    """(offset, rate, rms residual) of the line through the edges of marks ``level``."""
+def _level_fit(marks: list, level: list[int]) -> tuple[float, float]:
+    """(offset, rate) of the line through the edges of marks ``level``."""
     T = np.concatenate([marks[k][1] for k in level])
     t = np.concatenate([marks[k][2] for k in level])
-    offset, rate = _fit(T, t)
-    return offset, rate, float(np.sqrt(np.mean((t - offset - rate * T) ** 2)))
+    rate, offset = np.polyfit(T, t, 1)
+    return float(offset), float(rate)
 
 
 def _place(marks: list, source: object) -> tuple[float, float, list[int]]:
@@ -217,25 +196,17 @@ def _place(marks: list, source: object) -> tuple[float, float, list[int]]:
     for i, j in itertools.combinations(range(len(marks)), 2):
         if marks[i][0] == marks[j][0]:
             continue
-        offset, rate, _ = _level_fit(marks, [i, j])
+        offset, rate = _level_fit(marks, [i, j])
         if not 0.05 < rate < 20:
             continue
         level = [k for k, m in enumerate(marks) if _mark_shift(m, offset, rate) == 0]
         if len({marks[k][0] for k in level}) < 2:
             continue
-        offset, rate, _ = _level_fit(marks, level)
+        offset, rate = _level_fit(marks, level)
         shifts = {k: _mark_shift(m, offset, rate) for k, m in enumerate(marks)}
         agree = [k for k, v in shifts.items() if v is not None]
-        spread = float(
-            np.sqrt(
-                np.mean(
-                    np.concatenate(
-                        [marks[k][2] - offset - rate * marks[k][1] - shifts[k] for k in agree]
-                    )
-                    ** 2
-                )
-            )
-        )
+        residuals = [marks[k][2] - offset - rate * marks[k][1] - shifts[k] for k in agree]
+        spread = float(np.sqrt(np.mean(np.concatenate(residuals) ** 2)))
         key = (len({marks[k][0] for k in agree}), -spread, len(level))
         if best is None or key > best[0]:
             best = (key, offset, rate, agree)
@@ -337,8 +308,8 @@ def _step_gaps(r: np.ndarray) -> list[int]:
 
 
 def _smooth(T: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, tuple[tuple[float, int], ...]]:
-    """Offsets fitted by a line per segment between steps (the anchors' sub-frame timing
-    scatters by ~0.3 frame; the line averages it), and the steps as (player frame, frames)."""
+    """Offsets fitted by a line per segment between steps (averaging the anchors' sub-frame
+    timing scatter), and the steps as (player frame, frames)."""
     gaps = _step_gaps(r)
     bounds = [0, *(j + 1 for j in gaps), len(r)]
     smooth = np.empty_like(r)

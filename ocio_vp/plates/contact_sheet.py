@@ -1,10 +1,5 @@
-"""The take's contact sheet: which frames went to which patch, and the region measured.
-
-One SVG (``<measurements>.overlays/take.svg``, drawn with :mod:`ocio_vp.svg`): a frame of the
-take (the white patch, or the brightest one) with the wall's region outlined and the rows read
-marked; under it, the take's per-frame R, G, B (log scale) over time in a few strips, each
-measured patch's span shaded with its name, the frames averaged as dots, frames left out as
-unstable as red crosses, and the sync marks in yellow.
+"""The take's contact sheet (``<measurements>.overlays/take.svg``, drawn with :mod:`ocio_vp.svg`;
+docs/capture.md, *The take*, step 5): which frames went to which patch, and the region measured.
 """
 
 from __future__ import annotations

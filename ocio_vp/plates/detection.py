@@ -1,20 +1,16 @@
-"""Chart detection for a chart shot without ``corners``: numpy and scipy only (default install).
+"""Chart detection for a chart shot without ``corners``, on numpy and scipy (docs/capture.md,
+*Chart detection*). The plate is block-averaged to at most :data:`WORKING_WIDTH` pixels across,
+then:
 
-docs/capture.md (*Chart detection*) describes it for users. The plate is block-averaged to at
-most :data:`WORKING_WIDTH` pixels across (read in bands). Then:
-
-1. **Patches**: on the log of each channel (over a floor of 2 % of the bright level, lightly
-   smoothed), regions of small log-colour gradient that are compact, convex-like (0.8-1.05 of
-   the ellipse of their second moments) and not elongated.
+1. **Patches**: regions of small log-colour gradient that are compact, about as full as the
+   ellipse of their second moments, and not elongated.
 2. **Grid**: from a candidate and its neighbours a lattice is grown ring by ring, a homography
-   (normalised DLT, conditioning checked) refitted each time; of a few seeds the lattice
-   holding most candidates wins.
-3. **Which way up**: a ColorChecker 24 by its neutral row (six patches of proportional colours,
-   each darker than the last); other grids must be complete, patch 0 nearest the top-left.
+   refitted each time; of a few seeds the lattice holding most candidates wins.
+3. **Which way up**: a ColorChecker 24 by its neutral row; other grids must be complete, patch 0
+   nearest the top-left.
 
-The chart's four outer corners follow from the grid homography. When detection fails it says
-why (``too dark``, ``clipped``, ``too small``, ``not found``) and :func:`detection_overlay`
-shows what was searched.
+The chart's corners follow from the grid homography; a failure says why (:class:`Detection`)
+and :func:`detection_overlay` shows what was searched.
 """
 
 from __future__ import annotations
@@ -339,12 +335,8 @@ def _placements(ij: np.ndarray, rows: int, columns: int):
         lo, hi = corners.min(axis=0), corners.max(axis=0)
         for oi in range(-hi[0], -lo[0] + 1):
             for oj in range(-hi[1], -lo[1] + 1):
-                if (
-                    lo[0] + oi <= 0
-                    and lo[1] + oj <= 0
-                    and hi[0] + oi >= span[0]
-                    and (hi[1] + oj >= span[1])
-                ):
+                shift = np.array([oi, oj])
+                if np.all(lo + shift <= 0) and np.all(hi + shift >= span):
                     yield np.array([[R[0, 0], R[0, 1], oi], [R[1, 0], R[1, 1], oj], [0, 0, 1]])
 
 
@@ -416,15 +408,7 @@ def _jacobian(H: np.ndarray, point: np.ndarray) -> np.ndarray:
     u, v = float(point[0]), float(point[1])
     w = H[2, 0] * u + H[2, 1] * v + H[2, 2]
     x, y = apply_homography(H, np.array([[u, v]]))[0]
-    return (
-        np.array(
-            [
-                [H[0, 0] - x * H[2, 0], H[0, 1] - x * H[2, 1]],
-                [H[1, 0] - y * H[2, 0], H[1, 1] - y * H[2, 1]],
-            ]
-        )
-        / w
-    )
+    return (H[:2, :2] - np.outer([x, y], H[2, :2])) / w
 
 
 # -- the search --------------------------------------------------------------------------------

@@ -1,10 +1,6 @@
-"""Pixels of a box from one plate or several frames, and flat-field gains (vignetting).
-
-Frames of a sequence are averaged pixel by pixel (float64 over the box only). A flat field is a
-plate of a uniformly lit, diffuse white target shot with the same lens, stop and focus; its
-pixels divided by their mean over a small window at the frame's centre are the lens's relative
-gain (vignetting and colour shading), per pixel and channel, which the plate's pixels are
-divided by.
+"""Pixels of a box from one plate or several frames (averaged pixel by pixel, float64 over the
+box only), and flat-field gains: the lens's vignetting and colour shading (docs/capture.md,
+*Vignetting*), which the plate's pixels are divided by.
 """
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from ocio_vp.errors import InputError
+from ocio_vp.errors import InputError, format_key_path
 from ocio_vp.formats.jsontypes import JsonObject
 from ocio_vp.formats.measurements import (
     CHANNELS,
@@ -142,8 +142,6 @@ def _named(error: InputError, ref: PlateRef, key: str) -> InputError:
 def _sample_chart(
     capture: Capture, shot: ChartShot, detect: Callable[..., Detection] | None
 ) -> tuple[PlateSampling, np.ndarray | None]:
-    from ocio_vp.errors import format_key_path
-
     key = format_key_path(*shot.key)
     detection = None
     try:
@@ -191,8 +189,6 @@ def _sample_chart(
 
 def _sample_regions(capture: Capture, shots: Mapping[str, RegionShot]) -> list[PlateSampling]:
     """Sample regions, grouping those that share a plate into one :class:`PlateSampling`."""
-    from ocio_vp.errors import format_key_path
-
     groups: dict[PlateRef, list[tuple[str, RegionShot]]] = {}
     for label, shot in shots.items():
         groups.setdefault(shot.plate, []).append((label, shot))
@@ -297,8 +293,6 @@ def measure_capture(
 
     Parameters
     ----------
-    capture
-        A validated capture file.
     detect
         ``detect(plate_info, rows=, columns=) -> Detection`` for charts given without corners
         (default :func:`ocio_vp.plates.detection.detect_chart`); a chart not found raises
@@ -331,26 +325,26 @@ def measure_capture(
         step()
         return sampling.samples.means
 
-    def black_level(shot: RegionShot) -> list[float]:
-        black = _sample_regions(capture, {"black_level": shot})
-        plates.extend(black)
+    def regions(shots: Mapping[str, RegionShot]) -> dict[str, list[float]]:
+        sampled = _sample_regions(capture, shots)
+        plates.extend(sampled)
         step()
-        return black[0].samples.means[0].tolist()
+        return {
+            label: mean.tolist()
+            for s in sampled
+            for label, mean in zip(s.labels, s.samples.means, strict=True)
+        }
 
     if capture.panels:
         document["panels"] = [
-            {
-                "name": p.name,
-                **p.settings,
-                **_wall_values(capture, p.primaries, p.lit_chart, chart, plates, step),
-            }
+            {"name": p.name, **p.settings, **_wall_values(p.primaries, p.lit_chart, chart, regions)}
             for p in capture.panels
         ]
     else:
-        document |= _wall_values(capture, capture.primaries, capture.lit_chart, chart, plates, step)
+        document |= _wall_values(capture.primaries, capture.lit_chart, chart, regions)
     if capture.environments:
         document["environments"] = [
-            _environment(env, chart, black_level) for env in capture.environments
+            _environment(env, chart, regions) for env in capture.environments
         ]
     if "ramps" in document:  # the file's key order: ramps after environments
         document["ramps"] = document.pop("ramps")
@@ -381,14 +375,15 @@ def _plate_warnings(plates: list[PlateSampling]) -> list[str]:
     return warnings
 
 
-def _environment(env, chart, black_level) -> JsonObject:
+def _environment(env, chart, regions) -> JsonObject:
     """One environment's entry: its target chart, black level(s) and w_avg as given."""
     entry: dict[str, Any] = {"name": env.name, "target_chart": chart(env.target_chart).tolist()}
     if env.black_level is not None:
-        entry["black_level"] = black_level(env.black_level)
+        entry["black_level"] = regions({"black_level": env.black_level})["black_level"]
     if env.panel_black_level:
         entry["black_level"] = {
-            name: black_level(shot) for name, shot in env.panel_black_level.items()
+            name: regions({"black_level": shot})["black_level"]
+            for name, shot in env.panel_black_level.items()
         }
     if env.w_avg is not None:
         entry["w_avg"] = env.w_avg.tolist()
@@ -398,38 +393,20 @@ def _environment(env, chart, black_level) -> JsonObject:
 
 
 def _wall_values(
-    capture: Capture,
     primaries: Mapping[str, RegionShot],
     lit_chart: Mapping[str, ChartShot],
     chart: ChartSampler,
-    plates: list[PlateSampling],
-    step: Callable[[], None],
+    regions: Callable[[Mapping[str, RegionShot]], dict[str, list[float]]],
 ) -> JsonObject:
     """``primaries`` and ``lit_chart`` of the wall (or of one panel type), sampled, each where
     it is given (a wall file from a take has no lit chart; a charts file no primaries)."""
     out: JsonObject = {}
     if primaries:
-        out["primaries"] = _primaries(capture, primaries, plates, step)
+        means = regions(primaries)
+        out["primaries"] = {c: means[c] for c in CHANNELS}
     if lit_chart:
         out["lit_chart"] = {c: chart(lit_chart[c]).tolist() for c in CHANNELS}
     return out
-
-
-def _primaries(
-    capture: Capture,
-    primaries: Mapping[str, RegionShot],
-    plates: list[PlateSampling],
-    step: Callable[[], None],
-) -> dict[str, list[float]]:
-    """The mean camera RGB of each primary's region (the plates' samplings go to ``plates``)."""
-    sampled = _sample_regions(capture, primaries)
-    plates.extend(sampled)
-    step()
-    means = {}
-    for sampling in sampled:
-        for label, mean in zip(sampling.labels, sampling.samples.means, strict=True):
-            means[label] = mean
-    return {c: means[c].tolist() for c in CHANNELS}
 
 
 def _overlay(sampling: PlateSampling) -> np.ndarray:

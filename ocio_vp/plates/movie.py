@@ -1,12 +1,10 @@
-"""Reading a camera take recorded as a movie file (QuickTime, MP4, MXF) with PyAV.
+"""Reading a camera take recorded as a movie file (QuickTime, MP4, MXF) with PyAV;
+docs/capture.md (*A take as a movie*) gives the in/out points, timecode and refusals.
 
-A movie is decoded once, front to back (:func:`scan_movie`), giving the alignment's band and
-the measuring bands of every frame as :class:`~ocio_vp.plates.take_reader.FrameStats` (memory
-does not grow with the take's length). Y'CbCr is converted here, at the decoder's bit depth,
-with the matrix and range the stream declares or the capture file gives (``take.matrix``,
-``take.range``), subsampled chroma repeated onto its luma pixels; then the declared log
-encoding is decoded. Frame numbers count from 0 in the file; docs/capture.md (*A take as a
-movie*) gives the in/out points, timecode and refusals (variable frame rate among them).
+A movie is decoded once, front to back (:func:`scan_movie`), keeping per frame only
+:class:`~ocio_vp.plates.take_reader.FrameStats`. Y'CbCr is converted here, at the decoder's bit
+depth, with the matrix and range the stream declares or the capture file gives, subsampled
+chroma repeated onto its luma pixels; then the log encoding is decoded. Frames count from 0.
 """
 
 from __future__ import annotations
@@ -299,14 +297,11 @@ def ycbcr_to_rgb(
     """
     kr, kb = MATRICES[matrix]
     kg = 1.0 - kr - kb
-    scale = float(1 << (bits - 8))
+    yn = _levels(y, bits, range_)
     if range_ == "legal":
-        yn = (y.astype(np.float32) - 16.0 * scale) / np.float32(219.0 * scale)
-        c_off, c_div = 128.0 * scale, 224.0 * scale
+        c_off, c_div = 128.0 * (1 << (bits - 8)), 224.0 * (1 << (bits - 8))
     else:
-        full = float((1 << bits) - 1)
-        yn = y.astype(np.float32) / np.float32(full)
-        c_off, c_div = float(1 << (bits - 1)), full
+        c_off, c_div = float(1 << (bits - 1)), float((1 << bits) - 1)
     pb = (cb.astype(np.float32) - np.float32(c_off)) / np.float32(c_div)
     pr = (cr.astype(np.float32) - np.float32(c_off)) / np.float32(c_div)
     out = np.empty((*yn.shape, 3), dtype=np.float32)
@@ -337,25 +332,30 @@ def _chroma(plane: np.ndarray, box, sub: tuple[int, int]) -> np.ndarray:
     return part[y0 - y0 // sy * sy :][: y1 - y0, x0 - x0 // sx * sx :][:, : x1 - x0]
 
 
-def _gbr_to_rgb(g: np.ndarray, b: np.ndarray, r: np.ndarray, *, info: MovieInfo) -> np.ndarray:
-    """R'G'B' (..., 3) float32 from planar G, B, R code values at the stream's range."""
-    rgb = np.stack([r, g, b], axis=-1).astype(np.float32)
-    if info.range == "legal":
-        scale = float(1 << (info.bits - 8))
-        return (rgb - np.float32(16 * scale)) / np.float32(219 * scale)
-    return rgb / np.float32((1 << info.bits) - 1)
+def _levels(code: np.ndarray, bits: int, range_: str) -> np.ndarray:
+    """Y' (or R', G', B') code values as float32: 0 at black, 1 at white of ``range_``."""
+    code = code.astype(np.float32)
+    if range_ == "legal":
+        scale = float(1 << (bits - 8))
+        return (code - np.float32(16 * scale)) / np.float32(219 * scale)
+    return code / np.float32((1 << bits) - 1)
+
+
+def _planes_rgb(planes: list[np.ndarray], info: MovieInfo) -> np.ndarray:
+    """R'G'B' (..., 3) float32 from a frame's three planes (planar G, B, R or Y', Cb, Cr)."""
+    if not info.rgb:
+        return ycbcr_to_rgb(*planes, bits=info.bits, matrix=info.matrix, range_=info.range)
+    g, b, r = planes
+    return _levels(np.stack([r, g, b], axis=-1), info.bits, info.range)
 
 
 def frame_rgb(frame, info: MovieInfo, box: tuple[int, int, int, int]) -> np.ndarray:
-    """R'G'B' float32 (rows, columns, 3) of ``box`` (x0, y0, x1, y1) of a decoded frame."""
+    """R'G'B' float32 (rows, columns, 3) of ``box`` (x0, y0, x1, y1) of a decoded frame
+    (an RGB stream's subsampling is (1, 1))."""
     x0, y0, x1, y1 = box
     planes = [_plane(frame, k, info.bits) for k in range(3)]
-    if info.rgb:
-        return _gbr_to_rgb(*(p[y0:y1, x0:x1] for p in planes), info=info)
-    luma = planes[0][y0:y1, x0:x1]
-    cb = _chroma(planes[1], box, info.subsampling)
-    cr = _chroma(planes[2], box, info.subsampling)
-    return ycbcr_to_rgb(luma, cb, cr, bits=info.bits, matrix=info.matrix, range_=info.range)
+    chroma = [_chroma(p, box, info.subsampling) for p in planes[1:]]
+    return _planes_rgb([planes[0][y0:y1, x0:x1], *chroma], info)
 
 
 #: The decoding table's domain and size (:func:`decode_log`).
@@ -371,11 +371,10 @@ def _table(encoding: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def decode_log(values: np.ndarray, encoding: str) -> np.ndarray:
-    """Linear values of encoded R'G'B' (float64): colour-science's decoding sampled at 65,537
-    evenly spaced points over [-0.25, 1.5] and interpolated linearly (within 2e-5 of it,
-    relative, above 1e-4 linear: tests/test_plates_movie.py); values outside the table are
-    decoded directly, as are those next to a value the curve does not
-    define (a pure power's negative side). ``linear`` returns the values as float64."""
+    """Linear values of encoded R'G'B' (float64): colour-science's decoding sampled evenly over
+    :data:`_TABLE` and interpolated linearly; values outside the table, or next to a value the
+    curve does not define (a pure power's negative side), are decoded directly. ``linear``
+    returns the values as float64."""
     values = np.asarray(values)
     if encoding == "linear":
         return values.astype(np.float64)
@@ -547,15 +546,11 @@ def reduced_frame(info: MovieInfo, index: int, factor: int) -> np.ndarray:
     offsets = (np.arange(n) * factor) // n + (factor // n) // 2
     ys = (np.arange(cells_y)[:, None] * factor + offsets[None, :]).ravel()
     xs = (np.arange(cells_x)[:, None] * factor + offsets[None, :]).ravel()
-    sx, sy = (1, 1) if info.rgb else info.subsampling
+    sx, sy = info.subsampling  # (1, 1) for an RGB stream
     planes = []
     for k in range(3):
         plane = _plane(frame, k, info.bits)
-        rows, cols = (ys, xs) if k == 0 or info.rgb else (ys // sy, xs // sx)
+        rows, cols = (ys, xs) if k == 0 else (ys // sy, xs // sx)
         values = plane[np.ix_(rows, cols)].astype(np.float32)
         planes.append(values.reshape(cells_y, n, cells_x, n).mean(axis=(1, 3)))
-    if info.rgb:
-        rgb = _gbr_to_rgb(*planes, info=info)
-    else:
-        rgb = ycbcr_to_rgb(*planes, bits=info.bits, matrix=info.matrix, range_=info.range)
-    return decode_log(rgb, info.encoding)
+    return decode_log(_planes_rgb(planes, info), info.encoding)

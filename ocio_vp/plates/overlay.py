@@ -1,10 +1,6 @@
-"""Overlay PNGs: show exactly which pixels were sampled, so a human can check a plate at a glance.
-
-The overlay covers the sampled part of the plate (plus a margin) at full resolution. Sampled
-pixels keep their tone-mapped colour, every other pixel is dimmed, and each patch or region is
-outlined: green when fine, red when flagged for high spread, yellow when clipped pixels were
-found. The label map drawn is the one the sampling used
-(:func:`ocio_vp.plates.sampling.patch_labels`), not a re-drawing of it.
+"""Overlay PNGs: the sampled part of a plate (plus a margin) at full resolution, other pixels
+dimmed, each patch or region outlined by its state (:data:`OUTLINE_COLOURS`). The label map drawn
+is the one the sampling used (:func:`ocio_vp.plates.sampling.patch_labels`).
 """
 
 from __future__ import annotations

@@ -1,11 +1,7 @@
-"""Camera raw plates (DNG, CR2/CR3, NEF, ARW, RAF, ...) as camera-native linear RGB, with LibRaw.
-
-Nothing a raw developer applies (white balance, colour matrix, gamma, brightening): each sample
-becomes ``(value - black) / (white - black)`` with the file's levels, so 1.0 is the sensor's
-clip. Demosaicing is ``superpixel`` by default (no interpolation: each 2x2 Bayer block's R, mean
-G and B on its four pixels) or one of LibRaw's (:data:`DEMOSAIC_METHODS`); docs/capture.md
-(*Camera raw plates*) says when each is needed. Opening a plate reads its header only; the
-decoded mosaic of the last two files is kept (a plate is read for its samples and its overlay).
+"""Camera raw plates (DNG, CR2/CR3, NEF, ARW, RAF, ...) as camera-native linear RGB, with LibRaw:
+``(value - black) / (white - black)`` with the file's levels, nothing a raw developer applies.
+Demosaicing is ``superpixel`` by default or one of LibRaw's (:data:`DEMOSAIC_METHODS`);
+docs/capture.md (*Camera raw plates*) says when each is needed.
 """
 
 from __future__ import annotations
@@ -152,6 +148,7 @@ def raw_mosaic(path: str | os.PathLike[str]) -> RawMosaic:
 
 
 def _superpixel(raw: RawMosaic, box: tuple[int, int, int, int]) -> np.ndarray:
+    """No interpolation: each 2x2 Bayer block's R, mean G and B on its four pixels."""
     x0, y0, x1, y1 = box
     bx0, by0 = x0 // 2 * 2, y0 // 2 * 2
     bx1, by1 = min(-(-x1 // 2) * 2, raw.mosaic.shape[1]), min(-(-y1 // 2) * 2, raw.mosaic.shape[0])
@@ -175,15 +172,7 @@ def _developed(path: str, stamp: tuple[int, int], method: str) -> np.ndarray:
     """The whole picture demosaiced by LibRaw with no processing, float32 normalised."""
     import rawpy
 
-    algorithm = {
-        "linear": rawpy.DemosaicAlgorithm.LINEAR,
-        "vng": rawpy.DemosaicAlgorithm.VNG,
-        "ppg": rawpy.DemosaicAlgorithm.PPG,
-        "ahd": rawpy.DemosaicAlgorithm.AHD,
-        "dcb": rawpy.DemosaicAlgorithm.DCB,
-        "dht": rawpy.DemosaicAlgorithm.DHT,
-        "aahd": rawpy.DemosaicAlgorithm.AAHD,
-    }[method]
+    algorithm = rawpy.DemosaicAlgorithm[method.upper()]  # DEMOSAIC_METHODS[1:] are its names
     with _open(path) as raw:
         _check_cfa(raw, path)
         image = raw.postprocess(

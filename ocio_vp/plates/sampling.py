@@ -1,15 +1,9 @@
 """Sample a colour chart (and plain regions) from a plate: perspective-correct patch grid, robust
-statistics, flags.
+statistics (:mod:`ocio_vp.plates.statistics`), flags; docs/capture.md, *Coordinates*.
 
-The chart is given by the four outer corners of its patch grid (TL, TR, BR, BL of the chart;
-docs/capture.md, *Coordinates*). A homography maps grid coordinates ``(u, v)`` in ``[0, columns]
-x [0, rows]`` to the image; a pixel belongs to patch ``(r, c)`` when its centre's grid
-coordinates fall in ``[c + inset, c + 1 - inset] x [r + inset, r + 1 - inset]``.
-
-Each patch's value is a robust mean of its pixels (:data:`ROBUST_MEAN_METHODS`) after rejecting
-outliers (farther than 6 robust sigmas, 1.4826 MAD, from the patch median: a glint, dust, hot
-pixels), so the trim stays symmetric about the noise. Patches are flagged when pixels are
-clipped or too many are outliers. A ``flat_field`` plate divides out the lens's vignetting.
+A homography maps grid coordinates ``(u, v)`` in ``[0, columns] x [0, rows]`` onto the corners;
+a pixel belongs to patch ``(r, c)`` when its centre's grid coordinates fall in
+``[c + inset, c + 1 - inset] x [r + inset, r + 1 - inset]``.
 """
 
 from __future__ import annotations
@@ -98,10 +92,8 @@ def _check_corners(corners: object, source: object) -> np.ndarray:
         )
     # Cross products of consecutive edges: all the same sign for a convex quadrilateral.
     edges = np.roll(c, -1, axis=0) - c
-    cross = (
-        edges[:, 0] * np.roll(edges, -1, axis=0)[:, 1]
-        - edges[:, 1] * np.roll(edges, -1, axis=0)[:, 0]
-    )
+    following = np.roll(edges, -1, axis=0)
+    cross = edges[:, 0] * following[:, 1] - edges[:, 1] * following[:, 0]
     if not (np.all(cross > 0) or np.all(cross < 0)):
         raise InputError(
             "corners do not form a convex quadrilateral in the order TL, TR, BR, BL",
@@ -196,7 +188,7 @@ def sample_chart(
     """Sample every patch of a chart photographed in perspective, in reading order.
 
     The camera RGB the paper samples from its calibration photographs (the lit-chart columns of
-    [SRL]_j, eq. 3; the target chart p_j, eq. 5). The module docstring explains the statistics.
+    [SRL]_j, eq. 3; the target chart p_j, eq. 5), with :mod:`ocio_vp.plates.statistics`.
 
     Parameters
     ----------
@@ -344,12 +336,10 @@ def sample_region(
     pixels, is_float, n_frames = frames_pixels(
         frames, b, encoding=encoding, source=where, what="region"
     )
-    raw = pixels.reshape(-1, 3)
-    corrected = raw
-    if flat_field is not None:
-        corrected = (pixels / _gain(flat_field, b, encoding, frames[0], where)).reshape(-1, 3)
+    gain = None if flat_field is None else _gain(flat_field, b, encoding, frames[0], where)
+    raw, corrected = _patch_pixels(pixels, np.zeros(pixels.shape[:2], np.int32), 1, gain)
     stats = patch_statistics(
-        [corrected],
+        corrected,
         method=method,
         trim=trim,
         clip_level=clip_level,
@@ -357,6 +347,6 @@ def sample_region(
         outlier_sigma=outlier_sigma,
         max_outlier_fraction=max_outlier_fraction,
         max_spread=np.inf,  # a region has no brightest patch to compare with
-        raw_groups=[raw],
+        raw_groups=raw,
     )
     return ChartSamples(box=b, method=method, frames=n_frames, **stats)  # type: ignore[arg-type]

@@ -1,8 +1,5 @@
-"""Per-patch statistics: robust means, spreads, clip levels and flags.
-
-Used by :mod:`ocio_vp.plates.sampling` for chart patches and plain regions. A patch's outliers
-(farther than ``outlier_sigma`` robust sigmas, 1.4826 MAD, from its median) are rejected first,
-then the robust mean of :data:`ROBUST_MEAN_METHODS` is taken, so a small glint does not bias it.
+"""Per-patch statistics: robust means (:data:`ROBUST_MEAN_METHODS`, after rejecting outliers),
+spreads, clip levels and flags, for :mod:`ocio_vp.plates.sampling`.
 """
 
 from __future__ import annotations

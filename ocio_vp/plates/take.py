@@ -1,16 +1,10 @@
-"""Measuring one continuous camera take of a pattern sequence (``take`` in a capture file).
+"""Measuring one continuous camera take of a pattern sequence (``take`` in a capture file;
+docs/capture.md, *The take*, gives the steps and the refusals).
 
-The frames are listed; the wall's region is given or found (:mod:`ocio_vp.plates.wall_region`);
-one band of rows at the region's middle in every frame aligns the take with the sequence
-(:mod:`ocio_vp.plates.alignment`); each patch's stable frames (away from its changes, none
-straying from the patch's median by more than flicker and noise explain) are averaged over a
-few bands of rows (:mod:`ocio_vp.plates.take_reader`). docs/capture.md describes the steps and
-the one-line refusals (truncated take, no stable frame, clipped or under-exposed white, a take
-that does not look like the sequence).
-
-The result, :class:`TakeReading`, holds each patch's mean camera RGB (black not subtracted);
-:mod:`ocio_vp.plates.measure` turns it into ``primaries`` and ``ramps``, ``ocio-vp validate``
-into the displayed chart.
+The wall's region is given or found (:mod:`ocio_vp.plates.wall_region`); a band of rows at its
+middle aligns the take with the sequence (:mod:`ocio_vp.plates.alignment`); each patch's stable
+frames are averaged over a few bands of rows (:mod:`ocio_vp.plates.take_reader`) into a
+:class:`TakeReading`: each patch's mean camera RGB, black not subtracted.
 """
 
 from __future__ import annotations
@@ -203,13 +197,6 @@ def _check_length(count: int, take: TakeRef, source) -> None:
         raise InputError(message, source=source, key=take.key)
 
 
-def _take_frames(take: TakeRef, source) -> tuple[np.ndarray, list[Path]]:
-    """The take's frame numbers (the time coordinate) and files; too few is a refusal."""
-    listed = list_take_frames(take.frames)
-    _check_length(len(listed), take, source)
-    return np.array([n for n, _ in listed], dtype=np.float64), [p for _, p in listed]
-
-
 def _patch_frames(measured, alignment: Alignment, numbers: np.ndarray, source, key: str):
     """Per measured patch, its window in camera frames and the frames kept (refusing a
     truncated take and a patch too short for the camera)."""
@@ -259,7 +246,10 @@ def _open_frames(
 ) -> tuple[np.ndarray, list[Path], PlateInfo, MovieInfo | None]:
     """The take's frame numbers, files, header and (for a movie) the movie's header."""
     if not is_movie(take.frames):
-        numbers, paths = _take_frames(take, source)
+        listed = list_take_frames(take.frames)
+        _check_length(len(listed), take, source)
+        numbers = np.array([n for n, _ in listed], dtype=np.float64)  # the time coordinate
+        paths = [p for _, p in listed]
         return numbers, paths, open_plate(paths[0], encoding=take.encoding, layer=take.layer), None
     movie = open_movie(
         take.frames,

@@ -1,10 +1,8 @@
 """Reading a camera take: its numbered frames, and statistics of bands of rows of each.
 
-A take is thousands of large frames; measuring it must not decode them all. Each frame is
-opened for its header and only **bands** of rows inside the wall's region are decoded, whole
-chunks of the file's scanlines (OpenEXR stores 16 rows for ZIP, 32 for PIZ or DWAA ...). Per
-frame only :class:`FrameStats` is kept, so memory does not grow with the take's length; frames
-are read on a few threads (OpenImageIO decodes without holding Python's lock).
+Only bands of rows inside the wall's region are decoded, whole chunks of the file's scanlines,
+and per frame only :class:`FrameStats` is kept, so memory does not grow with the take's length;
+frames are read on a few threads (OpenImageIO decodes without holding Python's lock).
 """
 
 from __future__ import annotations
@@ -151,8 +149,7 @@ def band_rows(
 
 def frame_stats(pixels: np.ndarray, clip: float | None) -> FrameStats:
     """:class:`FrameStats` of linear RGB ``pixels`` (..., 3); ``clip`` the clip level if known.
-    The channels are laid out one after the other first: reductions over a contiguous axis are
-    faster than over a strided one (it matters at a movie's frame rate)."""
+    The channels are laid out one after the other first (contiguous reductions are faster)."""
     channels = np.ascontiguousarray(np.asarray(pixels, dtype=np.float64).reshape(-1, 3).T)
     peak = channels.max(axis=1)
     return FrameStats(

@@ -1,15 +1,9 @@
 """Finding the wall in a take: the largest rectangle of pixels that change with the patterns.
 
-The patterns switch the wall between black and full white many times, while the set around it
-stays (nearly) the same, so the wall is where the picture changes most over the take:
-
-1. :data:`SAMPLES` frames spread over the take are read whole (in bands) and block-averaged to
-   at most :data:`GRID` pixels wide;
-2. per pixel, the range (brightest minus darkest) of R + G + B over those frames;
-3. the pixels whose range exceeds half the 99th percentile, their largest connected part;
-4. the largest axis-aligned rectangle inside it (the histogram method, row by row), shrunk by
-   :data:`INSET` of its size on each side and one grid cell, so it holds no wall edge, bezel,
-   or blur of the edge, and mapped back to whole pixels inside the block-averaged cells.
+The patterns switch the wall between black and white while the set stays, so: :data:`SAMPLES`
+frames block-averaged to at most :data:`GRID` cells wide; per cell the range of R + G + B over
+them; the largest connected part above half its 99th percentile; its largest axis-aligned
+rectangle, shrunk by :data:`INSET` and one cell on each side (no edge, bezel or blur of it).
 """
 
 from __future__ import annotations
@@ -107,7 +101,7 @@ def find_wall(
             reduced.append(np.asarray(frames[1](int(k), factor), dtype=np.float64))
             continue
         frame_info = info if k == 0 else dataclasses.replace(info, path=str(paths[k]))
-        reduced.append(block_means(frame_info, factor, zero_non_finite=False))
+        reduced.append(block_means(frame_info, factor))
     mask = wall_mask(np.stack(reduced))
     rect = largest_rectangle(mask)
     hint = "give the take's region: [x0, y0, x1, y1] in the capture file"
