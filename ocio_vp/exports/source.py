@@ -1,9 +1,9 @@
 """What every export starts from: a solved environment folder, re-validated.
 
-``ocio-vp solve`` writes ``OUT/<environment>/solution.json`` and ``config.ocio`` (plus, with the
-panel-linearity work, a ``luts/`` sidecar folder named in the config's search path). A
-``solution.json`` can be edited by hand, so names are validated again here and the config is
-loaded and checked before anything is exported.
+``ocio-vp solve`` writes ``OUT/<environment>/solution.json``, ``config.ocio`` and, where the
+config names one in its search path, a ``luts/`` sidecar folder. A ``solution.json`` can be
+edited by hand, so names are validated again here and the config is loaded and checked before
+anything is exported.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 import shutil
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -100,7 +100,9 @@ class ExportSource:
 
 
 def _checked_names(config: OCIO.Config, names: OcioNames, source: str) -> ConfigNames:
-    def found(name: str | None, role: str) -> str:
+    found: dict[str, str] = {}
+    for role in (f.name for f in fields(ConfigNames)):
+        name = getattr(names, role)
         transform = role == "post_correction"
         lookup = config.getNamedTransform if transform else config.getColorSpace
         if name is None or lookup(name) is None:
@@ -108,17 +110,8 @@ def _checked_names(config: OCIO.Config, names: OcioNames, source: str) -> Config
             raise InputError(
                 f"{kind} {name!r} is not in the config", source=source, key=f"ocio.{role}"
             )
-        return name
-
-    return ConfigNames(
-        reference=found(names.reference, "reference"),
-        out_of_frustum=found(names.out_of_frustum, "out_of_frustum"),
-        in_frustum=found(names.in_frustum, "in_frustum"),
-        post_correction_colorspace=found(
-            names.post_correction_colorspace, "post_correction_colorspace"
-        ),
-        post_correction=found(names.post_correction, "post_correction"),
-    )
+        found[role] = name
+    return ConfigNames(**found)
 
 
 def load_export_source(directory: str | Path) -> ExportSource:
