@@ -106,12 +106,6 @@ OPTIMIZATIONS = ("lossless", "default", "good", "draft")
 DEFAULT_VALIDATION_THRESHOLD = 3.0
 
 
-def _encodings() -> tuple[str, ...]:
-    import colour
-
-    return ("linear", *sorted(colour.CCTF_DECODINGS.keys()))
-
-
 #: Encodings a plate may declare: ``linear`` or any decoding in colour-science's
 #: ``colour.CCTF_DECODINGS`` (``sRGB``, ``Gamma 2.4``, ``ARRI LogC4``, ``S-Log3``, ``Cineon`` ...).
 ENCODINGS = "linear or a name in colour.CCTF_DECODINGS"
@@ -127,7 +121,9 @@ def canonical_encoding(name: object, *, source: object = None, key: str | None =
     if isinstance(name, str) and name.lower() == "linear":
         return "linear"  # the default: no need to import colour-science to know it
 
-    names = _encodings()
+    import colour
+
+    names = ("linear", *sorted(colour.CCTF_DECODINGS.keys()))
     by_lower = {n.lower(): n for n in names}
     if isinstance(name, str) and name.lower() in by_lower:
         return by_lower[name.lower()]
