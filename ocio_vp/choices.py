@@ -15,6 +15,8 @@ __all__ = [
     "CONTEXT_VARIABLE",
     "DEFAULT_BASE_CONFIG",
     "DEFAULT_BLACK_LEVEL",
+    "DEFAULT_CUBE_RANGE",
+    "DEFAULT_CUBE_SIZE",
     "DEFAULT_FOOTAGE_ENCODING",
     "DEFAULT_METHOD",
     "DEFAULT_PEAK_NITS",
@@ -88,6 +90,9 @@ SHOW_TARGETS = ("show",)
 #: ``ocio-vp export --target`` values: per environment, then ``all`` of those, then ``show`` (one
 #: config for every given environment, on a base config).
 EXPORT_TARGETS = (*ENVIRONMENT_TARGETS, "all", *SHOW_TARGETS)
+#: Cube lattice size and input range (camera RGB) of every exported .cube.
+DEFAULT_CUBE_SIZE = 33
+DEFAULT_CUBE_RANGE = (-0.25, 16.0)
 #: The OCIO context variable that picks the environment in the show config, Nuke's OCIO nodes
 #: and Unreal's OCIO assets.
 CONTEXT_VARIABLE = "VP_ENVIRONMENT"

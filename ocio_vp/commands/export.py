@@ -10,6 +10,8 @@ from typing import TYPE_CHECKING
 from ocio_vp.choices import (
     CONTEXT_VARIABLE,
     DEFAULT_BASE_CONFIG,
+    DEFAULT_CUBE_RANGE,
+    DEFAULT_CUBE_SIZE,
     ENVIRONMENT_TARGETS,
     EXPORT_TARGETS,
 )
@@ -54,15 +56,18 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "--out", default=None, help="output folder (default: exports/ inside each environment)"
     )
     parser.add_argument(
-        "--cube-size", type=int, default=33, help="3D LUT size of the baked .cube (default 33)"
+        "--cube-size",
+        type=int,
+        default=DEFAULT_CUBE_SIZE,
+        help=f"3D LUT size of the baked .cube (default {DEFAULT_CUBE_SIZE})",
     )
     parser.add_argument(
         "--cube-range",
         type=float,
         nargs=2,
         metavar=("LO", "HI"),
-        default=(-0.25, 16.0),
-        help="linear input range the .cube covers (default -0.25 16)",
+        default=DEFAULT_CUBE_RANGE,
+        help="linear input range the .cube covers (default {:g} {:g})".format(*DEFAULT_CUBE_RANGE),
     )
     parser.set_defaults(func=run)
 

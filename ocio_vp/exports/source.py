@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 import PyOpenColorIO as OCIO
 
+from ocio_vp.choices import DEFAULT_CUBE_RANGE, DEFAULT_CUBE_SIZE
 from ocio_vp.errors import InputError
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.solution import OcioNames, Solution, load_solution
@@ -24,10 +25,6 @@ from ocio_vp.model.footage_range import AGREEMENT_P99, AGREEMENT_WORST, Agreemen
 
 if TYPE_CHECKING:  # the cube baker (numpy, OCIO's processors) is loaded by the targets baking one
     from ocio_vp.exports.cube import CubeAccuracy
-
-#: Cube lattice size and input range (camera RGB) of every exported .cube.
-DEFAULT_CUBE_SIZE = 33
-DEFAULT_CUBE_RANGE = (-0.25, 16.0)
 
 
 @dataclass(frozen=True)
