@@ -1,10 +1,6 @@
 """Writers for the tools studios already run: Unreal nDisplay, Nuke, DaVinci Resolve, and the
-fixture drives for the lighting desk (``lights``, only for solutions with fixtures).
-
-:func:`export_solutions` reads solved environment folders (``OUT/<environment>/`` from
-``ocio-vp solve``), re-validates them and writes each target into a staging folder; an
-environment's folders are renamed into place only when all its targets succeeded. One
-environment that cannot be exported is reported and never stops the others.
+fixture drives for the lighting desk (``lights``, only for solutions with fixtures), run by
+:func:`export_solutions` on solved environment folders, each environment all or nothing.
 """
 
 from __future__ import annotations
