@@ -15,6 +15,8 @@ __all__ = [
     "CONTEXT_VARIABLE",
     "DEFAULT_BASE_CONFIG",
     "DEFAULT_BLACK_LEVEL",
+    "DEFAULT_CUBE_RANGE",
+    "DEFAULT_CUBE_SIZE",
     "DEFAULT_FOOTAGE_ENCODING",
     "DEFAULT_METHOD",
     "DEFAULT_PEAK_NITS",
@@ -88,6 +90,9 @@ SHOW_TARGETS = ("show",)
 #: ``ocio-vp export --target`` values: per environment, then ``all`` of those, then ``show`` (one
 #: config for every given environment, on a base config).
 EXPORT_TARGETS = (*ENVIRONMENT_TARGETS, "all", *SHOW_TARGETS)
+#: Cube lattice size and input range (camera RGB) of every exported .cube.
+DEFAULT_CUBE_SIZE = 33
+DEFAULT_CUBE_RANGE = (-0.25, 16.0)
 #: The OCIO context variable that picks the environment in the show config, Nuke's OCIO nodes
 #: and Unreal's OCIO assets.
 CONTEXT_VARIABLE = "VP_ENVIRONMENT"
@@ -106,12 +111,6 @@ OPTIMIZATIONS = ("lossless", "default", "good", "draft")
 DEFAULT_VALIDATION_THRESHOLD = 3.0
 
 
-def _encodings() -> tuple[str, ...]:
-    import colour
-
-    return ("linear", *sorted(colour.CCTF_DECODINGS.keys()))
-
-
 #: Encodings a plate may declare: ``linear`` or any decoding in colour-science's
 #: ``colour.CCTF_DECODINGS`` (``sRGB``, ``Gamma 2.4``, ``ARRI LogC4``, ``S-Log3``, ``Cineon`` ...).
 ENCODINGS = "linear or a name in colour.CCTF_DECODINGS"
@@ -127,7 +126,9 @@ def canonical_encoding(name: object, *, source: object = None, key: str | None =
     if isinstance(name, str) and name.lower() == "linear":
         return "linear"  # the default: no need to import colour-science to know it
 
-    names = _encodings()
+    import colour
+
+    names = ("linear", *sorted(colour.CCTF_DECODINGS.keys()))
     by_lower = {n.lower(): n for n in names}
     if isinstance(name, str) and name.lower() in by_lower:
         return by_lower[name.lower()]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -11,6 +12,7 @@ from typing import TYPE_CHECKING
 from ocio_vp.choices import DEFAULT_FOOTAGE_ENCODING, canonical_encoding
 from ocio_vp.commands.common import warn
 from ocio_vp.commands.report import SOLUTIONS_HELP
+from ocio_vp.errors import InputError
 
 if TYPE_CHECKING:  # footage imports OCIO: not at start-up
     from ocio_vp.footage.apply import FrameResult
@@ -135,7 +137,6 @@ def post_correction_caveats(solution) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ocio_vp.errors import InputError
     from ocio_vp.footage.apply import FrameTask, load_post_correction
     from ocio_vp.footage.distributed import default_workers
     from ocio_vp.footage.sequences import expand_frames, output_paths, parse_frame_range
@@ -174,9 +175,6 @@ def run(args: argparse.Namespace) -> int:
 def _refuse_other_solutions(tasks: list) -> None:
     """Before any work: frames in --out made with another post-correction are never kept as
     done; without --overwrite the run stops on one line naming the first and how many."""
-    import os
-
-    from ocio_vp.errors import InputError
     from ocio_vp.footage.apply import other_solution_reason
     from ocio_vp.footage.sequences import output_solution
 
@@ -196,7 +194,6 @@ def _refuse_other_solutions(tasks: list) -> None:
 def _refuse_foreign(outputs: list[Path]) -> None:
     """Before any work: an output name taken by a file ocio-vp did not write is an error (each
     frame checks again when it runs)."""
-    from ocio_vp.errors import InputError
     from ocio_vp.footage.sequences import foreign_output_reason, foreign_outputs
 
     foreign = foreign_outputs(outputs)
@@ -255,9 +252,6 @@ def write_failure_error(tasks: list, finished: set[int], failure) -> Exception:
     """The one-line error that ends a run whose output could not be written (``failure``, a
     ``write-error`` FrameResult): the first frame not written and how many are done (frames
     still being written count where their output is there now, with this post-correction)."""
-    import os
-
-    from ocio_vp.errors import InputError
     from ocio_vp.footage.sequences import output_solution
 
     done = set(finished)
@@ -279,10 +273,7 @@ def check_free_space(tasks: list, *, margin: float = FREE_SPACE_MARGIN) -> None:
     """Refuse, before any frame is written, a run the output disk clearly cannot hold: free
     space below ``margin`` times the outputs' size, estimated at their inputs' (less what
     replaced outputs give back; skipped ones need nothing)."""
-    import os
     import shutil
-
-    from ocio_vp.errors import InputError
 
     need: dict[int, tuple[int, str]] = {}  # device -> (bytes, a folder on it)
     for task in tasks:

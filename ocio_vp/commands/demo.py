@@ -9,10 +9,12 @@ measurements), and prints how well each environment is reproduced, judged on the
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from ocio_vp.commands.common import add_method_argument, progress
 from ocio_vp.commands.solve import print_content_scale
 from ocio_vp.commands.summary import print_summary
+from ocio_vp.errors import InputError
 
 __all__ = ["add_parser", "run"]
 
@@ -34,9 +36,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     import math
     import time
-    from pathlib import Path
 
-    from ocio_vp.errors import InputError
     from ocio_vp.ocio.writer import writer_pool
     from ocio_vp.simulator.data import PAPER_ENVIRONMENTS
     from ocio_vp.simulator.samples import SAMPLE_NAME
@@ -86,9 +86,7 @@ def run(args: argparse.Namespace) -> int:
 def _simulate_and_write(out, method: str, pool) -> tuple:
     """The paper-like stage, its seven environments solved and written to ``out``."""
     import tempfile
-    from pathlib import Path
 
-    from ocio_vp.errors import InputError
     from ocio_vp.ocio.writer import write_solutions
     from ocio_vp.simulator.samples import SAMPLE_NAME, simulate_and_solve
     from ocio_vp.simulator.stage import paper_stage

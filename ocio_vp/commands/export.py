@@ -7,16 +7,21 @@ import argparse
 import sys
 from typing import TYPE_CHECKING
 
-from ocio_vp.choices import CONTEXT_VARIABLE, DEFAULT_BASE_CONFIG, EXPORT_TARGETS
+from ocio_vp.choices import (
+    CONTEXT_VARIABLE,
+    DEFAULT_BASE_CONFIG,
+    DEFAULT_CUBE_RANGE,
+    DEFAULT_CUBE_SIZE,
+    ENVIRONMENT_TARGETS,
+    EXPORT_TARGETS,
+)
 from ocio_vp.commands.report import SOLUTIONS_HELP
+from ocio_vp.errors import InputError
 
 if TYPE_CHECKING:  # the exports import OCIO: not at start-up
     from ocio_vp.exports import ExportResult
 
 __all__ = ["add_parser", "export_line", "run"]
-
-#: The per-environment targets ``all`` stands for.
-TARGETS = EXPORT_TARGETS[: EXPORT_TARGETS.index("all")]
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -51,15 +56,18 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "--out", default=None, help="output folder (default: exports/ inside each environment)"
     )
     parser.add_argument(
-        "--cube-size", type=int, default=33, help="3D LUT size of the baked .cube (default 33)"
+        "--cube-size",
+        type=int,
+        default=DEFAULT_CUBE_SIZE,
+        help=f"3D LUT size of the baked .cube (default {DEFAULT_CUBE_SIZE})",
     )
     parser.add_argument(
         "--cube-range",
         type=float,
         nargs=2,
         metavar=("LO", "HI"),
-        default=(-0.25, 16.0),
-        help="linear input range the .cube covers (default -0.25 16)",
+        default=DEFAULT_CUBE_RANGE,
+        help="linear input range the .cube covers (default {:g} {:g})".format(*DEFAULT_CUBE_RANGE),
     )
     parser.set_defaults(func=run)
 
@@ -69,10 +77,8 @@ def run(args: argparse.Namespace) -> int:
     from ocio_vp.formats.solution_inputs import solution_folders
 
     if args.base_config is not None and args.target != "show":
-        from ocio_vp.errors import InputError
-
         raise InputError("applies only to --target show", key="--base-config")
-    targets = TARGETS if args.target == "all" else (args.target,)
+    targets = ENVIRONMENT_TARGETS if args.target == "all" else (args.target,)
     chosen = solution_folders(args.solution_dirs)
     for note in chosen.notes():
         print(note)

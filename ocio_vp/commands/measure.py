@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ocio_vp.commands.common import progress
+from ocio_vp.errors import InputError
 
 __all__ = ["add_parser", "run"]
 
@@ -72,15 +73,10 @@ def run(args: argparse.Namespace) -> int:
         print(f"warning: {warning}")
     if result.take is not None:
         print(take_summary(result.take))
-    kind = (
-        ""
-        if result.measurements is not None
-        else (
-            " (a part: "
-            + ", ".join(k for k in result.document if k not in ("format", "version", "stage"))
-            + "; solve it with the other files, docs/measurements.md)"
-        )
-    )
+    kind = ""
+    if result.measurements is None:
+        parts = ", ".join(k for k in result.document if k not in ("format", "version", "stage"))
+        kind = f" (a part: {parts}; solve it with the other files, docs/measurements.md)"
     from ocio_vp.plates.contact_sheet import SHEET
 
     sheet = f" and {SHEET}" if result.take is not None else ""
@@ -94,7 +90,6 @@ def detection_failed(error, overlays) -> Exception:
     """Publish the failed search's overlay alone in the overlay folder
     (``<plate>.detection.png``; nothing else is written) and return the one-line error
     naming it."""
-    from ocio_vp.errors import InputError
     from ocio_vp.plates.detection import detection_overlay
     from ocio_vp.plates.overlay import write_png
     from ocio_vp.staging import publish_dir, staged_dir

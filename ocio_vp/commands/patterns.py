@@ -4,16 +4,18 @@ from __future__ import annotations
 
 import argparse
 import re
+from collections import Counter
+from pathlib import Path
 
 from ocio_vp.choices import WALL_ENCODINGS
 from ocio_vp.commands.common import progress
+from ocio_vp.errors import InputError, excerpt
 
 __all__ = ["add_parser", "parse_size", "run"]
 
 
 def parse_size(text: str) -> tuple[int, int]:
     """``"1920x1080"`` -> (1920, 1080)."""
-    from ocio_vp.errors import InputError, excerpt
 
     m = re.fullmatch(r"\s*(\d{1,5})\s*[xX]\s*(\d{1,5})\s*", text)
     if not m:
@@ -76,9 +78,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
-    from ocio_vp.errors import InputError
     from ocio_vp.patterns.design import PatternOptions, calibration_sequence
     from ocio_vp.patterns.frames import write_sequence_folder
     from ocio_vp.staging import check_not_input, check_replaceable, publish_dir, staged_dir
@@ -116,9 +115,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _print_summary(sequence, final) -> None:
-    kinds: dict[str, int] = {}
-    for patch in sequence.patches:
-        kinds[patch.kind] = kinds.get(patch.kind, 0) + 1
+    kinds = Counter(patch.kind for patch in sequence.patches)
     count = sequence.last_frame - sequence.first_frame + 1
     peak = f" at {sequence.peak_nits:g} cd/m2" if sequence.peak_nits else ""
     content = (

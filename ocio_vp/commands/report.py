@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ocio_vp.commands.common import progress
+from ocio_vp.errors import InputError
 
 __all__ = ["add_parser", "run"]
 
@@ -52,7 +53,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ocio_vp.errors import InputError
     from ocio_vp.formats.solution_inputs import solution_folders
     from ocio_vp.report.build import build_report, default_report_dir
 

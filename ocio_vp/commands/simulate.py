@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import os
 from collections.abc import Mapping
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ocio_vp.commands.common import progress, warn
+from ocio_vp.errors import InputError
 
 if TYPE_CHECKING:
     from ocio_vp.simulator.stage import EnvironmentLight
@@ -212,7 +215,6 @@ def _add_plate_options(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ocio_vp.errors import InputError
     from ocio_vp.formats.measurements import save_measurements
     from ocio_vp.simulator.fixtures import with_simulated_fixtures
     from ocio_vp.simulator.options import environments_from_args, stage_options_from_args
@@ -264,8 +266,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _check_take_options(args: argparse.Namespace) -> None:
-    from ocio_vp.errors import InputError
-
     if (args.film is None) != (args.take is None):
         raise InputError("give --film SEQUENCE and --take DIR together", key="--film/--take")
     if args.sequence is not None and args.plates is None:
@@ -292,9 +292,6 @@ def _take_options(args: argparse.Namespace, bounce=None):
 
 def _film(measurements, args: argparse.Namespace) -> str:
     """Film --film's sequence into --take, the stage lit by the sequence's environment."""
-    from pathlib import Path
-
-    from ocio_vp.errors import InputError
     from ocio_vp.patterns.sequence import load_sequence
     from ocio_vp.simulator.take import take_frame_count, write_take
     from ocio_vp.staging import publish_dir, staged_dir
@@ -343,7 +340,6 @@ def _mixable_defaults(environments: dict, stage) -> dict:
 
 def _check_no_scene(environments) -> None:
     """A scene (light from above and the sides) needs the ceiling that gives its light above."""
-    from ocio_vp.errors import InputError
     from ocio_vp.simulator.panels import SCENES
 
     for name, value in environments.items():
@@ -374,9 +370,6 @@ def _panel_measurements(wall, args: argparse.Namespace):
 
 def _write_plates(measurements, args: argparse.Namespace):
     """Render the plates into a staging folder, then rename it to --plates (all or nothing)."""
-    import os
-    from pathlib import Path
-
     from ocio_vp.patterns.sequence import load_sequence
     from ocio_vp.simulator.plates import PlateOptions, plate_count, raw_clip_note, write_capture
     from ocio_vp.staging import publish_dir, staged_dir

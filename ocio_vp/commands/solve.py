@@ -17,6 +17,7 @@ from ocio_vp.choices import (
 )
 from ocio_vp.commands.common import add_method_argument, progress
 from ocio_vp.commands.summary import print_summary
+from ocio_vp.errors import InputError, excerpt
 
 __all__ = [
     "add_parser",
@@ -261,8 +262,6 @@ def print_linearity(solutions: Sequence) -> None:
 def print_content_scale(solutions: Sequence) -> None:
     """Per environment what content white needs of the wall (stdout); one warning naming the
     environments where it clips (stderr)."""
-    import sys
-
     from ocio_vp.calibration.headroom import content_scale, content_scale_lines
 
     out, err = content_scale_lines([content_scale(s) for s in solutions])
@@ -284,8 +283,6 @@ def print_camera_gamut(solutions: Sequence) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ocio_vp.errors import InputError, excerpt
-
     if args.peak_nits is not None and not 0 < args.peak_nits <= 10000:
         raise InputError(f"expected 0 < cd/m2 <= 10000, got {args.peak_nits:g}", key="--peak-nits")
     if args.soft_clip is not None and not 0.0 < args.soft_clip < 1.0:
@@ -319,7 +316,6 @@ def wall_encoding(args: argparse.Namespace, measurements) -> tuple[str, float]:
     ``peak_nits``: what the wall was sent while it was measured), the command line's where the
     file says nothing, linear drive where neither does (said once). A flag contradicting the
     file, or ``--peak-nits`` for a wall that is not PQ, is refused on one line."""
-    from ocio_vp.errors import InputError
 
     stated = measurements.stage.wall
     source = measurements.source or "the measurements file"
@@ -374,7 +370,6 @@ def _solve_and_write(args: argparse.Namespace) -> list:
 
 def _solve_environments(args: argparse.Namespace, measurements, environments, pool) -> list:
     """Solve ``environments`` (HDRIs, wall encoding, soft clip as asked) and write them."""
-    from ocio_vp.errors import InputError
     from ocio_vp.ocio.writer import write_solutions
     from ocio_vp.wall.encoding import with_wall_encoding
     from ocio_vp.wall.softclip import with_soft_clip
@@ -404,7 +399,6 @@ def _solve_environments(args: argparse.Namespace, measurements, environments, po
 def _options(measurements, args: argparse.Namespace):
     """The :class:`~ocio_vp.pipeline.SolveOptions` of the command line."""
     from ocio_vp.correction.skin_spectra import stage_spectra
-    from ocio_vp.errors import InputError
     from ocio_vp.pipeline import SolveOptions
 
     spectra = stage_spectra(args.led_spectra, args.camera_sensitivities, args.location_light)

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from ocio_vp.commands.common import warn
+from ocio_vp.errors import InputError
 
 __all__ = ["FAILED_STATUS", "add_parser", "run"]
 
@@ -57,9 +59,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def _check_sequence(sequence, environment_dir, solution) -> None:
     import hashlib
-    from pathlib import Path
-
-    from ocio_vp.errors import InputError
 
     v = sequence.validation
     if v is None:
@@ -84,11 +83,8 @@ def _check_sequence(sequence, environment_dir, solution) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
     from ocio_vp.choices import canonical_encoding
     from ocio_vp.commands.measure import TakeProgress
-    from ocio_vp.errors import InputError
     from ocio_vp.formats.solution import load_solution
     from ocio_vp.patterns.sequence import load_sequence
     from ocio_vp.plates.take import TakeRef, measure_take

@@ -1,10 +1,6 @@
 """Writers for the tools studios already run: Unreal nDisplay, Nuke, DaVinci Resolve, and the
-fixture drives for the lighting desk (``lights``, only for solutions with fixtures).
-
-:func:`export_solutions` reads solved environment folders (``OUT/<environment>/`` from
-``ocio-vp solve``), re-validates them and writes each target into a staging folder; an
-environment's folders are renamed into place only when all its targets succeeded. One
-environment that cannot be exported is reported and never stops the others.
+fixture drives for the lighting desk (``lights``, only for solutions with fixtures), run by
+:func:`export_solutions` on solved environment folders, each environment all or nothing.
 """
 
 from __future__ import annotations
@@ -107,6 +103,13 @@ class ExportReport:
 ENVIRONMENT_ERRORS = (InputError, OCIO.Exception, ValueError, OSError)
 
 
+#: Why a target that applies only to some solutions wrote nothing for one.
+NOTHING_FOR = {
+    "lights": ": no fixtures in this solution",
+    "dit": ": no camera log encoding (solve with --camera-colorspace)",
+}
+
+
 def _final_folder(source: ExportSource, target: str, out: Path | None) -> Path:
     if out is None:
         root = source.directory / "exports"
@@ -133,7 +136,7 @@ def _check_options(targets, cube_size, cube_range) -> tuple[float, float]:
 
 
 def _has_camera_log(source: ExportSource) -> bool:
-    from ocio_vp.exports.dit import has_camera_log
+    from ocio_vp.exports.dit import has_camera_log  # loads the cube baker: only for dit
 
     return has_camera_log(source)
 
@@ -204,15 +207,8 @@ def export_solutions(
     plan = _plan(sources, targets, None if out is None else Path(out))
     for source, jobs in plan:
         if not jobs:
-            reason = (
-                f"{source.directory}: nothing for --target {'/'.join(targets)}"
-                + (": no fixtures in this solution" if "lights" in targets else "")
-                + (
-                    ": no camera log encoding (solve with --camera-colorspace)"
-                    if "dit" in targets
-                    else ""
-                )
-            )
+            why = "".join(NOTHING_FOR[t] for t in NOTHING_FOR if t in targets)
+            reason = f"{source.directory}: nothing for --target {'/'.join(targets)}{why}"
             report.failures.append(ExportFailure(str(source.directory), reason))
             continue
         try:

@@ -33,7 +33,6 @@ __all__ = ["render_nuke_script", "write_nuke"]
 
 #: Nuke evaluates this in a file knob when it reads it: the folder the script is in.
 SCRIPT_FOLDER = "[file dirname [value root.name]]"
-#: Nuke's OCIO nodes' first context variable (the Context tab's key1 / value1).
 # Only the names the script writes itself go into path knobs (no user path): safe for Tcl.
 _SAFE_RELATIVE = re.compile(r"\A[A-Za-z0-9._/-]+\Z")
 

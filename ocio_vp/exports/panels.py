@@ -8,6 +8,7 @@ the stage engineer to fill (UNREAL.md says which; docs/exports.md).
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,8 +17,9 @@ from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.panel_solution import OcioNames, PanelSolution
 from ocio_vp.formats.solution import Solution
 
-__all__ = ["PANEL_VERSIONS", "PanelAssignments", "panel_assignments", "panel_notes"]
+__all__ = ["PANEL_VERSIONS", "PanelAssignments", "ocio_slot", "panel_assignments", "panel_notes"]
 
+#: Owners of the slots: the root actor's configuration data, and each ICVFX camera.
 ROOT_CONFIG = "ADisplayClusterRootActor config data (UDisplayClusterConfigurationData)"
 CAMERA = "UDisplayClusterICVFXCameraComponent"
 #: Where the per-viewport and per-node profiles were checked.
@@ -30,19 +32,30 @@ PANEL_VERSIONS = (
 )
 
 
-def _profile(
-    ui: str, owner: str, prop: str, source: str, destination: str, role: str
+def ocio_slot(
+    ui: str,
+    owner: str,
+    prop: str,
+    source: str,
+    destination: str,
+    role: str,
+    *,
+    profile: bool = False,
 ) -> JsonObject:
+    """One OCIO conversion of ``unreal_ocio.json``: ``set`` on a stage-wide slot, or with
+    ``profile`` appended as a per-viewport or per-node profile (its objects left to fill)."""
+    objects: JsonObject = {"ApplyOCIOToObjects": []} if profile else {}
+    conversion: JsonObject = {
+        "bIsEnabled": True,
+        **objects,
+        "ColorConfiguration.SourceColorSpace": source,
+        "ColorConfiguration.DestinationColorSpace": destination,
+    }
     return {
         "ui": ui,
         "owner": owner,
         "property": prop,
-        "append": {
-            "bIsEnabled": True,
-            "ApplyOCIOToObjects": [],
-            "ColorConfiguration.SourceColorSpace": source,
-            "ColorConfiguration.DestinationColorSpace": destination,
-        },
+        "append" if profile else "set": conversion,
         "source": source,
         "destination": destination,
         "role": role,
@@ -79,6 +92,19 @@ def _spaces(
     return outer, inner
 
 
+def _other_types(
+    solution: Solution, where: Path | str | None
+) -> Iterator[tuple[str, PanelSolution, str, str | None]]:
+    """(name, panel, out-of-frustum space, in-frustum space or None) of every panel type but the
+    first in-frustum one, once its ``ocio`` block names its spaces."""
+    panels = solution.panels or {}
+    primary = next((p.name for p in panels.values() if p.in_frustum), None)
+    for name, panel in panels.items():
+        spaces = None if name == primary else _spaces(name, panel, where)
+        if spaces is not None:
+            yield name, panel, *spaces
+
+
 def panel_assignments(
     solution: Solution, source: str, where: Path | str | None = None
 ) -> PanelAssignments:
@@ -87,22 +113,16 @@ def panel_assignments(
     spaces: list[str] = []
     views: list[JsonValue] = []
     assignments: list[JsonValue] = []
-    panels = solution.panels or {}
-    primary = next((p.name for p in panels.values() if p.in_frustum), None)
     display = solution.ocio.display
-    for name, panel in panels.items():
-        spaces_named = None if name == primary else _spaces(name, panel, where)
-        if spaces_named is None:
-            continue
+    for name, panel, outer, inner in _other_types(solution, where):
         names = panel.ocio
-        outer, inner = spaces_named
         for space, view in ((outer, names.view_out_of_frustum), (inner, names.view_in_frustum)):
             if space is not None:
                 spaces.append(space)
             if space is not None and display and view is not None:
                 views.append({"display": display, "view": view})
         assignments.append(
-            _profile(
+            ocio_slot(
                 f"nDisplay root actor > ICVFX > OCIO > Per-Viewport OCIO Overrides: the {name} "
                 "viewports",
                 ROOT_CONFIG,
@@ -110,11 +130,12 @@ def panel_assignments(
                 source,
                 outer,
                 f"{name}.out_of_frustum",
+                profile=True,
             )
         )
         if inner is not None:
             assignments.append(
-                _profile(
+                ocio_slot(
                     f"ICVFX camera component > OCIO > Per-Node OCIO Overrides: the nodes "
                     f"driving the {name}",
                     CAMERA,
@@ -122,6 +143,7 @@ def panel_assignments(
                     source,
                     inner,
                     f"{name}.in_frustum",
+                    profile=True,
                 )
             )
     return PanelAssignments(spaces, views, assignments)
@@ -131,13 +153,7 @@ def panel_notes(solution: Solution, where: Path | str | None = None) -> list[str
     """One UNREAL.md step per other panel type (none for a stage of one panel type);
     ``where`` is solution.json (for errors)."""
     notes = []
-    panels = solution.panels or {}
-    primary = next((p.name for p in panels.values() if p.in_frustum), None)
-    for name, panel in panels.items():
-        spaces_named = None if name == primary else _spaces(name, panel, where)
-        if spaces_named is None:
-            continue
-        outer, inner = spaces_named
+    for name, _, outer, inner in _other_types(solution, where):
         text = (
             f"Panel type `{name}`: on the nDisplay root actor, **OCIO > Per-Viewport OCIO "
             f"Overrides**, add a profile for the viewports of the {name} (list them in *Apply "

@@ -1,9 +1,9 @@
 """What every export starts from: a solved environment folder, re-validated.
 
-``ocio-vp solve`` writes ``OUT/<environment>/solution.json`` and ``config.ocio`` (plus, with the
-panel-linearity work, a ``luts/`` sidecar folder named in the config's search path). A
-``solution.json`` can be edited by hand, so names are validated again here and the config is
-loaded and checked before anything is exported.
+``ocio-vp solve`` writes ``OUT/<environment>/solution.json``, ``config.ocio`` and, where the
+config names one in its search path, a ``luts/`` sidecar folder. A ``solution.json`` can be
+edited by hand, so names are validated again here and the config is loaded and checked before
+anything is exported.
 """
 
 from __future__ import annotations
@@ -11,12 +11,13 @@ from __future__ import annotations
 import json
 import shutil
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import PyOpenColorIO as OCIO
 
+from ocio_vp.choices import DEFAULT_CUBE_RANGE, DEFAULT_CUBE_SIZE
 from ocio_vp.errors import InputError
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.solution import OcioNames, Solution, load_solution
@@ -24,10 +25,6 @@ from ocio_vp.model.footage_range import AGREEMENT_P99, AGREEMENT_WORST, Agreemen
 
 if TYPE_CHECKING:  # the cube baker (numpy, OCIO's processors) is loaded by the targets baking one
     from ocio_vp.exports.cube import CubeAccuracy
-
-#: Cube lattice size and input range (camera RGB) of every exported .cube.
-DEFAULT_CUBE_SIZE = 33
-DEFAULT_CUBE_RANGE = (-0.25, 16.0)
 
 
 @dataclass(frozen=True)
@@ -100,7 +97,9 @@ class ExportSource:
 
 
 def _checked_names(config: OCIO.Config, names: OcioNames, source: str) -> ConfigNames:
-    def found(name: str | None, role: str) -> str:
+    found: dict[str, str] = {}
+    for role in (f.name for f in fields(ConfigNames)):
+        name = getattr(names, role)
         transform = role == "post_correction"
         lookup = config.getNamedTransform if transform else config.getColorSpace
         if name is None or lookup(name) is None:
@@ -108,17 +107,8 @@ def _checked_names(config: OCIO.Config, names: OcioNames, source: str) -> Config
             raise InputError(
                 f"{kind} {name!r} is not in the config", source=source, key=f"ocio.{role}"
             )
-        return name
-
-    return ConfigNames(
-        reference=found(names.reference, "reference"),
-        out_of_frustum=found(names.out_of_frustum, "out_of_frustum"),
-        in_frustum=found(names.in_frustum, "in_frustum"),
-        post_correction_colorspace=found(
-            names.post_correction_colorspace, "post_correction_colorspace"
-        ),
-        post_correction=found(names.post_correction, "post_correction"),
-    )
+        found[role] = name
+    return ConfigNames(**found)
 
 
 def load_export_source(directory: str | Path) -> ExportSource:

@@ -16,7 +16,14 @@ import PyOpenColorIO as OCIO
 from ocio_vp.calibration.headroom import content_scale
 from ocio_vp.choices import CONTEXT_VARIABLE
 from ocio_vp.errors import InputError
-from ocio_vp.exports.panels import PANEL_VERSIONS, panel_assignments, panel_notes
+from ocio_vp.exports.panels import (
+    CAMERA,
+    PANEL_VERSIONS,
+    ROOT_CONFIG,
+    ocio_slot,
+    panel_assignments,
+    panel_notes,
+)
 from ocio_vp.exports.source import (
     DEFAULT_CUBES,
     CubeOptions,
@@ -36,8 +43,6 @@ from ocio_vp.ocio.config import WORKING_SPACE_NAMES
 __all__ = ["MAPPING_FILE", "unreal_mapping", "write_ocioz", "write_unreal"]
 
 MAPPING_FILE = "unreal_ocio.json"
-#: Owner of the two stage-wide slots: the root actor's configuration data.
-ROOT_CONFIG = "ADisplayClusterRootActor config data (UDisplayClusterConfigurationData)"
 #: Where the property paths below were checked (Epic's nDisplay C++ and Python API pages).
 UNREAL_VERSIONS = (
     "Checked in Epic's API reference for UE 5.2 to 5.7: FDisplayClusterConfigurationOCIOConfiguration "
@@ -123,21 +128,6 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> JsonObje
     content, alternatives = _content_space(source)
     carriage = post_correction_carriage(solution)
 
-    def slot(ui: str, owner: str, prop: str, destination: str, role: str) -> JsonObject:
-        return {
-            "ui": ui,
-            "owner": owner,
-            "property": prop,
-            "set": {
-                "bIsEnabled": True,
-                "ColorConfiguration.SourceColorSpace": content,
-                "ColorConfiguration.DestinationColorSpace": destination,
-            },
-            "source": content,
-            "destination": destination,
-            "role": role,
-        }
-
     panels = panel_assignments(solution, content, source.directory / SOLUTION_FILE)  # other types
     return {
         "format": "ocio-vp/unreal-ocio",
@@ -157,10 +147,11 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> JsonObje
         "content_working_space_alternatives": alternatives,
         "unreal_versions": UNREAL_VERSIONS,
         "assignments": [
-            slot(
+            ocio_slot(
                 "nDisplay root actor > ICVFX > OCIO > All Viewports Color Configuration",
                 ROOT_CONFIG,
                 "StageSettings.ViewportOCIO.AllViewportsOCIOConfiguration",
+                content,
                 names.out_of_frustum,
                 "out_of_frustum",
             ),
@@ -176,10 +167,11 @@ def unreal_mapping(source: ExportSource, *, config: str, ocioz: str) -> JsonObje
                 "destination": names.out_of_frustum,
                 "role": "out_of_frustum",
             },
-            slot(
+            ocio_slot(
                 "ICVFX camera component > OCIO > All Nodes Color Configuration",
-                "UDisplayClusterICVFXCameraComponent",
+                CAMERA,
                 "CameraSettings.CameraOCIO.AllNodesOCIOConfiguration",
+                content,
                 names.in_frustum,
                 "in_frustum",
             ),

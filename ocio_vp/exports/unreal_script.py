@@ -9,60 +9,22 @@ docs/exports.md lists the properties and what each version allows).
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
 
 import PyOpenColorIO as OCIO
 
-__all__ = ["SCRIPT_FILE", "UNREAL_PROPERTIES", "UnrealSlot", "render_unreal_script"]
+__all__ = ["SCRIPT_FILE", "render_unreal_script"]
 
 SCRIPT_FILE = "ocio_vp_setup.py"
 
-#: Every editor property the script sets, by the struct or class that owns it, and the first
-#: engine version whose Python API documents it there (unreal.<Class> pages).
-UNREAL_PROPERTIES: dict[str, dict[str, str]] = {
-    "OpenColorIOConfiguration": {
-        "configuration_file": "5.1",
-        "desired_color_spaces": "5.1",
-        "context": "5.5",
-    },
-    "FilePath": {"file_path": "5.1"},
-    "OpenColorIOColorSpace": {
-        "color_space_name": "5.3",
-        "color_space_index": "5.3",
-        "family_name": "5.3",
-    },
-    "OpenColorIOColorConversionSettings": {
-        "configuration_source": "5.1",
-        "source_color_space": "5.1",
-        "destination_color_space": "5.1",
-    },
-    "DisplayClusterConfigurationOCIOConfiguration": {
-        "is_enabled": "5.1",
-        "color_configuration": "5.1",
-    },
-    "DisplayClusterConfigurationData": {"stage_settings": "5.1"},
-    "DisplayClusterConfigurationICVFX_StageSettings": {"viewport_ocio": "5.1", "lightcard": "5.1"},
-    "DisplayClusterConfigurationICVFX_ViewportOCIO": {"all_viewports_ocio_configuration": "5.1"},
-    "DisplayClusterConfigurationICVFX_LightcardSettings": {"lightcard_ocio": "5.2"},
-    "DisplayClusterConfigurationICVFX_LightcardOCIO": {"lightcard_ocio_mode": "5.2"},
-    "DisplayClusterICVFXCameraComponent": {"camera_settings": "5.1"},
-    "DisplayClusterConfigurationICVFX_CameraSettings": {"camera_ocio": "5.1"},
-    "DisplayClusterConfigurationICVFX_CameraOCIO": {"all_nodes_ocio_configuration": "5.1"},
-}
 
-
-@dataclass(frozen=True)
-class UnrealSlot:
+def _slot(config: OCIO.Config, name: str) -> dict[str, str | int]:
     """A colour space the script names, with the index and family the config gives it."""
-
-    name: str
-    index: int
-    family: str
-
-
-def _slot(config: OCIO.Config, name: str) -> UnrealSlot:
     names = list(config.getColorSpaceNames(OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ACTIVE))
-    return UnrealSlot(name, names.index(name), config.getColorSpace(name).getFamily())
+    return {
+        "name": name,
+        "index": names.index(name),
+        "family": config.getColorSpace(name).getFamily(),
+    }
 
 
 _TEMPLATE = '''"""ocio-vp: OpenColorIO and nDisplay for stage {stage}, environment {environment}.
@@ -198,10 +160,10 @@ def render_unreal_script(
     settings = {
         "asset_path": f"/Game/OCIO/OCIO_{stage}_{environment}".replace("-", "_"),
         "config": config_name,
-        "source": _slot(config, source).__dict__,
-        "out_of_frustum": _slot(config, out_of_frustum).__dict__,
-        "in_frustum": _slot(config, in_frustum).__dict__,
-        "desired": [_slot(config, name).__dict__ for name in dict.fromkeys(desired)],
+        "source": _slot(config, source),
+        "out_of_frustum": _slot(config, out_of_frustum),
+        "in_frustum": _slot(config, in_frustum),
+        "desired": [_slot(config, name) for name in dict.fromkeys(desired)],
         "context": dict(context),
     }
     text = json.dumps(settings, indent=4, sort_keys=True)
