@@ -1,29 +1,11 @@
 """Panel linearity: the ``ramps`` section, the per-channel response fit and its inverse 1D LUT.
 
 The paper assumes a linear LED volume (LeGendre et al. 2022, Section 3.2, "Panel and Camera
-Linearity") and suggests verifying it with displayed ramps and correcting it when needed. Here,
-per LED channel k, from ramps as a camera delivers them:
-
-1. every ramp step's camera RGB ``C_i`` is projected onto that primary's column ``s_k`` of [SL]
-   by least squares, ``y_i = s_k . C_i / (s_k . s_k)``, so the response is one scalar per step;
-2. the camera's black and the wall's flare -- the zero-drive step, or else a separate ``black``
-   frame -- is subtracted (it may read slightly negative after the camera's own black
-   subtraction) and the response normalised at the top step (drive 1.0, the level of
-   ``primaries``): ``r_i = (y_i - y_0) / (y_top - y_0)``;
-3. the measurement noise is estimated from the ramp itself (or given as ``noise_floor``):
-   an absolute floor plus a part proportional to the level, see :func:`estimate_noise`;
-4. a ramp that *falls* by more than the noise is refused; smaller dips are removed by a
-   weighted isotonic (monotone) regression, whose merged steps become one knot, and steps
-   below the detection limit (3 noise floors) are dropped from the knots -- all named in the
-   ``linearity`` block;
-5. ``r(d)`` is interpolated monotonically through the knots (PCHIP, never a polynomial) and
-   inverted exactly (bisection on the interpolant), giving the pre-correction
-   ``d = r^-1(x)`` that makes the panel linear. :mod:`ocio_vp.wall.encoding` turns it into
-   the CLF sidecar.
-
-Only what a scene requires is modelled: a channel within :data:`LINEARITY_TOLERANCE` of linear
-(absolute) and :data:`RELATIVE_TOLERANCE` of each level (where that exceeds the noise) is left
-alone; when every channel is, no LUT is written (``solution.json`` says so).
+Linearity") and suggests verifying it with displayed ramps. Per LED channel, each step's
+camera RGB is projected onto the primary's column of [SL], black-subtracted and normalised at
+the top step; the noise is estimated from the ramp; a monotone (isotonic, then PCHIP) response
+is fitted and inverted exactly. Each step, and when a channel counts as linear, is in
+docs/linearity.md; :mod:`ocio_vp.wall.encoding` turns the inverse into the CLF sidecar.
 """
 
 from __future__ import annotations
@@ -117,7 +99,9 @@ def _error(source: str | None, key: Key, problem: str) -> InputError:
     return InputError(problem, source=source, key=format_key_path("ramps", *key))
 
 
-def _parse_ramp(ctx: Validator, raw: JsonValue, key: Key) -> Ramp:
+def _parse_ramp(
+    ctx: Validator, raw: JsonValue, key: Key, black: np.ndarray | None, noise: float | None
+) -> Ramp:
     ramp = ctx.mapping(raw, key, required=("drive", "camera"))
     drive_raw, camera_raw = ramp["drive"], ramp["camera"]
     if not isinstance(drive_raw, (list, tuple)):
@@ -150,7 +134,7 @@ def _parse_ramp(ctx: Validator, raw: JsonValue, key: Key) -> Ramp:
         )
     if not np.any(camera[-1] > 0):
         raise ctx.error((*key, "camera", len(drive) - 1), "the top step is black (zero)")
-    return Ramp(drive=drive, camera=camera)
+    return Ramp(drive=drive, camera=camera, black=black, noise_floor=noise)
 
 
 def _rgb(ctx: Validator, value: JsonValue, key: Key) -> np.ndarray:
@@ -187,11 +171,7 @@ def parse_ramps(
                 (*key, "noise_floor"),
                 f"expected a fraction of the top step in (0, 0.5), got {noise:g}",
             )
-    ramps = {c: _parse_ramp(ctx, section[c], (*key, c)) for c in CHANNELS}
-    return {
-        c: Ramp(drive=r.drive, camera=r.camera, black=black, noise_floor=noise)
-        for c, r in ramps.items()
-    }
+    return {c: _parse_ramp(ctx, section[c], (*key, c), black, noise) for c in CHANNELS}
 
 
 def ramps_to_dict(ramps: Mapping[str, Ramp]) -> JsonObject:
