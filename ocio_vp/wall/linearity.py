@@ -369,18 +369,14 @@ def channel_response(
     *,
     source: str | None = None,
 ) -> ChannelResponse:
-    """Normalised panel response of one LED channel from its ramp, as a camera delivers it.
-
-    Each step's camera RGB is projected onto column ``channel`` of [SL] (paper eq. 1: the
-    camera sees ``[SL] d`` for drive ``d``) by least squares; the black (zero-drive step, else
-    the ``black`` frame, else 0) is subtracted and the result divided by the top step. The
-    noise is estimated (:func:`estimate_noise`) unless ``noise_floor`` is given; dips within
-    the noise are pooled by a weighted isotonic regression and steps below
-    :data:`DETECTION_SIGMAS` noise floors are dropped from the knots.
+    """Normalised panel response of one LED channel from its ramp, as a camera delivers it:
+    projected onto column ``channel`` of [SL], black-subtracted, normalised at the top step,
+    its noise estimated (:func:`estimate_noise`) unless ``noise_floor`` is given, dips within
+    the noise pooled and steps below :data:`DETECTION_SIGMAS` noise floors dropped from the
+    knots (docs/linearity.md, "From ramp to response").
 
     ``projection_residual`` is the largest part of a step's (black-subtracted) camera RGB that
-    is *not* along the primary's column, relative to the top step: a 1D LUT cannot fix a
-    channel whose colour shifts along the ramp, and this says how much it does.
+    is *not* along the primary's column, relative to the top step.
 
     Raises
     ------
@@ -490,13 +486,9 @@ def _deviations(
         return absolute, None, absolute > tolerance
     relative = r / d - 1.0
     sigma = np.hypot(fit.noise.floor, fit.noise.relative * r)
-    # deviations smaller than the noise say nothing about the wall (at 0.03% of peak a 0.02%
-    # floor is 70% of the level)
+    # deviations within the noise say nothing about the wall; the worst is reported where a
+    # level can be quantified, chosen by its lower bound (docs/linearity.md)
     significant = np.abs(r - d) > DETECTION_SIGMAS * sigma
-    # the worst deviation is reported where a level can be quantified (10 noise floors, where
-    # one step's own noise is 10% of it or less), with its uncertainty (the step's and the
-    # black's noise), and chosen by its lower bound: the largest of many noisy deviations is
-    # otherwise mostly noise
     quantified = significant & (r >= QUANTIFICATION_SIGMAS * fit.noise.floor)
     uncertainty = np.hypot(sigma, fit.noise.floor) / d
     shadow = None
@@ -607,14 +599,8 @@ def fit_linearity(
     tolerance: float = LINEARITY_TOLERANCE,
     source: str | None = None,
 ) -> Linearity:
-    """The ``linearity`` block of ``solution.json`` from the measured ramps.
-
-    Per channel: the response knots, the black subtracted, the noise, the steps dropped or
-    merged (see :func:`channel_response`), the largest deviation from linear over the knots
-    (``max |r_k - d_k|``, a fraction of the top step) and the worst relative to the level
-    (``shadow_deviation``: ``r/d - 1`` and the drive it is at), whether it is corrected, the
-    projection residual and how far the top step is from ``primaries``. ``notes`` and
-    ``warnings`` say the same in words, for the terminal.
+    """The ``linearity`` block of ``solution.json`` from the measured ramps (its fields:
+    docs/linearity.md); ``notes`` and ``warnings`` say it in words, for the terminal.
 
     The pre-correction LUT is built from the knots when the config is written
     (:func:`ocio_vp.ocio.wall.wall_outputs`); ``corrected`` false everywhere means no LUT.
