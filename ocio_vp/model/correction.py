@@ -207,12 +207,10 @@ def _pair(value: ArrayLike, key: str) -> tuple[float, float]:
 class FitDomain:
     """Where the post-correction was fitted: reflective colours as the stage lights them.
 
-    ``to_drive`` (3, 3) is ``U = D^-1 M``: camera RGB to LED drive, each channel divided by the
-    drive that lights a perfect white diffuser (floored at :data:`DRIVE_FLOOR` of the largest),
-    so reflective colours lie in [0, 1]^3 (the white patch at its reflectance). ``hull`` (k, 2)
-    are the vertices, counter-clockwise, of the convex polygon holding the chart's fitted
-    patches in the chromaticity plane ``(u_r, u_b) / sum(u)`` (and a disc of
-    :data:`HULL_MIN_RADIUS` around white); ``centre`` (2,) is white's chromaticity.
+    ``to_drive`` (3, 3) is ``U = D^-1 M``, camera RGB to drive relative to a perfect white
+    diffuser; ``hull`` (k, 2) the counter-clockwise vertices of the chart's fitted patches in
+    the chromaticity plane ``(u_r, u_b) / sum(u)``; ``centre`` (2,) white's chromaticity
+    (docs/solution.md, "The domain"; built by :func:`fit_domain`).
     """
 
     to_drive: np.ndarray
