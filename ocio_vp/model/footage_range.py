@@ -139,17 +139,8 @@ def wall_emitters(SL: ArrayLike, white: ArrayLike, camera_to_xyz: ArrayLike) -> 
     """The wall's primaries and their pairwise mixes (camera RGB, [SL]'s columns) at the
     luminance (Y through ``camera_to_xyz``) of ``white``; those of no positive luminance are
     left out."""
-    SL = np.asarray(SL, dtype=np.float64)
-    colours = np.asarray(
-        [
-            SL[:, 0],
-            SL[:, 1],
-            SL[:, 2],
-            SL[:, 0] + SL[:, 1],
-            SL[:, 1] + SL[:, 2],
-            SL[:, 0] + SL[:, 2],
-        ]
-    )
+    primaries = np.ascontiguousarray(np.asarray(SL, dtype=np.float64).T)
+    colours = np.vstack([primaries, primaries + np.roll(primaries, -1, axis=0)])  # r+g, g+b, b+r
     y = np.asarray(camera_to_xyz, dtype=np.float64)[1]
     luminance = colours @ y
     keep = luminance > 0

@@ -58,6 +58,7 @@ ACCURACY_BANDS = ((0.001, 0.002), (0.002, 0.02), (0.02, 1.0))
 #: What :func:`lut_accuracy` measures (the ``definition`` of ``linearity.lut``).
 LUT_ACCURACY = "max |r(LUT(x)) - x| / x, x = linear drive (1.0 = top step)"
 _CHECK_POINTS = 20001
+_SHAPER_SCALE = np.log2(1.0 + LINEAR_HEADROOM / LOG_SHAPER_KNEE)  # the shaper's t at drive H
 
 _PQ = {  # SMPTE ST 2084:2014 constants
     "m1": 2610 / 16384,
@@ -139,15 +140,13 @@ def shaper(drive: np.ndarray, encoding: str, *, peak_nits: float = DEFAULT_PEAK_
     if encoding != "linear":
         return encode(drive, encoding, peak_nits=peak_nits)
     drive = np.asarray(drive, dtype=np.float64)
-    scale = np.log2(1.0 + LINEAR_HEADROOM / LOG_SHAPER_KNEE)
-    return np.log2(1.0 + np.maximum(drive, 0.0) / LOG_SHAPER_KNEE) / scale
+    return np.log2(1.0 + np.maximum(drive, 0.0) / LOG_SHAPER_KNEE) / _SHAPER_SCALE
 
 
 def _unshape(t: np.ndarray, encoding: str, peak_nits: float) -> np.ndarray:
     if encoding != "linear":
         return decode(t, encoding, peak_nits=peak_nits)
-    scale = np.log2(1.0 + LINEAR_HEADROOM / LOG_SHAPER_KNEE)
-    return (np.exp2(np.asarray(t, dtype=np.float64) * scale) - 1.0) * LOG_SHAPER_KNEE
+    return (np.exp2(np.asarray(t, dtype=np.float64) * _SHAPER_SCALE) - 1.0) * LOG_SHAPER_KNEE
 
 
 #: OCIO's ``encoding`` attribute of the wall colorspaces, per wall signal (docs/linearity.md).
