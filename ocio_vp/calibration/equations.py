@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike
 
 from ocio_vp.choices import BLACK_LEVEL_METHODS
 from ocio_vp.errors import InputError
-from ocio_vp.model.correction import MAX_CONDITION_INVERSE
+from ocio_vp.model.correction import MAX_CONDITION_INVERSE, condition_number
 
 __all__ = [
     "BLACK_LEVEL_METHODS",
@@ -46,17 +46,6 @@ MAX_CONDITION_SL = 1e10
 #: N = M Q^-1 is not solved when cond(Q) is above this: the post-correction's own invertibility
 #: limit (:data:`ocio_vp.model.MAX_CONDITION_INVERSE`, defined there once).
 MAX_CONDITION_Q_FOR_N = MAX_CONDITION_INVERSE
-
-
-def condition_number(matrix: ArrayLike) -> float:
-    """2-norm condition number; ``inf`` for a singular (or non-finite) matrix."""
-    matrix = np.asarray(matrix, dtype=np.float64)
-    if not np.all(np.isfinite(matrix)):
-        return float("inf")
-    singular_values = np.linalg.svd(matrix, compute_uv=False)
-    if singular_values[-1] <= singular_values[0] * np.finfo(np.float64).eps:
-        return float("inf")
-    return float(singular_values[0] / singular_values[-1])
 
 
 def solve_M(

@@ -1,20 +1,11 @@
 """Several panel types on one stage: the paper's equations per type, the light on the chart summed.
 
-Most volumes are built from more than one panel model (a wall and a ceiling with other LEDs).
-Each type k has its own primaries [SL]_k, so its own pre-correction ``M_k = [SL]_k^-1``
-(eq. 2), its own calibration panel (beta_k) and lit chart [SRL]_j,k, and delivers its part
-``w_avg,k`` of the environment's diffuse light (the HDRI's directions it covers). Eq. 3 holds per
-type, and the chart on stage is lit by the sum:
-
-    ``x_j = sum_k (1/beta_k) [SRL]_j,k clip(M_k w_avg,k, 0)``
-
-Q is fitted to that sum by any method (eq. 5): the types other than the first in-frustum one
-reach the solvers as :attr:`ocio_vp.correction.problem.QProblem.extra_light`, beside that first
-type's own eq. 3. Each in-frustum type shows the background through its own
-``N_k = M_k Q^-1`` (eq. 7 with [SL]_k) and black-level offset ``-M_k b_k`` (Section 3.4), so
-every one of them maps content to the same camera colour after Q: they match in camera by
-construction, except where a type cannot reach a colour (drive below 0 or above its peak),
-which :func:`in_frustum_match` measures in ΔE2000 between types.
+Each type k has its own [SL]_k, ``M_k``, beta_k and [SRL]_j,k and delivers its part ``w_avg,k``
+of the environment's light; the chart on stage is lit by the sum
+``x_j = sum_k (1/beta_k) [SRL]_j,k clip(M_k w_avg,k, 0)``, Q is fitted to it, and each
+in-frustum type shows the background through its own ``N_k`` and offset, so that the types
+match in camera except where one cannot reach a colour (:func:`in_frustum_match`). The whole
+account is in docs/panels.md.
 
 References
 ----------

@@ -2,20 +2,13 @@
 
 The colour maths is the solution's own OCIO config, ``Stage Footage`` -> reference (Q, the
 paper's post-correction, eq. 5, plus whatever that colorspace carries), run by OCIO's CPU
-processor in place (``apply(PackedImageDesc)``, not the much slower ``applyRGB`` on an array)
-through the pluggable :class:`PixelTransform` (:data:`TRANSFORMS`). A non-linear Q (a bounded
-root-polynomial, an emitter-protected one) is applied exactly instead (:class:`ModelTransform`:
-float64 maths of :mod:`ocio_vp.model`, not the config's baked LUT). Every other channel (alpha,
-depth, AOVs), every subimage, the metadata, data and display windows, tiling, pixel formats and
-compression of each input are kept.
-
-Pixels stay in the file's own type when every channel of a subimage is half or every one is
-float: OpenImageIO's half <-> float conversions cost more than the transform itself (about as
-much as decoding the frame), and OCIO converts half itself, rounding exactly as storing a
-float32 result as half does. Other files are read as float32 and stored back in their types.
-
-A frame is written under a temporary name and renamed when complete, so an interrupted run
-never leaves a partial frame under its final name; a rerun skips the frames already written.
+processor in place through the pluggable :class:`PixelTransform` (:data:`TRANSFORMS`); a
+non-linear Q is applied exactly instead (:class:`ModelTransform`). Every other channel, every
+subimage, the metadata, data and display windows, tiling, pixel formats and compression of
+each input are kept. Pixels stay in the file's own type when a subimage is uniformly half or
+float (OCIO converts half itself, rounding as storing a float32 result as half does); other
+files are read as float32 and stored back in their types. Frames are written atomically and a
+rerun skips those already written (docs/distributed.md).
 
 References
 ----------
@@ -175,14 +168,6 @@ def solution_identity(stage: str, environment: str, model: str, encoding: str = 
     return f"{text}, footage {encoding}" if encoding else text
 
 
-_LEVELS = {
-    "lossless": "OPTIMIZATION_LOSSLESS",
-    "default": "OPTIMIZATION_DEFAULT",
-    "good": "OPTIMIZATION_GOOD",
-    "draft": "OPTIMIZATION_DRAFT",
-}
-
-
 @functools.lru_cache(maxsize=8)
 def cpu_processor(pc: PostCorrection, optimization: str = "default", bit_depth: str = "f32"):
     """The CPU processor for ``pc`` on ``bit_depth`` (``f32`` or ``f16``) buffers, in and out.
@@ -191,12 +176,13 @@ def cpu_processor(pc: PostCorrection, optimization: str = "default", bit_depth: 
     """
     import PyOpenColorIO as OCIO
 
-    if optimization not in _LEVELS:
+    if optimization not in OPTIMIZATIONS:
         raise ValueError(f"optimization must be one of {OPTIMIZATIONS}, got {optimization!r}")
     depth = {"f32": OCIO.BIT_DEPTH_F32, "f16": OCIO.BIT_DEPTH_F16}[bit_depth]
     config = OCIO.Config.CreateFromFile(pc.config)
     processor = config.getProcessor(pc.source, pc.target)
-    return processor.getOptimizedCPUProcessor(depth, depth, getattr(OCIO, _LEVELS[optimization]))
+    level = getattr(OCIO, f"OPTIMIZATION_{optimization.upper()}")
+    return processor.getOptimizedCPUProcessor(depth, depth, level)
 
 
 class PixelTransform(Protocol):
@@ -236,18 +222,10 @@ class OcioTransform:
 @dataclass(frozen=True)
 class ModelTransform:
     """A :class:`PixelTransform` applying a non-linear post-correction exactly: the model's
-    formulas (:mod:`ocio_vp.model.correction`), evaluated band by band by
-    :func:`ocio_vp.model.pixels.pixel_function`.
-
-    Half buffers (EXR footage) are computed in float32: it agrees with the float64 model to
-    about 5e-7 of the pixel's largest channel, a thousandth of half's rounding step, so a
-    result differs from the float64 one rounded to half by at most one half step, and only
-    where that value lies within 5e-7 of a rounding midpoint. float32 buffers are computed in
-    float64 and rounded once. Each band of :attr:`band` pixels is copied into planes (bounded
-    memory, the band's temporaries stay in the CPU's cache) and stored back in the buffer's
-    own type (a half result that overflows becomes inf, as OCIO's half output does). Roots
-    are sign-preserving, as in the fit: 0 maps to 0, and a negative channel gives a finite
-    value continuous with the positive side.
+    formulas (:mod:`ocio_vp.model.correction`) by :func:`ocio_vp.model.pixels.pixel_function`,
+    on bands of :attr:`band` pixels copied into planes; half buffers are computed in float32,
+    float32 ones in float64, and stored back in the buffer's own type (a half overflow becomes
+    inf, as OCIO's half output does). Accuracy: docs/root_polynomial.md ("the exact model").
     """
 
     correction: Any
@@ -272,7 +250,7 @@ class ModelTransform:
             for k in range(3):
                 np.copyto(X[k], block[:, k])
             out = f(X)
-            with np.errstate(over="ignore"):  # half overflow: inf, documented above
+            with np.errstate(over="ignore"):  # half overflow: inf, as documented
                 for k in range(3):
                     np.copyto(block[:, k], out[k], casting="same_kind")
 

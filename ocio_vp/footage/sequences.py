@@ -158,41 +158,36 @@ def foreign_output_error(dst: str | Path) -> str | None:
     return f"{dst}: {foreign_output_reason()}" if foreign_outputs([Path(dst)]) else None
 
 
-def output_solution(path: str | Path) -> str | None:
-    """The :data:`SOLUTION_MARK` of a frame ``ocio-vp apply`` wrote (None when it has none)."""
+def _header_attribute(path: str | Path, name: str) -> object | None:
+    """The header attribute ``name`` of the image file ``path`` (only the header is read);
+    None when it has none or is not a file that can be read as an image."""
     import OpenImageIO as oiio
 
-    inp = oiio.ImageInput.open(str(path))
+    inp = oiio.ImageInput.open(str(path)) if Path(path).is_file() else None
     if inp is None:
-        oiio.geterror()
+        oiio.geterror()  # a failed open leaves a message behind: the caller reports the file
         return None
     try:
-        value = inp.spec().getattribute(SOLUTION_MARK)
+        return inp.spec().getattribute(name)
     finally:
         inp.close()
+
+
+def output_solution(path: str | Path) -> str | None:
+    """The :data:`SOLUTION_MARK` of a frame ``ocio-vp apply`` wrote (None when it has none)."""
+    value = _header_attribute(path, SOLUTION_MARK)
     return None if value is None else str(value)
 
 
 def foreign_outputs(outputs: Sequence[Path]) -> list[Path]:
     """The existing files among ``outputs`` that ``ocio-vp apply`` did not write.
 
-    A frame it wrote carries :data:`MARK` in its header (only the header is read); a file
-    without it, or that cannot be read as an image, was put there by someone else, and neither
-    ``--overwrite`` may replace it nor a rerun count it as done.
+    A frame it wrote carries :data:`MARK` in its header; a file without it, or that cannot be
+    read as an image, was put there by someone else, and neither ``--overwrite`` may replace it
+    nor a rerun count it as done.
     """
-    import OpenImageIO as oiio
-
-    foreign = []
-    for path in outputs:
-        if not os.path.lexists(path):
-            continue
-        inp = oiio.ImageInput.open(str(path)) if Path(path).is_file() else None
-        try:
-            ours = inp is not None and inp.spec().getattribute(MARK) is not None
-        finally:
-            if inp is not None:
-                inp.close()
-        if not ours:
-            foreign.append(Path(path))
-    oiio.geterror()  # a failed open leaves a message behind: it is reported by the caller
-    return foreign
+    return [
+        Path(path)
+        for path in outputs
+        if os.path.lexists(path) and _header_attribute(path, MARK) is None
+    ]

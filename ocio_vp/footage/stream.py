@@ -1,14 +1,10 @@
 """A sequence of frames through one process: read ahead, transform, write behind.
 
-OpenEXR decodes and encodes a frame on all cores with its own threads, but each read and each
-write also has serial parts (opening the file, the header, writing the compressed chunks in
-order, the system calls, Python between them). Reading frame i+1 and writing frames i-1 and
-i-2 while frame i is transformed fills those gaps with useful work, and a single process pays
-the imports and OCIO set-up once, where a pool of worker processes pays them per worker. Two
-writes at once rather than one: a write's serial parts overlap the other's, and the last frames
-of a sequence are written side by side instead of one after the other, for one more frame in
-memory. At most :data:`HELD` frames are held at any time (one being read, one transformed, two
-being written), whatever the length of the sequence.
+Reading frame i+1 and writing frames i-1 and i-2 while frame i is transformed fills the serial
+parts of OpenEXR's reads and writes (opening, headers, chunks in order, system calls) with
+useful work, and one process pays the imports and OCIO set-up once. At most :data:`HELD` frames
+are held at any time (one being read, one transformed, :data:`WRITERS` being written), whatever
+the length of the sequence.
 """
 
 from __future__ import annotations

@@ -1,31 +1,9 @@
 """The post-correction Q as a typed object: what it is, where it was fitted, how it applies.
 
-Every consumer (the OCIO config, ``ocio-vp apply``, the Nuke, Resolve and Unreal exports, the
-report, the simulator, the benchmarks) is built from one :data:`PostCorrection`:
-
-==================  =============================================================  =========
-kind                what it computes                                               inverse
-==================  =============================================================  =========
-``matrix``          ``Q x`` (eq. 5 and every linear method)                        ``Q^-1 y``
-``rank-deficient``  ``Q x`` with Q too ill-conditioned to invert (sodium light)    none
-``root-polynomial`` ``C e(x)`` inside the chart's domain, fading to the matrix     Newton
-                    ``fallback`` outside it (Finlayson et al. 2015, bounded)
-``protected``       another kind, fading to the identity where no reflective       Newton
-                    surface lit by the stage can be (``solve --protect-emitters``)
-==================  =============================================================  =========
-
-``matrix`` is always a 3x3: Q itself for the linear kinds, the least-squares 3x3 on the same
-patches (the best linear approximation) for the others. solution.json writes it as ``Q`` for
-readers that want one; the ``post_correction`` block holds the object itself
-(:func:`correction_to_dict`, :func:`correction_from_dict`).
-
-The domain
-----------
-A reflective surface on stage, in drive relative to a perfect white diffuser, lies in the unit
-cube (:class:`FitDomain`); outside it a pixel is an emitter or a highlight. The chart's colours
-span a convex polygon (the **hull**) in that space's chromaticity plane: a root-polynomial Q is
-used inside it and fades to its fallback matrix by :data:`DEFAULT_FADE` times the hull's size
-around white, since outside it the polynomial only extrapolates (docs/stability.md).
+Every consumer (the config, ``ocio-vp apply``, the exports, the report, the simulator) is built
+from one :data:`PostCorrection`. Its kinds (``matrix``, ``rank-deficient``, ``root-polynomial``,
+``protected``) and the ``post_correction`` block of solution.json are in docs/solution.md; the
+fit's domain (the chart's hull) and the fade outside it in docs/stability.md.
 
 References
 ----------
@@ -43,7 +21,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import cached_property, partial
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -73,6 +51,7 @@ __all__ = [
     "ProtectedCorrection",
     "ProtectionPoint",
     "RootPolynomialCorrection",
+    "condition_number",
     "correction_from_dict",
     "correction_to_dict",
     "fit_domain",
@@ -122,11 +101,8 @@ DEFAULT_BRIGHT = PROTECTION.bright
 #: ``--protect-emitters``: the negative-drive fade (:attr:`ProtectionPoint.negative`).
 DEFAULT_NEGATIVE = PROTECTION.negative
 #: ``--protect-emitters``: below this brightness (of a perfect white diffuser) negative drive
-#: is measured against it rather than against the colour's own drive. Near black, negative
-#: channels are sensor noise, not light the wall cannot make: without the floor the protection
-#: switched pixel by pixel between Q and the identity with the noise. 2^-5 is 30 times the read
-#: noise of :mod:`ocio_vp.model.footage_range` and below every emitter it protects (1/4 of
-#: white's luminance and up).
+#: is measured against it rather than against the colour's own drive: near black, negative
+#: channels are sensor noise, not light the wall cannot make.
 DEFAULT_DARK = 2.0**-5
 #: A lighting drive channel below this fraction of the largest counts as this fraction (a light
 #: the wall cannot emit in that channel: reflectances there are noise and crosstalk).
@@ -141,14 +117,21 @@ HULL_MIN_RADIUS = 0.02
 MAX_CONDITION_INVERSE = 1e3
 
 
+def condition_number(matrix: ArrayLike) -> float:
+    """2-norm condition number; ``inf`` for a singular (or non-finite) matrix."""
+    matrix = np.asarray(matrix, dtype=np.float64)
+    if not np.all(np.isfinite(matrix)):
+        return float("inf")
+    singular_values = np.linalg.svd(matrix, compute_uv=False)
+    if singular_values[-1] <= singular_values[0] * np.finfo(np.float64).eps:
+        return float("inf")
+    return float(singular_values[0] / singular_values[-1])
+
+
 def matrix_invertible(Q: ArrayLike) -> bool:
     """Whether a 3x3 Q may be inverted: the one rule every consumer asks (cond(Q) at most
     :data:`MAX_CONDITION_INVERSE`; a singular or non-finite Q never)."""
-    Q = np.asarray(Q, dtype=np.float64)
-    if not np.all(np.isfinite(Q)):
-        return False
-    s = np.linalg.svd(Q, compute_uv=False)
-    return bool(s[-1] > 0 and s[0] / s[-1] <= MAX_CONDITION_INVERSE)
+    return condition_number(Q) <= MAX_CONDITION_INVERSE
 
 
 def truncated_pseudo_inverse(Q: ArrayLike) -> tuple[np.ndarray, int]:
@@ -224,12 +207,10 @@ def _pair(value: ArrayLike, key: str) -> tuple[float, float]:
 class FitDomain:
     """Where the post-correction was fitted: reflective colours as the stage lights them.
 
-    ``to_drive`` (3, 3) is ``U = D^-1 M``: camera RGB to LED drive, each channel divided by the
-    drive that lights a perfect white diffuser (floored at :data:`DRIVE_FLOOR` of the largest),
-    so reflective colours lie in [0, 1]^3 (the white patch at its reflectance). ``hull`` (k, 2)
-    are the vertices, counter-clockwise, of the convex polygon holding the chart's fitted
-    patches in the chromaticity plane ``(u_r, u_b) / sum(u)`` (and a disc of
-    :data:`HULL_MIN_RADIUS` around white); ``centre`` (2,) is white's chromaticity.
+    ``to_drive`` (3, 3) is ``U = D^-1 M``, camera RGB to drive relative to a perfect white
+    diffuser; ``hull`` (k, 2) the counter-clockwise vertices of the chart's fitted patches in
+    the chromaticity plane ``(u_r, u_b) / sum(u)``; ``centre`` (2,) white's chromaticity
+    (docs/solution.md, "The domain"; built by :func:`fit_domain`).
     """
 
     to_drive: np.ndarray
@@ -387,6 +368,8 @@ class MatrixCorrection:
     Q: np.ndarray
     domain: FitDomain | None = None
 
+    linear: ClassVar[bool] = True
+
     def __post_init__(self) -> None:
         object.__setattr__(self, "Q", _matrix(self.Q, "Q"))
 
@@ -399,16 +382,8 @@ class MatrixCorrection:
         return self.Q
 
     @property
-    def linear(self) -> bool:
-        return True
-
-    @property
     def invertible(self) -> bool:
         return matrix_invertible(self.Q)
-
-    @property
-    def homogeneous(self) -> bool:
-        return True
 
     def apply(self, rgb: ArrayLike) -> np.ndarray:
         """(..., 3) ``Q rgb``."""
@@ -443,6 +418,9 @@ class RootPolynomialCorrection:
     domain: FitDomain | None = None
     fade: tuple[float, float] = DEFAULT_FADE
 
+    kind: ClassVar[str] = "root-polynomial"
+    linear: ClassVar[bool] = False
+
     def __post_init__(self) -> None:
         object.__setattr__(self, "fade", _pair(self.fade, "post_correction.parameters.fade"))
         C = np.asarray(self.coefficients, dtype=np.float64)
@@ -457,10 +435,6 @@ class RootPolynomialCorrection:
         object.__setattr__(self, "fallback", _matrix(self.fallback, "fallback"))
 
     @property
-    def kind(self) -> str:
-        return "root-polynomial"
-
-    @property
     def degree(self) -> int:
         return next(d for d, n in ROOT_POLYNOMIAL_TERMS.items() if n == self.coefficients.shape[1])
 
@@ -469,16 +443,8 @@ class RootPolynomialCorrection:
         return self.fallback
 
     @property
-    def linear(self) -> bool:
-        return False
-
-    @property
     def invertible(self) -> bool:
         return matrix_invertible(self.fallback)
-
-    @property
-    def homogeneous(self) -> bool:
-        return True
 
     def weight(self, rgb: ArrayLike) -> np.ndarray:
         """(...,) 1 where the polynomial applies, 0 where the fallback does."""
@@ -553,6 +519,9 @@ class ProtectedCorrection:
     negative: tuple[float, float] = DEFAULT_NEGATIVE
     dark: float = 0.0
 
+    kind: ClassVar[str] = "protected"
+    linear: ClassVar[bool] = False
+
     def __post_init__(self) -> None:
         object.__setattr__(self, "drive_matrix", _matrix(self.drive_matrix, "drive_matrix"))
         object.__setattr__(self, "bright", _pair(self.bright, "post_correction.bright"))
@@ -565,10 +534,6 @@ class ProtectedCorrection:
             )
         object.__setattr__(self, "dark", float(self.dark))
 
-    @property
-    def kind(self) -> str:
-        return "protected"
-
     @cached_property
     def floor(self) -> float:
         """``dark`` in drive units: the least drive negative light is measured against."""
@@ -579,16 +544,8 @@ class ProtectedCorrection:
         return self.inner.matrix
 
     @property
-    def linear(self) -> bool:
-        return False
-
-    @property
     def invertible(self) -> bool:
         return self.inner.invertible
-
-    @property
-    def homogeneous(self) -> bool:
-        return False
 
     def weight(self, rgb: ArrayLike) -> np.ndarray:
         """(...,) 1 where ``inner`` applies, 0 where the identity does."""

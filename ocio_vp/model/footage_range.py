@@ -2,28 +2,18 @@
 rendering of a post-correction is from the exact model over it.
 
 A post-correction is fitted on a chart, but every host that carries it (the OCIO config, the
-Resolve CLF, DCTL and cube, ``ocio-vp apply``) sees whatever the camera records. The sets, all
-camera RGB relative to the scene's white (``white``: the white patch as the camera records it):
-
-==============  ===============================================================================
-set             what
-==============  ===============================================================================
-reflectances    surfaces lit by the stage at :data:`EXPOSURES` (1/16 to 4) times, with noise
-near_black      the same surfaces at :data:`NEAR_BLACK` (2^-10 to 2^-6) times, and black, with
-                noise: channels around 0, many negative
-highlights      the lit white at 1 to 16 times, the surfaces at 4 to 16 times (:data:`HDR`)
-emitters        self-luminous colours at :data:`EMITTER_LEVELS` (1/4, 1, 4) times the white's
-                luminance: narrow-band LEDs from spectra, the wall's own primaries and their
-                pairwise mixes (the caller supplies their camera RGB at the white's luminance)
-==============  ===============================================================================
+Resolve CLF, DCTL and cube, ``ocio-vp apply``) sees whatever the camera records. The sets
+(:data:`SETS`), camera RGB relative to the scene's white: ``reflectances``, surfaces lit by the
+stage at :data:`EXPOSURES` times, with noise; ``near_black``, the same at :data:`NEAR_BLACK`
+times and black, with noise (many channels negative); ``highlights``, the lit white and the
+surfaces up to :data:`HDR` times; ``emitters``, self-luminous colours at :data:`EMITTER_LEVELS`
+times the white's luminance (narrow-band LEDs, the wall's primaries and their pairwise mixes).
 
 Noise is Gaussian per channel, ``sigma^2 = (READ_NOISE w)^2 + SHOT_NOISE^2 w |x|`` with ``w``
 the white's largest channel. :func:`agreement` measures ΔE2000 between a host and the exact
-model on every set (:func:`ocio_vp.metrics.delta_E_2000`: the ``camera_to_xyz`` matrix, the
-scene white's chromaticity as Lab's reference white, the white at Y = 1).
-
-The simulator builds the sets from spectra (:func:`ocio_vp.simulator.truth.stage_footage_range`),
-the config writer from the calibration alone (:func:`calibration_footage_range`).
+model on every set (:func:`ocio_vp.metrics.delta_E_2000`). The simulator builds the sets from
+spectra (:func:`ocio_vp.simulator.truth.stage_footage_range`), the config writer from the
+calibration alone (:func:`calibration_footage_range`).
 """
 
 from __future__ import annotations
@@ -149,17 +139,8 @@ def wall_emitters(SL: ArrayLike, white: ArrayLike, camera_to_xyz: ArrayLike) -> 
     """The wall's primaries and their pairwise mixes (camera RGB, [SL]'s columns) at the
     luminance (Y through ``camera_to_xyz``) of ``white``; those of no positive luminance are
     left out."""
-    SL = np.asarray(SL, dtype=np.float64)
-    colours = np.asarray(
-        [
-            SL[:, 0],
-            SL[:, 1],
-            SL[:, 2],
-            SL[:, 0] + SL[:, 1],
-            SL[:, 1] + SL[:, 2],
-            SL[:, 0] + SL[:, 2],
-        ]
-    )
+    primaries = np.ascontiguousarray(np.asarray(SL, dtype=np.float64).T)
+    colours = np.vstack([primaries, primaries + np.roll(primaries, -1, axis=0)])  # r+g, g+b, b+r
     y = np.asarray(camera_to_xyz, dtype=np.float64)[1]
     luminance = colours @ y
     keep = luminance > 0

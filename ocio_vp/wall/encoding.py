@@ -1,33 +1,10 @@
 """The wall's signal: the encodings and the panel-linearity LUT, in numpy.
 
-The OCIO transforms built from them are in :mod:`ocio_vp.ocio.wall`.
-
-Chain (reference -> wall signal), for both ``LED Wall - Outer Frustum`` (M) and
-``LED Wall - Inner Frustum`` (N + offset)::
-
-    gamma2.4, srgb, pq:  matrix  ->  encoding  ->  FileTransform luts/<sidecar>.clf (LUT)
-    linear:              matrix  ->  FileTransform luts/<sidecar>.clf (log2 shaper + LUT)
-
-``<sidecar>`` is ``<stage>_panel_linearity_<hash>``, named by its content.
-
-The LUT corrects the panel's measured response ``r`` (:mod:`ocio_vp.wall.linearity`): the
-panel shown drive ``r^-1(x)`` emits ``x``. Its entries are spaced evenly **in the wall's own
-signal**, so they are dense where the wall is dark, as the wall's code values are:
-
-- ``gamma2.4``, ``srgb``, ``pq``: the LUT takes the encoded signal ``t`` in [0, 1] and returns
-  ``E(r^-1(E^-1(t)))``, the signal of the corrected drive (``E`` the encoding). A LUT1D clamps
-  its input to [0, 1], which is the encoded signal's own range; for PQ the table is the identity
-  above ``E(1)``, so HDR drive above 1.0 passes unchanged up to PQ's 10000 cd/m2.
-- ``linear``: a log2 shaper ``t = log2(1 + d / LOG_SHAPER_KNEE) / log2(1 + H / LOG_SHAPER_KNEE)``
-  (a CLF ``Log`` node) maps drive [0, H] to [0, 1], ``H`` = :data:`LINEAR_HEADROOM`, and the LUT
-  returns the corrected drive. Near black the spacing is linear (``LOG_SHAPER_KNEE`` = 0.01% of
-  the top step), above it each entry is a constant ratio of drive apart.
-
-Drive below 0 (outside the LED gamut) reaches the LUT as a signal <= 0 and is sent as black.
-The LUT has :data:`LUT_SIZE` = 4095 entries (OCIO keeps a 1D texture on GPU hosts up to that).
-
-Encodings: ``gamma2.4`` is ``drive^(1/2.4)`` (BT.1886 with a zero black); ``srgb`` is the
-IEC 61966-2-1 piecewise curve; ``pq`` is SMPTE ST 2084 of ``drive * peak_nits``.
+The OCIO transforms built from them are in :mod:`ocio_vp.ocio.wall`. Encodings: ``gamma2.4``
+is ``drive^(1/2.4)`` (BT.1886 with a zero black); ``srgb`` is the IEC 61966-2-1 piecewise
+curve; ``pq`` is SMPTE ST 2084 of ``drive * peak_nits``. The LUT sidecar, spaced in the wall's
+own signal (through the encoding, or a log2 shaper for a linear wall), is described in
+docs/linearity.md ("The LUT sidecar").
 """
 
 from __future__ import annotations
@@ -81,6 +58,7 @@ ACCURACY_BANDS = ((0.001, 0.002), (0.002, 0.02), (0.02, 1.0))
 #: What :func:`lut_accuracy` measures (the ``definition`` of ``linearity.lut``).
 LUT_ACCURACY = "max |r(LUT(x)) - x| / x, x = linear drive (1.0 = top step)"
 _CHECK_POINTS = 20001
+_SHAPER_SCALE = np.log2(1.0 + LINEAR_HEADROOM / LOG_SHAPER_KNEE)  # the shaper's t at drive H
 
 _PQ = {  # SMPTE ST 2084:2014 constants
     "m1": 2610 / 16384,
@@ -162,15 +140,13 @@ def shaper(drive: np.ndarray, encoding: str, *, peak_nits: float = DEFAULT_PEAK_
     if encoding != "linear":
         return encode(drive, encoding, peak_nits=peak_nits)
     drive = np.asarray(drive, dtype=np.float64)
-    scale = np.log2(1.0 + LINEAR_HEADROOM / LOG_SHAPER_KNEE)
-    return np.log2(1.0 + np.maximum(drive, 0.0) / LOG_SHAPER_KNEE) / scale
+    return np.log2(1.0 + np.maximum(drive, 0.0) / LOG_SHAPER_KNEE) / _SHAPER_SCALE
 
 
 def _unshape(t: np.ndarray, encoding: str, peak_nits: float) -> np.ndarray:
     if encoding != "linear":
         return decode(t, encoding, peak_nits=peak_nits)
-    scale = np.log2(1.0 + LINEAR_HEADROOM / LOG_SHAPER_KNEE)
-    return (np.exp2(np.asarray(t, dtype=np.float64) * scale) - 1.0) * LOG_SHAPER_KNEE
+    return (np.exp2(np.asarray(t, dtype=np.float64) * _SHAPER_SCALE) - 1.0) * LOG_SHAPER_KNEE
 
 
 #: OCIO's ``encoding`` attribute of the wall colorspaces, per wall signal (docs/linearity.md).

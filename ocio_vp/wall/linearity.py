@@ -1,29 +1,11 @@
 """Panel linearity: the ``ramps`` section, the per-channel response fit and its inverse 1D LUT.
 
 The paper assumes a linear LED volume (LeGendre et al. 2022, Section 3.2, "Panel and Camera
-Linearity") and suggests verifying it with displayed ramps and correcting it when needed. Here,
-per LED channel k, from ramps as a camera delivers them:
-
-1. every ramp step's camera RGB ``C_i`` is projected onto that primary's column ``s_k`` of [SL]
-   by least squares, ``y_i = s_k . C_i / (s_k . s_k)``, so the response is one scalar per step;
-2. the camera's black and the wall's flare -- the zero-drive step, or else a separate ``black``
-   frame -- is subtracted (it may read slightly negative after the camera's own black
-   subtraction) and the response normalised at the top step (drive 1.0, the level of
-   ``primaries``): ``r_i = (y_i - y_0) / (y_top - y_0)``;
-3. the measurement noise is estimated from the ramp itself (or given as ``noise_floor``):
-   an absolute floor plus a part proportional to the level, see :func:`estimate_noise`;
-4. a ramp that *falls* by more than the noise is refused; smaller dips are removed by a
-   weighted isotonic (monotone) regression, whose merged steps become one knot, and steps
-   below the detection limit (3 noise floors) are dropped from the knots -- all named in the
-   ``linearity`` block;
-5. ``r(d)`` is interpolated monotonically through the knots (PCHIP, never a polynomial) and
-   inverted exactly (bisection on the interpolant), giving the pre-correction
-   ``d = r^-1(x)`` that makes the panel linear. :mod:`ocio_vp.wall.encoding` turns it into
-   the CLF sidecar.
-
-Only what a scene requires is modelled: a channel within :data:`LINEARITY_TOLERANCE` of linear
-(absolute) and :data:`RELATIVE_TOLERANCE` of each level (where that exceeds the noise) is left
-alone; when every channel is, no LUT is written (``solution.json`` says so).
+Linearity") and suggests verifying it with displayed ramps. Per LED channel, each step's
+camera RGB is projected onto the primary's column of [SL], black-subtracted and normalised at
+the top step; the noise is estimated from the ramp; a monotone (isotonic, then PCHIP) response
+is fitted and inverted exactly. Each step, and when a channel counts as linear, is in
+docs/linearity.md; :mod:`ocio_vp.wall.encoding` turns the inverse into the CLF sidecar.
 """
 
 from __future__ import annotations
@@ -117,7 +99,9 @@ def _error(source: str | None, key: Key, problem: str) -> InputError:
     return InputError(problem, source=source, key=format_key_path("ramps", *key))
 
 
-def _parse_ramp(ctx: Validator, raw: JsonValue, key: Key) -> Ramp:
+def _parse_ramp(
+    ctx: Validator, raw: JsonValue, key: Key, black: np.ndarray | None, noise: float | None
+) -> Ramp:
     ramp = ctx.mapping(raw, key, required=("drive", "camera"))
     drive_raw, camera_raw = ramp["drive"], ramp["camera"]
     if not isinstance(drive_raw, (list, tuple)):
@@ -150,7 +134,7 @@ def _parse_ramp(ctx: Validator, raw: JsonValue, key: Key) -> Ramp:
         )
     if not np.any(camera[-1] > 0):
         raise ctx.error((*key, "camera", len(drive) - 1), "the top step is black (zero)")
-    return Ramp(drive=drive, camera=camera)
+    return Ramp(drive=drive, camera=camera, black=black, noise_floor=noise)
 
 
 def _rgb(ctx: Validator, value: JsonValue, key: Key) -> np.ndarray:
@@ -187,11 +171,7 @@ def parse_ramps(
                 (*key, "noise_floor"),
                 f"expected a fraction of the top step in (0, 0.5), got {noise:g}",
             )
-    ramps = {c: _parse_ramp(ctx, section[c], (*key, c)) for c in CHANNELS}
-    return {
-        c: Ramp(drive=r.drive, camera=r.camera, black=black, noise_floor=noise)
-        for c, r in ramps.items()
-    }
+    return {c: _parse_ramp(ctx, section[c], (*key, c), black, noise) for c in CHANNELS}
 
 
 def ramps_to_dict(ramps: Mapping[str, Ramp]) -> JsonObject:
@@ -389,18 +369,14 @@ def channel_response(
     *,
     source: str | None = None,
 ) -> ChannelResponse:
-    """Normalised panel response of one LED channel from its ramp, as a camera delivers it.
-
-    Each step's camera RGB is projected onto column ``channel`` of [SL] (paper eq. 1: the
-    camera sees ``[SL] d`` for drive ``d``) by least squares; the black (zero-drive step, else
-    the ``black`` frame, else 0) is subtracted and the result divided by the top step. The
-    noise is estimated (:func:`estimate_noise`) unless ``noise_floor`` is given; dips within
-    the noise are pooled by a weighted isotonic regression and steps below
-    :data:`DETECTION_SIGMAS` noise floors are dropped from the knots.
+    """Normalised panel response of one LED channel from its ramp, as a camera delivers it:
+    projected onto column ``channel`` of [SL], black-subtracted, normalised at the top step,
+    its noise estimated (:func:`estimate_noise`) unless ``noise_floor`` is given, dips within
+    the noise pooled and steps below :data:`DETECTION_SIGMAS` noise floors dropped from the
+    knots (docs/linearity.md, "From ramp to response").
 
     ``projection_residual`` is the largest part of a step's (black-subtracted) camera RGB that
-    is *not* along the primary's column, relative to the top step: a 1D LUT cannot fix a
-    channel whose colour shifts along the ramp, and this says how much it does.
+    is *not* along the primary's column, relative to the top step.
 
     Raises
     ------
@@ -510,13 +486,9 @@ def _deviations(
         return absolute, None, absolute > tolerance
     relative = r / d - 1.0
     sigma = np.hypot(fit.noise.floor, fit.noise.relative * r)
-    # deviations smaller than the noise say nothing about the wall (at 0.03% of peak a 0.02%
-    # floor is 70% of the level)
+    # deviations within the noise say nothing about the wall; the worst is reported where a
+    # level can be quantified, chosen by its lower bound (docs/linearity.md)
     significant = np.abs(r - d) > DETECTION_SIGMAS * sigma
-    # the worst deviation is reported where a level can be quantified (10 noise floors, where
-    # one step's own noise is 10% of it or less), with its uncertainty (the step's and the
-    # black's noise), and chosen by its lower bound: the largest of many noisy deviations is
-    # otherwise mostly noise
     quantified = significant & (r >= QUANTIFICATION_SIGMAS * fit.noise.floor)
     uncertainty = np.hypot(sigma, fit.noise.floor) / d
     shadow = None
@@ -627,14 +599,8 @@ def fit_linearity(
     tolerance: float = LINEARITY_TOLERANCE,
     source: str | None = None,
 ) -> Linearity:
-    """The ``linearity`` block of ``solution.json`` from the measured ramps.
-
-    Per channel: the response knots, the black subtracted, the noise, the steps dropped or
-    merged (see :func:`channel_response`), the largest deviation from linear over the knots
-    (``max |r_k - d_k|``, a fraction of the top step) and the worst relative to the level
-    (``shadow_deviation``: ``r/d - 1`` and the drive it is at), whether it is corrected, the
-    projection residual and how far the top step is from ``primaries``. ``notes`` and
-    ``warnings`` say the same in words, for the terminal.
+    """The ``linearity`` block of ``solution.json`` from the measured ramps (its fields:
+    docs/linearity.md); ``notes`` and ``warnings`` say it in words, for the terminal.
 
     The pre-correction LUT is built from the knots when the config is written
     (:func:`ocio_vp.ocio.wall.wall_outputs`); ``corrected`` false everywhere means no LUT.

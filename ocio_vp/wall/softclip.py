@@ -6,19 +6,8 @@ frustum) or N + offset (inside) and before the linearity LUT and the signal enco
     f(d) = d                                        d <= k
     f(d) = 1 - (1 - k) exp(-(d - k) / (1 - k))      d >  k
 
-``k`` (the knee, 0 < k < 1) is where compression starts. ``f`` is the identity below the knee
-(negative drive included), its slope is 1 on both sides of the knee (C1), it rises strictly
-and approaches 1.0 (full drive) without reaching it. It is within :data:`FULL_TOLERANCE`
-(1/1023, one 10-bit code value of drive) of 1.0 from :func:`full_drive` ``= k + (1 - k)
-ln(1023 (1 - k))`` on, which is at most ln 1023 = 6.93 for any knee: every drive content can
-ask for on a stage whose content white needs at least 6.93 / 16 = 0.43 of the peak (16x content
-white, four stops over, the linear wall's LUT domain) ends within a code value of full drive.
-
-OCIO carries ``f`` exactly as a ``LogCameraTransform`` (:mod:`ocio_vp.ocio.wall`). The inverse,
-``d = k - (1 - k) ln((1 - y) / (1 - k))`` above the knee, is defined on ``y < 1``; the config
-clamps the signal it inverts to :data:`INVERSE_CAP` (``1 - 2^-12``), so full drive (and above)
-reads back as :func:`inverse` of the cap, ``k + (1 - k) ln(4096 (1 - k))``: the brightest
-drive the curve tells apart at 12 bits.
+``k`` is the knee (0 < k < 1). Its properties, why :data:`FULL_TOLERANCE` is met, and how the
+config carries ``f`` and its inverse (capped at :data:`INVERSE_CAP`) are in docs/headroom.md.
 """
 
 from __future__ import annotations
