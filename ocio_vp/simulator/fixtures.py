@@ -17,9 +17,9 @@ import numpy as np
 from ocio_vp.errors import InputError
 from ocio_vp.formats.fixtures import Fixture
 from ocio_vp.formats.measurements import Measurements
-from ocio_vp.simulator.data import DEFAULT_LEDS, gaussian_leds
+from ocio_vp.simulator.data import DEFAULT_LEDS, gaussian_leds, light_spectrum
 from ocio_vp.simulator.stage import SpectralStage, camera_rgb
-from ocio_vp.spectra import align, unknown_name
+from ocio_vp.spectra import unknown_name
 
 __all__ = [
     "FIXTURE_KINDS",
@@ -40,14 +40,9 @@ FIXTURE_KINDS: dict[str, tuple[tuple[str, object], ...]] = {
 
 
 def _spectrum(source: object) -> np.ndarray:
-    import colour
-
     if isinstance(source, tuple):
         return gaussian_leds((source, source, source))[:, 0]
-    for collection in (colour.SDS_ILLUMINANTS, colour.SDS_LIGHT_SOURCES):
-        if source in collection:
-            return align(collection[source])
-    raise KeyError(source)  # a typo in FIXTURE_KINDS, not a user error
+    return light_spectrum(str(source))
 
 
 def _luminance(spectra: np.ndarray) -> np.ndarray:
