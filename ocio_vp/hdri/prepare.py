@@ -464,19 +464,16 @@ def prepare_hdri_file(
     half = oiio.TypeDesc(oiio.HALF)
     out_format = spec.format if spec.format.basetype in (oiio.HALF, oiio.FLOAT) else half
     storage = np.float16 if out_format.basetype == oiio.HALF else np.float32
+    rgb = pixels[..., rgb_index]  # a copy: fit_under_peak leaves it as read
     try:
-        prepared = fit_under_peak(pixels[..., rgb_index], peak=peak, storage_dtype=storage)
+        prepared = fit_under_peak(rgb, peak=peak, storage_dtype=storage)
     except InputError as err:
         raise InputError(err.problem, source=source, key=err.key) from None
-    before = {
-        name: diffuse_integral(pixels[..., rgb_index], normal=n)
+    w_avg = {
+        name: (diffuse_integral(rgb, normal=n), diffuse_integral(prepared.image, normal=n))
         for name, n in (normals or {}).items()
     }
     pixels[..., rgb_index] = prepared.image
-    w_avg = {
-        name: (before[name], diffuse_integral(prepared.image, normal=n))
-        for name, n in (normals or {}).items()
-    }
     prepared = dataclasses.replace(prepared, w_avg=w_avg)
     out_spec = oiio.ImageSpec(spec)
     out_spec.set_format(out_format)
