@@ -489,19 +489,14 @@ def plate_count(
     sequence: PatternSequence | None = None,
 ) -> int:
     """How many plates (and take frames) :func:`write_capture` writes (for a progress bar)."""
-    if measurements.panels:
-        per_env = sum(
-            1
-            + len(e.panel_black_level or {})
-            + (options.footage_frames if e.panel_w_avg is not None else 0)
-            for e in measurements.environments
-        )
-        return options.flat_frames + 6 * len(measurements.panels) + per_env
+    panels = measurements.panels
     per_env = sum(
-        1 + (e.black_level is not None) + (options.footage_frames if e.w_avg is not None else 0)
+        1
+        + (len(e.panel_black_level or {}) if panels else e.black_level is not None)
+        + (options.footage_frames if (e.panel_w_avg if panels else e.w_avg) is not None else 0)
         for e in measurements.environments
     )
-    plates = options.flat_frames + 6 + per_env
-    if options.take is None:
+    plates = options.flat_frames + 6 * max(1, len(panels)) + per_env
+    if panels or options.take is None:  # a take films one wall
         return plates
     return plates - 3 + take_frame_count(sequence or practice_sequence(), options.take)
