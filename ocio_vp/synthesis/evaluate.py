@@ -45,17 +45,12 @@ class HeldOutStudy:
         return self.q_synthesized / self.q_real
 
 
-def _noisy(clean, noise, w_avg_noise, rng):
-    noisy = noisy_measurements(clean, noise, rng)
-    env = noisy.environments[0]
-    if w_avg_noise is not None:  # w_avg with its own noise level (0: a rendered HDRI)
-        true = clean.environments[0].w_avg
-        env = dataclasses.replace(env, w_avg=true * (1.0 + w_avg_noise * rng.standard_normal(3)))
-    return noisy, env
-
-
 def _one_seed(stage, clean, spectrum, synthesize, rng, noise, method, held_out):
-    noisy, env = _noisy(clean, noise[0], noise[1], rng)
+    noisy = noisy_measurements(clean, noise[0], rng)
+    env = noisy.environments[0]
+    if noise[1] is not None:  # w_avg with its own noise level (0: a rendered HDRI)
+        true = clean.environments[0].w_avg
+        env = dataclasses.replace(env, w_avg=true * (1.0 + noise[1] * rng.standard_normal(3)))
     M = np.linalg.inv(noisy.SL)
 
     def mean_delta_E(Q):
