@@ -1,12 +1,10 @@
 """Fit an HDRI under the wall's peak: energy-preserving dilation of over-range light sources.
 
-LED panels cannot emit more than their peak, yet the paper shows the HDRI's full range by
-spreading bright sources with an energy-preserving dilation (Section 3.2). Here the *excess* of
-every over-range source moves, in the source's own colour, into the pixels closest to it (in
-angle on the sphere), each filled up to the peak, so that no channel exceeds ``peak`` and the
-solid-angle-weighted energy is unchanged per channel. docs/hdri.md gives the algorithm and
-what it cannot keep (w_avg facing a source drops slightly: the most compact spread minimises
-it).
+LED panels cannot emit more than their peak; as the paper spreads bright sources (Section
+3.2), the *excess* of every over-range source moves, in its own colour, into the pixels closest
+to it on the sphere, each filled up to the peak: no channel exceeds ``peak`` and the
+solid-angle-weighted energy is kept per channel. docs/hdri.md gives the algorithm and what it
+cannot keep.
 
 References
 ----------
