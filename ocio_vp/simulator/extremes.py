@@ -21,7 +21,7 @@ import numpy as np
 from ocio_vp.metrics import camera_delta_E_2000
 from ocio_vp.model.footage_range import EMITTER_LEVELS
 from ocio_vp.simulator.stage import SpectralStage, camera_rgb, environment_spectrum
-from ocio_vp.spectra import align, spectral_shape, wavelengths
+from ocio_vp.spectra import wavelengths
 
 __all__ = [
     "EMITTER_FWHM",
@@ -42,14 +42,13 @@ EMITTER_FWHM = 20.0
 #: Band edges (nm) of the optimal colours: every band between two of them is one band-pass
 #: reflectance; every band between two inner edges (not 380 or 780) is also one band-stop.
 OPTIMAL_EDGES = (380.0, *(float(e) for e in range(400, 701, 20)), 780.0)
-_OBSERVER = "CIE 1931 2 Degree Standard Observer"
 
 
 @functools.lru_cache(maxsize=1)
 def _y_bar() -> np.ndarray:
-    import colour
+    from ocio_vp.synthesis.camera import cie_cmfs
 
-    y = align(colour.MSDS_CMFS[_OBSERVER].copy().align(spectral_shape()).signals["y_bar"])
+    y = cie_cmfs()[:, 1]
     y.setflags(write=False)
     return y
 

@@ -18,6 +18,7 @@ from ocio_vp.errors import InputError
 from ocio_vp.formats.fixtures import Fixture
 from ocio_vp.formats.measurements import Measurements
 from ocio_vp.simulator.data import DEFAULT_LEDS, gaussian_leds, light_spectrum
+from ocio_vp.simulator.extremes import luminance
 from ocio_vp.simulator.stage import SpectralStage, camera_rgb
 from ocio_vp.spectra import unknown_name
 
@@ -45,20 +46,14 @@ def _spectrum(source: object) -> np.ndarray:
     return light_spectrum(str(source))
 
 
-def _luminance(spectra: np.ndarray) -> np.ndarray:
-    from ocio_vp.synthesis.camera import cie_cmfs
-
-    return cie_cmfs()[:, 1] @ spectra
-
-
 def fixture_spectra(stage: SpectralStage, kind: str) -> tuple[tuple[str, ...], np.ndarray]:
     """(channel names, (W, k) radiance per unit drive) of a fixture kind on ``stage``."""
     if kind not in FIXTURE_KINDS:
         raise InputError(unknown_name("fixture kind", kind, FIXTURE_KINDS), key="fixture")
     names = tuple(name for name, _ in FIXTURE_KINDS[kind])
     spectra = np.column_stack([_spectrum(source) for _, source in FIXTURE_KINDS[kind]])
-    green = float(_luminance(stage.leds[:, 1]))
-    return names, spectra * (green / _luminance(spectra))
+    green = float(luminance(stage.leds[:, 1]))
+    return names, spectra * (green / luminance(spectra.T))
 
 
 def simulated_fixture(stage: SpectralStage, kind: str, name: str | None = None) -> Fixture:
