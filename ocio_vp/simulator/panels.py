@@ -4,8 +4,6 @@ The ceiling is a second :class:`~ocio_vp.simulator.stage.SpectralStage` with its
 own calibration panel and no black level, its processor matched to the wall's white. A
 **scene** (:data:`SCENES`) lights it with one spectrum from above (the ceiling's part) and
 another from the sides (the wall's): docs/simulator.md (*A ceiling of another panel model*).
-:func:`simulate_panel_measurements` writes the measurements file a stage engineer would, and
-:func:`panel_held_out_errors` judges a solve on reflectances the chart does not contain.
 """
 
 from __future__ import annotations

@@ -5,11 +5,8 @@ The player shows sequence frame ``f`` during ``[f, f + 1) / fps`` seconds; the c
 shutter, each row ``readout`` frames later than the one above (rolling shutter). The wall's
 drive passes through the panel's response (:class:`PanelResponse`) and [SL]; ``bounce``,
 ``flicker``, ``flare``, ``spill`` onto a textured set, noise, ``dropped`` frames and a
-``truncate``d take are as docs/simulator.md (*The simulated take*) describes.
-
-:func:`take_signal` gives the per-frame mean of the wall region without rendering images,
-:func:`write_take` renders and writes the frames; the truth for the checks is
-:func:`true_frame_times` and :meth:`PanelResponse.__call__` with [SL].
+``truncate``d take are as docs/simulator.md (*The simulated take*) describes. The truth for
+the checks is :func:`true_frame_times` and :meth:`PanelResponse.__call__` with [SL].
 """
 
 from __future__ import annotations
