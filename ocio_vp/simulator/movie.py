@@ -16,7 +16,6 @@ import numpy as np
 
 from ocio_vp.patterns.sequence import PatternSequence
 from ocio_vp.plates.movie import AV_MATRICES, AV_RANGES
-from ocio_vp.simulator.plates import MOVIE_ENCODING
 from ocio_vp.simulator.take import TakeOptions, render_frames
 
 __all__ = ["MOVIE_CODECS", "write_movie"]
@@ -69,7 +68,7 @@ def write_movie(
     options: TakeOptions | None = None,
     *,
     codec: str = "prores4444",
-    encoding: str = MOVIE_ENCODING,
+    encoding: str = "ARRI LogC3",
     matrix: str = "rec709",
     range_: str = "legal",
     tags: bool = True,

@@ -475,6 +475,7 @@ def _film_patterns(measurements, folder: Path, options: PlateOptions, sequence, 
             folder / TAKE_FOLDER / TAKE_MOVIE,
             options.take,
             codec=options.take_format,
+            encoding=MOVIE_ENCODING,
             on_frame=on_frame,
         )
     else:
