@@ -266,7 +266,7 @@ def region_mask(height: int, width: int, regions) -> np.ndarray:
     >>> int(region_mask(4, 8, [PanelRegion(elevation=(0.0, 90.0))]).sum())  # the upper half
     16
     """
-    theta, phi = pixel_angles(np.arange(height), np.arange(width), height, width)
+    theta, phi = _angles(height, width)
     elevation = 90.0 - np.degrees(theta)[:, None]
     azimuth = np.degrees(phi)[None, :]
     mask = np.zeros((height, width), dtype=bool)

@@ -1,12 +1,10 @@
 """Fit an HDRI under the wall's peak: energy-preserving dilation of over-range light sources.
 
-LED panels cannot emit more than their peak, yet the paper shows the HDRI's full range by
-spreading bright sources with an energy-preserving dilation (Section 3.2). Here the *excess* of
-every over-range source moves, in the source's own colour, into the pixels closest to it (in
-angle on the sphere), each filled up to the peak, so that no channel exceeds ``peak`` and the
-solid-angle-weighted energy is unchanged per channel. docs/hdri.md gives the algorithm and
-what it cannot keep (w_avg facing a source drops slightly: the most compact spread minimises
-it).
+LED panels cannot emit more than their peak; as the paper spreads bright sources (Section
+3.2), the *excess* of every over-range source moves, in its own colour, into the pixels closest
+to it on the sphere, each filled up to the peak: no channel exceeds ``peak`` and the
+solid-angle-weighted energy is kept per channel. docs/hdri.md gives the algorithm and what it
+cannot keep.
 
 References
 ----------
@@ -464,19 +462,16 @@ def prepare_hdri_file(
     half = oiio.TypeDesc(oiio.HALF)
     out_format = spec.format if spec.format.basetype in (oiio.HALF, oiio.FLOAT) else half
     storage = np.float16 if out_format.basetype == oiio.HALF else np.float32
+    rgb = pixels[..., rgb_index]  # a copy: fit_under_peak leaves it as read
     try:
-        prepared = fit_under_peak(pixels[..., rgb_index], peak=peak, storage_dtype=storage)
+        prepared = fit_under_peak(rgb, peak=peak, storage_dtype=storage)
     except InputError as err:
         raise InputError(err.problem, source=source, key=err.key) from None
-    before = {
-        name: diffuse_integral(pixels[..., rgb_index], normal=n)
+    w_avg = {
+        name: (diffuse_integral(rgb, normal=n), diffuse_integral(prepared.image, normal=n))
         for name, n in (normals or {}).items()
     }
     pixels[..., rgb_index] = prepared.image
-    w_avg = {
-        name: (before[name], diffuse_integral(prepared.image, normal=n))
-        for name, n in (normals or {}).items()
-    }
     prepared = dataclasses.replace(prepared, w_avg=w_avg)
     out_spec = oiio.ImageSpec(spec)
     out_spec.set_format(out_format)

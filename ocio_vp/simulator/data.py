@@ -40,6 +40,7 @@ __all__ = [
     "chart_reflectances",
     "describe_drive",
     "gaussian_leds",
+    "light_spectrum",
     "wavelengths",
 ]
 
@@ -81,7 +82,6 @@ def gaussian_leds(primaries=DEFAULT_LEDS) -> np.ndarray:
     )
 
 
-# --------------------------------------------------------------------------------------------
 # Environments: each resolves to an (unnormalised) spectrum on the grid. The simulator scales
 # it (see ocio_vp.simulator.stage.environment_spectrum); ``leds``/``camera`` are the stage's own.
 
@@ -101,13 +101,15 @@ class EnvironmentSpec:
     broadband: bool
 
 
-def _dataset(collection: str, key: str) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-    def spectrum(leds: np.ndarray, camera: np.ndarray) -> np.ndarray:
-        import colour
+def light_spectrum(key: str) -> np.ndarray:
+    """(W,) colour-science's ``SDS_ILLUMINANTS[key]`` or ``SDS_LIGHT_SOURCES[key]`` on the grid
+    (no key is in both)."""
+    import colour
 
-        return align(getattr(colour, collection)[key])
-
-    return spectrum
+    for collection in (colour.SDS_ILLUMINANTS, colour.SDS_LIGHT_SOURCES):
+        if key in collection:
+            return align(collection[key])
+    raise KeyError(key)  # a typo in a table of the package, not a user error
 
 
 def camera_white_drive(leds: np.ndarray, camera: np.ndarray) -> np.ndarray:
@@ -140,8 +142,9 @@ def _rgb_led_white(leds: np.ndarray, camera: np.ndarray) -> np.ndarray:
     return leds @ drive
 
 
-def _spec(name: str, description: str, spectrum, broadband: bool) -> EnvironmentSpec:
-    return EnvironmentSpec(name, description, spectrum, broadband)
+def _spectrum(key: str | None) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """The stage's own white (``None``), else :func:`light_spectrum` of ``key``."""
+    return _rgb_led_white if key is None else lambda leds, camera: light_spectrum(key)
 
 
 #: The paper's seven environments (Fig. 5), in the paper's order.
@@ -155,56 +158,36 @@ PAPER_ENVIRONMENTS = (
     "direct_sun",
 )
 
+#: (safe name, description, colour-science key or None for the stage's own white, broadband).
+_ENVIRONMENT_TABLE = (
+    (
+        "warm_white_led",
+        "warm white phosphor LED (colour: SDS_LIGHT_SOURCES['Luxeon WW 2880'])",
+        "Luxeon WW 2880",
+        True,
+    ),
+    ("incandescent", "incandescent tungsten, CIE illuminant A (2856 K)", "A", True),
+    ("indoor_daylight", "indoor daylight through window glass, CIE ID65", "ID65", True),
+    ("rgb_led_white", "the stage's own R, G, B LEDs mixed to a camera-neutral white", None, False),
+    (
+        "sodium_vapour",
+        "low-pressure sodium vapour (colour: SDS_LIGHT_SOURCES['LPS'])",
+        "LPS",
+        False,
+    ),
+    ("outdoor_shade", "outdoors in shade, CIE D75", "D75", True),
+    ("direct_sun", "outdoors in direct sun, CIE D55", "D55", True),
+    (
+        "high_pressure_sodium",
+        "high-pressure sodium (colour: SDS_LIGHT_SOURCES['HPS'])",
+        "HPS",
+        False,
+    ),
+    ("d65", "CIE D65 daylight", "D65", True),
+    ("d50", "CIE D50 daylight", "D50", True),
+)
 #: Every named environment the simulator knows, by safe name.
 ENVIRONMENTS: dict[str, EnvironmentSpec] = {
-    s.name: s
-    for s in (
-        _spec(
-            "warm_white_led",
-            "warm white phosphor LED (colour: SDS_LIGHT_SOURCES['Luxeon WW 2880'])",
-            _dataset("SDS_LIGHT_SOURCES", "Luxeon WW 2880"),
-            True,
-        ),
-        _spec(
-            "incandescent",
-            "incandescent tungsten, CIE illuminant A (2856 K)",
-            _dataset("SDS_ILLUMINANTS", "A"),
-            True,
-        ),
-        _spec(
-            "indoor_daylight",
-            "indoor daylight through window glass, CIE ID65",
-            _dataset("SDS_ILLUMINANTS", "ID65"),
-            True,
-        ),
-        _spec(
-            "rgb_led_white",
-            "the stage's own R, G, B LEDs mixed to a camera-neutral white",
-            _rgb_led_white,
-            False,
-        ),
-        _spec(
-            "sodium_vapour",
-            "low-pressure sodium vapour (colour: SDS_LIGHT_SOURCES['LPS'])",
-            _dataset("SDS_LIGHT_SOURCES", "LPS"),
-            False,
-        ),
-        _spec(
-            "outdoor_shade", "outdoors in shade, CIE D75", _dataset("SDS_ILLUMINANTS", "D75"), True
-        ),
-        _spec(
-            "direct_sun",
-            "outdoors in direct sun, CIE D55",
-            _dataset("SDS_ILLUMINANTS", "D55"),
-            True,
-        ),
-        _spec(
-            "high_pressure_sodium",
-            "high-pressure sodium (colour: SDS_LIGHT_SOURCES['HPS'])",
-            _dataset("SDS_LIGHT_SOURCES", "HPS"),
-            False,
-        ),
-        _spec("d65", "CIE D65 daylight", _dataset("SDS_ILLUMINANTS", "D65"), True),
-        _spec("d50", "CIE D50 daylight", _dataset("SDS_ILLUMINANTS", "D50"), True),
-    )
+    name: EnvironmentSpec(name, description, _spectrum(key), broadband)
+    for name, description, key, broadband in _ENVIRONMENT_TABLE
 }

@@ -73,9 +73,6 @@ def evaluate_solution(stage: SpectralStage, solution, environment=None) -> Evalu
     )
 
 
-# --------------------------------------------------------------------------------------------
-
-
 @dataclass(frozen=True)
 class NoiseStudy:
     """How far N moves under noise: relative Frobenius change ``||N' - N|| / ||N||``."""

@@ -1,20 +1,9 @@
-"""Ground truth beyond the reflective colours of a scene: emitters and optimal colours.
-
-A frame on a stage holds more than reflectances lit by the wall (:mod:`ocio_vp.simulator.truth`
-judges those). This module builds the two other kinds of colour a post-correction meets:
-
-- :func:`emitter_spectra`: **narrow-band emitters** (practicals, neon, screens, LED props): a
-  Gaussian of :data:`EMITTER_FWHM` nm full width at half maximum at every
-  :data:`EMITTER_PEAKS` wavelength, each at :data:`EMITTER_LEVELS` times the luminance of the
-  scene's white (a perfect white diffuser under the real light). Luminance is CIE 1931 Y from
-  the colour-matching functions, not the camera's estimate of it. An emitter is recorded alike
-  on stage and on location (it lights itself), so the right post-correction leaves it alone:
-  :func:`emitter_errors` is the ΔE2000 between ``Q(x)`` and ``x``.
-- :func:`optimal_reflectances`: **optimal colours**, the edge of the reflective gamut: block
-  reflectances, 1 inside one wavelength band and 0 outside (band-pass), and their complements
-  (band-stop), with band edges at :data:`OPTIMAL_EDGES`. They are judged as held-out
-  reflectances are (:func:`ocio_vp.simulator.truth.held_out_errors`: lit by what the wall
-  emits, against the real light).
+"""Ground truth beyond the reflective colours of a scene (:mod:`ocio_vp.simulator.truth`
+judges those): narrow-band emitters (practicals, neon, screens, LED props), which light
+themselves alike on stage and on location, so the right post-correction leaves them alone
+(:func:`emitter_errors`); and optimal colours, the edge of the reflective gamut
+(:func:`optimal_reflectances`), judged as held-out reflectances are. docs/accuracy.md (*Beyond
+the chart*) describes both.
 
 References
 ----------
@@ -32,7 +21,7 @@ import numpy as np
 from ocio_vp.metrics import camera_delta_E_2000
 from ocio_vp.model.footage_range import EMITTER_LEVELS
 from ocio_vp.simulator.stage import SpectralStage, camera_rgb, environment_spectrum
-from ocio_vp.spectra import align, spectral_shape, wavelengths
+from ocio_vp.spectra import wavelengths
 
 __all__ = [
     "EMITTER_FWHM",
@@ -53,14 +42,13 @@ EMITTER_FWHM = 20.0
 #: Band edges (nm) of the optimal colours: every band between two of them is one band-pass
 #: reflectance; every band between two inner edges (not 380 or 780) is also one band-stop.
 OPTIMAL_EDGES = (380.0, *(float(e) for e in range(400, 701, 20)), 780.0)
-_OBSERVER = "CIE 1931 2 Degree Standard Observer"
 
 
 @functools.lru_cache(maxsize=1)
 def _y_bar() -> np.ndarray:
-    import colour
+    from ocio_vp.synthesis.camera import cie_cmfs
 
-    y = align(colour.MSDS_CMFS[_OBSERVER].copy().align(spectral_shape()).signals["y_bar"])
+    y = cie_cmfs()[:, 1]
     y.setflags(write=False)
     return y
 

@@ -17,9 +17,10 @@ import numpy as np
 from ocio_vp.errors import InputError
 from ocio_vp.formats.fixtures import Fixture
 from ocio_vp.formats.measurements import Measurements
-from ocio_vp.simulator.data import DEFAULT_LEDS, gaussian_leds
+from ocio_vp.simulator.data import DEFAULT_LEDS, gaussian_leds, light_spectrum
+from ocio_vp.simulator.extremes import luminance
 from ocio_vp.simulator.stage import SpectralStage, camera_rgb
-from ocio_vp.spectra import align, unknown_name
+from ocio_vp.spectra import unknown_name
 
 __all__ = [
     "FIXTURE_KINDS",
@@ -40,20 +41,9 @@ FIXTURE_KINDS: dict[str, tuple[tuple[str, object], ...]] = {
 
 
 def _spectrum(source: object) -> np.ndarray:
-    import colour
-
     if isinstance(source, tuple):
         return gaussian_leds((source, source, source))[:, 0]
-    for collection in (colour.SDS_ILLUMINANTS, colour.SDS_LIGHT_SOURCES):
-        if source in collection:
-            return align(collection[source])
-    raise KeyError(source)  # a typo in FIXTURE_KINDS, not a user error
-
-
-def _luminance(spectra: np.ndarray) -> np.ndarray:
-    from ocio_vp.synthesis.camera import cie_cmfs
-
-    return cie_cmfs()[:, 1] @ spectra
+    return light_spectrum(str(source))
 
 
 def fixture_spectra(stage: SpectralStage, kind: str) -> tuple[tuple[str, ...], np.ndarray]:
@@ -62,8 +52,8 @@ def fixture_spectra(stage: SpectralStage, kind: str) -> tuple[tuple[str, ...], n
         raise InputError(unknown_name("fixture kind", kind, FIXTURE_KINDS), key="fixture")
     names = tuple(name for name, _ in FIXTURE_KINDS[kind])
     spectra = np.column_stack([_spectrum(source) for _, source in FIXTURE_KINDS[kind]])
-    green = float(_luminance(stage.leds[:, 1]))
-    return names, spectra * (green / _luminance(spectra))
+    green = float(luminance(stage.leds[:, 1]))
+    return names, spectra * (green / luminance(spectra.T))
 
 
 def simulated_fixture(stage: SpectralStage, kind: str, name: str | None = None) -> Fixture:

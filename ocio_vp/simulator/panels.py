@@ -4,8 +4,6 @@ The ceiling is a second :class:`~ocio_vp.simulator.stage.SpectralStage` with its
 own calibration panel and no black level, its processor matched to the wall's white. A
 **scene** (:data:`SCENES`) lights it with one spectrum from above (the ceiling's part) and
 another from the sides (the wall's): docs/simulator.md (*A ceiling of another panel model*).
-:func:`simulate_panel_measurements` writes the measurements file a stage engineer would, and
-:func:`panel_held_out_errors` judges a solve on reflectances the chart does not contain.
 """
 
 from __future__ import annotations
@@ -13,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from functools import partial
 from typing import Any, TypeAlias
 
 import numpy as np
@@ -21,7 +20,7 @@ from numpy.typing import ArrayLike
 from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import Environment, Measurements, PanelGeometry, Stage
 from ocio_vp.formats.panels import PanelRegion, PanelType
-from ocio_vp.simulator.data import ENVIRONMENTS
+from ocio_vp.simulator.data import ENVIRONMENTS, light_spectrum
 from ocio_vp.simulator.stage import (
     EnvironmentLight,
     Leds,
@@ -85,35 +84,17 @@ class Scene:
     broadband: bool = True
 
 
-def _illuminant(name: str) -> Callable[[], np.ndarray]:
-    def spectrum() -> np.ndarray:
-        import colour
+def _daylight(cct: float) -> np.ndarray:
+    import colour
 
-        for collection in (colour.SDS_ILLUMINANTS, colour.SDS_LIGHT_SOURCES):
-            if name in collection:
-                return align(collection[name])
-        raise KeyError(name)  # a typo in SCENES, not a user error
-
-    return spectrum
+    xy = colour.temperature.CCT_to_xy_CIE_D(cct * 1.4388 / 1.4380)
+    return align(colour.sd_CIE_illuminant_D_series(xy))
 
 
-def _daylight(cct: float) -> Callable[[], np.ndarray]:
-    def spectrum() -> np.ndarray:
-        import colour
+def _planckian(cct: float) -> np.ndarray:
+    import colour
 
-        xy = colour.temperature.CCT_to_xy_CIE_D(cct * 1.4388 / 1.4380)
-        return align(colour.sd_CIE_illuminant_D_series(xy))
-
-    return spectrum
-
-
-def _planckian(cct: float) -> Callable[[], np.ndarray]:
-    def spectrum() -> np.ndarray:
-        import colour
-
-        return align(colour.sd_blackbody(cct))
-
-    return spectrum
+    return align(colour.sd_blackbody(cct))
 
 
 def _ground() -> np.ndarray:
@@ -130,15 +111,15 @@ SCENES: dict[str, Scene] = {
     s.name: s
     for s in (
         Scene("overcast", "overcast sky (D65) above, horizon sky and grass from the sides",
-              _daylight(6504.0), _ground, 0.65),
+              partial(_daylight, 6504.0), _ground, 0.65),
         Scene("clear_sky", "blue sky (CIE D 12000 K) above, the sun (D50) from the side",
-              _daylight(12000.0), _illuminant("D50"), 0.3),
+              partial(_daylight, 12000.0), partial(light_spectrum, "D50"), 0.3),
         Scene("golden_hour", "sky (CIE D 9000 K) above, a low sun (Planckian 3000 K) from the side",
-              _daylight(9000.0), _planckian(3000.0), 0.35),
+              partial(_daylight, 9000.0), partial(_planckian, 3000.0), 0.35),
         Scene("interior", "triband fluorescent (FL11) ceiling lights, tungsten (A) lamps",
-              _illuminant("FL11"), _illuminant("A"), 0.55),
+              partial(light_spectrum, "FL11"), partial(light_spectrum, "A"), 0.55),
         Scene("night_street", "white LED street lights (LED-B3) above, sodium (HPS) from the side",
-              _illuminant("LED-B3"), _illuminant("HPS"), 0.5, broadband=False),
+              partial(light_spectrum, "LED-B3"), partial(light_spectrum, "HPS"), 0.5, broadband=False),
     )
 }  # fmt: skip
 

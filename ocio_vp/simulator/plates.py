@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.measurements import CHANNELS, Measurements
-from ocio_vp.simulator.take import write_plate
+from ocio_vp.simulator.take import take_frame_count, write_plate, write_take
 
 if TYPE_CHECKING:
     from ocio_vp.patterns.sequence import PatternSequence
@@ -290,37 +290,37 @@ def _flat_fields(options: PlateOptions, seed: Iterator[int]) -> Iterator[tuple[s
         yield f"flat.{i + 1:04d}.exr", flat
 
 
-def _panel_capture(measurements: Measurements, names: set[str]) -> dict:
-    """The ``panels`` list and ``environments`` of a capture document (paths relative)."""
-    from ocio_vp.formats.panels import panel_values_to_dict, panels_to_dict
+def _chart(plate: str) -> JsonObject:
+    return {"plate": plate, "corners": CHART_CORNERS.tolist()}
 
-    panels: list[JsonValue] = []
-    for entry in panels_to_dict(measurements.panels):
-        name = entry["name"]
-        entry["primaries"] = {
-            c: {"plate": f"{name}_primary_{c}.exr", "region": list(PANEL_REGION)} for c in CHANNELS
-        }
-        entry["lit_chart"] = {
-            c: {"plate": f"{name}_lit_{c}.exr", "corners": CHART_CORNERS.tolist()} for c in CHANNELS
-        }
-        panels.append(entry)
+
+def _region(plate: str) -> JsonObject:
+    return {"plate": plate, "region": list(PANEL_REGION)}
+
+
+def _environments(measurements: Measurements, names: set[str]) -> list[JsonValue]:
+    """The capture document's ``environments``: each one's plates (those written) and w_avg,
+    per panel type on a stage of several."""
+    from ocio_vp.formats.panels import panel_values_to_dict
+
     environments: list[JsonValue] = []
     for env in measurements.environments:
-        entry = {
-            "name": env.name,
-            "target_chart": {"plate": f"{env.name}.exr", "corners": CHART_CORNERS.tolist()},
-        }
-        black: JsonObject = {
-            name: {"plate": f"{env.name}_{name}_black.exr", "region": list(PANEL_REGION)}
-            for name in (env.panel_black_level or {})
-            if f"{env.name}_{name}_black.exr" in names
-        }
+        entry: JsonObject = {"name": env.name, "target_chart": _chart(f"{env.name}.exr")}
+        black: JsonValue
+        w_avg: JsonValue
+        if measurements.panels:
+            plates = {n: f"{env.name}_{n}_black.exr" for n in (env.panel_black_level or {})}
+            black = {n: _region(plate) for n, plate in plates.items() if plate in names}
+            w_avg = None if env.panel_w_avg is None else panel_values_to_dict(env.panel_w_avg)
+        else:
+            black = _region(f"{env.name}_black.exr") if f"{env.name}_black.exr" in names else None
+            w_avg = None if env.w_avg is None else [float(v) for v in env.w_avg]
         if black:
             entry["black_level"] = black
-        if env.panel_w_avg is not None:
-            entry["w_avg"] = panel_values_to_dict(env.panel_w_avg)
+        if w_avg is not None:
+            entry["w_avg"] = w_avg
         environments.append(entry)
-    return {"panels": panels, "environments": environments}
+    return environments
 
 
 def _capture_document(
@@ -331,6 +331,7 @@ def _capture_document(
 ) -> dict:
     """The ``ocio-vp/capture`` document pointing at the plates (paths relative to it)."""
     from ocio_vp.formats.measurements import measurements_to_dict
+    from ocio_vp.formats.panels import panels_to_dict
 
     rows, columns = _grid(measurements.SRL.shape[0])
     stage = measurements_to_dict(measurements)["stage"]
@@ -344,33 +345,22 @@ def _capture_document(
     if flats:
         document["flat_field"] = flats
     if measurements.panels:
-        return document | _panel_capture(measurements, names)
+        panels = panels_to_dict(measurements.panels)
+        for entry in panels:
+            name = entry["name"]
+            entry["primaries"] = {c: _region(f"{name}_primary_{c}.exr") for c in CHANNELS}
+            entry["lit_chart"] = {c: _chart(f"{name}_lit_{c}.exr") for c in CHANNELS}
+        return document | {"panels": panels, "environments": _environments(measurements, names)}
     if options.take is None:
-        document["primaries"] = {
-            c: {"plate": f"primary_{c}.exr", "region": list(PANEL_REGION)} for c in CHANNELS
-        }
+        document["primaries"] = {c: _region(f"primary_{c}.exr") for c in CHANNELS}
     else:
         movie = options.take_format != "exr"
         frames = f"{TAKE_FOLDER}/{TAKE_MOVIE if movie else TAKE_NAME}"
         document["take"] = {"frames": frames, "sequence": sequence_ref}
         if movie:
             document["take"]["encoding"] = MOVIE_ENCODING
-    document["lit_chart"] = {
-        c: {"plate": f"lit_{c}.{options.lit_format}", "corners": CHART_CORNERS.tolist()}
-        for c in CHANNELS
-    }
-    environments = []
-    for env in measurements.environments:
-        entry: dict[str, Any] = {
-            "name": env.name,
-            "target_chart": {"plate": f"{env.name}.exr", "corners": CHART_CORNERS.tolist()},
-        }
-        if f"{env.name}_black.exr" in names:
-            entry["black_level"] = {"plate": f"{env.name}_black.exr", "region": list(PANEL_REGION)}
-        if env.w_avg is not None:
-            entry["w_avg"] = [float(v) for v in env.w_avg]
-        environments.append(entry)
-    document["environments"] = environments
+    document["lit_chart"] = {c: _chart(f"lit_{c}.{options.lit_format}") for c in CHANNELS}
+    document["environments"] = _environments(measurements, names)
     return document
 
 
@@ -471,7 +461,6 @@ def _film_patterns(measurements, folder: Path, options: PlateOptions, sequence, 
     capture file's reference to the sequence."""
     from ocio_vp.patterns.frames import write_sequence_folder
     from ocio_vp.patterns.sequence import load_sequence
-    from ocio_vp.simulator.take import write_take
 
     if sequence is None:
         path = write_sequence_folder(practice_sequence(), folder / "patterns")
@@ -480,18 +469,17 @@ def _film_patterns(measurements, folder: Path, options: PlateOptions, sequence, 
     if options.take_format != "exr":
         from ocio_vp.simulator.movie import write_movie
 
-        path = folder / TAKE_FOLDER / TAKE_MOVIE
         write_movie(
             sequence,
             measurements.SL,
-            path,
+            folder / TAKE_FOLDER / TAKE_MOVIE,
             options.take,
             codec=options.take_format,
             encoding=MOVIE_ENCODING,
             on_frame=on_frame,
         )
-        return ref
-    write_take(sequence, measurements.SL, folder / TAKE_FOLDER, options.take, on_frame=on_frame)
+    else:
+        write_take(sequence, measurements.SL, folder / TAKE_FOLDER, options.take, on_frame=on_frame)
     return ref
 
 
@@ -501,21 +489,14 @@ def plate_count(
     sequence: PatternSequence | None = None,
 ) -> int:
     """How many plates (and take frames) :func:`write_capture` writes (for a progress bar)."""
-    if measurements.panels:
-        per_env = sum(
-            1
-            + len(e.panel_black_level or {})
-            + (options.footage_frames if e.panel_w_avg is not None else 0)
-            for e in measurements.environments
-        )
-        return options.flat_frames + 6 * len(measurements.panels) + per_env
+    panels = measurements.panels
     per_env = sum(
-        1 + (e.black_level is not None) + (options.footage_frames if e.w_avg is not None else 0)
+        1
+        + (len(e.panel_black_level or {}) if panels else e.black_level is not None)
+        + (options.footage_frames if (e.panel_w_avg if panels else e.w_avg) is not None else 0)
         for e in measurements.environments
     )
-    plates = options.flat_frames + 6 + per_env
-    if options.take is None:
+    plates = options.flat_frames + 6 * max(1, len(panels)) + per_env
+    if panels or options.take is None:  # a take films one wall
         return plates
-    from ocio_vp.simulator.take import take_frame_count
-
     return plates - 3 + take_frame_count(sequence or practice_sequence(), options.take)

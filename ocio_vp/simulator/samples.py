@@ -3,10 +3,8 @@
 ``sample_configs/paper_stage.yaml`` is the measurements file and
 ``sample_configs/paper_stage/<environment>/`` the configs solved from it (paper eq. 5 exactly,
 ``method="least-squares"``, so a change of the library's default method does not change
-them). Regenerate with ``python -m ocio_vp.simulator.samples sample_configs``.
-Generation is deterministic: same code and libraries, same bytes (the test that checks the
-committed copy also accepts rounding from another BLAS build or CPU, each number at the
-tolerance its quantity deserves: ``tests/test_simulator_samples.py``).
+them). Regenerate with ``python -m ocio_vp.simulator.samples sample_configs``; same code and
+libraries, same bytes.
 """
 
 from __future__ import annotations

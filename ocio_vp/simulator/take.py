@@ -5,11 +5,8 @@ The player shows sequence frame ``f`` during ``[f, f + 1) / fps`` seconds; the c
 shutter, each row ``readout`` frames later than the one above (rolling shutter). The wall's
 drive passes through the panel's response (:class:`PanelResponse`) and [SL]; ``bounce``,
 ``flicker``, ``flare``, ``spill`` onto a textured set, noise, ``dropped`` frames and a
-``truncate``d take are as docs/simulator.md (*The simulated take*) describes.
-
-:func:`take_signal` gives the per-frame mean of the wall region without rendering images,
-:func:`write_take` renders and writes the frames; the truth for the checks is
-:func:`true_frame_times` and :meth:`PanelResponse.__call__` with [SL].
+``truncate``d take are as docs/simulator.md (*The simulated take*) describes. The truth for
+the checks is :func:`true_frame_times` and :meth:`PanelResponse.__call__` with [SL].
 """
 
 from __future__ import annotations
@@ -180,29 +177,31 @@ def _read_centre(path: Path) -> np.ndarray:
     return np.asarray(row, dtype=np.float64).reshape(-1, 3)[spec.width // 2]
 
 
-def _row_light(
-    sequence: PatternSequence, options: TakeOptions, drives: Callable, rows: int
-) -> Iterator[np.ndarray]:
-    """Per recorded frame, (rows, 3) panel light (the response to the drive, 1.0 at full
-    drive) integrated over each band of rows' exposure."""
-    count = _frame_count(sequence, options)
+def _wall_frames(
+    sequence: PatternSequence, SL: np.ndarray, options: TakeOptions, rows: int
+) -> Iterator[tuple[float, np.ndarray]]:
+    """Per recorded frame, its flicker gain and the wall's (rows, 3) camera RGB before flicker,
+    flare and noise: the panel light (the response to the drive, 1.0 at full drive) integrated
+    over each band of rows' exposure through [SL], plus the stage's light bounced off the
+    panels (``bounce``, when the environment is lit)."""
+    drives = frame_drives(sequence)
+    SL = np.asarray(SL, dtype=np.float64)
     fs, fc = sequence.fps, options.fps
     first, last = sequence.first_frame, sequence.last_frame
     delays = options.readout * (np.arange(rows) + 0.5) / rows / fc
     span = options.shutter / fc * fs
-    for i in _recorded(options, count):
+    for i in _recorded(options, _frame_count(sequence, options)):
         a = (i / fc - options.preroll + delays) * fs + first  # (rows,) exposure starts
         b = a + span
         frames = np.arange(int(np.floor(a.min())), int(np.floor(b.max())) + 1)
         weights = np.minimum(frames[None] + 1, b[:, None]) - np.maximum(frames[None], a[:, None])
         weights = np.clip(weights, 0.0, None) * ((frames >= first) & (frames <= last))[None]
         light = options.response(drives(frames))
-        yield weights @ light / span
-
-
-def _flicker(options: TakeOptions, index: int) -> float:
-    t = index / options.fps
-    return 1.0 + options.flicker * np.sin(2 * np.pi * options.flicker_hz * t + 0.3)
+        wall = options.exposure * (weights @ light / span) @ SL.T
+        if options.bounce is not None:
+            wall = wall + options.exposure * np.asarray(options.bounce, dtype=np.float64)
+        t = i / options.fps
+        yield 1.0 + options.flicker * np.sin(2 * np.pi * options.flicker_hz * t + 0.3), wall
 
 
 def wall_box_pixels(options: TakeOptions) -> tuple[int, int, int, int]:
@@ -212,30 +211,18 @@ def wall_box_pixels(options: TakeOptions) -> tuple[int, int, int, int]:
     return (round(x0 * width), round(y0 * height), round(x1 * width), round(y1 * height))
 
 
-def _wall_light(SL: np.ndarray, options: TakeOptions, light: np.ndarray) -> np.ndarray:
-    """Camera RGB of the wall for (rows, 3) panel light (before flicker, flare and noise), plus
-    the stage's light bounced off the panels (``bounce``, when the environment is lit)."""
-    out = options.exposure * light @ np.asarray(SL, dtype=np.float64).T
-    if options.bounce is not None:
-        out = out + options.exposure * np.asarray(options.bounce, dtype=np.float64)
-    return out
-
-
 def take_signal(
     sequence: PatternSequence, SL: np.ndarray, options: TakeOptions = TakeOptions()
 ) -> tuple[np.ndarray, np.ndarray]:
     """(frame numbers, (n, 3) mean camera RGB of the whole wall box per recorded frame), with
     flicker, flare and the noise of a mean over the box's pixels; no image is rendered."""
-    drives = frame_drives(sequence)
     rng = np.random.default_rng(options.seed)
     x0, y0, x1, y1 = wall_box_pixels(options)
     pixels = max(1, (x1 - x0) * (y1 - y0))
     white = options.exposure * np.asarray(SL, dtype=np.float64).sum(axis=1)
     means = []
-    indices = _recorded(options, _frame_count(sequence, options))
-    for index, rows in zip(indices, _row_light(sequence, options, drives, 8), strict=True):
-        light = _wall_light(SL, options, rows).mean(axis=0) * _flicker(options, int(index))
-        light = light + options.flare * white
+    for flicker, wall in _wall_frames(sequence, SL, options, 8):
+        light = wall.mean(axis=0) * flicker + options.flare * white
         sigma = np.sqrt((options.noise * light) ** 2 + options.read_noise**2) / np.sqrt(pixels)
         means.append(light + sigma * rng.standard_normal(3))
     numbers = options.first_frame + np.arange(len(means))
@@ -247,18 +234,16 @@ def render_frames(
 ) -> Iterator[np.ndarray]:
     """The take's frames, (height, width, 3) float32 linear camera RGB, in order."""
     width, height = options.size
-    drives = frame_drives(sequence)
     rng = np.random.default_rng(options.seed)
     x0, y0, x1, y1 = wall_box_pixels(options)
     white = options.exposure * np.asarray(SL, dtype=np.float64).sum(axis=1)
     ys, xs = np.mgrid[0:height, 0:width]
     texture = 0.03 + 0.02 * np.sin(xs / 7.0) * np.cos(ys / 5.0) + 0.01 * (xs / width)
     set_colour = np.array([1.0, 0.9, 0.75])
-    indices = _recorded(options, _frame_count(sequence, options))
     bands = min(height, _ROW_BANDS)
     band_of_row = np.minimum(np.arange(height) * bands // height, bands - 1)
-    for index, rows in zip(indices, _row_light(sequence, options, drives, bands), strict=True):
-        light = _wall_light(SL, options, rows[band_of_row]) * _flicker(options, int(index))
+    for flicker, wall in _wall_frames(sequence, SL, options, bands):
+        light = wall[band_of_row] * flicker
         mean_light = light[y0:y1].mean(axis=0)
         image = texture[..., None] * set_colour * white + options.spill * mean_light
         image[y0:y1, x0:x1] = light[y0:y1, None, :]

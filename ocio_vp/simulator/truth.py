@@ -1,20 +1,12 @@
 """Ground truth on colours the chart does not contain: held-out reflectances, noisy measurements.
 
-A calibration is fitted on 24 chart patches and applied to actors, costumes and sets. This module
-judges it the way it is used:
-
-- :func:`held_out_reflectances`: reflectance sets that are *not* the chart, all from
-  colour-science's offline data: the 190 RAW to ACES v1 training reflectances, the 99 CIE 2017
-  colour evaluation samples (the TM-30 set), and a ``skin`` set (the four skin tones of colour's
-  ``PMC`` chart and CIE 1995 test colour sample 13, "human complexion"). A sample whose spectrum
-  lies within :data:`CHART_DUPLICATE_TOLERANCE` of a chart patch is dropped: it is on the chart.
-- :func:`noisy_measurements`: every photographed value (primaries, lit chart, target chart,
-  w_avg, black level) multiplied by ``1 + noise * gauss``, independently.
-- :func:`held_out_errors`: the samples lit by what the wall really emits (the solution's
-  ``M w_avg`` clipped at 0, through the stage's true LED spectra), corrected by Q, against the
-  same samples under the real light, in ΔE2000 and ΔE ITP
-  (:func:`ocio_vp.metrics.chart_errors`, through the true camera's RGB -> XYZ matrix, the
-  reference white a perfect diffuser under the real light).
+A calibration is fitted on 24 chart patches and applied to actors, costumes and sets; this module
+judges it the way it is used (:func:`held_out_errors`, :func:`noisy_measurements`).
+:func:`held_out_reflectances` are sets that are *not* the chart, all from colour-science's offline
+data: the 190 RAW to ACES v1 training reflectances, the 99 CIE 2017 colour evaluation samples (the
+TM-30 set), and a ``skin`` set (the four skin tones of colour's ``PMC`` chart and CIE 1995 test
+colour sample 13, "human complexion"). A sample within :data:`CHART_DUPLICATE_TOLERANCE` of a
+chart patch is dropped: it is on the chart.
 """
 
 from __future__ import annotations

@@ -3,9 +3,8 @@ with the measurements file's ``white_reflectance``.
 
 The synthesized target must describe the *physical* chart photographed on the stage for
 ``lit_chart``: ``--chart`` names its edition's data. The data's white patch rarely reads exactly
-the file's ``white_reflectance`` (ColorChecker N Ohta: 0.887 for a Nikon's green channel, the
-file default is 0.9), so the whole chart is scaled by their ratio: the synthesized white patch
-then equals ``white_reflectance x w_avg`` as the solver assumes, and the scale is recorded.
+the file's ``white_reflectance``, so the whole chart is scaled by their ratio: the synthesized
+white patch then equals ``white_reflectance x w_avg`` as the solver assumes.
 """
 
 from __future__ import annotations

@@ -1,18 +1,10 @@
 """How good a synthesized target is, measured on the spectral simulator.
 
-For one environment spectrum E on a :class:`~ocio_vp.simulator.stage.SpectralStage`:
-
-- the *real* target is the chart photographed under E (``sum S R_j E``); the *synthesized* one
-  is whatever ``synthesize(w_avg)`` returns from the environment's w_avg alone;
-- with measurement noise (every measured value times ``1 + noise N(0, 1)``, independently, for
-  [SL], [SRL]_j, the photographed chart and w_avg; several seeds), Q is solved (paper eq. 5) from
-  each target against the same noisy stage measurements;
-- each Q is judged on colours *not on the chart*: colour-science's RAW to ACES training
-  reflectances minus those that duplicate a chart patch, lit by the wall as it really emits
-  (``L clip(M w_avg, 0)``), post-corrected by Q and compared with the same reflectances under E
-  (mean CIE ΔE2000 through the camera's fitted XYZ matrix, white = a perfect diffuser under E),
-  by :mod:`ocio_vp.simulator.truth` as in the accuracy benchmark. M alone (Q = I) is the
-  baseline.
+For one environment spectrum E, Q is solved (paper eq. 5) from the *real* target (the chart
+photographed under E) and from the *synthesized* one (``synthesize(w_avg)``), each against the
+same noisy stage measurements (:func:`~ocio_vp.simulator.truth.noisy_measurements`, several
+seeds), and judged on held-out reflectances by :func:`~ocio_vp.simulator.truth.held_out_errors`
+(mean ΔE2000), M alone (Q = I) the baseline.
 """
 
 from __future__ import annotations
@@ -53,17 +45,12 @@ class HeldOutStudy:
         return self.q_synthesized / self.q_real
 
 
-def _noisy(clean, noise, w_avg_noise, rng):
-    noisy = noisy_measurements(clean, noise, rng)
-    env = noisy.environments[0]
-    if w_avg_noise is not None:  # w_avg with its own noise level (0: a rendered HDRI)
-        true = clean.environments[0].w_avg
-        env = dataclasses.replace(env, w_avg=true * (1.0 + w_avg_noise * rng.standard_normal(3)))
-    return noisy, env
-
-
 def _one_seed(stage, clean, spectrum, synthesize, rng, noise, method, held_out):
-    noisy, env = _noisy(clean, noise[0], noise[1], rng)
+    noisy = noisy_measurements(clean, noise[0], rng)
+    env = noisy.environments[0]
+    if noise[1] is not None:  # w_avg with its own noise level (0: a rendered HDRI)
+        true = clean.environments[0].w_avg
+        env = dataclasses.replace(env, w_avg=true * (1.0 + noise[1] * rng.standard_normal(3)))
     M = np.linalg.inv(noisy.SL)
 
     def mean_delta_E(Q):

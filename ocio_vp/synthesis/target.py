@@ -255,28 +255,20 @@ def synthesize_environment(
         warnings=tuple(_warnings(synth)),
     )
     previous = {e.name: e for e in measurements.environments}.get(name)
+    panels = bool(measurements.panels)  # each type's share of w_avg comes from `solve --hdri`
     environment = Environment(
         name=name,
         target_chart=synth.target_chart,
-        w_avg=w_avg,
+        w_avg=None if panels else w_avg,
         black_level=None if previous is None else previous.black_level,
+        panel_black_level=previous.panel_black_level if panels and previous else None,
         synthesized=record,
     )
-    if measurements.panels:  # each panel type's share of w_avg comes from `solve --hdri`
-        environment = dataclasses.replace(
-            environment,
-            w_avg=None,
-            panel_black_level=None if previous is None else previous.panel_black_level,
-        )
     return environment, synth
 
 
 def with_environment(measurements: Measurements, environment: Environment) -> Measurements:
     """``measurements`` with ``environment`` replacing the one of its name, or appended."""
-    names = [e.name for e in measurements.environments]
-    environments = list(measurements.environments)
-    if environment.name in names:
-        environments[names.index(environment.name)] = environment
-    else:
-        environments.append(environment)
-    return dataclasses.replace(measurements, environments=tuple(environments))
+    by_name = {e.name: e for e in measurements.environments}  # a replaced one keeps its place
+    by_name[environment.name] = environment
+    return dataclasses.replace(measurements, environments=tuple(by_name.values()))
