@@ -27,6 +27,7 @@ from ocio_vp.deprecation import deprecated_names
 from ocio_vp.formats.linearity import Linearity
 from ocio_vp.formats.solution import CONFIG_FILENAME, OcioNames, Solution
 from ocio_vp.model.correction import MAX_CONDITION_INVERSE, truncated_pseudo_inverse
+from ocio_vp.ocio import WORKING_SPACE_NAMES
 from ocio_vp.ocio.description import (
     FAMILY,
     ColourSpace,
@@ -103,13 +104,7 @@ __getattr__ = deprecated_names(
 )
 
 
-#: Working spaces added when the stage names its camera gamut (colour's name: the config's),
-#: and the OCIO role each takes.
-WORKING_SPACE_NAMES = {
-    "ACES2065-1": "ACES2065-1",
-    "ACEScg": "ACEScg",
-    "ITU-R BT.709": "Linear Rec.709 (sRGB)",
-}
+#: The OCIO role a working space (:data:`~ocio_vp.ocio.WORKING_SPACE_NAMES`) takes.
 WORKING_SPACE_ROLES = {"ACES2065-1": "aces_interchange"}
 
 
