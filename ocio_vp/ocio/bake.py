@@ -1,49 +1,13 @@
 """A non-linear post-correction in OCIO: LUT chains on scale x direction, exact where it is linear.
 
 A root-polynomial Q or an emitter-protected one (:mod:`ocio_vp.model`) is not a matrix, so the
-config carries it (and its inverse) as a chain of CLF v3 operators, written as sidecar files:
-
-1. ``Matrix``: ``y = T x``, a mix towards grey ``T = (1 - e) I + e/3 ones`` (e =
-   :data:`CAMERA_MIX` on the footage side, :data:`CONTENT_MIX` on the corrected side), so
-   every colour of light has positive channels;
-2. ``Log``: ``l = log2 y``; on the footage side a ``cameraLinToLog`` whose linear segment below
-   :data:`LINEAR_BREAK` of the white carries noise around black and negative channels
-   (finite, continuous, invertible), on the corrected side a plain log2;
-3. ``Matrix``: to (scale ``s`` = mean of l, ``a`` = l_r - l_g, ``b`` = l_b - l_g) in [0, 1];
-4. ``LUT1D`` (4095): each axis to its position among the 3D LUT's nodes (the warp);
-5. ``LUT3D`` (65^3, tetrahedral) holding ``l(T L^-1 F(x))`` for the function ``F`` at the
-   node's input ``x``, in steps of 2^-12 stop (integers, exact in float32);
-6. ``Matrix`` (the steps back to stops), the inverse ``Log``, ``Matrix`` ``L T^-1``.
-
-**Exact where F is linear.** ``L`` is the matrix the function reduces to where it is linear:
-the root-polynomial's fallback outside the chart's domain (and its inverse for Q^-1), the
-identity where the emitter protection leaves a pixel alone. Where ``F(x) = L x`` the LUT holds
-each node's own coordinates, which tetrahedral interpolation reproduces exactly (they are
-linear within each cell: the warp is linear between nodes), and the last two operators undo
-the first two: the chain is then ``L`` to float precision, whatever the scale, near black or
-far out of the chart. Only where F departs from L does interpolation err, by how much the
-departure bends between nodes.
-
-**Scale.** A homogeneous F (the root-polynomial: ``F(k x) = k F(x)``) through a plain log2 is
-affine in ``s``, which tetrahedral interpolation reproduces, so its scale axis needs one cell
-(exposures 2^-40 to 2^24). The linear segment below the break and the emitter protection's
-fade above white (``bright``: its weight depends on brightness) are not, so the scale axis
-gets nodes there: around the break, and across the fade for every direction the chart's
-colours take. Slices of the cube beyond the last node are never reached (the warp stops there);
-they hold zeros, so each file stays small.
-
-**Directions.** Nodes on ``a`` and ``b`` are spread by the curvature of the departure from L
-(measured on a grid; where the root-polynomial's fade meets its growing polynomial, the grid
-needs most), with shares kept uniform over the chart's directions and over the whole range.
-
-What the chain does not carry: a pixel whose log-ratios leave +-:data:`RATIO_RANGE` (near
-black, a mixed channel below about -:data:`NEGATIVE_REACH` breaks beside others within a few
-breaks of black; less beside brighter ones: no colour of light), and, on the corrected side,
-content with a channel negative enough to stay negative after the mix (the plain log2 floors
-it). Inside that range, how close the chain comes to the model is
-measured when the config is written (:func:`model_outputs`): ΔE2000 against the exact model
-on the camera range of :mod:`ocio_vp.model.footage_range`, stored in ``solution.json``
-(``diagnostics.post_correction_ocio``) and quoted in the config's descriptions.
+config carries it (and its inverse) as a chain of CLF v3 operators in sidecar files
+(:func:`chain_transform`): exact to float precision where the model is linear, nodes where it
+bends. docs/root_polynomial.md (*The config: LUT chains*) describes the chain, its nodes and the
+range it carries. How close a chain comes to the model is measured when the config is written
+(:func:`model_outputs`: ΔE2000 on the camera range of :mod:`ocio_vp.model.footage_range`),
+stored in ``solution.json`` (``diagnostics.post_correction_ocio``) and quoted in the config's
+descriptions.
 """
 
 from __future__ import annotations
@@ -107,10 +71,6 @@ LINEAR_BREAK = 2.0**-9
 SCALE_RANGE = (-40.0, -40.0 + (WARP_SIZE - 1) / 64.0)
 #: |log2 r/g| and |log2 b/g| the chains cover; beyond, the ratio is clamped.
 RATIO_RANGE = 10.0
-#: How far below zero (in breaks) a mixed channel of a pixel near black may go and stay
-#: inside the footage side's range beside channels within a few breaks of black (its
-#: log-ratio is still within RATIO_RANGE; about 4 to 7 breaks, fewer beside brighter ones).
-NEGATIVE_REACH = 4.0
 #: The 3D LUT holds log2 values in steps of 2^-12 stop (integers, exact in float32 up to
 #: +-4096 stops; the rounding, <= 9e-5 relative, is far below the interpolation's error).
 LUT_STEPS_PER_STOP = 2.0**12
@@ -136,10 +96,10 @@ def _mix(e: float) -> np.ndarray:
     return (1.0 - e) * np.eye(3) + e / 3.0 * np.ones((3, 3))
 
 
-def _m44(matrix: np.ndarray) -> OCIO.MatrixTransform:
+def _m44(matrix: np.ndarray, offset: Sequence[float] = (0.0,) * 4) -> OCIO.MatrixTransform:
     m = np.eye(4)
     m[:3, :3] = matrix
-    return OCIO.MatrixTransform([float(v) for v in m.ravel()], [0.0, 0.0, 0.0, 0.0])
+    return OCIO.MatrixTransform([float(v) for v in m.ravel()], [float(v) for v in offset])
 
 
 # ---------------------------------------------------------------------------------------------
@@ -178,10 +138,6 @@ class LutChain:
         b = self.linear_break
         return np.where(v > np.log2(b), np.exp2(v), b + (v - np.log2(b)) * b * np.log(2))
 
-    def coordinates(self, x: np.ndarray) -> np.ndarray:
-        """(..., 3) (s, a, b) of camera-side inputs ``x``."""
-        return self.log(np.asarray(x, dtype=np.float64) @ self.T.T) @ _BASIS.T
-
     def inputs(self, s: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Inputs ``x`` whose coordinates are (s, a, b) (broadcast)."""
         g = s - (a + b) / 3.0
@@ -216,10 +172,7 @@ def _to_lut_domain() -> OCIO.MatrixTransform:
     """l -> ((s - low) / span, a / (2 R) + 1/2, b / (2 R) + 1/2)."""
     low, high = SCALE_RANGE
     scale = np.diag([1 / (high - low), 1 / (2 * RATIO_RANGE), 1 / (2 * RATIO_RANGE)])
-    m = np.eye(4)
-    m[:3, :3] = scale @ _BASIS
-    offset = [-low / (high - low), 0.5, 0.5, 0.0]
-    return OCIO.MatrixTransform([float(v) for v in m.ravel()], offset)
+    return _m44(scale @ _BASIS, [-low / (high - low), 0.5, 0.5, 0.0])
 
 
 def _warp(chain: LutChain) -> OCIO.Lut1DTransform:
@@ -271,7 +224,8 @@ def _lut_array(values: np.ndarray, chain: LutChain) -> np.ndarray:
 
 
 def chain_transform(chain: LutChain, lut: np.ndarray | None) -> OCIO.GroupTransform:
-    """The OCIO operators of the module docstring for a baked ``lut`` (:func:`bake`); with
+    """The chain's OCIO operators for a baked ``lut`` (:func:`bake`): mix ``T``, log, to
+    (scale, a, b) in [0, 1], the warp, the 3D LUT, steps to stops, antilog, ``L T^-1``. With
     ``lut`` None a 2^3 placeholder stands for the 3D LUT (for :func:`clf_text`)."""
     if lut is None:
         lut3d = OCIO.Lut3DTransform(gridSize=2)

@@ -1,19 +1,8 @@
 """One config for a whole show: every environment's wall and footage spaces on a base config.
 
-``ocio-vp export SOLUTIONS... --target show`` keeps the base config (default: OCIO's built-in
-ACES CG config) and adds, as data (:func:`_overlay`):
-
-- per environment, the colour spaces of its own config in :data:`ENVIRONMENT_FAMILIES` as
-  ``<name> [<environment>]``, their transforms as they are after the base's reference ->
-  that environment's camera gamut;
-- under the per-environment names (``LED Wall - Inner Frustum``, ...), colour spaces that pick
-  the environment from the context variable :data:`CONTEXT_VARIABLE` (default the first);
-- the named transform ``Post-Correction Q``, its look, a footage-after-Q view on every base
-  display, and the ``LED Wall`` display.
-
-The base is read into the same data (:func:`~ocio_vp.ocio.description.split_config`; an element
-no record rebuilds exactly stays as OCIO has it), the show is merged onto it as data
-(:func:`show_data`, the base wins by name) and the one builder makes the config.
+``ocio-vp export SOLUTIONS... --target show`` (docs/exports.md, *Show config*): the base read
+into data (:func:`~ocio_vp.ocio.description.split_config`), what the show adds (:func:`_overlay`)
+merged onto it (:func:`show_data`, the base wins by name), and the one builder makes the config.
 """
 
 from __future__ import annotations
@@ -361,7 +350,7 @@ def _check_environments(environments: Sequence[ShowEnvironment]) -> None:
 def build_show_config(
     environments: Sequence[ShowEnvironment], base: str = DEFAULT_BASE_CONFIG
 ) -> OCIO.Config:
-    """The show config of ``environments`` on ``base`` (see the module docstring).
+    """The show config of ``environments`` on ``base`` (docs/exports.md, *Show config*).
 
     Raises
     ------

@@ -1,13 +1,8 @@
 """What a pipeline needs around the wall colour spaces: log spaces, roles and monitor displays.
 
-A per-environment config carries, beside the wall colour spaces and ``Stage Footage``:
-
-- with the camera gamut known: ``ACEScct`` (``compositing_log`` and ``color_timing``) and the
-  camera's log encoding twice, ``Camera Native (LogC4)`` (corrected footage in the camera's log)
-  and ``Stage Footage (LogC4)`` (footage recorded in it: to the reference decodes and applies Q);
-- the look ``Post-Correction Q Look``, so a monitor can show footage after Q;
-- :data:`MONITORS`, displays of OCIO's built-in ACES CG config, each with a view of content and
-  one of footage after Q (without a camera gamut: camera RGB un-tone-mapped as if Rec.709).
+With the camera gamut known, ``ACEScct`` and the camera's log encoding (corrected footage and
+stage footage in it); always the look ``Post-Correction Q Look`` and the :data:`MONITORS`
+displays of OCIO's built-in ACES CG config (docs/architecture.md, *Monitor displays*).
 """
 
 from __future__ import annotations

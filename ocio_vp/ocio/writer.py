@@ -1,15 +1,10 @@
 """Write solved environments to disk: ``OUT/<environment>/config.ocio`` and ``solution.json``.
 
-All environments are written into a staging folder first and renamed into place only when
-every one of them succeeded, so a failure never leaves a half-written output folder. The
-output folder is locked only while they are renamed into place (:func:`write_solutions`).
-
-A non-linear environment costs far more to write than a 3x3 one (it designs, bakes, checks and
-formats two LUT chains; more with emitter protection, whose inverse is solved slice by slice;
-docs/performance.md has the figures). :func:`writer_pool` starts one helper process that writes
-some environments while this process writes the others. It imports only numpy, OpenColorIO and
-this package's writer (not colour-science), so a command that starts it before it loads and
-solves finds it ready; the files are the same either way.
+All or nothing: every environment goes into a staging folder, renamed into place only when all
+succeeded (:func:`write_solutions`). A non-linear environment bakes LUT chains, far costlier than
+a 3x3: :func:`writer_pool` starts one helper process (numpy, OpenColorIO and this writer only)
+that writes some environments while this process writes or solves the others; the files are
+the same either way.
 """
 
 from __future__ import annotations
