@@ -68,7 +68,6 @@ __all__ = [
     "post_correction_transforms",
     "wall_chains",
     "wall_signal_tail",
-    "wall_tail",
     "write_config",
 ]
 
@@ -119,32 +118,6 @@ class ModelFiles:
 
 
 Chains = tuple[list[Transform], list[Transform]]
-
-
-def wall_transforms(solution: Solution, model: ModelFiles | None = None) -> dict[str, Chains]:
-    """(reference -> drive, drive -> reference) chains of the two wall colour spaces, before
-    the wall's tail (:func:`wall_chains`).
-
-    With ``model`` (a non-linear Q's sidecars) and N solved, the in-frustum drive is
-    ``[SL]^-1 Q^-1(c)`` (the Q^-1 file, then the calibrated ``[SL]^-1``) and its other
-    direction ``Q([SL] d)``: OCIO never inverts a LUT file.
-    """
-    outer = [matrix_record(solution.M)]
-    outer_back = [matrix_record(solution.M, inverse=True)]
-    # an offset the camera cannot see is left out (docs/stability.md); solution.json keeps it
-    offset = solution.black_level_offset
-    if offset_is_negligible(offset, solution.SL):
-        offset = None
-    inner = [matrix_record(solution.in_frustum_matrix, offset)]
-    inner_back = [matrix_record(solution.in_frustum_matrix, offset, inverse=True)]
-    if model is not None and solution.N is not None:
-        if model.q_inverse is None:
-            raise ValueError("N is solved but the non-linear Q has no baked inverse")
-        # N inverts Q for the calibrated wall, [SL]^-1, whatever M lights with (joint's M)
-        calibrated = np.linalg.inv(np.asarray(solution.SL, dtype=np.float64))
-        inner = [file(model.q_inverse), matrix_record(calibrated, offset)]
-        inner_back = [matrix_record(calibrated, offset, inverse=True), file(model.q)]
-    return {OUT_OF_FRUSTUM: (outer, outer_back), IN_FRUSTUM: (inner, inner_back)}
 
 
 def post_correction_transforms(
@@ -205,29 +178,40 @@ def wall_signal_tail(solution: Solution, extra: list[Transform]) -> list[Transfo
     ]
 
 
-def wall_tail(solution: Solution, extra: list[Transform]) -> Chains:
-    """(drive -> wall signal, wall signal -> drive): the soft clip the solve asked for
-    (:mod:`ocio_vp.ocio.softclip`), then :func:`wall_signal_tail`; both empty for a linear
-    wall without LUT or soft clip."""
-    signal = wall_signal_tail(solution, extra)
-    undo = [group(signal, inverse=True)] if signal else []
-    knee = soft_clip_knee(solution.linearity)
-    if knee is None:
-        return signal, undo
-    clip, unclip = soft_clip_transforms(knee)
-    return [*clip, *signal], [*undo, *unclip]
-
-
 def wall_chains(
     solution: Solution, extra: dict[str, list[Transform]], model: ModelFiles | None
 ) -> dict[str, Chains]:
-    """:func:`wall_transforms` with each wall colour space's tail (:func:`wall_tail` of
-    ``extra``, its LUT and encoding) after it, undone before the other direction."""
-    chains = wall_transforms(solution, model)
-    for name, (there, back) in chains.items():
-        tail, undo = wall_tail(solution, list(extra.get(name, [])))
-        if tail:
-            chains[name] = (there + tail, [*undo, *back])
+    """(reference -> wall signal, wall signal -> reference) chains of the two wall colour
+    spaces: the drive (M; N and the offset), then the soft clip the solve asked for
+    (:mod:`ocio_vp.ocio.softclip`) and :func:`wall_signal_tail` of ``extra`` (that space's LUT
+    and encoding), undone before the other direction.
+
+    With ``model`` (a non-linear Q's sidecars) and N solved, the in-frustum drive is
+    ``[SL]^-1 Q^-1(c)`` (the Q^-1 file, then the calibrated ``[SL]^-1``) and its other
+    direction ``Q([SL] d)``: OCIO never inverts a LUT file.
+    """
+    outer = [matrix_record(solution.M)]
+    outer_back = [matrix_record(solution.M, inverse=True)]
+    # an offset the camera cannot see is left out (docs/stability.md); solution.json keeps it
+    offset = solution.black_level_offset
+    if offset_is_negligible(offset, solution.SL):
+        offset = None
+    inner = [matrix_record(solution.in_frustum_matrix, offset)]
+    inner_back = [matrix_record(solution.in_frustum_matrix, offset, inverse=True)]
+    if model is not None and solution.N is not None:
+        if model.q_inverse is None:
+            raise ValueError("N is solved but the non-linear Q has no baked inverse")
+        # N inverts Q for the calibrated wall, [SL]^-1, whatever M lights with (joint's M)
+        calibrated = np.linalg.inv(np.asarray(solution.SL, dtype=np.float64))
+        inner = [file(model.q_inverse), matrix_record(calibrated, offset)]
+        inner_back = [matrix_record(calibrated, offset, inverse=True), file(model.q)]
+    knee = soft_clip_knee(solution.linearity)
+    clip, unclip = ([], []) if knee is None else soft_clip_transforms(knee)
+    chains = {}
+    for name, there, back in ((OUT_OF_FRUSTUM, outer, outer_back), (IN_FRUSTUM, inner, inner_back)):
+        signal = wall_signal_tail(solution, list(extra.get(name, [])))
+        undo = [group(signal, inverse=True)] if signal else []
+        chains[name] = ([*there, *clip, *signal], [*undo, *unclip, *back])
     return chains
 
 
@@ -517,10 +501,10 @@ def _add_working_spaces(data: ConfigData, camera: str) -> tuple[dict[str, str], 
     return roles, aces_to_camera
 
 
-def ocio_names(config_filename: str = CONFIG_FILENAME) -> OcioNames:
+def ocio_names() -> OcioNames:
     """The ``ocio`` block of ``solution.json``: which colorspace does what."""
     return OcioNames(
-        config=config_filename,
+        config=CONFIG_FILENAME,
         reference=REFERENCE,
         out_of_frustum=OUT_OF_FRUSTUM,
         in_frustum=IN_FRUSTUM,
