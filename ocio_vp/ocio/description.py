@@ -371,14 +371,17 @@ def ocio_transform(record: Transform) -> OCIO.Transform:
     return transform
 
 
+def _ocio_optional(record: Transform | None) -> OCIO.Transform | None:
+    return None if record is None else ocio_transform(record)
+
+
 def _ocio_colour_space(record: ColourSpace) -> OCIO.ColorSpace:
     import PyOpenColorIO as OCIO
 
-    reference = (
-        OCIO.REFERENCE_SPACE_DISPLAY if record.display_referred else (OCIO.REFERENCE_SPACE_SCENE)
-    )
-    cs = OCIO.ColorSpace(
-        referenceSpace=reference,
+    return OCIO.ColorSpace(
+        referenceSpace=OCIO.REFERENCE_SPACE_DISPLAY
+        if record.display_referred
+        else OCIO.REFERENCE_SPACE_SCENE,
         name=record.name,
         family=record.family,
         encoding=record.encoding,
@@ -386,16 +389,10 @@ def _ocio_colour_space(record: ColourSpace) -> OCIO.ColorSpace:
         isData=record.is_data,
         aliases=list(record.aliases),
         bitDepth=getattr(OCIO, record.bit_depth.name),
+        toReference=_ocio_optional(record.to_reference),
+        fromReference=_ocio_optional(record.from_reference),
+        categories=list(record.categories),
     )
-    for category in record.categories:
-        cs.addCategory(category)
-    for transform, direction in (
-        (record.to_reference, OCIO.COLORSPACE_DIR_TO_REFERENCE),
-        (record.from_reference, OCIO.COLORSPACE_DIR_FROM_REFERENCE),
-    ):
-        if transform is not None:
-            cs.setTransform(ocio_transform(transform), direction)
-    return cs
 
 
 def _ocio_named_transform(record: NamedTransform) -> OCIO.NamedTransform:
@@ -406,38 +403,35 @@ def _ocio_named_transform(record: NamedTransform) -> OCIO.NamedTransform:
         aliases=list(record.aliases),
         family=record.family,
         description=record.description,
+        forwardTransform=_ocio_optional(record.forward),
+        inverseTransform=_ocio_optional(record.inverse),
         categories=list(record.categories),
     )
     named.setEncoding(record.encoding)
-    if record.forward is not None:
-        named.setTransform(ocio_transform(record.forward), OCIO.TRANSFORM_DIR_FORWARD)
-    if record.inverse is not None:
-        named.setTransform(ocio_transform(record.inverse), OCIO.TRANSFORM_DIR_INVERSE)
     return named
 
 
 def _ocio_look(record: Look) -> OCIO.Look:
     import PyOpenColorIO as OCIO
 
-    look = OCIO.Look(
+    return OCIO.Look(
         name=record.name,
         processSpace=record.process_space,
         transform=ocio_transform(record.transform),
+        inverseTransform=_ocio_optional(record.inverse),
         description=record.description,
     )
-    if record.inverse is not None:
-        look.setInverseTransform(ocio_transform(record.inverse))
-    return look
 
 
 def _ocio_view_transform(record: ViewTransform) -> OCIO.ViewTransform:
     import PyOpenColorIO as OCIO
 
-    vt = OCIO.ViewTransform(
-        referenceSpace=OCIO.REFERENCE_SPACE_SCENE, name=record.name, description=record.description
+    return OCIO.ViewTransform(
+        referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
+        name=record.name,
+        description=record.description,
+        fromReference=ocio_transform(record.from_reference),
     )
-    vt.setTransform(ocio_transform(record.from_reference), OCIO.VIEWTRANSFORM_DIR_FROM_REFERENCE)
-    return vt
 
 
 def _add_view(config: OCIO.Config, view: View) -> None:
