@@ -299,17 +299,18 @@ def _curvature(
     return along_a / h2, along_b / h2
 
 
-def _box(chain: LutChain, colours: np.ndarray) -> tuple[tuple[float, float], tuple[float, float]]:
-    """Log-ratio ranges (a, b) of ``colours`` (+-0.25 stop) inside the chain's range."""
-    y = np.asarray(colours, dtype=np.float64).reshape(-1, 3) @ chain.T.T
+def _ratio_box(
+    colours: np.ndarray, mix: float, margin: float, limit: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(lowest, highest) log-ratios (a, b) of ``colours`` mixed by ``mix`` (those whose mixed
+    channels are all positive; (-1, 1) for none), ``margin`` stops wider, within +-``limit``."""
+    y = np.asarray(colours, dtype=np.float64).reshape(-1, 3) @ _mix(mix).T
     y = y[np.all(y > 0, axis=1)]
     if len(y) == 0:
-        return (-1.0, 1.0), (-1.0, 1.0)
+        return -np.ones(2), np.ones(2)
     c = np.log2(y) @ _BASIS.T
-    limit = RATIO_RANGE - 0.5
-    lo = np.clip(c.min(axis=0)[1:] - 0.25, -limit, limit)
-    hi = np.clip(c.max(axis=0)[1:] + 0.25, -limit, limit)
-    return (float(lo[0]), float(hi[0])), (float(lo[1]), float(hi[1]))
+    low = np.clip(c.min(axis=0)[1:] - margin, -limit, limit)
+    return low, np.clip(c.max(axis=0)[1:] + margin, -limit, limit)
 
 
 def _design(
@@ -332,14 +333,14 @@ def _design(
         probe = LutChain(mix, function_reference, linear_break, nodes, flat, flat)
         ca, cb = _curvature(function, probe, scales)
         along_a, along_b = np.maximum(along_a, ca), np.maximum(along_b, cb)
-    box_a, box_b = _box(LutChain(mix, reference, linear_break, nodes, flat, flat), colours)
+    box_low, box_high = _ratio_box(colours, mix, 0.25, RATIO_RANGE - 0.5)
     return LutChain(
         mix,
         reference,
         linear_break,
         nodes,
-        _direction_nodes(along_a, box_a, size),
-        _direction_nodes(along_b, box_b, size),
+        _direction_nodes(along_a, (box_low[0], box_high[0]), size),
+        _direction_nodes(along_b, (box_low[1], box_high[1]), size),
         size,
     )
 
@@ -465,12 +466,7 @@ def inverse_chain(
 ) -> LutChain:
     """The corrected-side chain of Q^-1; ``content`` the colours it is finest on (the target
     chart and mixtures of it). A plain log2: content is light, its mixed channels positive."""
-    T = _mix(CONTENT_MIX)
-    y = np.asarray(content, dtype=np.float64) @ T.T
-    c = np.log2(y[np.all(y > 0, axis=1)]) @ _BASIS.T
-    limit = RATIO_RANGE - 1.0
-    low = np.maximum(c.min(axis=0)[1:] - CONTENT_MARGIN, -limit)
-    high = np.minimum(c.max(axis=0)[1:] + CONTENT_MARGIN, limit)
+    low, high = _ratio_box(content, CONTENT_MIX, CONTENT_MARGIN, RATIO_RANGE - 1.0)
     s_nodes = list(SCALE_RANGE)
     if isinstance(
         correction, ProtectedCorrection

@@ -45,6 +45,8 @@ from ocio_vp.ocio.description import (
 from ocio_vp.ocio.matrix import format_matrix, matrix_record, matrix_transform
 from ocio_vp.ocio.softclip import soft_clip_text, soft_clip_transforms
 from ocio_vp.ocio.viewing import (
+    ACESCCT,
+    MONITORS,
     add_acescct,
     add_camera_log_spaces,
     add_monitor_displays,
@@ -281,12 +283,12 @@ def config_data(
 
 def _add_displays(data: ConfigData, camera_to_aces: np.ndarray | None) -> None:
     """Monitor displays first (the viewer's default is a monitor view), then ``LED Wall``."""
-    monitors = add_monitor_displays(
+    add_monitor_displays(
         data, camera_to_aces, reference=REFERENCE, footage=POST_CORRECTION_COLORSPACE
     )
     for view, space in ((VIEW_OUTER, OUT_OF_FRUSTUM), (VIEW_INNER, IN_FRUSTUM), ("Raw", RAW)):
         data.views.append(View(DISPLAY, view, space))
-    displays = [*dict.fromkeys(m.display for m in monitors), DISPLAY]
+    displays = [*dict.fromkeys(m.display for m in MONITORS), DISPLAY]
     data.active_displays = tuple(displays)
     views = [v for d in displays[:-1] for v in data.view_names(d)]
     data.active_views = (*dict.fromkeys(views), VIEW_INNER, VIEW_OUTER, "Raw")
@@ -448,9 +450,9 @@ def _set_roles(data: ConfigData, camera: str | None) -> np.ndarray | None:
     if camera:
         working, aces_to_camera = _add_working_spaces(data, camera)
         roles.update(working)
-        log = add_acescct(data, aces_to_camera)
-        roles[OCIO.ROLE_COMPOSITING_LOG] = log
-        roles[OCIO.ROLE_COLOR_TIMING] = log
+        add_acescct(data, aces_to_camera)
+        roles[OCIO.ROLE_COMPOSITING_LOG] = ACESCCT
+        roles[OCIO.ROLE_COLOR_TIMING] = ACESCCT
         add_camera_log_spaces(data, camera, reference=REFERENCE, footage=POST_CORRECTION_COLORSPACE)
         camera_to_aces = np.linalg.inv(aces_to_camera)
     data.roles.update(roles)

@@ -91,12 +91,12 @@ def footage_to_reference(footage: ColourSpace) -> tuple[Transform, Transform | N
 
 def add_camera_log_spaces(
     data: ConfigData, camera: str | None, *, reference: str, footage: str
-) -> list[str]:
-    """Add ``Camera Native (LogC4)`` and ``Stage Footage (LogC4)`` (for ``camera``'s log curve)
-    and ACEScct; returns the names added (none without a known camera gamut)."""
+) -> None:
+    """Add ``Camera Native (LogC4)`` and ``Stage Footage (LogC4)`` (for ``camera``'s log curve;
+    nothing without a known camera gamut)."""
     curve = camera_log_for(camera)
     if curve is None:
-        return []
+        return
     native_name, footage_name = camera_log_names(curve)
     encode = transform_record(log_transform(curve))
     native = colour_space(
@@ -119,7 +119,6 @@ def add_camera_log_spaces(
         from_reference=None if inverse is None else group([inverse, encode]),
     )
     data.colour_spaces += [native, stage]
-    return [native_name, footage_name]
 
 
 #: OCIO 2.1 categories (what application menus filter on) by family, after ``ocio-vp/``.
@@ -148,7 +147,7 @@ def set_categories(data: ConfigData) -> None:
     ]
 
 
-def add_acescct(data: ConfigData, aces_to_camera: np.ndarray) -> str:
+def add_acescct(data: ConfigData, aces_to_camera: np.ndarray) -> None:
     """ACEScct (OCIO's builtin curve and AP1 -> AP0) then ACES2065-1 -> the camera gamut."""
     source = _aces_config().getColorSpace(ACESCCT)
     to_ref = transform_record(source.getTransform(OCIO.COLORSPACE_DIR_TO_REFERENCE))
@@ -161,7 +160,6 @@ def add_acescct(data: ConfigData, aces_to_camera: np.ndarray) -> str:
         to_reference=group([to_ref, matrix_record(aces_to_camera)]),
     )
     data.colour_spaces.append(cs)
-    return ACESCCT
 
 
 def _look(data: ConfigData, *, reference: str, footage: str) -> Look:
@@ -182,7 +180,7 @@ def add_monitor_displays(
     *,
     reference: str,
     footage: str,
-) -> list[Monitor]:
+) -> None:
     """Add the :data:`MONITORS` displays, their view transforms and the Q look.
 
     ``camera_to_aces`` (the reference -> ACES2065-1 matrix) puts the ACES output transforms
@@ -209,7 +207,6 @@ def add_monitor_displays(
                 looks=POST_CORRECTION_LOOK,
             )
         )
-    return list(MONITORS)
 
 
 def _clamped_display(display: ColourSpace) -> ColourSpace:
