@@ -618,13 +618,12 @@ def processor_function(processor: OCIO.Processor) -> Callable[[np.ndarray], np.n
 @dataclass(frozen=True)
 class ModelOutputs:
     """Sidecar files (relative path -> CLF text), the Q and Q^-1 file names (Q^-1 None where
-    the correction has no inverse), the agreement of each with the model, and the
-    ``post_correction_ocio`` block of ``solution.json``."""
+    the correction has no inverse), Q's agreement with the model, and the
+    ``post_correction_ocio`` block of ``solution.json`` (Q^-1's agreement there)."""
 
     q_file: str
     q_inverse_file: str | None
     forward: Agreement
-    inverse: Agreement | None
     files: dict[str, str] = field(default_factory=dict)
     block: PostCorrectionOCIO | None = None
 
@@ -758,7 +757,6 @@ def _outputs(solution, chains, measured, measured_inverse) -> ModelOutputs:
         q_file=names[0],
         q_inverse_file=names[1] if len(names) > 1 else None,
         forward=measured,
-        inverse=measured_inverse,
         files=files,
         block=block,
     )

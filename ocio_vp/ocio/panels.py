@@ -1,11 +1,6 @@
-"""The colour spaces of a stage's other panel types, beside the wall's.
-
-The first in-frustum type keeps the wall's colour spaces; every other type gets ``LED <Type> -
-Outer Frustum`` (through its own M) and, in frustum, ``LED <Type> - Inner Frustum`` (its own N
-and offset, or ``M_k Q^-1(c)`` for a non-linear Q), built as the wall's
-(:func:`ocio_vp.ocio.config.wall_chains`, :func:`ocio_vp.ocio.config.wall_space`) with its own
-linearity LUT and encoding, and views ``<Type> Outer Frustum`` / ``<Type> Inner Frustum`` on the
-``LED Wall`` display.
+"""The colour spaces of a stage's other panel types, beside the wall's (docs/panels.md, *The
+config*): each built as the wall's (:func:`ocio_vp.ocio.config.wall_chains`,
+:func:`ocio_vp.ocio.config.wall_space`) on a view of the solution as if that type were the wall.
 """
 
 from __future__ import annotations
