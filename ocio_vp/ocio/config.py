@@ -105,10 +105,6 @@ __getattr__ = deprecated_names(
 )
 
 
-#: The OCIO role a working space (:data:`~ocio_vp.ocio.WORKING_SPACE_NAMES`) takes.
-WORKING_SPACE_ROLES = {"ACES2065-1": "aces_interchange"}
-
-
 @dataclass(frozen=True)
 class ModelFiles:
     """A non-linear post-correction's sidecars (:mod:`ocio_vp.ocio.bake`): Q, Q^-1 (None
@@ -472,6 +468,7 @@ def _add_working_spaces(data: ConfigData, camera: str) -> tuple[dict[str, str], 
         to_camera = colour.matrix_RGB_to_RGB(source, target, chromatic_adaptation_transform="CAT02")
         if key == "ACES2065-1":
             aces_to_camera = np.asarray(to_camera, dtype=np.float64)
+            roles[OCIO.ROLE_INTERCHANGE_SCENE] = name
         data.colour_spaces.append(
             colour_space(
                 name,
@@ -481,8 +478,6 @@ def _add_working_spaces(data: ConfigData, camera: str) -> tuple[dict[str, str], 
                 to_reference=matrix_record(to_camera),
             )
         )
-        if key in WORKING_SPACE_ROLES:
-            roles[WORKING_SPACE_ROLES[key]] = name
     d65 = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
     to_xyz = (
         colour.adaptation.matrix_chromatic_adaptation_VonKries(
@@ -499,7 +494,7 @@ def _add_working_spaces(data: ConfigData, camera: str) -> tuple[dict[str, str], 
             from_reference=matrix_record(to_xyz),
         )
     )
-    roles["cie_xyz_d65_interchange"] = "CIE-XYZ-D65"
+    roles[OCIO.ROLE_INTERCHANGE_DISPLAY] = "CIE-XYZ-D65"
     return roles, aces_to_camera
 
 

@@ -61,7 +61,7 @@ __all__ = [
 DEFAULT_BASE_CONFIG = ACES_CG_CONFIG
 #: Families (after ``ocio-vp/``) of an environment config's own colour spaces.
 ENVIRONMENT_FAMILIES = ("LED Wall", "Camera")
-AP0_ROLE = "aces_interchange"
+AP0_ROLE = OCIO.ROLE_INTERCHANGE_SCENE
 
 
 @dataclass(frozen=True)
