@@ -15,8 +15,8 @@ Profile version 2.1, so that Unreal 5.1+ and other OCIO 2.1 hosts load it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import PyOpenColorIO as OCIO
@@ -55,6 +55,9 @@ from ocio_vp.ocio.viewing import (
 from ocio_vp.wall.encoding import WallEncoding
 from ocio_vp.wall.softclip import soft_clip_knee
 
+if TYPE_CHECKING:
+    from ocio_vp.ocio.bake import ModelOutputs
+
 __all__ = [
     "DISPLAY",
     "IN_FRUSTUM",
@@ -63,7 +66,6 @@ __all__ = [
     "POST_CORRECTION_COLORSPACE",
     "RAW",
     "REFERENCE",
-    "ModelFiles",
     "build_config",
     "config_data",
     "matrix_transform",
@@ -105,21 +107,11 @@ __getattr__ = deprecated_names(
 )
 
 
-@dataclass(frozen=True)
-class ModelFiles:
-    """A non-linear post-correction's sidecars (:mod:`ocio_vp.ocio.bake`): Q, Q^-1 (None
-    without an inverse) and how close they come to the model (for the descriptions)."""
-
-    q: str
-    q_inverse: str | None
-    note: str = ""
-
-
 Chains = tuple[list[Transform], list[Transform]]
 
 
 def post_correction_transforms(
-    solution: Solution, model: ModelFiles | None = None
+    solution: Solution, model: ModelOutputs | None = None
 ) -> tuple[Transform, Transform, str]:
     """Q as transform records: (footage -> corrected, corrected -> footage, a note on the
     second), both explicit so that OCIO never inverts a chain (a LUT) by search.
@@ -135,10 +127,10 @@ def post_correction_transforms(
             f"a {correction.kind} post-correction needs its LUT files (ocio_vp.ocio.bake); "
             "the config would otherwise carry only its 3x3"
         )
-    forward = matrix_record(Q) if model is None else file(model.q)
-    if model is not None and model.q_inverse is not None:
-        text = f"The inverse direction is the baked Q^-1 ({model.q_inverse})."
-        return forward, file(model.q_inverse), text
+    forward = matrix_record(Q) if model is None else file(model.q_file)
+    if model is not None and model.q_inverse_file is not None:
+        text = f"The inverse direction is the baked Q^-1 ({model.q_inverse_file})."
+        return forward, file(model.q_inverse_file), text
     if correction.invertible and model is None:
         return forward, matrix_record(Q, inverse=True), ""
     pinv, rank = truncated_pseudo_inverse(Q)
@@ -177,7 +169,7 @@ def wall_signal_tail(solution: Solution, extra: list[Transform]) -> list[Transfo
 
 
 def wall_chains(
-    solution: Solution, extra: dict[str, list[Transform]], model: ModelFiles | None
+    solution: Solution, extra: dict[str, list[Transform]], model: ModelOutputs | None
 ) -> dict[str, Chains]:
     """(reference -> wall signal, wall signal -> reference) chains of the two wall colour
     spaces: the drive (M; N and the offset), then the soft clip the solve asked for
@@ -197,12 +189,12 @@ def wall_chains(
     inner = [matrix_record(solution.in_frustum_matrix, offset)]
     inner_back = [matrix_record(solution.in_frustum_matrix, offset, inverse=True)]
     if model is not None and solution.N is not None:
-        if model.q_inverse is None:
+        if model.q_inverse_file is None:
             raise ValueError("N is solved but the non-linear Q has no baked inverse")
         # N inverts Q for the calibrated wall, [SL]^-1, whatever M lights with (joint's M)
         calibrated = np.linalg.inv(np.asarray(solution.SL, dtype=np.float64))
-        inner = [file(model.q_inverse), matrix_record(calibrated, offset)]
-        inner_back = [matrix_record(calibrated, offset, inverse=True), file(model.q)]
+        inner = [file(model.q_inverse_file), matrix_record(calibrated, offset)]
+        inner_back = [matrix_record(calibrated, offset, inverse=True), file(model.q_file)]
     knee = soft_clip_knee(solution.linearity)
     clip, unclip = ([], []) if knee is None else soft_clip_transforms(knee)
     chains = {}
@@ -218,7 +210,7 @@ def build_config(
     *,
     extra_wall_transforms: dict[str, list[Transform]] | None = None,
     search_path: str | None = None,
-    model: ModelFiles | None = None,
+    model: ModelOutputs | None = None,
 ) -> OCIO.Config:
     """The validated OCIO config of :func:`config_data`."""
     return build(
@@ -236,7 +228,7 @@ def config_data(
     *,
     extra_wall_transforms: dict[str, list[Transform]] | None = None,
     search_path: str | None = None,
-    model: ModelFiles | None = None,
+    model: ModelOutputs | None = None,
 ) -> ConfigData:
     """What the config of one solved environment holds, as data.
 
@@ -362,12 +354,12 @@ def in_frustum_text(
     return text
 
 
-def _in_frustum_text(solution: Solution, model: ModelFiles | None = None) -> str:
+def _in_frustum_text(solution: Solution, model: ModelOutputs | None = None) -> str:
     N_text = None
     if solution.N is not None and model is not None:
         N_text = (
             f"[SL]^-1 Q^-1(c), the baked inverse of the {solution.correction.kind} Q "
-            f"({model.q_inverse}) then [SL]^-1 {format_matrix(np.linalg.inv(solution.SL))} (N = "
+            f"({model.q_inverse_file}) then [SL]^-1 {format_matrix(np.linalg.inv(solution.SL))} (N = "
             f"[SL]^-1 Q^-1 for its 3x3 would be {format_matrix(solution.N)})"
         )
     elif solution.N is not None and is_identity(solution.Q):
@@ -390,7 +382,7 @@ def _add_post_correction(
     data: ConfigData,
     solution: Solution,
     origin: str,
-    model: ModelFiles | None = None,
+    model: ModelOutputs | None = None,
 ) -> None:
     """Q twice: the ``Stage Footage`` colour space and the ``Post-Correction Q`` named
     transform (a non-linear Q as its ``model`` sidecars; its matrix then only printed)."""
@@ -403,7 +395,8 @@ def _add_post_correction(
     if model is not None:
         q_text = (
             f"The {solution.correction.kind} Q ({solution.correction.describe()}) as a LUT chain "
-            f"({model.q}; the matrix below is only its 3x3 approximation). {model.note} " + q_text
+            f"({model.q_file}; the matrix below is only its 3x3 approximation). {model.note()} "
+            + q_text
         )
     if q_identity:
         q_text = "Q is the identity: no post-correction is needed. " + q_text

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from ocio_vp.formats.panel_solution import PanelSolution
 from ocio_vp.formats.solution import OcioNames, Solution
@@ -16,7 +17,6 @@ from ocio_vp.ocio.config import (
     OUT_OF_FRUSTUM,
     VIEW_INNER,
     VIEW_OUTER,
-    ModelFiles,
     drive_description,
     in_frustum_text,
     wall_chains,
@@ -26,6 +26,9 @@ from ocio_vp.ocio.description import ColourSpace, ConfigData, View
 from ocio_vp.ocio.matrix import format_matrix
 from ocio_vp.ocio.viewing import set_categories
 from ocio_vp.ocio.wall import wall_outputs
+
+if TYPE_CHECKING:
+    from ocio_vp.ocio.bake import ModelOutputs
 
 __all__ = ["PanelOutputs", "add_panel_spaces", "panel_labels", "panel_outputs"]
 
@@ -93,7 +96,7 @@ def _descriptions(solution: Solution, panel: PanelSolution) -> dict[str, str]:
     }
 
 
-def panel_outputs(solution: Solution, model: ModelFiles | None = None) -> PanelOutputs | None:
+def panel_outputs(solution: Solution, model: ModelOutputs | None = None) -> PanelOutputs | None:
     """The other panel types' colour spaces (None for a stage of one panel type); ``model``:
     a non-linear Q's sidecars, as for the wall's."""
     if not solution.panels:

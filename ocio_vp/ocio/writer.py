@@ -23,7 +23,7 @@ from pathlib import Path
 from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import Solution, solution_to_json
 from ocio_vp.ocio.bake import model_outputs
-from ocio_vp.ocio.config import ModelFiles, config_data, ocio_names, write_config
+from ocio_vp.ocio.config import config_data, ocio_names, write_config
 from ocio_vp.ocio.description import build
 from ocio_vp.ocio.panels import add_panel_spaces, panel_outputs
 from ocio_vp.ocio.wall import wall_outputs
@@ -41,15 +41,14 @@ def write_environment(solution: Solution, directory: Path) -> Solution:
     wall = wall_outputs(solution)  # panel-linearity LUT sidecar and wall signal encoding
     solution = dataclasses.replace(solution, ocio=ocio_names(), linearity=wall.linearity)
     luts = model_outputs(solution)  # a non-linear Q's LUT sidecars, else None
-    files, search_path, model = dict(wall.files), wall.search_path, None
+    files, search_path = dict(wall.files), wall.search_path
     if luts is not None:
         files.update(luts.files)
         search_path = LUT_DIR
-        model = ModelFiles(luts.q_file, luts.q_inverse_file, luts.note())
         diagnostics = solution.diagnostics.adding(post_correction_ocio=luts.block)
         solution = dataclasses.replace(solution, diagnostics=diagnostics)
     # A stage's other panel types: their own colour spaces, LUTs and encodings (ocio/panels.py).
-    panels = panel_outputs(solution, model)
+    panels = panel_outputs(solution, luts)
     if panels is not None:
         files.update(panels.files)
         search_path = LUT_DIR if files else search_path
@@ -58,7 +57,7 @@ def write_environment(solution: Solution, directory: Path) -> Solution:
         solution,
         extra_wall_transforms=wall.extra_wall_transforms,
         search_path=search_path,
-        model=model,
+        model=luts,
     )
     if panels is not None:
         add_panel_spaces(data, panels)
