@@ -223,9 +223,7 @@ def _space_transform(src: str, dst: str) -> Transform:
     return Transform("ColorSpaceTransform", (("Src", src), ("Dst", dst), ("DataBypass", True)))
 
 
-def _overlay(
-    base: ConfigData, environments: Sequence[EnvironmentData], aces_space: ColourSpace
-) -> ConfigData:
+def _overlay(environments: Sequence[EnvironmentData], aces_space: ColourSpace) -> ConfigData:
     """Everything the show adds to the base (its ``aces_interchange`` space ``aces_space``)."""
     aces = aces_space.name
     overlay = ConfigData(environment={CONTEXT_VARIABLE: environments[0].name}, search_path=LUT_DIR)
@@ -305,7 +303,7 @@ def show_data(
     """The show config of ``environments`` on ``base`` (``label``: how its description names
     the base), as data: the overlay merged onto the base, the footage views, the active and
     inactive lists."""
-    overlay = _overlay(base, environments, _aces_space(base))
+    overlay = _overlay(environments, _aces_space(base))
     names = ", ".join(env.name for env in environments)
     first = environments[0].name
     overlay.name = f"ocio-vp_show_{first}" if len(environments) == 1 else "ocio-vp_show"
