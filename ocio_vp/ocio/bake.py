@@ -32,7 +32,7 @@ from ocio_vp.model.footage_range import (
     agreement,
     calibration_footage_range,
 )
-from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
+from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3, sidecar_name
 from ocio_vp.wall.encoding import LUT_DIR
 
 __all__ = [
@@ -731,8 +731,6 @@ def content_range(footage, correction):
 
 
 def _outputs(solution, chains, measured, measured_inverse) -> ModelOutputs:
-    from ocio_vp.ocio.wall import sidecar_name  # the config's side (loads the config builder)
-
     correction = solution.correction
     files, names, designs = {}, [], {}
     for stem, chain, lut, what in chains:

@@ -10,7 +10,6 @@ Chain (reference -> wall signal) of both wall colour spaces::
 
 from __future__ import annotations
 
-import hashlib
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -18,7 +17,7 @@ import PyOpenColorIO as OCIO
 
 from ocio_vp.formats.linearity import Linearity, LutFile
 from ocio_vp.formats.solution import Solution
-from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
+from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3, sidecar_name
 from ocio_vp.ocio.config import IN_FRUSTUM, OUT_OF_FRUSTUM
 from ocio_vp.ocio.description import Transform, file, transform_record
 from ocio_vp.wall.encoding import (
@@ -38,7 +37,6 @@ __all__ = [
     "encoding_transforms",
     "log_shaper_transform",
     "lut_transform",
-    "sidecar_name",
     "wall_outputs",
 ]
 
@@ -72,13 +70,6 @@ def lut_transform(lut: LinearityLut):
         lut1d.setValue(i, float(r), float(g), float(b))
     shaper = [log_shaper_transform()] if WallEncoding(lut.encoding).linear else []
     return OCIO.GroupTransform([*shaper, lut1d])
-
-
-def sidecar_name(stem: str, text: str) -> str:
-    """``<stem>_<hash>.clf``: OCIO caches files by path for the whole process, so sidecars
-    that differ must not share a name."""
-    digest = hashlib.sha256(text.encode("utf-8")).hexdigest()[:12]
-    return f"{stem}_{digest}.clf"
 
 
 #: What the LUT takes and returns, per wall encoding (in the CLF and solution.json).
