@@ -99,7 +99,7 @@ def wall_outputs(solution: Solution) -> WallOutputs:
         return WallOutputs()
     wall = WallEncoding.of(linearity)
     encoding, peak_nits = wall.name, float(wall.peak_nits or DEFAULT_PEAK_NITS)
-    lut_name = None
+    chain = [transform_record(t) for t in wall.ocio_transforms()]
     files: dict[str, str] = {}
     if linearity.corrected:
         lut = lut_table(linearity, encoding, peak_nits=peak_nits)
@@ -112,7 +112,7 @@ def wall_outputs(solution: Solution) -> WallOutputs:
         text = clf_v3(group.write(formatName=CLF_FORMAT, config=OCIO.Config.CreateRaw()))
         name = sidecar_name(f"{solution.stage}_panel_linearity", text)
         files[f"{LUT_DIR}/{name}"] = text
-        lut_name = name
+        chain.append(file(name))
         max_error, bands = lut_accuracy(linearity, lut)
         record = LutFile(
             file=f"{LUT_DIR}/{name}",
@@ -123,9 +123,6 @@ def wall_outputs(solution: Solution) -> WallOutputs:
             definition=LUT_ACCURACY,
         )
         linearity = linearity.updated(lut=record)
-
-    chain = [transform_record(t) for t in wall.ocio_transforms()]
-    chain += [] if lut_name is None else [file(lut_name)]
     if not chain:
         return WallOutputs(linearity=linearity)
     return WallOutputs(
