@@ -38,7 +38,7 @@ from ocio_vp.exports.unreal_script import SCRIPT_FILE, render_unreal_script
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.solution import OcioNames
 from ocio_vp.formats.solution_inputs import SOLUTION_FILE
-from ocio_vp.ocio.config import WORKING_SPACE_NAMES
+from ocio_vp.ocio import WORKING_SPACE_NAMES
 
 __all__ = ["MAPPING_FILE", "unreal_mapping", "write_ocioz", "write_unreal"]
 

@@ -12,6 +12,14 @@ from typing import TYPE_CHECKING
 
 from ocio_vp.deprecation import published_on_first_use
 
+#: Working spaces a config gets when the stage names its camera gamut (colour's name: the
+#: config's); here, so that exports read them without loading the config builder.
+WORKING_SPACE_NAMES = {
+    "ACES2065-1": "ACES2065-1",
+    "ACEScg": "ACEScg",
+    "ITU-R BT.709": "Linear Rec.709 (sRGB)",
+}
+
 #: Public name -> the module of this package that defines it.
 _EXPORTS = {
     "DISPLAY": "ocio_vp.ocio.config",

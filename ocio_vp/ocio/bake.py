@@ -1,49 +1,13 @@
 """A non-linear post-correction in OCIO: LUT chains on scale x direction, exact where it is linear.
 
 A root-polynomial Q or an emitter-protected one (:mod:`ocio_vp.model`) is not a matrix, so the
-config carries it (and its inverse) as a chain of CLF v3 operators, written as sidecar files:
-
-1. ``Matrix``: ``y = T x``, a mix towards grey ``T = (1 - e) I + e/3 ones`` (e =
-   :data:`CAMERA_MIX` on the footage side, :data:`CONTENT_MIX` on the corrected side), so
-   every colour of light has positive channels;
-2. ``Log``: ``l = log2 y``; on the footage side a ``cameraLinToLog`` whose linear segment below
-   :data:`LINEAR_BREAK` of the white carries noise around black and negative channels
-   (finite, continuous, invertible), on the corrected side a plain log2;
-3. ``Matrix``: to (scale ``s`` = mean of l, ``a`` = l_r - l_g, ``b`` = l_b - l_g) in [0, 1];
-4. ``LUT1D`` (4095): each axis to its position among the 3D LUT's nodes (the warp);
-5. ``LUT3D`` (65^3, tetrahedral) holding ``l(T L^-1 F(x))`` for the function ``F`` at the
-   node's input ``x``, in steps of 2^-12 stop (integers, exact in float32);
-6. ``Matrix`` (the steps back to stops), the inverse ``Log``, ``Matrix`` ``L T^-1``.
-
-**Exact where F is linear.** ``L`` is the matrix the function reduces to where it is linear:
-the root-polynomial's fallback outside the chart's domain (and its inverse for Q^-1), the
-identity where the emitter protection leaves a pixel alone. Where ``F(x) = L x`` the LUT holds
-each node's own coordinates, which tetrahedral interpolation reproduces exactly (they are
-linear within each cell: the warp is linear between nodes), and the last two operators undo
-the first two: the chain is then ``L`` to float precision, whatever the scale, near black or
-far out of the chart. Only where F departs from L does interpolation err, by how much the
-departure bends between nodes.
-
-**Scale.** A homogeneous F (the root-polynomial: ``F(k x) = k F(x)``) through a plain log2 is
-affine in ``s``, which tetrahedral interpolation reproduces, so its scale axis needs one cell
-(exposures 2^-40 to 2^24). The linear segment below the break and the emitter protection's
-fade above white (``bright``: its weight depends on brightness) are not, so the scale axis
-gets nodes there: around the break, and across the fade for every direction the chart's
-colours take. Slices of the cube beyond the last node are never reached (the warp stops there);
-they hold zeros, so each file stays small.
-
-**Directions.** Nodes on ``a`` and ``b`` are spread by the curvature of the departure from L
-(measured on a grid; where the root-polynomial's fade meets its growing polynomial, the grid
-needs most), with shares kept uniform over the chart's directions and over the whole range.
-
-What the chain does not carry: a pixel whose log-ratios leave +-:data:`RATIO_RANGE` (near
-black, a mixed channel below about -:data:`NEGATIVE_REACH` breaks beside others within a few
-breaks of black; less beside brighter ones: no colour of light), and, on the corrected side,
-content with a channel negative enough to stay negative after the mix (the plain log2 floors
-it). Inside that range, how close the chain comes to the model is
-measured when the config is written (:func:`model_outputs`): ΔE2000 against the exact model
-on the camera range of :mod:`ocio_vp.model.footage_range`, stored in ``solution.json``
-(``diagnostics.post_correction_ocio``) and quoted in the config's descriptions.
+config carries it (and its inverse) as a chain of CLF v3 operators in sidecar files
+(:func:`chain_transform`): exact to float precision where the model is linear, nodes where it
+bends. docs/root_polynomial.md (*The config: LUT chains*) describes the chain, its nodes and the
+range it carries. How close a chain comes to the model is measured when the config is written
+(:func:`model_outputs`: ΔE2000 on the camera range of :mod:`ocio_vp.model.footage_range`),
+stored in ``solution.json`` (``diagnostics.post_correction_ocio``) and quoted in the config's
+descriptions.
 """
 
 from __future__ import annotations
@@ -68,7 +32,7 @@ from ocio_vp.model.footage_range import (
     agreement,
     calibration_footage_range,
 )
-from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
+from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3, sidecar_name
 from ocio_vp.wall.encoding import LUT_DIR
 
 __all__ = [
@@ -107,10 +71,6 @@ LINEAR_BREAK = 2.0**-9
 SCALE_RANGE = (-40.0, -40.0 + (WARP_SIZE - 1) / 64.0)
 #: |log2 r/g| and |log2 b/g| the chains cover; beyond, the ratio is clamped.
 RATIO_RANGE = 10.0
-#: How far below zero (in breaks) a mixed channel of a pixel near black may go and stay
-#: inside the footage side's range beside channels within a few breaks of black (its
-#: log-ratio is still within RATIO_RANGE; about 4 to 7 breaks, fewer beside brighter ones).
-NEGATIVE_REACH = 4.0
 #: The 3D LUT holds log2 values in steps of 2^-12 stop (integers, exact in float32 up to
 #: +-4096 stops; the rounding, <= 9e-5 relative, is far below the interpolation's error).
 LUT_STEPS_PER_STOP = 2.0**12
@@ -136,10 +96,10 @@ def _mix(e: float) -> np.ndarray:
     return (1.0 - e) * np.eye(3) + e / 3.0 * np.ones((3, 3))
 
 
-def _m44(matrix: np.ndarray) -> OCIO.MatrixTransform:
+def _m44(matrix: np.ndarray, offset: Sequence[float] = (0.0,) * 4) -> OCIO.MatrixTransform:
     m = np.eye(4)
     m[:3, :3] = matrix
-    return OCIO.MatrixTransform([float(v) for v in m.ravel()], [0.0, 0.0, 0.0, 0.0])
+    return OCIO.MatrixTransform([float(v) for v in m.ravel()], [float(v) for v in offset])
 
 
 # ---------------------------------------------------------------------------------------------
@@ -178,10 +138,6 @@ class LutChain:
         b = self.linear_break
         return np.where(v > np.log2(b), np.exp2(v), b + (v - np.log2(b)) * b * np.log(2))
 
-    def coordinates(self, x: np.ndarray) -> np.ndarray:
-        """(..., 3) (s, a, b) of camera-side inputs ``x``."""
-        return self.log(np.asarray(x, dtype=np.float64) @ self.T.T) @ _BASIS.T
-
     def inputs(self, s: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Inputs ``x`` whose coordinates are (s, a, b) (broadcast)."""
         g = s - (a + b) / 3.0
@@ -216,10 +172,7 @@ def _to_lut_domain() -> OCIO.MatrixTransform:
     """l -> ((s - low) / span, a / (2 R) + 1/2, b / (2 R) + 1/2)."""
     low, high = SCALE_RANGE
     scale = np.diag([1 / (high - low), 1 / (2 * RATIO_RANGE), 1 / (2 * RATIO_RANGE)])
-    m = np.eye(4)
-    m[:3, :3] = scale @ _BASIS
-    offset = [-low / (high - low), 0.5, 0.5, 0.0]
-    return OCIO.MatrixTransform([float(v) for v in m.ravel()], offset)
+    return _m44(scale @ _BASIS, [-low / (high - low), 0.5, 0.5, 0.0])
 
 
 def _warp(chain: LutChain) -> OCIO.Lut1DTransform:
@@ -271,7 +224,8 @@ def _lut_array(values: np.ndarray, chain: LutChain) -> np.ndarray:
 
 
 def chain_transform(chain: LutChain, lut: np.ndarray | None) -> OCIO.GroupTransform:
-    """The OCIO operators of the module docstring for a baked ``lut`` (:func:`bake`); with
+    """The chain's OCIO operators for a baked ``lut`` (:func:`bake`): mix ``T``, log, to
+    (scale, a, b) in [0, 1], the warp, the 3D LUT, steps to stops, antilog, ``L T^-1``. With
     ``lut`` None a 2^3 placeholder stands for the 3D LUT (for :func:`clf_text`)."""
     if lut is None:
         lut3d = OCIO.Lut3DTransform(gridSize=2)
@@ -345,17 +299,18 @@ def _curvature(
     return along_a / h2, along_b / h2
 
 
-def _box(chain: LutChain, colours: np.ndarray) -> tuple[tuple[float, float], tuple[float, float]]:
-    """Log-ratio ranges (a, b) of ``colours`` (+-0.25 stop) inside the chain's range."""
-    y = np.asarray(colours, dtype=np.float64).reshape(-1, 3) @ chain.T.T
+def _ratio_box(
+    colours: np.ndarray, mix: float, margin: float, limit: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(lowest, highest) log-ratios (a, b) of ``colours`` mixed by ``mix`` (those whose mixed
+    channels are all positive; (-1, 1) for none), ``margin`` stops wider, within +-``limit``."""
+    y = np.asarray(colours, dtype=np.float64).reshape(-1, 3) @ _mix(mix).T
     y = y[np.all(y > 0, axis=1)]
     if len(y) == 0:
-        return (-1.0, 1.0), (-1.0, 1.0)
+        return -np.ones(2), np.ones(2)
     c = np.log2(y) @ _BASIS.T
-    limit = RATIO_RANGE - 0.5
-    lo = np.clip(c.min(axis=0)[1:] - 0.25, -limit, limit)
-    hi = np.clip(c.max(axis=0)[1:] + 0.25, -limit, limit)
-    return (float(lo[0]), float(hi[0])), (float(lo[1]), float(hi[1]))
+    low = np.clip(c.min(axis=0)[1:] - margin, -limit, limit)
+    return low, np.clip(c.max(axis=0)[1:] + margin, -limit, limit)
 
 
 def _design(
@@ -378,14 +333,14 @@ def _design(
         probe = LutChain(mix, function_reference, linear_break, nodes, flat, flat)
         ca, cb = _curvature(function, probe, scales)
         along_a, along_b = np.maximum(along_a, ca), np.maximum(along_b, cb)
-    box_a, box_b = _box(LutChain(mix, reference, linear_break, nodes, flat, flat), colours)
+    box_low, box_high = _ratio_box(colours, mix, 0.25, RATIO_RANGE - 0.5)
     return LutChain(
         mix,
         reference,
         linear_break,
         nodes,
-        _direction_nodes(along_a, box_a, size),
-        _direction_nodes(along_b, box_b, size),
+        _direction_nodes(along_a, (box_low[0], box_high[0]), size),
+        _direction_nodes(along_b, (box_low[1], box_high[1]), size),
         size,
     )
 
@@ -511,12 +466,7 @@ def inverse_chain(
 ) -> LutChain:
     """The corrected-side chain of Q^-1; ``content`` the colours it is finest on (the target
     chart and mixtures of it). A plain log2: content is light, its mixed channels positive."""
-    T = _mix(CONTENT_MIX)
-    y = np.asarray(content, dtype=np.float64) @ T.T
-    c = np.log2(y[np.all(y > 0, axis=1)]) @ _BASIS.T
-    limit = RATIO_RANGE - 1.0
-    low = np.maximum(c.min(axis=0)[1:] - CONTENT_MARGIN, -limit)
-    high = np.minimum(c.max(axis=0)[1:] + CONTENT_MARGIN, limit)
+    low, high = _ratio_box(content, CONTENT_MIX, CONTENT_MARGIN, RATIO_RANGE - 1.0)
     s_nodes = list(SCALE_RANGE)
     if isinstance(
         correction, ProtectedCorrection
@@ -668,13 +618,12 @@ def processor_function(processor: OCIO.Processor) -> Callable[[np.ndarray], np.n
 @dataclass(frozen=True)
 class ModelOutputs:
     """Sidecar files (relative path -> CLF text), the Q and Q^-1 file names (Q^-1 None where
-    the correction has no inverse), the agreement of each with the model, and the
-    ``post_correction_ocio`` block of ``solution.json``."""
+    the correction has no inverse), Q's agreement with the model, and the
+    ``post_correction_ocio`` block of ``solution.json`` (Q^-1's agreement there)."""
 
     q_file: str
     q_inverse_file: str | None
     forward: Agreement
-    inverse: Agreement | None
     files: dict[str, str] = field(default_factory=dict)
     block: PostCorrectionOCIO | None = None
 
@@ -782,8 +731,6 @@ def content_range(footage, correction):
 
 
 def _outputs(solution, chains, measured, measured_inverse) -> ModelOutputs:
-    from ocio_vp.ocio.wall import sidecar_name  # the config's side (loads the config builder)
-
     correction = solution.correction
     files, names, designs = {}, [], {}
     for stem, chain, lut, what in chains:
@@ -808,7 +755,6 @@ def _outputs(solution, chains, measured, measured_inverse) -> ModelOutputs:
         q_file=names[0],
         q_inverse_file=names[1] if len(names) > 1 else None,
         forward=measured,
-        inverse=measured_inverse,
         files=files,
         block=block,
     )

@@ -7,9 +7,10 @@ gets the Academy CLF v3 header instead; the nodes OCIO writes are all CLF v3 nod
 
 from __future__ import annotations
 
+import hashlib
 import re
 
-__all__ = ["CLF_FORMAT", "CLF_V3_NAMESPACE", "clf_v3"]
+__all__ = ["CLF_FORMAT", "CLF_V3_NAMESPACE", "clf_v3", "sidecar_name"]
 
 CLF_FORMAT = "Academy/ASC Common LUT Format"
 CLF_V3_NAMESPACE = "urn:AMPAS:CLF:v3.0"
@@ -34,3 +35,10 @@ def clf_v3(text: str) -> str:
     attributes = _VERSION.sub("", _NAMESPACE.sub("", match.group(1)))
     header = f'<ProcessList xmlns="{CLF_V3_NAMESPACE}" compCLFversion="3.0"{attributes}>'
     return text[: match.start()] + header + text[match.end() :]
+
+
+def sidecar_name(stem: str, text: str) -> str:
+    """``<stem>_<hash>.clf``: OCIO caches files by path for the whole process, so sidecars
+    that differ must not share a name."""
+    digest = hashlib.sha256(text.encode("utf-8")).hexdigest()[:12]
+    return f"{stem}_{digest}.clf"

@@ -15,8 +15,8 @@ Profile version 2.1, so that Unreal 5.1+ and other OCIO 2.1 hosts load it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import PyOpenColorIO as OCIO
@@ -27,6 +27,7 @@ from ocio_vp.deprecation import deprecated_names
 from ocio_vp.formats.linearity import Linearity
 from ocio_vp.formats.solution import CONFIG_FILENAME, OcioNames, Solution
 from ocio_vp.model.correction import MAX_CONDITION_INVERSE, truncated_pseudo_inverse
+from ocio_vp.ocio import WORKING_SPACE_NAMES
 from ocio_vp.ocio.description import (
     FAMILY,
     ColourSpace,
@@ -44,6 +45,8 @@ from ocio_vp.ocio.description import (
 from ocio_vp.ocio.matrix import format_matrix, matrix_record, matrix_transform
 from ocio_vp.ocio.softclip import soft_clip_text, soft_clip_transforms
 from ocio_vp.ocio.viewing import (
+    ACESCCT,
+    MONITORS,
     add_acescct,
     add_camera_log_spaces,
     add_monitor_displays,
@@ -51,6 +54,9 @@ from ocio_vp.ocio.viewing import (
 )
 from ocio_vp.wall.encoding import WallEncoding
 from ocio_vp.wall.softclip import soft_clip_knee
+
+if TYPE_CHECKING:
+    from ocio_vp.ocio.bake import ModelOutputs
 
 __all__ = [
     "DISPLAY",
@@ -60,14 +66,12 @@ __all__ = [
     "POST_CORRECTION_COLORSPACE",
     "RAW",
     "REFERENCE",
-    "ModelFiles",
     "build_config",
     "config_data",
     "matrix_transform",
     "post_correction_transforms",
     "wall_chains",
     "wall_signal_tail",
-    "wall_tail",
     "write_config",
 ]
 
@@ -103,57 +107,11 @@ __getattr__ = deprecated_names(
 )
 
 
-#: Working spaces added when the stage names its camera gamut (colour's name: the config's),
-#: and the OCIO role each takes.
-WORKING_SPACE_NAMES = {
-    "ACES2065-1": "ACES2065-1",
-    "ACEScg": "ACEScg",
-    "ITU-R BT.709": "Linear Rec.709 (sRGB)",
-}
-WORKING_SPACE_ROLES = {"ACES2065-1": "aces_interchange"}
-
-
-@dataclass(frozen=True)
-class ModelFiles:
-    """A non-linear post-correction's sidecars (:mod:`ocio_vp.ocio.bake`): Q, Q^-1 (None
-    without an inverse) and how close they come to the model (for the descriptions)."""
-
-    q: str
-    q_inverse: str | None
-    note: str = ""
-
-
 Chains = tuple[list[Transform], list[Transform]]
 
 
-def wall_transforms(solution: Solution, model: ModelFiles | None = None) -> dict[str, Chains]:
-    """(reference -> drive, drive -> reference) chains of the two wall colour spaces, before
-    the wall's tail (:func:`wall_chains`).
-
-    With ``model`` (a non-linear Q's sidecars) and N solved, the in-frustum drive is
-    ``[SL]^-1 Q^-1(c)`` (the Q^-1 file, then the calibrated ``[SL]^-1``) and its other
-    direction ``Q([SL] d)``: OCIO never inverts a LUT file.
-    """
-    outer = [matrix_record(solution.M)]
-    outer_back = [matrix_record(solution.M, inverse=True)]
-    # an offset the camera cannot see is left out (docs/stability.md); solution.json keeps it
-    offset = solution.black_level_offset
-    if offset_is_negligible(offset, solution.SL):
-        offset = None
-    inner = [matrix_record(solution.in_frustum_matrix, offset)]
-    inner_back = [matrix_record(solution.in_frustum_matrix, offset, inverse=True)]
-    if model is not None and solution.N is not None:
-        if model.q_inverse is None:
-            raise ValueError("N is solved but the non-linear Q has no baked inverse")
-        # N inverts Q for the calibrated wall, [SL]^-1, whatever M lights with (joint's M)
-        calibrated = np.linalg.inv(np.asarray(solution.SL, dtype=np.float64))
-        inner = [file(model.q_inverse), matrix_record(calibrated, offset)]
-        inner_back = [matrix_record(calibrated, offset, inverse=True), file(model.q)]
-    return {OUT_OF_FRUSTUM: (outer, outer_back), IN_FRUSTUM: (inner, inner_back)}
-
-
 def post_correction_transforms(
-    solution: Solution, model: ModelFiles | None = None
+    solution: Solution, model: ModelOutputs | None = None
 ) -> tuple[Transform, Transform, str]:
     """Q as transform records: (footage -> corrected, corrected -> footage, a note on the
     second), both explicit so that OCIO never inverts a chain (a LUT) by search.
@@ -169,10 +127,10 @@ def post_correction_transforms(
             f"a {correction.kind} post-correction needs its LUT files (ocio_vp.ocio.bake); "
             "the config would otherwise carry only its 3x3"
         )
-    forward = matrix_record(Q) if model is None else file(model.q)
-    if model is not None and model.q_inverse is not None:
-        text = f"The inverse direction is the baked Q^-1 ({model.q_inverse})."
-        return forward, file(model.q_inverse), text
+    forward = matrix_record(Q) if model is None else file(model.q_file)
+    if model is not None and model.q_inverse_file is not None:
+        text = f"The inverse direction is the baked Q^-1 ({model.q_inverse_file})."
+        return forward, file(model.q_inverse_file), text
     if correction.invertible and model is None:
         return forward, matrix_record(Q, inverse=True), ""
     pinv, rank = truncated_pseudo_inverse(Q)
@@ -210,29 +168,40 @@ def wall_signal_tail(solution: Solution, extra: list[Transform]) -> list[Transfo
     ]
 
 
-def wall_tail(solution: Solution, extra: list[Transform]) -> Chains:
-    """(drive -> wall signal, wall signal -> drive): the soft clip the solve asked for
-    (:mod:`ocio_vp.ocio.softclip`), then :func:`wall_signal_tail`; both empty for a linear
-    wall without LUT or soft clip."""
-    signal = wall_signal_tail(solution, extra)
-    undo = [group(signal, inverse=True)] if signal else []
-    knee = soft_clip_knee(solution.linearity)
-    if knee is None:
-        return signal, undo
-    clip, unclip = soft_clip_transforms(knee)
-    return [*clip, *signal], [*undo, *unclip]
-
-
 def wall_chains(
-    solution: Solution, extra: dict[str, list[Transform]], model: ModelFiles | None
+    solution: Solution, extra: dict[str, list[Transform]], model: ModelOutputs | None
 ) -> dict[str, Chains]:
-    """:func:`wall_transforms` with each wall colour space's tail (:func:`wall_tail` of
-    ``extra``, its LUT and encoding) after it, undone before the other direction."""
-    chains = wall_transforms(solution, model)
-    for name, (there, back) in chains.items():
-        tail, undo = wall_tail(solution, list(extra.get(name, [])))
-        if tail:
-            chains[name] = (there + tail, [*undo, *back])
+    """(reference -> wall signal, wall signal -> reference) chains of the two wall colour
+    spaces: the drive (M; N and the offset), then the soft clip the solve asked for
+    (:mod:`ocio_vp.ocio.softclip`) and :func:`wall_signal_tail` of ``extra`` (that space's LUT
+    and encoding), undone before the other direction.
+
+    With ``model`` (a non-linear Q's sidecars) and N solved, the in-frustum drive is
+    ``[SL]^-1 Q^-1(c)`` (the Q^-1 file, then the calibrated ``[SL]^-1``) and its other
+    direction ``Q([SL] d)``: OCIO never inverts a LUT file.
+    """
+    outer = [matrix_record(solution.M)]
+    outer_back = [matrix_record(solution.M, inverse=True)]
+    # an offset the camera cannot see is left out (docs/stability.md); solution.json keeps it
+    offset = solution.black_level_offset
+    if offset_is_negligible(offset, solution.SL):
+        offset = None
+    inner = [matrix_record(solution.in_frustum_matrix, offset)]
+    inner_back = [matrix_record(solution.in_frustum_matrix, offset, inverse=True)]
+    if model is not None and solution.N is not None:
+        if model.q_inverse_file is None:
+            raise ValueError("N is solved but the non-linear Q has no baked inverse")
+        # N inverts Q for the calibrated wall, [SL]^-1, whatever M lights with (joint's M)
+        calibrated = np.linalg.inv(np.asarray(solution.SL, dtype=np.float64))
+        inner = [file(model.q_inverse_file), matrix_record(calibrated, offset)]
+        inner_back = [matrix_record(calibrated, offset, inverse=True), file(model.q_file)]
+    knee = soft_clip_knee(solution.linearity)
+    clip, unclip = ([], []) if knee is None else soft_clip_transforms(knee)
+    chains = {}
+    for name, there, back in ((OUT_OF_FRUSTUM, outer, outer_back), (IN_FRUSTUM, inner, inner_back)):
+        signal = wall_signal_tail(solution, list(extra.get(name, [])))
+        undo = [group(signal, inverse=True)] if signal else []
+        chains[name] = ([*there, *clip, *signal], [*undo, *unclip, *back])
     return chains
 
 
@@ -241,7 +210,7 @@ def build_config(
     *,
     extra_wall_transforms: dict[str, list[Transform]] | None = None,
     search_path: str | None = None,
-    model: ModelFiles | None = None,
+    model: ModelOutputs | None = None,
 ) -> OCIO.Config:
     """The validated OCIO config of :func:`config_data`."""
     return build(
@@ -259,7 +228,7 @@ def config_data(
     *,
     extra_wall_transforms: dict[str, list[Transform]] | None = None,
     search_path: str | None = None,
-    model: ModelFiles | None = None,
+    model: ModelOutputs | None = None,
 ) -> ConfigData:
     """What the config of one solved environment holds, as data.
 
@@ -302,12 +271,12 @@ def config_data(
 
 def _add_displays(data: ConfigData, camera_to_aces: np.ndarray | None) -> None:
     """Monitor displays first (the viewer's default is a monitor view), then ``LED Wall``."""
-    monitors = add_monitor_displays(
+    add_monitor_displays(
         data, camera_to_aces, reference=REFERENCE, footage=POST_CORRECTION_COLORSPACE
     )
     for view, space in ((VIEW_OUTER, OUT_OF_FRUSTUM), (VIEW_INNER, IN_FRUSTUM), ("Raw", RAW)):
         data.views.append(View(DISPLAY, view, space))
-    displays = [*dict.fromkeys(m.display for m in monitors), DISPLAY]
+    displays = [*dict.fromkeys(m.display for m in MONITORS), DISPLAY]
     data.active_displays = tuple(displays)
     views = [v for d in displays[:-1] for v in data.view_names(d)]
     data.active_views = (*dict.fromkeys(views), VIEW_INNER, VIEW_OUTER, "Raw")
@@ -385,12 +354,12 @@ def in_frustum_text(
     return text
 
 
-def _in_frustum_text(solution: Solution, model: ModelFiles | None = None) -> str:
+def _in_frustum_text(solution: Solution, model: ModelOutputs | None = None) -> str:
     N_text = None
     if solution.N is not None and model is not None:
         N_text = (
             f"[SL]^-1 Q^-1(c), the baked inverse of the {solution.correction.kind} Q "
-            f"({model.q_inverse}) then [SL]^-1 {format_matrix(np.linalg.inv(solution.SL))} (N = "
+            f"({model.q_inverse_file}) then [SL]^-1 {format_matrix(np.linalg.inv(solution.SL))} (N = "
             f"[SL]^-1 Q^-1 for its 3x3 would be {format_matrix(solution.N)})"
         )
     elif solution.N is not None and is_identity(solution.Q):
@@ -413,7 +382,7 @@ def _add_post_correction(
     data: ConfigData,
     solution: Solution,
     origin: str,
-    model: ModelFiles | None = None,
+    model: ModelOutputs | None = None,
 ) -> None:
     """Q twice: the ``Stage Footage`` colour space and the ``Post-Correction Q`` named
     transform (a non-linear Q as its ``model`` sidecars; its matrix then only printed)."""
@@ -426,7 +395,8 @@ def _add_post_correction(
     if model is not None:
         q_text = (
             f"The {solution.correction.kind} Q ({solution.correction.describe()}) as a LUT chain "
-            f"({model.q}; the matrix below is only its 3x3 approximation). {model.note} " + q_text
+            f"({model.q_file}; the matrix below is only its 3x3 approximation). {model.note()} "
+            + q_text
         )
     if q_identity:
         q_text = "Q is the identity: no post-correction is needed. " + q_text
@@ -469,9 +439,9 @@ def _set_roles(data: ConfigData, camera: str | None) -> np.ndarray | None:
     if camera:
         working, aces_to_camera = _add_working_spaces(data, camera)
         roles.update(working)
-        log = add_acescct(data, aces_to_camera)
-        roles[OCIO.ROLE_COMPOSITING_LOG] = log
-        roles[OCIO.ROLE_COLOR_TIMING] = log
+        add_acescct(data, aces_to_camera)
+        roles[OCIO.ROLE_COMPOSITING_LOG] = ACESCCT
+        roles[OCIO.ROLE_COLOR_TIMING] = ACESCCT
         add_camera_log_spaces(data, camera, reference=REFERENCE, footage=POST_CORRECTION_COLORSPACE)
         camera_to_aces = np.linalg.inv(aces_to_camera)
     data.roles.update(roles)
@@ -491,6 +461,7 @@ def _add_working_spaces(data: ConfigData, camera: str) -> tuple[dict[str, str], 
         to_camera = colour.matrix_RGB_to_RGB(source, target, chromatic_adaptation_transform="CAT02")
         if key == "ACES2065-1":
             aces_to_camera = np.asarray(to_camera, dtype=np.float64)
+            roles[OCIO.ROLE_INTERCHANGE_SCENE] = name
         data.colour_spaces.append(
             colour_space(
                 name,
@@ -500,8 +471,6 @@ def _add_working_spaces(data: ConfigData, camera: str) -> tuple[dict[str, str], 
                 to_reference=matrix_record(to_camera),
             )
         )
-        if key in WORKING_SPACE_ROLES:
-            roles[WORKING_SPACE_ROLES[key]] = name
     d65 = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
     to_xyz = (
         colour.adaptation.matrix_chromatic_adaptation_VonKries(
@@ -518,14 +487,14 @@ def _add_working_spaces(data: ConfigData, camera: str) -> tuple[dict[str, str], 
             from_reference=matrix_record(to_xyz),
         )
     )
-    roles["cie_xyz_d65_interchange"] = "CIE-XYZ-D65"
+    roles[OCIO.ROLE_INTERCHANGE_DISPLAY] = "CIE-XYZ-D65"
     return roles, aces_to_camera
 
 
-def ocio_names(config_filename: str = CONFIG_FILENAME) -> OcioNames:
+def ocio_names() -> OcioNames:
     """The ``ocio`` block of ``solution.json``: which colorspace does what."""
     return OcioNames(
-        config=config_filename,
+        config=CONFIG_FILENAME,
         reference=REFERENCE,
         out_of_frustum=OUT_OF_FRUSTUM,
         in_frustum=IN_FRUSTUM,

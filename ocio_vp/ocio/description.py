@@ -21,8 +21,8 @@ __all__ = [
     "FAMILY",
     "ColourSpace",
     "ConfigData",
-    "ElementOrder",
     "Enum",
+    "Kept",
     "Look",
     "NamedTransform",
     "Transform",
@@ -229,14 +229,20 @@ class View:
 
 
 @dataclass(frozen=True)
-class ElementOrder:
-    """The names of a read config's elements of each kind in its order: :func:`build` puts the
-    elements kept as OCIO objects back in their place among the rebuilt ones."""
+class Kept:
+    """An element of a read config that no record rebuilds exactly (:func:`split_config`),
+    as OCIO has it: an ``OCIO.ColorSpace``, ``NamedTransform``, ``Look`` or ``ViewTransform``,
+    and its place among the elements of its kind (:func:`build` puts it back there)."""
 
-    colour_spaces: tuple[str, ...] = ()
-    named_transforms: tuple[str, ...] = ()
-    looks: tuple[str, ...] = ()
-    view_transforms: tuple[str, ...] = ()
+    name: str
+    aliases: tuple[str, ...]
+    element: object
+    index: int
+
+    @property
+    def kind(self) -> str:
+        """The OCIO class name of the element (``ColorSpace``, ...)."""
+        return type(self.element).__name__
 
 
 @dataclass
@@ -261,10 +267,17 @@ class ConfigData:
     default_rule: str = ""
     default_view_transform: str = ""
     inactive_colour_spaces: tuple[str, ...] = ()
-    #: Names of elements a config read by :func:`split_config` keeps as OCIO objects.
-    opaque: tuple[str, ...] = ()
-    #: Where a config read by :func:`split_config` had each element (empty: as listed here).
-    order: ElementOrder = ElementOrder()
+    #: Elements a config read by :func:`split_config` keeps as OCIO objects.
+    kept: tuple[Kept, ...] = ()
+
+    @property
+    def opaque(self) -> tuple[str, ...]:
+        """The names of the :attr:`kept` elements."""
+        return tuple(k.name for k in self.kept)
+
+    def kept_names(self) -> set[str]:
+        """The names and aliases of the :attr:`kept` elements."""
+        return {n for k in self.kept for n in (k.name, *k.aliases)}
 
     def colour_space(self, name: str) -> ColourSpace:
         """The colour space called ``name`` or with that alias (KeyError when there is none)."""
@@ -358,14 +371,17 @@ def ocio_transform(record: Transform) -> OCIO.Transform:
     return transform
 
 
+def _ocio_optional(record: Transform | None) -> OCIO.Transform | None:
+    return None if record is None else ocio_transform(record)
+
+
 def _ocio_colour_space(record: ColourSpace) -> OCIO.ColorSpace:
     import PyOpenColorIO as OCIO
 
-    reference = (
-        OCIO.REFERENCE_SPACE_DISPLAY if record.display_referred else (OCIO.REFERENCE_SPACE_SCENE)
-    )
-    cs = OCIO.ColorSpace(
-        referenceSpace=reference,
+    return OCIO.ColorSpace(
+        referenceSpace=OCIO.REFERENCE_SPACE_DISPLAY
+        if record.display_referred
+        else OCIO.REFERENCE_SPACE_SCENE,
         name=record.name,
         family=record.family,
         encoding=record.encoding,
@@ -373,16 +389,10 @@ def _ocio_colour_space(record: ColourSpace) -> OCIO.ColorSpace:
         isData=record.is_data,
         aliases=list(record.aliases),
         bitDepth=getattr(OCIO, record.bit_depth.name),
+        toReference=_ocio_optional(record.to_reference),
+        fromReference=_ocio_optional(record.from_reference),
+        categories=list(record.categories),
     )
-    for category in record.categories:
-        cs.addCategory(category)
-    for transform, direction in (
-        (record.to_reference, OCIO.COLORSPACE_DIR_TO_REFERENCE),
-        (record.from_reference, OCIO.COLORSPACE_DIR_FROM_REFERENCE),
-    ):
-        if transform is not None:
-            cs.setTransform(ocio_transform(transform), direction)
-    return cs
 
 
 def _ocio_named_transform(record: NamedTransform) -> OCIO.NamedTransform:
@@ -393,38 +403,35 @@ def _ocio_named_transform(record: NamedTransform) -> OCIO.NamedTransform:
         aliases=list(record.aliases),
         family=record.family,
         description=record.description,
+        forwardTransform=_ocio_optional(record.forward),
+        inverseTransform=_ocio_optional(record.inverse),
         categories=list(record.categories),
     )
     named.setEncoding(record.encoding)
-    if record.forward is not None:
-        named.setTransform(ocio_transform(record.forward), OCIO.TRANSFORM_DIR_FORWARD)
-    if record.inverse is not None:
-        named.setTransform(ocio_transform(record.inverse), OCIO.TRANSFORM_DIR_INVERSE)
     return named
 
 
 def _ocio_look(record: Look) -> OCIO.Look:
     import PyOpenColorIO as OCIO
 
-    look = OCIO.Look(
+    return OCIO.Look(
         name=record.name,
         processSpace=record.process_space,
         transform=ocio_transform(record.transform),
+        inverseTransform=_ocio_optional(record.inverse),
         description=record.description,
     )
-    if record.inverse is not None:
-        look.setInverseTransform(ocio_transform(record.inverse))
-    return look
 
 
 def _ocio_view_transform(record: ViewTransform) -> OCIO.ViewTransform:
     import PyOpenColorIO as OCIO
 
-    vt = OCIO.ViewTransform(
-        referenceSpace=OCIO.REFERENCE_SPACE_SCENE, name=record.name, description=record.description
+    return OCIO.ViewTransform(
+        referenceSpace=OCIO.REFERENCE_SPACE_SCENE,
+        name=record.name,
+        description=record.description,
+        fromReference=ocio_transform(record.from_reference),
     )
-    vt.setTransform(ocio_transform(record.from_reference), OCIO.VIEWTRANSFORM_DIR_FROM_REFERENCE)
-    return vt
 
 
 def _add_view(config: OCIO.Config, view: View) -> None:
@@ -445,8 +452,8 @@ def _add_view(config: OCIO.Config, view: View) -> None:
 def build(data: ConfigData, *, start: OCIO.Config | None = None) -> OCIO.Config:
     """The OCIO config of ``data``, validated (``PyOpenColorIO.Exception``: a bug).
 
-    ``start``: the config to add to (taken, not copied; :func:`split_config`'s second half),
-    else an empty one."""
+    ``start``: the config to add to (taken, not copied; :func:`split_config`'s second half,
+    which holds no element of the four kinds ``data`` lists), else an empty one."""
     import PyOpenColorIO as OCIO
 
     config = OCIO.Config() if start is None else start
@@ -456,18 +463,18 @@ def build(data: ConfigData, *, start: OCIO.Config | None = None) -> OCIO.Config:
     config.setDescription(data.description)
     if data.search_path:
         config.setSearchPath(data.search_path)
-    spaces, named, looks, vts = _take_kept(config) if start is not None else ({}, {}, {}, {})
-    order = data.order
-    for cs in _in_order(data.colour_spaces, spaces, order.colour_spaces, _ocio_colour_space):
-        config.addColorSpace(cs)
-    for nt in _in_order(
-        data.named_transforms, named, order.named_transforms, _ocio_named_transform
-    ):
-        config.addNamedTransform(nt)
-    for look in _in_order(data.looks, looks, order.looks, _ocio_look):
-        config.addLook(look)
-    for vt in _in_order(data.view_transforms, vts, order.view_transforms, _ocio_view_transform):
-        config.addViewTransform(vt)
+    made = (
+        ("ColorSpace", [_ocio_colour_space(r) for r in data.colour_spaces]),
+        ("NamedTransform", [_ocio_named_transform(r) for r in data.named_transforms]),
+        ("Look", [_ocio_look(r) for r in data.looks]),
+        ("ViewTransform", [_ocio_view_transform(r) for r in data.view_transforms]),
+    )
+    for kind, elements in made:
+        for kept in sorted(data.kept, key=lambda k: k.index):
+            if kept.kind == kind:
+                elements.insert(kept.index, kept.element)
+        for element in elements:
+            getattr(config, f"add{kind}")(element)
     if data.default_view_transform:
         config.setDefaultViewTransformName(data.default_view_transform)
     for view in data.views:
@@ -488,34 +495,6 @@ def build(data: ConfigData, *, start: OCIO.Config | None = None) -> OCIO.Config:
         config.setInactiveColorSpaces(", ".join(data.inactive_colour_spaces))
     config.validate()
     return config
-
-
-def _take_kept(config: OCIO.Config) -> tuple[dict[str, object], ...]:
-    """The colour spaces, named transforms, looks and view transforms ``config`` holds (the
-    elements :func:`split_config` kept), by name, taken out of it."""
-    import PyOpenColorIO as OCIO
-
-    every = (OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ALL)
-    spaces = {cs.getName(): cs for cs in config.getColorSpaces(*every)}
-    for name in spaces:
-        config.removeColorSpace(name)
-    named = {nt.getName(): nt for nt in config.getNamedTransforms(OCIO.NAMEDTRANSFORM_ALL)}
-    looks = {look.getName(): look for look in config.getLooks()}
-    vts = {vt.getName(): vt for vt in config.getViewTransforms()}
-    config.clearNamedTransforms()
-    config.clearLooks()
-    config.clearViewTransforms()
-    return spaces, named, looks, vts
-
-
-def _in_order(
-    records: Iterable[_R], kept: dict[str, object], order: tuple[str, ...], make: Callable
-) -> list[object]:
-    """The OCIO objects of ``records`` and the ``kept`` ones, those ``order`` names in its
-    order, then the others as given."""
-    position = {name: i for i, name in enumerate(order)}
-    items = [(r.name, make(r)) for r in records] + list(kept.items())  # type: ignore[attr-defined]
-    return [item for _, item in sorted(items, key=lambda x: position.get(x[0], len(order)))]
 
 
 def _named_record(nt: OCIO.NamedTransform) -> NamedTransform:
@@ -592,13 +571,13 @@ def _yaml(item: object) -> str:
 
 def _split(
     items: Iterable[_O], record: Callable[[_O], _R], rebuild: Callable[[_R], object], exact: bool
-) -> tuple[list[_R], list[_O]]:
+) -> tuple[list[_R], list[Kept]]:
     """(records of ``items`` that rebuild them exactly, as OCIO writes both; the items that do
     not: a transform without record, a field the record does not carry); not ``exact``: every
     record, unchecked."""
     records: list[_R] = []
-    kept: list[_O] = []
-    for item in items:
+    kept: list[Kept] = []
+    for index, item in enumerate(items):
         if not exact:
             records.append(record(item))
             continue
@@ -610,7 +589,8 @@ def _split(
         if same:
             records.append(rec)
         else:
-            kept.append(item)
+            aliases = tuple(getattr(item, "getAliases", tuple)())  # looks, view transforms: none
+            kept.append(Kept(item.getName(), aliases, item, index))  # type: ignore[attr-defined]
     return records, kept
 
 
@@ -619,18 +599,18 @@ def split_config(
 ) -> tuple[ConfigData, OCIO.Config | None]:
     """``config`` as data, and a copy of it with only what the data does not describe: the file
     rules (but the default rule's colour space), viewing rules, luma, strict parsing, family
-    separator, and each colour space, named transform, look and view transform no record
-    rebuilds exactly (kept as OCIO has them, named in ``opaque``; :func:`build` adds the data
-    to this copy). ``exact=False``: every element as data, unchecked, and no copy."""
+    separator (:func:`build` adds the data to this copy). Each colour space, named transform,
+    look and view transform no record rebuilds exactly is kept as OCIO has it
+    (:attr:`ConfigData.kept`). ``exact=False``: every element as data, unchecked, and no copy."""
     import PyOpenColorIO as OCIO
 
     every = (OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ALL)
-    all_spaces = list(config.getColorSpaces(*every))
-    all_named = list(config.getNamedTransforms(OCIO.NAMEDTRANSFORM_ALL))
-    all_looks, all_vts = list(config.getLooks()), list(config.getViewTransforms())
+    all_spaces = config.getColorSpaces(*every)
+    all_named = config.getNamedTransforms(OCIO.NAMEDTRANSFORM_ALL)
+    all_vts = config.getViewTransforms()
     spaces, kept_spaces = _split(all_spaces, colour_space_record, _ocio_colour_space, exact)
     named, kept_named = _split(all_named, _named_record, _ocio_named_transform, exact)
-    looks, kept_looks = _split(all_looks, _look_record, _ocio_look, exact)
+    looks, kept_looks = _split(config.getLooks(), _look_record, _ocio_look, exact)
     vts, kept_vts = _split(all_vts, _view_transform_record, _ocio_view_transform, exact)
     rules = config.getFileRules()
     default_rule = rules.getColorSpace(rules.getNumEntries() - 1)
@@ -653,25 +633,15 @@ def split_config(
         default_rule="" if default_rule == "default" else default_rule,
         default_view_transform=config.getDefaultViewTransformName(),
         inactive_colour_spaces=tuple(name_list(config.getInactiveColorSpaces())),
-        opaque=tuple(x.getName() for x in (*kept_spaces, *kept_named, *kept_looks, *kept_vts)),
+        kept=(*kept_spaces, *kept_named, *kept_looks, *kept_vts),
     )
     if not exact:
         return data, None
-    data.order = ElementOrder(
-        *(tuple(x.getName() for x in xs) for xs in (all_spaces, all_named, all_looks, all_vts))
-    )
     rest = OCIO.Config.CreateFromStream(config.serialize())
-    for cs in spaces:
-        rest.removeColorSpace(cs.name)
+    rest.clearColorSpaces()
     rest.clearNamedTransforms()
     rest.clearLooks()
     rest.clearViewTransforms()
-    for nt in kept_named:
-        rest.addNamedTransform(nt)
-    for look in kept_looks:
-        rest.addLook(look)
-    for vt in kept_vts:
-        rest.addViewTransform(vt)
     rest.clearDisplays()
     for name in config.getSharedViews():  # no clearSharedViews before OCIO 2.4
         rest.removeSharedView(name)
@@ -696,7 +666,10 @@ def merge(base: ConfigData, overlay: ConfigData) -> ConfigData:
     views = {(v.display, v.name) for v in base.views}
 
     def new(mine: list[_N], theirs: list[_N]) -> list[_N]:
-        taken = {*base.opaque, *(n for x in mine for n in (x.name, *getattr(x, "aliases", ())))}
+        taken = {
+            *base.kept_names(),
+            *(n for x in mine for n in (x.name, *getattr(x, "aliases", ()))),
+        }
         return mine + [item for item in theirs if item.name not in taken]
 
     def add(mine: dict[str, str], theirs: dict[str, str]) -> dict[str, str]:

@@ -1,17 +1,13 @@
-"""The colour spaces of a stage's other panel types, beside the wall's.
-
-The first in-frustum type keeps the wall's colour spaces; every other type gets ``LED <Type> -
-Outer Frustum`` (through its own M) and, in frustum, ``LED <Type> - Inner Frustum`` (its own N
-and offset, or ``M_k Q^-1(c)`` for a non-linear Q), built as the wall's
-(:func:`ocio_vp.ocio.config.wall_chains`, :func:`ocio_vp.ocio.config.wall_space`) with its own
-linearity LUT and encoding, and views ``<Type> Outer Frustum`` / ``<Type> Inner Frustum`` on the
-``LED Wall`` display.
+"""The colour spaces of a stage's other panel types, beside the wall's (docs/panels.md, *The
+config*): each built as the wall's (:func:`ocio_vp.ocio.config.wall_chains`,
+:func:`ocio_vp.ocio.config.wall_space`) on a view of the solution as if that type were the wall.
 """
 
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from ocio_vp.formats.panel_solution import PanelSolution
 from ocio_vp.formats.solution import OcioNames, Solution
@@ -21,7 +17,6 @@ from ocio_vp.ocio.config import (
     OUT_OF_FRUSTUM,
     VIEW_INNER,
     VIEW_OUTER,
-    ModelFiles,
     drive_description,
     in_frustum_text,
     wall_chains,
@@ -31,6 +26,9 @@ from ocio_vp.ocio.description import ColourSpace, ConfigData, View
 from ocio_vp.ocio.matrix import format_matrix
 from ocio_vp.ocio.viewing import set_categories
 from ocio_vp.ocio.wall import wall_outputs
+
+if TYPE_CHECKING:
+    from ocio_vp.ocio.bake import ModelOutputs
 
 __all__ = ["PanelOutputs", "add_panel_spaces", "panel_labels", "panel_outputs"]
 
@@ -98,7 +96,7 @@ def _descriptions(solution: Solution, panel: PanelSolution) -> dict[str, str]:
     }
 
 
-def panel_outputs(solution: Solution, model: ModelFiles | None = None) -> PanelOutputs | None:
+def panel_outputs(solution: Solution, model: ModelOutputs | None = None) -> PanelOutputs | None:
     """The other panel types' colour spaces (None for a stage of one panel type); ``model``:
     a non-linear Q's sidecars, as for the wall's."""
     if not solution.panels:

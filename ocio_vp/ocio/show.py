@@ -1,19 +1,8 @@
 """One config for a whole show: every environment's wall and footage spaces on a base config.
 
-``ocio-vp export SOLUTIONS... --target show`` keeps the base config (default: OCIO's built-in
-ACES CG config) and adds, as data (:func:`_overlay`):
-
-- per environment, the colour spaces of its own config in :data:`ENVIRONMENT_FAMILIES` as
-  ``<name> [<environment>]``, their transforms as they are after the base's reference ->
-  that environment's camera gamut;
-- under the per-environment names (``LED Wall - Inner Frustum``, ...), colour spaces that pick
-  the environment from the context variable :data:`CONTEXT_VARIABLE` (default the first);
-- the named transform ``Post-Correction Q``, its look, a footage-after-Q view on every base
-  display, and the ``LED Wall`` display.
-
-The base is read into the same data (:func:`~ocio_vp.ocio.description.split_config`; an element
-no record rebuilds exactly stays as OCIO has it), the show is merged onto it as data
-(:func:`show_data`, the base wins by name) and the one builder makes the config.
+``ocio-vp export SOLUTIONS... --target show`` (docs/exports.md, *Show config*): the base read
+into data (:func:`~ocio_vp.ocio.description.split_config`), what the show adds (:func:`_overlay`)
+merged onto it (:func:`show_data`, the base wins by name), and the one builder makes the config.
 """
 
 from __future__ import annotations
@@ -61,7 +50,6 @@ __all__ = [
     "DEFAULT_BASE_CONFIG",
     "ENVIRONMENT_FAMILIES",
     "EnvironmentData",
-    "KeptSpace",
     "ShowEnvironment",
     "build_show_config",
     "environment_data",
@@ -73,7 +61,7 @@ __all__ = [
 DEFAULT_BASE_CONFIG = ACES_CG_CONFIG
 #: Families (after ``ocio-vp/``) of an environment config's own colour spaces.
 ENVIRONMENT_FAMILIES = ("LED Wall", "Camera")
-AP0_ROLE = "aces_interchange"
+AP0_ROLE = OCIO.ROLE_INTERCHANGE_SCENE
 
 
 @dataclass(frozen=True)
@@ -126,43 +114,22 @@ def _own_spaces(config: ConfigData) -> list[ColourSpace]:
     ]
 
 
-@dataclass(frozen=True)
-class KeptSpace:
-    """A base colour space kept as OCIO has it (no record rebuilds it exactly): what the show
-    reads of it; ``record`` its data where its transforms have records (not rebuilt), else None
-    and ``problem`` says why."""
-
-    name: str
-    aliases: tuple[str, ...]
-    is_data: bool
-    record: ColourSpace | None
-    problem: str = ""
-
-
-def kept_space(cs: OCIO.ColorSpace) -> KeptSpace:
-    """What the show reads of a base colour space kept as an OCIO object."""
-    try:
-        record = colour_space_record(cs)
-    except ValueError as error:
-        return KeptSpace(cs.getName(), tuple(cs.getAliases()), cs.isData(), None, str(error))
-    return KeptSpace(cs.getName(), tuple(cs.getAliases()), cs.isData(), record)
-
-
-def _aces_space(base: ConfigData, kept: Sequence[KeptSpace]) -> ColourSpace:
+def _aces_space(base: ConfigData) -> ColourSpace:
     """The base's ``aces_interchange`` space, named by name or alias, rebuilt or kept
     (InputError where its transform has no record)."""
     name = base.roles[AP0_ROLE]
     if base.has_colour_space(name):
         return base.colour_space(name)
-    for space in kept:
-        if name == space.name or name in space.aliases:
-            if space.record is None:
+    for kept in base.kept:
+        if kept.kind == "ColorSpace" and name in (kept.name, *kept.aliases):
+            try:
+                return colour_space_record(kept.element)
+            except ValueError as error:
                 raise InputError(
-                    f"the base config's {AP0_ROLE} space {space.name!r}: {space.problem} (the "
+                    f"the base config's {AP0_ROLE} space {kept.name!r}: {error} (the "
                     "environments' camera gamuts cannot be placed in it)",
                     key="--base-config",
-                )
-            return space.record
+                ) from None
     raise InputError(f"the base config has no {AP0_ROLE} space {name!r}", key="--base-config")
 
 
@@ -256,9 +223,7 @@ def _space_transform(src: str, dst: str) -> Transform:
     return Transform("ColorSpaceTransform", (("Src", src), ("Dst", dst), ("DataBypass", True)))
 
 
-def _overlay(
-    base: ConfigData, environments: Sequence[EnvironmentData], aces_space: ColourSpace
-) -> ConfigData:
+def _overlay(environments: Sequence[EnvironmentData], aces_space: ColourSpace) -> ConfigData:
     """Everything the show adds to the base (its ``aces_interchange`` space ``aces_space``)."""
     aces = aces_space.name
     overlay = ConfigData(environment={CONTEXT_VARIABLE: environments[0].name}, search_path=LUT_DIR)
@@ -307,13 +272,13 @@ def _quiet(level: OCIO.LoggingLevel = OCIO.LOGGING_LEVEL_NONE) -> Iterator[None]
         OCIO.SetLoggingLevel(before)
 
 
-def _footage_views(
-    data: ConfigData, displays: Sequence[str], kept: Sequence[KeptSpace]
-) -> list[View]:
+def _footage_views(data: ConfigData, displays: Sequence[str]) -> list[View]:
     """On every base display, each view's footage twin: the same view after the Q look."""
     shared = {v.name: v for v in data.views if not v.display}
     is_data = {n: cs.is_data for cs in data.colour_spaces for n in (cs.name, *cs.aliases)}
-    is_data.update({n: cs.is_data for cs in kept for n in (cs.name, *cs.aliases)})
+    for kept in data.kept:
+        if isinstance(kept.element, OCIO.ColorSpace):
+            is_data.update(dict.fromkeys((kept.name, *kept.aliases), kept.element.isData()))
     added = []
     for display in displays:
         mine = [v for v in data.views if v.display == display]
@@ -334,12 +299,11 @@ def show_data(
     base: ConfigData,
     environments: Sequence[EnvironmentData],
     label: str,
-    kept: Sequence[KeptSpace] = (),
 ) -> ConfigData:
     """The show config of ``environments`` on ``base`` (``label``: how its description names
-    the base; ``kept``: its colour spaces kept as OCIO objects), as data: the overlay merged onto
-    the base, the footage views, the active and inactive lists."""
-    overlay = _overlay(base, environments, _aces_space(base, kept))
+    the base), as data: the overlay merged onto the base, the footage views, the active and
+    inactive lists."""
+    overlay = _overlay(environments, _aces_space(base))
     names = ", ".join(env.name for env in environments)
     first = environments[0].name
     overlay.name = f"ocio-vp_show_{first}" if len(environments) == 1 else "ocio-vp_show"
@@ -352,7 +316,7 @@ def show_data(
     displays = base.active_displays or tuple(
         dict.fromkeys(v.display for v in base.views if v.display)
     )
-    footage = _footage_views(base, [d for d in displays if d != DISPLAY], kept)
+    footage = _footage_views(base, [d for d in displays if d != DISPLAY])
     merged.views += footage
     if base.active_views:
         led = [v.name for v in overlay.views if v.name not in base.active_views]
@@ -361,7 +325,8 @@ def show_data(
     if base.active_displays:
         merged.active_displays = (*base.active_displays, DISPLAY)
     # the base may list inactive names it does not define (OCIO logs each one on every load)
-    defined = {n for cs in merged.colour_spaces for n in (cs.name, *cs.aliases)} | {*base.opaque}
+    defined = {n for cs in merged.colour_spaces for n in (cs.name, *cs.aliases)}
+    defined |= base.kept_names()
     merged.inactive_colour_spaces = tuple(n for n in base.inactive_colour_spaces if n in defined)
     return merged
 
@@ -383,7 +348,7 @@ def _check_environments(environments: Sequence[ShowEnvironment]) -> None:
 def build_show_config(
     environments: Sequence[ShowEnvironment], base: str = DEFAULT_BASE_CONFIG
 ) -> OCIO.Config:
-    """The show config of ``environments`` on ``base`` (see the module docstring).
+    """The show config of ``environments`` on ``base`` (docs/exports.md, *Show config*).
 
     Raises
     ------
@@ -396,11 +361,8 @@ def build_show_config(
     base_config = load_base_config(base)
     with _quiet(OCIO.LOGGING_LEVEL_WARNING):
         data, rest = split_config(base_config)
-    every = (OCIO.SEARCH_REFERENCE_SPACE_ALL, OCIO.COLORSPACE_ALL)
-    spaces = base_config.getColorSpaces(*every)
-    kept = [kept_space(cs) for cs in spaces if cs.getName() in data.opaque]
-    _aces_space(data, kept)  # a base that cannot take the environments, before reading them
+    _aces_space(data)  # a base that cannot take the environments, before reading them
     merged = show_data(data, [environment_data(env) for env in environments],
-                       f"{base} ({base_config.getName()})", kept)  # fmt: skip
+                       f"{base} ({base_config.getName()})")  # fmt: skip
     with _quiet(OCIO.LOGGING_LEVEL_WARNING):
         return build(merged, start=rest)

@@ -1,13 +1,8 @@
 """What a pipeline needs around the wall colour spaces: log spaces, roles and monitor displays.
 
-A per-environment config carries, beside the wall colour spaces and ``Stage Footage``:
-
-- with the camera gamut known: ``ACEScct`` (``compositing_log`` and ``color_timing``) and the
-  camera's log encoding twice, ``Camera Native (LogC4)`` (corrected footage in the camera's log)
-  and ``Stage Footage (LogC4)`` (footage recorded in it: to the reference decodes and applies Q);
-- the look ``Post-Correction Q Look``, so a monitor can show footage after Q;
-- :data:`MONITORS`, displays of OCIO's built-in ACES CG config, each with a view of content and
-  one of footage after Q (without a camera gamut: camera RGB un-tone-mapped as if Rec.709).
+With the camera gamut known, ``ACEScct`` and the camera's log encoding (corrected footage and
+stage footage in it); always the look ``Post-Correction Q Look`` and the :data:`MONITORS`
+displays of OCIO's built-in ACES CG config (docs/architecture.md, *Monitor displays*).
 """
 
 from __future__ import annotations
@@ -96,12 +91,12 @@ def footage_to_reference(footage: ColourSpace) -> tuple[Transform, Transform | N
 
 def add_camera_log_spaces(
     data: ConfigData, camera: str | None, *, reference: str, footage: str
-) -> list[str]:
-    """Add ``Camera Native (LogC4)`` and ``Stage Footage (LogC4)`` (for ``camera``'s log curve)
-    and ACEScct; returns the names added (none without a known camera gamut)."""
+) -> None:
+    """Add ``Camera Native (LogC4)`` and ``Stage Footage (LogC4)`` (for ``camera``'s log curve;
+    nothing without a known camera gamut)."""
     curve = camera_log_for(camera)
     if curve is None:
-        return []
+        return
     native_name, footage_name = camera_log_names(curve)
     encode = transform_record(log_transform(curve))
     native = colour_space(
@@ -124,7 +119,6 @@ def add_camera_log_spaces(
         from_reference=None if inverse is None else group([inverse, encode]),
     )
     data.colour_spaces += [native, stage]
-    return [native_name, footage_name]
 
 
 #: OCIO 2.1 categories (what application menus filter on) by family, after ``ocio-vp/``.
@@ -153,7 +147,7 @@ def set_categories(data: ConfigData) -> None:
     ]
 
 
-def add_acescct(data: ConfigData, aces_to_camera: np.ndarray) -> str:
+def add_acescct(data: ConfigData, aces_to_camera: np.ndarray) -> None:
     """ACEScct (OCIO's builtin curve and AP1 -> AP0) then ACES2065-1 -> the camera gamut."""
     source = _aces_config().getColorSpace(ACESCCT)
     to_ref = transform_record(source.getTransform(OCIO.COLORSPACE_DIR_TO_REFERENCE))
@@ -166,7 +160,6 @@ def add_acescct(data: ConfigData, aces_to_camera: np.ndarray) -> str:
         to_reference=group([to_ref, matrix_record(aces_to_camera)]),
     )
     data.colour_spaces.append(cs)
-    return ACESCCT
 
 
 def _look(data: ConfigData, *, reference: str, footage: str) -> Look:
@@ -187,7 +180,7 @@ def add_monitor_displays(
     *,
     reference: str,
     footage: str,
-) -> list[Monitor]:
+) -> None:
     """Add the :data:`MONITORS` displays, their view transforms and the Q look.
 
     ``camera_to_aces`` (the reference -> ACES2065-1 matrix) puts the ACES output transforms
@@ -214,7 +207,6 @@ def add_monitor_displays(
                 looks=POST_CORRECTION_LOOK,
             )
         )
-    return list(MONITORS)
 
 
 def _clamped_display(display: ColourSpace) -> ColourSpace:

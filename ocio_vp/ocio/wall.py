@@ -10,7 +10,6 @@ Chain (reference -> wall signal) of both wall colour spaces::
 
 from __future__ import annotations
 
-import hashlib
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -18,7 +17,7 @@ import PyOpenColorIO as OCIO
 
 from ocio_vp.formats.linearity import Linearity, LutFile
 from ocio_vp.formats.solution import Solution
-from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
+from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3, sidecar_name
 from ocio_vp.ocio.config import IN_FRUSTUM, OUT_OF_FRUSTUM
 from ocio_vp.ocio.description import Transform, file, transform_record
 from ocio_vp.wall.encoding import (
@@ -38,7 +37,6 @@ __all__ = [
     "encoding_transforms",
     "log_shaper_transform",
     "lut_transform",
-    "sidecar_name",
     "wall_outputs",
 ]
 
@@ -74,13 +72,6 @@ def lut_transform(lut: LinearityLut):
     return OCIO.GroupTransform([*shaper, lut1d])
 
 
-def sidecar_name(stem: str, text: str) -> str:
-    """``<stem>_<hash>.clf``: OCIO caches files by path for the whole process, so sidecars
-    that differ must not share a name."""
-    digest = hashlib.sha256(text.encode("utf-8")).hexdigest()[:12]
-    return f"{stem}_{digest}.clf"
-
-
 #: What the LUT takes and returns, per wall encoding (in the CLF and solution.json).
 _LUT_DOMAINS = {
     "linear": f"drive [0, {LINEAR_HEADROOM:g}] through a log2 shaper -> drive",
@@ -108,7 +99,7 @@ def wall_outputs(solution: Solution) -> WallOutputs:
         return WallOutputs()
     wall = WallEncoding.of(linearity)
     encoding, peak_nits = wall.name, float(wall.peak_nits or DEFAULT_PEAK_NITS)
-    lut_name = None
+    chain = [transform_record(t) for t in wall.ocio_transforms()]
     files: dict[str, str] = {}
     if linearity.corrected:
         lut = lut_table(linearity, encoding, peak_nits=peak_nits)
@@ -121,7 +112,7 @@ def wall_outputs(solution: Solution) -> WallOutputs:
         text = clf_v3(group.write(formatName=CLF_FORMAT, config=OCIO.Config.CreateRaw()))
         name = sidecar_name(f"{solution.stage}_panel_linearity", text)
         files[f"{LUT_DIR}/{name}"] = text
-        lut_name = name
+        chain.append(file(name))
         max_error, bands = lut_accuracy(linearity, lut)
         record = LutFile(
             file=f"{LUT_DIR}/{name}",
@@ -132,9 +123,6 @@ def wall_outputs(solution: Solution) -> WallOutputs:
             definition=LUT_ACCURACY,
         )
         linearity = linearity.updated(lut=record)
-
-    chain = [transform_record(t) for t in wall.ocio_transforms()]
-    chain += [] if lut_name is None else [file(lut_name)]
     if not chain:
         return WallOutputs(linearity=linearity)
     return WallOutputs(

@@ -1,15 +1,10 @@
 """Write solved environments to disk: ``OUT/<environment>/config.ocio`` and ``solution.json``.
 
-All environments are written into a staging folder first and renamed into place only when
-every one of them succeeded, so a failure never leaves a half-written output folder. The
-output folder is locked only while they are renamed into place (:func:`write_solutions`).
-
-A non-linear environment costs far more to write than a 3x3 one (it designs, bakes, checks and
-formats two LUT chains; more with emitter protection, whose inverse is solved slice by slice;
-docs/performance.md has the figures). :func:`writer_pool` starts one helper process that writes
-some environments while this process writes the others. It imports only numpy, OpenColorIO and
-this package's writer (not colour-science), so a command that starts it before it loads and
-solves finds it ready; the files are the same either way.
+All or nothing: every environment goes into a staging folder, renamed into place only when all
+succeeded (:func:`write_solutions`). A non-linear environment bakes LUT chains, far costlier than
+a 3x3: :func:`writer_pool` starts one helper process (numpy, OpenColorIO and this writer only)
+that writes some environments while this process writes or solves the others; the files are
+the same either way.
 """
 
 from __future__ import annotations
@@ -28,7 +23,7 @@ from pathlib import Path
 from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import Solution, solution_to_json
 from ocio_vp.ocio.bake import model_outputs
-from ocio_vp.ocio.config import ModelFiles, config_data, ocio_names, write_config
+from ocio_vp.ocio.config import config_data, ocio_names, write_config
 from ocio_vp.ocio.description import build
 from ocio_vp.ocio.panels import add_panel_spaces, panel_outputs
 from ocio_vp.ocio.wall import wall_outputs
@@ -46,15 +41,14 @@ def write_environment(solution: Solution, directory: Path) -> Solution:
     wall = wall_outputs(solution)  # panel-linearity LUT sidecar and wall signal encoding
     solution = dataclasses.replace(solution, ocio=ocio_names(), linearity=wall.linearity)
     luts = model_outputs(solution)  # a non-linear Q's LUT sidecars, else None
-    files, search_path, model = dict(wall.files), wall.search_path, None
+    files, search_path = dict(wall.files), wall.search_path
     if luts is not None:
         files.update(luts.files)
         search_path = LUT_DIR
-        model = ModelFiles(luts.q_file, luts.q_inverse_file, luts.note())
         diagnostics = solution.diagnostics.adding(post_correction_ocio=luts.block)
         solution = dataclasses.replace(solution, diagnostics=diagnostics)
     # A stage's other panel types: their own colour spaces, LUTs and encodings (ocio/panels.py).
-    panels = panel_outputs(solution, model)
+    panels = panel_outputs(solution, luts)
     if panels is not None:
         files.update(panels.files)
         search_path = LUT_DIR if files else search_path
@@ -63,7 +57,7 @@ def write_environment(solution: Solution, directory: Path) -> Solution:
         solution,
         extra_wall_transforms=wall.extra_wall_transforms,
         search_path=search_path,
-        model=model,
+        model=luts,
     )
     if panels is not None:
         add_panel_spaces(data, panels)
