@@ -1,15 +1,7 @@
-"""The pattern sequence and its file, ``sequence.yaml`` (format ``ocio-vp/patterns``, version 1).
-
-``ocio-vp patterns`` writes the frames a wall plays for calibration (or validation) and, beside
-them, ``sequence.yaml``: which frames hold which patch, at what drive. ``measure`` (and
-``validate``) read it to find the patches in a camera take of the wall. Other tools may write
-such a file too, so it is validated like every file ocio-vp reads (unknown keys are errors;
-every error names the file and the key). ``docs/patterns.md`` documents every key.
-
-Frame numbers are the player's: frame ``f`` is shown during ``[f, f + 1)`` in units of
-``1 / fps`` seconds, from ``first_frame`` on. ``drive`` is the panel's linear drive, 1.0 = full
-drive (the level of the primaries); ``signal`` is the value written in the frames (for EXR the
-drive itself, for TIFF and DPX the wall's signal as a fraction of full code).
+"""The pattern sequence and its file, ``sequence.yaml`` (format ``ocio-vp/patterns``, version 1):
+which frames hold which patch, at what drive. Other tools may write it, so it is validated like
+every file ocio-vp reads; docs/patterns.md documents every key. Frame ``f`` is shown during
+``[f, f + 1)`` in units of ``1 / fps`` seconds, from ``first_frame`` on.
 """
 
 from __future__ import annotations
@@ -155,11 +147,7 @@ class PatternSequence:
 
 def expand_frame(pattern: str, frame: int) -> str:
     """``patterns.####.exr`` with frame 7 -> ``patterns.0007.exr`` (one run of ``#``)."""
-    start = pattern.index("#")
-    end = start
-    while end < len(pattern) and pattern[end] == "#":
-        end += 1
-    return f"{pattern[:start]}{frame:0{end - start}d}{pattern[end:]}"
+    return re.sub("#+", lambda run: f"{frame:0{len(run[0])}d}", pattern, count=1)
 
 
 # --------------------------------------------------------------------------------------------

@@ -1,24 +1,10 @@
 """The validation sequence: an environment's chart sent through its own config, in-frustum.
 
-``ocio-vp patterns --validate calib/<environment>`` takes the environment's target chart (the
-colours the location recorded, ``diagnostics.charts.target`` of ``solution.json``) as content,
-runs it through the environment's ``config.ocio`` from the reference colorspace to the
-in-frustum wall colorspace (OpenColorIO's CPU processor: N, the black-level offset, the
-linearity LUT and the wall's encoding, exactly what the wall is sent on set) and holds each
-colour full-field for ``hold`` frames. Filmed by the camera and post-corrected, every patch
-should read its content again (``ocio-vp validate``). Layout::
-
-    lead_in  sync_0  black  chart_00 ... chart_11  sync_1  chart_12 ... chart_23  sync_2  lead_out
-
-``black`` is content 0 through the config (the in-frustum offset, clipped at 0 by the wall).
-The chart is scaled (``content_scale``, recorded) so that its white patch asks the wall for
-:data:`WHITE_DRIVE` of full drive, and a patch that would need light outside the LEDs' gamut
-after N is pulled into it (:func:`into_gamut`: towards the grey of its brightness, its
-intent recomputed, ``validation.pulled`` recording how much saturation it kept), so every
-patch the sequence shows can be judged: a location's camera values have any exposure, the wall
-shows content at the DP's exposure, and a post-correction and N are linear in the content
-(the root-polynomial Q is exposure-invariant too). The wall's encoding and peak come from the
-solve (``linearity.wall_encoding``).
+``ocio-vp patterns --validate calib/<environment>``: the target chart (``diagnostics.charts.target``),
+scaled so its white patch asks for :data:`WHITE_DRIVE` of full drive and pulled into the LEDs'
+gamut where it must be (:func:`into_gamut`), run through ``config.ocio`` from the reference to
+the in-frustum colorspace (what the wall is sent on set), each colour held full-field. Layout and
+why: docs/patterns.md (*Validation sequence*) and docs/validation.md.
 """
 
 from __future__ import annotations
@@ -142,7 +128,7 @@ def into_gamut(solution: Solution, content: np.ndarray) -> tuple[np.ndarray, np.
 
 
 def validation_sequence(environment_dir: str | Path, options: PatternOptions) -> PatternSequence:
-    """The validation sequence of one solved environment (see the module docstring).
+    """The validation sequence of one solved environment (module docstring).
 
     ``options`` give the timing, size and file format; its encoding and peak must be the
     solve's (they are taken from it when ``options`` leave them at linear / none).
