@@ -1,11 +1,7 @@
-"""The numbers behind the report: charts read from ``solution.json``, made display-referred.
-
-``diagnostics.charts`` holds the per-patch camera RGB of the target and the stage charts. For
-the screen they go through one camera-to-display matrix per camera, as the paper does (Section
-4; :func:`camera_to_display`), are exposed so the target white's largest channel is
-:data:`DISPLAY_WHITE` (each stage chart's white green matched to the target's first), clipped
-and sRGB-encoded. Errors are never computed on display values: Fig. 11's are the solve's own
-(camera RGB), ΔE goes through the matching camera-to-XYZ matrix.
+"""The numbers behind the report, from ``solution.json`` only: the charts of
+``diagnostics.charts`` made display-referred through one camera-to-display matrix per camera
+(:func:`camera_to_display`; docs/report.md, *Colours on screen*), the solve's own Fig. 11 errors
+(camera RGB) and ΔE through the matching camera-to-XYZ matrix.
 
 References
 ----------

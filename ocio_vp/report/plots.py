@@ -1,9 +1,6 @@
-"""The report's figures as SVG (:mod:`ocio_vp.svg`, no matplotlib): the paper's
-comparison charts, its Fig. 11 error bars, per-patch ΔE, and the panel linearity curves.
-
-Every plot function writes one SVG file and returns the numbers it drew; the elements carry
-``class`` and ``data-*`` attributes and the axes their ticks, so what is on the page can be read
-back from the file.
+"""The report's figures as SVG (:mod:`ocio_vp.svg`): the paper's comparison charts, its Fig. 11
+error bars, per-patch ΔE and the panel linearity curves. Each plot writes one file and returns
+the numbers it drew; elements carry ``class`` and ``data-*`` attributes to read them back.
 
 References
 ----------
