@@ -28,19 +28,12 @@ __all__ = [
     "in_frustum_light",
     "into_gamut",
     "validation_sequence",
-    "wall_encoding_of",
     "wall_signal",
 ]
 
 #: The chart's white patch is shown at this fraction of full drive (headroom for saturated
 #: patches whose drive exceeds the white's in one channel).
 WHITE_DRIVE = 0.7
-
-
-def wall_encoding_of(solution: Solution) -> tuple[str, float | None]:
-    """(encoding, peak_nits or None) the solve's config sends to the wall."""
-    encoding = WallEncoding.of(solution.linearity)
-    return encoding.name, encoding.peak_nits
 
 
 def _wall_spaces(solution: Solution) -> tuple[str, str]:
@@ -146,7 +139,8 @@ def validation_sequence(environment_dir: str | Path, options: PatternOptions) ->
     target = np.zeros((0,)) if charts is None else charts.target
     if target.ndim != 2 or target.shape[1:] != (3,) or not np.all(np.isfinite(target)):
         raise InputError("no target chart in diagnostics.charts.target", source=source)
-    encoding, peak = wall_encoding_of(solution)
+    wall = WallEncoding.of(solution.linearity)  # what the solve's config sends the wall
+    encoding, peak = wall.name, wall.peak_nits
     asked = (options.encoding, options.peak_nits)
     if asked != ("linear", None) and asked != (encoding, peak):
         raise InputError(
@@ -160,7 +154,7 @@ def validation_sequence(environment_dir: str | Path, options: PatternOptions) ->
     scale = content_scale(solution, target)
     target, kept = into_gamut(solution, target * scale)
     signals = wall_signal(config, solution, np.vstack([np.zeros((1, 3)), target]))
-    drives = WallEncoding.of(solution.linearity).decode(signals)
+    drives = wall.decode(signals)
     if not np.all(np.isfinite(drives)):
         raise InputError("the config sends a non-finite drive for the chart", source=config)
     builder = SequenceBuilder(options)

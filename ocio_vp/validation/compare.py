@@ -116,12 +116,6 @@ class ValidationResult:
         return self.p95 <= self.threshold
 
 
-def _names(n: int) -> list[str]:
-    from ocio_vp.metrics import patch_label
-
-    return [patch_label(j, n) for j in range(n)]
-
-
 def _predicted_mean(solution: Solution, xyz: np.ndarray, white: int) -> float | None:
     """Mean ΔE2000 the solve itself predicts for the chart shown in-frustum (its model)."""
     from ocio_vp.metrics import chart_errors
@@ -151,7 +145,7 @@ def compare_take(
     InputError
         When the sequence holds no chart, or every patch is outside the wall's range.
     """
-    from ocio_vp.metrics import chart_errors
+    from ocio_vp.metrics import chart_errors, patch_label
     from ocio_vp.report.data import camera_to_display
 
     charts = sorted(sequence.of_kind("chart"), key=lambda p: p.index or 0)
@@ -178,11 +172,10 @@ def compare_take(
         raise InputError(
             "no chart patch is within the wall's range at this exposure", source=sequence.source
         )
-    names = _names(len(charts))
     patches = tuple(
         PatchResult(
             index=int(p.index or 0),
-            name=names[j],
+            name=patch_label(j, len(charts)),
             intended=intended[j],
             measured=measured[j],
             corrected=corrected[j],
