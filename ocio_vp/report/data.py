@@ -45,14 +45,6 @@ __all__ = [
     "patch_names",
 ]
 
-#: The chart arrays every solution carries in ``diagnostics.charts``.
-CHART_KEYS = (
-    "target",
-    "lit_baseline",
-    "lit_corrected",
-    "displayed_baseline",
-    "displayed_corrected",
-)
 #: The stage charts and the error keys of ``diagnostics`` that belong to them (paper Fig. 11).
 STAGE_CHARTS = {
     "lit_baseline": "lit_chart_error_baseline",
@@ -60,6 +52,8 @@ STAGE_CHARTS = {
     "displayed_baseline": "displayed_chart_error_baseline",
     "displayed_corrected": "displayed_chart_error",
 }
+#: The chart arrays every solution carries in ``diagnostics.charts``.
+CHART_KEYS = ("target", *STAGE_CHARTS)
 COLORCHECKER = "ColorChecker24 - After November 2014"
 #: Display-linear value of the target white patch's largest channel.
 DISPLAY_WHITE = 0.9

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ocio_vp.formats.solution import Solution
-from ocio_vp.report.data import EnvironmentData, patch_names
+from ocio_vp.report.data import STAGE_CHARTS, EnvironmentData, patch_names
 from ocio_vp.svg import Axes, Canvas, data_limits, hex_colours, num, subplot_boxes
 
 __all__ = [
@@ -36,8 +36,6 @@ __all__ = [
 
 CHANNEL_COLOURS = ("#c0392b", "#27ae60", "#2e6fbd")
 CHANNEL_NAMES = ("R", "G", "B")
-#: The four comparison panels: stage chart, rows lit/displayed, columns baseline/ours.
-PANELS = ("lit_baseline", "lit_corrected", "displayed_baseline", "displayed_corrected")
 #: The two series of every bar plot: baseline (M only) and ours.
 SERIES = ("baseline", "corrected")
 
@@ -158,7 +156,7 @@ def plot_comparison_charts(data: EnvironmentData, path: Path, *, dpi: float = 11
     titles = panel_titles(data.solution)
     target = np.clip(data.display["target"], 0.0, 1.0)
     squares, circles, drawn_titles = {}, {}, {}
-    for box, chart in zip(boxes, PANELS, strict=True):
+    for box, chart in zip(boxes, STAGE_CHARTS, strict=True):  # rows lit/displayed, columns M/ours
         stage = np.clip(data.display[chart], 0.0, 1.0)
         chart_box = _draw_chart(canvas, box, chart, target, stage)
         error = 100 * float(np.mean(data.errors[chart]))
@@ -345,13 +343,13 @@ def plot_delta_e(data: EnvironmentData, path: Path, *, dpi: float = 110) -> Delt
     boxes = subplot_boxes(
         canvas, 2, 2, left=0.06, right=0.99, top=0.91, bottom=0.2, hspace=0.2, wspace=0.14
     )
-    drawn: dict[str, dict[str, np.ndarray]] = {"CIE 2000": {}, "ITP": {}}
     for i, box in enumerate(boxes):
         metric, kind = ("CIE 2000", "ITP")[i % 2], ("lit", "displayed")[i // 2]
         _delta_e_panel(canvas, box, data, metric, kind, bottom=i >= 2)
-        for name in SERIES:
-            chart = f"{kind}_{name}"
-            drawn[metric][chart] = np.asarray(data.delta_e[metric][chart], dtype=np.float64)
+    drawn = {
+        metric: {chart: np.asarray(v, dtype=np.float64) for chart, v in charts.items()}
+        for metric, charts in data.delta_e.items()
+    }
     Axes(canvas, boxes[0], (0, 1), (0, 1), name="legend").legend(
         [
             ("baseline (M only)", {"fill": "#7f7f7f", "stroke": "#333333", "stroke_width": 0.8}),
