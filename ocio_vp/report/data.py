@@ -327,27 +327,24 @@ def environment_data(
 ) -> list[EnvironmentData]:
     """Load every solution and compute what the report shows; one display matrix per stage
     (``camera_to_xyz``, when the caller knows the camera, for every solution)."""
-    files = find_solutions(paths)
     loaded = []
-    for index, path in enumerate(files):
+    for path in find_solutions(paths):
         solution = load_solution(path)
-        charts = _charts(solution, path)
-        loaded.append((index, path, solution, charts, infer_white_patch(solution, charts)))
+        camera = (solution.stage, solution.measurements_sha256, solution.camera_colorspace)
+        loaded.append((path, solution, _charts(solution, path), camera))
     groups: dict[tuple, list] = {}
-    for item in loaded:
-        s = item[2]
-        groups.setdefault((s.stage, s.measurements_sha256, s.camera_colorspace), []).append(item)
+    for _, solution, charts, camera in loaded:
+        groups.setdefault(camera, []).append((solution, charts["target"]))
     transforms = {
-        key: camera_to_display(
-            [i[2] for i in items], [i[3]["target"] for i in items], camera_to_xyz=camera_to_xyz
+        camera: camera_to_display(
+            [s for s, _ in items], [t for _, t in items], camera_to_xyz=camera_to_xyz
         )
-        for key, items in groups.items()
+        for camera, items in groups.items()
     }
     out = []
-    for index, path, solution, charts, white in loaded:
-        key = (solution.stage, solution.measurements_sha256, solution.camera_colorspace)
-        transform = transforms[key]
-        diagnostics = solution.diagnostics
+    for index, (path, solution, charts, camera) in enumerate(loaded):
+        transform = transforms[camera]
+        white = infer_white_patch(solution, charts)
         out.append(
             EnvironmentData(
                 solution=solution,
@@ -355,7 +352,7 @@ def environment_data(
                 key=f"{index + 1:02d}-{solution.environment}",
                 white_patch=white,
                 charts=charts,
-                errors=_errors(diagnostics, charts, white),
+                errors=_errors(solution.diagnostics, charts, white),
                 display=display_charts(charts, transform.matrix, white, match_white=match_white),
                 delta_e=delta_e(charts, transform.camera_to_xyz, white),
                 transform=transform,
