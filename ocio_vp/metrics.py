@@ -226,13 +226,10 @@ def training_rgb_xyz(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Camera RGB and CIE XYZ of the RAW to ACES v1 training reflectances under ``illuminant``.
 
-    The spectra are put on the project's grid once per illuminant; each call is then one
-    matrix product with the camera's sensitivities.
-
     Parameters
     ----------
     camera
-        (W, 3) camera sensitivities on :data:`ocio_vp.simulator.data.SPECTRAL_SHAPE`.
+        (W, 3) camera sensitivities on :data:`ocio_vp.spectra.SPECTRAL_SHAPE`.
     illuminant
         A key of ``colour.SDS_ILLUMINANTS``.
 
