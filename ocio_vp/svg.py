@@ -151,12 +151,7 @@ def _attrs(attributes: dict[str, object]) -> str:
     for key, value in attributes.items():
         if value is None:
             continue
-        if isinstance(value, float):  # numpy's float64 too
-            text = num(value)
-        elif isinstance(value, str):
-            text = value.translate(_ESCAPES)
-        else:
-            text = num(value) if isinstance(value, np.floating) else escape(value)
+        text = num(value) if isinstance(value, float | np.floating) else escape(value)
         out.append(f' {_name(key)}="{text}"')
     return "".join(out)
 
