@@ -143,7 +143,8 @@ def error_relative_to_white(
     white_patch: int = DEFAULT_WHITE_PATCH,
     weights: ArrayLike | None = None,
 ) -> np.ndarray:
-    """Mean absolute error per channel, relative to the target white patch (paper, Fig. 11).
+    """(..., 3) mean absolute error per channel relative to the target white patch (paper, Fig.
+    11): ``mean_j |predicted_j - target_j| / target_white``, the white per :func:`white_scale`.
 
     Parameters
     ----------
@@ -153,12 +154,6 @@ def error_relative_to_white(
         Index of the white patch in ``target``.
     weights
         Optional (n,) weights (0 excludes a patch).
-
-    Returns
-    -------
-    ndarray
-        (..., 3) ``mean_j |predicted_j - target_j| / target_white`` (white per
-        :func:`white_scale`).
 
     Examples
     --------
