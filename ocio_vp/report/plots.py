@@ -265,6 +265,12 @@ def plot_error_bars(
     return ErrorBarsPlot(canvas.write(path), names, values["baseline"], values["corrected"])
 
 
+def _delta_e_style(canvas: Canvas, series: str) -> dict[str, object]:
+    """A ΔE bar's style (and its legend swatch's): baseline grey, ours hatched."""
+    fill = "#7f7f7f" if series == "baseline" else canvas.hatch("#333333")
+    return {"fill": fill, "stroke": "#333333", "stroke_width": 0.8}
+
+
 def _delta_e_panel(
     canvas: Canvas, box: tuple, data: EnvironmentData, metric: str, kind: str, bottom: bool
 ) -> None:
@@ -295,20 +301,10 @@ def _delta_e_panel(
     axes.yticks()
     for name, values in series.items():
         shift = -0.2 if name == "baseline" else 0.2
-        fill = "#7f7f7f" if name == "baseline" else canvas.hatch("#333333")
+        style = _delta_e_style(canvas, name)
         tags = {"data_metric": metric, "data_series": f"{kind}_{name}"}
         for j, value in enumerate(values):
-            _bar(
-                axes,
-                j + shift,
-                0.4,
-                float(value),
-                fill=fill,
-                stroke="#333333",
-                stroke_width=0.8,
-                data_patch=str(j),
-                **tags,
-            )
+            _bar(axes, j + shift, 0.4, float(value), **style, data_patch=str(j), **tags)
         for missing in np.flatnonzero(np.isnan(values)):  # no bar: mark it, not read as 0
             x, y = float(axes.x(missing + shift)), float(axes.y(0.0))
             d = (
@@ -350,12 +346,9 @@ def plot_delta_e(data: EnvironmentData, path: Path, *, dpi: float = 110) -> Delt
         metric: {chart: np.asarray(v, dtype=np.float64) for chart, v in charts.items()}
         for metric, charts in data.delta_e.items()
     }
+    legend = [("baseline (M only)", "baseline"), ("ours", "corrected")]
     Axes(canvas, boxes[0], (0, 1), (0, 1), name="legend").legend(
-        [
-            ("baseline (M only)", {"fill": "#7f7f7f", "stroke": "#333333", "stroke_width": 0.8}),
-            ("ours", {"fill": canvas.hatch("#333333"), "stroke": "#333333", "stroke_width": 0.8}),
-        ],
-        corner="upper right",
+        [(label, _delta_e_style(canvas, series)) for label, series in legend], corner="upper right"
     )
     title = f"{data.solution.environment}: colour difference per patch"
     if any(np.isnan(v).any() for v in data.delta_e["ITP"].values()):
