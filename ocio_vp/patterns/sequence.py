@@ -222,8 +222,10 @@ def _validation(ctx: Validator, raw: JsonValue) -> Validation:
     keys = ("environment", "stage", "solution_sha256", "in_frustum", "reference")
     optional = ("model", "solved")
     entry = ctx.mapping(raw, ("validation",), keys, ("content_scale", "pulled", *optional))
-    for name in (*keys, *(k for k in optional if k in entry)):
-        ctx.text(entry[name], ("validation", name), limit=None)
+    text = {
+        name: ctx.text(entry[name], ("validation", name), limit=None)
+        for name in (*keys, *(k for k in optional if k in entry))
+    }
     scale = ctx.number(
         entry.get("content_scale", 1.0), ("validation", "content_scale"), strict=True
     )
@@ -235,17 +237,7 @@ def _validation(ctx: Validator, raw: JsonValue) -> Validation:
     }
     if not isinstance(pulled, dict) or len(kept) != len(pulled):
         raise ctx.error(("validation", "pulled"), "expected {chart index: saturation kept}")
-    return Validation(
-        environment=entry["environment"],
-        stage=entry["stage"],
-        solution_sha256=entry["solution_sha256"],
-        in_frustum=entry["in_frustum"],
-        reference=entry["reference"],
-        content_scale=scale,
-        pulled=tuple(kept.items()),
-        model=entry.get("model"),
-        solved=entry.get("solved"),
-    )
+    return Validation(**text, content_scale=scale, pulled=tuple(kept.items()))
 
 
 def _checked_patches(ctx: Validator, raw: JsonValue, first_frame: int) -> tuple[Patch, ...]:
