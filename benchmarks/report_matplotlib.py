@@ -13,14 +13,13 @@ from typing import Any
 
 import numpy as np
 
-from ocio_vp.report.data import EnvironmentData, patch_names
+from ocio_vp.report.data import STAGE_CHARTS, EnvironmentData, patch_names
 
 # What is drawn and how it is recorded is the package's own; only the drawing is matplotlib.
 from ocio_vp.report.plots import (
     BACKGROUND,
     CHANNEL_COLOURS,
     CHANNEL_NAMES,
-    PANELS,
     ChartPlot,
     DeltaEPlot,
     ErrorBarsPlot,
@@ -107,7 +106,7 @@ def _charts_figure(data: EnvironmentData) -> tuple[Any, dict[str, tuple[Any, lis
         10.0, 7.4, left=0.015, right=0.985, top=0.88, bottom=0.01, hspace=0.2, wspace=0.05
     )
     panels = {}
-    for ax, chart in zip(figure.subplots(2, 2).ravel(), PANELS, strict=True):
+    for ax, chart in zip(figure.subplots(2, 2).ravel(), STAGE_CHARTS, strict=True):
         panels[chart] = (ax, *_draw_chart(ax, data.display["target"], data.display[chart]))
     return figure, panels
 

@@ -1,10 +1,6 @@
 """Module attributes served on first use (PEP 562): names that left the public API, for one
-more release with a DeprecationWarning, and a package's public names, imported when first read.
-
-A module sets ``__getattr__ = deprecated_names(__name__, table)``, the table mapping each old
-name to (what to use instead, in words; where its value lives, ``"module:name"``, or a function
-returning it), imported only when the old name is used; a subpackage sets ``__getattr__,
-__dir__ = published_on_first_use(__name__, exports)`` (``ocio_vp`` itself writes the same two
+more release with a DeprecationWarning (:func:`deprecated_names`), and a package's public names,
+imported when first read (:func:`published_on_first_use`; ``ocio_vp`` itself writes the same two
 functions out, so that ``import ocio_vp`` loads none of its modules).
 """
 
@@ -34,7 +30,9 @@ def warn_deprecated(old: str, replacement: str, stacklevel: int = 3) -> None:
 def deprecated_names(
     module: str, table: Mapping[str, tuple[str, str | Callable[[], Any]]]
 ) -> Callable[[str], Any]:
-    """A module ``__getattr__`` serving the old names of ``table`` with a DeprecationWarning."""
+    """A module ``__getattr__`` serving the old names of ``table`` with a DeprecationWarning: each
+    maps to (what to use instead, in words; where its value lives, ``"module:name"``, or a
+    function returning it), imported only when the old name is used."""
 
     def __getattr__(name: str) -> Any:
         if name not in table:

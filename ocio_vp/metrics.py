@@ -1,16 +1,6 @@
 """Chart error metrics: the paper's relative-to-white error (Fig. 11), CIE ΔE2000 and ΔE ITP
 of camera RGB through a camera RGB -> XYZ matrix (:func:`camera_to_xyz_matrix`, or the sample
-camera's, :func:`sample_camera_to_xyz`).
-
-Normalisation (both ΔE need one):
-
-- **ΔE2000**: XYZ are scaled so the *target* white patch has Y = 1, and CIE Lab uses that
-  patch's chromaticity as the reference white (so the target white is L* ~ 100, a* = b* = 0:
-  the eye adapted to the scene's white).
-- **ΔE ITP** (ITU-R BT.2124) needs absolute luminance: XYZ are scaled so the target white patch
-  is :data:`ITP_WHITE_NITS` = 100 cd/m^2 (diffuse white on an SDR/HDR reference display), then
-  ICtCp (ITU-R BT.2100-2 PQ, via BT.2020 RGB, no chromatic adaptation). 1 ΔE ITP is about one
-  just-noticeable difference.
+camera's, :func:`sample_camera_to_xyz`); their normalisation is in docs/report.md (*ΔE*).
 
 References
 ----------
@@ -153,7 +143,8 @@ def error_relative_to_white(
     white_patch: int = DEFAULT_WHITE_PATCH,
     weights: ArrayLike | None = None,
 ) -> np.ndarray:
-    """Mean absolute error per channel, relative to the target white patch (paper, Fig. 11).
+    """(..., 3) mean absolute error per channel relative to the target white patch (paper, Fig.
+    11): ``mean_j |predicted_j - target_j| / target_white``, the white per :func:`white_scale`.
 
     Parameters
     ----------
@@ -163,12 +154,6 @@ def error_relative_to_white(
         Index of the white patch in ``target``.
     weights
         Optional (n,) weights (0 excludes a patch).
-
-    Returns
-    -------
-    ndarray
-        (..., 3) ``mean_j |predicted_j - target_j| / target_white`` (white per
-        :func:`white_scale`).
 
     Examples
     --------
@@ -236,13 +221,10 @@ def training_rgb_xyz(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Camera RGB and CIE XYZ of the RAW to ACES v1 training reflectances under ``illuminant``.
 
-    The spectra are put on the project's grid once per illuminant; each call is then one
-    matrix product with the camera's sensitivities.
-
     Parameters
     ----------
     camera
-        (W, 3) camera sensitivities on :data:`ocio_vp.simulator.data.SPECTRAL_SHAPE`.
+        (W, 3) camera sensitivities on :data:`ocio_vp.spectra.SPECTRAL_SHAPE`.
     illuminant
         A key of ``colour.SDS_ILLUMINANTS``.
 
@@ -276,17 +258,6 @@ class ChartErrors:
     delta_E_2000: np.ndarray  # (n,)
     delta_E_ITP: np.ndarray  # (n,)
 
-    @property
-    def summary(self) -> dict[str, float]:
-        """Means (and maxima of ΔE) as plain floats, for tables and JSON."""
-        return {
-            "relative_to_white_mean": float(np.mean(self.relative_to_white)),
-            "delta_E_2000_mean": float(np.mean(self.delta_E_2000)),
-            "delta_E_2000_max": float(np.max(self.delta_E_2000)),
-            "delta_E_ITP_mean": float(np.mean(self.delta_E_ITP)),
-            "delta_E_ITP_max": float(np.max(self.delta_E_ITP)),
-        }
-
 
 def chart_errors(
     predicted: ArrayLike,
@@ -297,8 +268,9 @@ def chart_errors(
 ) -> ChartErrors:
     """Errors of ``predicted`` against ``target`` (both (n, 3) camera RGB).
 
-    See the module docstring for the normalisation of ΔE2000 (target white Y = 1 and the Lab
-    reference white) and ΔE ITP (target white = 100 cd/m^2).
+    ΔE2000: XYZ scaled so the target white patch has Y = 1, Lab relative to its chromaticity.
+    ΔE ITP (ITU-R BT.2124): the target white patch at :data:`ITP_WHITE_NITS` cd/m^2, ICtCp
+    (BT.2100-2 PQ, via BT.2020 RGB, no chromatic adaptation).
 
     Examples
     --------
@@ -315,11 +287,9 @@ def chart_errors(
     target = np.asarray(target, dtype=np.float64)
     matrix = np.asarray(camera_to_xyz, dtype=np.float64)
     scale = 1.0 / (target[white_patch] @ matrix[1])
-    itp_t = colour.XYZ_to_ICtCp(
-        target @ matrix.T * scale * ITP_WHITE_NITS, method="ITU-R BT.2100-2 PQ"
-    )
-    itp_p = colour.XYZ_to_ICtCp(
-        predicted @ matrix.T * scale * ITP_WHITE_NITS, method="ITU-R BT.2100-2 PQ"
+    itp_t, itp_p = (
+        colour.XYZ_to_ICtCp(rgb @ matrix.T * scale * ITP_WHITE_NITS, method="ITU-R BT.2100-2 PQ")
+        for rgb in (target, predicted)
     )
     return ChartErrors(
         relative_to_white=error_relative_to_white(predicted, target, white_patch),
@@ -424,19 +394,13 @@ def _ciede2000(lab_1: np.ndarray, lab_2: np.ndarray) -> np.ndarray:
 def delta_E_2000(
     a: ArrayLike, b: ArrayLike, *, camera_to_xyz: ArrayLike, white: ArrayLike
 ) -> np.ndarray:
-    """(n,) ΔE2000 between two (n, 3) camera RGB renderings of the same pixels.
-
-    Normalised as :func:`chart_errors` does: XYZ through ``camera_to_xyz``, scaled so that
-    ``white`` (camera RGB of the scene's white) has Y = 1, Lab relative to its chromaticity.
-    Pixels brighter than white, negative or out of gamut are measured as they are (CIE Lab
-    continues linearly below black).
+    """(n,) :func:`camera_delta_E_2000` of (n, 3) renderings in numpy alone: the config writer,
+    which loads no colour-science, measures its LUT chains with it (``tests/test_metrics.py``
+    checks it against colour-science). CIE Lab continues linearly below black.
 
     >>> white = np.array([0.9, 1.0, 0.8])
     >>> float(delta_E_2000(white[None], white[None], camera_to_xyz=np.eye(3), white=white)[0])
     0.0
-
-    In numpy (no colour-science: the config writer measures its LUT chains with it);
-    ``tests/test_metrics.py`` checks it against colour-science's ``delta_E`` and ``XYZ_to_Lab``.
     """
     matrix = np.asarray(camera_to_xyz, dtype=np.float64)
     white_xyz = np.asarray(white, dtype=np.float64) @ matrix.T

@@ -1,21 +1,13 @@
 """Measured human skin reflectances, their lightness bands (ITA°), and the cameras held out.
 
-A leaf module (numpy, :mod:`ocio_vp.spectra`; colour-science inside the functions). The data:
-
-- ``ocio_vp/data/skin_training.json``: the TRAINING half of NIST's *Reference Data Set of
-  Human Skin Reflectance* on the project grid. Fits, rules and constants may use it
-  (:func:`training_skin`).
-- ``benchmarks/data/skin_held_out.json``: the HELD-OUT half, outside the package on purpose:
-  only the skin benchmark reads it (``benchmarks/skin_eval.py``), never a fit.
-- ``ocio_vp/data/camera_sensitivities_physlight.json``: Weta's physlight cameras that the
-  rawtoaces file does not hold, each marked ``tuning`` or ``held-out``.
-
-The split is fixed in the files (rebuilt by ``benchmarks/make_skin_data.py``): within each ITA
-band, in order of ITA, subjects alternate training / held-out. Licences and sources:
-``ocio_vp/data/SKIN_LICENSE.md``.
-
-The Individual Typology Angle (Chardon, Cretois & Hourseau 1991):
-``ITA = atan((L* - 50) / b*) · 180/π``, from CIELAB under D65 (CIE 1931 2° observer).
+A leaf module (numpy, :mod:`ocio_vp.spectra`). ``ocio_vp/data/skin_training.json`` is the
+TRAINING half of NIST's *Reference Data Set of Human Skin Reflectance*, which fits, rules and
+constants may use; the HELD-OUT half, ``benchmarks/data/skin_held_out.json``, is outside the
+package on purpose (only ``benchmarks/skin_eval.py`` reads it). Weta's physlight cameras are
+marked ``tuning`` or ``held-out`` in ``ocio_vp/data/camera_sensitivities_physlight.json``. The
+split is fixed in the files (``benchmarks/make_skin_data.py``: within each ITA band, in order of
+ITA, subjects alternate); licences and sources: ``ocio_vp/data/SKIN_LICENSE.md``. ITA (Chardon,
+Cretois & Hourseau 1991): ``atan((L* - 50) / b*)`` in degrees, CIELAB under D65, CIE 1931 2°.
 """
 
 from __future__ import annotations

@@ -1,8 +1,5 @@
-"""The project's wavelength grid and colour-science spectral data aligned to it.
-
-A leaf module (it imports nothing of ocio_vp but :mod:`ocio_vp.errors`): the metrics, the
-perceptual post-correction and the simulator all put spectra on this one grid.
-colour-science is imported inside the functions: ``ocio-vp --help`` must stay fast.
+"""The project's wavelength grid and colour-science spectral data aligned to it (a leaf: the
+metrics, the perceptual post-correction and the simulator all put spectra on this one grid).
 """
 
 from __future__ import annotations

@@ -151,12 +151,7 @@ def _attrs(attributes: dict[str, object]) -> str:
     for key, value in attributes.items():
         if value is None:
             continue
-        if isinstance(value, float):  # numpy's float64 too
-            text = num(value)
-        elif isinstance(value, str):
-            text = value.translate(_ESCAPES)
-        else:
-            text = num(value) if isinstance(value, np.floating) else escape(value)
+        text = num(value) if isinstance(value, float | np.floating) else escape(value)
         out.append(f' {_name(key)}="{text}"')
     return "".join(out)
 
@@ -190,23 +185,15 @@ class Canvas:
 
     def rect(self, x: float, y: float, w: float, h: float, **attributes: object) -> None:
         """A rectangle with its top left corner at (x, y)."""
-        self._parts.append(
-            f'<rect x="{num(x)}" y="{num(y)}" width="{num(w)}" height="{num(h)}"'
-            f"{_attrs(attributes)}/>"
-        )
+        self.element("rect", x=float(x), y=float(y), width=float(w), height=float(h), **attributes)
 
     def circle(self, cx: float, cy: float, r: float, **attributes: object) -> None:
         """A circle of radius ``r`` centred on (cx, cy)."""
-        self._parts.append(
-            f'<circle cx="{num(cx)}" cy="{num(cy)}" r="{num(r)}"{_attrs(attributes)}/>'
-        )
+        self.element("circle", cx=float(cx), cy=float(cy), r=float(r), **attributes)
 
     def line(self, x1: float, y1: float, x2: float, y2: float, **attributes: object) -> None:
         """A straight line from (x1, y1) to (x2, y2)."""
-        self._parts.append(
-            f'<line x1="{num(x1)}" y1="{num(y1)}" x2="{num(x2)}" y2="{num(y2)}"'
-            f"{_attrs(attributes)}/>"
-        )
+        self.element("line", x1=float(x1), y1=float(y1), x2=float(x2), y2=float(y2), **attributes)
 
     def polyline(self, xs: Iterable[float], ys: Iterable[float], **attributes: object) -> None:
         """An open, unfilled line through the points (xs[i], ys[i])."""

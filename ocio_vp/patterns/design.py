@@ -1,26 +1,8 @@
 """The calibration sequence: what the wall plays, frame by frame, and at which code values.
 
-Layout (``ocio-vp patterns``), each patch held ``hold`` frames::
-
-    lead_in (1 s black)  sync_0  black red green blue white  sync_1
-    ramp_red_00 ... ramp_red_NN  sync_2  ramp_green_*  sync_3  ramp_blue_*  sync_4  lead_out
-
-**Sync marks.** ``sync_g`` is ``g + 2`` white flashes of ``F`` frames (``F`` ~ 1/6 s, at least
-2 frames) with ``F`` black frames between them, and ``2 F`` black frames before the first flash
-and after the last. A camera take is placed in time by these flashes alone (no colour needs to be known in
-advance): each mark is told from the others by its number of flashes, so a take that misses a
-mark (the camera started late) is still placed by the rest, and several marks spread over the
-take give its rate and any dropped frame (:mod:`ocio_vp.plates.alignment`).
-
-**Ramps** are spaced evenly in the wall's own signal (dense near black, where the eye and the
-wall's code values are): ``t_i = i / (steps - 1) * E(1)``, ``drive_i = E^-1(t_i)``, ``E`` the
-wall's encoding (:mod:`ocio_vp.wall.encoding`). A linear wall signal has no code values dense
-near black, so its ramps are spaced in gamma 2.4 instead.
-
-**Code values.** EXR frames hold linear drive as half floats (the drive recorded is the half
-value, exactly). TIFF (16 bits) and DPX (10 bits) hold the signal in full range; the drive
-recorded is the decoded code value, normalised so the top code (drive 1.0 encoded) is exactly
-1.0 -- for PQ, 1.0 is ``peak_nits`` to within the code value's step.
+Its layout, the sync marks (``sync_g``: ``g + 2`` white flashes that place a take in time,
+:mod:`ocio_vp.plates.alignment`), the ramps (spaced evenly in the wall's own signal, in gamma
+2.4 for a linear wall) and the code values each file format holds: docs/patterns.md.
 """
 
 from __future__ import annotations
@@ -238,7 +220,7 @@ class SequenceBuilder:
         self.add(name, "lead", (0.0, 0.0, 0.0), max(1, round(LEAD_SECONDS * self.options.fps)))
 
     def sync(self) -> None:
-        """The next sync mark: ``syncs + 2`` flashes (see the module docstring)."""
+        """The next sync mark: ``syncs + 2`` flashes (docs/patterns.md, *Sync marks*)."""
         f = flash_frames(self.options.fps)
         count = self.syncs + 2
         first = self.next_frame
@@ -267,7 +249,7 @@ class SequenceBuilder:
 
 
 def calibration_sequence(options: PatternOptions = PatternOptions()) -> PatternSequence:
-    """The calibration sequence (see the module docstring for its layout).
+    """The calibration sequence (docs/patterns.md, *The sequence*).
 
     Examples
     --------

@@ -1,11 +1,7 @@
 """Writing a sequence's frames and its ``sequence.yaml`` into a folder, all at once or not at all.
 
-A patch is one flat colour held for ``hold`` frames, so each distinct picture is encoded once
-and every other frame showing it is a hard link to that file (a copy where the file system has
-no hard links, e.g. exFAT): a player sees ordinary numbered files; the folder costs the
-distinct pictures only. EXR: half-float RGB, ZIP compression, values = linear drive. TIFF:
-16-bit RGB, LZW. DPX: 10-bit RGB. Integer frames hold the wall's signal in full range
-(code = round(signal x (2^bits - 1))).
+Each distinct picture is encoded once; every other frame showing it is a hard link to that file
+(a copy where the file system has none). File formats and code values: docs/patterns.md.
 """
 
 from __future__ import annotations

@@ -1,15 +1,7 @@
-"""The pattern sequence and its file, ``sequence.yaml`` (format ``ocio-vp/patterns``, version 1).
-
-``ocio-vp patterns`` writes the frames a wall plays for calibration (or validation) and, beside
-them, ``sequence.yaml``: which frames hold which patch, at what drive. ``measure`` (and
-``validate``) read it to find the patches in a camera take of the wall. Other tools may write
-such a file too, so it is validated like every file ocio-vp reads (unknown keys are errors;
-every error names the file and the key). ``docs/patterns.md`` documents every key.
-
-Frame numbers are the player's: frame ``f`` is shown during ``[f, f + 1)`` in units of
-``1 / fps`` seconds, from ``first_frame`` on. ``drive`` is the panel's linear drive, 1.0 = full
-drive (the level of the primaries); ``signal`` is the value written in the frames (for EXR the
-drive itself, for TIFF and DPX the wall's signal as a fraction of full code).
+"""The pattern sequence and its file, ``sequence.yaml`` (format ``ocio-vp/patterns``, version 1):
+which frames hold which patch, at what drive. Other tools may write it, so it is validated like
+every file ocio-vp reads; docs/patterns.md documents every key. Frame ``f`` is shown during
+``[f, f + 1)`` in units of ``1 / fps`` seconds, from ``first_frame`` on.
 """
 
 from __future__ import annotations
@@ -155,11 +147,7 @@ class PatternSequence:
 
 def expand_frame(pattern: str, frame: int) -> str:
     """``patterns.####.exr`` with frame 7 -> ``patterns.0007.exr`` (one run of ``#``)."""
-    start = pattern.index("#")
-    end = start
-    while end < len(pattern) and pattern[end] == "#":
-        end += 1
-    return f"{pattern[:start]}{frame:0{end - start}d}{pattern[end:]}"
+    return re.sub("#+", lambda run: f"{frame:0{len(run[0])}d}", pattern, count=1)
 
 
 # --------------------------------------------------------------------------------------------
@@ -234,8 +222,10 @@ def _validation(ctx: Validator, raw: JsonValue) -> Validation:
     keys = ("environment", "stage", "solution_sha256", "in_frustum", "reference")
     optional = ("model", "solved")
     entry = ctx.mapping(raw, ("validation",), keys, ("content_scale", "pulled", *optional))
-    for name in (*keys, *(k for k in optional if k in entry)):
-        ctx.text(entry[name], ("validation", name), limit=None)
+    text = {
+        name: ctx.text(entry[name], ("validation", name), limit=None)
+        for name in (*keys, *(k for k in optional if k in entry))
+    }
     scale = ctx.number(
         entry.get("content_scale", 1.0), ("validation", "content_scale"), strict=True
     )
@@ -247,17 +237,7 @@ def _validation(ctx: Validator, raw: JsonValue) -> Validation:
     }
     if not isinstance(pulled, dict) or len(kept) != len(pulled):
         raise ctx.error(("validation", "pulled"), "expected {chart index: saturation kept}")
-    return Validation(
-        environment=entry["environment"],
-        stage=entry["stage"],
-        solution_sha256=entry["solution_sha256"],
-        in_frustum=entry["in_frustum"],
-        reference=entry["reference"],
-        content_scale=scale,
-        pulled=tuple(kept.items()),
-        model=entry.get("model"),
-        solved=entry.get("solved"),
-    )
+    return Validation(**text, content_scale=scale, pulled=tuple(kept.items()))
 
 
 def _checked_patches(ctx: Validator, raw: JsonValue, first_frame: int) -> tuple[Patch, ...]:

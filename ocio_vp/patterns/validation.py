@@ -1,24 +1,10 @@
 """The validation sequence: an environment's chart sent through its own config, in-frustum.
 
-``ocio-vp patterns --validate calib/<environment>`` takes the environment's target chart (the
-colours the location recorded, ``diagnostics.charts.target`` of ``solution.json``) as content,
-runs it through the environment's ``config.ocio`` from the reference colorspace to the
-in-frustum wall colorspace (OpenColorIO's CPU processor: N, the black-level offset, the
-linearity LUT and the wall's encoding, exactly what the wall is sent on set) and holds each
-colour full-field for ``hold`` frames. Filmed by the camera and post-corrected, every patch
-should read its content again (``ocio-vp validate``). Layout::
-
-    lead_in  sync_0  black  chart_00 ... chart_11  sync_1  chart_12 ... chart_23  sync_2  lead_out
-
-``black`` is content 0 through the config (the in-frustum offset, clipped at 0 by the wall).
-The chart is scaled (``content_scale``, recorded) so that its white patch asks the wall for
-:data:`WHITE_DRIVE` of full drive, and a patch that would need light outside the LEDs' gamut
-after N is pulled into it (:func:`into_gamut`: towards the grey of its brightness, its
-intent recomputed, ``validation.pulled`` recording how much saturation it kept), so every
-patch the sequence shows can be judged: a location's camera values have any exposure, the wall
-shows content at the DP's exposure, and a post-correction and N are linear in the content
-(the root-polynomial Q is exposure-invariant too). The wall's encoding and peak come from the
-solve (``linearity.wall_encoding``).
+``ocio-vp patterns --validate calib/<environment>``: the target chart (``diagnostics.charts.target``),
+scaled so its white patch asks for :data:`WHITE_DRIVE` of full drive and pulled into the LEDs'
+gamut where it must be (:func:`into_gamut`), run through ``config.ocio`` from the reference to
+the in-frustum colorspace (what the wall is sent on set), each colour held full-field. Layout and
+why: docs/patterns.md (*Validation sequence*) and docs/validation.md.
 """
 
 from __future__ import annotations
@@ -42,19 +28,12 @@ __all__ = [
     "in_frustum_light",
     "into_gamut",
     "validation_sequence",
-    "wall_encoding_of",
     "wall_signal",
 ]
 
 #: The chart's white patch is shown at this fraction of full drive (headroom for saturated
 #: patches whose drive exceeds the white's in one channel).
 WHITE_DRIVE = 0.7
-
-
-def wall_encoding_of(solution: Solution) -> tuple[str, float | None]:
-    """(encoding, peak_nits or None) the solve's config sends to the wall."""
-    encoding = WallEncoding.of(solution.linearity)
-    return encoding.name, encoding.peak_nits
 
 
 def _wall_spaces(solution: Solution) -> tuple[str, str]:
@@ -142,7 +121,7 @@ def into_gamut(solution: Solution, content: np.ndarray) -> tuple[np.ndarray, np.
 
 
 def validation_sequence(environment_dir: str | Path, options: PatternOptions) -> PatternSequence:
-    """The validation sequence of one solved environment (see the module docstring).
+    """The validation sequence of one solved environment (module docstring).
 
     ``options`` give the timing, size and file format; its encoding and peak must be the
     solve's (they are taken from it when ``options`` leave them at linear / none).
@@ -160,7 +139,8 @@ def validation_sequence(environment_dir: str | Path, options: PatternOptions) ->
     target = np.zeros((0,)) if charts is None else charts.target
     if target.ndim != 2 or target.shape[1:] != (3,) or not np.all(np.isfinite(target)):
         raise InputError("no target chart in diagnostics.charts.target", source=source)
-    encoding, peak = wall_encoding_of(solution)
+    wall = WallEncoding.of(solution.linearity)  # what the solve's config sends the wall
+    encoding, peak = wall.name, wall.peak_nits
     asked = (options.encoding, options.peak_nits)
     if asked != ("linear", None) and asked != (encoding, peak):
         raise InputError(
@@ -174,7 +154,7 @@ def validation_sequence(environment_dir: str | Path, options: PatternOptions) ->
     scale = content_scale(solution, target)
     target, kept = into_gamut(solution, target * scale)
     signals = wall_signal(config, solution, np.vstack([np.zeros((1, 3)), target]))
-    drives = WallEncoding.of(solution.linearity).decode(signals)
+    drives = wall.decode(signals)
     if not np.all(np.isfinite(drives)):
         raise InputError("the config sends a non-finite drive for the chart", source=config)
     builder = SequenceBuilder(options)

@@ -1,9 +1,6 @@
-"""``ocio-vp report``: a self-contained HTML page (plus its SVG figures) for one or more solutions.
-
-Per environment: the paper's comparison charts (baseline M only vs ours), per-patch ΔE, the
-matrices, model choices, warnings and linearity curves; for all of them the paper's Fig. 11
-error bars. The page loads nothing from the network and is published all or nothing. The
-numbers come from ``solution.json`` only (:mod:`ocio_vp.report.data`).
+"""``ocio-vp report``: a self-contained HTML page and its SVG figures for one or more solutions
+(what it shows: docs/report.md), published all or nothing; the numbers come from
+``solution.json`` only (:mod:`ocio_vp.report.data`).
 """
 
 from __future__ import annotations
@@ -204,17 +201,16 @@ def _context(data: EnvironmentData, images: dict[str, str]) -> dict[str, Any]:
     facts += skin_facts(s)
     facts += _soft_clip_facts(s)
     notes = d.method_notes or {}
-    rows = []
-    for chart in STAGE_CHARTS:
-        rows.append(
-            {
-                "chart": chart.replace("_", " "),
-                "error": [f"{100 * v:.2f}%" for v in data.errors[chart]],
-                "mean": _percent(data.errors[chart]),
-                "de2000": f"{float(np.mean(data.delta_e['CIE 2000'][chart])):.2f}",
-                "deitp": mean_defined(data.delta_e["ITP"][chart]),
-            }
-        )
+    rows = [
+        {
+            "chart": chart.replace("_", " "),
+            "error": [f"{100 * v:.2f}%" for v in data.errors[chart]],
+            "mean": _percent(data.errors[chart]),
+            "de2000": f"{float(np.mean(data.delta_e['CIE 2000'][chart])):.2f}",
+            "deitp": mean_defined(data.delta_e["ITP"][chart]),
+        }
+        for chart in STAGE_CHARTS
+    ]
     return {
         "name": s.environment,
         "key": data.key,
@@ -519,9 +515,6 @@ def build_report(
 def _relocate(report: Report, staged: Path, final: Path) -> None:
     """Point the plot records at the published folder instead of the staging one."""
 
-    def moved(path: Path) -> Path:
-        return final / path.relative_to(staged)
-
     plots: tuple[dict[str, Any], ...] = (
         report.error_bars,
         report.charts,
@@ -529,4 +522,5 @@ def _relocate(report: Report, staged: Path, final: Path) -> None:
         report.linearity,
     )
     for records in plots:
-        records.update({k: dataclasses.replace(p, path=moved(p.path)) for k, p in records.items()})
+        for key, plot in records.items():
+            records[key] = dataclasses.replace(plot, path=final / plot.path.relative_to(staged))

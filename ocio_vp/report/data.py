@@ -1,11 +1,7 @@
-"""The numbers behind the report: charts read from ``solution.json``, made display-referred.
-
-``diagnostics.charts`` holds the per-patch camera RGB of the target and the stage charts. For
-the screen they go through one camera-to-display matrix per camera, as the paper does (Section
-4; :func:`camera_to_display`), are exposed so the target white's largest channel is
-:data:`DISPLAY_WHITE` (each stage chart's white green matched to the target's first), clipped
-and sRGB-encoded. Errors are never computed on display values: Fig. 11's are the solve's own
-(camera RGB), ΔE goes through the matching camera-to-XYZ matrix.
+"""The numbers behind the report, from ``solution.json`` only: the charts of
+``diagnostics.charts`` made display-referred through one camera-to-display matrix per camera
+(:func:`camera_to_display`; docs/report.md, *Colours on screen*), the solve's own Fig. 11 errors
+(camera RGB) and ΔE through the matching camera-to-XYZ matrix.
 
 References
 ----------
@@ -49,14 +45,6 @@ __all__ = [
     "patch_names",
 ]
 
-#: The chart arrays every solution carries in ``diagnostics.charts``.
-CHART_KEYS = (
-    "target",
-    "lit_baseline",
-    "lit_corrected",
-    "displayed_baseline",
-    "displayed_corrected",
-)
 #: The stage charts and the error keys of ``diagnostics`` that belong to them (paper Fig. 11).
 STAGE_CHARTS = {
     "lit_baseline": "lit_chart_error_baseline",
@@ -64,6 +52,8 @@ STAGE_CHARTS = {
     "displayed_baseline": "displayed_chart_error_baseline",
     "displayed_corrected": "displayed_chart_error",
 }
+#: The chart arrays every solution carries in ``diagnostics.charts``.
+CHART_KEYS = ("target", *STAGE_CHARTS)
 COLORCHECKER = "ColorChecker24 - After November 2014"
 #: Display-linear value of the target white patch's largest channel.
 DISPLAY_WHITE = 0.9
@@ -337,27 +327,24 @@ def environment_data(
 ) -> list[EnvironmentData]:
     """Load every solution and compute what the report shows; one display matrix per stage
     (``camera_to_xyz``, when the caller knows the camera, for every solution)."""
-    files = find_solutions(paths)
     loaded = []
-    for index, path in enumerate(files):
+    for path in find_solutions(paths):
         solution = load_solution(path)
-        charts = _charts(solution, path)
-        loaded.append((index, path, solution, charts, infer_white_patch(solution, charts)))
+        camera = (solution.stage, solution.measurements_sha256, solution.camera_colorspace)
+        loaded.append((path, solution, _charts(solution, path), camera))
     groups: dict[tuple, list] = {}
-    for item in loaded:
-        s = item[2]
-        groups.setdefault((s.stage, s.measurements_sha256, s.camera_colorspace), []).append(item)
+    for _, solution, charts, camera in loaded:
+        groups.setdefault(camera, []).append((solution, charts["target"]))
     transforms = {
-        key: camera_to_display(
-            [i[2] for i in items], [i[3]["target"] for i in items], camera_to_xyz=camera_to_xyz
+        camera: camera_to_display(
+            [s for s, _ in items], [t for _, t in items], camera_to_xyz=camera_to_xyz
         )
-        for key, items in groups.items()
+        for camera, items in groups.items()
     }
     out = []
-    for index, path, solution, charts, white in loaded:
-        key = (solution.stage, solution.measurements_sha256, solution.camera_colorspace)
-        transform = transforms[key]
-        diagnostics = solution.diagnostics
+    for index, (path, solution, charts, camera) in enumerate(loaded):
+        transform = transforms[camera]
+        white = infer_white_patch(solution, charts)
         out.append(
             EnvironmentData(
                 solution=solution,
@@ -365,7 +352,7 @@ def environment_data(
                 key=f"{index + 1:02d}-{solution.environment}",
                 white_patch=white,
                 charts=charts,
-                errors=_errors(diagnostics, charts, white),
+                errors=_errors(solution.diagnostics, charts, white),
                 display=display_charts(charts, transform.matrix, white, match_white=match_white),
                 delta_e=delta_e(charts, transform.camera_to_xyz, white),
                 transform=transform,

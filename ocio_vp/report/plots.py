@@ -1,9 +1,6 @@
-"""The report's figures as SVG (:mod:`ocio_vp.svg`, no matplotlib): the paper's
-comparison charts, its Fig. 11 error bars, per-patch ΔE, and the panel linearity curves.
-
-Every plot function writes one SVG file and returns the numbers it drew; the elements carry
-``class`` and ``data-*`` attributes and the axes their ticks, so what is on the page can be read
-back from the file.
+"""The report's figures as SVG (:mod:`ocio_vp.svg`): the paper's comparison charts, its Fig. 11
+error bars, per-patch ΔE and the panel linearity curves. Each plot writes one file and returns
+the numbers it drew; elements carry ``class`` and ``data-*`` attributes to read them back.
 
 References
 ----------
@@ -22,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ocio_vp.formats.solution import Solution
-from ocio_vp.report.data import EnvironmentData, patch_names
+from ocio_vp.report.data import STAGE_CHARTS, EnvironmentData, patch_names
 from ocio_vp.svg import Axes, Canvas, data_limits, hex_colours, num, subplot_boxes
 
 __all__ = [
@@ -39,8 +36,6 @@ __all__ = [
 
 CHANNEL_COLOURS = ("#c0392b", "#27ae60", "#2e6fbd")
 CHANNEL_NAMES = ("R", "G", "B")
-#: The four comparison panels: stage chart, rows lit/displayed, columns baseline/ours.
-PANELS = ("lit_baseline", "lit_corrected", "displayed_baseline", "displayed_corrected")
 #: The two series of every bar plot: baseline (M only) and ours.
 SERIES = ("baseline", "corrected")
 
@@ -161,7 +156,7 @@ def plot_comparison_charts(data: EnvironmentData, path: Path, *, dpi: float = 11
     titles = panel_titles(data.solution)
     target = np.clip(data.display["target"], 0.0, 1.0)
     squares, circles, drawn_titles = {}, {}, {}
-    for box, chart in zip(boxes, PANELS, strict=True):
+    for box, chart in zip(boxes, STAGE_CHARTS, strict=True):  # rows lit/displayed, columns M/ours
         stage = np.clip(data.display[chart], 0.0, 1.0)
         chart_box = _draw_chart(canvas, box, chart, target, stage)
         error = 100 * float(np.mean(data.errors[chart]))
@@ -270,6 +265,12 @@ def plot_error_bars(
     return ErrorBarsPlot(canvas.write(path), names, values["baseline"], values["corrected"])
 
 
+def _delta_e_style(canvas: Canvas, series: str) -> dict[str, object]:
+    """A ΔE bar's style (and its legend swatch's): baseline grey, ours hatched."""
+    fill = "#7f7f7f" if series == "baseline" else canvas.hatch("#333333")
+    return {"fill": fill, "stroke": "#333333", "stroke_width": 0.8}
+
+
 def _delta_e_panel(
     canvas: Canvas, box: tuple, data: EnvironmentData, metric: str, kind: str, bottom: bool
 ) -> None:
@@ -300,20 +301,10 @@ def _delta_e_panel(
     axes.yticks()
     for name, values in series.items():
         shift = -0.2 if name == "baseline" else 0.2
-        fill = "#7f7f7f" if name == "baseline" else canvas.hatch("#333333")
+        style = _delta_e_style(canvas, name)
         tags = {"data_metric": metric, "data_series": f"{kind}_{name}"}
         for j, value in enumerate(values):
-            _bar(
-                axes,
-                j + shift,
-                0.4,
-                float(value),
-                fill=fill,
-                stroke="#333333",
-                stroke_width=0.8,
-                data_patch=str(j),
-                **tags,
-            )
+            _bar(axes, j + shift, 0.4, float(value), **style, data_patch=str(j), **tags)
         for missing in np.flatnonzero(np.isnan(values)):  # no bar: mark it, not read as 0
             x, y = float(axes.x(missing + shift)), float(axes.y(0.0))
             d = (
@@ -348,19 +339,16 @@ def plot_delta_e(data: EnvironmentData, path: Path, *, dpi: float = 110) -> Delt
     boxes = subplot_boxes(
         canvas, 2, 2, left=0.06, right=0.99, top=0.91, bottom=0.2, hspace=0.2, wspace=0.14
     )
-    drawn: dict[str, dict[str, np.ndarray]] = {"CIE 2000": {}, "ITP": {}}
     for i, box in enumerate(boxes):
         metric, kind = ("CIE 2000", "ITP")[i % 2], ("lit", "displayed")[i // 2]
         _delta_e_panel(canvas, box, data, metric, kind, bottom=i >= 2)
-        for name in SERIES:
-            chart = f"{kind}_{name}"
-            drawn[metric][chart] = np.asarray(data.delta_e[metric][chart], dtype=np.float64)
+    drawn = {
+        metric: {chart: np.asarray(v, dtype=np.float64) for chart, v in charts.items()}
+        for metric, charts in data.delta_e.items()
+    }
+    legend = [("baseline (M only)", "baseline"), ("ours", "corrected")]
     Axes(canvas, boxes[0], (0, 1), (0, 1), name="legend").legend(
-        [
-            ("baseline (M only)", {"fill": "#7f7f7f", "stroke": "#333333", "stroke_width": 0.8}),
-            ("ours", {"fill": canvas.hatch("#333333"), "stroke": "#333333", "stroke_width": 0.8}),
-        ],
-        corner="upper right",
+        [(label, _delta_e_style(canvas, series)) for label, series in legend], corner="upper right"
     )
     title = f"{data.solution.environment}: colour difference per patch"
     if any(np.isnan(v).any() for v in data.delta_e["ITP"].values()):

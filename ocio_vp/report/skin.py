@@ -1,10 +1,6 @@
-"""The report's skin panel: what each solve expects faces to look like (``diagnostics.skin``).
-
-One table for all environments (expected mean ΔE2000 on skin per lightness band, the chosen
-post-correction beside the paper's least squares) and, per environment, where the skin samples
-came from, what the chart pays, and with skin first the default's figures
-(:class:`ocio_vp.formats.skin.SkinFigures`). docs/skin.md checks these expectations against
-measured skin.
+"""The report's skin panel: what each solve expects faces to look like (``diagnostics.skin``,
+:class:`ocio_vp.formats.skin.SkinFigures`): one table for all environments, facts per
+environment. docs/skin.md checks these expectations against measured skin.
 """
 
 from __future__ import annotations

@@ -1,23 +1,11 @@
 """Validation: the chart shown on the wall through its config, filmed, against what it should be.
 
-The validation sequence (:mod:`ocio_vp.patterns.validation`) sends content ``c`` (the
-environment's target chart, scaled) through the config's in-frustum colorspace: the wall emits
-``N(c) + offset``, the camera records ``[SL](N(c) + offset) + b`` (``b`` the stage's light
-bounced off the panels), and the post-correction gives ``Q([SL] M Q^-1(c)) = c`` (eq. 7-8 of the
-paper, the offset cancelling ``b``, Section 3.4). So every patch, filmed and post-corrected,
-should read ``c`` again. Where N was not solved (the in-frustum colorspace is M) the footage is
-not post-corrected, and the camera should record ``c`` as it is.
-
-The difference is judged in CIE ΔE2000 through a camera-to-XYZ matrix (the solve's camera
-colour space, or a fit of the chart to the ColorChecker's published values, as the report
-does), with the intended white patch as the reference white (``ocio_vp.metrics``). Patches whose
-in-frustum light ``N(c) + offset`` falls outside ``[0, 1]`` per channel cannot be shown by the
-wall at that exposure; they are listed and left out of the verdict, each with the error the
-calibration itself expects there (:func:`expected_camera`: the light clipped by the wall, as
-[SL] films it).
-
-The verdict: **pass** when the 95th percentile of ΔE2000 over the shown patches is at most
-:data:`DEFAULT_THRESHOLD` (docs/validation.md says why 3).
+Filmed and post-corrected, every patch should read its content ``c`` again (``Q([SL] M
+Q^-1(c)) = c``, the paper's eqs. 7-8), judged in CIE ΔE2000 with the intended white patch as
+reference white. Patches the wall cannot show (in-frustum light outside ``[0, 1]``) are listed
+with the error the calibration itself expects there (:func:`expected_camera`) and left out of the
+verdict: **pass** when the p95 over the shown patches is at most :data:`DEFAULT_THRESHOLD`.
+What is compared and why: docs/validation.md.
 """
 
 from __future__ import annotations
@@ -128,12 +116,6 @@ class ValidationResult:
         return self.p95 <= self.threshold
 
 
-def _names(n: int) -> list[str]:
-    from ocio_vp.metrics import patch_label
-
-    return [patch_label(j, n) for j in range(n)]
-
-
 def _predicted_mean(solution: Solution, xyz: np.ndarray, white: int) -> float | None:
     """Mean ΔE2000 the solve itself predicts for the chart shown in-frustum (its model)."""
     from ocio_vp.metrics import chart_errors
@@ -163,7 +145,7 @@ def compare_take(
     InputError
         When the sequence holds no chart, or every patch is outside the wall's range.
     """
-    from ocio_vp.metrics import chart_errors
+    from ocio_vp.metrics import chart_errors, patch_label
     from ocio_vp.report.data import camera_to_display
 
     charts = sorted(sequence.of_kind("chart"), key=lambda p: p.index or 0)
@@ -190,11 +172,10 @@ def compare_take(
         raise InputError(
             "no chart patch is within the wall's range at this exposure", source=sequence.source
         )
-    names = _names(len(charts))
     patches = tuple(
         PatchResult(
             index=int(p.index or 0),
-            name=names[j],
+            name=patch_label(j, len(charts)),
             intended=intended[j],
             measured=measured[j],
             corrected=corrected[j],

@@ -1,9 +1,6 @@
-"""Writing a validation: ``validation.json``, ``index.html`` (with the take's contact sheet)
-and the terminal's lines, all from one :class:`~ocio_vp.validation.compare.ValidationResult`.
-
-``validation.json`` (format ``ocio-vp/validation``, version 1) holds the statistics, the
-verdict and every patch (intended, measured and post-corrected camera RGB, ΔE2000, shown or
-not), plus what was compared (the solve's sha256, the sequence, the take, the alignment).
+"""Writing a validation: ``validation.json`` (its keys: docs/validation.md), ``index.html``
+(with the take's contact sheet) and the terminal's lines, all from one
+:class:`~ocio_vp.validation.compare.ValidationResult`.
 """
 
 from __future__ import annotations
@@ -80,10 +77,6 @@ def summary_lines(
     return lines
 
 
-def _rgb(values: np.ndarray) -> list[float]:
-    return [float(v) for v in values]
-
-
 def validation_document(
     result: ValidationResult, reading: TakeReading, *, sources: JsonMapping
 ) -> JsonObject:
@@ -120,9 +113,9 @@ def validation_document(
             {
                 "index": p.index,
                 "name": p.name,
-                "intended": _rgb(p.intended),
-                "measured": _rgb(p.measured),
-                "corrected": _rgb(p.corrected),
+                "intended": p.intended.tolist(),
+                "measured": p.measured.tolist(),
+                "corrected": p.corrected.tolist(),
                 "delta_e2000": p.delta_e,
                 "expected_delta_e2000": p.expected_delta_e,
                 "shown": p.shown,
