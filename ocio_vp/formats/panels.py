@@ -143,13 +143,11 @@ def parse_panels(ctx: Validator, value: JsonValue) -> tuple[PanelType, ...]:
     """Validate the ``panels`` list: safe, unique names, the same number of chart patches in
     every ``lit_chart``, at least one in-frustum type, regions that do not overlap."""
     panels: list[PanelType] = []
+    seen: dict[str, int] = {}
     for i, raw in enumerate(ctx.items(value, ("panels",), "panel types")):
         panel = _parse_one(ctx, raw, ("panels", i), panels[0].SRL.shape[0] if panels else None)
+        ctx.unique_name(panel.name, ("panels", i), seen)
         for j, other in enumerate(panels):
-            if other.name == panel.name:
-                raise ctx.error(
-                    ("panels", i, "name"), f"duplicate name {panel.name!r} (also panels[{j}])"
-                )
             for a in panel.regions:
                 if any(a.overlaps(b) for b in other.regions):
                     raise ctx.error(
