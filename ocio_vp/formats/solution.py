@@ -78,22 +78,15 @@ class FixtureDrive(Record):
 
 @dataclass(frozen=True)
 class Solution:
-    """Everything solved for one environment; all arrays float64.
+    """Everything solved for one environment; all arrays float64 (keys: docs/solution.md).
 
     ``black_level_offset`` is added to the in-frustum drive after N (``drive = N c + offset``),
-    ``None`` when the environment has no black-level measurement. ``ocio`` names the config and
-    its colour spaces by role (:class:`OcioNames`), filled in when the config is written.
-    ``fixtures`` maps each practical fixture to its ``channels`` and ``drive`` per channel (units
-    of its ``reference_drive``), ``None`` without a ``fixtures`` section; ``M`` is then the
-    matrix to light with while the fixtures are on.
-
-    ``post_correction`` is the post-correction itself (:mod:`ocio_vp.model`), which every
-    consumer applies; :attr:`Q` is derived from it, never stored beside it: its 3x3 (the
-    matrix, or a non-linear model's 3x3 fallback, for readers that want one).
-
-    ``panels`` (a stage of several panel types: :mod:`ocio_vp.formats.panel_solution`) holds
-    every type's solve by name, None otherwise; the top-level ``SL``, ``M``, ``N``, ``beta``,
-    ``w_avg``, ``black_level_offset`` and ``linearity`` are then the first in-frustum type's.
+    None without a black-level measurement. ``ocio`` is filled in when the config is written.
+    ``fixtures`` (None without a ``fixtures`` section) gives each practical fixture's drive per
+    channel, ``M`` then being the matrix to light with while they are on. ``post_correction``
+    is what every consumer applies; :attr:`Q` is derived from it. With ``panels`` (every panel
+    type's solve by name), the top-level arrays and ``linearity`` are the first in-frustum
+    type's.
     """
 
     stage: str
@@ -158,11 +151,8 @@ def _init(self: Solution, *args: Any, Q: Any = None, **kwargs: Any) -> None:
         correction = given[7] if len(given) > 7 else kwargs.get("post_correction")
         if correction is None:
             correction = MatrixCorrection(Q)
-        elif (relative := q_difference(Q, correction.matrix)) > Q_TOLERANCE:
-            raise ValueError(
-                f"Q differs from post_correction's matrix by {relative:.2g} relative (more "
-                f"than {Q_TOLERANCE:g}); Q is derived from post_correction: leave Q out"
-            )
+        elif problem := q_mismatch(Q, correction.matrix):
+            raise ValueError(f"Q {problem}: leave Q out")
         if len(given) > 7:
             given[7] = correction
         else:
@@ -346,7 +336,8 @@ def _post_correction(data: JsonMapping, Q: np.ndarray) -> PostCorrection:
     block = data.get("post_correction")
     if block is not None:
         correction = correction_from_dict(block)
-        _check_Q(Q, correction.matrix)
+        if problem := q_mismatch(Q, correction.matrix):
+            raise InputError(f"{problem}: edit that block, or restore Q", key="Q")
         return correction
     old = _old_root_polynomial(data)
     if old is None:
@@ -367,19 +358,15 @@ def _post_correction(data: JsonMapping, Q: np.ndarray) -> PostCorrection:
 Q_TOLERANCE = 1e-9
 
 
-def q_difference(Q: np.ndarray, matrix: np.ndarray) -> float:
-    """Largest difference of ``Q`` from ``matrix``, relative to ``matrix``'s largest entry."""
+def q_mismatch(Q: np.ndarray, matrix: np.ndarray) -> str:
+    """Why a ``Q`` given beside its post-correction's ``matrix`` is refused ("": it is that
+    matrix, to :data:`Q_TOLERANCE` of its largest entry): an edited Q would reach the readers
+    of Q but not ``apply`` and ``validate``."""
     scale = max(float(np.max(np.abs(matrix))), np.finfo(np.float64).tiny)
-    return float(np.max(np.abs(Q - matrix))) / scale
-
-
-def _check_Q(Q: np.ndarray, matrix: np.ndarray) -> None:
-    """Refuse a ``Q`` that is not its ``post_correction``'s matrix (Q is derived from it: an
-    edited Q would reach the readers of Q but not ``apply`` and ``validate``)."""
-    relative = q_difference(Q, matrix)
-    if relative > Q_TOLERANCE:
-        raise InputError(
-            f"differs from post_correction's matrix by {relative:.2g} relative (more than "
-            f"{Q_TOLERANCE:g}); Q is derived from post_correction: edit that block, or restore Q",
-            key="Q",
-        )
+    relative = float(np.max(np.abs(Q - matrix))) / scale
+    if not relative > Q_TOLERANCE:
+        return ""
+    return (
+        f"differs from post_correction's matrix by {relative:.2g} relative (more than "
+        f"{Q_TOLERANCE:g}); Q is derived from post_correction"
+    )
