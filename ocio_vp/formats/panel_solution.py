@@ -19,7 +19,7 @@ from ocio_vp.errors import InputError
 from ocio_vp.formats.checker import Validator, check_safe_name
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.linearity import Linearity, read_linearity
-from ocio_vp.formats.records import Record, finite_array, json_object, read_record
+from ocio_vp.formats.records import Record, finite_array, json_object, optional_array, read_record
 
 __all__ = [
     "CONFIG_FILENAME",
@@ -166,12 +166,7 @@ def _one(name: str, entry: JsonValue) -> PanelSolution:
     if not isinstance(entry, Mapping) or not isinstance(entry.get("in_frustum"), bool):
         raise InputError("expected a mapping with in_frustum true or false", key=key)
     in_frustum = entry["in_frustum"] is True
-
-    def array(field_name: str, shape: tuple[int, ...], optional: bool = False):
-        if optional and entry.get(field_name) is None:
-            return None
-        return finite_array(entry.get(field_name), shape, f"{key}.{field_name}")
-
+    inner = entry if in_frustum else {}  # what only an in-frustum type has
     numbers = {
         f: Validator().number(entry.get(f), (key, f), maximum=1.0) for f in ("beta", "share")
     }
@@ -181,15 +176,15 @@ def _one(name: str, entry: JsonValue) -> PanelSolution:
     return PanelSolution(
         name=name,
         in_frustum=in_frustum,
-        SL=array("SL", (3, 3)),
-        M=array("M", (3, 3)),
+        SL=finite_array(entry, "SL", (3, 3), key),
+        M=finite_array(entry, "M", (3, 3), key),
         beta=numbers["beta"],
-        w_avg=array("w_avg", (3,)),
-        drive=array("drive", (3,)),
+        w_avg=finite_array(entry, "w_avg", (3,), key),
+        drive=finite_array(entry, "drive", (3,), key),
         share=numbers["share"],
-        N=array("N", (3, 3), optional=True) if in_frustum else None,
+        N=optional_array(inner, "N", (3, 3), key),
         N_reason=reason if in_frustum else None,
-        black_level_offset=array("black_level_offset", (3,), optional=True) if in_frustum else None,
+        black_level_offset=optional_array(inner, "black_level_offset", (3,), key),
         linearity=read_linearity(entry.get("linearity"), f"{key}.linearity"),
         ocio=read_ocio_names(entry.get("ocio"), f"{key}.ocio"),
     )

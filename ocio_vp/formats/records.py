@@ -32,6 +32,7 @@ __all__ = [
     "floats",
     "json_object",
     "json_value",
+    "optional_array",
     "read_record",
     "read_value",
 ]
@@ -174,9 +175,12 @@ def floats(array: ArrayLike) -> JsonValue:
     return np.asarray(array, dtype=np.float64).tolist()
 
 
-def finite_array(value: object, shape: tuple[int, ...], key: str) -> np.ndarray:
-    """``value`` (a JSON list) as a finite float64 array of ``shape``, no entry beyond
-    :data:`MAX_VALUE`; else InputError naming ``key``."""
+def finite_array(
+    data: Mapping[str, object], name: str, shape: tuple[int, ...], within: str = ""
+) -> np.ndarray:
+    """``data[name]`` (a JSON list) as a finite float64 array of ``shape``, no entry beyond
+    :data:`MAX_VALUE`; else InputError naming the key (``within.name``)."""
+    value, key = data.get(name), f"{within}.{name}" if within else name
     try:
         array = np.asarray(value if isinstance(value, list) else (), dtype=np.float64)
     except (TypeError, ValueError, OverflowError):
@@ -185,6 +189,13 @@ def finite_array(value: object, shape: tuple[int, ...], key: str) -> np.ndarray:
         what = {(3, 3): "3x3 matrix", (3,): "[r, g, b]"}.get(shape, f"array of shape {shape}")
         raise InputError(f"expected a finite {what}", key=key)
     return array
+
+
+def optional_array(
+    data: Mapping[str, object], name: str, shape: tuple[int, ...], within: str = ""
+) -> np.ndarray | None:
+    """:func:`finite_array`, or None where ``data[name]`` is missing or null."""
+    return None if data.get(name) is None else finite_array(data, name, shape, within)
 
 
 def _float(value: object, key: str) -> float:

@@ -33,7 +33,7 @@ from ocio_vp.formats.panel_solution import (
     panel_solutions_to_dict,
     read_ocio_names,
 )
-from ocio_vp.formats.records import Record, finite_array, json_object, read_record
+from ocio_vp.formats.records import Record, finite_array, json_object, optional_array, read_record
 from ocio_vp.model.correction import (
     MatrixCorrection,
     PostCorrection,
@@ -199,14 +199,6 @@ def solution_to_json(solution: Solution) -> str:
     return json.dumps(solution_to_dict(solution), indent=2, allow_nan=False) + "\n"
 
 
-def _array(data: JsonMapping, key: str, shape: tuple[int, ...]) -> np.ndarray:
-    return finite_array(data.get(key), shape, key)
-
-
-def _optional_array(data: JsonMapping, key: str, shape: tuple[int, ...]) -> np.ndarray | None:
-    return None if data.get(key) is None else _array(data, key, shape)
-
-
 def _fixtures(data: JsonMapping) -> dict[str, FixtureDrive] | None:
     block = data.get("fixtures")
     if block is None:
@@ -297,19 +289,19 @@ def _solution(data: JsonMapping) -> Solution:
     beta = Validator().number(data["beta"], ("beta",), strict=True, maximum=1.0)
     measurements = _mapping(data, "measurements")
     linearity = read_linearity(data.get("linearity"))
-    Q = _array(data, "Q", (3, 3))
+    Q = finite_array(data, "Q", (3, 3))
     diagnostics = Diagnostics.from_dict(_mapping(data, "diagnostics"))
     return Solution(
         stage=check_safe_name(data.get("stage"), key="stage"),
         environment=check_safe_name(data.get("environment"), key="environment"),
         method=_text(data, "method") or "",
         beta=beta,
-        w_avg=_array(data, "w_avg", (3,)),
-        SL=_array(data, "SL", (3, 3)),
-        M=_array(data, "M", (3, 3)),
+        w_avg=finite_array(data, "w_avg", (3,)),
+        SL=finite_array(data, "SL", (3, 3)),
+        M=finite_array(data, "M", (3, 3)),
         post_correction=_post_correction(data, Q),
-        N=_optional_array(data, "N", (3, 3)),
-        black_level_offset=_optional_array(data, "black_level_offset", (3,)),
+        N=optional_array(data, "N", (3, 3)),
+        black_level_offset=optional_array(data, "black_level_offset", (3,)),
         black_level_method=_text(data, "black_level_method"),
         diagnostics=diagnostics,
         measurements_file=_text(measurements, "file"),
