@@ -1,9 +1,5 @@
-"""solution.json's ``panels`` block: what was solved for each panel type of a stage.
-
-Written only for a measurements file with ``panels`` (docs/solution.md). The top-level ``M``,
-``N``, ``SL``, ``beta``, ``w_avg``, ``black_level_offset`` and ``linearity`` stay the first
-in-frustum type's, so readers of files without panels read the main wall unchanged; an
-out-of-frustum type (a ceiling) has M and no N.
+"""solution.json's ``panels`` block, written for a stage of several panel types: what was
+solved for each (keys and meaning: docs/solution.md); and the ``ocio`` block of both levels.
 """
 
 from __future__ import annotations
@@ -53,40 +49,35 @@ class OcioNames(Record):
     def config_file(self) -> str:
         return self.config or CONFIG_FILENAME
 
+    # The dict interface of this block's earlier form, served for one more release.
+
     def __getitem__(self, key: str) -> str:
-        """``ocio["config"]``, as when this block was a dict: served for one more release."""
         value = self._old_lookup(key, f'ocio["{key}"]')
         if value is None:
             raise KeyError(key)
         return value
 
     def get(self, key: str, default: str | None = None) -> str | None:
-        """``ocio.get("config")``, as when this block was a dict: served for one more release."""
         value = self._old_lookup(key, f'ocio.get("{key}")')
         return default if value is None else value
 
     def __contains__(self, key: object) -> bool:
-        """``"config" in ocio``: served for one more release (only named roles count)."""
         warn_deprecated(f'"{key}" in ocio', f"ocio.{key} is not None")
         return key in self._named()
 
     def __iter__(self) -> Iterator[str]:
-        """``for key in ocio``: the named roles, served for one more release."""
         warn_deprecated("iterating ocio", "ocio.to_dict()")
         return iter(self._named())
 
-    def keys(self) -> KeysView[str]:
-        """``ocio.keys()`` (with ``ocio[key]``, what ``dict(ocio)`` reads): one more release."""
+    def keys(self) -> KeysView[str]:  # with ocio[key], what dict(ocio) reads
         warn_deprecated("ocio.keys()", "ocio.to_dict()")
         return self._named().keys()
 
     def items(self) -> ItemsView[str, str]:
-        """``ocio.items()``: the named roles and their names, served for one more release."""
         warn_deprecated("ocio.items()", "ocio.to_dict()")
         return self._named().items()
 
     def values(self) -> ValuesView[str]:
-        """``ocio.values()``: the names, served for one more release."""
         warn_deprecated("ocio.values()", "ocio.to_dict()")
         return self._named().values()
 
