@@ -77,41 +77,31 @@ def output_lock(folder: str | os.PathLike[str]) -> Iterator[None]:
     """Hold an exclusive lock on the existing ``folder`` while writing into it; an InputError
     at once when another process holds it."""
     key = os.path.realpath(folder)
-    if fcntl is None or key in _LOCKS:
-        fd, depth = _LOCKS.get(key, (-1, 0))
-        _LOCKS[key] = (fd, depth + 1)
-        try:
-            yield
-        finally:
-            _release(key)
-        return
+    fd, depth = _LOCKS.get(key, (-1, 0))
     busy = "another ocio-vp run is writing into this folder; wait for it to finish"
-    try:
-        fd = os.open(key, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
-    except OSError:  # removed since it was made: by another run that gave it up
-        raise InputError(busy, source=folder) from None
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        # The lock is on the folder opened above: if another run removed (or replaced) the
-        # folder meanwhile, the lock guards nothing that anyone else will write into.
-        if not os.path.samestat(os.fstat(fd), os.stat(key)):
-            raise OSError("replaced")
-    except OSError:
-        os.close(fd)
-        raise InputError(busy, source=folder) from None
-    _LOCKS[key] = (fd, 1)
+    if fcntl is not None and depth == 0:
+        try:
+            fd = os.open(key, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+        except OSError:  # removed since it was made: by another run that gave it up
+            raise InputError(busy, source=folder) from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            # The lock is on the folder opened above: if another run removed (or replaced) the
+            # folder meanwhile, the lock guards nothing that anyone else will write into.
+            if not os.path.samestat(os.fstat(fd), os.stat(key)):
+                raise OSError("replaced")
+        except OSError:
+            os.close(fd)
+            raise InputError(busy, source=folder) from None
+    _LOCKS[key] = (fd, depth + 1)
     try:
         yield
     finally:
-        _release(key)
-
-
-def _release(key: str) -> None:
-    fd, depth = _LOCKS.pop(key)
-    if depth > 1:
-        _LOCKS[key] = (fd, depth - 1)
-    elif fd >= 0:
-        os.close(fd)  # closing the descriptor releases the flock
+        fd, depth = _LOCKS.pop(key)
+        if depth > 1:
+            _LOCKS[key] = (fd, depth - 1)
+        elif fd >= 0:
+            os.close(fd)  # closing the descriptor releases the flock
 
 
 def _make_dirs(folder: Path) -> list[Path]:
