@@ -170,9 +170,6 @@ class Measurements:
         )
 
 
-# --------------------------------------------------------------------------------------------
-
-
 def measurements_from_dict(
     data: JsonValue, *, source: str = "<measurements>", sha256: str | None = None
 ) -> Measurements:
@@ -413,10 +410,6 @@ def _environment(
     if "synthesized" in env:
         synthesized = parse_synthesis(ctx, env["synthesized"], (*key, "synthesized"))
     return Environment(name, target, w_avg, black, synthesized, priority, panel_w_avg, panel_black)
-
-
-# --------------------------------------------------------------------------------------------
-# Files.
 
 
 def load_measurements(path: str | Path) -> Measurements:

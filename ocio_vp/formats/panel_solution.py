@@ -103,14 +103,10 @@ def read_ocio_names(block: JsonValue, key: str = "ocio") -> OcioNames:
 
 @dataclass(frozen=True)
 class PanelSolution:
-    """One panel type's solve in one environment (float64 arrays).
-
-    ``M = [SL]^-1`` of this type; ``w_avg`` the diffuse light it delivers and ``drive`` its
-    lighting drive ``M w_avg``; ``share`` its part of the light on the chart's white patch
-    (luminance, 0-1). In-frustum types only: ``N`` (None with ``N_reason`` where Q cannot be
-    inverted) and ``black_level_offset``. ``ocio`` names its colour spaces in the config
-    (filled in when the config is written).
-    """
+    """One panel type's solve in one environment (float64 arrays; keys: docs/solution.md):
+    ``drive`` is its lighting drive ``M w_avg``, ``share`` its part of the light on the chart's
+    white patch (luminance, 0-1); ``N`` (None with ``N_reason`` where Q cannot be inverted) and
+    ``black_level_offset`` only for an in-frustum type."""
 
     name: str
     in_frustum: bool

@@ -1,11 +1,7 @@
-"""Typed records of ``solution.json``: small frozen dataclasses read from and written to JSON.
-
-A record's fields are its keys, in file order; :func:`read_record` turns a JSON mapping into
-the record, each value converted to its field's type (numbers to ``float``/``int``, arrays to
-float64 ``np.ndarray``, nested records to theirs), so a record holds the same types after a
-solve and after a load. A value of the wrong type is an :class:`InputError` naming its key.
-:meth:`Record.to_dict` writes it back: a loaded record keeps the keys its file had (an older
-file's missing keys stay missing, unknown ones are kept), so a file round-trips unchanged.
+"""Typed records of ``solution.json``: small frozen dataclasses whose fields are a block's keys,
+in file order. :func:`read_record` converts each JSON value to its field's type, so a record
+holds the same types after a solve and after a load (a wrong type is an InputError naming its
+key); :meth:`Record.to_dict` writes a loaded record back with the keys its file had.
 """
 
 from __future__ import annotations

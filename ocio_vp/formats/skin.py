@@ -30,12 +30,10 @@ class SkinBand(Figures):
 
 @dataclass(frozen=True)
 class SkinDefault(Figures):
-    """The default post-correction on the same problem (written with skin first): its model,
-    its expected skin ΔE2000, the wall's LEDs in frame (p95 ΔE2000) through it and through this
-    solve, the chart patches the in-frustum matrix drives outside [0, 1] for each, and the
-    in-frustum background's expected error relative to white through each
-    (:func:`ocio_vp.correction.skin_figures.background_error`; None where Q has no inverse or
-    in a file written before the figure existed)."""
+    """The default post-correction on the same problem, beside this solve (written with skin
+    first; each key: docs/solution.md). The backgrounds' errors
+    (:func:`ocio_vp.correction.skin_figures.background_error`) are None where Q has no inverse
+    or in a file written before them."""
 
     model: str
     expected: float
@@ -64,13 +62,8 @@ class SkinDefault(Figures):
 
 @dataclass(frozen=True)
 class SkinFigures(Figures):
-    """What a solve expects of skin (module docstring).
-
-    ``priority``: ``general`` or ``skin``; ``source``: where the skin samples came from (in
-    words); ``expected`` / ``least_squares``: mean ΔE2000 over the samples; ``chart`` /
-    ``chart_least_squares``: mean ΔE2000 over the fitted chart patches; ``bands`` per lightness
-    band, lightest first; ``default`` with skin first, else None.
-    """
+    """What a solve expects of skin (module docstring; each key: docs/solution.md): ``bands``
+    lightest first, ``default`` only with skin first."""
 
     priority: str
     source: str
