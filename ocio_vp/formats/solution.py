@@ -23,7 +23,7 @@ from ocio_vp.formats.checker import Validator, check_safe_name
 from ocio_vp.formats.diagnostics import Diagnostics
 from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.fixtures import DMX_MODES, DmxPatch
-from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
+from ocio_vp.formats.jsontypes import JsonMapping, JsonObject
 from ocio_vp.formats.linearity import Linearity, read_linearity
 from ocio_vp.formats.panel_solution import (
     CONFIG_FILENAME,
@@ -200,6 +200,8 @@ def solution_to_json(solution: Solution) -> str:
 
 
 def _fixtures(data: JsonMapping) -> dict[str, FixtureDrive] | None:
+    """The ``fixtures`` block; each entry's shape is refused in the words solution.json's errors
+    have always had."""
     block = data.get("fixtures")
     if block is None:
         return None
@@ -207,36 +209,32 @@ def _fixtures(data: JsonMapping) -> dict[str, FixtureDrive] | None:
         raise InputError("expected a mapping", key="fixtures")
     fixtures = {}
     for name, entry in block.items():
-        _check_fixture(entry, f"fixtures.{name}")
-        fixtures[name] = read_record(FixtureDrive, entry, f"fixtures.{name}")
+        key = f"fixtures.{name}"
+        fields = entry if isinstance(entry, dict) else {}
+        channels, drive, dmx = fields.get("channels"), fields.get("drive"), fields.get("dmx")
+        if not (
+            isinstance(channels, list)
+            and all(isinstance(c, str) for c in channels)
+            and isinstance(drive, dict)
+            and set(drive) == set(channels)
+        ):
+            raise InputError("expected channels and a drive for each", key=key)
+        if not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
+            for v in drive.values()
+        ):
+            raise InputError("expected finite drives", key=key)
+        if dmx is not None and not (
+            isinstance(dmx, dict)
+            and all(type(dmx.get(k)) is int for k in ("universe", "address"))
+            and dmx.get("mode") in DMX_MODES
+        ):
+            raise InputError(
+                "expected universe, address (integers) and mode (8-bit or 16-bit)",
+                key=f"{key}.dmx",
+            )
+        fixtures[name] = read_record(FixtureDrive, entry, key)
     return fixtures
-
-
-def _check_fixture(entry: JsonValue, key: str) -> None:
-    """A ``fixtures.<name>`` block's shape, in the words solution.json's errors have always had."""
-    channels = entry.get("channels") if isinstance(entry, dict) else None
-    drive = entry.get("drive") if isinstance(entry, dict) else None
-    if not (
-        isinstance(channels, list)
-        and all(isinstance(c, str) for c in channels)
-        and isinstance(drive, dict)
-        and set(drive) == set(channels)
-    ):
-        raise InputError("expected channels and a drive for each", key=key)
-    if not all(
-        isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
-        for v in drive.values()
-    ):
-        raise InputError("expected finite drives", key=key)
-    dmx = entry.get("dmx") if isinstance(entry, dict) else None
-    if dmx is not None and not (
-        isinstance(dmx, dict)
-        and all(type(dmx.get(k)) is int for k in ("universe", "address"))
-        and dmx.get("mode") in DMX_MODES
-    ):
-        raise InputError(
-            "expected universe, address (integers) and mode (8-bit or 16-bit)", key=f"{key}.dmx"
-        )
 
 
 def _text(data: JsonMapping, key: str) -> str | None:
@@ -314,13 +312,6 @@ def _solution(data: JsonMapping) -> Solution:
     )
 
 
-def _old_root_polynomial(data: JsonMapping) -> JsonValue:
-    """Where files written before the ``post_correction`` block kept a root-polynomial model."""
-    diagnostics = data.get("diagnostics")
-    notes = diagnostics.get("method_notes") if isinstance(diagnostics, dict) else None
-    return notes.get("root_polynomial") if isinstance(notes, dict) else None
-
-
 def _post_correction(data: JsonMapping, Q: np.ndarray) -> PostCorrection:
     """The ``post_correction`` block; a file written before it existed gets its model back from
     where those versions kept it (a root-polynomial's coefficients in
@@ -331,7 +322,9 @@ def _post_correction(data: JsonMapping, Q: np.ndarray) -> PostCorrection:
         if problem := q_mismatch(Q, correction.matrix):
             raise InputError(f"{problem}: edit that block, or restore Q", key="Q")
         return correction
-    old = _old_root_polynomial(data)
+    diagnostics = data.get("diagnostics")
+    notes = diagnostics.get("method_notes") if isinstance(diagnostics, dict) else None
+    old = notes.get("root_polynomial") if isinstance(notes, dict) else None
     if old is None:
         return MatrixCorrection(Q)
     try:
