@@ -242,11 +242,6 @@ def _files(folder: Path) -> list[str]:
     return sorted(out)
 
 
-def _write_marker(folder: Path) -> None:
-    listed = [name for name in _files(folder) if name != MARKER]
-    (folder / MARKER).write_text(_MARKER_HEADER + "".join(f"{n}\n" for n in listed), "utf-8")
-
-
 def _nested_outputs(final: Path, present: list[str]) -> set[str]:
     """Files of ocio-vp output folders published inside ``final`` after it (an environment's
     ``exports/<target>/`` or ``report/``): each carries its own marker listing them."""
@@ -324,8 +319,10 @@ def publish_dirs(
     for _, final in pairs:
         check_replaceable(final)
     for staged, final in pairs:
-        _write_marker(Path(staged))
-        _replace_keeping_nested(Path(staged), Path(final))
+        staged, final = Path(staged), Path(final)
+        listed = [name for name in _files(staged) if name != MARKER]
+        (staged / MARKER).write_text(_MARKER_HEADER + "".join(f"{n}\n" for n in listed), "utf-8")
+        _replace_keeping_nested(staged, final)
 
 
 def _nested_folders(final: Path) -> list[str]:

@@ -236,7 +236,12 @@ def _parse_sections(ctx: Validator, data: JsonValue, *, partial: bool) -> dict[s
     if n is not None:
         _check_white_patch(ctx, out["stage"], n)
     if "environments" in top:
-        out["environments"] = _parse_environments(ctx, top["environments"], n, panels)
+        seen: dict[str, int] = {}
+        listed = ctx.items(top["environments"], ("environments",))
+        out["environments"] = tuple(
+            _environment(ctx, raw, ("environments", i), n, panels, seen)
+            for i, raw in enumerate(listed)
+        )
     if "ramps" in top:
         out["ramps"] = parse_ramps(top["ramps"], source=ctx.source)
     if "fixtures" in top:
@@ -356,16 +361,6 @@ def with_camera_colorspace(measurements: Measurements, value: str, *, key: str) 
         raise InputError(problem, key=key)
     stage = dataclasses.replace(measurements.stage, camera_colorspace=name)
     return dataclasses.replace(measurements, stage=stage)
-
-
-def _parse_environments(
-    ctx: Validator, value: JsonValue, n: int | None, panels: tuple[PanelType, ...] = ()
-) -> tuple[Environment, ...]:
-    seen: dict[str, int] = {}
-    listed = ctx.items(value, ("environments",))
-    return tuple(
-        _environment(ctx, raw, ("environments", i), n, panels, seen) for i, raw in enumerate(listed)
-    )
 
 
 def _environment(

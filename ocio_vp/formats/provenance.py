@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ocio_vp.formats.jsontypes import JsonObject
+from ocio_vp.formats.solution_inputs import SOLUTION_FILE
 
 if TYPE_CHECKING:
     from ocio_vp.formats.solution import Solution
@@ -33,7 +34,6 @@ __all__ = [
 
 #: In every export folder: the solution it was made from.
 SOURCE_FILE = ".ocio-vp-source.json"
-SOLUTION_FILE = "solution.json"
 REPORT_MANIFEST = "report.json"
 VALIDATION_FILE = "validation.json"
 
