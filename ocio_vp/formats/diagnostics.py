@@ -91,12 +91,7 @@ class DriveRange(Record):
 @dataclass(frozen=True)
 class Extrapolation(Figures):
     """What a solve measured of its post-correction beyond the chart
-    (:mod:`ocio_vp.correction.extrapolation`).
-
-    ``led_damage`` and ``led_damage_least_squares``: p95 ΔE2000 of the in-frame LEDs through
-    this correction and through the paper's least squares; ``kept`` and ``negative``: the
-    saturation probe; ``folds``: the fold fraction in the reflective solid (None: no inverse).
-    """
+    (:mod:`ocio_vp.correction.extrapolation`; each key: docs/stability.md)."""
 
     led_damage: float
     led_damage_least_squares: float
@@ -178,9 +173,8 @@ class InFrustumMatch(Record):
 
 @dataclass(frozen=True)
 class PanelsNotes(Record):
-    """A stage of several panel types: the ``primary`` type, each type's ``shares`` of the
-    light on the white patch, the lit white against the target's (3,) with each type's own M
-    and with the primary's M for all, and the in-frustum types' match (None for one)."""
+    """A stage of several panel types (docs/solution.md): the ``primary`` type, each type's
+    ``shares``, the lit white's (3,) errors, the in-frustum types' match (None for one)."""
 
     primary: str
     shares: dict[str, float]
