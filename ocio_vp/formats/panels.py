@@ -1,10 +1,6 @@
 """The optional ``panels`` section of a measurements file: several LED panel types on one stage
-(keys: docs/measurements.md, section "panels"; what is solved: docs/panels.md).
-
-Each type has its own ``primaries``, ``lit_chart``, ``ramps`` and ``calibration_panel``/``beta``,
-replacing the top-level ones (a file mixing both forms is refused); environments give ``w_avg``
-and ``black_level`` per type. Read with the measurements file's
-:class:`~ocio_vp.formats.checker.Validator` (``ctx``), so every error names the file and key path.
+(keys and rules: docs/measurements.md, section "panels"; what is solved: docs/panels.md), read
+with the file's :class:`~ocio_vp.formats.checker.Validator` (``ctx``).
 """
 
 from __future__ import annotations

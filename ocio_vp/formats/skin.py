@@ -1,10 +1,5 @@
-"""``diagnostics.skin`` of ``solution.json``: what a solve expects faces to look like.
-
-Typed records, written and read as plain JSON (docs/solution.md, docs/skin.md). The figures are
-mean ΔE2000 on the solve's skin samples (:mod:`ocio_vp.correction.skin`) through the sample
-camera's RGB -> XYZ matrix, for the chosen post-correction and for the paper's least squares
-fitted to the same patches; the chart's mean ΔE2000 likewise (what general reflectances pay).
-With skin first, the default's figures beside them (what the priority cost or bought).
+"""``diagnostics.skin`` of ``solution.json``: what a solve expects faces to look like, as typed
+records (figures and keys: docs/solution.md, docs/skin.md).
 """
 
 from __future__ import annotations
@@ -62,8 +57,9 @@ class SkinDefault(Figures):
 
 @dataclass(frozen=True)
 class SkinFigures(Figures):
-    """What a solve expects of skin (module docstring; each key: docs/solution.md): ``bands``
-    lightest first, ``default`` only with skin first."""
+    """What a solve expects of skin (each key: docs/solution.md): mean ΔE2000 over the skin
+    samples and the fitted chart patches, for this post-correction and the paper's least
+    squares on the same patches; ``bands`` lightest first, ``default`` only with skin first."""
 
     priority: str
     source: str

@@ -1,8 +1,5 @@
-"""The per-environment solution and its ``solution.json`` (format ``ocio-vp/solution`` v1).
-
-``solution.json`` is for pipeline TDs and for ocio_vp's own later steps (export, apply,
-report): matrices as 3x3 row-major lists, ``N`` null when it was not solved (the reason is in
-``diagnostics``), and ``ocio`` naming the colorspaces of the config written beside it.
+"""The per-environment solution and its ``solution.json`` (format ``ocio-vp/solution`` v1; keys:
+docs/solution.md), for pipeline TDs and for ocio_vp's own later steps (export, apply, report).
 """
 
 from __future__ import annotations
