@@ -51,7 +51,7 @@ class Record:
 
     def to_dict(self) -> dict[str, Any]:
         """The block as written: its keys in file order, values as they are (numpy kept)."""
-        extra = _extra(self)
+        extra = dict(getattr(self, "extra", None) or getattr(self, "_extra", None) or {})
         present = getattr(self, "present", None)
         if present is None:
             present = getattr(self, "_present", None)
@@ -83,13 +83,6 @@ class Figures(Record):
 
 #: Fields a record may have that are not keys of its block.
 _HIDDEN = ("extra", "present")
-
-
-def _extra(record: object) -> dict[str, Any]:
-    extra = getattr(record, "extra", None)
-    if extra is None:
-        extra = getattr(record, "_extra", None)
-    return dict(extra or {})
 
 
 @functools.cache
