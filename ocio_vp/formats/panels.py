@@ -12,7 +12,7 @@ import numpy as np
 
 from ocio_vp.formats.checker import CHANNELS, Validator, describe
 from ocio_vp.formats.geometry import PanelGeometry
-from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.records import floats
 from ocio_vp.wall.linearity import Ramp, parse_ramps, ramps_to_dict
 
@@ -107,18 +107,6 @@ def _regions(ctx: Validator, value: JsonValue, key: tuple) -> tuple[PanelRegion,
     return (_region(ctx, value, key),)
 
 
-def _encoding(ctx: Validator, entry: JsonMapping, key: tuple) -> tuple[str | None, float | None]:
-    encoding = entry.get("encoding")
-    if encoding is not None:
-        encoding = ctx.wall_encoding(encoding, (*key, "encoding"))
-    peak = None
-    if "peak_nits" in entry:
-        if encoding != "pq":
-            raise ctx.error((*key, "peak_nits"), "only with encoding: pq")
-        peak = ctx.peak_nits(entry["peak_nits"], (*key, "peak_nits"))
-    return encoding, peak
-
-
 def _parse_one(ctx: Validator, value: JsonValue, key: tuple, n: int | None) -> PanelType:
     required, optional = PANEL_KEYS
     entry = ctx.mapping(value, key, required=required, optional=optional)
@@ -131,7 +119,7 @@ def _parse_one(ctx: Validator, value: JsonValue, key: tuple, n: int | None) -> P
     if "ramps" in entry:
         ramps = parse_ramps(entry["ramps"], source=ctx.source, key=(*key, "ramps"))
     regions = _regions(ctx, entry["region"], (*key, "region")) if "region" in entry else ()
-    encoding, peak = _encoding(ctx, entry, key)
+    encoding, peak = ctx.encoding(entry, key, "encoding")
     return PanelType(name, in_frustum, SL, SRL, panel, beta, ramps, regions, encoding, peak)
 
 
