@@ -77,41 +77,31 @@ def output_lock(folder: str | os.PathLike[str]) -> Iterator[None]:
     """Hold an exclusive lock on the existing ``folder`` while writing into it; an InputError
     at once when another process holds it."""
     key = os.path.realpath(folder)
-    if fcntl is None or key in _LOCKS:
-        fd, depth = _LOCKS.get(key, (-1, 0))
-        _LOCKS[key] = (fd, depth + 1)
-        try:
-            yield
-        finally:
-            _release(key)
-        return
+    fd, depth = _LOCKS.get(key, (-1, 0))
     busy = "another ocio-vp run is writing into this folder; wait for it to finish"
-    try:
-        fd = os.open(key, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
-    except OSError:  # removed since it was made: by another run that gave it up
-        raise InputError(busy, source=folder) from None
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        # The lock is on the folder opened above: if another run removed (or replaced) the
-        # folder meanwhile, the lock guards nothing that anyone else will write into.
-        if not os.path.samestat(os.fstat(fd), os.stat(key)):
-            raise OSError("replaced")
-    except OSError:
-        os.close(fd)
-        raise InputError(busy, source=folder) from None
-    _LOCKS[key] = (fd, 1)
+    if fcntl is not None and depth == 0:
+        try:
+            fd = os.open(key, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+        except OSError:  # removed since it was made: by another run that gave it up
+            raise InputError(busy, source=folder) from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            # The lock is on the folder opened above: if another run removed (or replaced) the
+            # folder meanwhile, the lock guards nothing that anyone else will write into.
+            if not os.path.samestat(os.fstat(fd), os.stat(key)):
+                raise OSError("replaced")
+        except OSError:
+            os.close(fd)
+            raise InputError(busy, source=folder) from None
+    _LOCKS[key] = (fd, depth + 1)
     try:
         yield
     finally:
-        _release(key)
-
-
-def _release(key: str) -> None:
-    fd, depth = _LOCKS.pop(key)
-    if depth > 1:
-        _LOCKS[key] = (fd, depth - 1)
-    elif fd >= 0:
-        os.close(fd)  # closing the descriptor releases the flock
+        fd, depth = _LOCKS.pop(key)
+        if depth > 1:
+            _LOCKS[key] = (fd, depth - 1)
+        elif fd >= 0:
+            os.close(fd)  # closing the descriptor releases the flock
 
 
 def _make_dirs(folder: Path) -> list[Path]:
@@ -204,73 +194,42 @@ def staged_dir(parent: str | os.PathLike[str], *, locked: bool = True) -> Iterat
     parent = Path(parent)
     if os.path.lexists(parent) and not parent.is_dir():
         raise InputError(f"exists and is not a folder; {_MOVE_HINT}", source=parent)
-    if not locked:
-        with _unlocked_stage(parent) as stage:
-            yield stage
-        return
     created = _make_dirs(parent)
-    # Folders this call created are removed only while it holds the lock: a run that finds the
-    # folder locked leaves it to the run that holds it (removing it under that run made its
-    # staging folder fail, and a third run could then lock a new folder of the same name).
-    with output_lock(parent):
+    with output_lock(parent) if locked else contextlib.nullcontext():
+        # Named and registered before it exists: a stop signal arriving just as the folder
+        # is made still finds it (mkdtemp's name would be lost if it came before returning).
+        stage = parent / f".ocio-vp-staging-{os.getpid()}-{secrets.token_hex(6)}"
+        _LIVE_STAGES.add(stage)
         try:
-            with _stage(parent) as stage:
-                yield stage
+            if not _make_stage(stage, parent_may_go=not locked):
+                # Unlocked, the run that made ``parent`` may have removed it (once empty, under
+                # its lock) since it was found: made again.
+                created = _make_dirs(parent)
+                _make_stage(stage)
+            yield stage
         finally:
-            _remove_empty(created)
+            shutil.rmtree(stage, ignore_errors=True)
+            if not os.path.lexists(stage):  # else a straggler wrote into it: atexit
+                _LIVE_STAGES.discard(stage)
+            # Folders this call created are removed only under the lock (held here, or taken
+            # if free): a run that finds the folder locked leaves it to the run that holds it
+            # (removing it under that run made its staging folder fail, and a third run could
+            # then lock a new folder of the same name).
+            if created:
+                with contextlib.suppress(InputError), output_lock(created[0]):
+                    _remove_empty(created)
 
 
-@contextlib.contextmanager
-def _unlocked_stage(parent: Path) -> Iterator[Path]:
-    """:func:`staged_dir` without the lock. ``parent`` may be removed by the run that made it
-    (once empty, under its lock) between finding it and making the staging folder in it:
-    then made again."""
-    for attempt in range(3):
-        created = _make_dirs(parent)
-        try:
-            with _stage(parent, retry=attempt < 2) as stage:
-                yield stage
-            return
-        except _ParentGone:
-            continue
-        finally:  # the staging folder is gone by now
-            _remove_empty_locked(created)
-
-
-class _ParentGone(Exception):
-    """The folder a staging folder was being made in is gone (:func:`_unlocked_stage`)."""
-
-
-def _remove_empty_locked(created: Sequence[Path]) -> None:
-    """Remove the empty ``created`` folders (deepest first) under the lock on the first, if
-    no other run holds it: else they are that run's now (see :func:`staged_dir`)."""
-    if not created:
-        return
-    with contextlib.suppress(InputError), output_lock(created[0]):
-        _remove_empty(created)
-
-
-@contextlib.contextmanager
-def _stage(parent: Path, *, retry: bool = False) -> Iterator[Path]:
-    """A fresh staging folder in the existing ``parent``, removed on exit; :class:`_ParentGone`
-    if ``parent`` vanished before it was made and ``retry``."""
-    # Named and registered before it exists: a stop signal arriving just as the folder
-    # is made still finds it (mkdtemp's name would be lost if it came before returning).
-    stage = parent / f".ocio-vp-staging-{os.getpid()}-{secrets.token_hex(6)}"
-    _LIVE_STAGES.add(stage)
+def _make_stage(stage: Path, *, parent_may_go: bool = False) -> bool:
+    """Make the staging folder ``stage``; False if its parent is gone and ``parent_may_go``."""
     try:
-        try:
-            stage.mkdir(mode=0o700)
-        except OSError as error:
-            if retry and isinstance(error, FileNotFoundError):
-                raise _ParentGone() from None
-            raise InputError(f"cannot write: {error.strerror}", source=parent) from None
-        stage.chmod(default_mode(folder=True))  # it may itself be published
-        yield stage
-    finally:
-        shutil.rmtree(stage, ignore_errors=True)
-        if not os.path.lexists(stage):  # else a straggler wrote into it: atexit
-            _LIVE_STAGES.discard(stage)
+        stage.mkdir(mode=0o700)
+    except OSError as error:
+        if parent_may_go and isinstance(error, FileNotFoundError):
+            return False
+        raise InputError(f"cannot write: {error.strerror}", source=stage.parent) from None
+    stage.chmod(default_mode(folder=True))  # it may itself be published
+    return True
 
 
 def _files(folder: Path) -> list[str]:
@@ -281,11 +240,6 @@ def _files(folder: Path) -> list[str]:
         for name in names + [d for d in dirs if os.path.islink(os.path.join(root, d))]:
             out.append(Path(root, name).relative_to(folder).as_posix())
     return sorted(out)
-
-
-def _write_marker(folder: Path) -> None:
-    listed = [name for name in _files(folder) if name != MARKER]
-    (folder / MARKER).write_text(_MARKER_HEADER + "".join(f"{n}\n" for n in listed), "utf-8")
 
 
 def _nested_outputs(final: Path, present: list[str]) -> set[str]:
@@ -365,8 +319,10 @@ def publish_dirs(
     for _, final in pairs:
         check_replaceable(final)
     for staged, final in pairs:
-        _write_marker(Path(staged))
-        _replace_keeping_nested(Path(staged), Path(final))
+        staged, final = Path(staged), Path(final)
+        listed = [name for name in _files(staged) if name != MARKER]
+        (staged / MARKER).write_text(_MARKER_HEADER + "".join(f"{n}\n" for n in listed), "utf-8")
+        _replace_keeping_nested(staged, final)
 
 
 def _nested_folders(final: Path) -> list[str]:

@@ -1,14 +1,7 @@
-"""The file formats people and other tools depend on: measurements and solutions.
-
-- :mod:`~ocio_vp.formats.measurements`: ``ocio-vp/measurements`` v1 (YAML/JSON), strictly validated;
-- :mod:`~ocio_vp.formats.merge`: several measurements files (the wall, the charts) merged into one;
-- :mod:`~ocio_vp.formats.solution`: ``solution.json``, one solved environment;
-- :mod:`~ocio_vp.formats.synthesis`: the ``synthesized`` record of a computed target chart;
-- :mod:`~ocio_vp.formats.documents`: bounded reading of YAML/JSON and other input files.
-
-The names below are imported on first use (PEP 562): a reader of one format (``from
-ocio_vp.formats.solution import load_solution``, which every export and apply starts with)
-loads that module and what it imports, not every format of the package.
+"""The file formats people and other tools depend on: measurements and solutions, a module per
+file or block (docs/architecture.md). The names below are imported on first use (PEP 562): a
+reader of one format (``ocio_vp.formats.solution`` for export and apply) loads that module and
+what it imports, not every format of the package.
 """
 
 from __future__ import annotations

@@ -231,6 +231,22 @@ class Validator:
     def peak_nits(self, value: JsonValue, key: Key) -> float:
         return self.number(value, key, strict=True, maximum=MAX_PEAK_NITS)
 
+    def encoding(
+        self, value: JsonMapping, key: Key, name: str, *, needs_peak: bool = False
+    ) -> tuple[str | None, float | None]:
+        """The wall encoding ``value[name]`` (None: not stated) and ``peak_nits``, which only a
+        ``pq`` one may give (and must, if ``needs_peak``)."""
+        encoding = value.get(name)
+        if encoding is not None:
+            encoding = self.wall_encoding(encoding, (*key, name))
+        if "peak_nits" in value and encoding != "pq":
+            raise self.error((*key, "peak_nits"), f"only with {name}: pq")
+        if "peak_nits" in value:
+            return encoding, self.peak_nits(value["peak_nits"], (*key, "peak_nits"))
+        if needs_peak and encoding == "pq":
+            raise self.error((*key, "peak_nits"), "a pq wall needs its peak (cd/m2 of drive 1.0)")
+        return encoding, None
+
     def calibration(
         self, value: JsonMapping, key: Key
     ) -> tuple[PanelGeometry | None, float | None]:

@@ -91,12 +91,7 @@ class DriveRange(Record):
 @dataclass(frozen=True)
 class Extrapolation(Figures):
     """What a solve measured of its post-correction beyond the chart
-    (:mod:`ocio_vp.correction.extrapolation`).
-
-    ``led_damage`` and ``led_damage_least_squares``: p95 ΔE2000 of the in-frame LEDs through
-    this correction and through the paper's least squares; ``kept`` and ``negative``: the
-    saturation probe; ``folds``: the fold fraction in the reflective solid (None: no inverse).
-    """
+    (:mod:`ocio_vp.correction.extrapolation`; each key: docs/stability.md)."""
 
     led_damage: float
     led_damage_least_squares: float
@@ -178,9 +173,8 @@ class InFrustumMatch(Record):
 
 @dataclass(frozen=True)
 class PanelsNotes(Record):
-    """A stage of several panel types: the ``primary`` type, each type's ``shares`` of the
-    light on the white patch, the lit white against the target's (3,) with each type's own M
-    and with the primary's M for all, and the in-frustum types' match (None for one)."""
+    """A stage of several panel types (docs/solution.md): the ``primary`` type, each type's
+    ``shares``, the lit white's (3,) errors, the in-frustum types' match (None for one)."""
 
     primary: str
     shares: dict[str, float]
@@ -258,42 +252,13 @@ class Inconsistency(Record):
 
 @dataclass(frozen=True)
 class Diagnostics(Record):
-    """What a solve measured about itself: ``solution.json``'s ``diagnostics`` block (keys and
-    meaning: docs/stability.md, docs/solution.md).
+    """What a solve measured about itself: ``solution.json``'s ``diagnostics`` block (each key
+    in docs/stability.md, *Diagnostics*).
 
     Every field has one type, the same after a solve and after
     :func:`~ocio_vp.formats.solution.load_solution` (arrays float64, blocks typed records): read
-    it by attribute. Errors are the paper's Fig. 11 metric, per channel, relative to the target
-    white patch (:func:`ocio_vp.metrics.error_relative_to_white`), over the patches the fit used.
-
-    Attributes
-    ----------
-    white_patch
-        Index of the chart's white patch, 0-based as in the file (0 is a valid patch; people
-        see patches numbered from 1 with their names).
-    cond_SL, cond_Q, rank_Q
-        2-norm condition numbers of [SL] and Q, and Q's numerical rank.
-    N_solved, N_reason, max_condition_q_for_N
-        Whether N = M Q^-1 was solved (eq. 8), why not, and the cond(Q) above which it is not.
-    lit_chart_error_baseline, lit_chart_error, residual_rms
-        (3,) the lit chart (eq. 3) against the target through M alone and after Q; the RMS of
-        the latter in camera units.
-    displayed_chart_error_baseline, displayed_chart_error
-        (3,) the chart shown in-frustum as the camera records it, through M (no Q), and through
-        N and the black-level offset, then Q.
-    out_of_frustum_drive
-        (3,) the lighting drive M w_avg.
-    method_notes
-        What the Q method reported about itself, for people; no module reads it (the model is
-        the solution's ``post_correction``).
-    residuals_per_patch, cross_validated_error
-        (n, 3) signed residuals after Q, relative to the target white; (3,) leave-one-patch-out
-        lit-chart error, None for a method that does not report one.
-    *_clipped_drive
-        The same figures when the wall clips a negative drive, else None.
-    present
-        The keys a loaded file had, in its order (None after a solve: every field); ``extra``
-        those this version does not know, kept so they round-trip.
+    it by attribute. ``present`` holds the keys a loaded file had, in its order (None after a
+    solve: every field); ``extra`` those this version does not know, kept so they round-trip.
     """
 
     white_patch: int = DEFAULT_WHITE_PATCH

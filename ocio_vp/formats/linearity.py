@@ -1,12 +1,7 @@
-"""The ``linearity`` block of ``solution.json`` as typed records.
-
-:func:`ocio_vp.wall.linearity.fit_linearity` makes it from the measured ramps; the wall
-encoding (:mod:`ocio_vp.wall.encoding`), the pre-correction LUT the config writer bakes
-(:mod:`ocio_vp.ocio.wall`) and the soft clip (:mod:`ocio_vp.wall.softclip`) add to it. The
-records are data only (``wall/`` computes with them and imports this module, not the reverse). A block
-read back from a file is the same records (:func:`~ocio_vp.formats.records.read_record`), and
-is written back with the keys it had, in the order it had them: pipeline scripts read these
-keys, whose names and meaning are unchanged.
+"""The ``linearity`` block of ``solution.json`` as typed records, data only (``wall/`` computes
+with them and imports this module, not the reverse): :func:`ocio_vp.wall.linearity.fit_linearity`
+makes it from the measured ramps, later steps add the wall encoding, the pre-correction LUT and
+the soft clip. A block read back is written with the keys it had, in their order.
 """
 
 from __future__ import annotations

@@ -170,9 +170,6 @@ class Measurements:
         )
 
 
-# --------------------------------------------------------------------------------------------
-
-
 def measurements_from_dict(
     data: JsonValue, *, source: str = "<measurements>", sha256: str | None = None
 ) -> Measurements:
@@ -239,7 +236,12 @@ def _parse_sections(ctx: Validator, data: JsonValue, *, partial: bool) -> dict[s
     if n is not None:
         _check_white_patch(ctx, out["stage"], n)
     if "environments" in top:
-        out["environments"] = _parse_environments(ctx, top["environments"], n, panels)
+        seen: dict[str, int] = {}
+        listed = ctx.items(top["environments"], ("environments",))
+        out["environments"] = tuple(
+            _environment(ctx, raw, ("environments", i), n, panels, seen)
+            for i, raw in enumerate(listed)
+        )
     if "ramps" in top:
         out["ramps"] = parse_ramps(top["ramps"], source=ctx.source)
     if "fixtures" in top:
@@ -361,16 +363,6 @@ def with_camera_colorspace(measurements: Measurements, value: str, *, key: str) 
     return dataclasses.replace(measurements, stage=stage)
 
 
-def _parse_environments(
-    ctx: Validator, value: JsonValue, n: int | None, panels: tuple[PanelType, ...] = ()
-) -> tuple[Environment, ...]:
-    seen: dict[str, int] = {}
-    listed = ctx.items(value, ("environments",))
-    return tuple(
-        _environment(ctx, raw, ("environments", i), n, panels, seen) for i, raw in enumerate(listed)
-    )
-
-
 def _environment(
     ctx: Validator,
     raw: JsonValue,
@@ -413,10 +405,6 @@ def _environment(
     if "synthesized" in env:
         synthesized = parse_synthesis(ctx, env["synthesized"], (*key, "synthesized"))
     return Environment(name, target, w_avg, black, synthesized, priority, panel_w_avg, panel_black)
-
-
-# --------------------------------------------------------------------------------------------
-# Files.
 
 
 def load_measurements(path: str | Path) -> Measurements:

@@ -94,11 +94,6 @@ def merge_measurement_documents(documents: Sequence[tuple[JsonObject, str]]) -> 
     return merged
 
 
-def _combined_sha256(paths: Sequence[Path], digests: Sequence[str]) -> str:
-    text = "".join(f"{p.name}:{d}\n" for p, d in zip(paths, digests, strict=True))
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
-
-
 def load_measurement_files(given: Sequence[str | Path]) -> Measurements:
     """Load one measurements file, or merge several (module docstring) into one.
 
@@ -147,4 +142,6 @@ def load_measurement_files(given: Sequence[str | Path]) -> Measurements:
         return load_measurements(paths[0])
     merged = merge_measurement_documents(documents)
     source = " + ".join(p.name for p in paths)
-    return measurements_from_dict(merged, source=source, sha256=_combined_sha256(paths, digests))
+    lines = "".join(f"{p.name}:{d}\n" for p, d in zip(paths, digests, strict=True))
+    sha256 = hashlib.sha256(lines.encode("utf-8")).hexdigest()
+    return measurements_from_dict(merged, source=source, sha256=sha256)

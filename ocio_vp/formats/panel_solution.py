@@ -1,9 +1,5 @@
-"""solution.json's ``panels`` block: what was solved for each panel type of a stage.
-
-Written only for a measurements file with ``panels`` (docs/solution.md). The top-level ``M``,
-``N``, ``SL``, ``beta``, ``w_avg``, ``black_level_offset`` and ``linearity`` stay the first
-in-frustum type's, so readers of files without panels read the main wall unchanged; an
-out-of-frustum type (a ceiling) has M and no N.
+"""solution.json's ``panels`` block, written for a stage of several panel types: what was
+solved for each (keys and meaning: docs/solution.md); and the ``ocio`` block of both levels.
 """
 
 from __future__ import annotations
@@ -19,7 +15,7 @@ from ocio_vp.errors import InputError
 from ocio_vp.formats.checker import Validator, check_safe_name
 from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.linearity import Linearity, read_linearity
-from ocio_vp.formats.records import Record, finite_array, json_object, read_record
+from ocio_vp.formats.records import Record, finite_array, json_object, optional_array, read_record
 
 __all__ = [
     "CONFIG_FILENAME",
@@ -53,40 +49,35 @@ class OcioNames(Record):
     def config_file(self) -> str:
         return self.config or CONFIG_FILENAME
 
+    # The dict interface of this block's earlier form, served for one more release.
+
     def __getitem__(self, key: str) -> str:
-        """``ocio["config"]``, as when this block was a dict: served for one more release."""
         value = self._old_lookup(key, f'ocio["{key}"]')
         if value is None:
             raise KeyError(key)
         return value
 
     def get(self, key: str, default: str | None = None) -> str | None:
-        """``ocio.get("config")``, as when this block was a dict: served for one more release."""
         value = self._old_lookup(key, f'ocio.get("{key}")')
         return default if value is None else value
 
     def __contains__(self, key: object) -> bool:
-        """``"config" in ocio``: served for one more release (only named roles count)."""
         warn_deprecated(f'"{key}" in ocio', f"ocio.{key} is not None")
         return key in self._named()
 
     def __iter__(self) -> Iterator[str]:
-        """``for key in ocio``: the named roles, served for one more release."""
         warn_deprecated("iterating ocio", "ocio.to_dict()")
         return iter(self._named())
 
-    def keys(self) -> KeysView[str]:
-        """``ocio.keys()`` (with ``ocio[key]``, what ``dict(ocio)`` reads): one more release."""
+    def keys(self) -> KeysView[str]:  # with ocio[key], what dict(ocio) reads
         warn_deprecated("ocio.keys()", "ocio.to_dict()")
         return self._named().keys()
 
     def items(self) -> ItemsView[str, str]:
-        """``ocio.items()``: the named roles and their names, served for one more release."""
         warn_deprecated("ocio.items()", "ocio.to_dict()")
         return self._named().items()
 
     def values(self) -> ValuesView[str]:
-        """``ocio.values()``: the names, served for one more release."""
         warn_deprecated("ocio.values()", "ocio.to_dict()")
         return self._named().values()
 
@@ -112,14 +103,10 @@ def read_ocio_names(block: JsonValue, key: str = "ocio") -> OcioNames:
 
 @dataclass(frozen=True)
 class PanelSolution:
-    """One panel type's solve in one environment (float64 arrays).
-
-    ``M = [SL]^-1`` of this type; ``w_avg`` the diffuse light it delivers and ``drive`` its
-    lighting drive ``M w_avg``; ``share`` its part of the light on the chart's white patch
-    (luminance, 0-1). In-frustum types only: ``N`` (None with ``N_reason`` where Q cannot be
-    inverted) and ``black_level_offset``. ``ocio`` names its colour spaces in the config
-    (filled in when the config is written).
-    """
+    """One panel type's solve in one environment (float64 arrays; keys: docs/solution.md):
+    ``drive`` is its lighting drive ``M w_avg``, ``share`` its part of the light on the chart's
+    white patch (luminance, 0-1); ``N`` (None with ``N_reason`` where Q cannot be inverted) and
+    ``black_level_offset`` only for an in-frustum type."""
 
     name: str
     in_frustum: bool
@@ -166,12 +153,7 @@ def _one(name: str, entry: JsonValue) -> PanelSolution:
     if not isinstance(entry, Mapping) or not isinstance(entry.get("in_frustum"), bool):
         raise InputError("expected a mapping with in_frustum true or false", key=key)
     in_frustum = entry["in_frustum"] is True
-
-    def array(field_name: str, shape: tuple[int, ...], optional: bool = False):
-        if optional and entry.get(field_name) is None:
-            return None
-        return finite_array(entry.get(field_name), shape, f"{key}.{field_name}")
-
+    inner = entry if in_frustum else {}  # what only an in-frustum type has
     numbers = {
         f: Validator().number(entry.get(f), (key, f), maximum=1.0) for f in ("beta", "share")
     }
@@ -181,15 +163,15 @@ def _one(name: str, entry: JsonValue) -> PanelSolution:
     return PanelSolution(
         name=name,
         in_frustum=in_frustum,
-        SL=array("SL", (3, 3)),
-        M=array("M", (3, 3)),
+        SL=finite_array(entry, "SL", (3, 3), key),
+        M=finite_array(entry, "M", (3, 3), key),
         beta=numbers["beta"],
-        w_avg=array("w_avg", (3,)),
-        drive=array("drive", (3,)),
+        w_avg=finite_array(entry, "w_avg", (3,), key),
+        drive=finite_array(entry, "drive", (3,), key),
         share=numbers["share"],
-        N=array("N", (3, 3), optional=True) if in_frustum else None,
+        N=optional_array(inner, "N", (3, 3), key),
         N_reason=reason if in_frustum else None,
-        black_level_offset=array("black_level_offset", (3,), optional=True) if in_frustum else None,
+        black_level_offset=optional_array(inner, "black_level_offset", (3,), key),
         linearity=read_linearity(entry.get("linearity"), f"{key}.linearity"),
         ocio=read_ocio_names(entry.get("ocio"), f"{key}.ocio"),
     )

@@ -1,10 +1,6 @@
 """The optional ``panels`` section of a measurements file: several LED panel types on one stage
-(keys: docs/measurements.md, section "panels"; what is solved: docs/panels.md).
-
-Each type has its own ``primaries``, ``lit_chart``, ``ramps`` and ``calibration_panel``/``beta``,
-replacing the top-level ones (a file mixing both forms is refused); environments give ``w_avg``
-and ``black_level`` per type. Read with the measurements file's
-:class:`~ocio_vp.formats.checker.Validator` (``ctx``), so every error names the file and key path.
+(keys and rules: docs/measurements.md, section "panels"; what is solved: docs/panels.md), read
+with the file's :class:`~ocio_vp.formats.checker.Validator` (``ctx``).
 """
 
 from __future__ import annotations
@@ -16,7 +12,7 @@ import numpy as np
 
 from ocio_vp.formats.checker import CHANNELS, Validator, describe
 from ocio_vp.formats.geometry import PanelGeometry
-from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
+from ocio_vp.formats.jsontypes import JsonObject, JsonValue
 from ocio_vp.formats.records import floats
 from ocio_vp.wall.linearity import Ramp, parse_ramps, ramps_to_dict
 
@@ -111,18 +107,6 @@ def _regions(ctx: Validator, value: JsonValue, key: tuple) -> tuple[PanelRegion,
     return (_region(ctx, value, key),)
 
 
-def _encoding(ctx: Validator, entry: JsonMapping, key: tuple) -> tuple[str | None, float | None]:
-    encoding = entry.get("encoding")
-    if encoding is not None:
-        encoding = ctx.wall_encoding(encoding, (*key, "encoding"))
-    peak = None
-    if "peak_nits" in entry:
-        if encoding != "pq":
-            raise ctx.error((*key, "peak_nits"), "only with encoding: pq")
-        peak = ctx.peak_nits(entry["peak_nits"], (*key, "peak_nits"))
-    return encoding, peak
-
-
 def _parse_one(ctx: Validator, value: JsonValue, key: tuple, n: int | None) -> PanelType:
     required, optional = PANEL_KEYS
     entry = ctx.mapping(value, key, required=required, optional=optional)
@@ -135,7 +119,7 @@ def _parse_one(ctx: Validator, value: JsonValue, key: tuple, n: int | None) -> P
     if "ramps" in entry:
         ramps = parse_ramps(entry["ramps"], source=ctx.source, key=(*key, "ramps"))
     regions = _regions(ctx, entry["region"], (*key, "region")) if "region" in entry else ()
-    encoding, peak = _encoding(ctx, entry, key)
+    encoding, peak = ctx.encoding(entry, key, "encoding")
     return PanelType(name, in_frustum, SL, SRL, panel, beta, ramps, regions, encoding, peak)
 
 
@@ -143,13 +127,11 @@ def parse_panels(ctx: Validator, value: JsonValue) -> tuple[PanelType, ...]:
     """Validate the ``panels`` list: safe, unique names, the same number of chart patches in
     every ``lit_chart``, at least one in-frustum type, regions that do not overlap."""
     panels: list[PanelType] = []
+    seen: dict[str, int] = {}
     for i, raw in enumerate(ctx.items(value, ("panels",), "panel types")):
         panel = _parse_one(ctx, raw, ("panels", i), panels[0].SRL.shape[0] if panels else None)
+        ctx.unique_name(panel.name, ("panels", i), seen)
         for j, other in enumerate(panels):
-            if other.name == panel.name:
-                raise ctx.error(
-                    ("panels", i, "name"), f"duplicate name {panel.name!r} (also panels[{j}])"
-                )
             for a in panel.regions:
                 if any(a.overlaps(b) for b in other.regions):
                     raise ctx.error(

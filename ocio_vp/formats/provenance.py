@@ -1,14 +1,11 @@
-"""Which solution an export or a report was made from, and which ones a re-solve left stale.
+"""Which solution an export, a report or a validation was made from, and which ones a re-solve
+left stale.
 
-Each export folder holds :data:`SOURCE_FILE` (the sha256 of the ``solution.json`` it was made
-from, the environment and its model), a report's ``report.json`` lists the sha256 of each
-solution it shows, and a validation's ``validation.json`` the sha256 of the solution its
-patterns were made from. A second ``solve`` into the same folder keeps an environment's
-``exports/``, ``report/`` and ``validation/`` (:func:`ocio_vp.staging.publish_dirs` carries
-nested output folders over, so the config Unreal points at is still there) and
-:func:`stale_outputs` names every one made from a different solution than the one now in the
-folder (a re-solve with another method, or of a re-measured stage: the measurements file's
-sha256 is part of the solution).
+Each records the sha256 of the ``solution.json`` it was made from (an export in
+:data:`SOURCE_FILE`, a report per solution in ``report.json``, a validation in
+``validation.json``). A second ``solve`` into the same folder keeps an environment's
+``exports/``, ``report/`` and ``validation/`` (:func:`ocio_vp.staging.publish_dirs`), and
+:func:`stale_outputs` names each one made from another solution than the one now there.
 """
 
 from __future__ import annotations
@@ -21,6 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ocio_vp.formats.jsontypes import JsonObject
+from ocio_vp.formats.solution_inputs import SOLUTION_FILE
 
 if TYPE_CHECKING:
     from ocio_vp.formats.solution import Solution
@@ -36,7 +34,6 @@ __all__ = [
 
 #: In every export folder: the solution it was made from.
 SOURCE_FILE = ".ocio-vp-source.json"
-SOLUTION_FILE = "solution.json"
 REPORT_MANIFEST = "report.json"
 VALIDATION_FILE = "validation.json"
 

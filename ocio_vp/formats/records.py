@@ -1,11 +1,7 @@
-"""Typed records of ``solution.json``: small frozen dataclasses read from and written to JSON.
-
-A record's fields are its keys, in file order; :func:`read_record` turns a JSON mapping into
-the record, each value converted to its field's type (numbers to ``float``/``int``, arrays to
-float64 ``np.ndarray``, nested records to theirs), so a record holds the same types after a
-solve and after a load. A value of the wrong type is an :class:`InputError` naming its key.
-:meth:`Record.to_dict` writes it back: a loaded record keeps the keys its file had (an older
-file's missing keys stay missing, unknown ones are kept), so a file round-trips unchanged.
+"""Typed records of ``solution.json``: small frozen dataclasses whose fields are a block's keys,
+in file order. :func:`read_record` converts each JSON value to its field's type, so a record
+holds the same types after a solve and after a load (a wrong type is an InputError naming its
+key); :meth:`Record.to_dict` writes a loaded record back with the keys its file had.
 """
 
 from __future__ import annotations
@@ -32,6 +28,7 @@ __all__ = [
     "floats",
     "json_object",
     "json_value",
+    "optional_array",
     "read_record",
     "read_value",
 ]
@@ -54,7 +51,7 @@ class Record:
 
     def to_dict(self) -> dict[str, Any]:
         """The block as written: its keys in file order, values as they are (numpy kept)."""
-        extra = _extra(self)
+        extra = dict(getattr(self, "extra", None) or getattr(self, "_extra", None) or {})
         present = getattr(self, "present", None)
         if present is None:
             present = getattr(self, "_present", None)
@@ -86,13 +83,6 @@ class Figures(Record):
 
 #: Fields a record may have that are not keys of its block.
 _HIDDEN = ("extra", "present")
-
-
-def _extra(record: object) -> dict[str, Any]:
-    extra = getattr(record, "extra", None)
-    if extra is None:
-        extra = getattr(record, "_extra", None)
-    return dict(extra or {})
 
 
 @functools.cache
@@ -174,9 +164,12 @@ def floats(array: ArrayLike) -> JsonValue:
     return np.asarray(array, dtype=np.float64).tolist()
 
 
-def finite_array(value: object, shape: tuple[int, ...], key: str) -> np.ndarray:
-    """``value`` (a JSON list) as a finite float64 array of ``shape``, no entry beyond
-    :data:`MAX_VALUE`; else InputError naming ``key``."""
+def finite_array(
+    data: Mapping[str, object], name: str, shape: tuple[int, ...], within: str = ""
+) -> np.ndarray:
+    """``data[name]`` (a JSON list) as a finite float64 array of ``shape``, no entry beyond
+    :data:`MAX_VALUE`; else InputError naming the key (``within.name``)."""
+    value, key = data.get(name), f"{within}.{name}" if within else name
     try:
         array = np.asarray(value if isinstance(value, list) else (), dtype=np.float64)
     except (TypeError, ValueError, OverflowError):
@@ -185,6 +178,13 @@ def finite_array(value: object, shape: tuple[int, ...], key: str) -> np.ndarray:
         what = {(3, 3): "3x3 matrix", (3,): "[r, g, b]"}.get(shape, f"array of shape {shape}")
         raise InputError(f"expected a finite {what}", key=key)
     return array
+
+
+def optional_array(
+    data: Mapping[str, object], name: str, shape: tuple[int, ...], within: str = ""
+) -> np.ndarray | None:
+    """:func:`finite_array`, or None where ``data[name]`` is missing or null."""
+    return None if data.get(name) is None else finite_array(data, name, shape, within)
 
 
 def _float(value: object, key: str) -> float:

@@ -1,10 +1,5 @@
-"""``diagnostics.skin`` of ``solution.json``: what a solve expects faces to look like.
-
-Typed records, written and read as plain JSON (docs/solution.md, docs/skin.md). The figures are
-mean ΔE2000 on the solve's skin samples (:mod:`ocio_vp.correction.skin`) through the sample
-camera's RGB -> XYZ matrix, for the chosen post-correction and for the paper's least squares
-fitted to the same patches; the chart's mean ΔE2000 likewise (what general reflectances pay).
-With skin first, the default's figures beside them (what the priority cost or bought).
+"""``diagnostics.skin`` of ``solution.json``: what a solve expects faces to look like, as typed
+records (figures and keys: docs/solution.md, docs/skin.md).
 """
 
 from __future__ import annotations
@@ -30,12 +25,10 @@ class SkinBand(Figures):
 
 @dataclass(frozen=True)
 class SkinDefault(Figures):
-    """The default post-correction on the same problem (written with skin first): its model,
-    its expected skin ΔE2000, the wall's LEDs in frame (p95 ΔE2000) through it and through this
-    solve, the chart patches the in-frustum matrix drives outside [0, 1] for each, and the
-    in-frustum background's expected error relative to white through each
-    (:func:`ocio_vp.correction.skin_figures.background_error`; None where Q has no inverse or
-    in a file written before the figure existed)."""
+    """The default post-correction on the same problem, beside this solve (written with skin
+    first; each key: docs/solution.md). The backgrounds' errors
+    (:func:`ocio_vp.correction.skin_figures.background_error`) are None where Q has no inverse
+    or in a file written before them."""
 
     model: str
     expected: float
@@ -64,13 +57,9 @@ class SkinDefault(Figures):
 
 @dataclass(frozen=True)
 class SkinFigures(Figures):
-    """What a solve expects of skin (module docstring).
-
-    ``priority``: ``general`` or ``skin``; ``source``: where the skin samples came from (in
-    words); ``expected`` / ``least_squares``: mean ΔE2000 over the samples; ``chart`` /
-    ``chart_least_squares``: mean ΔE2000 over the fitted chart patches; ``bands`` per lightness
-    band, lightest first; ``default`` with skin first, else None.
-    """
+    """What a solve expects of skin (each key: docs/solution.md): mean ΔE2000 over the skin
+    samples and the fitted chart patches, for this post-correction and the paper's least
+    squares on the same patches; ``bands`` lightest first, ``default`` only with skin first."""
 
     priority: str
     source: str

@@ -1,8 +1,5 @@
-"""The per-environment solution and its ``solution.json`` (format ``ocio-vp/solution`` v1).
-
-``solution.json`` is for pipeline TDs and for ocio_vp's own later steps (export, apply,
-report): matrices as 3x3 row-major lists, ``N`` null when it was not solved (the reason is in
-``diagnostics``), and ``ocio`` naming the colorspaces of the config written beside it.
+"""The per-environment solution and its ``solution.json`` (format ``ocio-vp/solution`` v1; keys:
+docs/solution.md), for pipeline TDs and for ocio_vp's own later steps (export, apply, report).
 """
 
 from __future__ import annotations
@@ -23,7 +20,7 @@ from ocio_vp.formats.checker import Validator, check_safe_name
 from ocio_vp.formats.diagnostics import Diagnostics
 from ocio_vp.formats.documents import read_document
 from ocio_vp.formats.fixtures import DMX_MODES, DmxPatch
-from ocio_vp.formats.jsontypes import JsonMapping, JsonObject, JsonValue
+from ocio_vp.formats.jsontypes import JsonMapping, JsonObject
 from ocio_vp.formats.linearity import Linearity, read_linearity
 from ocio_vp.formats.panel_solution import (
     CONFIG_FILENAME,
@@ -33,7 +30,7 @@ from ocio_vp.formats.panel_solution import (
     panel_solutions_to_dict,
     read_ocio_names,
 )
-from ocio_vp.formats.records import Record, finite_array, json_object, read_record
+from ocio_vp.formats.records import Record, finite_array, json_object, optional_array, read_record
 from ocio_vp.model.correction import (
     MatrixCorrection,
     PostCorrection,
@@ -78,22 +75,15 @@ class FixtureDrive(Record):
 
 @dataclass(frozen=True)
 class Solution:
-    """Everything solved for one environment; all arrays float64.
+    """Everything solved for one environment; all arrays float64 (keys: docs/solution.md).
 
     ``black_level_offset`` is added to the in-frustum drive after N (``drive = N c + offset``),
-    ``None`` when the environment has no black-level measurement. ``ocio`` names the config and
-    its colour spaces by role (:class:`OcioNames`), filled in when the config is written.
-    ``fixtures`` maps each practical fixture to its ``channels`` and ``drive`` per channel (units
-    of its ``reference_drive``), ``None`` without a ``fixtures`` section; ``M`` is then the
-    matrix to light with while the fixtures are on.
-
-    ``post_correction`` is the post-correction itself (:mod:`ocio_vp.model`), which every
-    consumer applies; :attr:`Q` is derived from it, never stored beside it: its 3x3 (the
-    matrix, or a non-linear model's 3x3 fallback, for readers that want one).
-
-    ``panels`` (a stage of several panel types: :mod:`ocio_vp.formats.panel_solution`) holds
-    every type's solve by name, None otherwise; the top-level ``SL``, ``M``, ``N``, ``beta``,
-    ``w_avg``, ``black_level_offset`` and ``linearity`` are then the first in-frustum type's.
+    None without a black-level measurement. ``ocio`` is filled in when the config is written.
+    ``fixtures`` (None without a ``fixtures`` section) gives each practical fixture's drive per
+    channel, ``M`` then being the matrix to light with while they are on. ``post_correction``
+    is what every consumer applies; :attr:`Q` is derived from it. With ``panels`` (every panel
+    type's solve by name), the top-level arrays and ``linearity`` are the first in-frustum
+    type's.
     """
 
     stage: str
@@ -158,11 +148,8 @@ def _init(self: Solution, *args: Any, Q: Any = None, **kwargs: Any) -> None:
         correction = given[7] if len(given) > 7 else kwargs.get("post_correction")
         if correction is None:
             correction = MatrixCorrection(Q)
-        elif (relative := q_difference(Q, correction.matrix)) > Q_TOLERANCE:
-            raise ValueError(
-                f"Q differs from post_correction's matrix by {relative:.2g} relative (more "
-                f"than {Q_TOLERANCE:g}); Q is derived from post_correction: leave Q out"
-            )
+        elif problem := q_mismatch(Q, correction.matrix):
+            raise ValueError(f"Q {problem}: leave Q out")
         if len(given) > 7:
             given[7] = correction
         else:
@@ -209,15 +196,9 @@ def solution_to_json(solution: Solution) -> str:
     return json.dumps(solution_to_dict(solution), indent=2, allow_nan=False) + "\n"
 
 
-def _array(data: JsonMapping, key: str, shape: tuple[int, ...]) -> np.ndarray:
-    return finite_array(data.get(key), shape, key)
-
-
-def _optional_array(data: JsonMapping, key: str, shape: tuple[int, ...]) -> np.ndarray | None:
-    return None if data.get(key) is None else _array(data, key, shape)
-
-
 def _fixtures(data: JsonMapping) -> dict[str, FixtureDrive] | None:
+    """The ``fixtures`` block; each entry's shape is refused in the words solution.json's errors
+    have always had."""
     block = data.get("fixtures")
     if block is None:
         return None
@@ -225,36 +206,32 @@ def _fixtures(data: JsonMapping) -> dict[str, FixtureDrive] | None:
         raise InputError("expected a mapping", key="fixtures")
     fixtures = {}
     for name, entry in block.items():
-        _check_fixture(entry, f"fixtures.{name}")
-        fixtures[name] = read_record(FixtureDrive, entry, f"fixtures.{name}")
+        key = f"fixtures.{name}"
+        fields = entry if isinstance(entry, dict) else {}
+        channels, drive, dmx = fields.get("channels"), fields.get("drive"), fields.get("dmx")
+        if not (
+            isinstance(channels, list)
+            and all(isinstance(c, str) for c in channels)
+            and isinstance(drive, dict)
+            and set(drive) == set(channels)
+        ):
+            raise InputError("expected channels and a drive for each", key=key)
+        if not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
+            for v in drive.values()
+        ):
+            raise InputError("expected finite drives", key=key)
+        if dmx is not None and not (
+            isinstance(dmx, dict)
+            and all(type(dmx.get(k)) is int for k in ("universe", "address"))
+            and dmx.get("mode") in DMX_MODES
+        ):
+            raise InputError(
+                "expected universe, address (integers) and mode (8-bit or 16-bit)",
+                key=f"{key}.dmx",
+            )
+        fixtures[name] = read_record(FixtureDrive, entry, key)
     return fixtures
-
-
-def _check_fixture(entry: JsonValue, key: str) -> None:
-    """A ``fixtures.<name>`` block's shape, in the words solution.json's errors have always had."""
-    channels = entry.get("channels") if isinstance(entry, dict) else None
-    drive = entry.get("drive") if isinstance(entry, dict) else None
-    if not (
-        isinstance(channels, list)
-        and all(isinstance(c, str) for c in channels)
-        and isinstance(drive, dict)
-        and set(drive) == set(channels)
-    ):
-        raise InputError("expected channels and a drive for each", key=key)
-    if not all(
-        isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
-        for v in drive.values()
-    ):
-        raise InputError("expected finite drives", key=key)
-    dmx = entry.get("dmx") if isinstance(entry, dict) else None
-    if dmx is not None and not (
-        isinstance(dmx, dict)
-        and all(type(dmx.get(k)) is int for k in ("universe", "address"))
-        and dmx.get("mode") in DMX_MODES
-    ):
-        raise InputError(
-            "expected universe, address (integers) and mode (8-bit or 16-bit)", key=f"{key}.dmx"
-        )
 
 
 def _text(data: JsonMapping, key: str) -> str | None:
@@ -307,19 +284,19 @@ def _solution(data: JsonMapping) -> Solution:
     beta = Validator().number(data["beta"], ("beta",), strict=True, maximum=1.0)
     measurements = _mapping(data, "measurements")
     linearity = read_linearity(data.get("linearity"))
-    Q = _array(data, "Q", (3, 3))
+    Q = finite_array(data, "Q", (3, 3))
     diagnostics = Diagnostics.from_dict(_mapping(data, "diagnostics"))
     return Solution(
         stage=check_safe_name(data.get("stage"), key="stage"),
         environment=check_safe_name(data.get("environment"), key="environment"),
         method=_text(data, "method") or "",
         beta=beta,
-        w_avg=_array(data, "w_avg", (3,)),
-        SL=_array(data, "SL", (3, 3)),
-        M=_array(data, "M", (3, 3)),
+        w_avg=finite_array(data, "w_avg", (3,)),
+        SL=finite_array(data, "SL", (3, 3)),
+        M=finite_array(data, "M", (3, 3)),
         post_correction=_post_correction(data, Q),
-        N=_optional_array(data, "N", (3, 3)),
-        black_level_offset=_optional_array(data, "black_level_offset", (3,)),
+        N=optional_array(data, "N", (3, 3)),
+        black_level_offset=optional_array(data, "black_level_offset", (3,)),
         black_level_method=_text(data, "black_level_method"),
         diagnostics=diagnostics,
         measurements_file=_text(measurements, "file"),
@@ -332,13 +309,6 @@ def _solution(data: JsonMapping) -> Solution:
     )
 
 
-def _old_root_polynomial(data: JsonMapping) -> JsonValue:
-    """Where files written before the ``post_correction`` block kept a root-polynomial model."""
-    diagnostics = data.get("diagnostics")
-    notes = diagnostics.get("method_notes") if isinstance(diagnostics, dict) else None
-    return notes.get("root_polynomial") if isinstance(notes, dict) else None
-
-
 def _post_correction(data: JsonMapping, Q: np.ndarray) -> PostCorrection:
     """The ``post_correction`` block; a file written before it existed gets its model back from
     where those versions kept it (a root-polynomial's coefficients in
@@ -346,9 +316,12 @@ def _post_correction(data: JsonMapping, Q: np.ndarray) -> PostCorrection:
     block = data.get("post_correction")
     if block is not None:
         correction = correction_from_dict(block)
-        _check_Q(Q, correction.matrix)
+        if problem := q_mismatch(Q, correction.matrix):
+            raise InputError(f"{problem}: edit that block, or restore Q", key="Q")
         return correction
-    old = _old_root_polynomial(data)
+    diagnostics = data.get("diagnostics")
+    notes = diagnostics.get("method_notes") if isinstance(diagnostics, dict) else None
+    old = notes.get("root_polynomial") if isinstance(notes, dict) else None
     if old is None:
         return MatrixCorrection(Q)
     try:
@@ -367,19 +340,15 @@ def _post_correction(data: JsonMapping, Q: np.ndarray) -> PostCorrection:
 Q_TOLERANCE = 1e-9
 
 
-def q_difference(Q: np.ndarray, matrix: np.ndarray) -> float:
-    """Largest difference of ``Q`` from ``matrix``, relative to ``matrix``'s largest entry."""
+def q_mismatch(Q: np.ndarray, matrix: np.ndarray) -> str:
+    """Why a ``Q`` given beside its post-correction's ``matrix`` is refused ("": it is that
+    matrix, to :data:`Q_TOLERANCE` of its largest entry): an edited Q would reach the readers
+    of Q but not ``apply`` and ``validate``."""
     scale = max(float(np.max(np.abs(matrix))), np.finfo(np.float64).tiny)
-    return float(np.max(np.abs(Q - matrix))) / scale
-
-
-def _check_Q(Q: np.ndarray, matrix: np.ndarray) -> None:
-    """Refuse a ``Q`` that is not its ``post_correction``'s matrix (Q is derived from it: an
-    edited Q would reach the readers of Q but not ``apply`` and ``validate``)."""
-    relative = q_difference(Q, matrix)
-    if relative > Q_TOLERANCE:
-        raise InputError(
-            f"differs from post_correction's matrix by {relative:.2g} relative (more than "
-            f"{Q_TOLERANCE:g}); Q is derived from post_correction: edit that block, or restore Q",
-            key="Q",
-        )
+    relative = float(np.max(np.abs(Q - matrix))) / scale
+    if not relative > Q_TOLERANCE:
+        return ""
+    return (
+        f"differs from post_correction's matrix by {relative:.2g} relative (more than "
+        f"{Q_TOLERANCE:g}); Q is derived from post_correction"
+    )

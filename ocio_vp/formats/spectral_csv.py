@@ -107,27 +107,22 @@ def _checked(table: np.ndarray, header: tuple[str, ...], source: str) -> np.ndar
     from ocio_vp.spectra import wavelengths
 
     nm = table[:, 0]
+
+    def wavelength_error(problem: str) -> InputError:
+        return InputError(f"column 'wavelength': {problem}", source=source)
+
     if len(nm) < 2 or np.any(np.diff(nm) <= 0):
-        raise InputError(
-            "column 'wavelength': expected increasing wavelengths in nm", source=source
-        )
+        raise wavelength_error("expected increasing wavelengths in nm")
     if nm[0] < PLAUSIBLE[0] or nm[-1] > PLAUSIBLE[1]:
-        raise InputError(
-            f"column 'wavelength': {nm[0]:g}-{nm[-1]:g} is not a range of wavelengths in nm",
-            source=source,
-        )
-    if nm[0] > VISIBLE[0] or nm[-1] < VISIBLE[1]:
-        raise InputError(
-            f"column 'wavelength': covers {nm[0]:g}-{nm[-1]:g} nm, need at least "
-            f"{VISIBLE[0]:g}-{VISIBLE[1]:g} nm",
-            source=source,
-        )
-    inside = int(np.count_nonzero((nm >= VISIBLE[0]) & (nm <= VISIBLE[1])))
+        raise wavelength_error(f"{nm[0]:g}-{nm[-1]:g} is not a range of wavelengths in nm")
+    low, high = VISIBLE
+    if nm[0] > low or nm[-1] < high:
+        raise wavelength_error(f"covers {nm[0]:g}-{nm[-1]:g} nm, need at least {low:g}-{high:g} nm")
+    inside = int(np.count_nonzero((nm >= low) & (nm <= high)))
     if inside < MIN_SAMPLES:
-        raise InputError(
-            f"column 'wavelength': too few samples: {inside} between {VISIBLE[0]:g} and "
-            f"{VISIBLE[1]:g} nm, need at least {MIN_SAMPLES}",
-            source=source,
+        raise wavelength_error(
+            f"too few samples: {inside} between {low:g} and {high:g} nm, need at least "
+            f"{MIN_SAMPLES}"
         )
     for k, name in enumerate(header):
         values = table[:, k + 1]

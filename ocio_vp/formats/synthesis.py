@@ -1,9 +1,5 @@
-"""The ``synthesized`` record of an environment whose target chart was computed, not photographed.
-
-``ocio-vp target-chart`` writes it beside the synthesized ``target_chart`` so that ``solve`` (and
-``solution.json``, and the report) can say how the target was made and what it assumes. It is
-part of the measurements file format (``docs/measurements.md``), validated as strictly as the
-rest: unknown keys, wrong types and empty texts are errors naming the key path.
+"""The ``synthesized`` record of an environment whose target chart was computed, not
+photographed (written by ``ocio-vp target-chart``; keys and rules: docs/measurements.md).
 """
 
 from __future__ import annotations
@@ -29,14 +25,7 @@ _OPTIONAL = ("hdri", "cct", "duv", "warnings")
 
 @dataclass(frozen=True)
 class SynthesisRecord:
-    """How a synthesized target chart was made.
-
-    ``source``: ``"hdri"`` or ``"average-rgb"``; ``hdri``: the HDRI's file name (no folder);
-    ``colorspace``: the space its RGB was in; ``illuminant``: the spectrum estimate used (e.g.
-    ``"CIE daylight"``); ``cct``/``duv``: the light's correlated colour temperature (K) and
-    distance from the Planckian locus; ``camera`` and ``chart``: the camera model and the chart's
-    spectral data; ``assumptions`` and ``warnings``: one sentence each.
-    """
+    """How a synthesized target chart was made (each key: docs/measurements.md)."""
 
     source: str
     colorspace: str

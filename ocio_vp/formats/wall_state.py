@@ -52,16 +52,7 @@ class WallState:
 
 def parse_wall_state(ctx: Validator, stage: JsonMapping, key: tuple[str | int, ...]) -> WallState:
     """The :class:`WallState` of a ``stage`` mapping (``ctx``: the file's Validator)."""
-    encoding = stage.get("wall_encoding")
-    if encoding is not None:
-        encoding = ctx.wall_encoding(encoding, (*key, "wall_encoding"))
-    peak = None
-    if encoding == "pq":
-        if "peak_nits" not in stage:
-            raise ctx.error((*key, "peak_nits"), "a pq wall needs its peak (cd/m2 of drive 1.0)")
-        peak = ctx.peak_nits(stage["peak_nits"], (*key, "peak_nits"))
-    elif "peak_nits" in stage:
-        raise ctx.error((*key, "peak_nits"), "only with wall_encoding: pq")
+    encoding, peak = ctx.encoding(stage, key, "wall_encoding", needs_peak=True)
     size = stage.get("pattern_size")
     pattern_size = (
         None if size is None else ctx.size(size, (*key, "pattern_size"), _MAX_SIZE, whole_list=True)
