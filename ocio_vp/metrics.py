@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.choices import DEFAULT_WHITE_PATCH
-from ocio_vp.spectra import spectral_shape, wavelengths
+from ocio_vp.spectra import CIE_OBSERVER, spectral_shape, wavelengths
 
 __all__ = [
     "COLORCHECKER_NAMES",
@@ -86,7 +86,6 @@ def patch_label(index: int, n: int) -> str:
 
 #: Luminance (cd/m^2) that the target white patch is mapped to for ΔE ITP.
 ITP_WHITE_NITS = 100.0
-_CMFS = "CIE 1931 2 Degree Standard Observer"
 
 
 #: A white-patch channel below this fraction of the white's brightest channel is floored to it,
@@ -210,7 +209,7 @@ def _training_radiance_xyz(illuminant: str) -> tuple[np.ndarray, np.ndarray]:
     reflectances = _training_reflectances()
     light = np.maximum(_on_grid(colour.SDS_ILLUMINANTS[illuminant]), 0.0)
     radiance = reflectances * light
-    xyz = radiance @ _on_grid(colour.MSDS_CMFS[_CMFS])
+    xyz = radiance @ _on_grid(colour.MSDS_CMFS[CIE_OBSERVER])
     for array in (radiance, xyz):
         array.setflags(write=False)
     return radiance, xyz

@@ -67,12 +67,10 @@ def lab_d65(reflectances) -> np.ndarray:
     """(..., 3) CIELAB of reflectances (..., W) on the grid under D65, CIE 1931 2° observer."""
     import colour
 
-    from ocio_vp.spectra import align, spectral_shape
+    from ocio_vp.spectra import align, cie_cmfs_sds
 
-    shape = spectral_shape()
-    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape)
     d65 = align(colour.SDS_ILLUMINANTS["D65"])
-    weights = cmfs.values * d65[:, None]
+    weights = cie_cmfs_sds().values * d65[:, None]
     XYZ = np.asarray(reflectances, dtype=np.float64) @ weights / weights[:, 1].sum()
     white = np.ones(weights.shape[0]) @ weights / weights[:, 1].sum()
     return colour.XYZ_to_Lab(XYZ, colour.XYZ_to_xy(white))

@@ -14,6 +14,7 @@ import numpy as np
 from ocio_vp.errors import InputError
 
 __all__ = [
+    "CIE_OBSERVER",
     "DEFAULT_CAMERA",
     "DEFAULT_CHART",
     "SPECTRAL_SHAPE",
@@ -22,6 +23,7 @@ __all__ = [
     "camera_names",
     "camera_sensitivities",
     "checker_reflectances",
+    "cie_cmfs_sds",
     "spectral_shape",
     "unknown_name",
     "wavelengths",
@@ -31,6 +33,7 @@ __all__ = [
 SPECTRAL_SHAPE = (380.0, 780.0, 5.0)
 DEFAULT_CAMERA = "Nikon 5100 (NPL)"
 DEFAULT_CHART = "ColorChecker N Ohta"
+CIE_OBSERVER = "CIE 1931 2 Degree Standard Observer"
 #: Measured sensitivities shipped with ocio_vp (``ocio_vp/data/camera_sensitivities.json``, from
 #: the rawtoaces project's data, and :data:`VENDORED_CAMERA_FILES`; licences in
 #: ``ocio_vp/data/CAMERAS_LICENSE.md``), beside colour-science's ``MSDS_CAMERA_SENSITIVITIES``.
@@ -61,6 +64,14 @@ def align(sd) -> np.ndarray:
     and reflectance are never negative.
     """
     return np.maximum(np.asarray(sd.copy().align(spectral_shape()).values, dtype=np.float64), 0.0)
+
+
+def cie_cmfs_sds():
+    """The CIE 1931 2-degree colour matching functions (colour ``MultiSpectralDistributions``)
+    on the project's grid."""
+    import colour
+
+    return colour.MSDS_CMFS[CIE_OBSERVER].copy().align(spectral_shape())
 
 
 def checker_reflectances(name: str = DEFAULT_CHART) -> np.ndarray:

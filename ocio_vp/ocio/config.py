@@ -52,6 +52,7 @@ from ocio_vp.ocio.viewing import (
     add_monitor_displays,
     set_categories,
 )
+from ocio_vp.spectra import CIE_OBSERVER
 from ocio_vp.wall.encoding import WallEncoding
 from ocio_vp.wall.softclip import soft_clip_knee
 
@@ -471,7 +472,7 @@ def _add_working_spaces(data: ConfigData, camera: str) -> tuple[dict[str, str], 
                 to_reference=matrix_record(to_camera),
             )
         )
-    d65 = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
+    d65 = colour.CCS_ILLUMINANTS[CIE_OBSERVER]["D65"]
     to_xyz = (
         colour.adaptation.matrix_chromatic_adaptation_VonKries(
             colour.xy_to_XYZ(target.whitepoint), colour.xy_to_XYZ(d65), transform="CAT02"
