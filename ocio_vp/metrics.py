@@ -32,6 +32,7 @@ __all__ = [
     "ChartErrors",
     "as_recorded",
     "camera_delta_E_2000",
+    "camera_lab",
     "camera_to_xyz_matrix",
     "chart_errors",
     "delta_E_2000",
@@ -316,15 +317,21 @@ def camera_delta_E_2000(
     """
     import colour
 
+    lab = [camera_lab(rgb, camera_to_xyz=camera_to_xyz, white=white) for rgb in (reference, other)]
+    return np.asarray(colour.delta_E(lab[0], lab[1], method="CIE 2000"))
+
+
+def camera_lab(rgb: ArrayLike, *, camera_to_xyz: ArrayLike, white: ArrayLike) -> np.ndarray:
+    """(..., 3) CIE Lab of camera RGB (..., 3) as :func:`camera_delta_E_2000` measures it."""
+    import colour
+
     matrix = np.asarray(camera_to_xyz, dtype=np.float64)
     white = np.asarray(white, dtype=np.float64)
     scale = 1.0 / float(white @ matrix[1])
     white_xy = colour.XYZ_to_xy(white @ matrix.T * scale)
-    lab = [
+    return np.asarray(
         colour.XYZ_to_Lab(np.asarray(rgb, dtype=np.float64) @ matrix.T * scale, white_xy)
-        for rgb in (reference, other)
-    ]
-    return np.asarray(colour.delta_E(lab[0], lab[1], method="CIE 2000"))
+    )
 
 
 #: The file holding :func:`sample_camera_to_xyz` (inside the package), written by
