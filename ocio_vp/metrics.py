@@ -38,6 +38,7 @@ __all__ = [
     "delta_E_2000",
     "error_relative_to_white",
     "patch_label",
+    "rgb_to_rgb_cat02",
     "sample_camera_to_xyz",
     "training_rgb_xyz",
     "white_scale",
@@ -332,6 +333,18 @@ def camera_lab(rgb: ArrayLike, *, camera_to_xyz: ArrayLike, white: ArrayLike) ->
     return np.asarray(
         colour.XYZ_to_Lab(np.asarray(rgb, dtype=np.float64) @ matrix.T * scale, white_xy)
     )
+
+
+def rgb_to_rgb_cat02(source: str, target: str) -> np.ndarray:
+    """(3, 3) colour-science's ``matrix_RGB_to_RGB`` between two ``colour.RGB_COLOURSPACES``
+    names with CAT02 adaptation: how content and working spaces reach the camera's gamut."""
+    import colour
+
+    spaces = colour.RGB_COLOURSPACES
+    matrix = colour.matrix_RGB_to_RGB(
+        spaces[source], spaces[target], chromatic_adaptation_transform="CAT02"
+    )
+    return np.asarray(matrix, dtype=np.float64)
 
 
 #: The file holding :func:`sample_camera_to_xyz` (inside the package), written by
