@@ -12,16 +12,14 @@ colour differences in television.
 from __future__ import annotations
 
 import functools
-import json
 import os
 from dataclasses import dataclass
-from importlib import resources
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.choices import DEFAULT_WHITE_PATCH
-from ocio_vp.spectra import CIE_OBSERVER, spectral_shape, wavelengths
+from ocio_vp.spectra import CIE_OBSERVER, packaged_json, spectral_shape, wavelengths
 
 __all__ = [
     "COLORCHECKER_NAMES",
@@ -358,10 +356,7 @@ def sample_camera_to_xyz() -> np.ndarray:
     under D65), read from :data:`SAMPLE_MATRIX_FILE` so that code writing files (the OCIO
     config's agreement check) needs no colour-science; ``tests/test_metrics.py`` checks it
     against the fit. Read-only."""
-    document = json.loads(
-        resources.files("ocio_vp").joinpath(SAMPLE_MATRIX_FILE).read_text(encoding="utf-8")
-    )
-    matrix = np.array(document["camera_to_xyz"], dtype=np.float64)
+    matrix = np.array(packaged_json(SAMPLE_MATRIX_FILE)["camera_to_xyz"], dtype=np.float64)
     matrix.setflags(write=False)
     return matrix
 

@@ -19,7 +19,7 @@ from importlib import resources
 
 import numpy as np
 
-from ocio_vp.spectra import SPECTRAL_SHAPE
+from ocio_vp.spectra import PHYSLIGHT_CAMERAS, on_grid, packaged_json
 
 __all__ = [
     "ITA_BANDS",
@@ -45,7 +45,6 @@ ITA_BANDS: tuple[tuple[str, float], ...] = (
 )
 
 TRAINING_FILE = "data/skin_training.json"
-PHYSLIGHT_FILE = "data/camera_sensitivities_physlight.json"
 
 
 @dataclass(frozen=True)
@@ -92,10 +91,7 @@ def band_of(ita: float) -> str:
 
 def load_skin_file(text: str) -> SkinSet:
     """A :class:`SkinSet` from a skin JSON document (``ocio-vp/skin-reflectances``)."""
-    document = json.loads(text)
-    grid = document["wavelengths"]
-    if (grid["start"], grid["end"], grid["interval"]) != SPECTRAL_SHAPE:
-        raise RuntimeError(f"skin data is not on the grid {SPECTRAL_SHAPE}")
+    document = on_grid(json.loads(text), "skin data")
     samples = document["samples"]
     reflectances = np.array([s["reflectance"] for s in samples.values()], dtype=np.float64)
     reflectances.setflags(write=False)
@@ -122,12 +118,7 @@ def training_skin() -> SkinSet:
 
 @functools.lru_cache(maxsize=1)
 def _physlight() -> dict:
-    text = resources.files("ocio_vp").joinpath(PHYSLIGHT_FILE).read_text(encoding="utf-8")
-    document = json.loads(text)
-    grid = document["wavelengths"]
-    if (grid["start"], grid["end"], grid["interval"]) != SPECTRAL_SHAPE:
-        raise RuntimeError(f"{PHYSLIGHT_FILE} is not on the grid {SPECTRAL_SHAPE}")
-    return document["cameras"]
+    return on_grid(packaged_json(PHYSLIGHT_CAMERAS), PHYSLIGHT_CAMERAS)["cameras"]
 
 
 def physlight_camera_names(split: str) -> tuple[str, ...]:
