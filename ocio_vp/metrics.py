@@ -12,16 +12,14 @@ colour differences in television.
 from __future__ import annotations
 
 import functools
-import json
 import os
 from dataclasses import dataclass
-from importlib import resources
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.choices import DEFAULT_WHITE_PATCH
-from ocio_vp.spectra import spectral_shape, wavelengths
+from ocio_vp.spectra import CIE_OBSERVER, packaged_json, spectral_shape, wavelengths
 
 __all__ = [
     "COLORCHECKER_NAMES",
@@ -32,11 +30,13 @@ __all__ = [
     "ChartErrors",
     "as_recorded",
     "camera_delta_E_2000",
+    "camera_lab",
     "camera_to_xyz_matrix",
     "chart_errors",
     "delta_E_2000",
     "error_relative_to_white",
     "patch_label",
+    "rgb_to_rgb_cat02",
     "sample_camera_to_xyz",
     "training_rgb_xyz",
     "white_scale",
@@ -86,7 +86,6 @@ def patch_label(index: int, n: int) -> str:
 
 #: Luminance (cd/m^2) that the target white patch is mapped to for ΔE ITP.
 ITP_WHITE_NITS = 100.0
-_CMFS = "CIE 1931 2 Degree Standard Observer"
 
 
 #: A white-patch channel below this fraction of the white's brightest channel is floored to it,
@@ -210,7 +209,7 @@ def _training_radiance_xyz(illuminant: str) -> tuple[np.ndarray, np.ndarray]:
     reflectances = _training_reflectances()
     light = np.maximum(_on_grid(colour.SDS_ILLUMINANTS[illuminant]), 0.0)
     radiance = reflectances * light
-    xyz = radiance @ _on_grid(colour.MSDS_CMFS[_CMFS])
+    xyz = radiance @ _on_grid(colour.MSDS_CMFS[CIE_OBSERVER])
     for array in (radiance, xyz):
         array.setflags(write=False)
     return radiance, xyz
@@ -317,15 +316,33 @@ def camera_delta_E_2000(
     """
     import colour
 
+    lab = [camera_lab(rgb, camera_to_xyz=camera_to_xyz, white=white) for rgb in (reference, other)]
+    return np.asarray(colour.delta_E(lab[0], lab[1], method="CIE 2000"))
+
+
+def camera_lab(rgb: ArrayLike, *, camera_to_xyz: ArrayLike, white: ArrayLike) -> np.ndarray:
+    """(..., 3) CIE Lab of camera RGB (..., 3) as :func:`camera_delta_E_2000` measures it."""
+    import colour
+
     matrix = np.asarray(camera_to_xyz, dtype=np.float64)
     white = np.asarray(white, dtype=np.float64)
     scale = 1.0 / float(white @ matrix[1])
     white_xy = colour.XYZ_to_xy(white @ matrix.T * scale)
-    lab = [
+    return np.asarray(
         colour.XYZ_to_Lab(np.asarray(rgb, dtype=np.float64) @ matrix.T * scale, white_xy)
-        for rgb in (reference, other)
-    ]
-    return np.asarray(colour.delta_E(lab[0], lab[1], method="CIE 2000"))
+    )
+
+
+def rgb_to_rgb_cat02(source: str, target: str) -> np.ndarray:
+    """(3, 3) colour-science's ``matrix_RGB_to_RGB`` between two ``colour.RGB_COLOURSPACES``
+    names with CAT02 adaptation: how content and working spaces reach the camera's gamut."""
+    import colour
+
+    spaces = colour.RGB_COLOURSPACES
+    matrix = colour.matrix_RGB_to_RGB(
+        spaces[source], spaces[target], chromatic_adaptation_transform="CAT02"
+    )
+    return np.asarray(matrix, dtype=np.float64)
 
 
 #: The file holding :func:`sample_camera_to_xyz` (inside the package), written by
@@ -339,10 +356,7 @@ def sample_camera_to_xyz() -> np.ndarray:
     under D65), read from :data:`SAMPLE_MATRIX_FILE` so that code writing files (the OCIO
     config's agreement check) needs no colour-science; ``tests/test_metrics.py`` checks it
     against the fit. Read-only."""
-    document = json.loads(
-        resources.files("ocio_vp").joinpath(SAMPLE_MATRIX_FILE).read_text(encoding="utf-8")
-    )
-    matrix = np.array(document["camera_to_xyz"], dtype=np.float64)
+    matrix = np.array(packaged_json(SAMPLE_MATRIX_FILE)["camera_to_xyz"], dtype=np.float64)
     matrix.setflags(write=False)
     return matrix
 

@@ -19,7 +19,7 @@ from importlib import resources
 
 import numpy as np
 
-from ocio_vp.spectra import SPECTRAL_SHAPE
+from ocio_vp.spectra import PHYSLIGHT_CAMERAS, on_grid, packaged_json
 
 __all__ = [
     "ITA_BANDS",
@@ -45,7 +45,6 @@ ITA_BANDS: tuple[tuple[str, float], ...] = (
 )
 
 TRAINING_FILE = "data/skin_training.json"
-PHYSLIGHT_FILE = "data/camera_sensitivities_physlight.json"
 
 
 @dataclass(frozen=True)
@@ -67,12 +66,10 @@ def lab_d65(reflectances) -> np.ndarray:
     """(..., 3) CIELAB of reflectances (..., W) on the grid under D65, CIE 1931 2° observer."""
     import colour
 
-    from ocio_vp.spectra import align, spectral_shape
+    from ocio_vp.spectra import align, cie_cmfs_sds
 
-    shape = spectral_shape()
-    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape)
     d65 = align(colour.SDS_ILLUMINANTS["D65"])
-    weights = cmfs.values * d65[:, None]
+    weights = cie_cmfs_sds().values * d65[:, None]
     XYZ = np.asarray(reflectances, dtype=np.float64) @ weights / weights[:, 1].sum()
     white = np.ones(weights.shape[0]) @ weights / weights[:, 1].sum()
     return colour.XYZ_to_Lab(XYZ, colour.XYZ_to_xy(white))
@@ -94,10 +91,7 @@ def band_of(ita: float) -> str:
 
 def load_skin_file(text: str) -> SkinSet:
     """A :class:`SkinSet` from a skin JSON document (``ocio-vp/skin-reflectances``)."""
-    document = json.loads(text)
-    grid = document["wavelengths"]
-    if (grid["start"], grid["end"], grid["interval"]) != SPECTRAL_SHAPE:
-        raise RuntimeError(f"skin data is not on the grid {SPECTRAL_SHAPE}")
+    document = on_grid(json.loads(text), "skin data")
     samples = document["samples"]
     reflectances = np.array([s["reflectance"] for s in samples.values()], dtype=np.float64)
     reflectances.setflags(write=False)
@@ -124,12 +118,7 @@ def training_skin() -> SkinSet:
 
 @functools.lru_cache(maxsize=1)
 def _physlight() -> dict:
-    text = resources.files("ocio_vp").joinpath(PHYSLIGHT_FILE).read_text(encoding="utf-8")
-    document = json.loads(text)
-    grid = document["wavelengths"]
-    if (grid["start"], grid["end"], grid["interval"]) != SPECTRAL_SHAPE:
-        raise RuntimeError(f"{PHYSLIGHT_FILE} is not on the grid {SPECTRAL_SHAPE}")
-    return document["cameras"]
+    return on_grid(packaged_json(PHYSLIGHT_CAMERAS), PHYSLIGHT_CAMERAS)["cameras"]
 
 
 def physlight_camera_names(split: str) -> tuple[str, ...]:

@@ -14,14 +14,19 @@ import numpy as np
 from ocio_vp.errors import InputError
 
 __all__ = [
+    "CIE_OBSERVER",
     "DEFAULT_CAMERA",
     "DEFAULT_CHART",
+    "PHYSLIGHT_CAMERAS",
     "SPECTRAL_SHAPE",
     "VENDORED_CAMERAS",
     "align",
     "camera_names",
     "camera_sensitivities",
     "checker_reflectances",
+    "cie_cmfs_sds",
+    "on_grid",
+    "packaged_json",
     "spectral_shape",
     "unknown_name",
     "wavelengths",
@@ -31,13 +36,15 @@ __all__ = [
 SPECTRAL_SHAPE = (380.0, 780.0, 5.0)
 DEFAULT_CAMERA = "Nikon 5100 (NPL)"
 DEFAULT_CHART = "ColorChecker N Ohta"
+CIE_OBSERVER = "CIE 1931 2 Degree Standard Observer"
 #: Measured sensitivities shipped with ocio_vp (``ocio_vp/data/camera_sensitivities.json``, from
 #: the rawtoaces project's data, and :data:`VENDORED_CAMERA_FILES`; licences in
 #: ``ocio_vp/data/CAMERAS_LICENSE.md``), beside colour-science's ``MSDS_CAMERA_SENSITIVITIES``.
 VENDORED_CAMERAS = "data/camera_sensitivities.json"
 #: Every file of measured cameras shipped with ocio_vp: the rawtoaces file, then Weta's physlight
 #: cameras that it does not hold (Apache-2.0, same licence notice).
-VENDORED_CAMERA_FILES = (VENDORED_CAMERAS, "data/camera_sensitivities_physlight.json")
+PHYSLIGHT_CAMERAS = "data/camera_sensitivities_physlight.json"
+VENDORED_CAMERA_FILES = (VENDORED_CAMERAS, PHYSLIGHT_CAMERAS)
 
 
 def spectral_shape():
@@ -61,6 +68,14 @@ def align(sd) -> np.ndarray:
     and reflectance are never negative.
     """
     return np.maximum(np.asarray(sd.copy().align(spectral_shape()).values, dtype=np.float64), 0.0)
+
+
+def cie_cmfs_sds():
+    """The CIE 1931 2-degree colour matching functions (colour ``MultiSpectralDistributions``)
+    on the project's grid."""
+    import colour
+
+    return colour.MSDS_CMFS[CIE_OBSERVER].copy().align(spectral_shape())
 
 
 def checker_reflectances(name: str = DEFAULT_CHART) -> np.ndarray:
@@ -95,16 +110,26 @@ def camera_names() -> tuple[str, ...]:
     return (*colour.MSDS_CAMERA_SENSITIVITIES, *_vendored_cameras())
 
 
+def packaged_json(path: str) -> dict:
+    """The JSON document at ``path`` inside the package (``data/...``)."""
+    return json.loads(resources.files("ocio_vp").joinpath(path).read_text(encoding="utf-8"))
+
+
+def on_grid(document: dict, what: str) -> dict:
+    """``document`` if its ``wavelengths`` are :data:`SPECTRAL_SHAPE`; else RuntimeError naming
+    ``what``."""
+    grid = document["wavelengths"]
+    if (grid["start"], grid["end"], grid["interval"]) != SPECTRAL_SHAPE:
+        raise RuntimeError(f"{what} is not on the grid {SPECTRAL_SHAPE}")
+    return document
+
+
 @functools.lru_cache(maxsize=1)
 def _vendored_cameras() -> dict[str, np.ndarray]:
     """The cameras of :data:`VENDORED_CAMERA_FILES`, (W, 3) each; the files are on the grid."""
     cameras = {}
     for path in VENDORED_CAMERA_FILES:
-        document = json.loads(resources.files("ocio_vp").joinpath(path).read_text(encoding="utf-8"))
-        grid = document["wavelengths"]
-        if (grid["start"], grid["end"], grid["interval"]) != SPECTRAL_SHAPE:
-            raise RuntimeError(f"{path} is not on the grid {SPECTRAL_SHAPE}")
-        for name, record in document["cameras"].items():
+        for name, record in on_grid(packaged_json(path), path)["cameras"].items():
             values = np.asarray(record["RGB"], dtype=np.float64)
             values.setflags(write=False)
             cameras[name] = values

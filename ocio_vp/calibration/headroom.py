@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ocio_vp.formats.solution import Solution
+from ocio_vp.metrics import rgb_to_rgb_cat02
 from ocio_vp.wall.encoding import WallEncoding
 from ocio_vp.wall.linearity import CHANNELS
 from ocio_vp.wall.softclip import soft_clip_knee
@@ -175,11 +176,8 @@ def _white_camera(camera: str | None) -> tuple[np.ndarray, str, np.ndarray | Non
         return np.ones(3), "camera native RGB", None
     import colour
 
-    target = colour.RGB_COLOURSPACES[camera]
-    to_camera = colour.matrix_RGB_to_RGB(
-        colour.RGB_COLOURSPACES[CONTENT_SPACE], target, chromatic_adaptation_transform="CAT02"
-    )
-    return to_camera @ np.ones(3), CONTENT_SPACE_NAME, np.asarray(target.matrix_RGB_to_XYZ)[1]
+    y_row = np.asarray(colour.RGB_COLOURSPACES[camera].matrix_RGB_to_XYZ)[1]
+    return rgb_to_rgb_cat02(CONTENT_SPACE, camera) @ np.ones(3), CONTENT_SPACE_NAME, y_row
 
 
 def content_scale(solution: Solution) -> ContentScale:

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ocio_vp.calibration.equations import predict_lit_chart
-from ocio_vp.metrics import sample_camera_to_xyz
+from ocio_vp.metrics import camera_lab, sample_camera_to_xyz
 from ocio_vp.skin_data import SkinSet, band_of, ita_degrees, training_skin
 from ocio_vp.spectra import checker_reflectances
 
@@ -180,10 +180,7 @@ def skin_patch_weights(
     location colour is a skin colour (hue between 20° and 90° in CIE L*a*b* through the sample
     camera, chroma 8-50, L* 20-90: the ColorChecker's two skin patches and the skin of every
     lightness band under a broadband light)."""
-    matrix = sample_camera_to_xyz()
-    xyz = target @ matrix.T
-    white = xyz[white_patch]
-    lab = _lab(xyz, white)
+    lab = camera_lab(target, camera_to_xyz=sample_camera_to_xyz(), white=target[white_patch])
     if named:
         chosen = [j for j in named if active[j]]
     else:
@@ -218,13 +215,4 @@ def patch_skin_samples(
         band=bands,
         source=f"the chart's skin patches {', '.join(map(str, chosen))} ({how})",
         weights=weights,
-    )
-
-
-def _lab(xyz: np.ndarray, white_xyz: np.ndarray) -> np.ndarray:
-    import colour
-
-    scale = 1.0 / white_xyz[1]
-    return np.asarray(
-        colour.XYZ_to_Lab(xyz * scale, colour.XYZ_to_xy(white_xyz * scale)), dtype=np.float64
     )

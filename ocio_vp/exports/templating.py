@@ -21,7 +21,7 @@ if TYPE_CHECKING:  # imported where templates are rendered, not at start-up
 
 from ocio_vp.exports.escape import c_comment, c_float, markdown_text, tcl_float, tcl_string
 
-__all__ = ["jinja_environment", "read_template", "render_template"]
+__all__ = ["html_template", "jinja_environment", "read_template", "render_template"]
 
 #: The package that holds the templates as resources.
 TEMPLATE_PACKAGE = "ocio_vp"
@@ -43,6 +43,15 @@ def read_template(name: str) -> str:
             f"ocio-vp template {name!r} is missing from the installed package ({resource}); "
             "reinstall ocio-vp"
         ) from None
+
+
+def html_template(name: str) -> jinja2.Template:
+    """Template ``name`` for an HTML page: autoescaped, undefined variables an error."""
+    import jinja2
+
+    loader = jinja2.FunctionLoader(lambda name: (read_template(name), None, lambda: True))
+    env = jinja2.Environment(loader=loader, autoescape=True, undefined=jinja2.StrictUndefined)
+    return env.get_template(name)
 
 
 @functools.lru_cache(maxsize=1)

@@ -26,6 +26,7 @@ from ocio_vp.calibration.equations import condition_text
 from ocio_vp.deprecation import deprecated_names
 from ocio_vp.formats.linearity import Linearity
 from ocio_vp.formats.solution import CONFIG_FILENAME, OcioNames, Solution
+from ocio_vp.metrics import rgb_to_rgb_cat02
 from ocio_vp.model.correction import MAX_CONDITION_INVERSE, truncated_pseudo_inverse
 from ocio_vp.ocio import WORKING_SPACE_NAMES
 from ocio_vp.ocio.description import (
@@ -52,6 +53,7 @@ from ocio_vp.ocio.viewing import (
     add_monitor_displays,
     set_categories,
 )
+from ocio_vp.spectra import CIE_OBSERVER
 from ocio_vp.wall.encoding import WallEncoding
 from ocio_vp.wall.softclip import soft_clip_knee
 
@@ -457,21 +459,20 @@ def _add_working_spaces(data: ConfigData, camera: str) -> tuple[dict[str, str], 
     roles = {}
     aces_to_camera = np.eye(3)
     for key, name in WORKING_SPACE_NAMES.items():
-        source = colour.RGB_COLOURSPACES[key]
-        to_camera = colour.matrix_RGB_to_RGB(source, target, chromatic_adaptation_transform="CAT02")
+        to_camera = rgb_to_rgb_cat02(key, camera)
         if key == "ACES2065-1":
-            aces_to_camera = np.asarray(to_camera, dtype=np.float64)
+            aces_to_camera = to_camera
             roles[OCIO.ROLE_INTERCHANGE_SCENE] = name
         data.colour_spaces.append(
             colour_space(
                 name,
-                f"{source.name} linear; to the reference ({camera}) by colour-science's "
+                f"{colour.RGB_COLOURSPACES[key].name} linear; to the reference ({camera}) by colour-science's "
                 "matrix_RGB_to_RGB with CAT02 adaptation.",
                 family="Working",
                 to_reference=matrix_record(to_camera),
             )
         )
-    d65 = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
+    d65 = colour.CCS_ILLUMINANTS[CIE_OBSERVER]["D65"]
     to_xyz = (
         colour.adaptation.matrix_chromatic_adaptation_VonKries(
             colour.xy_to_XYZ(target.whitepoint), colour.xy_to_XYZ(d65), transform="CAT02"

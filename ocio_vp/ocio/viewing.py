@@ -30,6 +30,7 @@ from ocio_vp.ocio.description import (
     transform_record,
 )
 from ocio_vp.ocio.matrix import matrix_record
+from ocio_vp.spectra import packaged_json
 
 __all__ = [
     "ACESCCT",
@@ -232,11 +233,7 @@ REC709_MATRIX_FILE = "data/rec709_to_xyz.json"
 def rec709_to_xyz() -> np.ndarray:
     """(3, 3) ITU-R BT.709 linear RGB to CIE XYZ (D65), as colour-science computes it (read
     from :data:`REC709_MATRIX_FILE`; tests/test_ocio_viewing.py checks every bit). Read-only."""
-    import json
-    from importlib import resources
-
-    text = resources.files("ocio_vp").joinpath(REC709_MATRIX_FILE).read_text(encoding="utf-8")
-    matrix = np.array(json.loads(text)["rgb_to_xyz"], dtype=np.float64)
+    matrix = np.array(packaged_json(REC709_MATRIX_FILE)["rgb_to_xyz"], dtype=np.float64)
     matrix.setflags(write=False)
     return matrix
 

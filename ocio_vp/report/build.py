@@ -461,16 +461,12 @@ def build_report(
         (3, 3) camera RGB -> XYZ when the caller knows the camera
         (:func:`ocio_vp.report.data.camera_to_display`).
     """
-    import jinja2
+    from ocio_vp.exports.templating import html_template
 
     out_dir = Path(out_dir).resolve()
     environments = environment_data(paths, match_white=match_white, camera_to_xyz=camera_to_xyz)
     _check_replaceable(out_dir, environments, replace=replace)
     report = Report(index=out_dir / "index.html", environments=environments)
-    from ocio_vp.exports.templating import read_template
-
-    loader = jinja2.FunctionLoader(lambda name: (read_template(name), None, lambda: True))
-    env = jinja2.Environment(loader=loader, autoescape=True, undefined=jinja2.StrictUndefined)
     with staged_dir(out_dir.parent) as stage:
         folder = stage / "report"
         (folder / "img").mkdir(parents=True)
@@ -497,7 +493,7 @@ def build_report(
             sections.append(_context(data, images))
             if on_step is not None:
                 on_step()
-        html = env.get_template(TEMPLATE).render(
+        html = html_template(TEMPLATE).render(
             summary=_summary(environments),
             summary_images=summary_images,
             sections=sections,

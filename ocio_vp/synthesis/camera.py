@@ -20,28 +20,16 @@ from numpy.typing import ArrayLike
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import camera_to_xyz_matrix
 from ocio_vp.simulator.options import read_spectra_csv
-from ocio_vp.spectra import camera_sensitivities, spectral_shape, unknown_name
+from ocio_vp.spectra import camera_sensitivities, cie_cmfs_sds, unknown_name
 
 __all__ = [
-    "CIE_OBSERVER",
     "CameraModel",
     "camera_from_colourspace",
     "camera_from_csv",
     "camera_from_dataset",
     "camera_from_matrix",
     "cie_cmfs",
-    "cie_cmfs_sds",
 ]
-
-CIE_OBSERVER = "CIE 1931 2 Degree Standard Observer"
-
-
-def cie_cmfs_sds():
-    """The CIE 1931 2-degree colour matching functions (colour ``MultiSpectralDistributions``)
-    on the project's grid."""
-    import colour
-
-    return colour.MSDS_CMFS[CIE_OBSERVER].copy().align(spectral_shape())
 
 
 def cie_cmfs() -> np.ndarray:

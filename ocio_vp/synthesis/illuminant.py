@@ -27,8 +27,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.errors import InputError
-from ocio_vp.spectra import align, spectral_shape, wavelengths
-from ocio_vp.synthesis.camera import CameraModel, cie_cmfs_sds
+from ocio_vp.spectra import align, cie_cmfs_sds, spectral_shape, wavelengths
+from ocio_vp.synthesis.camera import CameraModel
 
 __all__ = [
     "DAYLIGHT_FROM_CCT",

@@ -26,6 +26,7 @@ from ocio_vp.choices import DEFAULT_WHITE_PATCH
 from ocio_vp.errors import InputError
 from ocio_vp.formats.measurements import Environment, Measurements
 from ocio_vp.formats.synthesis import SynthesisRecord
+from ocio_vp.metrics import rgb_to_rgb_cat02
 from ocio_vp.spectra import unknown_name
 from ocio_vp.synthesis.camera import CameraModel
 from ocio_vp.synthesis.chart import DEFAULT_CHART, chart_spectra, scaled_to_white
@@ -50,8 +51,8 @@ def rgb_to_camera(rgb: ArrayLike, colorspace: str, camera_colorspace: str | None
     """(3,) an HDRI's RGB in ``colorspace`` as camera linear RGB.
 
     ``"camera"`` is returned as is. Another ``colour.RGB_COLOURSPACES`` name (or ``Linear
-    Rec.709``) is converted to ``camera_colorspace`` with colour-science's ``matrix_RGB_to_RGB``
-    and CAT02, exactly as the OCIO config converts that working space for the wall.
+    Rec.709``) goes to ``camera_colorspace`` by :func:`ocio_vp.metrics.rgb_to_rgb_cat02`, as the
+    OCIO config converts that working space for the wall.
 
     Examples
     --------
@@ -80,12 +81,7 @@ def rgb_to_camera(rgb: ArrayLike, colorspace: str, camera_colorspace: str | None
             "stage.camera_colorspace or give the RGB in the camera's space ('camera')",
             key="--hdri-colorspace",
         )
-    matrix = colour.matrix_RGB_to_RGB(
-        colour.RGB_COLOURSPACES[name],
-        colour.RGB_COLOURSPACES[camera_colorspace],
-        chromatic_adaptation_transform="CAT02",
-    )
-    return np.asarray(matrix, dtype=np.float64) @ rgb
+    return rgb_to_rgb_cat02(name, camera_colorspace) @ rgb
 
 
 @dataclass(frozen=True)

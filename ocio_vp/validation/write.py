@@ -157,14 +157,11 @@ def _swatches(result: ValidationResult) -> str:
 
 
 def _html(result: ValidationResult, reading: TakeReading, lines: list[str]) -> str:
-    import jinja2
     from markupsafe import Markup
 
-    from ocio_vp.exports.templating import read_template
+    from ocio_vp.exports.templating import html_template
 
-    env = jinja2.Environment(autoescape=True, undefined=jinja2.StrictUndefined)
-    template = env.from_string(read_template("validation.html.j2"))
-    return template.render(
+    return html_template("validation.html.j2").render(
         result=result,
         lines=lines,
         swatches=Markup(_swatches(result)),
