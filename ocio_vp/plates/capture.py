@@ -22,7 +22,7 @@ from ocio_vp.errors import format_key_path
 from ocio_vp.formats.jsontypes import JsonMapping, JsonValue
 from ocio_vp.formats.measurements import CHANNELS, Validator, parse_stage, read_document
 from ocio_vp.plates.movie import MATRICES, RANGES, is_movie
-from ocio_vp.plates.raw import DEFAULT_DEMOSAIC, DEMOSAIC_METHODS, is_raw
+from ocio_vp.plates.raw import DEFAULT_DEMOSAIC, DEMOSAIC_METHODS, MAX_CONDITION_RAW, is_raw
 from ocio_vp.plates.reader import canonical_encoding, plate_path
 from ocio_vp.plates.statistics import ROBUST_MEAN_METHODS
 from ocio_vp.plates.take import TakeRef
@@ -351,7 +351,7 @@ def _raw_options(ctx: Validator, value: JsonValue, stage: JsonMapping) -> RawOpt
         to_camera, ("raw", "to_camera"), (3, 3), "a 3x3 matrix [[r], [g], [b]] or 'dng'"
     )
     condition = np.linalg.cond(matrix)
-    if not np.isfinite(condition) or condition > 1e6:
+    if not np.isfinite(condition) or condition > MAX_CONDITION_RAW:
         raise ctx.error(("raw", "to_camera"), f"singular matrix (condition number {condition:.3g})")
     return RawOptions(demosaic, matrix)
 

@@ -18,6 +18,7 @@ from ocio_vp.formats.documents import check_regular_file
 
 __all__ = [
     "DEMOSAIC_METHODS",
+    "MAX_CONDITION_RAW",
     "RAW_SUFFIXES",
     "CameraSpace",
     "RawMosaic",
@@ -37,6 +38,8 @@ RAW_SUFFIXES = frozenset(
 #: Demosaicing methods: ``superpixel`` (ours, no interpolation) or LibRaw's, by name.
 DEMOSAIC_METHODS = ("superpixel", "linear", "vng", "ppg", "ahd", "dcb", "dht", "aahd")
 DEFAULT_DEMOSAIC = "superpixel"
+#: A raw camera matrix (DNG ColorMatrix, ``raw.to_camera``) above this condition is singular.
+MAX_CONDITION_RAW = 1e6
 
 
 def is_raw(path: str | os.PathLike[str]) -> bool:
@@ -302,7 +305,7 @@ def sensor_to_camera(path: str | os.PathLike[str], colourspace: str) -> CameraSp
 
     matrix, illuminant = dng_colour_matrix(path)
     condition = np.linalg.cond(matrix)
-    if not np.isfinite(condition) or condition > 1e6:
+    if not np.isfinite(condition) or condition > MAX_CONDITION_RAW:
         raise InputError(
             f"the DNG's ColorMatrix cannot be inverted (condition number {condition:.3g})",
             source=path,

@@ -18,13 +18,15 @@ from ocio_vp.patterns.sequence import PatternSequence
 from ocio_vp.plates.movie import AV_MATRICES, AV_RANGES
 from ocio_vp.simulator.take import TakeOptions, render_frames
 
-__all__ = ["MOVIE_CODECS", "write_movie"]
+__all__ = ["MOVIE_CODECS", "MOVIE_ENCODING", "write_movie"]
 
 #: Codec name -> (FFmpeg encoder, profile, pixel format).
 MOVIE_CODECS = {
     "prores4444": ("prores_ks", "4", "yuv444p10le"),
     "prores422": ("prores_ks", "3", "yuv422p10le"),
 }
+#: The camera log curve a simulated movie is in unless told otherwise (the take's encoding).
+MOVIE_ENCODING = "ARRI LogC3"
 _WEIGHTS = {"rec709": "ITU-R BT.709", "rec2020": "ITU-R BT.2020"}
 #: FFmpeg's codes for the tags (AVColorSpace, AVColorRange), as the reader decodes them.
 _AV_MATRIX = {name: code for code, name in AV_MATRICES.items()}
@@ -68,7 +70,7 @@ def write_movie(
     options: TakeOptions | None = None,
     *,
     codec: str = "prores4444",
-    encoding: str = "ARRI LogC3",
+    encoding: str = MOVIE_ENCODING,
     matrix: str = "rec709",
     range_: str = "legal",
     tags: bool = True,

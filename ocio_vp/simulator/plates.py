@@ -358,6 +358,8 @@ def _capture_document(
         frames = f"{TAKE_FOLDER}/{TAKE_MOVIE if movie else TAKE_NAME}"
         document["take"] = {"frames": frames, "sequence": sequence_ref}
         if movie:
+            from ocio_vp.simulator.movie import MOVIE_ENCODING
+
             document["take"]["encoding"] = MOVIE_ENCODING
     document["lit_chart"] = {c: _chart(f"lit_{c}.{options.lit_format}") for c in CHANNELS}
     document["environments"] = _environments(measurements, names)
@@ -443,9 +445,8 @@ def raw_clip_note(measurements: Measurements, options: PlateOptions) -> str | No
 #: Where the take goes in the plates folder, and its frames' names.
 TAKE_FOLDER = "take"
 TAKE_NAME = "A001.####.exr"
-#: The take as a camera movie (``PlateOptions.take_format``), and the log curve it is in.
+#: The take as a camera movie (``PlateOptions.take_format``).
 TAKE_MOVIE = "A001.mov"
-MOVIE_ENCODING = "ARRI LogC3"
 
 
 def practice_sequence() -> PatternSequence:
@@ -475,7 +476,6 @@ def _film_patterns(measurements, folder: Path, options: PlateOptions, sequence, 
             folder / TAKE_FOLDER / TAKE_MOVIE,
             options.take,
             codec=options.take_format,
-            encoding=MOVIE_ENCODING,
             on_frame=on_frame,
         )
     else:
