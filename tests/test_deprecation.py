@@ -198,3 +198,18 @@ def test_dict_style_ocio_names_warn_and_read_the_field() -> None:
     ]
     assert names == OcioNames(config="config.ocio", reference="ACES2065-1")  # no warning
     assert OcioNames() == OcioNames() and bool(OcioNames())  # dataclass eq, always truthy
+
+
+@pytest.mark.parametrize("module", ["ocio_vp.correction", "ocio_vp.correction.linear"])
+def test_loo_cv_error_is_the_relative_error_of_the_held_out_predictions(module) -> None:
+    from ocio_vp.correction.linear import loo_predictions
+
+    loo_cv_error = _old(module, "loo_cv_error", "error_relative_to_white")
+    X = RNG.random((24, 3)) + 0.05
+    P = X @ Q.T + 0.01 * RNG.standard_normal((24, 3))
+    w = np.ones(24)
+    w[3] = 0.0
+    held = loo_predictions("least-squares", X, P, w, 18)
+    # d96a980's formula, written out: mean_j w_j |held_j - p_j| / p_white over the kept patches
+    expected = (w[:, None] * np.abs(held - P)).sum(axis=0) / w.sum() / P[18]
+    np.testing.assert_allclose(loo_cv_error("least-squares", X, P, w, 18), expected, rtol=1e-12)
