@@ -28,6 +28,8 @@ ALIASES = [
         for module in ("ocio_vp.correction", "ocio_vp.correction.perceptual")
     ),
     ("ocio_vp.correction.skin_priority", "default_fit", "q_auto", "ocio_vp.correction.auto:q_auto"),
+    ("ocio_vp.synthesis.camera", "CIE_OBSERVER", "spectra.CIE_OBSERVER", "ocio_vp.spectra"),
+    ("ocio_vp.synthesis.camera", "cie_cmfs_sds", "spectra.cie_cmfs_sds", "ocio_vp.spectra"),
 ]
 RNG = np.random.default_rng(39)
 C = np.hstack([np.diag([1.1, 0.9, 1.0]), 0.05 * RNG.standard_normal((3, 3))])  # degree 2
