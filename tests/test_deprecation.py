@@ -3,6 +3,7 @@ names the replacement and the release that removes them (ocio_vp.deprecation).""
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import warnings
 
@@ -215,3 +216,58 @@ def test_loo_cv_error_is_the_relative_error_of_the_held_out_predictions(module) 
     # d96a980's formula, written out: mean_j w_j |held_j - p_j| / p_white over the kept patches
     expected = (w[:, None] * np.abs(held - P)).sum(axis=0) / w.sum() / P[18]
     np.testing.assert_allclose(loo_cv_error("least-squares", X, P, w, 18), expected, rtol=1e-12)
+
+
+SAMPLE_SOLUTION = "sample_configs/paper_stage/direct_sun"
+
+
+def test_model_files_is_read_by_config_data_as_its_sidecars() -> None:
+    from pathlib import Path
+
+    import ocio_vp.ocio.config as config
+    from ocio_vp.formats.solution import load_solution
+    from ocio_vp.ocio.description import file, group
+
+    ModelFiles = _old("ocio_vp.ocio.config", "ModelFiles", "ModelOutputs")
+    solution = load_solution(Path(__file__).resolve().parent.parent / SAMPLE_SOLUTION)
+    data = config.config_data(solution, model=ModelFiles("q.clf", "qi.clf", "Chain note."))
+    footage = data.colour_space(config.POST_CORRECTION_COLORSPACE)
+    assert (footage.to_reference, footage.from_reference) == (file("q.clf"), file("qi.clf"))
+    (q,) = [t for t in data.named_transforms if t.name == config.POST_CORRECTION]
+    assert "(q.clf; the matrix below is only its 3x3 approximation). Chain note." in q.description
+    inner = data.colour_space(config.IN_FRUSTUM).from_reference  # [SL]^-1 Q^-1(c)
+    assert inner.children[0] == file("qi.clf") and inner == group(
+        [file("qi.clf"), inner.children[1]]
+    )
+
+
+def test_wall_tail_is_what_wall_chains_appends() -> None:
+    from pathlib import Path
+
+    import ocio_vp.ocio.config as config
+    from ocio_vp.formats.solution import load_solution
+    from ocio_vp.ocio.description import clamp, group
+    from ocio_vp.ocio.matrix import matrix_record
+
+    wall_tail = _old("ocio_vp.ocio.config", "wall_tail", "wall_chains")
+    solution = load_solution(Path(__file__).resolve().parent.parent / SAMPLE_SOLUTION)
+    extra = [matrix_record(np.eye(3) * 0.5)]
+    tail, undo = wall_tail(solution, extra)
+    # a linear wall without soft clip: the extra records between clamps to the drive's domain
+    assert tail == [clamp(min_in=0.0, min_out=0.0), *extra]
+    assert undo == [group(tail, inverse=True)]
+    there, back = config.wall_chains(solution, {config.OUT_OF_FRUSTUM: extra}, None)[
+        config.OUT_OF_FRUSTUM
+    ]
+    assert there[-2:] == tail and back[:1] == undo
+    assert wall_tail(solution, []) == ([], [])
+
+
+def test_ocio_names_config_filename_keyword_warns_and_names_the_config() -> None:
+    from ocio_vp.ocio.config import ocio_names
+
+    with pytest.warns(DeprecationWarning, match=f"config_filename.*{REMOVED_IN}.*ocio_names"):
+        names = ocio_names(config_filename="stage.ocio")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert names == dataclasses.replace(ocio_names(), config="stage.ocio")
