@@ -271,3 +271,22 @@ def test_ocio_names_config_filename_keyword_warns_and_names_the_config() -> None
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert names == dataclasses.replace(ocio_names(), config="stage.ocio")
+
+
+def test_skin_delta_e_is_camera_delta_e_2000_with_the_target_first() -> None:
+    import colour
+
+    skin_delta_e = _old("ocio_vp.correction.skin", "skin_delta_e", "camera_delta_E_2000")
+    white = np.array([0.9, 1.0, 0.8])
+    target = np.array([[0.40, 0.30, 0.22], [0.20, 0.14, 0.10]])
+    corrected = target * np.array([1.03, 0.98, 1.01])
+    # independently: XYZ = RGB / white's Y (camera_to_xyz = I), Lab relative to white, ΔE2000
+    lab = [
+        colour.XYZ_to_Lab(rgb / white[1], colour.XYZ_to_xy(white / white[1]))
+        for rgb in (target, corrected)
+    ]
+    np.testing.assert_allclose(
+        skin_delta_e(corrected, target, white, np.eye(3)),
+        colour.delta_E(lab[0], lab[1], method="CIE 2000"),
+        rtol=1e-9,
+    )
