@@ -290,3 +290,43 @@ def test_skin_delta_e_is_camera_delta_e_2000_with_the_target_first() -> None:
         colour.delta_E(lab[0], lab[1], method="CIE 2000"),
         rtol=1e-9,
     )
+
+
+def test_wall_encoding_of_names_the_encoding_and_peak() -> None:
+    from pathlib import Path
+
+    from ocio_vp.formats.solution import load_solution
+
+    wall_encoding_of = _old("ocio_vp.patterns.validation", "wall_encoding_of", "WallEncoding.of")
+    solution = load_solution(Path(__file__).resolve().parent.parent / SAMPLE_SOLUTION)
+    assert solution.linearity is None  # a linear wall, no peak: what d96a980 returned for it
+    assert wall_encoding_of(solution) == ("linear", None)
+
+
+@pytest.mark.parametrize(
+    ("module", "name", "fields"),
+    [
+        ("ocio_vp.ocio.show", "KeptSpace", ["name", "aliases", "is_data", "record", "problem"]),
+        ("ocio_vp.exports.unreal_script", "UnrealSlot", ["name", "index", "family"]),
+    ],
+)
+def test_old_records_keep_their_fields(module, name, fields) -> None:
+    record = _old(module, name, "")
+    assert [f.name for f in dataclasses.fields(record)] == fields
+
+
+def test_show_data_kept_keyword_warns_and_changes_nothing() -> None:
+    from ocio_vp.ocio import description as d
+    from ocio_vp.ocio import show
+
+    base = d.ConfigData(
+        colour_spaces=[d.ColourSpace("AP0", "", "")],
+        roles={"aces_interchange": "AP0"},
+        views=[d.View("sRGB", "Film", "AP0")],
+    )
+    camera = d.matrix([2.0, 0, 0, 0, 0, 2.0, 0, 0, 0, 0, 2.0, 0, 0, 0, 0, 1])
+    own = d.ConfigData(colour_spaces=[d.ColourSpace(show.REFERENCE, "ocio-vp/Camera", "camera")])
+    envs = [show.EnvironmentData("a", own, camera)]
+    with pytest.warns(DeprecationWarning, match=f"show_data\\(kept=.*{REMOVED_IN}.*base.kept"):
+        data = show.show_data(base, envs, "base", kept=[])
+    assert data == show.show_data(base, envs, "base")
