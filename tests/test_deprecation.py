@@ -330,3 +330,60 @@ def test_show_data_kept_keyword_warns_and_changes_nothing() -> None:
     with pytest.warns(DeprecationWarning, match=f"show_data\\(kept=.*{REMOVED_IN}.*base.kept"):
         data = show.show_data(base, envs, "base", kept=[])
     assert data == show.show_data(base, envs, "base")
+
+
+def _corrections():
+    from ocio_vp.model.correction import FitDomain, ProtectedCorrection
+
+    domain = FitDomain(np.eye(3), [[0.2, 0.2], [0.5, 0.2], [0.2, 0.5]], [0.3, 0.3])
+    return [
+        MatrixCorrection(Q),
+        RootPolynomialCorrection(C, Q),
+        ProtectedCorrection(MatrixCorrection(Q), domain, np.eye(3)),
+    ]
+
+
+@pytest.mark.parametrize("index", range(3))
+def test_homogeneous_warns_and_says_whether_q_commutes_with_scale(index) -> None:
+    correction = _corrections()[index]
+    name = type(correction).__name__
+    with pytest.warns(DeprecationWarning, match=f"{name}.homogeneous.*{REMOVED_IN}"):
+        homogeneous = correction.homogeneous
+    assert homogeneous is (index < 2)  # d96a980: True, True, False
+    rgb = RNG.random((64, 3)) * 2.0
+    commutes = np.allclose(correction.apply(4.0 * rgb), 4.0 * correction.apply(rgb), rtol=1e-9)
+    assert commutes is homogeneous
+
+
+def test_chart_errors_summary_is_the_means_and_maxima() -> None:
+    from ocio_vp.metrics import ChartErrors
+
+    errors = ChartErrors(np.array([0.01, 0.02, 0.03]), np.array([1.0, 3.0]), np.array([2.0, 6.0]))
+    with pytest.warns(DeprecationWarning, match=f"ChartErrors.summary.*{REMOVED_IN}"):
+        summary = errors.summary
+    assert summary == pytest.approx(
+        {
+            "relative_to_white_mean": 0.02,
+            "delta_E_2000_mean": 2.0,
+            "delta_E_2000_max": 3.0,
+            "delta_E_ITP_mean": 4.0,
+            "delta_E_ITP_max": 6.0,
+        },
+        rel=1e-15,
+    )
+
+
+def test_model_outputs_inverse_is_the_blocks_inverse_agreement() -> None:
+    from ocio_vp.formats.diagnostics import PostCorrectionOCIO
+    from ocio_vp.model.footage_range import Agreement
+    from ocio_vp.ocio.bake import ModelOutputs
+
+    forward = Agreement({"all": 0.1}, {"all": 0.2}, (1.0, 1.0, 1.0))
+    back = Agreement({"all": 0.3}, {"all": 0.4}, (0.5, 0.5, 0.5))
+    block = PostCorrectionOCIO(files=["q.clf", "qi.clf"], agreement=forward, inverse_agreement=back)
+    for outputs, expected in [
+        (ModelOutputs("q.clf", "qi.clf", forward, block=block), back),
+        (ModelOutputs("q.clf", None, forward), None),
+    ]:
+        with pytest.warns(DeprecationWarning, match=f"ModelOutputs.inverse.*{REMOVED_IN}"):
+            assert outputs.inverse is expected
