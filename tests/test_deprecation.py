@@ -387,3 +387,16 @@ def test_model_outputs_inverse_is_the_blocks_inverse_agreement() -> None:
     ]:
         with pytest.warns(DeprecationWarning, match=f"ModelOutputs.inverse.*{REMOVED_IN}"):
             assert outputs.inverse is expected
+
+
+@pytest.mark.parametrize(("zero", "overflow"), [(True, 0.0), (False, np.inf)])
+def test_block_means_zero_non_finite_keyword_still_chooses(monkeypatch, zero, overflow) -> None:
+    from ocio_vp.plates import reader
+
+    pixels = np.full((8, 8, 3), 0.5, dtype=np.float32)
+    pixels[4:8, 0:4] = np.inf  # one block overflowed
+    monkeypatch.setattr(reader, "read_region", lambda info, box: pixels[box[1] : box[3]])
+    info = reader.PlateInfo("p.exr", "openexr", 8, 8, 16, True, "linear")
+    with pytest.warns(DeprecationWarning, match=f"zero_non_finite.*{REMOVED_IN}"):
+        means = reader.block_means(info, 4, zero_non_finite=zero)
+    assert (means[1, 0] == overflow).all() and (means[0, 0] == 0.5).all()
