@@ -400,3 +400,11 @@ def test_block_means_zero_non_finite_keyword_still_chooses(monkeypatch, zero, ov
     with pytest.warns(DeprecationWarning, match=f"zero_non_finite.*{REMOVED_IN}"):
         means = reader.block_means(info, 4, zero_non_finite=zero)
     assert (means[1, 0] == overflow).all() and (means[0, 0] == 0.5).all()
+
+
+def test_finite_array_old_call_fails_at_once_and_says_how() -> None:
+    from ocio_vp.formats.records import finite_array
+
+    with pytest.raises(TypeError, match=r"now finite_array\(data, name, shape, within\)"):
+        finite_array([1.0, 2.0, 3.0], (3,), "white")  # type: ignore[arg-type]
+    np.testing.assert_array_equal(finite_array({"white": [1, 2, 3]}, "white", (3,)), [1, 2, 3])
