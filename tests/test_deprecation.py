@@ -29,6 +29,7 @@ ALIASES = [
         for module in ("ocio_vp.correction", "ocio_vp.correction.perceptual")
     ),
     ("ocio_vp.correction.skin_priority", "default_fit", "q_auto", "ocio_vp.correction.auto:q_auto"),
+    ("ocio_vp.ocio.wall", "sidecar_name", "ocio.clf.sidecar_name", "ocio_vp.ocio.clf"),
     ("ocio_vp.synthesis.camera", "CIE_OBSERVER", "spectra.CIE_OBSERVER", "ocio_vp.spectra"),
     ("ocio_vp.synthesis.camera", "cie_cmfs_sds", "spectra.cie_cmfs_sds", "ocio_vp.spectra"),
 ]
