@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ocio_vp.choices import DEFAULT_WHITE_PATCH
+from ocio_vp.deprecation import warn_deprecated
 from ocio_vp.spectra import CIE_OBSERVER, packaged_json, spectral_shape, wavelengths
 
 __all__ = [
@@ -256,6 +257,18 @@ class ChartErrors:
     relative_to_white: np.ndarray  # (3,) paper Fig. 11
     delta_E_2000: np.ndarray  # (n,)
     delta_E_ITP: np.ndarray  # (n,)
+
+    @property
+    def summary(self) -> dict[str, float]:
+        """Deprecated: means (and maxima of ΔE) as plain floats."""
+        warn_deprecated("ChartErrors.summary", "the means and maxima of its arrays")
+        return {
+            "relative_to_white_mean": float(np.mean(self.relative_to_white)),
+            "delta_E_2000_mean": float(np.mean(self.delta_E_2000)),
+            "delta_E_2000_max": float(np.max(self.delta_E_2000)),
+            "delta_E_ITP_mean": float(np.mean(self.delta_E_ITP)),
+            "delta_E_ITP_max": float(np.max(self.delta_E_ITP)),
+        }
 
 
 def chart_errors(

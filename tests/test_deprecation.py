@@ -3,6 +3,7 @@ names the replacement and the release that removes them (ocio_vp.deprecation).""
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import warnings
 
@@ -28,6 +29,9 @@ ALIASES = [
         for module in ("ocio_vp.correction", "ocio_vp.correction.perceptual")
     ),
     ("ocio_vp.correction.skin_priority", "default_fit", "q_auto", "ocio_vp.correction.auto:q_auto"),
+    ("ocio_vp.ocio.wall", "sidecar_name", "ocio.clf.sidecar_name", "ocio_vp.ocio.clf"),
+    ("ocio_vp.synthesis.camera", "CIE_OBSERVER", "spectra.CIE_OBSERVER", "ocio_vp.spectra"),
+    ("ocio_vp.synthesis.camera", "cie_cmfs_sds", "spectra.cie_cmfs_sds", "ocio_vp.spectra"),
 ]
 RNG = np.random.default_rng(39)
 C = np.hstack([np.diag([1.1, 0.9, 1.0]), 0.05 * RNG.standard_normal((3, 3))])  # degree 2
@@ -198,3 +202,210 @@ def test_dict_style_ocio_names_warn_and_read_the_field() -> None:
     ]
     assert names == OcioNames(config="config.ocio", reference="ACES2065-1")  # no warning
     assert OcioNames() == OcioNames() and bool(OcioNames())  # dataclass eq, always truthy
+
+
+@pytest.mark.parametrize("module", ["ocio_vp.correction", "ocio_vp.correction.linear"])
+def test_loo_cv_error_is_the_relative_error_of_the_held_out_predictions(module) -> None:
+    from ocio_vp.correction.linear import loo_predictions
+
+    loo_cv_error = _old(module, "loo_cv_error", "error_relative_to_white")
+    X = RNG.random((24, 3)) + 0.05
+    P = X @ Q.T + 0.01 * RNG.standard_normal((24, 3))
+    w = np.ones(24)
+    w[3] = 0.0
+    held = loo_predictions("least-squares", X, P, w, 18)
+    # d96a980's formula, written out: mean_j w_j |held_j - p_j| / p_white over the kept patches
+    expected = (w[:, None] * np.abs(held - P)).sum(axis=0) / w.sum() / P[18]
+    np.testing.assert_allclose(loo_cv_error("least-squares", X, P, w, 18), expected, rtol=1e-12)
+
+
+SAMPLE_SOLUTION = "sample_configs/paper_stage/direct_sun"
+
+
+def test_model_files_is_read_by_config_data_as_its_sidecars() -> None:
+    from pathlib import Path
+
+    import ocio_vp.ocio.config as config
+    from ocio_vp.formats.solution import load_solution
+    from ocio_vp.ocio.description import file, group
+
+    ModelFiles = _old("ocio_vp.ocio.config", "ModelFiles", "ModelOutputs")
+    solution = load_solution(Path(__file__).resolve().parent.parent / SAMPLE_SOLUTION)
+    data = config.config_data(solution, model=ModelFiles("q.clf", "qi.clf", "Chain note."))
+    footage = data.colour_space(config.POST_CORRECTION_COLORSPACE)
+    assert (footage.to_reference, footage.from_reference) == (file("q.clf"), file("qi.clf"))
+    (q,) = [t for t in data.named_transforms if t.name == config.POST_CORRECTION]
+    assert "(q.clf; the matrix below is only its 3x3 approximation). Chain note." in q.description
+    inner = data.colour_space(config.IN_FRUSTUM).from_reference  # [SL]^-1 Q^-1(c)
+    assert inner.children[0] == file("qi.clf") and inner == group(
+        [file("qi.clf"), inner.children[1]]
+    )
+
+
+def test_wall_tail_is_what_wall_chains_appends() -> None:
+    from pathlib import Path
+
+    import ocio_vp.ocio.config as config
+    from ocio_vp.formats.solution import load_solution
+    from ocio_vp.ocio.description import clamp, group
+    from ocio_vp.ocio.matrix import matrix_record
+
+    wall_tail = _old("ocio_vp.ocio.config", "wall_tail", "wall_chains")
+    solution = load_solution(Path(__file__).resolve().parent.parent / SAMPLE_SOLUTION)
+    extra = [matrix_record(np.eye(3) * 0.5)]
+    tail, undo = wall_tail(solution, extra)
+    # a linear wall without soft clip: the extra records between clamps to the drive's domain
+    assert tail == [clamp(min_in=0.0, min_out=0.0), *extra]
+    assert undo == [group(tail, inverse=True)]
+    there, back = config.wall_chains(solution, {config.OUT_OF_FRUSTUM: extra}, None)[
+        config.OUT_OF_FRUSTUM
+    ]
+    assert there[-2:] == tail and back[:1] == undo
+    assert wall_tail(solution, []) == ([], [])
+
+
+def test_ocio_names_config_filename_keyword_warns_and_names_the_config() -> None:
+    from ocio_vp.ocio.config import ocio_names
+
+    with pytest.warns(DeprecationWarning, match=f"config_filename.*{REMOVED_IN}.*ocio_names"):
+        names = ocio_names(config_filename="stage.ocio")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert names == dataclasses.replace(ocio_names(), config="stage.ocio")
+
+
+def test_skin_delta_e_is_camera_delta_e_2000_with_the_target_first() -> None:
+    import colour
+
+    skin_delta_e = _old("ocio_vp.correction.skin", "skin_delta_e", "camera_delta_E_2000")
+    white = np.array([0.9, 1.0, 0.8])
+    target = np.array([[0.40, 0.30, 0.22], [0.20, 0.14, 0.10]])
+    corrected = target * np.array([1.03, 0.98, 1.01])
+    # independently: XYZ = RGB / white's Y (camera_to_xyz = I), Lab relative to white, ΔE2000
+    lab = [
+        colour.XYZ_to_Lab(rgb / white[1], colour.XYZ_to_xy(white / white[1]))
+        for rgb in (target, corrected)
+    ]
+    np.testing.assert_allclose(
+        skin_delta_e(corrected, target, white, np.eye(3)),
+        colour.delta_E(lab[0], lab[1], method="CIE 2000"),
+        rtol=1e-9,
+    )
+
+
+def test_wall_encoding_of_names_the_encoding_and_peak() -> None:
+    from pathlib import Path
+
+    from ocio_vp.formats.solution import load_solution
+
+    wall_encoding_of = _old("ocio_vp.patterns.validation", "wall_encoding_of", "WallEncoding.of")
+    solution = load_solution(Path(__file__).resolve().parent.parent / SAMPLE_SOLUTION)
+    assert solution.linearity is None  # a linear wall, no peak: what d96a980 returned for it
+    assert wall_encoding_of(solution) == ("linear", None)
+
+
+@pytest.mark.parametrize(
+    ("module", "name", "fields"),
+    [
+        ("ocio_vp.ocio.show", "KeptSpace", ["name", "aliases", "is_data", "record", "problem"]),
+        ("ocio_vp.exports.unreal_script", "UnrealSlot", ["name", "index", "family"]),
+    ],
+)
+def test_old_records_keep_their_fields(module, name, fields) -> None:
+    record = _old(module, name, "")
+    assert [f.name for f in dataclasses.fields(record)] == fields
+
+
+def test_show_data_kept_keyword_warns_and_changes_nothing() -> None:
+    from ocio_vp.ocio import description as d
+    from ocio_vp.ocio import show
+
+    base = d.ConfigData(
+        colour_spaces=[d.ColourSpace("AP0", "", "")],
+        roles={"aces_interchange": "AP0"},
+        views=[d.View("sRGB", "Film", "AP0")],
+    )
+    camera = d.matrix([2.0, 0, 0, 0, 0, 2.0, 0, 0, 0, 0, 2.0, 0, 0, 0, 0, 1])
+    own = d.ConfigData(colour_spaces=[d.ColourSpace(show.REFERENCE, "ocio-vp/Camera", "camera")])
+    envs = [show.EnvironmentData("a", own, camera)]
+    with pytest.warns(DeprecationWarning, match=f"show_data\\(kept=.*{REMOVED_IN}.*base.kept"):
+        data = show.show_data(base, envs, "base", kept=[])
+    assert data == show.show_data(base, envs, "base")
+
+
+def _corrections():
+    from ocio_vp.model.correction import FitDomain, ProtectedCorrection
+
+    domain = FitDomain(np.eye(3), [[0.2, 0.2], [0.5, 0.2], [0.2, 0.5]], [0.3, 0.3])
+    return [
+        MatrixCorrection(Q),
+        RootPolynomialCorrection(C, Q),
+        ProtectedCorrection(MatrixCorrection(Q), domain, np.eye(3)),
+    ]
+
+
+@pytest.mark.parametrize("index", range(3))
+def test_homogeneous_warns_and_says_whether_q_commutes_with_scale(index) -> None:
+    correction = _corrections()[index]
+    name = type(correction).__name__
+    with pytest.warns(DeprecationWarning, match=f"{name}.homogeneous.*{REMOVED_IN}"):
+        homogeneous = correction.homogeneous
+    assert homogeneous is (index < 2)  # d96a980: True, True, False
+    rgb = RNG.random((64, 3)) * 2.0
+    commutes = np.allclose(correction.apply(4.0 * rgb), 4.0 * correction.apply(rgb), rtol=1e-9)
+    assert commutes is homogeneous
+
+
+def test_chart_errors_summary_is_the_means_and_maxima() -> None:
+    from ocio_vp.metrics import ChartErrors
+
+    errors = ChartErrors(np.array([0.01, 0.02, 0.03]), np.array([1.0, 3.0]), np.array([2.0, 6.0]))
+    with pytest.warns(DeprecationWarning, match=f"ChartErrors.summary.*{REMOVED_IN}"):
+        summary = errors.summary
+    assert summary == pytest.approx(
+        {
+            "relative_to_white_mean": 0.02,
+            "delta_E_2000_mean": 2.0,
+            "delta_E_2000_max": 3.0,
+            "delta_E_ITP_mean": 4.0,
+            "delta_E_ITP_max": 6.0,
+        },
+        rel=1e-15,
+    )
+
+
+def test_model_outputs_inverse_is_the_blocks_inverse_agreement() -> None:
+    from ocio_vp.formats.diagnostics import PostCorrectionOCIO
+    from ocio_vp.model.footage_range import Agreement
+    from ocio_vp.ocio.bake import ModelOutputs
+
+    forward = Agreement({"all": 0.1}, {"all": 0.2}, (1.0, 1.0, 1.0))
+    back = Agreement({"all": 0.3}, {"all": 0.4}, (0.5, 0.5, 0.5))
+    block = PostCorrectionOCIO(files=["q.clf", "qi.clf"], agreement=forward, inverse_agreement=back)
+    for outputs, expected in [
+        (ModelOutputs("q.clf", "qi.clf", forward, block=block), back),
+        (ModelOutputs("q.clf", None, forward), None),
+    ]:
+        with pytest.warns(DeprecationWarning, match=f"ModelOutputs.inverse.*{REMOVED_IN}"):
+            assert outputs.inverse is expected
+
+
+@pytest.mark.parametrize(("zero", "overflow"), [(True, 0.0), (False, np.inf)])
+def test_block_means_zero_non_finite_keyword_still_chooses(monkeypatch, zero, overflow) -> None:
+    from ocio_vp.plates import reader
+
+    pixels = np.full((8, 8, 3), 0.5, dtype=np.float32)
+    pixels[4:8, 0:4] = np.inf  # one block overflowed
+    monkeypatch.setattr(reader, "read_region", lambda info, box: pixels[box[1] : box[3]])
+    info = reader.PlateInfo("p.exr", "openexr", 8, 8, 16, True, "linear")
+    with pytest.warns(DeprecationWarning, match=f"zero_non_finite.*{REMOVED_IN}"):
+        means = reader.block_means(info, 4, zero_non_finite=zero)
+    assert (means[1, 0] == overflow).all() and (means[0, 0] == 0.5).all()
+
+
+def test_finite_array_old_call_fails_at_once_and_says_how() -> None:
+    from ocio_vp.formats.records import finite_array
+
+    with pytest.raises(TypeError, match=r"now finite_array\(data, name, shape, within\)"):
+        finite_array([1.0, 2.0, 3.0], (3,), "white")  # type: ignore[arg-type]
+    np.testing.assert_array_equal(finite_array({"white": [1, 2, 3]}, "white", (3,)), [1, 2, 3])

@@ -53,6 +53,7 @@ from ocio_vp.correction.linear import (
     q_white_preserving,
     target_rank,
 )
+from ocio_vp.correction.linear import DEPRECATED as _LINEAR_DEPRECATED
 from ocio_vp.correction.outliers import (
     COLORCHECKER_NAMES,
     MAX_EXCLUDED,
@@ -107,7 +108,9 @@ from ocio_vp.correction.validation import (
 )
 from ocio_vp.deprecation import deprecated_names
 
-__getattr__ = deprecated_names(__name__, {**_DEPRECATED, **_PERCEPTUAL_DEPRECATED})
+__getattr__ = deprecated_names(
+    __name__, {**_DEPRECATED, **_LINEAR_DEPRECATED, **_PERCEPTUAL_DEPRECATED}
+)
 
 __all__ = [
     "AUTO_LADDER",

@@ -13,6 +13,7 @@ import numpy as np
 
 from ocio_vp.correction.perceptual import patch_delta_e
 from ocio_vp.correction.problem import QFit, QProblem, fit_least_squares
+from ocio_vp.deprecation import deprecated_names
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import white_scale
 from ocio_vp.model.correction import MatrixCorrection
@@ -516,3 +517,21 @@ def choose_model(
     lowest = min(means[name] for name in eligible)
     chosen = next(name for name in eligible if means[name] <= lowest + AUTO_TIE)
     return chosen, table
+
+
+def _loo_cv_error(name: str, X: np.ndarray, P: np.ndarray, w: np.ndarray, white: int):
+    """(3,) leave-one-patch-out chart error per channel, relative to white (the old function)."""
+    from ocio_vp.metrics import error_relative_to_white
+
+    return error_relative_to_white(loo_predictions(name, X, P, w, white), P, white, w)
+
+
+#: Names served for one more release (ocio_vp.deprecation).
+DEPRECATED = {
+    "loo_cv_error": (
+        "ocio_vp.metrics.error_relative_to_white(loo_predictions(name, X, P, w, white), P, "
+        "white, w)",
+        lambda: _loo_cv_error,
+    )
+}
+__getattr__ = deprecated_names(__name__, DEPRECATED)

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ocio_vp.calibration.equations import predict_lit_chart
+from ocio_vp.deprecation import deprecated_names
 from ocio_vp.metrics import camera_lab, sample_camera_to_xyz
 from ocio_vp.skin_data import SkinSet, band_of, ita_degrees, training_skin
 from ocio_vp.spectra import checker_reflectances
@@ -216,3 +217,24 @@ def patch_skin_samples(
         source=f"the chart's skin patches {', '.join(map(str, chosen))} ({how})",
         weights=weights,
     )
+
+
+def _skin_delta_e(
+    corrected: np.ndarray, target: np.ndarray, white: np.ndarray, camera_to_xyz: np.ndarray
+) -> np.ndarray:
+    """The old ``skin_delta_e``: ΔE2000 of corrected skin samples against the target."""
+    from ocio_vp.metrics import camera_delta_E_2000
+
+    return camera_delta_E_2000(target, corrected, camera_to_xyz=camera_to_xyz, white=white)
+
+
+#: Names served for one more release (ocio_vp.deprecation).
+__getattr__ = deprecated_names(
+    __name__,
+    {
+        "skin_delta_e": (
+            "ocio_vp.metrics.camera_delta_E_2000(target, corrected, camera_to_xyz=..., white=...)",
+            lambda: _skin_delta_e,
+        )
+    },
+)

@@ -9,12 +9,36 @@ docs/exports.md lists the properties and what each version allows).
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 
 import PyOpenColorIO as OCIO
+
+from ocio_vp.deprecation import deprecated_names
 
 __all__ = ["SCRIPT_FILE", "render_unreal_script"]
 
 SCRIPT_FILE = "ocio_vp_setup.py"
+
+
+@dataclass(frozen=True)
+class _UnrealSlot:
+    """The old ``UnrealSlot``: a colour space the script names, its index and family."""
+
+    name: str
+    index: int
+    family: str
+
+
+#: Names served for one more release (ocio_vp.deprecation).
+__getattr__ = deprecated_names(
+    __name__,
+    {
+        "UnrealSlot": (
+            "a dict with the same keys (name, index, family)",
+            lambda: _UnrealSlot,
+        )
+    },
+)
 
 
 def _slot(config: OCIO.Config, name: str) -> dict[str, str | int]:

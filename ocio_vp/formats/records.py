@@ -168,7 +168,14 @@ def finite_array(
     data: Mapping[str, object], name: str, shape: tuple[int, ...], within: str = ""
 ) -> np.ndarray:
     """``data[name]`` (a JSON list) as a finite float64 array of ``shape``, no entry beyond
-    :data:`MAX_VALUE`; else InputError naming the key (``within.name``)."""
+    :data:`MAX_VALUE`; else InputError naming the key (``within.name``).
+
+    The old call ``finite_array(value, shape, key)`` fails at once with a TypeError saying so."""
+    if not isinstance(name, str) or not isinstance(data, Mapping):
+        raise TypeError(
+            "finite_array(value, shape, key) is now finite_array(data, name, shape, within): "
+            "pass the mapping holding the value and the value's key"
+        )
     value, key = data.get(name), f"{within}.{name}" if within else name
     try:
         array = np.asarray(value if isinstance(value, list) else (), dtype=np.float64)

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ocio_vp.deprecation import warn_deprecated
 from ocio_vp.errors import InputError
 from ocio_vp.model.expansion import (
     ROOT_POLYNOMIAL_TERMS,
@@ -385,6 +386,12 @@ class MatrixCorrection:
     def invertible(self) -> bool:
         return matrix_invertible(self.Q)
 
+    @property
+    def homogeneous(self) -> bool:
+        """Deprecated: whether ``apply`` commutes with scaling (Q(kx) = k Q(x))."""
+        warn_deprecated("MatrixCorrection.homogeneous", "its inverse's own handling of scale")
+        return True
+
     def apply(self, rgb: ArrayLike) -> np.ndarray:
         """(..., 3) ``Q rgb``."""
         return np.asarray(rgb, dtype=np.float64) @ self.Q.T
@@ -445,6 +452,14 @@ class RootPolynomialCorrection:
     @property
     def invertible(self) -> bool:
         return matrix_invertible(self.fallback)
+
+    @property
+    def homogeneous(self) -> bool:
+        """Deprecated: whether ``apply`` commutes with scaling (Q(kx) = k Q(x))."""
+        warn_deprecated(
+            "RootPolynomialCorrection.homogeneous", "its inverse's own handling of scale"
+        )
+        return True
 
     def weight(self, rgb: ArrayLike) -> np.ndarray:
         """(...,) 1 where the polynomial applies, 0 where the fallback does."""
@@ -546,6 +561,12 @@ class ProtectedCorrection:
     @property
     def invertible(self) -> bool:
         return self.inner.invertible
+
+    @property
+    def homogeneous(self) -> bool:
+        """Deprecated: whether ``apply`` commutes with scaling (Q(kx) = k Q(x))."""
+        warn_deprecated("ProtectedCorrection.homogeneous", "its inverse's own handling of scale")
+        return False
 
     def weight(self, rgb: ArrayLike) -> np.ndarray:
         """(...,) 1 where ``inner`` applies, 0 where the identity does."""

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import PyOpenColorIO as OCIO
 
+from ocio_vp.deprecation import warn_deprecated
 from ocio_vp.errors import InputError
 from ocio_vp.formats.diagnostics import PostCorrectionOCIO
 from ocio_vp.formats.solution import Solution
@@ -626,6 +627,12 @@ class ModelOutputs:
     forward: Agreement
     files: dict[str, str] = field(default_factory=dict)
     block: PostCorrectionOCIO | None = None
+
+    @property
+    def inverse(self) -> Agreement | None:
+        """Deprecated: Q^-1's agreement with the model (``block.inverse_agreement``)."""
+        warn_deprecated("ModelOutputs.inverse", "ModelOutputs.block.inverse_agreement")
+        return None if self.block is None else self.block.inverse_agreement
 
     def note(self) -> str:
         """One sentence for descriptions: how close the chain is, and what to use where it is

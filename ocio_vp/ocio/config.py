@@ -15,15 +15,16 @@ Profile version 2.1, so that Unreal 5.1+ and other OCIO 2.1 hosts load it.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import PyOpenColorIO as OCIO
 
 from ocio_vp.calibration.diagnostics import is_identity, offset_is_negligible
 from ocio_vp.calibration.equations import condition_text
-from ocio_vp.deprecation import deprecated_names
+from ocio_vp.deprecation import deprecated_names, warn_deprecated
 from ocio_vp.formats.linearity import Linearity
 from ocio_vp.formats.solution import CONFIG_FILENAME, OcioNames, Solution
 from ocio_vp.metrics import rgb_to_rgb_cat02
@@ -105,8 +106,48 @@ __getattr__ = deprecated_names(
             "ocio_vp.calibration.MAX_CONDITION_Q_FOR_N",
             "ocio_vp.calibration:MAX_CONDITION_Q_FOR_N",
         ),
+        "ModelFiles": (
+            "ocio_vp.ocio.bake.ModelOutputs (model_outputs)",
+            lambda: _ModelFiles,
+        ),
+        "wall_tail": (
+            "ocio_vp.ocio.config.wall_chains (it appends each wall colour space's tail)",
+            lambda: _wall_tail,
+        ),
     },
 )
+
+
+@dataclass(frozen=True)
+class _ModelFiles:
+    """The old ``ModelFiles`` (a non-linear Q's sidecar names and its note), which
+    :func:`config_data` still reads, as the three things of ``ModelOutputs`` it uses."""
+
+    q: str
+    q_inverse: str | None
+    note: str = ""
+
+
+class _ModelFilesOutputs:
+    """``_ModelFiles`` read as ``ModelOutputs`` (file names, ``note()``)."""
+
+    def __init__(self, files: _ModelFiles) -> None:
+        self.q_file, self.q_inverse_file, self._note = files.q, files.q_inverse, files.note
+
+    def note(self) -> str:
+        return self._note
+
+
+def _wall_tail(solution: Solution, extra: list[Transform]) -> Chains:
+    """The old ``wall_tail``: (drive -> wall signal, wall signal -> drive), the soft clip then
+    :func:`wall_signal_tail`, as :func:`wall_chains` appends them."""
+    signal = wall_signal_tail(solution, extra)
+    undo = [group(signal, inverse=True)] if signal else []
+    knee = soft_clip_knee(solution.linearity)
+    if knee is None:
+        return signal, undo
+    clip, unclip = soft_clip_transforms(knee)
+    return [*clip, *signal], [*undo, *unclip]
 
 
 Chains = tuple[list[Transform], list[Transform]]
@@ -250,6 +291,8 @@ def config_data(
     ValueError
         A non-linear post-correction without ``model``.
     """
+    if isinstance(model, _ModelFiles):  # the deprecated ModelFiles
+        model = cast("ModelOutputs", _ModelFilesOutputs(model))
     origin = _origin(solution)
     data = ConfigData(
         name=f"ocio-vp_{solution.stage}_{solution.environment}",
@@ -492,10 +535,14 @@ def _add_working_spaces(data: ConfigData, camera: str) -> tuple[dict[str, str], 
     return roles, aces_to_camera
 
 
-def ocio_names() -> OcioNames:
-    """The ``ocio`` block of ``solution.json``: which colorspace does what."""
+def ocio_names(config_filename: str | None = None) -> OcioNames:
+    """The ``ocio`` block of ``solution.json``: which colorspace does what.
+
+    ``config_filename`` (deprecated) names the config other than :data:`CONFIG_FILENAME`."""
+    if config_filename is not None:
+        warn_deprecated("ocio_names(config_filename=...)", "ocio_names() (a config.ocio)")
     return OcioNames(
-        config=CONFIG_FILENAME,
+        config=CONFIG_FILENAME if config_filename is None else config_filename,
         reference=REFERENCE,
         out_of_frustum=OUT_OF_FRUSTUM,
         in_frustum=IN_FRUSTUM,

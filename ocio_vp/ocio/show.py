@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import PyOpenColorIO as OCIO
 
 from ocio_vp.choices import CONTEXT_VARIABLE
+from ocio_vp.deprecation import deprecated_names, warn_deprecated
 from ocio_vp.errors import InputError
 from ocio_vp.ocio.config import (
     DISPLAY,
@@ -62,6 +63,29 @@ DEFAULT_BASE_CONFIG = ACES_CG_CONFIG
 #: Families (after ``ocio-vp/``) of an environment config's own colour spaces.
 ENVIRONMENT_FAMILIES = ("LED Wall", "Camera")
 AP0_ROLE = OCIO.ROLE_INTERCHANGE_SCENE
+
+
+@dataclass(frozen=True)
+class _KeptSpace:
+    """The old ``KeptSpace``: a base colour space kept as OCIO has it, as the show read it."""
+
+    name: str
+    aliases: tuple[str, ...]
+    is_data: bool
+    record: ColourSpace | None
+    problem: str = ""
+
+
+#: Names served for one more release (ocio_vp.deprecation).
+__getattr__ = deprecated_names(
+    __name__,
+    {
+        "KeptSpace": (
+            "ConfigData.kept (ocio_vp.ocio.description.Kept: the OCIO object itself)",
+            lambda: _KeptSpace,
+        )
+    },
+)
 
 
 @dataclass(frozen=True)
@@ -299,10 +323,14 @@ def show_data(
     base: ConfigData,
     environments: Sequence[EnvironmentData],
     label: str,
+    kept: Sequence[object] | None = None,
 ) -> ConfigData:
     """The show config of ``environments`` on ``base`` (``label``: how its description names
     the base), as data: the overlay merged onto the base, the footage views, the active and
-    inactive lists."""
+    inactive lists. ``kept`` (deprecated, ignored): the base's kept colour spaces, which
+    ``base.kept`` now holds."""
+    if kept is not None:
+        warn_deprecated("show_data(kept=...)", "show_data(base) (it reads base.kept)")
     overlay = _overlay(environments, _aces_space(base))
     names = ", ".join(env.name for env in environments)
     first = environments[0].name

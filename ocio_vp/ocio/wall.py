@@ -15,9 +15,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import PyOpenColorIO as OCIO
 
+from ocio_vp.deprecation import deprecated_names
 from ocio_vp.formats.linearity import Linearity, LutFile
 from ocio_vp.formats.solution import Solution
-from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3, sidecar_name
+from ocio_vp.ocio import clf
+from ocio_vp.ocio.clf import CLF_FORMAT, clf_v3
 from ocio_vp.ocio.config import IN_FRUSTUM, OUT_OF_FRUSTUM
 from ocio_vp.ocio.description import Transform, file, transform_record
 from ocio_vp.wall.encoding import (
@@ -39,6 +41,12 @@ __all__ = [
     "lut_transform",
     "wall_outputs",
 ]
+
+#: Names served for one more release (ocio_vp.deprecation): moved to ocio_vp.ocio.clf.
+__getattr__ = deprecated_names(
+    __name__,
+    {"sidecar_name": ("ocio_vp.ocio.clf.sidecar_name", "ocio_vp.ocio.clf:sidecar_name")},
+)
 
 
 def encoding_transforms(encoding: str, *, peak_nits: float = DEFAULT_PEAK_NITS) -> list:
@@ -110,7 +118,7 @@ def wall_outputs(solution: Solution) -> WallOutputs:
             f"inverse of the measured ramp response, {_LUT_DOMAINS[encoding]}.",
         )
         text = clf_v3(group.write(formatName=CLF_FORMAT, config=OCIO.Config.CreateRaw()))
-        name = sidecar_name(f"{solution.stage}_panel_linearity", text)
+        name = clf.sidecar_name(f"{solution.stage}_panel_linearity", text)
         files[f"{LUT_DIR}/{name}"] = text
         chain.append(file(name))
         max_error, bands = lut_accuracy(linearity, lut)

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ocio_vp.deprecation import deprecated_names
 from ocio_vp.errors import InputError
 from ocio_vp.formats.solution import Solution, load_solution
 from ocio_vp.patterns.design import PatternOptions, SequenceBuilder
@@ -30,6 +31,24 @@ __all__ = [
     "validation_sequence",
     "wall_signal",
 ]
+
+
+def _wall_encoding_of(solution: Solution) -> tuple[str, float | None]:
+    """The old ``wall_encoding_of``: (encoding, peak_nits or None) sent to the wall."""
+    encoding = WallEncoding.of(solution.linearity)
+    return encoding.name, encoding.peak_nits
+
+
+#: Names served for one more release (ocio_vp.deprecation).
+__getattr__ = deprecated_names(
+    __name__,
+    {
+        "wall_encoding_of": (
+            "ocio_vp.wall.WallEncoding.of(solution.linearity) (its name and peak_nits)",
+            lambda: _wall_encoding_of,
+        )
+    },
+)
 
 #: The chart's white patch is shown at this fraction of full drive (headroom for saturated
 #: patches whose drive exceeds the white's in one channel).

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ocio_vp.choices import ENCODINGS, canonical_encoding
+from ocio_vp.deprecation import warn_deprecated
 from ocio_vp.errors import InputError
 from ocio_vp.formats.documents import check_regular_file
 from ocio_vp.plates.raw import is_raw
@@ -314,18 +315,23 @@ def read_region(
     return out
 
 
-def block_means(info: PlateInfo, factor: int) -> np.ndarray:
+def block_means(info: PlateInfo, factor: int, *, zero_non_finite: bool | None = None) -> np.ndarray:
     """(height // factor, width // factor, 3) float64: the plate averaged over blocks of
     ``factor`` x ``factor`` pixels (whole blocks only), read in bands. NaN and +-Inf (only a
     stated encoding's decoding gives them: :func:`read_region` refuses them in a file) count
-    as 0, so one sample cannot turn a whole search's statistics into NaN."""
+    as 0, so one sample cannot turn a whole search's statistics into NaN; ``zero_non_finite``
+    (deprecated) False still carries them into their block's mean."""
+    if zero_non_finite is not None:
+        warn_deprecated("block_means(zero_non_finite=...)", "block_means(info, factor)")
     cells_x, cells_y = info.width // factor, info.height // factor
     out = np.empty((cells_y, cells_x, 3), dtype=np.float64)
     band = max(1, (1 << 21) // max(1, info.width * factor * 3))
     for cy in range(0, cells_y, band):
         cy1 = min(cells_y, cy + band)
         box = (info.x, info.y + cy * factor, info.x + cells_x * factor, info.y + cy1 * factor)
-        pixels = np.nan_to_num(read_region(info, box).astype(np.float64), posinf=0.0, neginf=0.0)
+        pixels = read_region(info, box).astype(np.float64)
+        if zero_non_finite is not False:
+            pixels = np.nan_to_num(pixels, posinf=0.0, neginf=0.0)
         out[cy:cy1] = pixels.reshape(cy1 - cy, factor, cells_x, factor, 3).mean(axis=(1, 3))
     return out
 

@@ -17,10 +17,12 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ocio_vp import spectra
+from ocio_vp.deprecation import deprecated_names
 from ocio_vp.errors import InputError
 from ocio_vp.metrics import camera_to_xyz_matrix
 from ocio_vp.simulator.options import read_spectra_csv
-from ocio_vp.spectra import camera_sensitivities, cie_cmfs_sds, unknown_name
+from ocio_vp.spectra import camera_sensitivities, unknown_name
 
 __all__ = [
     "CameraModel",
@@ -31,10 +33,19 @@ __all__ = [
     "cie_cmfs",
 ]
 
+#: Names served for one more release (ocio_vp.deprecation): moved to ocio_vp.spectra.
+__getattr__ = deprecated_names(
+    __name__,
+    {
+        "CIE_OBSERVER": ("ocio_vp.spectra.CIE_OBSERVER", "ocio_vp.spectra:CIE_OBSERVER"),
+        "cie_cmfs_sds": ("ocio_vp.spectra.cie_cmfs_sds", "ocio_vp.spectra:cie_cmfs_sds"),
+    },
+)
+
 
 def cie_cmfs() -> np.ndarray:
     """(W, 3) the CIE 1931 2-degree colour matching functions on the project's grid."""
-    return np.asarray(cie_cmfs_sds().values, dtype=np.float64)
+    return np.asarray(spectra.cie_cmfs_sds().values, dtype=np.float64)
 
 
 @dataclass(frozen=True)
