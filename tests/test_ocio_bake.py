@@ -346,3 +346,12 @@ def test_auto_d50_emitters_agree_between_apply_and_the_config():
     large = np.abs(applied) >= 0.01 * np.abs(applied).max(axis=1, keepdims=True)
     miss = np.abs(configured - applied)[large] / np.abs(applied)[large]
     assert miss.max() < 0.01, f"largest relative miss {miss.max():.3%}"
+
+
+def test_the_inverse_refuses_content_with_no_light():
+    # d96a980 failed on an empty .min() here; a silent box around neutral would hide it.
+    from ocio_vp.errors import InputError
+    from ocio_vp.ocio.bake import inverse_chain
+
+    with pytest.raises(InputError, match="no target chart colour has light"):
+        inverse_chain(None, -np.ones((4, 3)))  # type: ignore[arg-type]

@@ -314,3 +314,28 @@ def test_two_solutions_of_one_environment_are_refused(solved):
     environments = _environments(solved / "ls")[:1] * 2
     with pytest.raises(InputError, match="env_0"):
         show.build_show_config(environments)
+
+
+def test_a_kept_base_element_s_aliases_are_taken_names():
+    """Without OCIO: a kept base colour space's alias is a name the config defines, so an
+    overlay element of that name is not added (OCIO's addColorSpace would replace the kept space
+    by it) and an inactive
+    name that is the alias stays in the inactive list."""
+    d = description
+    kept = d.Kept("Legacy", ("legacy",), OCIO.ColorSpace(name="Legacy"), 1)
+    base = d.ConfigData(
+        colour_spaces=[d.ColourSpace("AP0", "", "")], roles={"aces_interchange": "AP0"},
+        kept=(kept,), inactive_colour_spaces=("legacy", "Gone"),
+    )  # fmt: skip
+    overlay = d.ConfigData(
+        colour_spaces=[d.ColourSpace("legacy", "x", "overlay's"), d.ColourSpace("New", "x", "")]
+    )
+    assert [cs.name for cs in d.merge(base, overlay).colour_spaces] == ["AP0", "New"]
+    camera = d.matrix([2.0, 0, 0, 0, 0, 2.0, 0, 0, 0, 0, 2.0, 0, 0, 0, 0, 1])
+    own = d.ConfigData(
+        colour_spaces=[d.ColourSpace(show.REFERENCE, "ocio-vp/Camera", "camera")],
+        views=[d.View(show.DISPLAY, "Raw", show.REFERENCE)],
+    )
+    data = show.show_data(base, [show.EnvironmentData("a", own, camera)], "base")
+    assert data.inactive_colour_spaces == ("legacy",)
+    assert data.kept == (kept,) and "legacy" not in [cs.name for cs in data.colour_spaces]

@@ -69,3 +69,22 @@ def test_the_wall_is_found_where_decoding_gives_nan(tmp_path):
     info = open_plate(paths[0], encoding="Gamma 2.4")
     x0, y0, x1, y1 = find_wall(paths, info)
     assert 12 <= x0 < x1 <= 56 and 10 <= y0 < y1 <= 40 and (x1 - x0) * (y1 - y0) > 600
+
+
+def test_a_movie_frame_decoded_to_nan_does_not_hide_the_wall():
+    # A movie's reduced frames come through ``frames``: Gamma 2.4 decodes below-black
+    # legal-range codes to NaN (reduced_frame -> decode_log); one NaN cell made the spread's
+    # percentile NaN and the take was refused as unchanging.
+    from ocio_vp.plates.movie import decode_log
+    from ocio_vp.plates.reader import PlateInfo
+    from ocio_vp.plates.wall_region import find_wall
+
+    encoded = np.full((8, 48, 64, 3), 0.05)  # R'G'B' after the legal range's scaling
+    encoded[1::2, 10:40, 12:56] = 0.8
+    encoded[:, 0, 0] = (14 - 64) / 876  # 10-bit code 14, below black
+    with np.errstate(invalid="ignore"):
+        stack = [decode_log(frame, "Gamma 2.4") for frame in encoded]
+    assert np.isnan(stack[0][0, 0]).all()
+    info = PlateInfo("take.mov", "movie", 64, 48, 10, False, "Gamma 2.4")
+    x0, y0, x1, y1 = find_wall([], info, frames=(8, lambda k, factor: stack[k]))
+    assert 12 <= x0 < x1 <= 56 and 10 <= y0 < y1 <= 40 and (x1 - x0) * (y1 - y0) > 600

@@ -4,7 +4,7 @@
 Each skin reflectance is lit through the LED spectra and camera sensitivities, with gains
 fitted to the photographed lit and target charts (the files' units are unknown); a location
 light not measured is estimated from the target chart (:func:`estimate_light`). docs/skin.md
-("From spectra") explains it.
+("Skin samples", its "From spectra" item) explains it.
 """
 
 from __future__ import annotations

@@ -51,7 +51,8 @@ class Record:
 
     def to_dict(self) -> dict[str, Any]:
         """The block as written: its keys in file order, values as they are (numpy kept)."""
-        extra = dict(getattr(self, "extra", None) or getattr(self, "_extra", None) or {})
+        extra = getattr(self, "extra", None)
+        extra = dict((getattr(self, "_extra", None) if extra is None else extra) or {})
         present = getattr(self, "present", None)
         if present is None:
             present = getattr(self, "_present", None)

@@ -300,18 +300,15 @@ def _curvature(
     return along_a / h2, along_b / h2
 
 
-def _ratio_box(
-    colours: np.ndarray, mix: float, margin: float, limit: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """(lowest, highest) log-ratios (a, b) of ``colours`` mixed by ``mix`` (those whose mixed
-    channels are all positive; (-1, 1) for none), ``margin`` stops wider, within +-``limit``."""
+def _ratio_box(colours: np.ndarray, mix: float, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """(lowest, highest) log-ratios (a, b) of ``colours`` mixed by ``mix``, ``margin`` stops
+    wider, over those whose mixed channels are all positive; empty arrays for none."""
     y = np.asarray(colours, dtype=np.float64).reshape(-1, 3) @ _mix(mix).T
     y = y[np.all(y > 0, axis=1)]
     if len(y) == 0:
-        return -np.ones(2), np.ones(2)
+        return np.empty(0), np.empty(0)
     c = np.log2(y) @ _BASIS.T
-    low = np.clip(c.min(axis=0)[1:] - margin, -limit, limit)
-    return low, np.clip(c.max(axis=0)[1:] + margin, -limit, limit)
+    return c.min(axis=0)[1:] - margin, c.max(axis=0)[1:] + margin
 
 
 def _design(
@@ -334,7 +331,12 @@ def _design(
         probe = LutChain(mix, function_reference, linear_break, nodes, flat, flat)
         ca, cb = _curvature(function, probe, scales)
         along_a, along_b = np.maximum(along_a, ca), np.maximum(along_b, cb)
-    box_low, box_high = _ratio_box(colours, mix, 0.25, RATIO_RANGE - 0.5)
+    box_low, box_high = _ratio_box(colours, mix, 0.25)
+    if len(box_low) == 0:  # no colour of the stage to be finest on: a box around neutral
+        box_low, box_high = -np.ones(2), np.ones(2)
+    else:
+        limit = RATIO_RANGE - 0.5
+        box_low, box_high = np.clip(box_low, -limit, limit), np.clip(box_high, -limit, limit)
     return LutChain(
         mix,
         reference,
@@ -467,7 +469,13 @@ def inverse_chain(
 ) -> LutChain:
     """The corrected-side chain of Q^-1; ``content`` the colours it is finest on (the target
     chart and mixtures of it). A plain log2: content is light, its mixed channels positive."""
-    low, high = _ratio_box(content, CONTENT_MIX, CONTENT_MARGIN, RATIO_RANGE - 1.0)
+    low, high = _ratio_box(content, CONTENT_MIX, CONTENT_MARGIN)
+    if len(low) == 0:
+        # the target chart is in the content: only a chart none of whose patches (its white
+        # included) is non-negative and lit gets here; refuse rather than guess a box
+        raise InputError("no target chart colour has light in every channel: Q^-1 cannot be baked")
+    limit = RATIO_RANGE - 1.0
+    low, high = np.maximum(low, -limit), np.minimum(high, limit)
     s_nodes = list(SCALE_RANGE)
     if isinstance(
         correction, ProtectedCorrection

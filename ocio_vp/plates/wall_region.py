@@ -98,7 +98,9 @@ def find_wall(
     reduced = []
     for k in picks:
         if frames is not None:
-            reduced.append(np.asarray(frames[1](int(k), factor), dtype=np.float64))
+            # block_means's rule: a decoding's NaN/+-Inf (a pure power below black) counts as 0
+            cells = np.asarray(frames[1](int(k), factor), dtype=np.float64)
+            reduced.append(np.nan_to_num(cells, posinf=0.0, neginf=0.0))
             continue
         frame_info = info if k == 0 else dataclasses.replace(info, path=str(paths[k]))
         reduced.append(block_means(frame_info, factor))
