@@ -333,17 +333,23 @@ def camera_delta_E_2000(
     return np.asarray(colour.delta_E(lab[0], lab[1], method="CIE 2000"))
 
 
-def camera_lab(rgb: ArrayLike, *, camera_to_xyz: ArrayLike, white: ArrayLike) -> np.ndarray:
-    """(..., 3) CIE Lab of camera RGB (..., 3) as :func:`camera_delta_E_2000` measures it."""
+def camera_lab(rgb: ArrayLike, *, camera_to_xyz: ArrayLike, white: ArrayLike | int) -> np.ndarray:
+    """(..., 3) CIE Lab of camera RGB (..., 3) as :func:`camera_delta_E_2000` measures it.
+
+    ``white`` is the white's camera RGB, or the index of the row of ``rgb`` (n, 3) that is the
+    white: its XYZ is then that row of the same product, bit for bit what the rows get."""
     import colour
 
     matrix = np.asarray(camera_to_xyz, dtype=np.float64)
-    white = np.asarray(white, dtype=np.float64)
-    scale = 1.0 / float(white @ matrix[1])
-    white_xy = colour.XYZ_to_xy(white @ matrix.T * scale)
-    return np.asarray(
-        colour.XYZ_to_Lab(np.asarray(rgb, dtype=np.float64) @ matrix.T * scale, white_xy)
-    )
+    xyz = np.asarray(rgb, dtype=np.float64) @ matrix.T
+    if isinstance(white, (int, np.integer)):
+        scale = 1.0 / xyz[white, 1]
+        white_xy = colour.XYZ_to_xy(xyz[white] * scale)
+    else:
+        white = np.asarray(white, dtype=np.float64)
+        scale = 1.0 / float(white @ matrix[1])
+        white_xy = colour.XYZ_to_xy(white @ matrix.T * scale)
+    return np.asarray(colour.XYZ_to_Lab(xyz * scale, white_xy))
 
 
 def rgb_to_rgb_cat02(source: str, target: str) -> np.ndarray:

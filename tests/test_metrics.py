@@ -227,3 +227,19 @@ def test_camera_delta_E_2000_is_the_published_ciede2000_through_a_camera():
     np.testing.assert_allclose(
         camera_delta_E_2000(4 * a, 4 * b, camera_to_xyz=matrix, white=4 * white), got, rtol=1e-12
     )
+
+
+def test_camera_lab_with_the_white_as_a_row_is_colour_science_lab_of_that_rows_xyz():
+    # Independent source: colour-science's XYZ_to_Lab on the rows' XYZ, the white's row scaled to
+    # Y = 1 and its chromaticity the reference white (bit for bit: the skin selection's
+    # thresholds depend on it).
+    from ocio_vp.metrics import camera_lab, sample_camera_to_xyz
+
+    matrix = sample_camera_to_xyz()
+    rgb = np.random.default_rng(5).uniform(0.001, 2.0, (24, 3))
+    xyz = rgb @ matrix.T
+    xyz = xyz * (1.0 / xyz[7, 1])
+    expected = colour.XYZ_to_Lab(xyz, colour.XYZ_to_xy(xyz[7]))
+    lab = camera_lab(rgb, camera_to_xyz=matrix, white=7)
+    np.testing.assert_array_equal(lab, expected)
+    assert np.allclose(lab[7], [100.0, 0.0, 0.0], atol=1e-9)

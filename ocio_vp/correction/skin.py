@@ -17,7 +17,7 @@ import numpy as np
 
 from ocio_vp.calibration.equations import predict_lit_chart
 from ocio_vp.deprecation import deprecated_names
-from ocio_vp.metrics import sample_camera_to_xyz
+from ocio_vp.metrics import camera_lab, sample_camera_to_xyz
 from ocio_vp.skin_data import SkinSet, band_of, ita_degrees, training_skin
 from ocio_vp.spectra import checker_reflectances
 
@@ -181,14 +181,7 @@ def skin_patch_weights(
     location colour is a skin colour (hue between 20° and 90° in CIE L*a*b* through the sample
     camera, chroma 8-50, L* 20-90: the ColorChecker's two skin patches and the skin of every
     lightness band under a broadband light)."""
-    import colour
-
-    # Lab of the whole chart, then the white's row: the white scaled and indexed from the same
-    # product as the patches (metrics.camera_lab's own ``white @ matrix`` can differ in the last
-    # bit, enough to move a patch across a threshold).
-    xyz = np.asarray(target, dtype=np.float64) @ sample_camera_to_xyz().T
-    scale = 1.0 / xyz[white_patch, 1]
-    lab = np.asarray(colour.XYZ_to_Lab(xyz * scale, colour.XYZ_to_xy(xyz[white_patch] * scale)))
+    lab = camera_lab(target, camera_to_xyz=sample_camera_to_xyz(), white=white_patch)
     if named:
         chosen = [j for j in named if active[j]]
     else:
